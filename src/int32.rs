@@ -1,0 +1,289 @@
+//! Big-endian int32: `socket_send_int` on the robot, `socket_read_binary_integer(number)`
+//! reading what the server sends, and the External Control messages built from them.
+//!
+//! Fixed-size: a message is `4 × number` bytes, so no scan is needed; the decoder only
+//! counts bytes. Values are decoded in place from the caller's buffer ([`Int32Values`]).
+
+use crate::{ArgumentError, DecodeError, Decoder, EncodeError, Sink, Status};
+
+/// The most values one `socket_read_binary_integer` call reads.
+pub const MAX_VALUES: usize = 30;
+
+/// Writes one int32 big-endian (4 bytes): what `socket_send_int(v)` sends.
+///
+/// ```
+/// use urscript_socket::int32::encode_int32;
+/// let mut out = Vec::new();
+/// encode_int32(-1, &mut out).unwrap();
+/// assert_eq!(out, [0xFF, 0xFF, 0xFF, 0xFF]);
+/// ```
+pub fn encode_int32<S: Sink + ?Sized>(value: i32, sink: &mut S) -> Result<usize, EncodeError> {
+    sink.put(&value.to_be_bytes())?;
+    Ok(4)
+}
+
+/// Writes each value as a big-endian int32, back to back: a message for
+/// `socket_read_binary_integer(values.len())` (or any number of messages). Any length is
+/// accepted; the robot reads at most 30 per call.
+///
+/// ```
+/// use urscript_socket::int32::encode_int32_list;
+/// let mut out = Vec::new();
+/// encode_int32_list(&[100, 2000, 30000], &mut out).unwrap();
+/// assert_eq!(out, [0, 0, 0, 0x64, 0, 0, 0x07, 0xD0, 0, 0, 0x75, 0x30]);
+/// ```
+pub fn encode_int32_list<S: Sink + ?Sized>(
+    values: &[i32],
+    sink: &mut S,
+) -> Result<usize, EncodeError> {
+    // Batch through a stack buffer: one `put` per 32 values rather than per value.
+    let mut chunk = [0u8; 128];
+    for group in values.chunks(32) {
+        for (slot, v) in chunk.chunks_exact_mut(4).zip(group) {
+            slot.copy_from_slice(&v.to_be_bytes());
+        }
+        sink.put(&chunk[..group.len() * 4])?;
+    }
+    Ok(values.len() * 4)
+}
+
+/// A complete message of big-endian int32 values, borrowed from the receive buffer.
+///
+/// ```
+/// use urscript_socket::int32::Int32Decoder;
+/// let mut dec = Int32Decoder::new(2).unwrap();
+/// let vals = dec.decode(&[0, 0, 0, 1, 0xFF, 0xFF, 0xFF, 0xFE]).unwrap().item().unwrap();
+/// assert_eq!(vals.iter().collect::<Vec<_>>(), [1, -2]);
+/// ```
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Int32Values<'a> {
+    bytes: &'a [u8],
+}
+
+impl<'a> Int32Values<'a> {
+    /// A view over `bytes`; a trailing partial value (fewer than 4 bytes) is ignored.
+    ///
+    /// ```
+    /// # use urscript_socket::int32::Int32Values;
+    /// assert_eq!(Int32Values::new(&[0, 0, 0, 7, 1]).len(), 1);
+    /// ```
+    pub fn new(bytes: &'a [u8]) -> Self {
+        Int32Values {
+            bytes: &bytes[..bytes.len() / 4 * 4],
+        }
+    }
+
+    /// Number of values.
+    ///
+    /// ```
+    /// # use urscript_socket::int32::Int32Values;
+    /// assert_eq!(Int32Values::new(&[0; 8]).len(), 2);
+    /// ```
+    pub fn len(&self) -> usize {
+        self.bytes.len() / 4
+    }
+
+    /// True if there is no value.
+    ///
+    /// ```
+    /// # use urscript_socket::int32::Int32Values;
+    /// assert!(Int32Values::new(&[0; 3]).is_empty());
+    /// ```
+    pub fn is_empty(&self) -> bool {
+        self.bytes.is_empty()
+    }
+
+    /// The value at `index`, if any.
+    ///
+    /// ```
+    /// # use urscript_socket::int32::Int32Values;
+    /// assert_eq!(Int32Values::new(&[0, 0, 0x75, 0x30]).get(0), Some(30000));
+    /// ```
+    pub fn get(&self, index: usize) -> Option<i32> {
+        let b = self.bytes.get(index * 4..index * 4 + 4)?;
+        Some(i32::from_be_bytes([b[0], b[1], b[2], b[3]]))
+    }
+
+    /// The values in order.
+    ///
+    /// ```
+    /// # use urscript_socket::int32::Int32Values;
+    /// assert_eq!(Int32Values::new(&[0, 0, 0, 1]).iter().sum::<i32>(), 1);
+    /// ```
+    pub fn iter(&self) -> impl ExactSizeIterator<Item = i32> + 'a {
+        self.bytes
+            .chunks_exact(4)
+            .map(|b| i32::from_be_bytes([b[0], b[1], b[2], b[3]]))
+    }
+
+    /// The raw bytes, 4 per value.
+    ///
+    /// ```
+    /// # use urscript_socket::int32::Int32Values;
+    /// assert_eq!(Int32Values::new(&[0, 0, 0, 1]).as_bytes(), [0, 0, 0, 1]);
+    /// ```
+    pub fn as_bytes(&self) -> &'a [u8] {
+        self.bytes
+    }
+
+    /// Copies the values into `out`, returning how many were written (the smaller of
+    /// the two lengths).
+    ///
+    /// ```
+    /// # use urscript_socket::int32::Int32Values;
+    /// let mut out = [0i32; 8];
+    /// assert_eq!(Int32Values::new(&[0, 0, 0, 5]).copy_to(&mut out), 1);
+    /// assert_eq!(out[0], 5);
+    /// ```
+    pub fn copy_to(&self, out: &mut [i32]) -> usize {
+        let mut n = 0;
+        for (slot, v) in out.iter_mut().zip(self.iter()) {
+            *slot = v;
+            n += 1;
+        }
+        n
+    }
+}
+
+/// Decoder of `number` big-endian int32 per message: the robot's
+/// `socket_read_binary_integer(number)`, or, with `number = 1`, a server reading the
+/// robot's `socket_send_int` stream.
+///
+/// Holds no bytes and no scan state: a message is complete once `4 × number` bytes are
+/// buffered. Bound: `4 × number` ≤ 120 bytes.
+///
+/// ```
+/// use urscript_socket::int32::Int32Decoder;
+/// let mut dec = Int32Decoder::new(3).unwrap();
+/// let bytes = [0, 0, 0, 0x64, 0, 0, 0x07, 0xD0, 0, 0, 0x75, 0x30];
+/// assert!(dec.decode(&bytes[..7]).unwrap().item().is_none());
+/// let vals = dec.decode(&bytes).unwrap().item().unwrap();
+/// assert_eq!(vals.iter().collect::<Vec<_>>(), [100, 2000, 30000]);
+/// ```
+#[derive(Debug, Clone)]
+pub struct Int32Decoder {
+    number: u8,
+    pos: u64,
+}
+
+impl Int32Decoder {
+    /// A decoder of `number` (1..=30) values per message.
+    ///
+    /// ```
+    /// # use urscript_socket::int32::Int32Decoder;
+    /// assert!(Int32Decoder::new(0).is_err());
+    /// assert!(Int32Decoder::new(30).is_ok());
+    /// ```
+    pub fn new(number: usize) -> Result<Self, ArgumentError> {
+        if !(1..=MAX_VALUES).contains(&number) {
+            return Err(ArgumentError::NumberOutOfRange { number });
+        }
+        Ok(Int32Decoder {
+            number: number as u8,
+            pos: 0,
+        })
+    }
+
+    /// Values per message.
+    ///
+    /// ```
+    /// # use urscript_socket::int32::Int32Decoder;
+    /// assert_eq!(Int32Decoder::new(8).unwrap().number(), 8);
+    /// ```
+    pub fn number(&self) -> usize {
+        usize::from(self.number)
+    }
+
+    /// Absolute stream offset of the next byte to decode.
+    ///
+    /// ```
+    /// # use urscript_socket::int32::Int32Decoder;
+    /// let mut d = Int32Decoder::new(1).unwrap();
+    /// d.decode(&[0; 4]).unwrap();
+    /// assert_eq!(d.position(), 4);
+    /// ```
+    pub fn position(&self) -> u64 {
+        self.pos
+    }
+
+    /// The next message, once `4 × number` bytes are there.
+    ///
+    /// ```
+    /// # use urscript_socket::int32::Int32Decoder;
+    /// let mut d = Int32Decoder::new(1).unwrap();
+    /// assert_eq!(d.decode(&[0xFF; 4]).unwrap().item().unwrap().get(0), Some(-1));
+    /// ```
+    pub fn decode<'a>(&mut self, buf: &'a [u8]) -> Result<Status<Int32Values<'a>>, DecodeError> {
+        let need = usize::from(self.number) * 4;
+        if buf.len() < need {
+            return Ok(Status::Partial { consumed: 0 });
+        }
+        self.pos += need as u64;
+        Ok(Status::Complete {
+            item: Int32Values {
+                bytes: &buf[..need],
+            },
+            consumed: need,
+        })
+    }
+
+    /// The whole values available when the read must end early (the
+    /// "return what arrived" timeout policy): `Some` with `consumed` if at least one
+    /// whole value is buffered.
+    ///
+    /// ```
+    /// # use urscript_socket::int32::Int32Decoder;
+    /// let mut d = Int32Decoder::new(3).unwrap();
+    /// let (vals, used) = d.take_partial(&[0, 0, 0, 9, 1, 2]).unwrap();
+    /// assert_eq!((vals.len(), used), (1, 4));
+    /// ```
+    pub fn take_partial<'a>(&mut self, buf: &'a [u8]) -> Option<(Int32Values<'a>, usize)> {
+        let whole = (buf.len() / 4).min(usize::from(self.number)) * 4;
+        if whole == 0 {
+            return None;
+        }
+        self.pos += whole as u64;
+        Some((
+            Int32Values {
+                bytes: &buf[..whole],
+            },
+            whole,
+        ))
+    }
+
+    /// At end of input: leftover bytes short of a message are
+    /// [`Truncated`](ErrorKind::Truncated).
+    ///
+    /// ```
+    /// # use urscript_socket::int32::Int32Decoder;
+    /// let mut d = Int32Decoder::new(1).unwrap();
+    /// assert!(d.decode_eof(&[0, 0]).is_err());
+    /// assert!(d.decode_eof(&[]).unwrap().is_none());
+    /// ```
+    pub fn decode_eof<'a>(
+        &mut self,
+        buf: &'a [u8],
+    ) -> Result<Option<(Int32Values<'a>, usize)>, DecodeError> {
+        match self.decode(buf)? {
+            Status::Complete { item, consumed } => Ok(Some((item, consumed))),
+            Status::Partial { .. } if buf.is_empty() => Ok(None),
+            Status::Partial { .. } => crate::status::truncated(&mut self.pos, buf),
+        }
+    }
+}
+
+impl Decoder for Int32Decoder {
+    type Item<'buf> = Int32Values<'buf>;
+    fn decode<'buf>(&mut self, buf: &'buf [u8]) -> Result<Status<Int32Values<'buf>>, DecodeError> {
+        Int32Decoder::decode(self, buf)
+    }
+    fn decode_eof<'buf>(
+        &mut self,
+        buf: &'buf [u8],
+    ) -> Result<Option<(Int32Values<'buf>, usize)>, DecodeError> {
+        Int32Decoder::decode_eof(self, buf)
+    }
+    fn position(&self) -> u64 {
+        self.pos
+    }
+}

@@ -1,0 +1,292 @@
+//! Number text shared by the text formats: the conservative plain-decimal float form,
+//! the float and int token grammars. Internal; each format exposes what it needs.
+
+use crate::ErrorKind;
+
+/// The longest plain-decimal text of a finite f64: `-0.` + 323 zeros + `5` for the
+/// smallest subnormal is 327 bytes; `-` + 309 digits for the largest is 310.
+pub const MAX_PLAIN_F64_LEN: usize = 327;
+
+/// Writes the shortest decimal text that parses back to exactly `v`, in plain notation
+/// (no exponent), into `out`, returning the length. `v` must be finite.
+///
+/// ryu finds the shortest round-trip digits (and is several times faster than
+/// `core::fmt`); we only re-lay its `d.ddde±x` output as plain decimal. The decimal value
+/// is unchanged by that, so the text still parses back bit-exactly.
+pub fn write_plain_f64(v: f64, out: &mut [u8; MAX_PLAIN_F64_LEN]) -> usize {
+    debug_assert!(v.is_finite());
+    let mut ryu_buf = ryu::Buffer::new();
+    let text = ryu_buf.format_finite(v).as_bytes();
+
+    let mut i = 0;
+    let mut len = 0;
+    if text.first() == Some(&b'-') {
+        out[0] = b'-';
+        len = 1;
+        i = 1;
+    }
+    // Collect the significant digits; `point` = digits before the decimal point.
+    let mut digits = [0u8; 17];
+    let mut n = 0usize;
+    let mut point: i32 = 0;
+    let mut seen_point = false;
+    let mut exp: i32 = 0;
+    while i < text.len() {
+        let c = text[i];
+        match c {
+            b'0'..=b'9' => {
+                if n == 0 && c == b'0' {
+                    // A leading zero: shifts the point left if after it.
+                    if seen_point {
+                        point -= 1;
+                    }
+                } else if n < digits.len() {
+                    digits[n] = c;
+                    n += 1;
+                    if !seen_point {
+                        point += 1;
+                    }
+                }
+            }
+            b'.' => seen_point = true,
+            b'e' | b'E' => {
+                let mut neg = false;
+                let mut j = i + 1;
+                if text.get(j) == Some(&b'-') {
+                    neg = true;
+                    j += 1;
+                }
+                let mut e: i32 = 0;
+                while j < text.len() {
+                    e = e * 10 + i32::from(text[j] - b'0');
+                    j += 1;
+                }
+                exp = if neg { -e } else { e };
+                break;
+            }
+            _ => {}
+        }
+        i += 1;
+    }
+    while n > 0 && digits[n - 1] == b'0' {
+        n -= 1;
+    }
+    if n == 0 {
+        out[len] = b'0';
+        return len + 1;
+    }
+    let point = point + exp;
+    let digits = &digits[..n];
+    if point <= 0 {
+        let zeros = (-point) as usize;
+        out[len] = b'0';
+        out[len + 1] = b'.';
+        len += 2;
+        out[len..len + zeros].fill(b'0');
+        len += zeros;
+        out[len..len + n].copy_from_slice(digits);
+        len + n
+    } else if point as usize >= n {
+        let zeros = point as usize - n;
+        out[len..len + n].copy_from_slice(digits);
+        len += n;
+        out[len..len + zeros].fill(b'0');
+        len + zeros
+    } else {
+        let p = point as usize;
+        out[len..len + p].copy_from_slice(&digits[..p]);
+        len += p;
+        out[len] = b'.';
+        len += 1;
+        out[len..len + n - p].copy_from_slice(&digits[p..]);
+        len + n - p
+    }
+}
+
+/// Checks `token` against the float grammar `[+-]? (d+ ('.' d*)? | '.' d+) ([eE] [+-]? d+)?`
+/// (the exponent only when `allow_exponent`) and parses it. On failure returns the index
+/// of the first offending byte within `token`.
+#[inline]
+pub fn parse_float_token(token: &[u8], allow_exponent: bool) -> Result<f64, usize> {
+    let mut i = 0;
+    if matches!(token.first(), Some(b'+' | b'-')) {
+        i = 1;
+    }
+    let int_start = i;
+    while i < token.len() && token[i].is_ascii_digit() {
+        i += 1;
+    }
+    let mut digits = i - int_start;
+    if i < token.len() && token[i] == b'.' {
+        i += 1;
+        let frac_start = i;
+        while i < token.len() && token[i].is_ascii_digit() {
+            i += 1;
+        }
+        digits += i - frac_start;
+    }
+    if digits == 0 {
+        return Err(i.min(token.len().saturating_sub(1)));
+    }
+    if i < token.len() && (token[i] == b'e' || token[i] == b'E') {
+        if !allow_exponent {
+            return Err(i);
+        }
+        i += 1;
+        if i < token.len() && (token[i] == b'+' || token[i] == b'-') {
+            i += 1;
+        }
+        let exp_start = i;
+        while i < token.len() && token[i].is_ascii_digit() {
+            i += 1;
+        }
+        if i == exp_start {
+            return Err(i.min(token.len() - 1));
+        }
+    }
+    if i != token.len() {
+        return Err(i);
+    }
+    // The grammar above is a subset of what fast-float accepts, so this cannot fail; map
+    // a failure to the token start anyway rather than trusting that.
+    fast_float2::parse::<f64, _>(token).map_err(|_| 0)
+}
+
+/// Parses a decimal int32: optional sign, one or more digits (leading zeros allowed).
+pub fn parse_i32(token: &[u8]) -> Result<i32, (ErrorKind, usize)> {
+    let (neg, digits_at) = match token.first() {
+        Some(b'-') => (true, 1),
+        Some(b'+') => (false, 1),
+        _ => (false, 0),
+    };
+    if token.len() == digits_at {
+        return Err((ErrorKind::InvalidNumber, token.len().saturating_sub(1)));
+    }
+    // Accumulate negatively so that i32::MIN parses.
+    let mut acc: i32 = 0;
+    for (i, &c) in token.iter().enumerate().skip(digits_at) {
+        if !c.is_ascii_digit() {
+            return Err((ErrorKind::InvalidNumber, i));
+        }
+        acc = acc
+            .checked_mul(10)
+            .and_then(|a| a.checked_sub(i32::from(c - b'0')))
+            .ok_or((ErrorKind::IntegerOutOfRange, 0))?;
+    }
+    if neg {
+        Ok(acc)
+    } else {
+        acc.checked_neg().ok_or((ErrorKind::IntegerOutOfRange, 0))
+    }
+}
+
+/// Writes the decimal text of `v` into `out`, returning the length (at most 11).
+pub fn write_i32(v: i32, out: &mut [u8; 11]) -> usize {
+    let mut tmp = [0u8; 11];
+    let mut n = 0;
+    let mut u = v.unsigned_abs();
+    loop {
+        tmp[n] = b'0' + (u % 10) as u8;
+        n += 1;
+        u /= 10;
+        if u == 0 {
+            break;
+        }
+    }
+    let mut len = 0;
+    if v < 0 {
+        out[0] = b'-';
+        len = 1;
+    }
+    for k in (0..n).rev() {
+        out[len] = tmp[k];
+        len += 1;
+    }
+    len
+}
+
+/// ASCII whitespace the text formats allow around numbers: space, tab, CR, LF.
+#[inline]
+pub fn is_space(b: u8) -> bool {
+    matches!(b, b' ' | b'\t' | b'\r' | b'\n')
+}
+
+/// Splits off spaces at both ends, returning the offset of the trimmed start.
+#[inline]
+pub fn trim(bytes: &[u8]) -> (usize, &[u8]) {
+    let mut s = 0;
+    let mut e = bytes.len();
+    while s < e && is_space(bytes[s]) {
+        s += 1;
+    }
+    while e > s && is_space(bytes[e - 1]) {
+        e -= 1;
+    }
+    (s, &bytes[s..e])
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn plain(v: f64) -> alloc::string::String {
+        let mut out = [0u8; MAX_PLAIN_F64_LEN];
+        let n = write_plain_f64(v, &mut out);
+        alloc::string::String::from_utf8(out[..n].to_vec()).unwrap()
+    }
+
+    #[test]
+    fn plain_forms() {
+        assert_eq!(plain(1.414), "1.414");
+        assert_eq!(plain(0.0), "0");
+        assert_eq!(plain(-0.0), "-0");
+        assert_eq!(plain(3.0), "3");
+        assert_eq!(plain(-0.15), "-0.15");
+        assert_eq!(plain(1e16), "10000000000000000");
+        assert_eq!(plain(1.5e-7), "0.00000015");
+        assert_eq!(plain(123456.789), "123456.789");
+        assert_eq!(plain(f64::MAX).len(), 309);
+        assert_eq!(
+            plain(-f64::MIN_POSITIVE * f64::EPSILON).len(),
+            MAX_PLAIN_F64_LEN
+        );
+    }
+
+    #[test]
+    fn i32_text() {
+        for v in [0, 1, -1, 10, -3, i32::MAX, i32::MIN, 2200] {
+            let mut out = [0u8; 11];
+            let n = write_i32(v, &mut out);
+            assert_eq!(parse_i32(&out[..n]), Ok(v));
+            assert_eq!(
+                core::str::from_utf8(&out[..n]).unwrap(),
+                alloc::format!("{v}")
+            );
+        }
+        assert_eq!(parse_i32(b"077"), Ok(77));
+        assert_eq!(
+            parse_i32(b"2147483648").unwrap_err().0,
+            ErrorKind::IntegerOutOfRange
+        );
+        assert_eq!(parse_i32(b"-2147483648"), Ok(i32::MIN));
+        assert_eq!(parse_i32(b"12a"), Err((ErrorKind::InvalidNumber, 2)));
+        assert!(parse_i32(b"-").is_err());
+        assert!(parse_i32(b"").is_err());
+    }
+
+    #[test]
+    fn float_grammar() {
+        assert_eq!(parse_float_token(b"1.414", true), Ok(1.414));
+        assert_eq!(parse_float_token(b"-3", true), Ok(-3.0));
+        assert_eq!(parse_float_token(b".5", true), Ok(0.5));
+        assert_eq!(parse_float_token(b"5.", true), Ok(5.0));
+        assert_eq!(parse_float_token(b"1e3", true), Ok(1000.0));
+        assert_eq!(parse_float_token(b"1e3", false), Err(1));
+        assert_eq!(parse_float_token(b"1e", true), Err(1));
+        assert!(parse_float_token(b"nan", true).is_err());
+        assert!(parse_float_token(b"inf", true).is_err());
+        assert!(parse_float_token(b"-", true).is_err());
+        assert!(parse_float_token(b".", true).is_err());
+        assert_eq!(parse_float_token(b"1.2.3", true), Err(3));
+    }
+}

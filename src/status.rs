@@ -1,0 +1,110 @@
+//! The result of one decoding step, and the [`Decoder`] trait every format implements.
+
+use crate::DecodeError;
+
+/// What one call to a decoder's `decode` found, in the manner of `httparse::Status`, plus
+/// the bytes the caller must drop in either case.
+///
+/// The caller keeps the unconsumed bytes in its own buffer. After
+/// `Complete { consumed, .. }` or `Partial { consumed }` it drops `consumed` bytes from the
+/// front, appends whatever arrives next, and calls `decode` again with the whole
+/// unconsumed rest. The decoder remembers how far it has already looked, so no byte is
+/// examined twice however the stream is chunked.
+///
+/// ```
+/// use urscript_socket::{line::LineDecoder, Status};
+/// let mut lines = LineDecoder::new();
+/// assert_eq!(lines.decode(b"hel").unwrap(), Status::Partial { consumed: 0 });
+/// assert_eq!(
+///     lines.decode(b"hello\nwor").unwrap(),
+///     Status::Complete { item: &b"hello"[..], consumed: 6 }
+/// );
+/// ```
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Status<T> {
+    /// A message is complete. `item` borrows the input where the format allows it.
+    Complete {
+        /// The decoded message.
+        item: T,
+        /// Bytes of the input that the message (and anything skipped before it) used.
+        consumed: usize,
+    },
+    /// More input is needed. `consumed` bytes (noise the format skips, or the rest of an
+    /// over-long message being discarded) can already be dropped.
+    Partial {
+        /// Bytes the caller may drop now.
+        consumed: usize,
+    },
+}
+
+impl<T> Status<T> {
+    /// The bytes to drop from the front of the buffer, in both cases.
+    ///
+    /// ```
+    /// use urscript_socket::Status;
+    /// assert_eq!(Status::<()>::Partial { consumed: 3 }.consumed(), 3);
+    /// ```
+    pub fn consumed(&self) -> usize {
+        match *self {
+            Status::Complete { consumed, .. } | Status::Partial { consumed } => consumed,
+        }
+    }
+
+    /// The item, if complete.
+    ///
+    /// ```
+    /// use urscript_socket::Status;
+    /// assert_eq!(Status::Complete { item: 5, consumed: 1 }.item(), Some(5));
+    /// ```
+    pub fn item(self) -> Option<T> {
+        match self {
+            Status::Complete { item, .. } => Some(item),
+            Status::Partial { .. } => None,
+        }
+    }
+}
+
+/// An incremental decoder over a caller-owned buffer: the one interface the adapters,
+/// the robot emulation and the CLI drive. Every format's decoder implements it.
+///
+/// Contract: `buf` is always the unconsumed bytes, oldest first. After any return the
+/// caller drops the bytes it was told to drop (`Status::consumed`, or
+/// [`DecodeError::skip`]) and calls again with what is left plus what arrived since.
+/// A decoder never panics, never reads a byte twice across calls, and holds at most a
+/// few words of state; the largest message it will buffer is its documented bound.
+///
+/// ```
+/// use urscript_socket::{Decoder, RecvBuffer, int32::Int32Decoder};
+/// let mut buf = RecvBuffer::<[u8; 64]>::new();
+/// let mut ints = Int32Decoder::new(1).unwrap();
+/// buf.extend(&[0, 0, 0]);
+/// assert!(buf.decode(&mut ints).unwrap().is_none());
+/// buf.extend(&[100]);
+/// assert_eq!(buf.decode(&mut ints).unwrap().unwrap().get(0), Some(100));
+/// ```
+pub trait Decoder {
+    /// What a complete message decodes to; borrows the buffer where it can.
+    type Item<'buf>;
+
+    /// Looks at `buf` (the unconsumed bytes) for the next message.
+    fn decode<'buf>(&mut self, buf: &'buf [u8]) -> Result<Status<Self::Item<'buf>>, DecodeError>;
+
+    /// The input ended (peer closed, end of file): returns a last message if the format
+    /// can end without a terminator, `Ok(None)` if `buf` is empty, and an error of kind
+    /// [`Truncated`](crate::ErrorKind::Truncated) if a message was cut off. The decoder is
+    /// reset afterwards.
+    fn decode_eof<'buf>(
+        &mut self,
+        buf: &'buf [u8],
+    ) -> Result<Option<(Self::Item<'buf>, usize)>, DecodeError>;
+
+    /// Bytes consumed so far: the absolute stream offset of `buf[0]` on the next call.
+    fn position(&self) -> u64;
+}
+
+/// Shared helper: the error returned by `decode_eof` when unfinished bytes remain.
+pub(crate) fn truncated<T>(pos: &mut u64, buf: &[u8]) -> Result<T, DecodeError> {
+    let at = *pos;
+    *pos += buf.len() as u64;
+    Err(DecodeError::new(crate::ErrorKind::Truncated, at, buf.len()))
+}

@@ -1,0 +1,463 @@
+//! Strings: `socket_send_string` (bytes, no terminator), `socket_read_string(prefix,
+//! suffix, interpret_escape)` with its 1024-byte limit, and, on the server side, strings
+//! split on a delimiter of the user's choice.
+//!
+//! * [`ReadStringDecoder`]: the robot's `socket_read_string` rules (spec section 3).
+//! * [`DelimitedDecoder`]: a server splitting the robot's unframed `socket_send_string`
+//!   traffic on a delimiter, with [`flush`](DelimitedDecoder::flush) for idle-time framing.
+//! * [`encode_string`], [`encode_framed_string`]: what either side writes.
+
+pub use crate::framer::MAX_PATTERN_LEN;
+use crate::framer::{Framer, Pattern};
+use crate::{ArgumentError, DecodeError, Decoder, EncodeError, Sink, Status};
+
+/// The most bytes one `socket_read_string` returns, terminators included (5.x manual).
+pub const READ_STRING_LIMIT: usize = 1024;
+
+/// Default bound on one delimited message's content, in bytes.
+pub const DEFAULT_MAX_MESSAGE_LEN: usize = 4096;
+
+/// Writes `text` unchanged, with no terminator: what `socket_send_string(text)` sends.
+///
+/// ```
+/// use urscript_socket::string::encode_string;
+/// let mut out = Vec::new();
+/// encode_string(b"hi", &mut out).unwrap();
+/// assert_eq!(out, b"hi");
+/// ```
+pub fn encode_string<S: Sink + ?Sized>(text: &[u8], sink: &mut S) -> Result<usize, EncodeError> {
+    sink.put(text)?;
+    Ok(text.len())
+}
+
+/// Writes `prefix`, `text`, `suffix`: a message for
+/// `socket_read_string(prefix=.., suffix=..)`. Refused if `text` contains the suffix
+/// (the robot would stop there), reporting where.
+///
+/// ```
+/// use urscript_socket::string::encode_framed_string;
+/// let mut out = Vec::new();
+/// encode_framed_string(b">", b"hello", b"<", &mut out).unwrap();
+/// assert_eq!(out, b">hello<");
+/// assert!(encode_framed_string(b">", b"a<b", b"<", &mut out).is_err());
+/// ```
+pub fn encode_framed_string<S: Sink + ?Sized>(
+    prefix: &[u8],
+    text: &[u8],
+    suffix: &[u8],
+    sink: &mut S,
+) -> Result<usize, EncodeError> {
+    if !suffix.is_empty() {
+        if let Some(index) = memchr::memmem::find(text, suffix) {
+            return Err(EncodeError::ForbiddenByte {
+                byte: text[index],
+                index,
+            });
+        }
+    }
+    sink.put(prefix)?;
+    sink.put(text)?;
+    sink.put(suffix)?;
+    Ok(prefix.len() + text.len() + suffix.len())
+}
+
+/// Turns a prefix or suffix argument into the bytes the controller matches: leading
+/// spaces dropped, and with `interpret_escape` the two-character escapes `\n`, `\t`,
+/// `\r` made into LF, TAB, CR (other backslashes stay as they are).
+///
+/// ```
+/// use urscript_socket::string::controller_pattern;
+/// let mut out = [0u8; 64];
+/// let n = controller_pattern(br"  \r", true, &mut out).unwrap();
+/// assert_eq!(&out[..n], b"\r");
+/// ```
+pub fn controller_pattern(
+    arg: &[u8],
+    interpret_escape: bool,
+    out: &mut [u8; MAX_PATTERN_LEN],
+) -> Result<usize, ArgumentError> {
+    let start = arg.iter().position(|&b| b != b' ').unwrap_or(arg.len());
+    let arg = &arg[start..];
+    let mut n = 0;
+    let mut i = 0;
+    while i < arg.len() {
+        let mut b = arg[i];
+        if interpret_escape && b == b'\\' && i + 1 < arg.len() {
+            let esc = match arg[i + 1] {
+                b'n' => Some(b'\n'),
+                b't' => Some(b'\t'),
+                b'r' => Some(b'\r'),
+                _ => None,
+            };
+            if let Some(e) = esc {
+                b = e;
+                i += 1;
+            }
+        }
+        if n == MAX_PATTERN_LEN {
+            return Err(ArgumentError::PatternTooLong {
+                limit: MAX_PATTERN_LEN,
+            });
+        }
+        out[n] = b;
+        n += 1;
+        i += 1;
+    }
+    Ok(n)
+}
+
+/// The robot's `socket_read_string(prefix, suffix, interpret_escape)`, as a decoder.
+///
+/// Rules (spec sections 3 and 6):
+/// * no prefix, no suffix: everything buffered (at least one byte), up to 1024 bytes;
+/// * prefix: everything up to and including the first prefix is dropped; without a
+///   suffix the read completes once a byte follows the prefix;
+/// * suffix: the result ends before the suffix, which is consumed; bytes after it stay;
+/// * the window is [`READ_STRING_LIMIT`] bytes from the start of the prefix (or of the
+///   buffer): if the suffix is not within it, the window's content is returned and the
+///   rest stays buffered;
+/// * until complete nothing is consumed, so a timeout leaves the buffer unchanged.
+///
+/// Linear: the prefix and suffix searches resume where they stopped.
+///
+/// ```
+/// use urscript_socket::string::ReadStringDecoder;
+/// let mut read = ReadStringDecoder::new(b">", b"<", false).unwrap();
+/// let buf = b">hello<>world<";
+/// let first = read.decode(buf).unwrap();
+/// assert_eq!(first.consumed(), 7);
+/// assert_eq!(first.item(), Some(&b"hello"[..]));
+/// assert_eq!(read.decode(&buf[7..]).unwrap().item(), Some(&b"world"[..]));
+/// ```
+#[derive(Debug, Clone)]
+pub struct ReadStringDecoder {
+    prefix: Pattern,
+    suffix: Pattern,
+    /// Where the content starts (just past the prefix), once the prefix was found.
+    content_start: Option<usize>,
+    /// Bytes at the front of the current search region known to hold no match start:
+    /// for the prefix search an index into `buf`, for the suffix search one into the
+    /// content.
+    scanned: usize,
+    pos: u64,
+}
+
+impl ReadStringDecoder {
+    /// A read with the given URScript arguments (leading spaces dropped, escapes
+    /// interpreted if asked). Each pattern may hold at most 64 bytes.
+    ///
+    /// ```
+    /// # use urscript_socket::string::ReadStringDecoder;
+    /// let mut read = ReadStringDecoder::new(b"", br"\r", true).unwrap();
+    /// assert_eq!(read.decode(b"OK,1\rNEXT\r").unwrap().item(), Some(&b"OK,1"[..]));
+    /// ```
+    pub fn new(
+        prefix: &[u8],
+        suffix: &[u8],
+        interpret_escape: bool,
+    ) -> Result<Self, ArgumentError> {
+        let mut tmp = [0u8; MAX_PATTERN_LEN];
+        let n = controller_pattern(prefix, interpret_escape, &mut tmp)?;
+        let prefix = Pattern::new(&tmp[..n])?;
+        let n = controller_pattern(suffix, interpret_escape, &mut tmp)?;
+        let suffix = Pattern::new(&tmp[..n])?;
+        Ok(ReadStringDecoder {
+            prefix,
+            suffix,
+            content_start: None,
+            scanned: 0,
+            pos: 0,
+        })
+    }
+
+    /// Absolute stream offset of the next byte to decode.
+    ///
+    /// ```
+    /// # use urscript_socket::string::ReadStringDecoder;
+    /// let mut r = ReadStringDecoder::new(b"", b"", false).unwrap();
+    /// r.decode(b"abc").unwrap();
+    /// assert_eq!(r.position(), 3);
+    /// ```
+    pub fn position(&self) -> u64 {
+        self.pos
+    }
+
+    /// Forgets the search progress (for a read that timed out: the next read starts
+    /// over on the unchanged buffer).
+    ///
+    /// ```
+    /// # use urscript_socket::string::ReadStringDecoder;
+    /// let mut r = ReadStringDecoder::new(b">", b"<", false).unwrap();
+    /// r.decode(b">hel").unwrap();
+    /// r.reset();
+    /// assert_eq!(r.decode(b">hello<").unwrap().item(), Some(&b"hello"[..]));
+    /// ```
+    pub fn reset(&mut self) {
+        self.content_start = None;
+        self.scanned = 0;
+    }
+
+    /// Looks for the string in `buf`. Nothing is consumed until it completes.
+    ///
+    /// ```
+    /// # use urscript_socket::string::ReadStringDecoder;
+    /// let mut r = ReadStringDecoder::new(b">", b"<", false).unwrap();
+    /// assert!(r.decode(b"noise>hel").unwrap().item().is_none());
+    /// assert_eq!(r.decode(b"noise>hello<").unwrap().item(), Some(&b"hello"[..]));
+    /// ```
+    pub fn decode<'a>(&mut self, buf: &'a [u8]) -> Result<Status<&'a [u8]>, DecodeError> {
+        let plen = self.prefix.len();
+        let content_start = match self.content_start {
+            Some(c) => c,
+            None if plen == 0 => 0,
+            None => {
+                let from = self.scanned.saturating_sub(plen - 1).min(buf.len());
+                match self.prefix.find(&buf[from..]) {
+                    Some(i) => {
+                        let c = from + i + plen;
+                        self.content_start = Some(c);
+                        self.scanned = 0;
+                        c
+                    }
+                    None => {
+                        self.scanned = buf.len();
+                        return Ok(Status::Partial { consumed: 0 });
+                    }
+                }
+            }
+        };
+        let content = &buf[content_start..];
+        let slen = self.suffix.len();
+        // The 1024-byte window counts the prefix and the suffix.
+        let max_content = READ_STRING_LIMIT - plen - slen;
+        if slen == 0 {
+            if content.is_empty() {
+                return Ok(Status::Partial { consumed: 0 });
+            }
+            let n = content.len().min(max_content);
+            return Ok(self.complete(&content[..n], content_start + n));
+        }
+        let window = content.len().min(max_content + slen);
+        let from = self.scanned.saturating_sub(slen - 1).min(window);
+        match self.suffix.find(&content[from..window]) {
+            Some(i) => {
+                let end = from + i;
+                Ok(self.complete(&content[..end], content_start + end + slen))
+            }
+            None if content.len() >= max_content + slen => {
+                Ok(self.complete(&content[..max_content], content_start + max_content))
+            }
+            None => {
+                self.scanned = window;
+                Ok(Status::Partial { consumed: 0 })
+            }
+        }
+    }
+
+    fn complete<'a>(&mut self, item: &'a [u8], consumed: usize) -> Status<&'a [u8]> {
+        self.reset();
+        self.pos += consumed as u64;
+        Status::Complete { item, consumed }
+    }
+}
+
+impl Decoder for ReadStringDecoder {
+    type Item<'buf> = &'buf [u8];
+    fn decode<'buf>(&mut self, buf: &'buf [u8]) -> Result<Status<&'buf [u8]>, DecodeError> {
+        ReadStringDecoder::decode(self, buf)
+    }
+    /// End of input is the robot's timeout: `Ok(None)` (the read returns `""`) and the
+    /// buffer is left as it was.
+    fn decode_eof<'buf>(
+        &mut self,
+        buf: &'buf [u8],
+    ) -> Result<Option<(&'buf [u8], usize)>, DecodeError> {
+        let r = match self.decode(buf)? {
+            Status::Complete { item, consumed } => Some((item, consumed)),
+            Status::Partial { .. } => None,
+        };
+        self.reset();
+        Ok(r)
+    }
+    fn position(&self) -> u64 {
+        self.pos
+    }
+}
+
+/// Server-side decoder that splits a byte stream on a delimiter of the user's choice
+/// (1 to 64 bytes): the way to frame a robot's bare `socket_send_string` traffic. The
+/// item is the message without its delimiter, borrowed from the buffer.
+///
+/// For peers that mark the end of a message only by going quiet,
+/// [`flush`](Self::flush) returns what is buffered as one message.
+///
+/// Bound: content longer than `max_len` ([`DEFAULT_MAX_MESSAGE_LEN`]) is a
+/// [`TooLong`](crate::ErrorKind::TooLong) error; the rest of it is discarded through the
+/// next delimiter.
+///
+/// ```
+/// use urscript_socket::string::DelimitedDecoder;
+/// let mut dec = DelimitedDecoder::new(b"\r\n").unwrap();
+/// let buf = b"OK\r\nNE";
+/// let s = dec.decode(buf).unwrap();
+/// assert_eq!(s.item(), Some(&b"OK"[..]));
+/// assert_eq!(dec.flush(&buf[4..]), Some((&b"NE"[..], 2)));
+/// ```
+#[derive(Debug, Clone)]
+pub struct DelimitedDecoder {
+    framer: Framer,
+}
+
+impl DelimitedDecoder {
+    /// A decoder splitting on `delimiter`, with the default bound.
+    ///
+    /// ```
+    /// # use urscript_socket::string::DelimitedDecoder;
+    /// assert!(DelimitedDecoder::new(b"").is_err());
+    /// assert!(DelimitedDecoder::new(b";").is_ok());
+    /// ```
+    pub fn new(delimiter: &[u8]) -> Result<Self, ArgumentError> {
+        Self::with_max_len(delimiter, DEFAULT_MAX_MESSAGE_LEN)
+    }
+
+    /// A decoder splitting on `delimiter` whose messages hold at most `max_len` bytes.
+    ///
+    /// ```
+    /// # use urscript_socket::string::DelimitedDecoder;
+    /// let mut d = DelimitedDecoder::with_max_len(b";", 2).unwrap();
+    /// assert!(d.decode(b"abc;").is_err());
+    /// ```
+    pub fn with_max_len(delimiter: &[u8], max_len: usize) -> Result<Self, ArgumentError> {
+        if delimiter.is_empty() {
+            return Err(ArgumentError::EmptyPattern);
+        }
+        Ok(DelimitedDecoder {
+            framer: Framer::new(Pattern::new(delimiter)?, max_len),
+        })
+    }
+
+    /// The delimiter.
+    ///
+    /// ```
+    /// # use urscript_socket::string::DelimitedDecoder;
+    /// assert_eq!(DelimitedDecoder::new(b";").unwrap().delimiter(), b";");
+    /// ```
+    pub fn delimiter(&self) -> &[u8] {
+        self.framer.pattern().as_bytes()
+    }
+
+    /// Absolute stream offset of the next byte to decode.
+    ///
+    /// ```
+    /// # use urscript_socket::string::DelimitedDecoder;
+    /// let mut d = DelimitedDecoder::new(b";").unwrap();
+    /// d.decode(b"a;").unwrap();
+    /// assert_eq!(d.position(), 2);
+    /// ```
+    pub fn position(&self) -> u64 {
+        self.framer.pos
+    }
+
+    /// The next delimited message.
+    ///
+    /// ```
+    /// # use urscript_socket::string::DelimitedDecoder;
+    /// let mut d = DelimitedDecoder::new(b"<>").unwrap();
+    /// assert_eq!(d.decode(b"a<").unwrap().item(), None);
+    /// assert_eq!(d.decode(b"a<>").unwrap().item(), Some(&b"a"[..]));
+    /// ```
+    pub fn decode<'a>(&mut self, buf: &'a [u8]) -> Result<Status<&'a [u8]>, DecodeError> {
+        self.framer.next(buf)
+    }
+
+    /// Returns everything buffered as one message (at most `max_len` bytes) and resets
+    /// the scan: for peers that end a message by going idle. `None` if nothing is held.
+    ///
+    /// ```
+    /// # use urscript_socket::string::DelimitedDecoder;
+    /// let mut d = DelimitedDecoder::new(b";").unwrap();
+    /// assert_eq!(d.flush(b"partial"), Some((&b"partial"[..], 7)));
+    /// assert_eq!(d.flush(b""), None);
+    /// ```
+    pub fn flush<'a>(&mut self, buf: &'a [u8]) -> Option<(&'a [u8], usize)> {
+        self.framer.take_all(buf)
+    }
+}
+
+impl Decoder for DelimitedDecoder {
+    type Item<'buf> = &'buf [u8];
+    fn decode<'buf>(&mut self, buf: &'buf [u8]) -> Result<Status<&'buf [u8]>, DecodeError> {
+        self.framer.next(buf)
+    }
+    /// End of input flushes: the bytes after the last delimiter are the last message.
+    fn decode_eof<'buf>(
+        &mut self,
+        buf: &'buf [u8],
+    ) -> Result<Option<(&'buf [u8], usize)>, DecodeError> {
+        match self.framer.next(buf)? {
+            Status::Complete { item, consumed } => Ok(Some((item, consumed))),
+            Status::Partial { consumed } => Ok(self
+                .framer
+                .take_all(&buf[consumed..])
+                .map(|(item, n)| (item, n + consumed))),
+        }
+    }
+    fn position(&self) -> u64 {
+        self.framer.pos
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn read_once<'a>(d: &mut ReadStringDecoder, buf: &'a [u8]) -> Option<(&'a [u8], usize)> {
+        match d.decode(buf).unwrap() {
+            Status::Complete { item, consumed } => Some((item, consumed)),
+            Status::Partial { consumed } => {
+                assert_eq!(consumed, 0);
+                None
+            }
+        }
+    }
+
+    #[test]
+    fn limit_without_suffix() {
+        let big = [b'a'; 3000];
+        let mut d = ReadStringDecoder::new(b"", b"", false).unwrap();
+        assert_eq!(read_once(&mut d, &big).unwrap().1, READ_STRING_LIMIT);
+        let mut d = ReadStringDecoder::new(b"", b";", false).unwrap();
+        let (s, used) = read_once(&mut d, &big).unwrap();
+        assert_eq!(
+            (s.len(), used),
+            (READ_STRING_LIMIT - 1, READ_STRING_LIMIT - 1)
+        );
+    }
+
+    #[test]
+    fn prefix_waits_for_content() {
+        let mut d = ReadStringDecoder::new(b">", b"", false).unwrap();
+        assert_eq!(read_once(&mut d, b"xx>"), None);
+        assert_eq!(read_once(&mut d, b"xx>a"), Some((&b"a"[..], 4)));
+    }
+
+    #[test]
+    fn split_prefix_and_suffix() {
+        let mut d = ReadStringDecoder::new(b"<<", b">>", false).unwrap();
+        let all = b"..<<hi>>";
+        for end in 0..all.len() {
+            assert_eq!(read_once(&mut d, &all[..end]), None, "{end}");
+        }
+        assert_eq!(read_once(&mut d, all), Some((&b"hi"[..], 8)));
+    }
+
+    #[test]
+    fn escapes_only_when_asked() {
+        let mut d = ReadStringDecoder::new(b"", br"\n", false).unwrap();
+        assert_eq!(read_once(&mut d, b"a\\nb"), Some((&b"a"[..], 3)));
+        let mut out = [0u8; MAX_PATTERN_LEN];
+        let n = controller_pattern(br"\x\t", true, &mut out).unwrap();
+        assert_eq!(&out[..n], b"\\x\t");
+        assert!(controller_pattern(&[b'a'; 65], false, &mut out).is_err());
+    }
+}

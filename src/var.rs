@@ -1,0 +1,498 @@
+//! Variables: the robot's `socket_set_var(name, v)` (`SET name v\n`) and
+//! `socket_get_var(name)` (`GET name\n`, answered by the server with `name v\n`).
+//!
+//! Each message is one line: the [`LineDecoder`] frames it, then a small nom parser
+//! (complete mode, run once per line) reads it.
+
+use nom::bytes::complete::{tag, take_while1};
+use nom::character::complete::space1;
+use nom::combinator::{opt, recognize};
+use nom::sequence::preceded;
+use nom::{IResult, Parser};
+
+use crate::framer::Pattern;
+use crate::line::LineDecoder;
+use crate::number::{parse_i32, write_i32};
+use crate::{ArgumentError, DecodeError, Decoder, EncodeError, ErrorKind, Sink, Status};
+
+/// Default bound on one variable line, in bytes (a 64-byte name and an int fit easily).
+pub const DEFAULT_MAX_VAR_LINE_LEN: usize = 256;
+
+/// A variable name the robot can send: 1 or more printable ASCII bytes, no space.
+fn is_name_byte(b: u8) -> bool {
+    b.is_ascii_graphic()
+}
+
+fn check_name(name: &str) -> Result<(), EncodeError> {
+    if name.is_empty() || !name.bytes().all(is_name_byte) {
+        return Err(EncodeError::InvalidName);
+    }
+    Ok(())
+}
+
+fn put_named<S: Sink + ?Sized>(
+    head: &[u8],
+    name: &str,
+    value: Option<i32>,
+    sink: &mut S,
+) -> Result<usize, EncodeError> {
+    check_name(name)?;
+    sink.put(head)?;
+    sink.put(name.as_bytes())?;
+    let mut n = head.len() + name.len();
+    if let Some(v) = value {
+        let mut digits = [0u8; 12];
+        digits[0] = b' ';
+        let mut text = [0u8; 11];
+        let len = write_i32(v, &mut text);
+        digits[1..=len].copy_from_slice(&text[..len]);
+        sink.put(&digits[..=len])?;
+        n += len + 1;
+    }
+    sink.put(b"\n")?;
+    Ok(n + 1)
+}
+
+/// Writes `SET name value\n`: what `socket_set_var(name, value)` sends.
+///
+/// ```
+/// use urscript_socket::var::encode_set_var;
+/// let mut out = Vec::new();
+/// encode_set_var("POS_Y", 2200, &mut out).unwrap();
+/// assert_eq!(out, b"SET POS_Y 2200\n");
+/// ```
+pub fn encode_set_var<S: Sink + ?Sized>(
+    name: &str,
+    value: i32,
+    sink: &mut S,
+) -> Result<usize, EncodeError> {
+    put_named(b"SET ", name, Some(value), sink)
+}
+
+/// Writes `GET name\n`: what `socket_get_var(name)` sends before waiting for the reply.
+///
+/// ```
+/// use urscript_socket::var::encode_get_var;
+/// let mut out = Vec::new();
+/// encode_get_var("POS_X", &mut out).unwrap();
+/// assert_eq!(out, b"GET POS_X\n");
+/// ```
+pub fn encode_get_var<S: Sink + ?Sized>(name: &str, sink: &mut S) -> Result<usize, EncodeError> {
+    put_named(b"GET ", name, None, sink)
+}
+
+/// Writes the server's reply to `GET name`: `name value\n`.
+///
+/// ```
+/// use urscript_socket::var::encode_var_reply;
+/// let mut out = Vec::new();
+/// encode_var_reply("POS_X", 1234, &mut out).unwrap();
+/// assert_eq!(out, b"POS_X 1234\n");
+/// ```
+pub fn encode_var_reply<S: Sink + ?Sized>(
+    name: &str,
+    value: i32,
+    sink: &mut S,
+) -> Result<usize, EncodeError> {
+    put_named(b"", name, Some(value), sink)
+}
+
+/// A variable message from the robot.
+///
+/// ```
+/// use urscript_socket::var::{VarMessage, VarMessageDecoder};
+/// let mut dec = VarMessageDecoder::new();
+/// let msg = dec.decode(b"SET POS_Y 2200\n").unwrap().item().unwrap();
+/// assert_eq!(msg, VarMessage::Set { name: "POS_Y", value: 2200 });
+/// ```
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum VarMessage<'a> {
+    /// `SET name value`: `socket_set_var`. No reply is expected.
+    Set {
+        /// Variable name.
+        name: &'a str,
+        /// Its new value.
+        value: i32,
+    },
+    /// `GET name`: `socket_get_var`. Answer with [`encode_var_reply`] within 2 s.
+    Get {
+        /// Variable name.
+        name: &'a str,
+    },
+}
+
+type PResult<'a, T> = IResult<&'a [u8], T>;
+
+/// (is `SET`, name, value token).
+type VarParts<'a> = (bool, &'a [u8], Option<&'a [u8]>);
+
+fn name(input: &[u8]) -> PResult<'_, &[u8]> {
+    take_while1(is_name_byte)(input)
+}
+
+fn int_token(input: &[u8]) -> PResult<'_, &[u8]> {
+    recognize((
+        opt(nom::character::complete::one_of("+-")),
+        take_while1(|b: u8| b.is_ascii_digit()),
+    ))
+    .parse(input)
+}
+
+/// `SET name int` | `GET name`, spaces or tabs between, nothing after. The keyword is
+/// matched first so that an error points into the rest of the line, not at its start.
+fn var_message(input: &[u8]) -> PResult<'_, VarParts<'_>> {
+    let (rest, keyword) = nom::branch::alt((tag(&b"SET"[..]), tag(&b"GET"[..]))).parse(input)?;
+    if keyword == b"SET" {
+        let (rest, (n, v)) = (preceded(space1, name), preceded(space1, int_token)).parse(rest)?;
+        Ok((rest, (true, n, Some(v))))
+    } else {
+        let (rest, n) = preceded(space1, name).parse(rest)?;
+        Ok((rest, (false, n, None)))
+    }
+}
+
+/// `name int`.
+fn var_reply(input: &[u8]) -> PResult<'_, (&[u8], &[u8])> {
+    (name, preceded(space1, int_token)).parse(input)
+}
+
+/// Runs a complete-mode parser over a whole line; the error is (kind, offset in line).
+fn whole_line<'a, T>(
+    line: &'a [u8],
+    parser: impl Fn(&'a [u8]) -> PResult<'a, T>,
+    expected: &'static str,
+) -> Result<T, (ErrorKind, usize)> {
+    match parser(line) {
+        Ok((rest, v)) => {
+            // Trailing spaces are tolerated; anything else is not.
+            let trailing = rest.iter().position(|&b| b != b' ' && b != b'\t');
+            match trailing {
+                None => Ok(v),
+                Some(i) => {
+                    let at = line.len() - rest.len() + i;
+                    Err((unexpected(line, at, expected), at))
+                }
+            }
+        }
+        Err(nom::Err::Error(e) | nom::Err::Failure(e)) => {
+            let at = line.len() - e.input.len();
+            Err((unexpected(line, at, expected), at))
+        }
+        Err(nom::Err::Incomplete(_)) => Err((ErrorKind::Truncated, line.len())),
+    }
+}
+
+fn unexpected(line: &[u8], at: usize, expected: &'static str) -> ErrorKind {
+    match line.get(at) {
+        Some(&found) => ErrorKind::UnexpectedByte { found, expected },
+        None => ErrorKind::Truncated,
+    }
+}
+
+fn int_value(token: &[u8], token_at: usize) -> Result<i32, (ErrorKind, usize)> {
+    parse_i32(token).map_err(|(k, i)| (k, token_at + i))
+}
+
+fn offset_in(line: &[u8], part: &[u8]) -> usize {
+    part.as_ptr() as usize - line.as_ptr() as usize
+}
+
+/// Server-side decoder of the robot's `SET`/`GET` lines. Bound: lines of at most
+/// `max_len` bytes ([`DEFAULT_MAX_VAR_LINE_LEN`]). A malformed line is an error at the
+/// offending byte and is consumed whole; the next line decodes normally.
+///
+/// ```
+/// use urscript_socket::var::{VarMessage, VarMessageDecoder};
+/// let mut dec = VarMessageDecoder::new();
+/// let buf = b"GET POS_X\nSET A 1\n";
+/// let first = dec.decode(buf).unwrap();
+/// assert_eq!(first.consumed(), 10);
+/// assert_eq!(first.item(), Some(VarMessage::Get { name: "POS_X" }));
+/// ```
+#[derive(Debug, Clone, Default)]
+pub struct VarMessageDecoder {
+    lines: LineDecoder,
+}
+
+impl VarMessageDecoder {
+    /// A decoder with the default bound.
+    ///
+    /// ```
+    /// # use urscript_socket::var::VarMessageDecoder;
+    /// let _ = VarMessageDecoder::new();
+    /// ```
+    pub fn new() -> Self {
+        VarMessageDecoder {
+            lines: LineDecoder::with_max_len(DEFAULT_MAX_VAR_LINE_LEN),
+        }
+    }
+
+    /// Absolute stream offset of the next byte to decode.
+    ///
+    /// ```
+    /// # use urscript_socket::var::VarMessageDecoder;
+    /// let mut d = VarMessageDecoder::new();
+    /// d.decode(b"GET A\n").unwrap();
+    /// assert_eq!(d.position(), 6);
+    /// ```
+    pub fn position(&self) -> u64 {
+        self.lines.position()
+    }
+
+    /// The next `SET`/`GET` message.
+    ///
+    /// ```
+    /// # use urscript_socket::{var::VarMessageDecoder, ErrorKind};
+    /// let mut d = VarMessageDecoder::new();
+    /// let e = d.decode(b"SET A x\n").unwrap_err();
+    /// assert_eq!(e.offset(), 6);
+    /// ```
+    pub fn decode<'a>(&mut self, buf: &'a [u8]) -> Result<Status<VarMessage<'a>>, DecodeError> {
+        let start = self.lines.position();
+        match self.lines.decode(buf)? {
+            Status::Partial { consumed } => Ok(Status::Partial { consumed }),
+            Status::Complete { item, consumed } => {
+                let line_at = start + (consumed - item.len() - line_end_len(buf, consumed)) as u64;
+                parse_var_message(item)
+                    .map(|item| Status::Complete { item, consumed })
+                    .map_err(|(kind, at)| DecodeError::new(kind, line_at + at as u64, consumed))
+            }
+        }
+    }
+
+    /// At end of input: an unterminated line is [`Truncated`](ErrorKind::Truncated).
+    ///
+    /// ```
+    /// # use urscript_socket::var::VarMessageDecoder;
+    /// assert!(VarMessageDecoder::new().decode_eof(b"GET A").is_err());
+    /// ```
+    pub fn decode_eof<'a>(
+        &mut self,
+        buf: &'a [u8],
+    ) -> Result<Option<(VarMessage<'a>, usize)>, DecodeError> {
+        match self.decode(buf) {
+            Ok(Status::Complete { item, consumed }) => Ok(Some((item, consumed))),
+            Ok(Status::Partial { consumed }) => self
+                .lines
+                .decode_eof(&buf[consumed..])
+                .map(|_| None)
+                .map_err(|e| DecodeError::new(e.kind(), e.offset(), e.skip() + consumed)),
+            Err(e) => Err(e),
+        }
+    }
+}
+
+/// Length of the line terminator (LF, or CR LF) that ends the `consumed` bytes.
+fn line_end_len(buf: &[u8], consumed: usize) -> usize {
+    if consumed >= 2 && buf[consumed - 2] == b'\r' {
+        2
+    } else {
+        1
+    }
+}
+
+/// Parses one `SET name int` / `GET name` line (without its LF).
+///
+/// ```
+/// use urscript_socket::var::{parse_var_message, VarMessage};
+/// assert_eq!(parse_var_message(b"GET A"), Ok(VarMessage::Get { name: "A" }));
+/// assert!(parse_var_message(b"PUT A").is_err());
+/// ```
+pub fn parse_var_message(line: &[u8]) -> Result<VarMessage<'_>, (ErrorKind, usize)> {
+    let (is_set, name, value) = whole_line(line, var_message, "`SET name int` or `GET name`")?;
+    let name = ascii(name);
+    match value {
+        Some(token) => Ok(VarMessage::Set {
+            name,
+            value: int_value(token, offset_in(line, token))?,
+        }),
+        None if is_set => Err((ErrorKind::Truncated, line.len())),
+        None => Ok(VarMessage::Get { name }),
+    }
+}
+
+fn ascii(name: &[u8]) -> &str {
+    // `name` only holds ASCII graphic bytes (the parser checked), so this never fails.
+    core::str::from_utf8(name).unwrap_or("")
+}
+
+impl Decoder for VarMessageDecoder {
+    type Item<'buf> = VarMessage<'buf>;
+    fn decode<'buf>(&mut self, buf: &'buf [u8]) -> Result<Status<VarMessage<'buf>>, DecodeError> {
+        VarMessageDecoder::decode(self, buf)
+    }
+    fn decode_eof<'buf>(
+        &mut self,
+        buf: &'buf [u8],
+    ) -> Result<Option<(VarMessage<'buf>, usize)>, DecodeError> {
+        VarMessageDecoder::decode_eof(self, buf)
+    }
+    fn position(&self) -> u64 {
+        self.lines.position()
+    }
+}
+
+/// Robot-side decoder of the server's reply to `GET name`: a line `name int` (leading
+/// zeros allowed, as gripper daemons send `PRE 077`). A reply naming another variable is a
+/// [`NameMismatch`](ErrorKind::NameMismatch) error; the emulated `get_var` then returns 0.
+///
+/// ```
+/// use urscript_socket::var::VarReplyDecoder;
+/// let mut dec = VarReplyDecoder::new("POS_X").unwrap();
+/// assert_eq!(dec.decode(b"POS_X 1234\n").unwrap().item(), Some(1234));
+/// ```
+#[derive(Debug, Clone)]
+pub struct VarReplyDecoder {
+    name: Pattern,
+    lines: LineDecoder,
+}
+
+impl VarReplyDecoder {
+    /// A decoder for replies about `name` (1 to 64 printable ASCII bytes, no space).
+    ///
+    /// ```
+    /// # use urscript_socket::var::VarReplyDecoder;
+    /// assert!(VarReplyDecoder::new("has space").is_err());
+    /// ```
+    pub fn new(name: &str) -> Result<Self, ArgumentError> {
+        if check_name(name).is_err() {
+            return Err(ArgumentError::InvalidName);
+        }
+        Ok(VarReplyDecoder {
+            name: Pattern::new(name.as_bytes())?,
+            lines: LineDecoder::with_max_len(DEFAULT_MAX_VAR_LINE_LEN),
+        })
+    }
+
+    /// Absolute stream offset of the next byte to decode.
+    ///
+    /// ```
+    /// # use urscript_socket::var::VarReplyDecoder;
+    /// let mut d = VarReplyDecoder::new("A").unwrap();
+    /// d.decode(b"A 1\n").unwrap();
+    /// assert_eq!(d.position(), 4);
+    /// ```
+    pub fn position(&self) -> u64 {
+        self.lines.position()
+    }
+
+    /// The value of the next reply line.
+    ///
+    /// ```
+    /// # use urscript_socket::{var::VarReplyDecoder, ErrorKind};
+    /// let mut d = VarReplyDecoder::new("PRE").unwrap();
+    /// assert_eq!(d.decode(b"PRE 077\n").unwrap().item(), Some(77));
+    /// assert_eq!(d.decode(b"POS 1\n").unwrap_err().kind(), ErrorKind::NameMismatch);
+    /// ```
+    pub fn decode(&mut self, buf: &[u8]) -> Result<Status<i32>, DecodeError> {
+        let start = self.lines.position();
+        match self.lines.decode(buf)? {
+            Status::Partial { consumed } => Ok(Status::Partial { consumed }),
+            Status::Complete { item, consumed } => {
+                let line_at = start + (consumed - item.len() - line_end_len(buf, consumed)) as u64;
+                let parsed = whole_line(item, var_reply, "`name int`").and_then(|(name, token)| {
+                    if name != self.name.as_bytes() {
+                        return Err((ErrorKind::NameMismatch, 0));
+                    }
+                    int_value(token, offset_in(item, token))
+                });
+                parsed
+                    .map(|item| Status::Complete { item, consumed })
+                    .map_err(|(kind, at)| DecodeError::new(kind, line_at + at as u64, consumed))
+            }
+        }
+    }
+
+    /// At end of input: an unterminated line is [`Truncated`](ErrorKind::Truncated).
+    ///
+    /// ```
+    /// # use urscript_socket::var::VarReplyDecoder;
+    /// assert!(VarReplyDecoder::new("A").unwrap().decode_eof(b"A 1").is_err());
+    /// ```
+    pub fn decode_eof(&mut self, buf: &[u8]) -> Result<Option<(i32, usize)>, DecodeError> {
+        match self.decode(buf) {
+            Ok(Status::Complete { item, consumed }) => Ok(Some((item, consumed))),
+            Ok(Status::Partial { consumed }) => self
+                .lines
+                .decode_eof(&buf[consumed..])
+                .map(|_| None)
+                .map_err(|e| DecodeError::new(e.kind(), e.offset(), e.skip() + consumed)),
+            Err(e) => Err(e),
+        }
+    }
+}
+
+impl Decoder for VarReplyDecoder {
+    type Item<'buf> = i32;
+    fn decode(&mut self, buf: &[u8]) -> Result<Status<i32>, DecodeError> {
+        VarReplyDecoder::decode(self, buf)
+    }
+    fn decode_eof(&mut self, buf: &[u8]) -> Result<Option<(i32, usize)>, DecodeError> {
+        VarReplyDecoder::decode_eof(self, buf)
+    }
+    fn position(&self) -> u64 {
+        self.lines.position()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use alloc::vec::Vec;
+
+    #[test]
+    fn messages_and_errors() {
+        assert_eq!(
+            parse_var_message(b"SET  X\t-5  "),
+            Ok(VarMessage::Set {
+                name: "X",
+                value: -5
+            })
+        );
+        assert_eq!(
+            parse_var_message(b"SET X").unwrap_err().0,
+            ErrorKind::Truncated
+        );
+        assert_eq!(
+            parse_var_message(b"SET X 99999999999").unwrap_err().0,
+            ErrorKind::IntegerOutOfRange
+        );
+        let (kind, at) = parse_var_message(b"GET X Y").unwrap_err();
+        assert_eq!(
+            (kind, at),
+            (
+                ErrorKind::UnexpectedByte {
+                    found: b'Y',
+                    expected: "`SET name int` or `GET name`"
+                },
+                6
+            )
+        );
+    }
+
+    #[test]
+    fn error_offsets_are_absolute() {
+        let mut d = VarMessageDecoder::new();
+        let buf = b"GET A\r\nSET B z\n";
+        assert_eq!(d.decode(buf).unwrap().consumed(), 7);
+        let e = d.decode(&buf[7..]).unwrap_err();
+        assert_eq!((e.offset(), e.skip()), (13, 8));
+    }
+
+    #[test]
+    fn names_are_checked() {
+        let mut out = Vec::new();
+        assert_eq!(
+            encode_set_var("", 1, &mut out),
+            Err(EncodeError::InvalidName)
+        );
+        assert_eq!(
+            encode_get_var("a b", &mut out),
+            Err(EncodeError::InvalidName)
+        );
+        assert_eq!(
+            encode_var_reply("a\n", 1, &mut out),
+            Err(EncodeError::InvalidName)
+        );
+    }
+}
