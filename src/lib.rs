@@ -91,3 +91,8 @@ pub use buffer::RecvBuffer;
 pub use error::{ArgumentError, DecodeError, EncodeError, ErrorKind};
 pub use sink::{Sink, SliceSink};
 pub use status::{Decoder, Status};
+
+/// The README's code, compiled as a doc test so it cannot rot.
+#[cfg(doctest)]
+#[doc = include_str!("../README.md")]
+pub struct ReadmeDoctests;
