@@ -87,6 +87,9 @@ pub mod stx_etx;
 pub mod to_str;
 pub mod var;
 
+#[cfg(feature = "alloc")]
+pub mod robot;
+
 pub use buffer::RecvBuffer;
 pub use error::{ArgumentError, DecodeError, EncodeError, ErrorKind};
 pub use sink::{Sink, SliceSink};
