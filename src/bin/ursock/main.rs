@@ -1,0 +1,221 @@
+//! `ursock`: the socket debug assistant for Universal Robots' URScript `socket_*`
+//! functions. See `ursock --help`.
+#![forbid(unsafe_code)]
+
+mod demo;
+mod formats;
+mod listen;
+mod offline;
+mod script;
+mod show;
+
+use clap::{Parser, Subcommand};
+use urscript_socket::robot::ReadCall;
+
+use formats::DecodeFormat;
+
+/// Socket debug assistant for UR robots: every URScript socket format, both directions.
+#[derive(Parser)]
+#[command(name = "ursock", version, about, long_about = None)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// A server and a virtual robot on 127.0.0.1 walk through every socket function;
+    /// prints both sides' traffic. Needs no robot.
+    Demo,
+    /// Listen for robots (socket_open connects here) and show their traffic decoded.
+    Listen {
+        /// Address to bind.
+        #[arg(long, default_value = "0.0.0.0")]
+        bind: String,
+        /// Port to listen on (0 picks a free one).
+        #[arg(long)]
+        port: u16,
+        /// How to decode what robots send.
+        #[arg(long, value_enum)]
+        decode: Option<DecodeFormat>,
+        /// Delimiter for `--decode delimiter` (`\r`, `\n`, `\t` are interpreted).
+        #[arg(long, default_value = "\\n")]
+        delimiter: String,
+        /// Reply to each decoded message, e.g. `floats 0.1 0.2 0.3`, `line OK`,
+        /// `int32 1 2`, `bytes 2 3`, `string >ok<`. GET is always answered from SET.
+        #[arg(long, allow_hyphen_values = true)]
+        reply: Option<String>,
+        /// Exit after this many robots have connected and left.
+        #[arg(long)]
+        exit_after: Option<usize>,
+    },
+    /// A virtual robot running URScript socket calls against a server.
+    Robot {
+        /// Open `socket_0` to HOST:PORT before the script runs.
+        #[arg(long)]
+        connect: Option<String>,
+        /// A file of calls, one per line.
+        #[arg(long, conflicts_with = "eval")]
+        script: Option<std::path::PathBuf>,
+        /// Calls given on the command line (repeatable).
+        #[arg(short = 'e', long = "eval")]
+        eval: Vec<String>,
+        /// Also print the bytes sent and received.
+        #[arg(long)]
+        trace: bool,
+    },
+    /// Write the bytes a server (or with --robot, the robot) sends.
+    /// Formats: floats, floats-lf, int32, bytes, string, line, framed PREFIX TEXT SUFFIX,
+    /// var-reply NAME INT; robot: line, string, byte, int, set-var, get-var, stx-etx, value.
+    Encode {
+        /// The format.
+        format: String,
+        /// The values.
+        #[arg(allow_negative_numbers = true)]
+        values: Vec<String>,
+        /// Print hex instead of raw bytes.
+        #[arg(long)]
+        hex: bool,
+        /// Encode the robot's sends instead of the server's.
+        #[arg(long)]
+        robot: bool,
+    },
+    /// Run a robot read function on the bytes of stdin (end of input = timeout) and print
+    /// what URScript gets, one line per read.
+    Read {
+        #[command(subcommand)]
+        call: ReadCmd,
+        /// Repeat the read K times.
+        #[arg(long, global = true, default_value_t = 1)]
+        repeat: usize,
+    },
+    /// Decode what a robot sent (stdin), one message per line.
+    Decode {
+        /// The format.
+        #[arg(value_enum)]
+        format: DecodeFormat,
+        /// Delimiter for `delimiter` (`\r`, `\n`, `\t` are interpreted).
+        #[arg(long, default_value = "\\n")]
+        delimiter: String,
+        /// JSON lines.
+        #[arg(long)]
+        json: bool,
+    },
+}
+
+#[derive(Subcommand)]
+enum ReadCmd {
+    /// socket_read_ascii_float(N)
+    AsciiFloat { number: usize },
+    /// socket_read_binary_integer(N)
+    BinaryInteger { number: usize },
+    /// socket_read_byte_list(N)
+    ByteList { number: usize },
+    /// socket_read_line()
+    Line,
+    /// socket_read_string(prefix, suffix, interpret_escape)
+    String {
+        #[arg(long, default_value = "", allow_hyphen_values = true)]
+        prefix: String,
+        #[arg(long, default_value = "", allow_hyphen_values = true)]
+        suffix: String,
+        #[arg(long)]
+        interpret_escape: bool,
+    },
+}
+
+/// `\r`, `\n`, `\t`, `\\` in a command-line delimiter.
+fn unescape(s: &str) -> Vec<u8> {
+    let mut out = Vec::new();
+    let mut it = s.bytes().peekable();
+    while let Some(b) = it.next() {
+        if b == b'\\' {
+            match it.peek() {
+                Some(b'n') => out.push(b'\n'),
+                Some(b'r') => out.push(b'\r'),
+                Some(b't') => out.push(b'\t'),
+                Some(b'\\') => out.push(b'\\'),
+                _ => {
+                    out.push(b);
+                    continue;
+                }
+            }
+            it.next();
+        } else {
+            out.push(b);
+        }
+    }
+    out
+}
+
+fn run(cli: Cli) -> Result<(), String> {
+    match cli.command {
+        Command::Demo => demo::run(),
+        Command::Listen {
+            bind,
+            port,
+            decode,
+            delimiter,
+            reply,
+            exit_after,
+        } => listen::listen(listen::ListenOptions {
+            bind,
+            port,
+            decode,
+            delimiter: unescape(&delimiter),
+            reply: reply.map(|r| r.split_whitespace().map(String::from).collect()),
+            exit_after,
+        }),
+        Command::Robot {
+            connect,
+            script,
+            eval,
+            trace,
+        } => {
+            let text = match script {
+                Some(path) => std::fs::read_to_string(&path)
+                    .map_err(|e| format!("{}: {e}", path.display()))?,
+                None if !eval.is_empty() => eval.join("\n"),
+                None => return Err("give --script FILE or -e 'CALL'".into()),
+            };
+            script::run(&text, connect.as_deref(), trace)
+        }
+        Command::Encode {
+            format,
+            values,
+            hex,
+            robot,
+        } => offline::encode(&format, &values, hex, robot),
+        Command::Read { call, repeat } => {
+            let call = match call {
+                ReadCmd::AsciiFloat { number } => ReadCall::AsciiFloat { number },
+                ReadCmd::BinaryInteger { number } => ReadCall::BinaryInteger { number },
+                ReadCmd::ByteList { number } => ReadCall::ByteList { number },
+                ReadCmd::Line => ReadCall::Line,
+                ReadCmd::String {
+                    prefix,
+                    suffix,
+                    interpret_escape,
+                } => ReadCall::String {
+                    prefix: prefix.into_bytes(),
+                    suffix: suffix.into_bytes(),
+                    interpret_escape,
+                },
+            };
+            offline::read(call, repeat)
+        }
+        Command::Decode {
+            format,
+            delimiter,
+            json,
+        } => offline::decode(format, &unescape(&delimiter), json),
+    }
+}
+
+fn main() {
+    let cli = Cli::parse();
+    if let Err(msg) = run(cli) {
+        eprintln!("ursock: {msg}");
+        std::process::exit(1);
+    }
+}

@@ -1,0 +1,410 @@
+//! `ursock robot`: a virtual robot running socket calls written as URScript, one per line.
+//!
+//! The subset: `[name =] function(arg, ..., key=arg)` with string literals (no escapes,
+//! as in URScript), numbers, `True`/`False`, lists `[...]` and poses `p[...]`, variables
+//! assigned earlier, `#` comments. List and pose literals are read by the library's
+//! `to_str` parser.
+
+use std::collections::HashMap;
+use std::time::Duration;
+
+use urscript_socket::robot::{
+    Policy, ReadCall, ReadResult, Timeout, VirtualRobot, DEFAULT_SOCKET_NAME,
+};
+use urscript_socket::to_str::{parse_value, Scalar, Value};
+
+use crate::show::{hex, quoted};
+
+/// An argument value.
+#[derive(Debug, Clone)]
+enum Arg {
+    Str(Vec<u8>),
+    Num(f64),
+    Bool(bool),
+    /// A list or pose literal, kept as text and read with `to_str::parse_value`.
+    Bracketed(String),
+    /// The result of an earlier read.
+    Result(Box<ReadResult>),
+}
+
+struct Call {
+    target: Option<String>,
+    function: String,
+    positional: Vec<Arg>,
+    named: Vec<(String, Arg)>,
+}
+
+/// Splits a line into a call. Errors are messages without the line number.
+fn parse_line(line: &str, vars: &HashMap<String, ReadResult>) -> Result<Option<Call>, String> {
+    let code = strip_comment(line).trim();
+    if code.is_empty() {
+        return Ok(None);
+    }
+    let (target, rest) = match code.find('=') {
+        Some(eq) if is_ident(code[..eq].trim()) && !code[..eq].contains('(') => {
+            (Some(code[..eq].trim().to_string()), code[eq + 1..].trim())
+        }
+        _ => (None, code),
+    };
+    let open = rest
+        .find('(')
+        .ok_or_else(|| format!("expected a call like `f(...)`, found `{rest}`"))?;
+    let function = rest[..open].trim().to_string();
+    if !is_ident(&function) {
+        return Err(format!("`{function}` is not a function name"));
+    }
+    let inner = rest[open + 1..]
+        .strip_suffix(')')
+        .ok_or_else(|| format!("missing `)` at the end of `{rest}`"))?;
+    let mut call = Call {
+        target,
+        function,
+        positional: Vec::new(),
+        named: Vec::new(),
+    };
+    for raw in split_args(inner)? {
+        let raw = raw.trim();
+        if raw.is_empty() {
+            return Err("empty argument".into());
+        }
+        match raw.find('=') {
+            Some(eq) if is_ident(raw[..eq].trim()) && !raw.starts_with('"') => {
+                call.named.push((
+                    raw[..eq].trim().to_string(),
+                    parse_arg(raw[eq + 1..].trim(), vars)?,
+                ));
+            }
+            _ => call.positional.push(parse_arg(raw, vars)?),
+        }
+    }
+    Ok(Some(call))
+}
+
+fn is_ident(s: &str) -> bool {
+    let mut chars = s.chars();
+    matches!(chars.next(), Some(c) if c.is_ascii_alphabetic() || c == '_')
+        && chars.all(|c| c.is_ascii_alphanumeric() || c == '_')
+}
+
+fn strip_comment(line: &str) -> &str {
+    let mut in_str = false;
+    for (i, c) in line.char_indices() {
+        match c {
+            '"' => in_str = !in_str,
+            '#' if !in_str => return &line[..i],
+            _ => {}
+        }
+    }
+    line
+}
+
+/// Splits on commas outside strings and brackets.
+fn split_args(s: &str) -> Result<Vec<&str>, String> {
+    let (mut out, mut depth, mut in_str, mut start) = (Vec::new(), 0i32, false, 0);
+    for (i, c) in s.char_indices() {
+        match c {
+            '"' => in_str = !in_str,
+            '[' if !in_str => depth += 1,
+            ']' if !in_str => depth -= 1,
+            ',' if !in_str && depth == 0 => {
+                out.push(&s[start..i]);
+                start = i + 1;
+            }
+            _ => {}
+        }
+    }
+    if in_str {
+        return Err("unterminated string literal".into());
+    }
+    if depth != 0 {
+        return Err("unbalanced brackets".into());
+    }
+    if !s.trim().is_empty() {
+        out.push(&s[start..]);
+    }
+    Ok(out)
+}
+
+fn parse_arg(raw: &str, vars: &HashMap<String, ReadResult>) -> Result<Arg, String> {
+    if let Some(body) = raw.strip_prefix('"') {
+        let text = body
+            .strip_suffix('"')
+            .ok_or_else(|| format!("bad string literal {raw}"))?;
+        return Ok(Arg::Str(text.as_bytes().to_vec()));
+    }
+    if raw.starts_with('[') || raw.starts_with("p[") {
+        parse_value(raw.as_bytes()).map_err(|e| format!("bad list or pose `{raw}`: {e}"))?;
+        return Ok(Arg::Bracketed(raw.to_string()));
+    }
+    match raw {
+        "True" => return Ok(Arg::Bool(true)),
+        "False" => return Ok(Arg::Bool(false)),
+        _ => {}
+    }
+    if let Some(v) = vars.get(raw) {
+        return Ok(Arg::Result(Box::new(v.clone())));
+    }
+    raw.parse::<f64>()
+        .map(Arg::Num)
+        .map_err(|_| format!("`{raw}` is not a literal or a known variable"))
+}
+
+/// Binds positional and named arguments to a function's parameter list.
+struct Args {
+    values: Vec<Option<Arg>>,
+    names: &'static [&'static str],
+}
+
+impl Args {
+    fn bind(call: &Call, names: &'static [&'static str]) -> Result<Self, String> {
+        if call.positional.len() > names.len() {
+            return Err(format!(
+                "{} takes at most {} arguments",
+                call.function,
+                names.len()
+            ));
+        }
+        let mut values: Vec<Option<Arg>> = vec![None; names.len()];
+        for (slot, a) in values.iter_mut().zip(&call.positional) {
+            *slot = Some(a.clone());
+        }
+        for (k, v) in &call.named {
+            let i = names
+                .iter()
+                .position(|n| n == k)
+                .ok_or_else(|| format!("{} has no parameter `{k}`", call.function))?;
+            values[i] = Some(v.clone());
+        }
+        Ok(Args { values, names })
+    }
+
+    fn get(&self, i: usize) -> Option<&Arg> {
+        self.values.get(i).and_then(Option::as_ref)
+    }
+
+    fn str_or(&self, i: usize, default: &str) -> Result<Vec<u8>, String> {
+        match self.get(i) {
+            None => Ok(default.as_bytes().to_vec()),
+            Some(Arg::Str(s)) => Ok(s.clone()),
+            Some(_) => Err(format!("`{}` must be a string", self.names[i])),
+        }
+    }
+
+    fn name_or_default(&self, i: usize) -> Result<String, String> {
+        Ok(String::from_utf8_lossy(&self.str_or(i, DEFAULT_SOCKET_NAME)?).into_owned())
+    }
+
+    fn num(&self, i: usize) -> Result<f64, String> {
+        match self.get(i) {
+            Some(Arg::Num(v)) => Ok(*v),
+            Some(_) => Err(format!("`{}` must be a number", self.names[i])),
+            None => Err(format!("missing argument `{}`", self.names[i])),
+        }
+    }
+
+    fn int(&self, i: usize) -> Result<i64, String> {
+        let v = self.num(i)?;
+        if v.fract() != 0.0 || !(-2147483648.0..=2147483647.0).contains(&v) {
+            return Err(format!("`{}` must be an int32", self.names[i]));
+        }
+        Ok(v as i64)
+    }
+
+    fn bool_or(&self, i: usize, default: bool) -> Result<bool, String> {
+        match self.get(i) {
+            None => Ok(default),
+            Some(Arg::Bool(b)) => Ok(*b),
+            Some(_) => Err(format!("`{}` must be True or False", self.names[i])),
+        }
+    }
+
+    fn timeout(&self, i: usize) -> Result<Timeout, String> {
+        match self.get(i) {
+            None => Ok(Timeout::default()),
+            Some(Arg::Num(s)) => Ok(Timeout::from_secs_f64(*s)),
+            Some(_) => Err("`timeout` must be a number of seconds".into()),
+        }
+    }
+}
+
+/// Runs `script` (the text of a file or `-e` lines) against a virtual robot; `connect`
+/// opens `socket_0` first. Prints each call and its result; returns an error naming the
+/// line for unsupported script.
+pub fn run(script: &str, connect: Option<&str>, trace: bool) -> Result<(), String> {
+    let mut robot = VirtualRobot::new(Policy::default());
+    if trace {
+        robot.set_observer(|name, dir, bytes| {
+            let arrow = match dir {
+                urscript_socket::robot::Direction::RobotToServer => "->",
+                urscript_socket::robot::Direction::ServerToRobot => "<-",
+            };
+            println!("    {name} {arrow} {}  {}", hex(bytes), quoted(bytes));
+        });
+    }
+    if let Some(addr) = connect {
+        let ok = robot
+            .socket_open(addr, DEFAULT_SOCKET_NAME)
+            .map_err(|e| e.to_string())?;
+        if !ok {
+            return Err(format!("cannot connect to {addr}"));
+        }
+        println!("socket_open(\"{addr}\") -> True");
+    }
+    let mut vars: HashMap<String, ReadResult> = HashMap::new();
+    for (n, line) in script.lines().enumerate() {
+        let lineno = n + 1;
+        let call = match parse_line(line, &vars).map_err(|e| format!("line {lineno}: {e}"))? {
+            Some(c) => c,
+            None => continue,
+        };
+        let shown = strip_comment(line).trim().to_string();
+        let outcome = execute(&mut robot, &call).map_err(|e| format!("line {lineno}: {e}"))?;
+        match outcome {
+            Outcome::Sent => println!("{shown}"),
+            Outcome::Printed(text) => println!("{shown} -> {text}"),
+            Outcome::Result(r) => {
+                println!("{shown} -> {}", r.to_urscript());
+                if let Some(t) = &call.target {
+                    vars.insert(t.clone(), *r);
+                }
+            }
+        }
+    }
+    Ok(())
+}
+
+enum Outcome {
+    Sent,
+    Printed(String),
+    Result(Box<ReadResult>),
+}
+
+fn value_text(arg: &Arg) -> Result<Vec<u8>, String> {
+    let mut out = Vec::new();
+    let encode = |v: &Value<'_>, out: &mut Vec<u8>| {
+        urscript_socket::to_str::encode_value(v, out).map_err(|e| e.to_string())
+    };
+    match arg {
+        Arg::Str(s) => {
+            out.extend_from_slice(s);
+        }
+        Arg::Num(v) if v.fract() == 0.0 && v.abs() < 2147483648.0 => {
+            encode(&Value::Scalar(Scalar::Int(*v as i32)), &mut out)?;
+        }
+        Arg::Num(v) => {
+            encode(&Value::Scalar(Scalar::Float(*v)), &mut out)?;
+        }
+        Arg::Bool(b) => {
+            encode(&Value::Scalar(Scalar::Bool(*b)), &mut out)?;
+        }
+        Arg::Bracketed(text) => {
+            let v = parse_value(text.as_bytes()).map_err(|e| e.to_string())?;
+            encode(&v, &mut out)?;
+        }
+        Arg::Result(r) => {
+            out.extend_from_slice(r.to_urscript().as_bytes());
+        }
+    }
+    Ok(out)
+}
+
+fn execute(robot: &mut VirtualRobot, call: &Call) -> Result<Outcome, String> {
+    let e = |e: urscript_socket::robot::RobotError| e.to_string();
+    let f = call.function.as_str();
+    Ok(match f {
+        "socket_open" => {
+            let a = Args::bind(call, &["address", "port", "socket_name"])?;
+            let host = String::from_utf8_lossy(&a.str_or(0, "")?).into_owned();
+            let port = a.int(1)?;
+            let port = u16::try_from(port).map_err(|_| "port must be 0..=65535".to_string())?;
+            let ok = robot.socket_open((host.as_str(), port), &a.name_or_default(2)?).map_err(e)?;
+            Outcome::Printed(if ok { "True" } else { "False" }.into())
+        }
+        "socket_close" => {
+            let a = Args::bind(call, &["socket_name"])?;
+            robot.socket_close(&a.name_or_default(0)?);
+            Outcome::Sent
+        }
+        "socket_send_string" | "socket_send_line" => {
+            let a = Args::bind(call, &["str", "socket_name"])?;
+            let text = value_text(a.get(0).ok_or("missing argument `str`")?)?;
+            let name = a.name_or_default(1)?;
+            if f == "socket_send_line" {
+                robot.socket_send_line(&text, &name).map_err(e)?;
+            } else {
+                robot.socket_send_string(&text, &name).map_err(e)?;
+            }
+            Outcome::Printed("True".into())
+        }
+        "socket_send_byte" => {
+            let a = Args::bind(call, &["value", "socket_name"])?;
+            let v = u8::try_from(a.int(0)?).map_err(|_| "`value` must be 0..=255".to_string())?;
+            robot.socket_send_byte(v, &a.name_or_default(1)?).map_err(e)?;
+            Outcome::Printed("True".into())
+        }
+        "socket_send_int" => {
+            let a = Args::bind(call, &["value", "socket_name"])?;
+            robot.socket_send_int(a.int(0)? as i32, &a.name_or_default(1)?).map_err(e)?;
+            Outcome::Printed("True".into())
+        }
+        "socket_set_var" => {
+            let a = Args::bind(call, &["name", "value", "socket_name"])?;
+            let name = String::from_utf8_lossy(&a.str_or(0, "")?).into_owned();
+            robot.socket_set_var(&name, a.int(1)? as i32, &a.name_or_default(2)?).map_err(e)?;
+            Outcome::Sent
+        }
+        "socket_get_var" => {
+            let a = Args::bind(call, &["name", "socket_name"])?;
+            let name = String::from_utf8_lossy(&a.str_or(0, "")?).into_owned();
+            let v = robot.socket_get_var(&name, &a.name_or_default(1)?).map_err(e)?;
+            Outcome::Result(Box::new(ReadResult::Int(v)))
+        }
+        "socket_read_ascii_float" | "socket_read_binary_integer" | "socket_read_byte_list" => {
+            let a = Args::bind(call, &["number", "socket_name", "timeout"])?;
+            let number = usize::try_from(a.int(0)?).unwrap_or(0);
+            let read = match f {
+                "socket_read_ascii_float" => ReadCall::AsciiFloat { number },
+                "socket_read_binary_integer" => ReadCall::BinaryInteger { number },
+                _ => ReadCall::ByteList { number },
+            };
+            Outcome::Result(Box::new(robot.read(read, &a.name_or_default(1)?, a.timeout(2)?).map_err(e)?))
+        }
+        "socket_read_line" => {
+            let a = Args::bind(call, &["socket_name", "timeout"])?;
+            Outcome::Result(Box::new(robot.read(ReadCall::Line, &a.name_or_default(0)?, a.timeout(1)?).map_err(e)?))
+        }
+        "socket_read_string" => {
+            let a = Args::bind(call, &["socket_name", "prefix", "suffix", "interpret_escape", "timeout"])?;
+            let read = ReadCall::String {
+                prefix: a.str_or(1, "")?,
+                suffix: a.str_or(2, "")?,
+                interpret_escape: a.bool_or(3, false)?,
+            };
+            Outcome::Result(Box::new(robot.read(read, &a.name_or_default(0)?, a.timeout(4)?).map_err(e)?))
+        }
+        "sleep" => {
+            let a = Args::bind(call, &["t"])?;
+            let t = a.num(0)?;
+            if !(0.0..=3600.0).contains(&t) {
+                return Err("sleep takes 0 to 3600 seconds".into());
+            }
+            std::thread::sleep(Duration::from_secs_f64(t));
+            Outcome::Sent
+        }
+        "textmsg" => {
+            let mut text = Vec::new();
+            for arg in &call.positional {
+                text.extend(value_text(arg)?);
+            }
+            Outcome::Printed(String::from_utf8_lossy(&text).into_owned())
+        }
+        other => {
+            return Err(format!(
+                "unsupported call `{other}` (supported: socket_open, socket_close, socket_send_string, \
+                 socket_send_line, socket_send_byte, socket_send_int, socket_set_var, socket_get_var, \
+                 socket_read_ascii_float, socket_read_binary_integer, socket_read_byte_list, \
+                 socket_read_line, socket_read_string, sleep, textmsg)"
+            ))
+        }
+    })
+}
