@@ -69,6 +69,16 @@ impl ByteListDecoder {
         })
     }
 
+    /// A decoder of one byte per message: a server reading `socket_send_byte`.
+    ///
+    /// ```
+    /// # use urscript_socket::byte_list::ByteListDecoder;
+    /// assert_eq!(ByteListDecoder::single().number(), 1);
+    /// ```
+    pub const fn single() -> Self {
+        ByteListDecoder { number: 1, pos: 0 }
+    }
+
     /// Bytes per message.
     ///
     /// ```

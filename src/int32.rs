@@ -184,6 +184,16 @@ impl Int32Decoder {
         })
     }
 
+    /// A decoder of one value per message: a server reading `socket_send_int`.
+    ///
+    /// ```
+    /// # use urscript_socket::int32::Int32Decoder;
+    /// assert_eq!(Int32Decoder::single().number(), 1);
+    /// ```
+    pub const fn single() -> Self {
+        Int32Decoder { number: 1, pos: 0 }
+    }
+
     /// Values per message.
     ///
     /// ```

@@ -90,6 +90,8 @@ pub mod var;
 #[cfg(feature = "alloc")]
 pub mod robot;
 
+pub mod adapters;
+
 pub use buffer::RecvBuffer;
 pub use error::{ArgumentError, DecodeError, EncodeError, ErrorKind};
 pub use sink::{Sink, SliceSink};

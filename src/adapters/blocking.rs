@@ -1,0 +1,280 @@
+//! Blocking adapters over `std::io::Read` and `Write`.
+
+use std::boxed::Box;
+use std::io::{self, Read, Write};
+use std::vec::Vec;
+
+use crate::{DecodeError, Decoder, EncodeError, RecvBuffer};
+
+/// Default receive buffer of a [`MessageReader`]: 64 KiB, above every core decoder's
+/// default bound.
+pub const DEFAULT_CAPACITY: usize = 64 * 1024;
+
+/// Why a [`MessageReader`] or [`MessageWriter`] call failed.
+///
+/// ```
+/// use urscript_socket::adapters::blocking::ReadError;
+/// let e = ReadError::TimedOut;
+/// assert_eq!(e.to_string(), "no complete message before the read timeout");
+/// ```
+#[derive(Debug)]
+#[non_exhaustive]
+pub enum ReadError {
+    /// The transport failed.
+    Io(io::Error),
+    /// Bad bytes: what and where. The reader has already skipped them; the next call
+    /// goes on with the next message.
+    Decode(DecodeError),
+    /// The peer closed in the middle of a message (every complete message before it was
+    /// delivered first). `Decode` errors of kind `Truncated` say the same with an offset;
+    /// this variant is used when no decoder offset applies.
+    ClosedMidMessage,
+    /// The read timeout set on the transport passed first; call again to go on waiting.
+    TimedOut,
+    /// The buffer is full and still holds no complete message.
+    BufferFull {
+        /// The buffer's capacity.
+        capacity: usize,
+    },
+    /// An encoder refused the message.
+    Encode(EncodeError),
+}
+
+impl core::fmt::Display for ReadError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            ReadError::Io(e) => write!(f, "transport error: {e}"),
+            ReadError::Decode(e) => write!(f, "bad input: {e}"),
+            ReadError::ClosedMidMessage => f.write_str("peer closed in the middle of a message"),
+            ReadError::TimedOut => f.write_str("no complete message before the read timeout"),
+            ReadError::BufferFull { capacity } => {
+                write!(
+                    f,
+                    "receive buffer of {capacity} bytes full without a complete message"
+                )
+            }
+            ReadError::Encode(e) => write!(f, "cannot encode: {e}"),
+        }
+    }
+}
+
+impl std::error::Error for ReadError {
+    fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
+        match self {
+            ReadError::Io(e) => Some(e),
+            ReadError::Decode(e) => Some(e),
+            ReadError::Encode(e) => Some(e),
+            _ => None,
+        }
+    }
+}
+
+/// Reads messages of one format from a blocking reader: a core decoder over a bounded
+/// buffer. Items are handed to a closure, borrowed straight from the buffer (no copy).
+///
+/// ```
+/// use urscript_socket::{adapters::blocking::MessageReader, line::LineDecoder};
+/// let input: &[u8] = b"hello\nworld\n";
+/// let mut reader = MessageReader::new(input, LineDecoder::new());
+/// let mut lines = Vec::new();
+/// while let Some(line) = reader.next_with(|l| l.to_vec()).unwrap() {
+///     lines.push(line);
+/// }
+/// assert_eq!(lines, [b"hello".to_vec(), b"world".to_vec()]);
+/// ```
+#[derive(Debug)]
+pub struct MessageReader<R, D> {
+    reader: R,
+    decoder: D,
+    rx: RecvBuffer<Box<[u8]>>,
+    eof: bool,
+}
+
+impl<R: Read, D: Decoder> MessageReader<R, D> {
+    /// A reader with a [`DEFAULT_CAPACITY`] buffer.
+    ///
+    /// ```
+    /// # use urscript_socket::{adapters::blocking::MessageReader, int32::Int32Decoder};
+    /// let r = MessageReader::new(&[0u8, 0, 0, 1][..], Int32Decoder::new(1).unwrap());
+    /// ```
+    pub fn new(reader: R, decoder: D) -> Self {
+        Self::with_capacity(reader, decoder, DEFAULT_CAPACITY)
+    }
+
+    /// A reader whose buffer holds at most `capacity` bytes: the memory bound.
+    ///
+    /// ```
+    /// # use urscript_socket::{adapters::blocking::MessageReader, line::LineDecoder};
+    /// let r = MessageReader::with_capacity(&b""[..], LineDecoder::new(), 8192);
+    /// ```
+    pub fn with_capacity(reader: R, decoder: D, capacity: usize) -> Self {
+        MessageReader {
+            reader,
+            decoder,
+            rx: RecvBuffer::with_capacity(capacity),
+            eof: false,
+        }
+    }
+
+    /// The transport, e.g. to set its read timeout.
+    ///
+    /// ```
+    /// # use urscript_socket::{adapters::blocking::MessageReader, line::LineDecoder};
+    /// let mut r = MessageReader::new(&b""[..], LineDecoder::new());
+    /// let _inner: &mut &[u8] = r.get_mut();
+    /// ```
+    pub fn get_mut(&mut self) -> &mut R {
+        &mut self.reader
+    }
+
+    /// Bytes received but not yet part of a returned message.
+    ///
+    /// ```
+    /// # use urscript_socket::{adapters::blocking::MessageReader, line::LineDecoder};
+    /// let mut r = MessageReader::new(&b"a\nrest"[..], LineDecoder::new());
+    /// r.next_with(|_| ()).unwrap();
+    /// assert_eq!(r.buffered(), b"rest");
+    /// ```
+    pub fn buffered(&self) -> &[u8] {
+        self.rx.data()
+    }
+
+    /// Waits for the next message and returns `f(message)`. `Ok(None)`: the peer closed
+    /// cleanly between messages. Errors: bad bytes (skipped, so calling again goes on),
+    /// a close in the middle of a message, the transport's read timeout, the buffer bound.
+    ///
+    /// ```
+    /// # use urscript_socket::{adapters::blocking::{MessageReader, ReadError}, line::LineDecoder};
+    /// let mut r = MessageReader::new(&b"ok\ncut"[..], LineDecoder::new());
+    /// assert_eq!(r.next_with(|l| l.to_vec()).unwrap(), Some(b"ok".to_vec()));
+    /// assert!(matches!(r.next_with(|l| l.to_vec()), Err(ReadError::Decode(_))));
+    /// assert_eq!(r.next_with(|l| l.to_vec()).unwrap(), None);
+    /// ```
+    pub fn next_with<T>(
+        &mut self,
+        f: impl FnOnce(D::Item<'_>) -> T,
+    ) -> Result<Option<T>, ReadError> {
+        loop {
+            if self.eof {
+                return match self.rx.decode_eof(&mut self.decoder) {
+                    Ok(Some(item)) => Ok(Some(f(item))),
+                    Ok(None) => Ok(None),
+                    Err(e) => Err(ReadError::Decode(e)),
+                };
+            }
+            match self.rx.decode(&mut self.decoder) {
+                Ok(Some(item)) => return Ok(Some(f(item))),
+                Ok(None) => {}
+                Err(e) => return Err(ReadError::Decode(e)),
+            }
+            let space = self.rx.spare();
+            if space.is_empty() {
+                return Err(ReadError::BufferFull {
+                    capacity: self.rx.capacity(),
+                });
+            }
+            match self.reader.read(space) {
+                Ok(0) => self.eof = true,
+                Ok(n) => self.rx.commit(n),
+                Err(e) if e.kind() == io::ErrorKind::Interrupted => {}
+                Err(e)
+                    if matches!(
+                        e.kind(),
+                        io::ErrorKind::WouldBlock | io::ErrorKind::TimedOut
+                    ) =>
+                {
+                    return Err(ReadError::TimedOut)
+                }
+                Err(e) => return Err(ReadError::Io(e)),
+            }
+        }
+    }
+
+    /// Calls `f` for every message until the peer closes; stops at the first error.
+    ///
+    /// ```
+    /// # use urscript_socket::{adapters::blocking::MessageReader, int32::Int32Decoder};
+    /// let bytes = [0u8, 0, 0, 1, 0, 0, 0, 2];
+    /// let mut sum = 0;
+    /// MessageReader::new(&bytes[..], Int32Decoder::new(1).unwrap())
+    ///     .for_each(|v| sum += v.get(0).unwrap())
+    ///     .unwrap();
+    /// assert_eq!(sum, 3);
+    /// ```
+    pub fn for_each(&mut self, mut f: impl FnMut(D::Item<'_>)) -> Result<(), ReadError> {
+        while self.next_with(&mut f)?.is_some() {}
+        Ok(())
+    }
+}
+
+/// Writes messages produced by the core encoders to a blocking writer, one `write_all`
+/// per message (so a message is never interleaved with another writer's bytes).
+///
+/// ```
+/// use urscript_socket::{adapters::blocking::MessageWriter, ascii_float::encode_float_tuple};
+/// let mut w = MessageWriter::new(Vec::new());
+/// w.send(|out| encode_float_tuple(&[1.0, 2.5], true, out)).unwrap();
+/// assert_eq!(w.get_ref(), b"(1,2.5)\n");
+/// ```
+#[derive(Debug)]
+pub struct MessageWriter<W> {
+    writer: W,
+    scratch: Vec<u8>,
+}
+
+impl<W: Write> MessageWriter<W> {
+    /// Wraps `writer`.
+    ///
+    /// ```
+    /// # use urscript_socket::adapters::blocking::MessageWriter;
+    /// let w = MessageWriter::new(Vec::new());
+    /// ```
+    pub fn new(writer: W) -> Self {
+        MessageWriter {
+            writer,
+            scratch: Vec::new(),
+        }
+    }
+
+    /// The writer.
+    ///
+    /// ```
+    /// # use urscript_socket::adapters::blocking::MessageWriter;
+    /// assert!(MessageWriter::new(Vec::new()).get_ref().is_empty());
+    /// ```
+    pub fn get_ref(&self) -> &W {
+        &self.writer
+    }
+
+    /// The writer, mutably.
+    ///
+    /// ```
+    /// # use urscript_socket::adapters::blocking::MessageWriter;
+    /// MessageWriter::new(Vec::new()).get_mut().push(1);
+    /// ```
+    pub fn get_mut(&mut self) -> &mut W {
+        &mut self.writer
+    }
+
+    /// Encodes one message with `encode` (any core encoder) and writes it whole. If the
+    /// encoder refuses, nothing is written.
+    ///
+    /// ```
+    /// # use urscript_socket::adapters::blocking::MessageWriter;
+    /// use urscript_socket::int32::encode_int32_list;
+    /// let mut w = MessageWriter::new(Vec::new());
+    /// w.send(|out| encode_int32_list(&[1, 2], out)).unwrap();
+    /// assert_eq!(w.get_ref().len(), 8);
+    /// ```
+    pub fn send(
+        &mut self,
+        encode: impl FnOnce(&mut Vec<u8>) -> Result<usize, EncodeError>,
+    ) -> Result<(), ReadError> {
+        self.scratch.clear();
+        encode(&mut self.scratch).map_err(ReadError::Encode)?;
+        self.writer
+            .write_all(&self.scratch)
+            .map_err(ReadError::Io)?;
+        self.writer.flush().map_err(ReadError::Io)
+    }
+}

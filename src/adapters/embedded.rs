@@ -1,0 +1,144 @@
+//! Adapters over `embedded_io_async::{Read, Write}`: embassy-net's `TcpSocket`, or any
+//! smoltcp-based stack. No allocator: the buffer is a `[u8; N]` owned by the reader.
+
+use embedded_io_async::{Read, Write};
+
+use crate::{DecodeError, Decoder, EncodeError, RecvBuffer, SliceSink};
+
+/// Why an embedded read or write failed.
+///
+/// ```
+/// use urscript_socket::adapters::embedded::Error;
+/// let e: Error<core::convert::Infallible> = Error::BufferFull;
+/// assert_eq!(format!("{e}"), "receive buffer full without a complete message");
+/// ```
+#[derive(Debug)]
+#[non_exhaustive]
+pub enum Error<E> {
+    /// The transport failed.
+    Io(E),
+    /// Bad bytes (already skipped: calling again goes on with the next message).
+    Decode(DecodeError),
+    /// The encoder refused the message or the scratch buffer is too small.
+    Encode(EncodeError),
+    /// The buffer is full and holds no complete message.
+    BufferFull,
+}
+
+impl<E: core::fmt::Debug> core::fmt::Display for Error<E> {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            Error::Io(e) => write!(f, "transport error: {e:?}"),
+            Error::Decode(e) => write!(f, "bad input: {e}"),
+            Error::Encode(e) => write!(f, "cannot encode: {e}"),
+            Error::BufferFull => f.write_str("receive buffer full without a complete message"),
+        }
+    }
+}
+
+impl<E: core::fmt::Debug> core::error::Error for Error<E> {}
+
+/// Reads messages of one format from an `embedded_io_async::Read`, through a core decoder
+/// over an `N`-byte buffer (the memory bound).
+///
+/// ```
+/// # futures_lite_block_on::run(async {
+/// use urscript_socket::{adapters::embedded::MessageReader, int32::Int32Decoder};
+/// let input: &[u8] = &[0, 0, 0, 7, 0xFF, 0xFF, 0xFF, 0xFF];
+/// let mut r: MessageReader<_, _, 64> = MessageReader::new(input, Int32Decoder::new(1).unwrap());
+/// assert_eq!(r.next_with(|v| v.get(0)).await.unwrap(), Some(Some(7)));
+/// assert_eq!(r.next_with(|v| v.get(0)).await.unwrap(), Some(Some(-1)));
+/// assert_eq!(r.next_with(|v| v.get(0)).await.unwrap(), None);
+/// # });
+/// # mod futures_lite_block_on {
+/// #     pub fn run<F: core::future::Future>(f: F) -> F::Output {
+/// #         tokio::runtime::Builder::new_current_thread().build().unwrap().block_on(f)
+/// #     }
+/// # }
+/// ```
+#[derive(Debug)]
+pub struct MessageReader<R, D, const N: usize> {
+    reader: R,
+    decoder: D,
+    rx: RecvBuffer<[u8; N]>,
+    eof: bool,
+}
+
+impl<R: Read, D: Decoder, const N: usize> MessageReader<R, D, N> {
+    /// Wraps `reader`; the buffer is `N` bytes inside the value.
+    ///
+    /// ```
+    /// # use urscript_socket::{adapters::embedded::MessageReader, line::LineDecoder};
+    /// let r: MessageReader<&[u8], _, 256> = MessageReader::new(&b""[..], LineDecoder::new());
+    /// ```
+    pub fn new(reader: R, decoder: D) -> Self {
+        MessageReader {
+            reader,
+            decoder,
+            rx: RecvBuffer::new(),
+            eof: false,
+        }
+    }
+
+    /// Waits for the next message and returns `f(message)`; `Ok(None)` once the peer
+    /// closed cleanly between messages.
+    ///
+    /// ```
+    /// # tokio::runtime::Builder::new_current_thread().build().unwrap().block_on(async {
+    /// # use urscript_socket::{adapters::embedded::MessageReader, line::LineDecoder};
+    /// let mut r: MessageReader<_, _, 64> = MessageReader::new(&b"hi\n"[..], LineDecoder::new());
+    /// assert_eq!(r.next_with(|l| l.len()).await.unwrap(), Some(2));
+    /// # });
+    /// ```
+    pub async fn next_with<T>(
+        &mut self,
+        f: impl FnOnce(D::Item<'_>) -> T,
+    ) -> Result<Option<T>, Error<R::Error>> {
+        loop {
+            if self.eof {
+                return match self.rx.decode_eof(&mut self.decoder) {
+                    Ok(Some(item)) => Ok(Some(f(item))),
+                    Ok(None) => Ok(None),
+                    Err(e) => Err(Error::Decode(e)),
+                };
+            }
+            match self.rx.decode(&mut self.decoder) {
+                Ok(Some(item)) => return Ok(Some(f(item))),
+                Ok(None) => {}
+                Err(e) => return Err(Error::Decode(e)),
+            }
+            let space = self.rx.spare();
+            if space.is_empty() {
+                return Err(Error::BufferFull);
+            }
+            match self.reader.read(space).await {
+                Ok(0) => self.eof = true,
+                Ok(n) => self.rx.commit(n),
+                Err(e) => return Err(Error::Io(e)),
+            }
+        }
+    }
+}
+
+/// Encodes one message into `scratch` with `encode` (any core encoder) and writes it all
+/// to `writer`. Nothing is written if the encoder refuses or `scratch` is too small.
+///
+/// ```
+/// # tokio::runtime::Builder::new_current_thread().build().unwrap().block_on(async {
+/// use urscript_socket::{adapters::embedded::send, int32::encode_int32};
+/// let mut out = [0u8; 8];
+/// let mut scratch = [0u8; 16];
+/// let mut w: &mut [u8] = &mut out;
+/// send(&mut w, &mut scratch, |sink| encode_int32(100, sink)).await.unwrap();
+/// assert_eq!(out[..4], [0, 0, 0, 100]);
+/// # });
+/// ```
+pub async fn send<W: Write>(
+    writer: &mut W,
+    scratch: &mut [u8],
+    encode: impl FnOnce(&mut SliceSink<'_>) -> Result<usize, EncodeError>,
+) -> Result<(), Error<W::Error>> {
+    let mut sink = SliceSink::new(scratch);
+    encode(&mut sink).map_err(Error::Encode)?;
+    writer.write_all(sink.written()).await.map_err(Error::Io)
+}
