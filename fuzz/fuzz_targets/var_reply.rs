@@ -1,0 +1,7 @@
+#![no_main]
+use libfuzzer_sys::fuzz_target;
+use urscript_socket::var::VarReplyDecoder;
+
+fuzz_target!(|data: &[u8]| {
+    urscript_socket_fuzz::check_split(|| VarReplyDecoder::new("POS_X").unwrap(), data, 257);
+});

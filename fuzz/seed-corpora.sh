@@ -1,0 +1,28 @@
+#!/usr/bin/env bash
+# Writes the seed corpora (fuzz/seeds/TARGET/NAME) from the spec's test vectors and from
+# encoder output. The first byte of each decoder seed picks chunk sizes (see src/lib.rs).
+set -euo pipefail
+cd "$(dirname "$0")"
+rm -rf seeds && mkdir -p seeds
+seed() { mkdir -p "seeds/$1"; printf "$3" > "seeds/$1/$2"; }
+seed float_tuple v1 '\x03\x01\x07\x40( 1.414 , 3.14159, 1.616, 0.0 )'
+seed float_tuple v3 '\x00(-0.15,-0.5,0.3,0,-3.14,0)'
+seed float_tuple v5 '\x02\x01\x05(1,2)\n(3,4)\n'
+seed float_tuple bad '\x01\x03(1,x,3)(4)noise(5e3)'
+seed int32 v6 '\x01\x05\x00\x00\x00\x64\x00\x00\x07\xD0\x00\x00\x75\x30\x00\x00\x00\x64\x00\x00\x07\xD0\x00\x00\x75\x30\xff\xff\xff\xff\x00\x00\x00\x01'
+seed byte_list v9 '\x00\x64\xC8\x2Cack'
+seed line v13 '\x01\x02reply from the server:\r\nsecond\n'
+seed delimited crlf '\x01\x01OK,1\r\nNEXT\r\n\r'
+seed stx_etx v20 '\x01\x01\x02hi\x03noise\x02\x02ok\x03'
+seed var_message v19 '\x01\x03SET POS_Y 2200\nGET POS_X\nSET A x\n'
+seed var_reply v16 '\x01\x04POS_X 1234\nPOS_X 077\nPOS 1\n'
+seed read_string v11 '\x00noise>hello<>world<'
+seed to_str v21 'p[1, 2, 3, 4, 5, 6]'
+seed to_str v22 '[True, False, True]'
+seed to_str float '2.123456'
+seed split_invariance float '\x00\x02\x01(1,2)\n(3)junk(1e3,x)'
+seed split_invariance line '\x04\x01\x03abc\r\ndef\nlonger line here\n'
+seed split_invariance stx '\x06\x01\x02\x02ab\x03\x02c'
+seed split_invariance var '\x07\x01SET A 1\nGET B\n'
+seed split_invariance str '\x09\x01<<hi\r<<x\\r'
+echo "seeds written: $(find seeds -type f | wc -l) files"
