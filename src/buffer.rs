@@ -144,6 +144,7 @@ impl<S: AsRef<[u8]> + AsMut<[u8]>> RecvBuffer<S> {
     /// buf.consume(1);
     /// assert_eq!(buf.data(), b"bc");
     /// ```
+    #[inline]
     pub fn data(&self) -> &[u8] {
         &self.storage.as_ref()[self.start..self.end]
     }
@@ -159,6 +160,7 @@ impl<S: AsRef<[u8]> + AsMut<[u8]>> RecvBuffer<S> {
     /// buf.commit(2);
     /// assert_eq!(buf.data(), b"hi");
     /// ```
+    #[inline]
     pub fn spare(&mut self) -> &mut [u8] {
         if self.end == self.capacity() && self.start > 0 {
             // Reclaim consumed space: one move of the unconsumed rest.
@@ -180,6 +182,7 @@ impl<S: AsRef<[u8]> + AsMut<[u8]>> RecvBuffer<S> {
     /// buf.commit(1);
     /// assert_eq!(buf.data(), b"x");
     /// ```
+    #[inline]
     pub fn commit(&mut self, n: usize) {
         self.end = (self.end + n).min(self.capacity());
     }
@@ -192,6 +195,7 @@ impl<S: AsRef<[u8]> + AsMut<[u8]>> RecvBuffer<S> {
     /// let mut buf = RecvBuffer::<[u8; 4]>::new();
     /// assert_eq!(buf.extend(b"abcdef"), 4);
     /// ```
+    #[inline]
     pub fn extend(&mut self, chunk: &[u8]) -> usize {
         let space = self.spare();
         let n = space.len().min(chunk.len());
@@ -209,6 +213,7 @@ impl<S: AsRef<[u8]> + AsMut<[u8]>> RecvBuffer<S> {
     /// buf.consume(3);
     /// assert_eq!(buf.data(), b"d");
     /// ```
+    #[inline]
     pub fn consume(&mut self, n: usize) {
         advance(&mut self.start, &mut self.end, n);
     }
@@ -239,6 +244,7 @@ impl<S: AsRef<[u8]> + AsMut<[u8]>> RecvBuffer<S> {
     /// assert_eq!(buf.decode(&mut two).unwrap(), Some(&b"ab"[..]));
     /// assert_eq!(buf.decode(&mut two).unwrap(), None);
     /// ```
+    #[inline]
     pub fn decode<D: Decoder>(
         &mut self,
         decoder: &mut D,
@@ -292,6 +298,7 @@ impl<S: AsRef<[u8]> + AsMut<[u8]>> RecvBuffer<S> {
 
 /// Drops `n` bytes (clamped) from the front of `start..end`; an emptied buffer restarts
 /// at index 0 so the next bytes need no move.
+#[inline]
 fn advance(start: &mut usize, end: &mut usize, n: usize) {
     *start += n.min(*end - *start);
     if *start == *end {

@@ -108,6 +108,7 @@ impl ByteListDecoder {
     /// let mut d = ByteListDecoder::new(2).unwrap();
     /// assert!(d.decode(b"a").unwrap().item().is_none());
     /// ```
+    #[inline]
     pub fn decode<'a>(&mut self, buf: &'a [u8]) -> Result<Status<&'a [u8]>, DecodeError> {
         let need = usize::from(self.number);
         if buf.len() < need {

@@ -37,14 +37,17 @@ impl Pattern {
         Ok(p)
     }
 
+    #[inline]
     pub fn as_bytes(&self) -> &[u8] {
         &self.bytes[..usize::from(self.len)]
     }
 
+    #[inline]
     pub fn len(&self) -> usize {
         usize::from(self.len)
     }
 
+    #[inline]
     pub fn is_empty(&self) -> bool {
         self.len == 0
     }
@@ -98,6 +101,7 @@ impl Framer {
     }
 
     /// Next frame: the content before the delimiter; `consumed` includes the delimiter.
+    #[inline]
     pub fn next<'a>(&mut self, buf: &'a [u8]) -> Result<Status<&'a [u8]>, DecodeError> {
         let dlen = self.pattern.len();
         let mut lead = 0;

@@ -17,6 +17,7 @@ pub const MAX_VALUES: usize = 30;
 /// encode_int32(-1, &mut out).unwrap();
 /// assert_eq!(out, [0xFF, 0xFF, 0xFF, 0xFF]);
 /// ```
+#[inline]
 pub fn encode_int32<S: Sink + ?Sized>(value: i32, sink: &mut S) -> Result<usize, EncodeError> {
     sink.put(&value.to_be_bytes())?;
     Ok(4)
@@ -67,6 +68,7 @@ impl<'a> Int32Values<'a> {
     /// # use urscript_socket::int32::Int32Values;
     /// assert_eq!(Int32Values::new(&[0, 0, 0, 7, 1]).len(), 1);
     /// ```
+    #[inline]
     pub fn new(bytes: &'a [u8]) -> Self {
         Int32Values {
             bytes: &bytes[..bytes.len() / 4 * 4],
@@ -79,6 +81,7 @@ impl<'a> Int32Values<'a> {
     /// # use urscript_socket::int32::Int32Values;
     /// assert_eq!(Int32Values::new(&[0; 8]).len(), 2);
     /// ```
+    #[inline]
     pub fn len(&self) -> usize {
         self.bytes.len() / 4
     }
@@ -99,6 +102,7 @@ impl<'a> Int32Values<'a> {
     /// # use urscript_socket::int32::Int32Values;
     /// assert_eq!(Int32Values::new(&[0, 0, 0x75, 0x30]).get(0), Some(30000));
     /// ```
+    #[inline]
     pub fn get(&self, index: usize) -> Option<i32> {
         let b = self.bytes.get(index * 4..index * 4 + 4)?;
         Some(i32::from_be_bytes([b[0], b[1], b[2], b[3]]))
@@ -110,6 +114,7 @@ impl<'a> Int32Values<'a> {
     /// # use urscript_socket::int32::Int32Values;
     /// assert_eq!(Int32Values::new(&[0, 0, 0, 1]).iter().sum::<i32>(), 1);
     /// ```
+    #[inline]
     pub fn iter(&self) -> impl ExactSizeIterator<Item = i32> + 'a {
         self.bytes
             .chunks_exact(4)
@@ -122,6 +127,7 @@ impl<'a> Int32Values<'a> {
     /// # use urscript_socket::int32::Int32Values;
     /// assert_eq!(Int32Values::new(&[0, 0, 0, 1]).as_bytes(), [0, 0, 0, 1]);
     /// ```
+    #[inline]
     pub fn as_bytes(&self) -> &'a [u8] {
         self.bytes
     }
@@ -223,6 +229,7 @@ impl Int32Decoder {
     /// let mut d = Int32Decoder::new(1).unwrap();
     /// assert_eq!(d.decode(&[0xFF; 4]).unwrap().item().unwrap().get(0), Some(-1));
     /// ```
+    #[inline]
     pub fn decode<'a>(&mut self, buf: &'a [u8]) -> Result<Status<Int32Values<'a>>, DecodeError> {
         let need = usize::from(self.number) * 4;
         if buf.len() < need {

@@ -112,6 +112,7 @@ impl LineDecoder {
     /// assert_eq!(d.decode(b"a\nb").unwrap(), Status::Complete { item: &b"a"[..], consumed: 2 });
     /// assert_eq!(d.decode(b"b").unwrap(), Status::Partial { consumed: 0 });
     /// ```
+    #[inline]
     pub fn decode<'a>(&mut self, buf: &'a [u8]) -> Result<Status<&'a [u8]>, DecodeError> {
         Ok(match self.framer.next(buf)? {
             Status::Complete { item, consumed } => Status::Complete {

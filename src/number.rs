@@ -15,6 +15,9 @@ pub const MAX_PLAIN_F64_LEN: usize = 327;
 /// is unchanged by that, so the text still parses back bit-exactly.
 pub fn write_plain_f64(v: f64, out: &mut [u8; MAX_PLAIN_F64_LEN]) -> usize {
     debug_assert!(v.is_finite());
+    if let Some(n) = write_short_decimal(v, out) {
+        return n;
+    }
     let mut ryu_buf = ryu::Buffer::new();
     let text = ryu_buf.format_finite(v).as_bytes();
 
@@ -101,6 +104,59 @@ pub fn write_plain_f64(v: f64, out: &mut [u8; MAX_PLAIN_F64_LEN]) -> usize {
         out[len..len + n - p].copy_from_slice(&digits[p..]);
         len + n - p
     }
+}
+
+/// Fast path for the values robots and vision systems actually exchange: at most 9
+/// decimals and below 1e6 (or integers below 2^53).
+///
+/// Why it is exact: with `a = |v|` and `m = round(a * 1e9)` below 1e15, IEEE division
+/// gives the double nearest to the decimal `m / 10^9`. If that is `a`, the decimal (15
+/// significant digits at most) reads back as `v`. Two distinct decimals of at most 15
+/// significant digits never round to the same double (their relative spacing, 1e-15 at
+/// least, exceeds a double's 2^-52), so this decimal is the only one of that length: exactly
+/// the shortest round-trip text ryu would find, minus trailing zeros. Otherwise `None`,
+/// and the general path runs. Saves the shortest-digits search for ~all pose values.
+#[inline]
+fn write_short_decimal(v: f64, out: &mut [u8; MAX_PLAIN_F64_LEN]) -> Option<usize> {
+    let a = v.abs();
+    let (m, frac_digits) = if a < 1e6 {
+        let m = (a * 1e9).round();
+        if m / 1e9 != a {
+            return None;
+        }
+        (m as u64, 9usize)
+    } else if a < 9_007_199_254_740_992.0 && a.fract() == 0.0 {
+        (a as u64, 0)
+    } else {
+        return None;
+    };
+    let mut digits = [b'0'; 20];
+    let mut n = 0;
+    let mut x = m;
+    while x > 0 || n <= frac_digits {
+        digits[19 - n] = b'0' + (x % 10) as u8;
+        x /= 10;
+        n += 1;
+    }
+    let digits = &digits[20 - n..];
+    let int_len = n - frac_digits;
+    let mut len = 0;
+    if v.is_sign_negative() {
+        out[0] = b'-';
+        len = 1;
+    }
+    out[len..len + int_len].copy_from_slice(&digits[..int_len]);
+    len += int_len;
+    let mut frac = &digits[int_len..];
+    while let [rest @ .., b'0'] = frac {
+        frac = rest;
+    }
+    if !frac.is_empty() {
+        out[len] = b'.';
+        out[len + 1..len + 1 + frac.len()].copy_from_slice(frac);
+        len += 1 + frac.len();
+    }
+    Some(len)
 }
 
 /// Checks `token` against the float grammar `[+-]? (d+ ('.' d*)? | '.' d+) ([eE] [+-]? d+)?`
@@ -250,6 +306,47 @@ mod tests {
             plain(-f64::MIN_POSITIVE * f64::EPSILON).len(),
             MAX_PLAIN_F64_LEN
         );
+        assert_eq!(plain(-0.123456), "-0.123456");
+        assert_eq!(plain(999999.999999999), "999999.999999999");
+        assert_eq!(plain(0.000000001), "0.000000001");
+        assert_eq!(plain(0.1 + 0.2), "0.30000000000000004");
+        assert_eq!(plain(9007199254740991.0), "9007199254740991");
+        assert_eq!(plain(1e15 + 0.5), "1000000000000000.5");
+    }
+
+    /// The fast path agrees with the general one wherever it applies: it reads back
+    /// bit-exactly and is the shortest text (std's `Display` is shortest round-trip too).
+    #[test]
+    fn fast_path_matches_shortest() {
+        let mut x: u64 = 1;
+        let mut taken = 0;
+        for i in 0..200_000u64 {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            let v = match i % 4 {
+                0 => f64::from_bits(x),
+                1 => ((x % 2_000_000_000_000) as f64 - 1e12) / 1e6,
+                2 => (x % 100_000_000) as f64 / 1e4 * if x & 1 == 0 { 1.0 } else { -1.0 },
+                _ => (x % 1_000_000_000) as f64 * 1e-9,
+            };
+            if !v.is_finite() {
+                continue;
+            }
+            let mut a = [0u8; MAX_PLAIN_F64_LEN];
+            let Some(n) = write_short_decimal(v, &mut a) else {
+                continue;
+            };
+            taken += 1;
+            let text = core::str::from_utf8(&a[..n]).unwrap();
+            assert_eq!(
+                text.parse::<f64>().unwrap().to_bits(),
+                v.to_bits(),
+                "{text}"
+            );
+            assert_eq!(text, alloc::format!("{v}"), "shortest, as std's Display");
+        }
+        assert!(taken > 100_000, "the fast path is the common path: {taken}");
     }
 
     #[test]

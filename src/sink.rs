@@ -22,6 +22,7 @@ pub trait Sink {
 }
 
 impl<S: Sink + ?Sized> Sink for &mut S {
+    #[inline]
     fn put(&mut self, bytes: &[u8]) -> Result<(), EncodeError> {
         (**self).put(bytes)
     }
@@ -29,6 +30,7 @@ impl<S: Sink + ?Sized> Sink for &mut S {
 
 #[cfg(feature = "alloc")]
 impl Sink for alloc::vec::Vec<u8> {
+    #[inline]
     fn put(&mut self, bytes: &[u8]) -> Result<(), EncodeError> {
         self.extend_from_slice(bytes);
         Ok(())
@@ -37,6 +39,7 @@ impl Sink for alloc::vec::Vec<u8> {
 
 #[cfg(feature = "tokio")]
 impl Sink for bytes::BytesMut {
+    #[inline]
     fn put(&mut self, bytes: &[u8]) -> Result<(), EncodeError> {
         self.extend_from_slice(bytes);
         Ok(())
@@ -123,6 +126,7 @@ impl<'a> SliceSink<'a> {
 }
 
 impl Sink for SliceSink<'_> {
+    #[inline]
     fn put(&mut self, bytes: &[u8]) -> Result<(), EncodeError> {
         let free = self.buf.len() - self.len;
         if bytes.len() > free {

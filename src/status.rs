@@ -44,6 +44,7 @@ impl<T> Status<T> {
     /// use urscript_socket::Status;
     /// assert_eq!(Status::<()>::Partial { consumed: 3 }.consumed(), 3);
     /// ```
+    #[inline]
     pub fn consumed(&self) -> usize {
         match *self {
             Status::Complete { consumed, .. } | Status::Partial { consumed } => consumed,
@@ -56,6 +57,7 @@ impl<T> Status<T> {
     /// use urscript_socket::Status;
     /// assert_eq!(Status::Complete { item: 5, consumed: 1 }.item(), Some(5));
     /// ```
+    #[inline]
     pub fn item(self) -> Option<T> {
         match self {
             Status::Complete { item, .. } => Some(item),

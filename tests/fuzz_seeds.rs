@@ -15,7 +15,9 @@ use urscript_socket::var::{VarMessageDecoder, VarReplyDecoder};
 use urscript_socket::{ascii_float::FloatTupleDecoder, to_str::parse_value};
 
 fn seeds(target: &str) -> Vec<Vec<u8>> {
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("fuzz/seeds").join(target);
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("fuzz/seeds")
+        .join(target);
     let mut out: Vec<Vec<u8>> = std::fs::read_dir(&dir)
         .unwrap_or_else(|e| panic!("{}: {e}", dir.display()))
         .map(|f| std::fs::read(f.unwrap().path()).unwrap())
@@ -41,15 +43,27 @@ where
 
 #[test]
 fn decoder_seeds_are_split_invariant() {
-    replay("float_tuple", || FloatTupleDecoder::new(6).unwrap().with_max_len(256), 256);
+    replay(
+        "float_tuple",
+        || FloatTupleDecoder::new(6).unwrap().with_max_len(256),
+        256,
+    );
     replay("int32", || Int32Decoder::new(8).unwrap(), 32);
     replay("byte_list", || ByteListDecoder::new(3).unwrap(), 3);
     replay("line", || LineDecoder::with_max_len(64), 65);
-    replay("delimited", || DelimitedDecoder::with_max_len(b"\r\n", 64).unwrap(), 66);
+    replay(
+        "delimited",
+        || DelimitedDecoder::with_max_len(b"\r\n", 64).unwrap(),
+        66,
+    );
     replay("stx_etx", || StxEtxDecoder::with_max_len(64), 66);
     replay("var_message", VarMessageDecoder::new, 257);
     replay("var_reply", || VarReplyDecoder::new("POS_X").unwrap(), 257);
-    replay("read_string", || ReadStringDecoder::new(b">", b"<", false).unwrap(), usize::MAX / 2);
+    replay(
+        "read_string",
+        || ReadStringDecoder::new(b">", b"<", false).unwrap(),
+        usize::MAX / 2,
+    );
     // The differential target's seeds, read by every decoder.
     replay("split_invariance", || LineDecoder::with_max_len(8), 9);
     replay("split_invariance", || StxEtxDecoder::with_max_len(8), 10);

@@ -14,7 +14,6 @@ use urscript_socket::string::{DelimitedDecoder, ReadStringDecoder};
 use urscript_socket::stx_etx::StxEtxDecoder;
 use urscript_socket::var::{VarMessageDecoder, VarReplyDecoder};
 
-
 mod common;
 use common::check;
 

@@ -86,4 +86,3 @@ where
 pub fn prop_assert_eq_hack(a: &[Event], b: &[Event]) {
     assert_eq!(a, b);
 }
-
