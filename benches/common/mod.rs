@@ -102,16 +102,11 @@ pub fn nom_reparse(stream: &[u8], chunk: usize) -> (usize, f64) {
     let mut buf: Vec<u8> = Vec::new();
     for piece in stream.chunks(chunk) {
         buf.extend_from_slice(piece);
-        loop {
-            match nom_tuple(&buf) {
-                Ok((rest, values)) => {
-                    n += 1;
-                    sum += values[0];
-                    let used = buf.len() - rest.len();
-                    buf.drain(..used);
-                }
-                Err(_) => break,
-            }
+        while let Ok((rest, values)) = nom_tuple(&buf) {
+            n += 1;
+            sum += values[0];
+            let used = buf.len() - rest.len();
+            buf.drain(..used);
         }
     }
     (n, sum)
@@ -120,7 +115,7 @@ pub fn nom_reparse(stream: &[u8], chunk: usize) -> (usize, f64) {
 /// (c) The floor: the tokens, already split, through `str::parse::<f64>` alone.
 pub fn pre_split_tokens(stream: &[u8]) -> Vec<String> {
     let text = std::str::from_utf8(stream).unwrap();
-    text.split(|c| c == '(' || c == ')' || c == ',' || c == '\n')
+    text.split(['(', ')', ',', '\n'])
         .filter(|t| !t.is_empty())
         .map(String::from)
         .collect()
