@@ -13,7 +13,7 @@
 //! number = [+-]? (digits ("." digits?)? | "." digits) ([eE] [+-]? digits)?
 //! ```
 
-use crate::number::{is_space, write_plain_f64, MAX_PLAIN_F64_LEN};
+use crate::number::{is_space, parse_short_decimal, write_plain_f64, MAX_PLAIN_F64_LEN};
 use crate::{ArgumentError, DecodeError, Decoder, EncodeError, ErrorKind, Sink, Status};
 
 /// The most values one `socket_read_ascii_float` call reads (and one tuple may carry).
@@ -51,28 +51,29 @@ pub fn encode_float_tuple<S: Sink + ?Sized>(
     if let Some(index) = values.iter().position(|v| !v.is_finite()) {
         return Err(EncodeError::NotFinite { index });
     }
-    // One value at a time into a stack buffer: one `put` per value keeps the sink calls
-    // few without needing the 10 KB worst case on the stack.
-    let mut text = [0u8; MAX_PLAIN_F64_LEN + 2];
+    // The text is built in a 1 KiB stack buffer and handed to the sink when the next value
+    // might not fit: one `put` per typical tuple, no 10 KB worst case on the stack.
+    let mut buf = [0u8; 1024];
+    let mut len = 0;
     let mut total = 0;
     for (i, &v) in values.iter().enumerate() {
-        text[0] = if i == 0 { b'(' } else { b',' };
-        let mut digits = [0u8; MAX_PLAIN_F64_LEN];
-        let n = write_plain_f64(v, &mut digits);
-        text[1..=n].copy_from_slice(&digits[..n]);
-        let mut len = n + 1;
-        if i + 1 == values.len() {
-            text[len] = b')';
-            len += 1;
+        if buf.len() - len < MAX_PLAIN_F64_LEN + 3 {
+            sink.put(&buf[..len])?;
+            total += len;
+            len = 0;
         }
-        sink.put(&text[..len])?;
-        total += len;
+        buf[len] = if i == 0 { b'(' } else { b',' };
+        len += 1;
+        len += write_plain_f64(v, &mut buf[len..]);
     }
+    buf[len] = b')';
+    len += 1;
     if trailing_lf {
-        sink.put(b"\n")?;
-        total += 1;
+        buf[len] = b'\n';
+        len += 1;
     }
-    Ok(total)
+    sink.put(&buf[..len])?;
+    Ok(total + len)
 }
 
 /// What to do with bytes before the `(` of a tuple (for example the `\n` a server sent
@@ -554,8 +555,9 @@ impl Decoder for FloatTupleDecoder {
 
 /// Parses a complete tuple `frame` = `( ... )`. Errors carry the offset within `frame`.
 ///
-/// One pass over the tuple: each number is parsed in place by fast-float's
-/// `parse_partial`, which also says where the number ends, so the separator check starts
+/// One pass over the tuple: each number is parsed in place (Clinger's exact fast path for
+/// short plain decimals, else fast-float's `parse_partial`), which also says where the
+/// number ends, so the separator check starts
 /// right there and no byte is looked at twice. fast-float accepts exactly our number
 /// grammar plus `inf`/`nan`, which the first-byte check excludes; the exponent policy is
 /// checked on the (short) span fast-float consumed.
@@ -587,8 +589,13 @@ fn parse_tuple(
         if !matches!(first_digit, Some(b'0'..=b'9' | b'.')) {
             return Err((ErrorKind::InvalidNumber, i));
         }
-        let (v, len) = fast_float2::parse_partial::<f64, _>(token)
-            .map_err(|_| (ErrorKind::InvalidNumber, i))?;
+        // Plain decimals of up to 15 digits (every pose value) take the exact fast path;
+        // anything else goes to fast-float.
+        let (v, len) = match parse_short_decimal(token) {
+            Some(found) => found,
+            None => fast_float2::parse_partial::<f64, _>(token)
+                .map_err(|_| (ErrorKind::InvalidNumber, i))?,
+        };
         if !policy.allow_exponent {
             if let Some(e) = token[..len].iter().position(|&b| b | 0x20 == b'e') {
                 return Err((ErrorKind::InvalidNumber, i + e));

@@ -8,12 +8,13 @@ use crate::ErrorKind;
 pub const MAX_PLAIN_F64_LEN: usize = 327;
 
 /// Writes the shortest decimal text that parses back to exactly `v`, in plain notation
-/// (no exponent), into `out`, returning the length. `v` must be finite.
+/// (no exponent), into `out` (at least [`MAX_PLAIN_F64_LEN`] bytes), returning the
+/// length. `v` must be finite.
 ///
 /// ryu finds the shortest round-trip digits (and is several times faster than
 /// `core::fmt`); we only re-lay its `d.ddde±x` output as plain decimal. The decimal value
 /// is unchanged by that, so the text still parses back bit-exactly.
-pub fn write_plain_f64(v: f64, out: &mut [u8; MAX_PLAIN_F64_LEN]) -> usize {
+pub fn write_plain_f64(v: f64, out: &mut [u8]) -> usize {
     debug_assert!(v.is_finite());
     if let Some(n) = write_short_decimal(v, out) {
         return n;
@@ -117,7 +118,7 @@ pub fn write_plain_f64(v: f64, out: &mut [u8; MAX_PLAIN_F64_LEN]) -> usize {
 /// the shortest round-trip text ryu would find, minus trailing zeros. Otherwise `None`,
 /// and the general path runs. Saves the shortest-digits search for ~all pose values.
 #[inline]
-fn write_short_decimal(v: f64, out: &mut [u8; MAX_PLAIN_F64_LEN]) -> Option<usize> {
+fn write_short_decimal(v: f64, out: &mut [u8]) -> Option<usize> {
     let a = v.abs();
     let (m, frac_digits) = if a < 1e6 {
         let m = (a * 1e9).round();
@@ -130,14 +131,31 @@ fn write_short_decimal(v: f64, out: &mut [u8; MAX_PLAIN_F64_LEN]) -> Option<usiz
     } else {
         return None;
     };
+    // Digits two at a time from a table, right to left.
+    const PAIRS: &[u8; 200] = b"0001020304050607080910111213141516171819\
+                                2021222324252627282930313233343536373839\
+                                4041424344454647484950515253545556575859\
+                                6061626364656667686970717273747576777879\
+                                8081828384858687888990919293949596979899";
     let mut digits = [b'0'; 20];
-    let mut n = 0;
+    let mut pos = 20;
     let mut x = m;
-    while x > 0 || n <= frac_digits {
-        digits[19 - n] = b'0' + (x % 10) as u8;
-        x /= 10;
-        n += 1;
+    while x >= 100 {
+        let pair = (x % 100) as usize * 2;
+        x /= 100;
+        pos -= 2;
+        digits[pos..pos + 2].copy_from_slice(&PAIRS[pair..pair + 2]);
     }
+    if x >= 10 {
+        let pair = x as usize * 2;
+        pos -= 2;
+        digits[pos..pos + 2].copy_from_slice(&PAIRS[pair..pair + 2]);
+    } else {
+        pos -= 1;
+        digits[pos] = b'0' + x as u8;
+    }
+    // At least one integer digit: pad with zeros to frac_digits + 1 digits.
+    let n = (20 - pos).max(frac_digits + 1);
     let digits = &digits[20 - n..];
     let int_len = n - frac_digits;
     let mut len = 0;
@@ -157,6 +175,66 @@ fn write_short_decimal(v: f64, out: &mut [u8; MAX_PLAIN_F64_LEN]) -> Option<usiz
         len += 1 + frac.len();
     }
     Some(len)
+}
+
+/// Exact powers of ten, 10^0..=10^22: every one is a double.
+const POW10: [f64; 23] = [
+    1e0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9, 1e10, 1e11, 1e12, 1e13, 1e14, 1e15, 1e16,
+    1e17, 1e18, 1e19, 1e20, 1e21, 1e22,
+];
+
+/// Parses the plain decimal at the start of `bytes` (`[+-]? digits ('.' digits)?`) when
+/// Clinger's fast path applies, returning the value and the bytes used; `None` sends the
+/// caller to the general parser (exponents, more than 15 digits, no digit at all).
+///
+/// Why it is exact: the digits form an integer `m` below 10^15 < 2^53 and the number is
+/// `m / 10^k` with `k` <= 22, so both operands are exact doubles and IEEE division
+/// rounds the true quotient correctly: the same double any correct parser returns. For
+/// the 6-decimal values of poses this skips the general algorithm entirely.
+#[inline]
+pub fn parse_short_decimal(bytes: &[u8]) -> Option<(f64, usize)> {
+    let mut i = 0;
+    let neg = match bytes.first() {
+        Some(b'-') => {
+            i = 1;
+            true
+        }
+        Some(b'+') => {
+            i = 1;
+            false
+        }
+        _ => false,
+    };
+    let mut m: u64 = 0;
+    let mut digits = 0usize;
+    let start = i;
+    while let Some(&c) = bytes.get(i) {
+        if !c.is_ascii_digit() {
+            break;
+        }
+        m = m.wrapping_mul(10).wrapping_add(u64::from(c - b'0'));
+        digits += 1;
+        i += 1;
+    }
+    let mut frac = 0usize;
+    if bytes.get(i) == Some(&b'.') {
+        i += 1;
+        while let Some(&c) = bytes.get(i) {
+            if !c.is_ascii_digit() {
+                break;
+            }
+            m = m.wrapping_mul(10).wrapping_add(u64::from(c - b'0'));
+            digits += 1;
+            frac += 1;
+            i += 1;
+        }
+    }
+    // No digit, too many for the fast path (m might not be exact), or an exponent next.
+    if digits == 0 || digits > 15 || i == start || matches!(bytes.get(i), Some(b'e' | b'E')) {
+        return None;
+    }
+    let v = m as f64 / POW10[frac];
+    Some((if neg { -v } else { v }, i))
 }
 
 /// Checks `token` against the float grammar `[+-]? (d+ ('.' d*)? | '.' d+) ([eE] [+-]? d+)?`
@@ -369,6 +447,36 @@ mod tests {
         assert_eq!(parse_i32(b"12a"), Err((ErrorKind::InvalidNumber, 2)));
         assert!(parse_i32(b"-").is_err());
         assert!(parse_i32(b"").is_err());
+    }
+
+    #[test]
+    fn short_decimal_agrees_with_std() {
+        let mut x: u64 = 7;
+        for i in 0..200_000u64 {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            let text = match i % 3 {
+                0 => alloc::format!("{}", ((x % 2_000_000_000) as f64 - 1e9) / 1e6),
+                1 => alloc::format!("{}.{:0w$}", x % 1000, x % 1_000_000, w = (i % 10) as usize),
+                _ => alloc::format!("-{}", x % 1_000_000_000_000_000),
+            };
+            if let Some((v, n)) = parse_short_decimal(text.as_bytes()) {
+                assert_eq!(n, text.len(), "{text}");
+                assert_eq!(
+                    v.to_bits(),
+                    text.parse::<f64>().unwrap().to_bits(),
+                    "{text}"
+                );
+            }
+        }
+        assert_eq!(parse_short_decimal(b"-0"), Some((-0.0, 2)));
+        assert_eq!(parse_short_decimal(b"1e3"), None);
+        assert_eq!(parse_short_decimal(b"."), None);
+        assert_eq!(parse_short_decimal(b"-"), None);
+        assert_eq!(parse_short_decimal(b"1234567890123456"), None);
+        assert_eq!(parse_short_decimal(b".5,"), Some((0.5, 2)));
+        assert_eq!(parse_short_decimal(b"5.)"), Some((5.0, 2)));
     }
 
     #[test]
