@@ -137,11 +137,7 @@ fn server(listener: TcpListener, events: mpsc::Sender<String>) -> Result<(), Str
         };
         match reply {
             Some(bytes) => {
-                let _ = events.send(format!(
-                    "server -> robot    {:<24} {}",
-                    hex(&bytes),
-                    quoted(&bytes)
-                ));
+                let _ = events.send(show_bytes("server -> robot", &bytes));
                 stream.write_all(&bytes).map_err(|e| e.to_string())?;
             }
             None => {
@@ -157,6 +153,11 @@ fn server(listener: TcpListener, events: mpsc::Sender<String>) -> Result<(), Str
 }
 
 type Traffic = Arc<Mutex<Vec<(Direction, Vec<u8>)>>>;
+
+/// `label "text"` and, under it, the hex of the same bytes.
+fn show_bytes(label: &str, bytes: &[u8]) -> String {
+    format!("{label:<19}{}\n    {:<19}{}", quoted(bytes), "", hex(bytes))
+}
 
 struct Transcript {
     step: usize,
@@ -174,11 +175,7 @@ impl Transcript {
             std::mem::take(&mut *self.traffic.lock().unwrap_or_else(|p| p.into_inner()));
         for (dir, bytes) in &traffic {
             if *dir == Direction::RobotToServer {
-                println!(
-                    "    robot  -> server    {:<24} {}",
-                    hex(bytes),
-                    quoted(bytes)
-                );
+                println!("    {}", show_bytes("robot  -> server", bytes));
             }
         }
         for _ in 0..server_events {
@@ -189,11 +186,7 @@ impl Transcript {
         }
         for (dir, bytes) in &traffic {
             if *dir == Direction::ServerToRobot {
-                println!(
-                    "    robot  <- server    {:<24} {}",
-                    hex(bytes),
-                    quoted(bytes)
-                );
+                println!("    {}", show_bytes("robot  <- server", bytes));
             }
         }
         if let Some(r) = result {
