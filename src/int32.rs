@@ -269,7 +269,7 @@ impl Int32Decoder {
     }
 
     /// At end of input: leftover bytes short of a message are
-    /// [`Truncated`](ErrorKind::Truncated).
+    /// [`Truncated`](crate::ErrorKind::Truncated).
     ///
     /// ```
     /// # use urscript_socket::int32::Int32Decoder;

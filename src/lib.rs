@@ -29,7 +29,7 @@
 //! | [`ascii_float`] | | `(1.414,3.14159)` for `socket_read_ascii_float` |
 //! | [`int32`] | `socket_send_int` | int32 lists for `socket_read_binary_integer` |
 //! | [`byte_list`] | `socket_send_byte` | bytes for `socket_read_byte_list` |
-//! | [`line`] | `socket_send_line` | lines for `socket_read_line` |
+//! | [`line`](mod@line) | `socket_send_line` | lines for `socket_read_line` |
 //! | [`string`] | `socket_send_string` | strings for `socket_read_string` (prefix/suffix) |
 //! | [`stx_etx`] | `02 <s> 03` framing | |
 //! | [`var`] | `SET name v`, `GET name` | `name v` replies |
