@@ -110,7 +110,7 @@ pub fn write_plain_f64(v: f64, out: &mut [u8]) -> usize {
 /// Fast path for the values robots and vision systems actually exchange: at most 9
 /// decimals and below 1e6 (or integers below 2^53).
 ///
-/// Why it is exact: with `a = |v|` and `m = round(a * 1e9)` below 1e15, IEEE division
+/// Why it is exact: with `a = |v|` and `m` the integer nearest `a * 1e9`, below 1e15, IEEE division
 /// gives the double nearest to the decimal `m / 10^9`. If that is `a`, the decimal (15
 /// significant digits at most) reads back as `v`. Two distinct decimals of at most 15
 /// significant digits never round to the same double (their relative spacing, 1e-15 at
@@ -120,13 +120,14 @@ pub fn write_plain_f64(v: f64, out: &mut [u8]) -> usize {
 #[inline]
 fn write_short_decimal(v: f64, out: &mut [u8]) -> Option<usize> {
     let a = v.abs();
+    // (`f64::round`/`fract` need std; `as u64` truncation is in core and exact here.)
     let (m, frac_digits) = if a < 1e6 {
-        let m = (a * 1e9).round();
-        if m / 1e9 != a {
+        let m = (a * 1e9 + 0.5) as u64;
+        if m as f64 / 1e9 != a {
             return None;
         }
-        (m as u64, 9usize)
-    } else if a < 9_007_199_254_740_992.0 && a.fract() == 0.0 {
+        (m, 9usize)
+    } else if a < 9_007_199_254_740_992.0 && (a as u64) as f64 == a {
         (a as u64, 0)
     } else {
         return None;
