@@ -1,10 +1,12 @@
 #!/usr/bin/env bash
-# Runs every fuzz target for SECONDS (default 20) and prints, per target: executions,
+# Runs every fuzz target (or the TARGETs named) for SECONDS (default 20) and prints, per
+# target: executions,
 # coverage, and the result. Uses the nightly toolchain with AddressSanitizer where
 # `cargo +nightly` works, else stable with `-s none`. Exits non-zero if any target fails.
 set -uo pipefail
 cd "$(dirname "$0")"
 secs=${1:-20}
+shift || true
 if ! command -v cargo-fuzz >/dev/null 2>&1; then
   cargo install cargo-fuzz --locked || cargo install cargo-fuzz
 fi
@@ -17,7 +19,9 @@ echo "fuzzing each target for ${secs}s ($mode)"
 cargo "${tc[@]}" fuzz build "${san[@]}" >/dev/null 2>&1 || cargo "${tc[@]}" fuzz build "${san[@]}" || exit 1
 status=0
 printf '%-18s %12s %8s %8s  %s\n' target executions cov ft result
-for t in $(cargo "${tc[@]}" fuzz list); do
+targets=("$@")
+[ ${#targets[@]} -gt 0 ] || targets=($(cargo "${tc[@]}" fuzz list))
+for t in "${targets[@]}"; do
   mkdir -p "corpus/$t"
   seeds=()
   [ -d "seeds/$t" ] && seeds=("seeds/$t")
