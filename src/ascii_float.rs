@@ -561,6 +561,7 @@ impl Decoder for FloatTupleDecoder {
 /// right there and no byte is looked at twice. fast-float accepts exactly our number
 /// grammar plus `inf`/`nan`, which the first-byte check excludes; the exponent policy is
 /// checked on the (short) span fast-float consumed.
+#[inline]
 fn parse_tuple(
     frame: &[u8],
     number: u8,

@@ -194,48 +194,34 @@ const POW10: [f64; 23] = [
 /// the 6-decimal values of poses this skips the general algorithm entirely.
 #[inline]
 pub fn parse_short_decimal(bytes: &[u8]) -> Option<(f64, usize)> {
-    let mut i = 0;
-    let neg = match bytes.first() {
-        Some(b'-') => {
-            i = 1;
-            true
-        }
-        Some(b'+') => {
-            i = 1;
-            false
-        }
-        _ => false,
+    let (neg, body) = match bytes {
+        [b'-', rest @ ..] => (true, rest),
+        [b'+', rest @ ..] => (false, rest),
+        _ => (false, bytes),
     };
+    let sign_len = bytes.len() - body.len();
+    // Iterating slices (not indexing) lets the compiler drop the bounds checks.
+    let int_len = body.iter().take_while(|c| c.is_ascii_digit()).count();
     let mut m: u64 = 0;
-    let mut digits = 0usize;
-    let start = i;
-    while let Some(&c) = bytes.get(i) {
-        if !c.is_ascii_digit() {
-            break;
-        }
+    for &c in &body[..int_len] {
         m = m.wrapping_mul(10).wrapping_add(u64::from(c - b'0'));
-        digits += 1;
-        i += 1;
     }
-    let mut frac = 0usize;
-    if bytes.get(i) == Some(&b'.') {
-        i += 1;
-        while let Some(&c) = bytes.get(i) {
-            if !c.is_ascii_digit() {
-                break;
-            }
+    let mut used = int_len;
+    let mut frac = 0;
+    if let [b'.', after @ ..] = &body[int_len..] {
+        frac = after.iter().take_while(|c| c.is_ascii_digit()).count();
+        for &c in &after[..frac] {
             m = m.wrapping_mul(10).wrapping_add(u64::from(c - b'0'));
-            digits += 1;
-            frac += 1;
-            i += 1;
         }
+        used += 1 + frac;
     }
+    let digits = int_len + frac;
     // No digit, too many for the fast path (m might not be exact), or an exponent next.
-    if digits == 0 || digits > 15 || i == start || matches!(bytes.get(i), Some(b'e' | b'E')) {
+    if digits == 0 || digits > 15 || matches!(body.get(used), Some(b'e' | b'E')) {
         return None;
     }
     let v = m as f64 / POW10[frac];
-    Some((if neg { -v } else { v }, i))
+    Some((if neg { -v } else { v }, sign_len + used))
 }
 
 /// Checks `token` against the float grammar `[+-]? (d+ ('.' d*)? | '.' d+) ([eE] [+-]? d+)?`
