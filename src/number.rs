@@ -184,6 +184,53 @@ const POW10: [f64; 23] = [
     1e17, 1e18, 1e19, 1e20, 1e21, 1e22,
 ];
 
+const POW10_U64: [u64; 9] = [
+    1,
+    10,
+    100,
+    1_000,
+    10_000,
+    100_000,
+    1_000_000,
+    10_000_000,
+    100_000_000,
+];
+
+/// The leading ASCII digits among the first 8 bytes of `bytes` (which must hold 8) as
+/// (value, how many), computed on one little-endian `u64` (SWAR), or `None` if fewer than 8
+/// bytes are there.
+///
+/// Why it is exact: a byte `c` is a digit iff `c - 0x30` does not borrow and `c + 0x46`
+/// does not reach 0x80; carries and borrows only travel towards later bytes, so the first
+/// flagged byte is the first non-digit. The `n` digits are moved to the top of the word
+/// (zeros below act as leading zeros) and combined pairwise (fast-float's
+/// `parse_eight_digits_unrolled`). Checked against the byte loop by a property test.
+#[inline]
+fn swar_digits(bytes: &[u8]) -> Option<(u64, usize)> {
+    let chunk: [u8; 8] = bytes.get(..8)?.try_into().ok()?;
+    let x = u64::from_le_bytes(chunk);
+    let flags = (x.wrapping_add(0x4646_4646_4646_4646) | x.wrapping_sub(0x3030_3030_3030_3030))
+        & 0x8080_8080_8080_8080;
+    let n = if flags == 0 {
+        8
+    } else {
+        (flags.trailing_zeros() / 8) as usize
+    };
+    if n == 0 {
+        return Some((0, 0));
+    }
+    let mut v = x.wrapping_sub(0x3030_3030_3030_3030) << ((8 - n) * 8);
+    v = v.wrapping_mul(10).wrapping_add(v >> 8);
+    const MASK: u64 = 0x0000_00FF_0000_00FF;
+    const MUL1: u64 = 0x000F_4240_0000_0064;
+    const MUL2: u64 = 0x0000_2710_0000_0001;
+    v = ((v & MASK)
+        .wrapping_mul(MUL1)
+        .wrapping_add(((v >> 16) & MASK).wrapping_mul(MUL2)))
+        >> 32;
+    Some((v, n))
+}
+
 /// Parses the plain decimal at the start of `bytes` (`[+-]? digits ('.' digits)?`) when
 /// Clinger's fast path applies, returning the value and the bytes used; `None` sends the
 /// caller to the general parser (exponents, more than 15 digits, no digit at all).
@@ -209,9 +256,18 @@ pub fn parse_short_decimal(bytes: &[u8]) -> Option<(f64, usize)> {
     let mut used = int_len;
     let mut frac = 0;
     if let [b'.', after @ ..] = &body[int_len..] {
-        frac = after.iter().take_while(|c| c.is_ascii_digit()).count();
-        for &c in &after[..frac] {
-            m = m.wrapping_mul(10).wrapping_add(u64::from(c - b'0'));
+        match swar_digits(after) {
+            // Up to 8 fraction digits in one step (the 6-decimal case of every pose).
+            Some((value, n)) if n < 8 => {
+                frac = n;
+                m = m.wrapping_mul(POW10_U64[n]).wrapping_add(value);
+            }
+            _ => {
+                frac = after.iter().take_while(|c| c.is_ascii_digit()).count();
+                for &c in &after[..frac] {
+                    m = m.wrapping_mul(10).wrapping_add(u64::from(c - b'0'));
+                }
+            }
         }
         used += 1 + frac;
     }
@@ -464,6 +520,39 @@ mod tests {
         assert_eq!(parse_short_decimal(b"1234567890123456"), None);
         assert_eq!(parse_short_decimal(b".5,"), Some((0.5, 2)));
         assert_eq!(parse_short_decimal(b"5.)"), Some((5.0, 2)));
+    }
+
+    #[test]
+    fn swar_digits_agree_with_the_byte_loop() {
+        let mut x: u64 = 3;
+        for i in 0..300_000u64 {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            let mut b = x.to_le_bytes();
+            // Mostly digits, sometimes any byte, at any position.
+            for (k, c) in b.iter_mut().enumerate() {
+                if (i >> k) & 7 != 0 {
+                    *c = b'0' + *c % 10;
+                }
+            }
+            let n = b.iter().take_while(|c| c.is_ascii_digit()).count();
+            let want = b[..n]
+                .iter()
+                .fold(0u64, |m, &c| m * 10 + u64::from(c - b'0'));
+            assert_eq!(swar_digits(&b), Some((want, n)), "{b:?}");
+        }
+        for c in 0..=255u8 {
+            let b = [c, b'1', b'2', b'3', b'4', b'5', b'6', b'7'];
+            let n = usize::from(c.is_ascii_digit()) * 8;
+            let want = if n == 8 {
+                u64::from(c - b'0') * 10_000_000 + 1234567
+            } else {
+                0
+            };
+            assert_eq!(swar_digits(&b), Some((want, n)), "byte {c}");
+        }
+        assert_eq!(swar_digits(b"1234567"), None);
     }
 
     #[test]
