@@ -280,7 +280,7 @@ impl UrList {
 /// `socket_read_ascii_float(number)` reads it.
 ///
 /// Incremental: it finds the tuple's `)` with a resumable scan (remembering where it
-/// stopped, so a chunked stream is examined once), then parses the complete tuple in one
+/// stopped, so a chunked stream is searched once), then parses the complete tuple in one
 /// pass. Bound: a tuple longer than `max_len` bytes ([`DEFAULT_MAX_TUPLE_LEN`]) is an
 /// error at the byte past the bound; the decoder then discards through the next `)`.
 ///
@@ -557,8 +557,7 @@ impl Decoder for FloatTupleDecoder {
 ///
 /// One pass over the tuple: each number is parsed in place (Clinger's exact fast path for
 /// short plain decimals, else fast-float's `parse_partial`), which also says where the
-/// number ends, so the separator check starts
-/// right there and no byte is looked at twice. fast-float accepts exactly our number
+/// number ends, so the separator check starts right there: one pass over the tuple. fast-float accepts exactly our number
 /// grammar plus `inf`/`nan`, which the first-byte check excludes; the exponent policy is
 /// checked on the (short) span fast-float consumed.
 #[inline]

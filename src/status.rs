@@ -8,8 +8,9 @@ use crate::DecodeError;
 /// The caller keeps the unconsumed bytes in its own buffer. After
 /// `Complete { consumed, .. }` or `Partial { consumed }` it drops `consumed` bytes from the
 /// front, appends whatever arrives next, and calls `decode` again with the whole
-/// unconsumed rest. The decoder remembers how far it has already looked, so no byte is
-/// examined twice however the stream is chunked.
+/// unconsumed rest. The decoder remembers how far it has already looked, so a search never
+/// goes back over bytes it already searched (at most a delimiter's length minus one):
+/// chunked input costs what whole input costs, linear in its length.
 ///
 /// ```
 /// use urscript_socket::{line::LineDecoder, Status};
@@ -72,8 +73,8 @@ impl<T> Status<T> {
 /// Contract: `buf` is always the unconsumed bytes, oldest first. After any return the
 /// caller drops the bytes it was told to drop (`Status::consumed`, or
 /// [`DecodeError::skip`]) and calls again with what is left plus what arrived since.
-/// A decoder never panics, never reads a byte twice across calls, and holds at most a
-/// few words of state; the largest message it will buffer is its documented bound.
+/// A decoder never panics, never searches the same bytes again on a later call, and holds
+/// at most a few words of state; the largest message it will buffer is its documented bound.
 ///
 /// ```
 /// use urscript_socket::{Decoder, RecvBuffer, int32::Int32Decoder};
