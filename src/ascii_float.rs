@@ -193,6 +193,7 @@ impl FloatTuple {
     /// let t = FloatTupleDecoder::new(6).unwrap().decode(b"(3)").unwrap().item().unwrap();
     /// assert_eq!(t.count(), 1);
     /// ```
+    #[inline]
     pub fn count(&self) -> usize {
         usize::from(self.count)
     }
@@ -205,6 +206,7 @@ impl FloatTuple {
     /// assert_eq!(t.values()[0], 3.0);
     /// assert!(t.values()[1].is_nan());
     /// ```
+    #[inline]
     pub fn values(&self) -> &[f64] {
         &self.values[..usize::from(self.number)]
     }
@@ -216,6 +218,7 @@ impl FloatTuple {
     /// let t = FloatTupleDecoder::new(6).unwrap().decode(b"(1,2)").unwrap().item().unwrap();
     /// assert_eq!(t.read(), [1.0, 2.0]);
     /// ```
+    #[inline]
     pub fn read(&self) -> &[f64] {
         &self.values[..usize::from(self.count)]
     }

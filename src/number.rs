@@ -122,11 +122,12 @@ fn write_short_decimal(v: f64, out: &mut [u8]) -> Option<usize> {
     let a = v.abs();
     // (`f64::round`/`fract` need std; `as u64` truncation is in core and exact here.)
     let (m, frac_digits) = if a < 1e6 {
-        let m = (a * 1e9 + 0.5) as u64;
+        // Below 1e15: i64 conversions are single instructions (u64's are not).
+        let m = (a * 1e9 + 0.5) as i64;
         if m as f64 / 1e9 != a {
             return None;
         }
-        (m, 9usize)
+        (m as u64, 9usize)
     } else if a < 9_007_199_254_740_992.0 && (a as u64) as f64 == a {
         (a as u64, 0)
     } else {
@@ -276,7 +277,8 @@ pub fn parse_short_decimal(bytes: &[u8]) -> Option<(f64, usize)> {
     if digits == 0 || digits > 15 || matches!(body.get(used), Some(b'e' | b'E')) {
         return None;
     }
-    let v = m as f64 / POW10[frac];
+    // `m` < 10^15 fits an i64, whose conversion is one instruction (u64's is four).
+    let v = m as i64 as f64 / POW10[frac];
     Some((if neg { -v } else { v }, sign_len + used))
 }
 
