@@ -54,7 +54,7 @@ impl Pattern {
 
     /// First occurrence in `hay`. memchr for one byte; memchr's `memmem` (a SIMD
     /// prefilter + Two-Way) for longer patterns, so the cost is linear in `hay`.
-    #[inline]
+    #[inline(always)]
     pub fn find(&self, hay: &[u8]) -> Option<usize> {
         match self.as_bytes() {
             [] => Some(0),
