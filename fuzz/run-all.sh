@@ -2,7 +2,8 @@
 # Runs every fuzz target (or the TARGETs named) for SECONDS (default 20) and prints, per
 # target: executions,
 # coverage, and the result. Uses the nightly toolchain with AddressSanitizer where
-# `cargo +nightly` works, else stable with `-s none`. Exits non-zero if any target fails.
+# `cargo +nightly` works (and FUZZ_TOOLCHAIN is not `stable`), else stable with `-s none`.
+# Exits non-zero if any target fails.
 set -uo pipefail
 cd "$(dirname "$0")"
 secs=${1:-20}
@@ -10,7 +11,7 @@ shift || true
 if ! command -v cargo-fuzz >/dev/null 2>&1; then
   cargo install cargo-fuzz --locked || cargo install cargo-fuzz
 fi
-if cargo +nightly --version >/dev/null 2>&1; then
+if [ "${FUZZ_TOOLCHAIN:-}" != stable ] && cargo +nightly --version >/dev/null 2>&1; then
   tc=(+nightly); san=(); mode="nightly, address sanitizer"
 else
   tc=(); san=(-s none); mode="stable, no sanitizer"

@@ -545,6 +545,7 @@ impl FloatTupleDecoder {
 
 impl Decoder for FloatTupleDecoder {
     type Item<'buf> = FloatTuple;
+    #[inline]
     fn decode(&mut self, buf: &[u8]) -> Result<Status<FloatTuple>, DecodeError> {
         FloatTupleDecoder::decode(self, buf)
     }

@@ -159,6 +159,7 @@ impl ByteListDecoder {
 
 impl Decoder for ByteListDecoder {
     type Item<'buf> = &'buf [u8];
+    #[inline]
     fn decode<'buf>(&mut self, buf: &'buf [u8]) -> Result<Status<&'buf [u8]>, DecodeError> {
         ByteListDecoder::decode(self, buf)
     }

@@ -291,6 +291,7 @@ impl Int32Decoder {
 
 impl Decoder for Int32Decoder {
     type Item<'buf> = Int32Values<'buf>;
+    #[inline]
     fn decode<'buf>(&mut self, buf: &'buf [u8]) -> Result<Status<Int32Values<'buf>>, DecodeError> {
         Int32Decoder::decode(self, buf)
     }

@@ -164,6 +164,7 @@ fn strip_cr(line: &[u8]) -> &[u8] {
 
 impl Decoder for LineDecoder {
     type Item<'buf> = &'buf [u8];
+    #[inline]
     fn decode<'buf>(&mut self, buf: &'buf [u8]) -> Result<Status<&'buf [u8]>, DecodeError> {
         LineDecoder::decode(self, buf)
     }

@@ -263,6 +263,7 @@ impl ReadStringDecoder {
 
 impl Decoder for ReadStringDecoder {
     type Item<'buf> = &'buf [u8];
+    #[inline]
     fn decode<'buf>(&mut self, buf: &'buf [u8]) -> Result<Status<&'buf [u8]>, DecodeError> {
         ReadStringDecoder::decode(self, buf)
     }
@@ -386,6 +387,7 @@ impl DelimitedDecoder {
 
 impl Decoder for DelimitedDecoder {
     type Item<'buf> = &'buf [u8];
+    #[inline]
     fn decode<'buf>(&mut self, buf: &'buf [u8]) -> Result<Status<&'buf [u8]>, DecodeError> {
         self.framer.next(buf)
     }

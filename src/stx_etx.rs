@@ -263,6 +263,7 @@ impl StxEtxDecoder {
 
 impl Decoder for StxEtxDecoder {
     type Item<'buf> = &'buf [u8];
+    #[inline]
     fn decode<'buf>(&mut self, buf: &'buf [u8]) -> Result<Status<&'buf [u8]>, DecodeError> {
         StxEtxDecoder::decode(self, buf)
     }

@@ -318,6 +318,7 @@ fn ascii(name: &[u8]) -> &str {
 
 impl Decoder for VarMessageDecoder {
     type Item<'buf> = VarMessage<'buf>;
+    #[inline]
     fn decode<'buf>(&mut self, buf: &'buf [u8]) -> Result<Status<VarMessage<'buf>>, DecodeError> {
         VarMessageDecoder::decode(self, buf)
     }
@@ -424,6 +425,7 @@ impl VarReplyDecoder {
 
 impl Decoder for VarReplyDecoder {
     type Item<'buf> = i32;
+    #[inline]
     fn decode(&mut self, buf: &[u8]) -> Result<Status<i32>, DecodeError> {
         VarReplyDecoder::decode(self, buf)
     }
