@@ -42,7 +42,7 @@ impl<E: core::fmt::Debug> core::error::Error for Error<E> {}
 /// over an `N`-byte buffer (the memory bound).
 ///
 /// ```
-/// # futures_lite_block_on::run(async {
+/// # tokio::runtime::Builder::new_current_thread().build().unwrap().block_on(async {
 /// use urscript_socket::{adapters::embedded::MessageReader, int32::Int32Decoder};
 /// let input: &[u8] = &[0, 0, 0, 7, 0xFF, 0xFF, 0xFF, 0xFF];
 /// let mut r: MessageReader<_, _, 64> = MessageReader::new(input, Int32Decoder::new(1).unwrap());
@@ -50,11 +50,6 @@ impl<E: core::fmt::Debug> core::error::Error for Error<E> {}
 /// assert_eq!(r.next_with(|v| v.get(0)).await.unwrap(), Some(Some(-1)));
 /// assert_eq!(r.next_with(|v| v.get(0)).await.unwrap(), None);
 /// # });
-/// # mod futures_lite_block_on {
-/// #     pub fn run<F: core::future::Future>(f: F) -> F::Output {
-/// #         tokio::runtime::Builder::new_current_thread().build().unwrap().block_on(f)
-/// #     }
-/// # }
 /// ```
 #[derive(Debug)]
 pub struct MessageReader<R, D, const N: usize> {
