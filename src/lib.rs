@@ -62,7 +62,7 @@
 #![warn(missing_docs)]
 // The spec's vectors use 3.14 and 3.14159 as data, not as π.
 #![cfg_attr(test, allow(clippy::approx_constant))]
-#![cfg_attr(docsrs, feature(doc_auto_cfg))]
+#![cfg_attr(docsrs, feature(doc_cfg))]
 
 #[cfg(feature = "alloc")]
 extern crate alloc;
