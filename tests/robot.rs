@@ -262,7 +262,10 @@ fn messages() -> impl Strategy<Value = Vec<(ReadCall, Vec<u8>, String)>> {
             }
             let mut text = format!("[{}", v.len());
             for x in &v {
-                text.push_str(&format!(", {x}"));
+                // The robot's to_str rule: 6 decimals, trailing zeros and point dropped.
+                let six = format!("{x:.6}");
+                let trimmed = six.trim_end_matches('0').trim_end_matches('.');
+                text.push_str(&format!(", {trimmed}"));
             }
             text.push(']');
             (ReadCall::AsciiFloat { number: v.len() }, b, text)
@@ -667,4 +670,23 @@ fn virtual_robot_says_why_socket_open_failed() {
         robot.last_open_error().unwrap().kind(),
         std::io::ErrorKind::ConnectionRefused
     );
+}
+
+/// One text writer: a read's result prints as the robot's own `to_str` text, the form
+/// the same program uses for a pose literal (it printed `3.14159265` before).
+#[test]
+fn read_results_print_by_the_robots_to_str_rules() {
+    let (text, _) = read_now(
+        Policy::default(),
+        b"(3.14159265,2.5)",
+        ReadCall::AsciiFloat { number: 2 },
+    );
+    assert_eq!(text, "[2, 3.141593, 2.5]");
+    let mut pose = String::new();
+    urscript_socket::to_str::write_value(
+        &urscript_socket::to_str::Value::Pose([3.14159265, 0.0, 0.0, 0.0, 0.0, 1e-9]),
+        &mut pose,
+    )
+    .unwrap();
+    assert_eq!(pose, "p[3.141593, 0, 0, 0, 0, 0]");
 }

@@ -7,6 +7,7 @@ use core::fmt::{self, Write as _};
 use core::time::Duration;
 
 use crate::ascii_float::{FloatReadPolicy, FloatTuple};
+use crate::to_str::{write_list, Scalar};
 
 use super::DEFAULT_RECEIVE_CAPACITY;
 
@@ -267,9 +268,11 @@ pub enum ReadResult {
 }
 
 impl ReadResult {
-    /// The value in URScript notation: lists as `[4, 1.414, 3.14159, 1.616, 0]` (floats
-    /// in shortest round-trip form, NaN as `nan`), strings quoted with `\n`, `\r`, `\t`,
-    /// `\\`, `\"` and `\xHH` escapes, ints in decimal.
+    /// The value in URScript notation, by the robot's own `to_str` rules (the one text
+    /// writer, [`to_str::write_value`](crate::to_str::write_value)): lists as
+    /// `[4, 1.414, 3.14159, 1.616, 0]` (floats with at most 6 decimals, NaN as `nan`),
+    /// strings quoted as a URScript literal would be written, with `\n`, `\r`, `\t`, `\\`,
+    /// `\"` and `\xHH` escapes for display, ints in decimal.
     ///
     /// ```
     /// use urscript_socket::{ascii_float::FloatTuple, robot::ReadResult};
@@ -284,21 +287,16 @@ impl ReadResult {
 
     fn write_urscript(&self, s: &mut String) -> fmt::Result {
         match self {
-            ReadResult::Floats(t) => {
-                write!(s, "[{}", t.count())?;
-                for v in t.values() {
-                    s.push_str(", ");
-                    write_float(s, *v)?;
-                }
-                s.push(']');
-            }
-            ReadResult::Ints(l) => {
-                write!(s, "[{}", l.count())?;
-                for v in l.values() {
-                    write!(s, ", {v}")?;
-                }
-                s.push(']');
-            }
+            ReadResult::Floats(t) => write_list(
+                core::iter::once(count(t.count()))
+                    .chain(t.values().iter().map(|&v| Scalar::Float(v))),
+                s,
+            )?,
+            ReadResult::Ints(l) => write_list(
+                core::iter::once(count(l.count()))
+                    .chain(l.values().iter().map(|&v| Scalar::Int(v))),
+                s,
+            )?,
             ReadResult::Text(t) => write_quoted(s, t)?,
             ReadResult::Int(v) => write!(s, "{v}")?,
         }
@@ -328,18 +326,6 @@ impl fmt::Display for ReadResult {
     }
 }
 
-/// Writes a float in shortest round-trip form (Rust's `{}`), NaN as `nan`, infinities as
-/// `inf`/`-inf`.
-pub(crate) fn write_float(s: &mut impl fmt::Write, v: f64) -> fmt::Result {
-    if v.is_nan() {
-        s.write_str("nan")
-    } else if v.is_infinite() {
-        s.write_str(if v > 0.0 { "inf" } else { "-inf" })
-    } else {
-        write!(s, "{v}")
-    }
-}
-
 /// Writes `bytes` as a quoted string literal with `\n \r \t \\ \"` and `\xHH` escapes.
 pub(crate) fn write_quoted(s: &mut impl fmt::Write, bytes: &[u8]) -> fmt::Result {
     s.write_char('"')?;
@@ -355,4 +341,9 @@ pub(crate) fn write_quoted(s: &mut impl fmt::Write, bytes: &[u8]) -> fmt::Result
         }
     }
     s.write_char('"')
+}
+
+/// A read's count (at most 30) as the first element of its URScript list.
+fn count(n: usize) -> Scalar {
+    Scalar::Int(i32::try_from(n).unwrap_or(i32::MAX))
 }
