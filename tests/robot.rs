@@ -684,9 +684,9 @@ fn read_results_print_by_the_robots_to_str_rules() {
     assert_eq!(text, "[2, 3.141593, 2.5]");
     let mut pose = String::new();
     urscript_socket::to_str::write_value(
-        &urscript_socket::to_str::Value::Pose([2.71828182, 0.0, 0.0, 0.0, 0.0, 1e-9]),
+        &urscript_socket::to_str::Value::Pose([1.23456789, 0.0, 0.0, 0.0, 0.0, 1e-9]),
         &mut pose,
     )
     .unwrap();
-    assert_eq!(pose, "p[2.718282, 0, 0, 0, 0, 0]");
+    assert_eq!(pose, "p[1.234568, 0, 0, 0, 0, 0]");
 }
