@@ -7,6 +7,7 @@ use core::fmt::{self, Write as _};
 use core::time::Duration;
 
 use crate::ascii_float::{FloatReadPolicy, FloatTuple};
+use crate::format::{write_quoted, Format, Message};
 use crate::to_str::{write_list, Scalar};
 
 use super::DEFAULT_RECEIVE_CAPACITY;
@@ -171,6 +172,31 @@ impl ReadCall {
         }
     }
 
+    /// The wire format this read decodes.
+    ///
+    /// ```
+    /// # use urscript_socket::{format::Format, robot::ReadCall};
+    /// assert_eq!(ReadCall::AsciiFloat { number: 6 }.format(), Format::FloatTuple { number: 6 });
+    /// ```
+    pub fn format(&self) -> Format<'_> {
+        match self {
+            ReadCall::AsciiFloat { number } => Format::FloatTuple { number: *number },
+            ReadCall::BinaryInteger { number } => Format::Int32 { number: *number },
+            ReadCall::ByteList { number } => Format::Bytes { number: *number },
+            ReadCall::Line => Format::Line,
+            ReadCall::String {
+                prefix,
+                suffix,
+                interpret_escape,
+            } => Format::String {
+                prefix,
+                suffix,
+                interpret_escape: *interpret_escape,
+            },
+            ReadCall::GetVar { name } => Format::VarReply { name },
+        }
+    }
+
     /// The sentinel this read returns on timeout or failure.
     ///
     /// ```
@@ -268,6 +294,27 @@ pub enum ReadResult {
 }
 
 impl ReadResult {
+    /// What the robot program gets for a complete message of its read's format.
+    ///
+    /// ```
+    /// use urscript_socket::{format::Message, robot::ReadResult};
+    /// assert_eq!(ReadResult::from_message(&Message::Bytes(&[2, 3])).to_urscript(), "[2, 2, 3]");
+    /// ```
+    pub fn from_message(message: &Message<'_>) -> Self {
+        match message {
+            Message::FloatTuple(t) => ReadResult::Floats(*t),
+            Message::Int32(v) => ReadResult::Ints(IntList::read(v.len(), v.iter())),
+            Message::Bytes(b) => {
+                ReadResult::Ints(IntList::read(b.len(), b.iter().map(|&x| i32::from(x))))
+            }
+            Message::Text(t) => ReadResult::Text(t.to_vec()),
+            Message::Var(_) | Message::Value(_) => {
+                ReadResult::Text(alloc::format!("{message}").into_bytes())
+            }
+            Message::VarReply(v) => ReadResult::Int(*v),
+        }
+    }
+
     /// The value in URScript notation, by the robot's own `to_str` rules (the one text
     /// writer, [`to_str::write_value`](crate::to_str::write_value)): lists as
     /// `[4, 1.414, 3.14159, 1.616, 0]` (floats with at most 6 decimals, NaN as `nan`),
@@ -324,23 +371,6 @@ impl fmt::Display for ReadResult {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         f.write_str(&self.to_urscript())
     }
-}
-
-/// Writes `bytes` as a quoted string literal with `\n \r \t \\ \"` and `\xHH` escapes.
-pub(crate) fn write_quoted(s: &mut impl fmt::Write, bytes: &[u8]) -> fmt::Result {
-    s.write_char('"')?;
-    for &b in bytes {
-        match b {
-            b'\n' => s.write_str("\\n")?,
-            b'\r' => s.write_str("\\r")?,
-            b'\t' => s.write_str("\\t")?,
-            b'\\' => s.write_str("\\\\")?,
-            b'"' => s.write_str("\\\"")?,
-            0x20..=0x7E => s.write_char(b as char)?,
-            _ => write!(s, "\\x{b:02X}")?,
-        }
-    }
-    s.write_char('"')
 }
 
 /// A read's count (at most 30) as the first element of its URScript list.

@@ -5,34 +5,17 @@ use alloc::string::String;
 use alloc::vec::Vec;
 use core::time::Duration;
 
-use crate::ascii_float::FloatTupleDecoder;
-use crate::byte_list::ByteListDecoder;
-use crate::int32::Int32Decoder;
-use crate::line::LineDecoder;
-use crate::string::ReadStringDecoder;
+use crate::format::{AnyDecoder, Counted};
 use crate::to_str::Value;
-use crate::var::VarReplyDecoder;
-use crate::{DecodeError, Decoder, RecvBuffer};
+use crate::{DecodeError, RecvBuffer};
 
 use super::{IntList, Policy, ReadCall, ReadResult, RobotError, ShortRead, Timeout};
-
-/// The decoder of the read in progress.
-#[allow(clippy::large_enum_variant)]
-#[derive(Debug)]
-enum Reader {
-    Float(FloatTupleDecoder),
-    Int(Int32Decoder),
-    Bytes(ByteListDecoder),
-    Line(LineDecoder),
-    Str(ReadStringDecoder),
-    Var(VarReplyDecoder),
-}
 
 /// The read in progress: the call, its decoder and when it gives up (`None`: never).
 #[derive(Debug)]
 struct Pending {
     call: ReadCall,
-    reader: Reader,
+    reader: AnyDecoder,
     deadline: Option<Duration>,
 }
 
@@ -234,24 +217,10 @@ impl SocketConnection {
         if self.pending.is_some() {
             return Err(RobotError::ReadPending);
         }
-        let reader = match &call {
-            ReadCall::AsciiFloat { number } => {
-                Reader::Float(FloatTupleDecoder::with_policy(*number, self.policy.float)?)
-            }
-            ReadCall::BinaryInteger { number } => Reader::Int(Int32Decoder::new(*number)?),
-            ReadCall::ByteList { number } => Reader::Bytes(ByteListDecoder::new(*number)?),
-            ReadCall::Line => Reader::Line(LineDecoder::new()),
-            ReadCall::String {
-                prefix,
-                suffix,
-                interpret_escape,
-            } => Reader::Str(ReadStringDecoder::new(prefix, suffix, *interpret_escape)?),
-            ReadCall::GetVar { name } => {
-                let reader = VarReplyDecoder::new(name)?;
-                crate::var::encode_get_var(name, &mut self.tx)?;
-                Reader::Var(reader)
-            }
-        };
+        let reader = call.format().decoder_with(self.policy.float)?;
+        if let ReadCall::GetVar { name } = &call {
+            crate::var::encode_get_var(name, &mut self.tx)?;
+        }
         let wait = match call {
             ReadCall::GetVar { .. } => Timeout::default(),
             _ => timeout,
@@ -303,17 +272,10 @@ impl SocketConnection {
     /// ```
     pub fn poll_read(&mut self) -> Option<ReadResult> {
         let pending = self.pending.as_mut()?;
-        let outcome = match &mut pending.reader {
-            Reader::Float(d) => decode_with(&mut self.rx, d, |t| ReadResult::Floats(*t)),
-            Reader::Int(d) => decode_with(&mut self.rx, d, |v| {
-                ReadResult::Ints(IntList::read(v.len(), v.iter()))
-            }),
-            Reader::Bytes(d) => decode_with(&mut self.rx, d, |b| {
-                ReadResult::Ints(IntList::read(b.len(), b.iter().map(|&x| i32::from(x))))
-            }),
-            Reader::Line(d) => decode_with(&mut self.rx, d, |l| ReadResult::Text(l.to_vec())),
-            Reader::Str(d) => decode_with(&mut self.rx, d, |s| ReadResult::Text(s.to_vec())),
-            Reader::Var(d) => decode_with(&mut self.rx, d, |v| ReadResult::Int(*v)),
+        let outcome = match self.rx.decode(&mut pending.reader) {
+            Ok(Some(message)) => Outcome::Done(ReadResult::from_message(&message)),
+            Ok(None) => Outcome::Waiting,
+            Err(e) => Outcome::Failed(e),
         };
         let result = match outcome {
             Outcome::Done(r) => r,
@@ -376,11 +338,11 @@ impl SocketConnection {
                 _ => 0,
             };
             let data = self.rx.data();
-            let taken = match &mut reader {
-                Reader::Int(d) => d
+            let taken = match reader.as_counted() {
+                Counted::Int32(d) => d
                     .take_partial(data)
                     .map(|(v, n)| (IntList::read(number, v.iter()), n)),
-                Reader::Bytes(d) => d
+                Counted::Bytes(d) => d
                     .take_partial(data)
                     .map(|(b, n)| (IntList::read(number, b.iter().map(|&x| i32::from(x))), n)),
                 _ => None,
@@ -546,17 +508,4 @@ enum Outcome {
     Done(ReadResult),
     Failed(DecodeError),
     Waiting,
-}
-
-/// Runs `decoder` on the receive buffer and converts a complete item.
-fn decode_with<D: Decoder>(
-    rx: &mut RecvBuffer<Box<[u8]>>,
-    decoder: &mut D,
-    convert: impl FnOnce(&D::Item<'_>) -> ReadResult,
-) -> Outcome {
-    match rx.decode(decoder) {
-        Ok(Some(item)) => Outcome::Done(convert(&item)),
-        Ok(None) => Outcome::Waiting,
-        Err(e) => Outcome::Failed(e),
-    }
 }
