@@ -119,6 +119,32 @@ impl VirtualRobot {
         Ok(true)
     }
 
+    /// [`socket_open`](Self::socket_open) that keeps the reason: `Ok(Err(e))` carries
+    /// the OS error of a connection that failed (refused, unreachable, unknown host,
+    /// missing port), where `socket_open` says only `Ok(false)`. For tools that must tell
+    /// the user why; the URScript result is still `False`.
+    ///
+    /// ```
+    /// # use urscript_socket::robot::{Policy, VirtualRobot};
+    /// let mut robot = VirtualRobot::new(Policy::default());
+    /// assert!(robot.socket_open_or_reason("no-port-given", "socket_0").unwrap().is_err());
+    /// ```
+    pub fn socket_open_or_reason(
+        &mut self,
+        address: impl ToSocketAddrs,
+        socket_name: &str,
+    ) -> Result<Result<(), io::Error>, RobotError> {
+        self.socket_close(socket_name);
+        let stream = match TcpStream::connect(address) {
+            Ok(s) => s,
+            Err(e) => return Ok(Err(e)),
+        };
+        stream.set_nodelay(true).map_err(RobotError::Io)?;
+        self.sockets
+            .push((SocketConnection::new(socket_name, self.policy), stream));
+        Ok(Ok(()))
+    }
+
     /// `socket_close(socket_name)`; returns whether it was open.
     ///
     /// ```
