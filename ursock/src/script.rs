@@ -377,7 +377,8 @@ pub fn run(script: &str, connect: Option<&str>, opts: Options) -> Result<(), Str
     }
     let mut vars: HashMap<String, ReadResult> = HashMap::new();
     let mut timed_out: HashMap<String, TimedOut> = HashMap::new();
-    // Whitespace a float read left in the buffer (the LF after `)`), per socket.
+    // What a read left in the socket's buffer for the next one (the LF after `)`), per
+    // socket, as far as the CLI can tell from the bytes it saw.
     let mut carry: HashMap<String, Vec<u8>> = HashMap::new();
     for (n, line) in script.lines().enumerate() {
         let lineno = n + 1;
@@ -415,7 +416,8 @@ pub fn run(script: &str, connect: Option<&str>, opts: Options) -> Result<(), Str
                 if let Some(read) = &read {
                     let mut seen = carry.remove(&socket).unwrap_or_default();
                     seen.extend_from_slice(&got.bytes);
-                    if crate::offline::failed(read, &r) {
+                    let binary = matches!(read, ReadCall::BinaryInteger { .. } | ReadCall::ByteList { .. });
+                    if binary || crate::offline::failed(read, &r) {
                         why = crate::diagnose::diagnose(read, &seen);
                     }
                     if let Some(t) = timed_out.remove(&socket) {
@@ -435,13 +437,8 @@ pub fn run(script: &str, connect: Option<&str>, opts: Options) -> Result<(), Str
                             socket.clone(),
                             TimedOut { call: read.clone(), line: lineno, sent_since: false },
                         );
-                    } else if matches!(read, ReadCall::AsciiFloat { .. }) {
-                        if let Some(close) = seen.iter().rposition(|&b| b == b')') {
-                            let tail = &seen[close + 1..];
-                            if !tail.is_empty() && tail.iter().all(|b| matches!(b, b'\r' | b'\n' | 0)) {
-                                carry.insert(socket.clone(), tail.to_vec());
-                            }
-                        }
+                    } else if let Some(rest) = leftover(read, &seen) {
+                        carry.insert(socket.clone(), rest.to_vec());
                     }
                 }
                 report(
@@ -460,6 +457,23 @@ pub fn run(script: &str, connect: Option<&str>, opts: Options) -> Result<(), Str
         }
     }
     Ok(())
+}
+
+/// The bytes a successful read left buffered, from what it saw: the read consumes
+/// through `)` (floats), through LF (lines) or exactly its bytes (binary). `None` where
+/// the CLI cannot tell (strings).
+fn leftover<'a>(read: &ReadCall, seen: &'a [u8]) -> Option<&'a [u8]> {
+    let end = match read {
+        ReadCall::AsciiFloat { .. } => {
+            let open = seen.iter().position(|&b| b == b'(')?;
+            open + seen[open..].iter().position(|&b| b == b')')? + 1
+        }
+        ReadCall::Line => seen.iter().position(|&b| b == b'\n')? + 1,
+        ReadCall::BinaryInteger { number } => number * 4,
+        ReadCall::ByteList { number } => *number,
+        _ => return None,
+    };
+    seen.get(end..).filter(|rest| !rest.is_empty())
 }
 
 enum Outcome {
