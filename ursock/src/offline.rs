@@ -151,7 +151,7 @@ pub fn read(call: ReadCall, repeat: usize, json: bool, timestamps: bool) -> Resu
             outln!("{}", serde_json::to_string(&line).unwrap_or_default());
         } else {
             let stamp = if timestamps { format!("{} ", out::stamp()) } else { String::new() };
-            outln!("{stamp}{}", result.to_urscript());
+            outln!("{stamp}{}", crate::show::read_result(&result));
             if let Some(w) = why {
                 out::note(&format!("why: {w}"));
             }

@@ -446,7 +446,7 @@ pub fn run(script: &str, connect: Option<&str>, opts: Options) -> Result<(), Str
                     &shown,
                     f,
                     crate::offline::result_json(&r),
-                    &r.to_urscript(),
+                    &crate::show::read_result(&r),
                     r.is_sentinel(),
                     why,
                 );
@@ -515,7 +515,10 @@ fn value_text(arg: &Arg) -> Result<Vec<u8>, String> {
 }
 
 fn execute(robot: &mut VirtualRobot, call: &Call) -> Result<Outcome, String> {
-    let e = |e: urscript_socket::robot::RobotError| e.to_string();
+    let e = |e: RobotError| match e {
+        RobotError::Encode(x) => format!("cannot send: {}", crate::messages::encode_error(x)),
+        other => other.to_string(),
+    };
     let f = call.function.as_str();
     Ok(match f {
         "socket_open" => {

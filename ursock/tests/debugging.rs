@@ -236,6 +236,8 @@ fn hex_in_and_out_escapes_and_utf8_text() {
     assert!(code != 0 && err.contains("unknown escape"), "{err}");
     let (_, out, _) = run(&["decode", "line"], "café\n".as_bytes());
     assert_eq!(out, "\"café\"\n");
+    let (_, out, _) = run(&["read", "line"], "café\n".as_bytes());
+    assert_eq!(out, "\"café\"\n");
     let (_, out, _) = run(&["read", "line"], b"caf\xE9\n");
     assert_eq!(out, "\"caf\\xE9\"\n");
 }
