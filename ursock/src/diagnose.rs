@@ -22,8 +22,14 @@ fn shown(bytes: &[u8]) -> String {
 
 fn trim(bytes: &[u8]) -> &[u8] {
     let is_space = |b: &u8| matches!(b, b' ' | b'\t' | b'\r' | b'\n' | 0);
-    let start = bytes.iter().position(|b| !is_space(b)).unwrap_or(bytes.len());
-    let end = bytes.iter().rposition(|b| !is_space(b)).map_or(start, |e| e + 1);
+    let start = bytes
+        .iter()
+        .position(|b| !is_space(b))
+        .unwrap_or(bytes.len());
+    let end = bytes
+        .iter()
+        .rposition(|b| !is_space(b))
+        .map_or(start, |e| e + 1);
     &bytes[start..end]
 }
 
@@ -126,7 +132,11 @@ fn floats(number: usize, bytes: &[u8]) -> Option<String> {
             format!("no '(' arrived, no tuple to read: {}", shown(body))
         });
     };
-    let Some(close) = body[open..].iter().position(|&b| b == b')').map(|c| open + c) else {
+    let Some(close) = body[open..]
+        .iter()
+        .position(|&b| b == b')')
+        .map(|c| open + c)
+    else {
         return Some(format!(
             "the tuple has no closing ')': the reply was cut off or was still arriving \
              when the timeout passed ({})",
@@ -149,7 +159,11 @@ fn floats(number: usize, bytes: &[u8]) -> Option<String> {
              whole read; send {number} values or read {values}"
         ));
     }
-    if let Some(bad) = inner.split(',').map(str::trim).find(|v| v.parse::<f64>().is_err()) {
+    if let Some(bad) = inner
+        .split(',')
+        .map(str::trim)
+        .find(|v| v.parse::<f64>().is_err())
+    {
         return Some(format!(
             "{bad:?} is not a number the robot reads (plain decimal, optional exponent)"
         ));
@@ -165,10 +179,17 @@ fn floats(number: usize, bytes: &[u8]) -> Option<String> {
 /// `(0,15, 0,5)`: every field, split on ", ", is two digit groups joined by ','.
 /// (The `;` form is caught before; `(0,15,0,5)` cannot be told from four values.)
 fn decimal_commas(inner: &str) -> bool {
-    inner.contains(", ") && inner.split(", ").all(|p| {
-        let parts: Vec<&str> = p.trim().split(',').collect();
-        parts.len() == 2 && parts.iter().all(|d| !d.is_empty() && d.trim_start_matches('-').chars().all(|c| c.is_ascii_digit()))
-    })
+    inner.contains(", ")
+        && inner.split(", ").all(|p| {
+            let parts: Vec<&str> = p.trim().split(',').collect();
+            parts.len() == 2
+                && parts.iter().all(|d| {
+                    !d.is_empty()
+                        && d.trim_start_matches('-')
+                            .chars()
+                            .all(|c| c.is_ascii_digit())
+                })
+        })
 }
 
 fn binary(needed: usize, what: &str, bytes: &[u8]) -> Option<String> {
@@ -184,7 +205,12 @@ fn binary(needed: usize, what: &str, bytes: &[u8]) -> Option<String> {
         ));
     }
     let body = trim(bytes);
-    if what == "int32" && !body.is_empty() && body.iter().all(|b| b.is_ascii_digit() || b" -+,()".contains(b)) {
+    if what == "int32"
+        && !body.is_empty()
+        && body
+            .iter()
+            .all(|b| b.is_ascii_digit() || b" -+,()".contains(b))
+    {
         return Some(format!(
             "text {} arrived where binary int32 was expected: pack the values, e.g. \
              struct.pack(\"!i\", v) in Python",
@@ -259,7 +285,10 @@ mod tests {
     #[test]
     fn fewer_values_and_good_tuples() {
         assert!(f(6, b"(3)").contains("1 of the 6"));
-        assert_eq!(diagnose(&ReadCall::AsciiFloat { number: 2 }, b"(1, 2)\n"), None);
+        assert_eq!(
+            diagnose(&ReadCall::AsciiFloat { number: 2 }, b"(1, 2)\n"),
+            None
+        );
     }
 
     #[test]
@@ -287,8 +316,14 @@ mod tests {
     #[test]
     fn lines_and_strings() {
         assert!(diagnose(&ReadCall::Line, b"OK\r").unwrap().contains("CR"));
-        let s = ReadCall::String { prefix: b">".to_vec(), suffix: b"<".to_vec(), interpret_escape: false };
-        assert!(diagnose(&s, b"junk").unwrap().contains("prefix \">\" never arrived"));
+        let s = ReadCall::String {
+            prefix: b">".to_vec(),
+            suffix: b"<".to_vec(),
+            interpret_escape: false,
+        };
+        assert!(diagnose(&s, b"junk")
+            .unwrap()
+            .contains("prefix \">\" never arrived"));
         assert!(diagnose(&s, b">abc").unwrap().contains("suffix"));
         assert_eq!(diagnose(&s, b">abc<"), None);
     }

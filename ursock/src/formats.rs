@@ -153,17 +153,24 @@ fn need(values: &[String], n: usize, usage: &str) -> Result<(), String> {
 pub fn parse_hex(values: &[String]) -> Result<Vec<u8>, String> {
     let mut out = Vec::new();
     for v in values {
-        let digits = v.strip_prefix("0x").or_else(|| v.strip_prefix("0X")).unwrap_or(v);
-        let digits: Vec<u8> = digits.bytes().filter(|b| !matches!(b, b':' | b'-' | b',')).collect();
+        let digits = v
+            .strip_prefix("0x")
+            .or_else(|| v.strip_prefix("0X"))
+            .unwrap_or(v);
+        let digits: Vec<u8> = digits
+            .bytes()
+            .filter(|b| !matches!(b, b':' | b'-' | b','))
+            .collect();
         if digits.is_empty() || digits.len() % 2 != 0 {
-            return Err(format!("{v:?} is not hex bytes (pairs of hex digits, like 02 41 03)"));
+            return Err(format!(
+                "{v:?} is not hex bytes (pairs of hex digits, like 02 41 03)"
+            ));
         }
         for pair in digits.chunks(2) {
             let text = std::str::from_utf8(pair).unwrap_or("");
-            out.push(
-                u8::from_str_radix(text, 16)
-                    .map_err(|_| format!("{v:?} is not hex bytes (pairs of hex digits, like 02 41 03)"))?,
-            );
+            out.push(u8::from_str_radix(text, 16).map_err(|_| {
+                format!("{v:?} is not hex bytes (pairs of hex digits, like 02 41 03)")
+            })?);
         }
     }
     if out.is_empty() {
@@ -238,7 +245,11 @@ pub fn encode_server(format: &str, values: &[String]) -> Result<Vec<u8>, String>
 }
 
 /// [`encode_server`], with `escapes` interpreted in text values.
-pub fn encode_server_with(format: &str, values: &[String], escapes: bool) -> Result<Vec<u8>, String> {
+pub fn encode_server_with(
+    format: &str,
+    values: &[String],
+    escapes: bool,
+) -> Result<Vec<u8>, String> {
     let mut out = Vec::new();
     let r = match format {
         "hex" => return parse_hex(values),
@@ -288,7 +299,11 @@ pub fn encode_server_with(format: &str, values: &[String], escapes: bool) -> Res
 /// Encodes what the robot sends: `line`, `string`, `byte`, `int`, `set-var NAME INT`,
 /// `get-var NAME`, `stx-etx TEXT`, `value TEXT` (the `to_str` form of a number, bool,
 /// list or pose), `hex HH...`; with `escapes` interpreted in text values.
-pub fn encode_robot_with(format: &str, values: &[String], escapes: bool) -> Result<Vec<u8>, String> {
+pub fn encode_robot_with(
+    format: &str,
+    values: &[String],
+    escapes: bool,
+) -> Result<Vec<u8>, String> {
     let mut out = Vec::new();
     let r = match format {
         "hex" => return parse_hex(values),

@@ -88,7 +88,8 @@ pub fn read(call: ReadCall, repeat: usize, json: bool, timestamps: bool) -> Resu
     let mut eof = false;
     for _ in 0..repeat {
         // What this read sees: what was buffered before it, then what arrives.
-        let mut seen: Vec<u8> = socket.buffered()[..socket.buffered().len().min(DIAGNOSIS_WINDOW)].to_vec();
+        let mut seen: Vec<u8> =
+            socket.buffered()[..socket.buffered().len().min(DIAGNOSIS_WINDOW)].to_vec();
         let note_seen = |bytes: &[u8], seen: &mut Vec<u8>| {
             let room = DIAGNOSIS_WINDOW.saturating_sub(seen.len());
             seen.extend_from_slice(&bytes[..bytes.len().min(room)]);
@@ -150,7 +151,11 @@ pub fn read(call: ReadCall, repeat: usize, json: bool, timestamps: bool) -> Resu
             };
             outln!("{}", serde_json::to_string(&line).unwrap_or_default());
         } else {
-            let stamp = if timestamps { format!("{} ", out::stamp()) } else { String::new() };
+            let stamp = if timestamps {
+                format!("{} ", out::stamp())
+            } else {
+                String::new()
+            };
             outln!("{stamp}{}", crate::show::read_result(&result));
             if let Some(w) = why {
                 out::note(&format!("why: {w}"));

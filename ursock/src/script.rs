@@ -10,13 +10,12 @@ use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
 use urscript_socket::robot::{
-    Direction, Policy, ReadCall, ReadResult, RobotError, Timeout, VirtualRobot,
-    DEFAULT_SOCKET_NAME,
+    Direction, Policy, ReadCall, ReadResult, RobotError, Timeout, VirtualRobot, DEFAULT_SOCKET_NAME,
 };
 use urscript_socket::to_str::{parse_value, Scalar, Value};
 
-use crate::show::{text_and_hex, JsonBytes};
 use crate::out;
+use crate::show::{text_and_hex, JsonBytes};
 
 /// An argument value.
 #[derive(Debug, Clone)]
@@ -281,12 +280,20 @@ fn trace_event(json: bool, name: &str, dir: Direction, bytes: &[u8]) {
         });
         outln!("{ev}");
     } else {
-        outln!("    {} {name} {arrow} {}", out::stamp(), text_and_hex(bytes, "        "));
+        outln!(
+            "    {} {name} {arrow} {}",
+            out::stamp(),
+            text_and_hex(bytes, "        ")
+        );
     }
 }
 
 fn elapsed() -> f64 {
-    out::stamp().trim_start_matches('+').trim_end_matches('s').parse().unwrap_or(0.0)
+    out::stamp()
+        .trim_start_matches('+')
+        .trim_end_matches('s')
+        .parse()
+        .unwrap_or(0.0)
 }
 
 /// `socket_open("host", port, "socket_0")` for a `--connect HOST:PORT` argument.
@@ -297,7 +304,10 @@ fn split_host_port(addr: &str) -> Result<(String, u16), String> {
     let port = port
         .parse::<u16>()
         .map_err(|_| format!("--connect {addr:?}: {port:?} is not a port (0-65535)"))?;
-    let host = host.trim_start_matches('[').trim_end_matches(']').to_string();
+    let host = host
+        .trim_start_matches('[')
+        .trim_end_matches(']')
+        .to_string();
     Ok((host, port))
 }
 
@@ -305,7 +315,9 @@ fn split_host_port(addr: &str) -> Result<(String, u16), String> {
 fn open_failure(host: &str, port: u16, e: &std::io::Error) -> String {
     use std::io::ErrorKind as K;
     let hint = match e.kind() {
-        K::ConnectionRefused => "connection refused: nothing listens on that port (is the server running?)",
+        K::ConnectionRefused => {
+            "connection refused: nothing listens on that port (is the server running?)"
+        }
         K::TimedOut => "timed out: no answer from that host (wrong address, firewall or cable?)",
         K::InvalidInput => "not a valid address",
         _ if e.to_string().contains("lookup") || e.to_string().contains("resolve") => {
@@ -339,7 +351,13 @@ pub fn run(script: &str, connect: Option<&str>, opts: Options) -> Result<(), Str
             }
         });
     }
-    let report = |line: usize, shown: &str, call: &str, result: serde_json::Value, text: &str, sentinel: bool, why: Option<String>| {
+    let report = |line: usize,
+                  shown: &str,
+                  call: &str,
+                  result: serde_json::Value,
+                  text: &str,
+                  sentinel: bool,
+                  why: Option<String>| {
         if opts.json {
             let ev = crate::offline::ReadJson {
                 t: Some(elapsed()),
@@ -416,7 +434,10 @@ pub fn run(script: &str, connect: Option<&str>, opts: Options) -> Result<(), Str
                 if let Some(read) = &read {
                     let mut seen = carry.remove(&socket).unwrap_or_default();
                     seen.extend_from_slice(&got.bytes);
-                    let binary = matches!(read, ReadCall::BinaryInteger { .. } | ReadCall::ByteList { .. });
+                    let binary = matches!(
+                        read,
+                        ReadCall::BinaryInteger { .. } | ReadCall::ByteList { .. }
+                    );
                     if binary || crate::offline::failed(read, &r) {
                         why = crate::diagnose::diagnose(read, &seen);
                     }
@@ -435,7 +456,11 @@ pub fn run(script: &str, connect: Option<&str>, opts: Options) -> Result<(), Str
                     if r.is_sentinel() {
                         timed_out.insert(
                             socket.clone(),
-                            TimedOut { call: read.clone(), line: lineno, sent_since: false },
+                            TimedOut {
+                                call: read.clone(),
+                                line: lineno,
+                                sent_since: false,
+                            },
                         );
                     } else if let Some(rest) = leftover(read, &seen) {
                         carry.insert(socket.clone(), rest.to_vec());

@@ -124,7 +124,9 @@ pub enum JsonBytes {
 impl JsonBytes {
     pub fn new(bytes: &[u8]) -> Self {
         match std::str::from_utf8(bytes) {
-            Ok(t) => JsonBytes::Utf8 { text: t.to_string() },
+            Ok(t) => JsonBytes::Utf8 {
+                text: t.to_string(),
+            },
             Err(_) => JsonBytes::Hex {
                 hex: bytes.iter().fold(String::new(), |mut s, b| {
                     let _ = write!(s, "{b:02x}");
@@ -134,7 +136,6 @@ impl JsonBytes {
         }
     }
 }
-
 
 /// A float in shortest round-trip form, `nan`, `inf`.
 pub fn float(v: f64) -> String {
@@ -202,10 +203,19 @@ impl Message<'_> {
         match self {
             Message::Int(v) => JsonMessage::Int32 { value: *v },
             Message::Byte(b) => JsonMessage::Byte { value: *b },
-            Message::Text("frame", t) => JsonMessage::Frame { value: JsonBytes::new(t) },
-            Message::Text("string", t) => JsonMessage::String { value: JsonBytes::new(t) },
-            Message::Text(_, t) => JsonMessage::Line { value: JsonBytes::new(t) },
-            Message::Var(VarMessage::Set { name, value }) => JsonMessage::Set { name, value: *value },
+            Message::Text("frame", t) => JsonMessage::Frame {
+                value: JsonBytes::new(t),
+            },
+            Message::Text("string", t) => JsonMessage::String {
+                value: JsonBytes::new(t),
+            },
+            Message::Text(_, t) => JsonMessage::Line {
+                value: JsonBytes::new(t),
+            },
+            Message::Var(VarMessage::Set { name, value }) => JsonMessage::Set {
+                name,
+                value: *value,
+            },
             Message::Var(VarMessage::Get { name }) => JsonMessage::Get { name },
             Message::Value(Value::Scalar(Scalar::Int(v))) => JsonMessage::Int { value: *v },
             Message::Value(Value::Scalar(Scalar::Float(v))) => JsonMessage::Float { value: *v },

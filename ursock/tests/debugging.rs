@@ -79,7 +79,10 @@ fn a_closed_stdout_ends_every_subcommand_quietly() {
         (vec!["encode", "line", "hello"], b""),
         (vec!["read", "ascii-float", "1"], b"(1)"),
         (vec!["decode", "line"], b"a\nb\n"),
-        (vec!["robot", "--connect", &addr, "-e", "textmsg(\"x\")"], b""),
+        (
+            vec!["robot", "--connect", &addr, "-e", "textmsg(\"x\")"],
+            b"",
+        ),
     ];
     for (args, input) in cases {
         let mut child = ursock()
@@ -123,10 +126,15 @@ fn decode_json_keeps_utf8_as_text_and_marks_raw_bytes_as_hex() {
 
 #[test]
 fn read_and_robot_speak_json_lines() {
-    let (code, out, _) = run(&["read", "ascii-float", "2", "--json", "--repeat", "2"], b"(1,2)(3,4)");
+    let (code, out, _) = run(
+        &["read", "ascii-float", "2", "--json", "--repeat", "2"],
+        b"(1,2)(3,4)",
+    );
     assert_eq!(code, 0);
-    let lines: Vec<serde_json::Value> =
-        out.lines().map(|l| serde_json::from_str(l).unwrap()).collect();
+    let lines: Vec<serde_json::Value> = out
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect();
     assert_eq!(lines.len(), 2);
     assert_eq!(lines[1]["result"]["values"][1], 4.0);
     assert_eq!(lines[0]["call"], "socket_read_ascii_float");
@@ -145,9 +153,14 @@ fn read_and_robot_speak_json_lines() {
         "socket_send_line(\"go\")\nx = socket_read_ascii_float(2)\nsocket_close()",
     );
     assert_eq!(code, 0, "{err}");
-    let events: Vec<serde_json::Value> =
-        out.lines().map(|l| serde_json::from_str(l).expect(l)).collect();
-    let read = events.iter().find(|e| e["call"] == "socket_read_ascii_float").unwrap();
+    let events: Vec<serde_json::Value> = out
+        .lines()
+        .map(|l| serde_json::from_str(l).expect(l))
+        .collect();
+    let read = events
+        .iter()
+        .find(|e| e["call"] == "socket_read_ascii_float")
+        .unwrap();
     assert_eq!(read["result"]["count"], 2);
     assert_eq!(read["line"], 2);
 }
@@ -155,15 +168,39 @@ fn read_and_robot_speak_json_lines() {
 #[test]
 fn connect_failures_say_why() {
     // A port nobody listens on (bound, then closed).
-    let port = TcpListener::bind("127.0.0.1:0").unwrap().local_addr().unwrap().port();
+    let port = TcpListener::bind("127.0.0.1:0")
+        .unwrap()
+        .local_addr()
+        .unwrap()
+        .port();
     let (code, out, err) = robot(port, &[], "textmsg(\"x\")");
     assert_ne!(code, 0);
     assert!(err.contains("refused"), "{err}");
-    assert!(out.contains(&format!("socket_open(\"127.0.0.1\", {port}, \"socket_0\") -> False")), "{out}");
-    let (_, _, err) = run(&["robot", "--connect", "127.0.0.1", "-e", "textmsg(1)"], b"");
+    assert!(
+        out.contains(&format!(
+            "socket_open(\"127.0.0.1\", {port}, \"socket_0\") -> False"
+        )),
+        "{out}"
+    );
+    let (_, _, err) = run(
+        &["robot", "--connect", "127.0.0.1", "-e", "textmsg(1)"],
+        b"",
+    );
     assert!(err.contains("no port"), "{err}");
-    let (_, _, err) = run(&["robot", "--connect", "no-such-host.invalid:30000", "-e", "textmsg(1)"], b"");
-    assert!(err.contains("unknown host") || err.contains("lookup"), "{err}");
+    let (_, _, err) = run(
+        &[
+            "robot",
+            "--connect",
+            "no-such-host.invalid:30000",
+            "-e",
+            "textmsg(1)",
+        ],
+        b"",
+    );
+    assert!(
+        err.contains("unknown host") || err.contains("lookup"),
+        "{err}"
+    );
     // Inside a script, socket_open returns False, says why, and the program goes on.
     let script = format!("socket_open(\"127.0.0.1\", {port})\ntextmsg(\"goes on\")");
     let (code, out, err) = run(&["robot", "-e", &script], b"");
@@ -184,19 +221,30 @@ fn messages_say_what_happened() {
     assert!(err.contains("input ended before ']'"), "{err}");
     let (_, out, _) = run(&["--help"], b"");
     let first = out.lines().next().unwrap();
-    assert!(first.contains("debug assistant") && !first.contains("Sans-IO"), "{first}");
+    assert!(
+        first.contains("debug assistant") && !first.contains("Sans-IO"),
+        "{first}"
+    );
     let port = server(|mut s| {
         let _ = s.read(&mut [0u8; 16]);
     });
     let (_, out, _) = robot(port, &[], "textmsg(1)");
-    assert!(out.starts_with(&format!("socket_open(\"127.0.0.1\", {port}, \"socket_0\") -> True")), "{out}");
+    assert!(
+        out.starts_with(&format!(
+            "socket_open(\"127.0.0.1\", {port}, \"socket_0\") -> True"
+        )),
+        "{out}"
+    );
 }
 
 #[test]
 fn like_commands_behave_alike() {
     let (code, _, err) = run(&["encode", "int32"], b"");
     assert_ne!(code, 0);
-    assert!(err.starts_with("ursock: ") && err.lines().count() == 1, "{err}");
+    assert!(
+        err.starts_with("ursock: ") && err.lines().count() == 1,
+        "{err}"
+    );
     let (code, _, _) = run(&["encode", "--robot", "int"], b"");
     assert_ne!(code, 0);
     // An unterminated last message: an error for every format, accepted with the flag.
@@ -250,18 +298,28 @@ fn long_chunks_get_a_wrapped_hex_dump_and_trace_lines_a_time() {
         s.write_all(&long).unwrap();
         let _ = s.read(&mut [0u8; 16]);
     });
-    let (code, out, err) = robot(port, &["--trace"], "socket_send_line(\"go\")\nx = socket_read_line()");
+    let (code, out, err) = robot(
+        port,
+        &["--trace"],
+        "socket_send_line(\"go\")\nx = socket_read_line()",
+    );
     assert_eq!(code, 0, "{err}");
     assert!(out.contains("0000  61 62 63"), "{out}");
     assert!(out.contains("0010  "), "{out}");
     assert!(out.contains("0020  "), "{out}");
     assert!(out.lines().all(|l| l.len() < 200), "{out}");
-    assert!(out.lines().any(|l| l.trim_start().starts_with("+0.")), "{out}");
+    assert!(
+        out.lines().any(|l| l.trim_start().starts_with("+0.")),
+        "{out}"
+    );
 }
 
 #[test]
 fn read_timestamps_and_robot_log() {
-    let (_, out, _) = run(&["read", "line", "--timestamps", "--repeat", "2"], b"a\nb\n");
+    let (_, out, _) = run(
+        &["read", "line", "--timestamps", "--repeat", "2"],
+        b"a\nb\n",
+    );
     for l in out.lines() {
         let (t, rest) = l.split_once(' ').unwrap();
         assert!(t.starts_with('+') && t.ends_with('s'), "{l}");
@@ -271,7 +329,11 @@ fn read_timestamps_and_robot_log() {
         let _ = s.read(&mut [0u8; 16]);
     });
     let log = std::env::temp_dir().join(format!("ursock-log-{}.txt", std::process::id()));
-    let (code, out, _) = robot(port, &["--log", log.to_str().unwrap()], "textmsg(\"logged\")");
+    let (code, out, _) = robot(
+        port,
+        &["--log", log.to_str().unwrap()],
+        "textmsg(\"logged\")",
+    );
     assert_eq!(code, 0);
     let logged = std::fs::read_to_string(&log).unwrap();
     let _ = std::fs::remove_file(&log);
@@ -281,7 +343,7 @@ fn read_timestamps_and_robot_log() {
 
 #[test]
 fn sending_to_a_server_that_closed_returns_false_and_the_script_goes_on() {
-    let port = server(|s| drop(s));
+    let port = server(drop);
     let script = "sleep(0.2)\nsocket_send_line(\"a\")\nsleep(0.2)\nsocket_send_line(\"b\")\nsocket_send_int(1)\ntextmsg(\"still running\")";
     let (code, out, err) = robot(port, &[], script);
     assert_eq!(code, 0, "{err}");
@@ -298,7 +360,11 @@ fn a_huge_timeout_means_forever_and_does_not_panic() {
         s.write_all(b"(1,2)\n").unwrap();
         let _ = s.read(&mut [0u8; 16]);
     });
-    let (code, out, err) = robot(port, &[], "socket_send_line(\"go\")\nx = socket_read_ascii_float(2, timeout=1e19)");
+    let (code, out, err) = robot(
+        port,
+        &[],
+        "socket_send_line(\"go\")\nx = socket_read_ascii_float(2, timeout=1e19)",
+    );
     assert_eq!(code, 0, "{err}");
     assert!(!err.contains("panicked"), "{err}");
     assert!(out.contains("-> [2, 1, 2]"), "{out}");
@@ -327,10 +393,17 @@ fn a_prefix_that_never_comes_does_not_buffer_all_of_stdin() {
     });
     let out = child.wait_with_output().unwrap();
     let written = writer.join().unwrap();
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     assert_eq!(String::from_utf8_lossy(&out.stdout), "\"\"\n");
     // The old code read all 16 MiB into memory; now it stops at the 1 MiB buffer.
-    assert!(written < 4 * 1024 * 1024, "ursock took {written} bytes of stdin");
+    assert!(
+        written < 4 * 1024 * 1024,
+        "ursock took {written} bytes of stdin"
+    );
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("prefix \">\" never arrived"), "{err}");
 }
@@ -342,7 +415,11 @@ fn failed_reads_are_explained_in_the_server_writers_terms() {
         (b"[0.1 0.2]\n", "2", "numpy"),
         (b"(0,15;0,5)\n", "2", "decimal commas"),
         (b"0.1, 0.2\n", "2", "without parentheses"),
-        (b"(1,2,3)\n", "2", "3 values arrived where the read asked for 2"),
+        (
+            b"(1,2,3)\n",
+            "2",
+            "3 values arrived where the read asked for 2",
+        ),
         (b"(1,2", "2", "cut off"),
     ] {
         let (code, out, err) = run(&["read", "ascii-float", n], input);
@@ -362,9 +439,18 @@ fn failed_reads_are_explained_in_the_server_writers_terms() {
     let script = "socket_send_line(\"a\")\nx = socket_read_ascii_float(2)\ny = socket_read_binary_integer(1)\nsocket_send_line(\"b\")\nz = socket_read_ascii_float(2, timeout=0.1)\nsleep(0.6)\nw = socket_read_ascii_float(2, timeout=0.5)";
     let (code, out, err) = robot(port, &[], script);
     assert_eq!(code, 0, "{err}");
-    assert!(out.contains("y = socket_read_binary_integer(1) -> [1, 167772167]"), "{out}");
+    assert!(
+        out.contains("y = socket_read_binary_integer(1) -> [1, 167772167]"),
+        "{out}"
+    );
     assert!(err.contains("line 3: why: a leftover LF"), "{err}");
     assert!(err.contains("line 5: why: nothing arrived"), "{err}");
-    assert!(err.contains("line 7: why: this data was already waiting"), "{err}");
-    assert!(out.contains("w = socket_read_ascii_float(2, timeout=0.5) -> [2, 3, 4]"), "{out}");
+    assert!(
+        err.contains("line 7: why: this data was already waiting"),
+        "{err}"
+    );
+    assert!(
+        out.contains("w = socket_read_ascii_float(2, timeout=0.5) -> [2, 3, 4]"),
+        "{out}"
+    );
 }
