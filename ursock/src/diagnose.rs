@@ -110,13 +110,15 @@ fn floats(number: usize, bytes: &[u8]) -> Option<String> {
     if body[0] == b'[' {
         let inner = text.trim_start_matches('[').trim_end_matches(']');
         let what = if inner.contains(',') {
-            "Python str(list) text `[0.1, 0.2]`"
+            "a Python list, str(list)"
         } else {
-            "numpy str(array) text `[0.1 0.2]`"
+            "a numpy array, str(array)"
         };
         return Some(format!(
-            "{what} arrived ({}) where a tuple in parentheses was expected: {fix}",
-            shown(body)
+            "{what}, arrived: {}; the robot reads only a tuple in parentheses, \
+             like ({}): {fix}",
+            shown(body),
+            inner.split([',', ' ']).filter(|v| !v.is_empty()).collect::<Vec<_>>().join(",")
         ));
     }
     let Some(open) = body.iter().position(|&b| b == b'(') else {
@@ -257,12 +259,13 @@ mod tests {
 
     #[test]
     fn python_list() {
-        assert!(f(2, b"[0.1, 0.2]\n").contains("Python str(list)"));
+        let d = f(2, b"[0.1, 0.2]\n");
+        assert!(d.contains("Python list, str(list)") && d.contains("like (0.1,0.2)"), "{d}");
     }
 
     #[test]
     fn numpy_array_and_repr() {
-        assert!(f(2, b"[0.1 0.2]").contains("numpy str(array)"));
+        assert!(f(2, b"[0.1 0.2]").contains("numpy array, str(array)"));
         assert!(f(2, b"(np.float64(0.1), np.float64(0.2))").contains("numpy 2"));
     }
 

@@ -93,21 +93,31 @@ pub fn hex_dump(bytes: &[u8]) -> Vec<String> {
         .collect()
 }
 
-/// Bytes for a person: the quoted text and, for up to 16 bytes, the hex on the same
-/// line; longer chunks get a [`hex_dump`] below, one row per 16 bytes, each row
-/// prefixed by `indent`.
+/// Bytes for a person: up to 16 bytes as the quoted text and the hex on one line;
+/// longer chunks as their length, the start of the text, and a [`hex_dump`] below, one
+/// row per 16 bytes, each row prefixed by `indent` (never one line of 12,000 characters).
 pub fn text_and_hex(bytes: &[u8], indent: &str) -> String {
+    const PREVIEW: usize = 48;
     if bytes.len() <= 16 {
-        format!("{}  {}", quoted(bytes), hex(bytes))
-    } else {
-        let mut s = format!("{}  ({} bytes)", quoted(bytes), bytes.len());
-        for row in hex_dump(bytes) {
-            s.push('\n');
-            s.push_str(indent);
-            s.push_str(&row);
-        }
-        s
+        return format!("{}  {}", quoted(bytes), hex(bytes));
     }
+    let mut s = format!("{} bytes", bytes.len());
+    if bytes.len() <= PREVIEW {
+        s = format!("{}  ({s})", quoted(bytes));
+    } else {
+        // Do not cut a UTF-8 character in two: back off over continuation bytes.
+        let mut cut = PREVIEW;
+        while cut > PREVIEW - 3 && bytes[cut] & 0xC0 == 0x80 {
+            cut -= 1;
+        }
+        s = format!("{}...  ({s})", quoted(&bytes[..cut]));
+    }
+    for row in hex_dump(bytes) {
+        s.push('\n');
+        s.push_str(indent);
+        s.push_str(&row);
+    }
+    s
 }
 
 /// Raw bytes in JSON, saying which form it chose: `{"encoding":"utf-8","text":"café"}`

@@ -411,7 +411,7 @@ fn a_prefix_that_never_comes_does_not_buffer_all_of_stdin() {
 #[test]
 fn failed_reads_are_explained_in_the_server_writers_terms() {
     for (input, n, needle) in [
-        (&b"[0.1, 0.2]\n"[..], "2", "Python str(list)"),
+        (&b"[0.1, 0.2]\n"[..], "2", "Python list, str(list)"),
         (b"[0.1 0.2]\n", "2", "numpy"),
         (b"(0,15;0,5)\n", "2", "decimal commas"),
         (b"0.1, 0.2\n", "2", "without parentheses"),
