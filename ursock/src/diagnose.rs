@@ -15,7 +15,7 @@ fn shown(bytes: &[u8]) -> String {
     let cut = &bytes[..bytes.len().min(SHOWN)];
     let mut s = crate::show::quoted(cut);
     if bytes.len() > SHOWN {
-        s.push_str(&format!(" (and {} more bytes)", bytes.len() - SHOWN));
+        s.push_str("...");
     }
     s
 }
@@ -72,9 +72,8 @@ pub fn diagnose(expected: &ReadCall, bytes: &[u8]) -> Option<String> {
                     Some(i) => &bytes[i + prefix.len()..],
                     None => {
                         return Some(format!(
-                            "the prefix {} never arrived in {} bytes: {}",
+                            "the prefix {} never arrived, only other bytes: {}",
                             crate::show::quoted(prefix),
-                            bytes.len(),
                             shown(bytes)
                         ))
                     }
@@ -131,7 +130,7 @@ fn floats(number: usize, bytes: &[u8]) -> Option<String> {
                 shown(body)
             )
         } else {
-            format!("no '(' arrived, no tuple to read: {}", shown(body))
+            format!("no tuple arrived before the read ended, only {}", shown(body))
         });
     };
     let Some(close) = body[open..]

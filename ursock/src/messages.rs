@@ -11,14 +11,27 @@ use urscript_socket::{DecodeError, EncodeError, ErrorKind};
 pub fn encode_error(e: EncodeError) -> String {
     match e {
         EncodeError::NotFinite { index } => format!(
-            "the value at index {index} (counting from 0) is NaN or infinite and has no \
-             plain decimal form"
+            "the {} value (index {index}) is NaN or infinite and has no plain decimal form",
+            ordinal(index + 1)
         ),
-        EncodeError::ForbiddenByte { byte, index } => {
-            format!("byte 0x{byte:02X} at index {index} (counting from 0) would break the framing")
-        }
+        EncodeError::ForbiddenByte { byte, index } => format!(
+            "byte 0x{byte:02X}, the {} byte (index {index}), would break the framing",
+            ordinal(index + 1)
+        ),
         other => other.to_string(),
     }
+}
+
+/// `1st`, `2nd`, `3rd`, `4th`, `11th`, `21st`...
+fn ordinal(n: usize) -> String {
+    let suffix = match (n % 10, n % 100) {
+        (_, 11..=13) => "th",
+        (1, _) => "st",
+        (2, _) => "nd",
+        (3, _) => "rd",
+        _ => "th",
+    };
+    format!("{n}{suffix}")
 }
 
 /// A parse error of a value's text (`p[...]`, `[...]`, a number): the CLI's wording.
@@ -44,7 +57,9 @@ mod tests {
     #[test]
     fn an_index_is_called_an_index() {
         let m = encode_error(EncodeError::NotFinite { index: 0 });
-        assert!(m.starts_with("the value at index 0"), "{m}");
+        assert!(m.starts_with("the 1st value (index 0)"), "{m}");
+        assert_eq!(ordinal(12), "12th");
+        assert_eq!(ordinal(22), "22nd");
     }
 
     #[test]

@@ -127,14 +127,15 @@ pub fn read(call: ReadCall, repeat: usize, json: bool, timestamps: bool) -> Resu
                 Err(e) => return Err(format!("stdin: {e}")),
             }
         };
-        let mut why = if failed(&call, &result) {
+        let binary = matches!(call, ReadCall::BinaryInteger { .. } | ReadCall::ByteList { .. });
+        let mut why = if binary || failed(&call, &result) {
             crate::diagnose::diagnose(&call, &seen)
         } else {
             None
         };
         if buffer_full {
             let full = format!(
-                "the 1 MiB receive buffer filled before the read could complete{}",
+                "the 1 MiB receive buffer filled and the read could not complete{}",
                 why.as_deref().map(|w| format!(": {w}")).unwrap_or_default()
             );
             why = Some(full);
