@@ -388,8 +388,10 @@ pub fn run(script: &str, connect: Option<&str>, opts: Options) -> Result<(), Str
         {
             Ok(()) => report(0, &shown, "socket_open", true.into(), "True", false, None),
             Err(e) => {
-                report(0, &shown, "socket_open", false.into(), "False", true, None);
-                return Err(open_failure(&host, port, &e));
+                let reason = open_failure(&host, port, &e);
+                let why = opts.json.then(|| reason.clone());
+                report(0, &shown, "socket_open", false.into(), "False", true, why);
+                return Err(reason);
             }
         }
     }
@@ -425,8 +427,12 @@ pub fn run(script: &str, connect: Option<&str>, opts: Options) -> Result<(), Str
                 report(lineno, &shown, f, result, &text, false, None)
             }
             Outcome::Failed(reason) => {
-                report(lineno, &shown, f, false.into(), "False", false, None);
-                out::note(&format!("line {lineno}: {reason}"));
+                // In JSON the reason is the event's `why`; in text, a note on stderr.
+                let why = opts.json.then(|| reason.clone());
+                report(lineno, &shown, f, false.into(), "False", false, why);
+                if !opts.json {
+                    out::note(&format!("line {lineno}: {reason}"));
+                }
             }
             Outcome::Result(r, socket, read) => {
                 let mut why = None;

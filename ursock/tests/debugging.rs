@@ -351,6 +351,17 @@ fn sending_to_a_server_that_closed_returns_false_and_the_script_goes_on() {
     assert!(out.contains("-> False"), "{out}");
     assert!(out.contains("still running"), "{out}");
     assert!(err.contains("closed"), "{err}");
+    // In --json, the reason is the event's `why`.
+    let port = server(drop);
+    let (code, out, _) = robot(port, &["--json"], script);
+    assert_eq!(code, 0);
+    let failed: Vec<serde_json::Value> = out
+        .lines()
+        .map(|l| serde_json::from_str::<serde_json::Value>(l).unwrap())
+        .filter(|e| e["result"] == false)
+        .collect();
+    assert!(!failed.is_empty(), "{out}");
+    assert!(failed[0]["why"].as_str().unwrap().contains("closed"), "{out}");
 }
 
 #[test]
