@@ -127,7 +127,10 @@ pub fn read(call: ReadCall, repeat: usize, json: bool, timestamps: bool) -> Resu
                 Err(e) => return Err(format!("stdin: {e}")),
             }
         };
-        let binary = matches!(call, ReadCall::BinaryInteger { .. } | ReadCall::ByteList { .. });
+        let binary = matches!(
+            call,
+            ReadCall::BinaryInteger { .. } | ReadCall::ByteList { .. }
+        );
         let mut why = if binary || failed(&call, &result) {
             crate::diagnose::diagnose(&call, &seen)
         } else {
@@ -140,7 +143,7 @@ pub fn read(call: ReadCall, repeat: usize, json: bool, timestamps: bool) -> Resu
             );
             why = Some(full);
         }
-        let t = start_elapsed();
+        let t = out::elapsed_secs();
         if json {
             let line = ReadJson {
                 t: timestamps.then_some(t),
@@ -164,14 +167,6 @@ pub fn read(call: ReadCall, repeat: usize, json: bool, timestamps: bool) -> Resu
         }
     }
     Ok(())
-}
-
-fn start_elapsed() -> f64 {
-    out::stamp()
-        .trim_start_matches('+')
-        .trim_end_matches('s')
-        .parse()
-        .unwrap_or(0.0)
 }
 
 /// `ursock decode FORMAT [--json] [--allow-unterminated]`: what a robot sent, one message

@@ -65,7 +65,12 @@ pub fn start_clock() {
 
 /// Seconds since [`start_clock`], as `+0.003s`, for prefixing trace and read lines.
 pub fn stamp() -> String {
-    format!("+{:.3}s", start().elapsed().as_secs_f64())
+    format!("+{:.3}s", elapsed_secs())
+}
+
+/// Seconds since [`start_clock`], rounded to the millisecond (the `t` of JSON events).
+pub fn elapsed_secs() -> f64 {
+    (start().elapsed().as_secs_f64() * 1000.0).round() / 1000.0
 }
 
 static LOG: Mutex<Option<File>> = Mutex::new(None);

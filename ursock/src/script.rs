@@ -272,7 +272,7 @@ fn trace_event(json: bool, name: &str, dir: Direction, bytes: &[u8]) {
     };
     if json {
         let ev = serde_json::json!({
-            "t": elapsed(),
+            "t": out::elapsed_secs(),
             "event": tag,
             "socket": name,
             "len": bytes.len(),
@@ -286,14 +286,6 @@ fn trace_event(json: bool, name: &str, dir: Direction, bytes: &[u8]) {
             text_and_hex(bytes, "        ")
         );
     }
-}
-
-fn elapsed() -> f64 {
-    out::stamp()
-        .trim_start_matches('+')
-        .trim_end_matches('s')
-        .parse()
-        .unwrap_or(0.0)
 }
 
 /// `socket_open("host", port, "socket_0")` for a `--connect HOST:PORT` argument.
@@ -360,7 +352,7 @@ pub fn run(script: &str, connect: Option<&str>, opts: Options) -> Result<(), Str
                   why: Option<String>| {
         if opts.json {
             let ev = crate::offline::ReadJson {
-                t: Some(elapsed()),
+                t: Some(out::elapsed_secs()),
                 line: Some(line),
                 call: call.to_string(),
                 result,
