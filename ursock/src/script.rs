@@ -251,6 +251,11 @@ struct TimedOut {
     sent_since: bool,
 }
 
+/// Data that a read finds within this many milliseconds of its start, with no send since
+/// the previous read on that socket timed out, was waiting: that read's late reply (no
+/// new request could have been answered). Generous, so a loaded machine does not miss it.
+const LATE_WINDOW_MS: u128 = 50;
+
 /// Keeps the first bytes of a read's input for [`crate::diagnose::diagnose`].
 const WINDOW: usize = 4096;
 
@@ -442,7 +447,7 @@ pub fn run(script: &str, connect: Option<&str>, opts: Options) -> Result<(), Str
                     if let Some(t) = timed_out.remove(&socket) {
                         let waiting = got
                             .first_at
-                            .is_some_and(|at| at.duration_since(started).as_micros() < 1000);
+                            .is_some_and(|at| at.duration_since(started).as_millis() < LATE_WINDOW_MS);
                         if waiting && !t.sent_since {
                             let late = crate::diagnose::late_reply(&t.call, t.line);
                             why = Some(match why {
