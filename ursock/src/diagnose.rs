@@ -117,7 +117,11 @@ fn floats(number: usize, bytes: &[u8]) -> Option<String> {
             "{what}, arrived: {}; the robot reads only a tuple in parentheses, \
              like ({}): {fix}",
             shown(body),
-            inner.split([',', ' ']).filter(|v| !v.is_empty()).collect::<Vec<_>>().join(",")
+            inner
+                .split([',', ' '])
+                .filter(|v| !v.is_empty())
+                .collect::<Vec<_>>()
+                .join(",")
         ));
     }
     let Some(open) = body.iter().position(|&b| b == b'(') else {
@@ -130,7 +134,10 @@ fn floats(number: usize, bytes: &[u8]) -> Option<String> {
                 shown(body)
             )
         } else {
-            format!("no tuple arrived before the read ended, only {}", shown(body))
+            format!(
+                "no tuple arrived before the read ended, only {}",
+                shown(body)
+            )
         });
     };
     let Some(close) = body[open..]
@@ -259,7 +266,10 @@ mod tests {
     #[test]
     fn python_list() {
         let d = f(2, b"[0.1, 0.2]\n");
-        assert!(d.contains("Python list, str(list)") && d.contains("like (0.1,0.2)"), "{d}");
+        assert!(
+            d.contains("Python list, str(list)") && d.contains("like (0.1,0.2)"),
+            "{d}"
+        );
     }
 
     #[test]

@@ -1,7 +1,7 @@
 //! Standard output that never panics, relative timestamps, and an optional session log.
 //!
 //! `println!` panics when stdout is a closed pipe (`ursock demo | head -1`). Every line
-//! `ursock` prints goes through [`line`] instead: a closed pipe ends the process quietly
+//! `ursock` prints goes through [`line()`] instead: a closed pipe ends the process quietly
 //! with status 0, as `head`, `grep` and other Unix tools do; any other write error is one
 //! line on stderr and status 1.
 
@@ -40,7 +40,7 @@ pub fn failed(e: &std::io::Error) -> ! {
     std::process::exit(1);
 }
 
-/// `println!` through [`line`]: never panics on a closed stdout.
+/// `println!` through [`line()`]: never panics on a closed stdout.
 #[macro_export]
 macro_rules! outln {
     () => { $crate::out::line("") };
@@ -75,7 +75,7 @@ pub fn elapsed_secs() -> f64 {
 
 static LOG: Mutex<Option<File>> = Mutex::new(None);
 
-/// Copies every later [`line`] and [`note`] to `path` (created or truncated).
+/// Copies every later [`line()`] and [`note`] to `path` (created or truncated).
 pub fn open_log(path: &std::path::Path) -> Result<(), String> {
     let f = File::create(path).map_err(|e| format!("--log {}: {e}", path.display()))?;
     *LOG.lock().unwrap_or_else(|p| p.into_inner()) = Some(f);

@@ -445,9 +445,9 @@ pub fn run(script: &str, connect: Option<&str>, opts: Options) -> Result<(), Str
                         why = crate::diagnose::diagnose(read, &seen);
                     }
                     if let Some(t) = timed_out.remove(&socket) {
-                        let waiting = got
-                            .first_at
-                            .is_some_and(|at| at.duration_since(started).as_millis() < LATE_WINDOW_MS);
+                        let waiting = got.first_at.is_some_and(|at| {
+                            at.duration_since(started).as_millis() < LATE_WINDOW_MS
+                        });
                         if waiting && !t.sent_since {
                             let late = crate::diagnose::late_reply(&t.call, t.line);
                             why = Some(match why {

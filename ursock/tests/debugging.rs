@@ -304,7 +304,10 @@ fn long_chunks_get_a_wrapped_hex_dump_and_trace_lines_a_time() {
         "socket_send_line(\"go\")\nx = socket_read_byte_list(30)",
     );
     assert_eq!(code, 0, "{err}");
-    assert!(out.contains("0000  61 62 63 64 65 66 67 68  69 6A"), "{out}");
+    assert!(
+        out.contains("0000  61 62 63 64 65 66 67 68  69 6A"),
+        "{out}"
+    );
     assert!(out.contains("0010  71 72 73"), "{out}");
     assert!(out.contains("|abcdefghijklmnop|"), "{out}");
     let longest = out.lines().map(str::len).max().unwrap();
@@ -361,7 +364,10 @@ fn sending_to_a_server_that_closed_returns_false_and_the_script_goes_on() {
         .filter(|e| e["result"] == false)
         .collect();
     assert!(!failed.is_empty(), "{out}");
-    assert!(failed[0]["why"].as_str().unwrap().contains("closed"), "{out}");
+    assert!(
+        failed[0]["why"].as_str().unwrap().contains("closed"),
+        "{out}"
+    );
 }
 
 #[test]
