@@ -3,9 +3,13 @@
 #![forbid(unsafe_code)]
 
 mod demo;
+pub mod diagnose;
 mod formats;
 mod listen;
+mod messages;
 mod offline;
+#[macro_use]
+pub mod out;
 mod script;
 mod show;
 
@@ -16,7 +20,7 @@ use formats::DecodeFormat;
 
 /// Socket debug assistant for UR robots: every URScript socket format, both directions.
 #[derive(Parser)]
-#[command(name = "ursock", version, about, long_about = None)]
+#[command(name = "ursock", version, about = "Socket debug assistant for UR robots: every URScript socket format, both directions", long_about = None)]
 struct Cli {
     #[command(subcommand)]
     command: Command,
@@ -60,13 +64,20 @@ enum Command {
         /// Calls given on the command line (repeatable).
         #[arg(short = 'e', long = "eval")]
         eval: Vec<String>,
-        /// Also print the bytes sent and received.
+        /// Also print the bytes sent and received, with times relative to the start.
         #[arg(long)]
         trace: bool,
+        /// Print each call's result as one JSON object per line.
+        #[arg(long)]
+        json: bool,
+        /// Copy everything printed (stdout and stderr notes) to FILE.
+        #[arg(long, value_name = "FILE")]
+        log: Option<std::path::PathBuf>,
     },
     /// Write the bytes a server (or with --robot, the robot) sends.
     /// Formats: floats, floats-lf, int32, bytes, string, line, framed PREFIX TEXT SUFFIX,
-    /// var-reply NAME INT; robot: line, string, byte, int, set-var, get-var, stx-etx, value.
+    /// var-reply NAME INT, hex HH...; robot: line, string, byte, int, set-var, get-var,
+    /// stx-etx, value, hex HH....
     Encode {
         /// The format.
         format: String,
@@ -76,6 +87,9 @@ enum Command {
         /// Print hex instead of raw bytes.
         #[arg(long)]
         hex: bool,
+        /// Interpret `\r \n \t \0 \\ \xHH` in text values (string, line, framed, stx-etx).
+        #[arg(long)]
+        escapes: bool,
         /// Encode the robot's sends instead of the server's.
         #[arg(long)]
         robot: bool,
@@ -85,9 +99,15 @@ enum Command {
     Read {
         #[command(subcommand)]
         call: ReadCmd,
-        /// Repeat the read K times.
+        /// Repeat the read K times (1 or more).
         #[arg(long, global = true, default_value_t = 1)]
         repeat: usize,
+        /// Print each result as one JSON object per line.
+        #[arg(long, global = true)]
+        json: bool,
+        /// Prefix each result with the time since the start (`+0.003s`).
+        #[arg(long, global = true)]
+        timestamps: bool,
     },
     /// Decode what a robot sent (stdin), one message per line.
     Decode {
@@ -97,9 +117,15 @@ enum Command {
         /// Delimiter for `delimiter` (`\r`, `\n`, `\t` are interpreted).
         #[arg(long, default_value = "\\n")]
         delimiter: String,
-        /// JSON lines.
+        /// One JSON object per line; text as {"encoding":"utf-8","text":...}, other
+        /// bytes as {"encoding":"hex","hex":...}.
         #[arg(long)]
         json: bool,
+        /// Accept a last message without its terminator at the end of input (line,
+        /// delimiter, var, value). Without it, an unterminated rest is reported as cut off,
+        /// for every format alike.
+        #[arg(long)]
+        allow_unterminated: bool,
     },
 }
 
@@ -171,22 +197,36 @@ fn run(cli: Cli) -> Result<(), String> {
             script,
             eval,
             trace,
+            json,
+            log,
         } => {
+            if let Some(path) = &log {
+                out::open_log(path)?;
+            }
             let text = match script {
                 Some(path) => std::fs::read_to_string(&path)
                     .map_err(|e| format!("{}: {e}", path.display()))?,
                 None if !eval.is_empty() => eval.join("\n"),
                 None => return Err("give --script FILE or -e 'CALL'".into()),
             };
-            script::run(&text, connect.as_deref(), trace)
+            script::run(&text, connect.as_deref(), script::Options { trace, json })
         }
         Command::Encode {
             format,
             values,
             hex,
+            escapes,
             robot,
-        } => offline::encode(&format, &values, hex, robot),
-        Command::Read { call, repeat } => {
+        } => offline::encode(&format, &values, hex, escapes, robot),
+        Command::Read {
+            call,
+            repeat,
+            json,
+            timestamps,
+        } => {
+            if repeat == 0 {
+                return Err("--repeat 0: give the number of reads, 1 or more".into());
+            }
             let call = match call {
                 ReadCmd::AsciiFloat { number } => ReadCall::AsciiFloat { number },
                 ReadCmd::BinaryInteger { number } => ReadCall::BinaryInteger { number },
@@ -202,20 +242,22 @@ fn run(cli: Cli) -> Result<(), String> {
                     interpret_escape,
                 },
             };
-            offline::read(call, repeat)
+            offline::read(call, repeat, json, timestamps)
         }
         Command::Decode {
             format,
             delimiter,
             json,
-        } => offline::decode(format, &unescape(&delimiter), json),
+            allow_unterminated,
+        } => offline::decode(format, &unescape(&delimiter), json, allow_unterminated),
     }
 }
 
 fn main() {
+    out::start_clock();
     let cli = Cli::parse();
     if let Err(msg) = run(cli) {
-        eprintln!("ursock: {msg}");
+        out::note(&msg);
         std::process::exit(1);
     }
 }
