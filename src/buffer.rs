@@ -259,7 +259,7 @@ impl<S: AsRef<[u8]> + AsMut<[u8]>> RecvBuffer<S> {
     /// buf.extend(b"too long");
     /// let e = buf.decode(&mut lines).unwrap_err();
     /// assert_eq!(e.kind(), ErrorKind::TooLong { limit: 8 });
-    /// buf.extend(b" line\nok\n");
+    /// buf.extend(b"ine\nok\n");
     /// assert_eq!(buf.decode(&mut lines).unwrap(), Some(&b"ok"[..]));
     /// ```
     #[inline]
