@@ -14,7 +14,7 @@ use smoltcp::wire::{EthernetAddress, IpAddress, IpCidr};
 
 use urscript_socket::ascii_float::encode_float_tuple;
 use urscript_socket::line::{encode_line, LineDecoder};
-use urscript_socket::robot::{Policy, ReadCall, ReadResult, SocketConnection};
+use urscript_socket::robot::{Policy, ReadCall, ReadResult, SocketConnection, Timeout};
 use urscript_socket::{RecvBuffer, SliceSink};
 
 const PORT: u16 = 30002;
@@ -103,7 +103,11 @@ fn main() -> Result<(), String> {
                 .map_err(|e| e.to_string())?;
             robot_tx.extend_from_slice(sink.written());
             robot
-                .start_read(ReadCall::AsciiFloat { number: 6 })
+                .start_read(
+                    ReadCall::AsciiFloat { number: 6 },
+                    Timeout::default(),
+                    clock(now),
+                )
                 .map_err(|e| e.to_string())?;
             asked += 1;
         }
@@ -119,6 +123,10 @@ fn main() -> Result<(), String> {
             if !matches!(got, Ok(n) if n > 0) {
                 break;
             }
+        }
+        // The robot model takes the same simulated time as smoltcp.
+        if robot.handle_timeout(clock(now)).is_some() {
+            return Err(format!("exchange {answered}: timed out"));
         }
         if let Some(result) = robot.poll_read() {
             let want = pose(answered);
@@ -143,4 +151,9 @@ fn main() -> Result<(), String> {
     }
     println!("{answered} request/reply exchanges over smoltcp's loopback device, all matched");
     Ok(())
+}
+
+/// smoltcp's simulated instant as the robot model's clock (time since the epoch).
+fn clock(now: Instant) -> core::time::Duration {
+    core::time::Duration::from_micros(u64::try_from(now.total_micros()).unwrap_or(0))
 }

@@ -85,6 +85,7 @@ mod status;
 
 pub mod ascii_float;
 pub mod byte_list;
+pub mod format;
 pub mod int32;
 pub mod line;
 pub mod string;

@@ -285,27 +285,115 @@ fn put_scalar<S: Sink + ?Sized>(s: Scalar, out: &mut Counted<'_, S>) -> Result<(
         }
         Scalar::Bool(true) => out.put(b"True"),
         Scalar::Bool(false) => out.put(b"False"),
-        Scalar::Float(v) if v.is_nan() => out.put(b"nan"),
-        Scalar::Float(v) if v.is_infinite() => out.put(if v > 0.0 { b"inf" } else { b"-inf" }),
         Scalar::Float(v) => {
-            // `{:.6}` rounds correctly from the exact binary value; the longest finite
-            // result is 309 integer digits, a sign, a point and 6 decimals.
-            let mut text = StackText::<320> {
-                buf: [0; 320],
-                len: 0,
-            };
-            write!(text, "{v:.6}").map_err(|_| EncodeError::TooLong {
-                limit: MAX_TO_STR_LEN,
-            })?;
-            let mut t = &text.buf[..text.len];
-            while let [rest @ .., b'0'] = t {
-                t = rest;
-            }
-            if let [rest @ .., b'.'] = t {
-                t = rest;
-            }
-            out.put(t)
+            let text = FloatText::new(v);
+            out.put(text.as_bytes())
         }
+    }
+}
+
+/// The `to_str` text of one float, on the stack: `nan`, `inf`, `-inf`, or 6 decimals
+/// with trailing zeros and the point removed. The one float writer of the crate.
+struct FloatText {
+    text: StackText<320>,
+}
+
+impl FloatText {
+    fn new(v: f64) -> Self {
+        let mut text = StackText::<320> {
+            buf: [0; 320],
+            len: 0,
+        };
+        // `{:.6}` rounds correctly from the exact binary value; the longest finite
+        // result is 309 integer digits, a sign, a point and 6 decimals, so it fits.
+        let _ = if v.is_nan() {
+            text.write_str("nan")
+        } else if v.is_infinite() {
+            text.write_str(if v > 0.0 { "inf" } else { "-inf" })
+        } else {
+            write!(text, "{v:.6}")
+        };
+        if !v.is_finite() {
+            return FloatText { text };
+        }
+        let mut len = text.len;
+        while len > 0 && text.buf[len - 1] == b'0' {
+            len -= 1;
+        }
+        if len > 0 && text.buf[len - 1] == b'.' {
+            len -= 1;
+        }
+        text.len = len;
+        FloatText { text }
+    }
+
+    fn as_bytes(&self) -> &[u8] {
+        &self.text.buf[..self.text.len]
+    }
+
+    fn as_str(&self) -> &str {
+        // Only ASCII was written.
+        core::str::from_utf8(self.as_bytes()).unwrap_or("nan")
+    }
+}
+
+/// Writes the `to_str` text of a scalar (`2.123456`, `-3`, `True`) to a formatter: the
+/// same rules as [`encode_value`], without its 1023-character bound. For display.
+///
+/// ```
+/// use urscript_socket::to_str::{write_scalar, Scalar};
+/// let mut s = String::new();
+/// write_scalar(Scalar::Float(3.14159265), &mut s).unwrap();
+/// write_scalar(Scalar::Float(f64::NAN), &mut s).unwrap();
+/// assert_eq!(s, "3.141593nan");
+/// ```
+pub fn write_scalar(s: Scalar, out: &mut impl core::fmt::Write) -> core::fmt::Result {
+    match s {
+        Scalar::Int(v) => write!(out, "{v}"),
+        Scalar::Bool(true) => out.write_str("True"),
+        Scalar::Bool(false) => out.write_str("False"),
+        Scalar::Float(v) => out.write_str(FloatText::new(v).as_str()),
+    }
+}
+
+/// Writes the `to_str` text of a value to a formatter (`p[1, 2, 3, 0, 3.141593, 0]`,
+/// `[True, False]`), without [`encode_value`]'s 1023-character bound. For display.
+///
+/// ```
+/// use urscript_socket::to_str::{write_value, Value};
+/// let mut s = String::new();
+/// write_value(&Value::Pose([0.1, 0.2, 0.3, 0.0, 3.14159265, 0.0]), &mut s).unwrap();
+/// assert_eq!(s, "p[0.1, 0.2, 0.3, 0, 3.141593, 0]");
+/// ```
+pub fn write_value(value: &Value<'_>, out: &mut impl core::fmt::Write) -> core::fmt::Result {
+    match value {
+        Value::Scalar(s) => write_scalar(*s, out),
+        Value::Pose(p) => {
+            out.write_char('p')?;
+            write_list(p.iter().map(|&v| Scalar::Float(v)), out)
+        }
+        Value::List(l) => write_list(l.iter(), out),
+    }
+}
+
+/// Writes `[a, b, c]` with the scalars' `to_str` text.
+pub fn write_list(
+    items: impl IntoIterator<Item = Scalar>,
+    out: &mut impl core::fmt::Write,
+) -> core::fmt::Result {
+    out.write_char('[')?;
+    for (i, s) in items.into_iter().enumerate() {
+        if i > 0 {
+            out.write_str(", ")?;
+        }
+        write_scalar(s, out)?;
+    }
+    out.write_char(']')
+}
+
+impl core::fmt::Display for Value<'_> {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        write_value(self, f)
     }
 }
 

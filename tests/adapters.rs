@@ -282,3 +282,41 @@ fn load_200_robots() {
         );
     });
 }
+
+/// `timeout=1e19` used to overflow `Instant + Duration` inside the async robot's read.
+#[tokio::test]
+async fn async_robot_huge_timeout_and_closed_peer() {
+    let listener = tokio::net::TcpListener::bind("127.0.0.1:0").await.unwrap();
+    let addr = listener.local_addr().unwrap();
+    let server = tokio::spawn(async move {
+        use tokio::io::AsyncWriteExt;
+        let (mut robot, _) = listener.accept().await.unwrap();
+        robot.write_all(b"(1,2)").await.unwrap();
+        // Then the server goes away.
+    });
+    let mut robot = AsyncRobotSocket::connect(addr, "socket_0", Policy::default())
+        .await
+        .unwrap();
+    let r = robot
+        .read(
+            ReadCall::AsciiFloat { number: 2 },
+            Timeout::from_secs_f64(1e19),
+        )
+        .await
+        .unwrap();
+    assert_eq!(r.to_urscript(), "[2, 1, 2]");
+    server.await.unwrap();
+    // Sends to the closed server: false once the write fails, never an error.
+    let mut sent = Vec::new();
+    for _ in 0..200 {
+        robot.socket().send_line(b"x");
+        sent.push(robot.flush().await.unwrap());
+        tokio::time::sleep(Duration::from_millis(1)).await;
+    }
+    assert_eq!(sent.last(), Some(&false));
+    let r = robot
+        .read(ReadCall::Line, Timeout::from_secs_f64(1e19))
+        .await
+        .unwrap();
+    assert_eq!(r.to_urscript(), "\"\"");
+}

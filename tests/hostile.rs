@@ -3,9 +3,10 @@
 //! invalid UTF-8. The decoders must report at the bound, keep memory bounded (the receive
 //! buffer never grows) and recover for the next good message.
 
+use std::time::Duration;
 use urscript_socket::ascii_float::FloatTupleDecoder;
 use urscript_socket::line::LineDecoder;
-use urscript_socket::robot::{Policy, ReadCall, SocketConnection};
+use urscript_socket::robot::{Policy, ReadCall, SocketConnection, Timeout};
 use urscript_socket::string::{DelimitedDecoder, ReadStringDecoder};
 use urscript_socket::stx_etx::StxEtxDecoder;
 use urscript_socket::to_str::parse_value;
@@ -193,11 +194,15 @@ fn repeated_prefixes_stay_linear_and_bounded() {
         },
     );
     robot
-        .start_read(ReadCall::String {
-            prefix: b"<<>".to_vec(),
-            suffix: vec![],
-            interpret_escape: false,
-        })
+        .start_read(
+            ReadCall::String {
+                prefix: b"<<>".to_vec(),
+                suffix: vec![],
+                interpret_escape: false,
+            },
+            Timeout::default(),
+            Duration::ZERO,
+        )
         .unwrap();
     let mut accepted = 0;
     for _ in 0..100 {
@@ -205,7 +210,7 @@ fn repeated_prefixes_stay_linear_and_bounded() {
         assert!(robot.poll_read().is_none());
     }
     assert_eq!(accepted, 4096);
-    assert_eq!(robot.handle_timeout().unwrap().to_urscript(), "\"\"");
+    assert_eq!(robot.give_up().unwrap().to_urscript(), "\"\"");
 }
 
 #[test]
@@ -225,11 +230,15 @@ fn invalid_utf8_in_text_formats() {
     let mut robot = SocketConnection::new("s", Policy::default());
     robot.receive(bad);
     robot
-        .start_read(ReadCall::String {
-            prefix: vec![],
-            suffix: vec![],
-            interpret_escape: false,
-        })
+        .start_read(
+            ReadCall::String {
+                prefix: vec![],
+                suffix: vec![],
+                interpret_escape: false,
+            },
+            Timeout::Forever,
+            Duration::ZERO,
+        )
         .unwrap();
     assert_eq!(
         robot.poll_read().unwrap().to_urscript(),

@@ -3,6 +3,7 @@
 
 use std::io::{Read, Write};
 use std::net::TcpListener;
+use std::time::Duration;
 
 use proptest::prelude::*;
 use urscript_socket::ascii_float::{
@@ -20,8 +21,9 @@ use urscript_socket::{line::LineDecoder, RecvBuffer};
 fn read_now(policy: Policy, input: &[u8], call: ReadCall) -> (String, Vec<u8>) {
     let mut s = SocketConnection::new("socket_0", policy);
     s.receive(input);
-    s.start_read(call).unwrap();
-    let r = s.poll_read().or_else(|| s.handle_timeout()).unwrap();
+    s.start_read(call, Timeout::Forever, Duration::ZERO)
+        .unwrap();
+    let r = s.poll_read().or_else(|| s.give_up()).unwrap();
     (r.to_urscript(), s.buffered().to_vec())
 }
 
@@ -168,7 +170,12 @@ fn read_string_over_the_limit_and_unseen_suffix() {
 fn peer_close_resolves_every_pending_read() {
     let mut s = SocketConnection::new("socket_0", Policy::default());
     s.receive(b"(1,");
-    s.start_read(ReadCall::AsciiFloat { number: 2 }).unwrap();
+    s.start_read(
+        ReadCall::AsciiFloat { number: 2 },
+        Timeout::Forever,
+        Duration::ZERO,
+    )
+    .unwrap();
     assert!(s.poll_read().is_none());
     s.peer_closed();
     assert_eq!(s.poll_read().unwrap().to_urscript(), "[0, nan, nan]");
@@ -177,7 +184,8 @@ fn peer_close_resolves_every_pending_read() {
         (ReadCall::Line, "\"\""),
         (ReadCall::GetVar { name: "A".into() }, "0"),
     ] {
-        s.start_read(call).unwrap();
+        s.start_read(call, Timeout::Forever, Duration::ZERO)
+            .unwrap();
         assert_eq!(s.poll_read().unwrap().to_urscript(), want);
     }
 }
@@ -198,13 +206,17 @@ fn misuse_is_refused_before_any_byte() {
             interpret_escape: false,
         },
     ] {
-        assert!(matches!(s.start_read(call), Err(RobotError::Argument(_))));
+        assert!(matches!(
+            s.start_read(call, Timeout::Forever, Duration::ZERO),
+            Err(RobotError::Argument(_))
+        ));
     }
     assert_eq!(s.buffered(), b"(1)");
     assert!(s.outgoing().is_empty());
-    s.start_read(ReadCall::Line).unwrap();
+    s.start_read(ReadCall::Line, Timeout::Forever, Duration::ZERO)
+        .unwrap();
     assert!(matches!(
-        s.start_read(ReadCall::Line),
+        s.start_read(ReadCall::Line, Timeout::Forever, Duration::ZERO),
         Err(RobotError::ReadPending)
     ));
     assert!(s.set_var("has space", 1).is_err());
@@ -216,7 +228,12 @@ fn named_sockets_are_independent() {
     robot.socket_open("a").receive(b"(1)");
     robot.socket_open("b").receive(b"(2)");
     let a = robot.socket("a").unwrap();
-    a.start_read(ReadCall::AsciiFloat { number: 1 }).unwrap();
+    a.start_read(
+        ReadCall::AsciiFloat { number: 1 },
+        Timeout::Forever,
+        Duration::ZERO,
+    )
+    .unwrap();
     assert_eq!(a.poll_read().unwrap().to_urscript(), "[1, 1]");
     assert_eq!(robot.socket("b").unwrap().buffered(), b"(2)");
 }
@@ -245,7 +262,10 @@ fn messages() -> impl Strategy<Value = Vec<(ReadCall, Vec<u8>, String)>> {
             }
             let mut text = format!("[{}", v.len());
             for x in &v {
-                text.push_str(&format!(", {x}"));
+                // The robot's to_str rule: 6 decimals, trailing zeros and point dropped.
+                let six = format!("{x:.6}");
+                let trimmed = six.trim_end_matches('0').trim_end_matches('.');
+                text.push_str(&format!(", {trimmed}"));
             }
             text.push(']');
             (ReadCall::AsciiFloat { number: v.len() }, b, text)
@@ -313,7 +333,7 @@ proptest! {
         let mut s = SocketConnection::new("socket_0", Policy::default());
         let mut fed = 0;
         for (call, _, want) in &msgs {
-            s.start_read(call.clone()).unwrap();
+            s.start_read(call.clone(), Timeout::Forever, Duration::ZERO).unwrap();
             let result = loop {
                 let mut got = None;
                 for _ in 0..polls {
@@ -454,7 +474,12 @@ fn virtual_robot_sees_peer_close_as_sentinel() {
 fn var_message_decoder_matches_the_robot_sends() {
     let mut s = SocketConnection::new("socket_0", Policy::default());
     s.set_var("A", -5).unwrap();
-    s.start_read(ReadCall::GetVar { name: "A".into() }).unwrap();
+    s.start_read(
+        ReadCall::GetVar { name: "A".into() },
+        Timeout::Forever,
+        Duration::ZERO,
+    )
+    .unwrap();
     let out = s.take_outgoing();
     let mut d = VarMessageDecoder::new();
     let first = d.decode(&out).unwrap();
@@ -470,4 +495,198 @@ fn var_message_decoder_matches_the_robot_sends() {
         d.decode(&out[used..]).unwrap().item(),
         Some(VarMessage::Get { name: "A" })
     );
+}
+
+// ---- The robot as a state machine with time as an input (no sleeps, no clock) ----
+
+#[test]
+fn deadlines_are_inputs_and_resolve_exactly_at_their_moment() {
+    let ms = Duration::from_millis;
+    let mut s = SocketConnection::new("s", Policy::default());
+    assert_eq!(s.poll_timeout(), None);
+    s.start_read(ReadCall::Line, Timeout::from_secs_f64(0.25), ms(1_000))
+        .unwrap();
+    assert_eq!(s.poll_timeout(), Some(ms(1_250)));
+    assert!(s.poll_read().is_none());
+    assert!(s.handle_timeout(ms(1_249)).is_none());
+    assert!(s.pending_read().is_some());
+    s.receive(b"partial");
+    assert!(s.poll_read().is_none());
+    assert_eq!(s.handle_timeout(ms(1_250)).unwrap().to_urscript(), "\"\"");
+    assert_eq!(s.poll_timeout(), None);
+    // The bytes stay for the next read, which completes before its deadline.
+    s.start_read(ReadCall::Line, Timeout::from_secs_f64(1.0), ms(2_000))
+        .unwrap();
+    s.receive(b"\n");
+    assert_eq!(s.poll_read().unwrap().to_urscript(), "\"partial\"");
+    assert!(s.handle_timeout(ms(9_999)).is_none());
+}
+
+#[test]
+fn get_var_waits_two_seconds_whatever_is_asked() {
+    let mut s = SocketConnection::new("s", Policy::default());
+    let call = ReadCall::GetVar { name: "X".into() };
+    s.start_read(call, Timeout::Forever, Duration::from_secs(5))
+        .unwrap();
+    assert_eq!(s.poll_timeout(), Some(Duration::from_secs(7)));
+}
+
+#[test]
+fn huge_timeouts_mean_forever_not_overflow() {
+    // timeout=1e19 used to overflow `Instant + Duration` in the drivers.
+    let mut s = SocketConnection::new("s", Policy::default());
+    s.start_read(
+        ReadCall::Line,
+        Timeout::from_secs_f64(1e19),
+        Duration::from_secs(10),
+    )
+    .unwrap();
+    assert!(s.poll_timeout().unwrap() > Duration::from_secs(1 << 62));
+    assert!(s.handle_timeout(Duration::from_secs(1 << 40)).is_none());
+    s.give_up();
+    s.start_read(ReadCall::Line, Timeout::After(Duration::MAX), Duration::MAX)
+        .unwrap();
+    assert_eq!(s.poll_timeout(), None);
+}
+
+#[test]
+fn a_read_that_can_never_complete_ends_at_its_deadline_or_at_once_without_one() {
+    let small = Policy {
+        receive_capacity: 8,
+        ..Policy::default()
+    };
+    let mut s = SocketConnection::new("s", small);
+    s.receive(b"(1,2,3,4");
+    s.start_read(
+        ReadCall::AsciiFloat { number: 9 },
+        Timeout::from_secs_f64(1.0),
+        Duration::ZERO,
+    )
+    .unwrap();
+    assert!(s.poll_read().is_none(), "waits for its deadline");
+    assert!(s.handle_timeout(Duration::from_secs(1)).is_some());
+    s.start_read(
+        ReadCall::AsciiFloat { number: 9 },
+        Timeout::Forever,
+        Duration::ZERO,
+    )
+    .unwrap();
+    assert_eq!(
+        s.poll_read().unwrap().to_urscript(),
+        "[0, nan, nan, nan, nan, nan, nan, nan, nan, nan]"
+    );
+}
+
+#[test]
+fn robot_table_wakes_at_the_earliest_deadline() {
+    let mut robot = Robot::new(Policy::default());
+    for (name, secs) in [("a", 2.0), ("b", 0.5), ("c", 0.0)] {
+        robot
+            .socket_open(name)
+            .start_read(
+                ReadCall::Line,
+                Timeout::from_secs_f64(secs),
+                Duration::from_secs(1),
+            )
+            .unwrap();
+    }
+    assert_eq!(robot.poll_timeout(), Some(Duration::from_millis(1_500)));
+    let b = robot.socket("b").unwrap();
+    assert!(b.handle_timeout(Duration::from_millis(1_500)).is_some());
+    assert_eq!(robot.poll_timeout(), Some(Duration::from_secs(3)));
+}
+
+#[test]
+fn sends_after_a_failed_send_return_false_and_the_program_goes_on() {
+    let mut s = SocketConnection::new("s", Policy::default());
+    assert!(s.send_int(1));
+    s.send_failed();
+    assert!(!s.send_int(1));
+    assert!(!s.send_line(b"x"));
+    assert!(!s.send_byte(2));
+    assert!(!s.set_var("X", 1).unwrap());
+    assert!(s.outgoing().is_empty());
+    // Reads still work on what arrived.
+    s.receive(b"ok\n");
+    s.start_read(ReadCall::Line, Timeout::default(), Duration::ZERO)
+        .unwrap();
+    assert_eq!(s.poll_read().unwrap().to_urscript(), "\"ok\"");
+}
+
+#[test]
+fn virtual_robot_huge_timeout_does_not_panic() {
+    let listener = TcpListener::bind("127.0.0.1:0").unwrap();
+    let addr = listener.local_addr().unwrap();
+    let server = std::thread::spawn(move || {
+        let (mut robot, _) = listener.accept().unwrap();
+        robot.write_all(b"(1,2)").unwrap();
+    });
+    let mut robot = VirtualRobot::new(Policy::default());
+    assert!(robot.socket_open(addr, "s").unwrap());
+    let t = robot
+        .socket_read_ascii_float(2, "s", Timeout::from_secs_f64(1e19))
+        .unwrap();
+    assert_eq!(t.values(), [1.0, 2.0]);
+    server.join().unwrap();
+}
+
+#[test]
+fn virtual_robot_sends_to_a_closed_server_return_false() {
+    let listener = TcpListener::bind("127.0.0.1:0").unwrap();
+    let addr = listener.local_addr().unwrap();
+    let server = std::thread::spawn(move || {
+        let (robot, _) = listener.accept().unwrap();
+        drop(robot);
+    });
+    let mut robot = VirtualRobot::new(Policy::default());
+    assert!(robot.socket_open(addr, "s").unwrap());
+    server.join().unwrap();
+    // The first writes may still be accepted by the kernel; once the peer's RST
+    // arrives a write fails, and from then on every send is false, never an error.
+    let mut results = Vec::new();
+    for _ in 0..200 {
+        results.push(robot.socket_send_line(b"hello", "s").unwrap());
+        std::thread::sleep(Duration::from_millis(1));
+    }
+    assert_eq!(results.last(), Some(&false), "{results:?}");
+    let first_false = results.iter().position(|r| !r).unwrap();
+    assert!(results[first_false..].iter().all(|r| !r));
+    assert!(!robot.socket_send_int(7, "s").unwrap());
+    // Reads resolve to sentinels: the program goes on.
+    let r = robot
+        .socket_read_line("s", Timeout::from_secs_f64(0.2))
+        .unwrap();
+    assert!(r.is_empty());
+}
+
+#[test]
+fn virtual_robot_says_why_socket_open_failed() {
+    let listener = TcpListener::bind("127.0.0.1:0").unwrap();
+    let addr = listener.local_addr().unwrap();
+    drop(listener);
+    let mut robot = VirtualRobot::new(Policy::default());
+    assert!(!robot.socket_open(addr, "s").unwrap());
+    assert_eq!(
+        robot.last_open_error().unwrap().kind(),
+        std::io::ErrorKind::ConnectionRefused
+    );
+}
+
+/// One text writer: a read's result prints as the robot's own `to_str` text, the form
+/// the same program uses for a pose literal (it printed `3.14159265` before).
+#[test]
+fn read_results_print_by_the_robots_to_str_rules() {
+    let (text, _) = read_now(
+        Policy::default(),
+        b"(3.14159265,2.5)",
+        ReadCall::AsciiFloat { number: 2 },
+    );
+    assert_eq!(text, "[2, 3.141593, 2.5]");
+    let mut pose = String::new();
+    urscript_socket::to_str::write_value(
+        &urscript_socket::to_str::Value::Pose([1.23456789, 0.0, 0.0, 0.0, 0.0, 1e-9]),
+        &mut pose,
+    )
+    .unwrap();
+    assert_eq!(pose, "p[1.234568, 0, 0, 0, 0, 0]");
 }

@@ -2,11 +2,12 @@
 //! through the robot emulation.
 #![allow(clippy::approx_constant)] // the spec's data, not π
 
+use std::time::Duration;
 use urscript_socket::ascii_float::{encode_float_tuple, FloatTuple, FloatTupleDecoder};
 use urscript_socket::byte_list::ByteListDecoder;
 use urscript_socket::int32::{encode_int32, Int32Decoder};
 use urscript_socket::line::{encode_line, LineDecoder};
-use urscript_socket::robot::{Policy, ReadCall, ReadResult, SocketConnection};
+use urscript_socket::robot::{Policy, ReadCall, ReadResult, SocketConnection, Timeout};
 use urscript_socket::string::ReadStringDecoder;
 use urscript_socket::stx_etx::encode_stx_etx;
 use urscript_socket::to_str::{encode_value, List, Scalar, Value};
@@ -28,10 +29,11 @@ fn robot(input: &[u8], calls: &[ReadCall]) -> Vec<String> {
     calls
         .iter()
         .map(|c| {
-            s.start_read(c.clone()).unwrap();
+            s.start_read(c.clone(), Timeout::Forever, Duration::ZERO)
+                .unwrap();
             let r: ReadResult = match s.poll_read() {
                 Some(r) => r,
-                None => s.handle_timeout().unwrap(),
+                None => s.give_up().unwrap(),
             };
             r.to_urscript()
         })
@@ -224,7 +226,8 @@ fn v14_read_string_everything() {
 fn v15_read_string_cr_suffix_escape() {
     let mut s = SocketConnection::new("socket_0", Policy::default());
     s.receive(b"OK,1\rNEXT\r");
-    s.start_read(string("", "\\r", true)).unwrap();
+    s.start_read(string("", "\\r", true), Timeout::Forever, Duration::ZERO)
+        .unwrap();
     assert_eq!(s.poll_read().unwrap(), ReadResult::Text(b"OK,1".to_vec()));
     assert_eq!(s.buffered(), b"NEXT\r");
 }
@@ -239,9 +242,13 @@ fn v16_get_var() {
     );
     assert_eq!(v, 1234);
     let mut s = SocketConnection::new("socket_0", Policy::default());
-    s.start_read(ReadCall::GetVar {
-        name: "POS_X".into(),
-    })
+    s.start_read(
+        ReadCall::GetVar {
+            name: "POS_X".into(),
+        },
+        Timeout::Forever,
+        Duration::ZERO,
+    )
     .unwrap();
     assert_eq!(s.take_outgoing(), b"GET POS_X\n");
     s.receive(b"POS_X 1234\n");

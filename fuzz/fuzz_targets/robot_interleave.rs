@@ -6,7 +6,8 @@
 use arbitrary::Arbitrary;
 use libfuzzer_sys::fuzz_target;
 use urscript_socket::ascii_float::encode_float_tuple;
-use urscript_socket::robot::{Policy, ReadCall, ShortRead, SocketConnection};
+use std::time::Duration;
+use urscript_socket::robot::{Policy, ReadCall, ShortRead, SocketConnection, Timeout};
 
 #[derive(Debug, Arbitrary)]
 enum Call {
@@ -57,7 +58,7 @@ fuzz_target!(|input: (bool, Vec<Op>)| {
             }
             Op::Start(c) => {
                 let before = s.buffered().to_vec();
-                if s.start_read(call(c)).is_err() {
+                if s.start_read(call(c), Timeout::Forever, Duration::ZERO).is_err() {
                     assert_eq!(s.buffered(), &before[..], "a refused call consumes nothing");
                 }
             }
@@ -65,7 +66,7 @@ fuzz_target!(|input: (bool, Vec<Op>)| {
                 let _ = s.poll_read();
             }
             Op::Timeout => {
-                let _ = s.handle_timeout();
+                let _ = s.give_up();
             }
             Op::Close => s.peer_closed(),
             Op::Tuple(values) => {
@@ -73,17 +74,17 @@ fuzz_target!(|input: (bool, Vec<Op>)| {
                 if s.is_peer_closed() || encode_float_tuple(&values, false, &mut text).is_err() {
                     continue;
                 }
-                let _ = s.handle_timeout();
+                let _ = s.give_up();
                 // Empty the buffer the way a program would: byte reads until nothing is left.
                 while !s.buffered().is_empty() {
                     let n = s.buffered().len().min(30);
-                    s.start_read(ReadCall::ByteList { number: n }).unwrap();
+                    s.start_read(ReadCall::ByteList { number: n }, Timeout::Forever, Duration::ZERO).unwrap();
                     assert!(s.poll_read().is_some());
                 }
                 if s.receive(&text) < text.len() {
                     continue;
                 }
-                s.start_read(ReadCall::AsciiFloat { number: values.len() }).unwrap();
+                s.start_read(ReadCall::AsciiFloat { number: values.len() }, Timeout::Forever, Duration::ZERO).unwrap();
                 let r = s.poll_read().expect("a whole tuple completes the read");
                 let urscript_socket::robot::ReadResult::Floats(t) = r else { panic!("not floats") };
                 assert_eq!(t.count(), values.len());

@@ -14,3 +14,5 @@ pub mod blocking;
 pub mod embedded;
 #[cfg(feature = "tokio")]
 pub mod tokio;
+#[cfg(feature = "std")]
+pub(crate) mod virtual_robot;

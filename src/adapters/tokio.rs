@@ -613,6 +613,8 @@ impl<'a> codec::Encoder<&'a [f64]> for FloatTupleCodec {
 pub struct AsyncRobotSocket {
     conn: SocketConnection,
     stream: TcpStream,
+    /// Time zero of the machine's clock.
+    epoch: ::tokio::time::Instant,
 }
 
 impl AsyncRobotSocket {
@@ -634,6 +636,7 @@ impl AsyncRobotSocket {
         Ok(AsyncRobotSocket {
             conn: SocketConnection::new(socket_name, policy),
             stream,
+            epoch: ::tokio::time::Instant::now(),
         })
     }
 
@@ -648,20 +651,22 @@ impl AsyncRobotSocket {
         &mut self.conn
     }
 
-    /// Writes everything queued.
+    /// Writes everything queued. `Ok(false)` if the peer has gone: the socket is then
+    /// broken for writing and later sends return false, as `socket_send_*` returns False
+    /// on the controller.
     ///
     /// ```no_run
     /// # async fn demo(robot: &mut urscript_socket::adapters::tokio::AsyncRobotSocket) {
     /// robot.socket().send_line(b"go");
-    /// robot.flush().await.unwrap();
+    /// assert!(robot.flush().await.unwrap());
     /// # }
     /// ```
-    pub async fn flush(&mut self) -> Result<(), RobotError> {
+    pub async fn flush(&mut self) -> Result<bool, RobotError> {
         let out: Vec<u8> = self.conn.take_outgoing();
-        if !out.is_empty() {
-            self.stream.write_all(&out).await.map_err(RobotError::Io)?;
+        if !out.is_empty() && self.stream.write_all(&out).await.is_err() {
+            self.conn.send_failed();
         }
-        Ok(())
+        Ok(!self.conn.is_send_broken())
     }
 
     /// Runs a read call: sends what is queued (a `GET` for `GetVar`), then waits until the
@@ -678,30 +683,34 @@ impl AsyncRobotSocket {
         call: ReadCall,
         timeout: Timeout,
     ) -> Result<ReadResult, RobotError> {
-        self.conn.start_read(call)?;
+        self.conn.start_read(call, timeout, self.epoch.elapsed())?;
         self.flush().await?;
-        let deadline = match self.conn.pending_timeout(timeout).unwrap_or(timeout) {
-            Timeout::After(d) => Some(::tokio::time::Instant::now() + d),
-            Timeout::Forever => None,
-        };
         loop {
             if let Some(r) = self.conn.poll_read() {
                 return Ok(r);
             }
+            if let Some(r) = self.conn.handle_timeout(self.epoch.elapsed()) {
+                return Ok(r);
+            }
+            // A deadline past what the clock can represent is no deadline.
+            let deadline = self
+                .conn
+                .poll_timeout()
+                .and_then(|d| self.epoch.checked_add(d));
             let space = self.conn.receive_space();
             if space.is_empty() {
+                // Full buffer, incomplete read: only the deadline ends it (a read with no
+                // deadline already ended in poll_read).
                 if let Some(d) = deadline {
                     ::tokio::time::sleep_until(d).await;
                 }
-                return Ok(self.conn.handle_timeout().unwrap_or(ReadResult::Int(0)));
+                continue;
             }
             let read = self.stream.read(space);
             let n = match deadline {
                 Some(d) => match ::tokio::time::timeout_at(d, read).await {
                     Ok(r) => r,
-                    Err(_elapsed) => {
-                        return Ok(self.conn.handle_timeout().unwrap_or(ReadResult::Int(0)))
-                    }
+                    Err(_elapsed) => continue,
                 },
                 None => read.await,
             };

@@ -2,7 +2,7 @@
 
 use std::io::{Read, Write};
 
-use urscript_socket::robot::{Policy, ReadCall, SocketConnection};
+use urscript_socket::robot::{Policy, ReadCall, SocketConnection, Timeout};
 use urscript_socket::RecvBuffer;
 
 use crate::formats::{encode_robot, encode_server, AnyDecoder, DecodeFormat};
@@ -41,7 +41,9 @@ pub fn read(call: ReadCall, repeat: usize) -> Result<(), String> {
     let mut pending_input: Vec<u8> = Vec::new();
     let mut eof = false;
     for _ in 0..repeat.max(1) {
-        socket.start_read(call.clone()).map_err(|e| e.to_string())?;
+        socket
+            .start_read(call.clone(), Timeout::Forever, std::time::Duration::ZERO)
+            .map_err(|e| e.to_string())?;
         let result = loop {
             if let Some(r) = socket.poll_read() {
                 break r;
@@ -56,7 +58,7 @@ pub fn read(call: ReadCall, repeat: usize) -> Result<(), String> {
             }
             if eof {
                 // The end of input is the timeout: the read gets its sentinel.
-                break socket.handle_timeout().unwrap_or_else(|| call.sentinel());
+                break socket.give_up().unwrap_or_else(|| call.sentinel());
             }
             match stdin.read(&mut chunk) {
                 Ok(0) => eof = true,

@@ -4,11 +4,13 @@ use std::boxed::Box;
 use std::io::{self, Read, Write};
 use std::net::{TcpStream, ToSocketAddrs};
 use std::string::String;
-use std::time::Instant;
+use std::time::{Duration, Instant};
 use std::vec::Vec;
 
-use super::{IntList, Policy, ReadCall, ReadResult, RobotError, SocketConnection, Timeout};
 use crate::ascii_float::FloatTuple;
+use crate::robot::{
+    IntList, Policy, ReadCall, ReadResult, Robot, RobotError, SocketConnection, Timeout,
+};
 use crate::to_str::Value;
 
 /// Which way bytes went, for a traffic observer.
@@ -45,23 +47,19 @@ type Observer = Box<dyn FnMut(&str, Direction, &[u8]) + Send>;
 /// # Ok::<(), urscript_socket::robot::RobotError>(())
 /// ```
 pub struct VirtualRobot {
-    policy: Policy,
-    sockets: Vec<(SocketConnection, TcpStream)>,
+    robot: Robot<TcpStream>,
     observer: Option<Observer>,
+    /// Time zero of the machine's clock (`now` = `epoch.elapsed()`).
+    epoch: Instant,
+    /// Why the last `socket_open` failed.
+    open_error: Option<io::Error>,
 }
 
 impl core::fmt::Debug for VirtualRobot {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
         f.debug_struct("VirtualRobot")
-            .field("policy", &self.policy)
-            .field(
-                "sockets",
-                &self
-                    .sockets
-                    .iter()
-                    .map(|(s, _)| s.name())
-                    .collect::<Vec<_>>(),
-            )
+            .field("policy", self.robot.policy())
+            .field("sockets", &self.robot.names().collect::<Vec<_>>())
             .finish()
     }
 }
@@ -72,36 +70,39 @@ impl VirtualRobot {
     /// ```
     /// # use urscript_socket::robot::{Policy, VirtualRobot};
     /// let robot = VirtualRobot::new(Policy::default());
+    /// assert!(robot.socket_names().is_empty());
     /// ```
     pub fn new(policy: Policy) -> Self {
         VirtualRobot {
-            policy,
-            sockets: Vec::new(),
+            robot: Robot::new(policy),
             observer: None,
+            epoch: Instant::now(),
+            open_error: None,
         }
     }
 
-    /// Calls `observer(socket_name, direction, bytes)` for every chunk sent or received:
-    /// the hook behind `ursock demo`'s transcript.
+    /// Calls `observer(socket_name, direction, bytes)` for every chunk sent or received.
     ///
     /// ```
     /// # use urscript_socket::robot::{Policy, VirtualRobot};
     /// let mut robot = VirtualRobot::new(Policy::default());
-    /// robot.set_observer(|name, dir, bytes| println!("{name} {dir:?} {bytes:02X?}"));
+    /// robot.set_observer(|name, dir, bytes| println!("{name} {dir:?} {bytes:?}"));
     /// ```
     pub fn set_observer(&mut self, observer: impl FnMut(&str, Direction, &[u8]) + Send + 'static) {
         self.observer = Some(Box::new(observer));
     }
 
     /// `socket_open(address, port, socket_name)`: connects; `Ok(false)` if the server
-    /// cannot be reached, as URScript returns `False`. An open socket of the same name is
-    /// closed first.
+    /// cannot be reached (as the robot's `False`; [`last_open_error`](Self::last_open_error)
+    /// says why). Re-opening a name closes the old connection first.
     ///
-    /// ```
+    /// ```no_run
     /// # use urscript_socket::robot::{Policy, VirtualRobot};
-    /// let listener = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
-    /// let mut robot = VirtualRobot::new(Policy::default());
-    /// assert!(robot.socket_open(listener.local_addr().unwrap(), "socket_0").unwrap());
+    /// # let mut robot = VirtualRobot::new(Policy::default());
+    /// if !robot.socket_open("127.0.0.1:30000", "socket_0")? {
+    ///     eprintln!("{}", robot.last_open_error().unwrap());
+    /// }
+    /// # Ok::<(), urscript_socket::robot::RobotError>(())
     /// ```
     pub fn socket_open(
         &mut self,
@@ -111,31 +112,45 @@ impl VirtualRobot {
         self.socket_close(socket_name);
         let stream = match TcpStream::connect(address) {
             Ok(s) => s,
-            Err(_) => return Ok(false),
+            Err(e) => {
+                self.open_error = Some(e);
+                return Ok(false);
+            }
         };
+        self.open_error = None;
         stream.set_nodelay(true).map_err(RobotError::Io)?;
-        self.sockets
-            .push((SocketConnection::new(socket_name, self.policy), stream));
+        self.robot.open(socket_name, stream);
         Ok(true)
+    }
+
+    /// Why the last [`socket_open`](Self::socket_open) returned false (connection refused,
+    /// unknown host...): the operating system's reason, which the robot program never sees.
+    ///
+    /// ```
+    /// # use urscript_socket::robot::{Policy, VirtualRobot};
+    /// let mut robot = VirtualRobot::new(Policy::default());
+    /// assert!(!robot.socket_open("no-such-host.invalid:1", "s").unwrap());
+    /// assert!(robot.last_open_error().is_some());
+    /// ```
+    pub fn last_open_error(&self) -> Option<&io::Error> {
+        self.open_error.as_ref()
     }
 
     /// `socket_close(socket_name)`; returns whether it was open.
     ///
     /// ```
     /// # use urscript_socket::robot::{Policy, VirtualRobot};
-    /// assert!(!VirtualRobot::new(Policy::default()).socket_close("socket_0"));
+    /// let mut robot = VirtualRobot::new(Policy::default());
+    /// assert!(!robot.socket_close("socket_0"));
     /// ```
     pub fn socket_close(&mut self, socket_name: &str) -> bool {
-        let before = self.sockets.len();
-        self.sockets.retain(|(s, stream)| {
-            if s.name() == socket_name {
+        match self.robot.close(socket_name) {
+            Some(stream) => {
                 let _ = stream.shutdown(std::net::Shutdown::Both);
-                false
-            } else {
                 true
             }
-        });
-        before != self.sockets.len()
+            None => false,
+        }
     }
 
     /// The names of the open sockets.
@@ -145,40 +160,29 @@ impl VirtualRobot {
     /// assert!(VirtualRobot::new(Policy::default()).socket_names().is_empty());
     /// ```
     pub fn socket_names(&self) -> Vec<String> {
-        self.sockets
-            .iter()
-            .map(|(s, _)| String::from(s.name()))
-            .collect()
+        self.robot.names().map(String::from).collect()
     }
 
-    fn index(&self, socket_name: &str) -> Result<usize, RobotError> {
-        self.sockets
-            .iter()
-            .position(|(s, _)| s.name() == socket_name)
-            .ok_or_else(|| RobotError::NotOpen(String::from(socket_name)))
+    /// The machine's clock: time since this robot was made.
+    fn now(&self) -> Duration {
+        self.epoch.elapsed()
     }
 
-    /// Sends what the model queued on socket `i`.
-    fn flush(&mut self, i: usize) -> Result<(), RobotError> {
-        let (socket, stream) = &mut self.sockets[i];
-        let out = socket.take_outgoing();
-        if out.is_empty() {
-            return Ok(());
-        }
-        if let Some(obs) = self.observer.as_mut() {
-            obs(socket.name(), Direction::RobotToServer, &out);
-        }
-        stream.write_all(&out).map_err(RobotError::Io)
-    }
-
+    /// Runs `queue` on the socket and sends what it queued; `Ok(false)` if the socket is
+    /// broken for writing (the peer went away), as `socket_send_*` returns False.
     fn send_with(
         &mut self,
         socket_name: &str,
-        f: impl FnOnce(&mut SocketConnection) -> Result<(), RobotError>,
-    ) -> Result<(), RobotError> {
-        let i = self.index(socket_name)?;
-        f(&mut self.sockets[i].0)?;
-        self.flush(i)
+        queue: impl FnOnce(&mut SocketConnection) -> Result<bool, RobotError>,
+    ) -> Result<bool, RobotError> {
+        let (socket, stream) = self
+            .robot
+            .get(socket_name)
+            .ok_or_else(|| RobotError::NotOpen(String::from(socket_name)))?;
+        if !queue(socket)? {
+            return Ok(false);
+        }
+        Ok(flush(socket, stream, &mut self.observer))
     }
 
     /// `socket_send_string(text, socket_name)`.
@@ -189,11 +193,12 @@ impl VirtualRobot {
     /// robot.socket_send_string(b"hi", "socket_0")?;
     /// # Ok::<(), urscript_socket::robot::RobotError>(())
     /// ```
-    pub fn socket_send_string(&mut self, text: &[u8], socket_name: &str) -> Result<(), RobotError> {
-        self.send_with(socket_name, |s| {
-            s.send_string(text);
-            Ok(())
-        })
+    pub fn socket_send_string(
+        &mut self,
+        text: &[u8],
+        socket_name: &str,
+    ) -> Result<bool, RobotError> {
+        self.send_with(socket_name, |s| Ok(s.send_string(text)))
     }
 
     /// `socket_send_line(text, socket_name)`.
@@ -204,11 +209,8 @@ impl VirtualRobot {
     /// robot.socket_send_line(b"hello", "socket_0")?;
     /// # Ok::<(), urscript_socket::robot::RobotError>(())
     /// ```
-    pub fn socket_send_line(&mut self, text: &[u8], socket_name: &str) -> Result<(), RobotError> {
-        self.send_with(socket_name, |s| {
-            s.send_line(text);
-            Ok(())
-        })
+    pub fn socket_send_line(&mut self, text: &[u8], socket_name: &str) -> Result<bool, RobotError> {
+        self.send_with(socket_name, |s| Ok(s.send_line(text)))
     }
 
     /// `socket_send_string(value)` / `socket_send_line(value)` of a number, bool, list or
@@ -226,7 +228,7 @@ impl VirtualRobot {
         value: &Value<'_>,
         line: bool,
         socket_name: &str,
-    ) -> Result<(), RobotError> {
+    ) -> Result<bool, RobotError> {
         self.send_with(socket_name, |s| s.send_value(value, line))
     }
 
@@ -238,11 +240,8 @@ impl VirtualRobot {
     /// robot.socket_send_byte(2, "socket_0")?;
     /// # Ok::<(), urscript_socket::robot::RobotError>(())
     /// ```
-    pub fn socket_send_byte(&mut self, value: u8, socket_name: &str) -> Result<(), RobotError> {
-        self.send_with(socket_name, |s| {
-            s.send_byte(value);
-            Ok(())
-        })
+    pub fn socket_send_byte(&mut self, value: u8, socket_name: &str) -> Result<bool, RobotError> {
+        self.send_with(socket_name, |s| Ok(s.send_byte(value)))
     }
 
     /// `socket_send_int(value, socket_name)`.
@@ -253,11 +252,8 @@ impl VirtualRobot {
     /// robot.socket_send_int(-1, "socket_0")?;
     /// # Ok::<(), urscript_socket::robot::RobotError>(())
     /// ```
-    pub fn socket_send_int(&mut self, value: i32, socket_name: &str) -> Result<(), RobotError> {
-        self.send_with(socket_name, |s| {
-            s.send_int(value);
-            Ok(())
-        })
+    pub fn socket_send_int(&mut self, value: i32, socket_name: &str) -> Result<bool, RobotError> {
+        self.send_with(socket_name, |s| Ok(s.send_int(value)))
     }
 
     /// `socket_set_var(name, value, socket_name)`.
@@ -273,7 +269,7 @@ impl VirtualRobot {
         name: &str,
         value: i32,
         socket_name: &str,
-    ) -> Result<(), RobotError> {
+    ) -> Result<bool, RobotError> {
         self.send_with(socket_name, |s| s.set_var(name, value))
     }
 
@@ -293,64 +289,31 @@ impl VirtualRobot {
         socket_name: &str,
         timeout: Timeout,
     ) -> Result<ReadResult, RobotError> {
-        let i = self.index(socket_name)?;
-        self.sockets[i].0.start_read(call)?;
-        self.flush(i)?;
-        let wait = self.sockets[i]
-            .0
-            .pending_timeout(timeout)
-            .unwrap_or(timeout);
-        let deadline = match wait {
-            Timeout::After(d) => Some(Instant::now() + d),
-            Timeout::Forever => None,
-        };
+        let now = self.now();
+        let epoch = self.epoch;
+        let (socket, stream) = self
+            .robot
+            .get(socket_name)
+            .ok_or_else(|| RobotError::NotOpen(String::from(socket_name)))?;
+        socket.start_read(call, timeout, now)?;
+        flush(socket, stream, &mut self.observer);
         loop {
-            let (socket, stream) = &mut self.sockets[i];
             if let Some(result) = socket.poll_read() {
                 return Ok(result);
             }
-            let remaining = match deadline {
-                Some(d) => {
-                    let now = Instant::now();
-                    if now >= d {
-                        return Ok(socket.handle_timeout().unwrap_or(ReadResult::Int(0)));
-                    }
-                    Some(d - now)
-                }
-                None => None,
-            };
-            stream.set_read_timeout(remaining).map_err(RobotError::Io)?;
-            let space = socket.receive_space();
-            if space.is_empty() {
-                // Buffer full and the read still incomplete: nothing more can help it
-                // but the timeout, exactly as a full TCP window on the robot.
-                match remaining {
-                    Some(r) => std::thread::sleep(r),
-                    None => return Ok(socket.handle_timeout().unwrap_or(ReadResult::Int(0))),
-                }
+            let now = epoch.elapsed();
+            if let Some(result) = socket.handle_timeout(now) {
+                return Ok(result);
+            }
+            // Not yet due: wait for bytes at most until the deadline (None: forever).
+            let wait = socket.poll_timeout().map(|d| d.saturating_sub(now));
+            if socket.receive_space().is_empty() {
+                // Buffer full, read incomplete: only the deadline can end it (a read with
+                // no deadline already ended in poll_read).
+                std::thread::sleep(wait.unwrap_or(Duration::from_millis(10)));
                 continue;
             }
-            match stream.read(space) {
-                Ok(0) => socket.peer_closed(),
-                Ok(n) => {
-                    socket.commit_received(n);
-                    if let Some(obs) = self.observer.as_mut() {
-                        let data = socket.buffered();
-                        obs(
-                            socket.name(),
-                            Direction::ServerToRobot,
-                            &data[data.len() - n..],
-                        );
-                    }
-                }
-                Err(e)
-                    if matches!(
-                        e.kind(),
-                        io::ErrorKind::WouldBlock | io::ErrorKind::TimedOut
-                    ) => {}
-                Err(e) if e.kind() == io::ErrorKind::Interrupted => {}
-                Err(_) => socket.peer_closed(),
-            }
+            receive(socket, stream, wait, &mut self.observer);
         }
     }
 
@@ -496,5 +459,63 @@ impl VirtualRobot {
             ReadResult::Int(v) => Ok(v),
             _ => Ok(0),
         }
+    }
+}
+
+/// Sends what the model queued; false (and the socket marked broken) if the write failed.
+fn flush(
+    socket: &mut SocketConnection,
+    stream: &mut TcpStream,
+    observer: &mut Option<Observer>,
+) -> bool {
+    let out = socket.take_outgoing();
+    if out.is_empty() {
+        return !socket.is_send_broken();
+    }
+    if let Some(obs) = observer.as_mut() {
+        obs(socket.name(), Direction::RobotToServer, &out);
+    }
+    match stream.write_all(&out) {
+        Ok(()) => true,
+        Err(_) => {
+            socket.send_failed();
+            false
+        }
+    }
+}
+
+/// One blocking read from `stream` into the socket, waiting at most `wait`.
+fn receive(
+    socket: &mut SocketConnection,
+    stream: &mut TcpStream,
+    wait: Option<Duration>,
+    observer: &mut Option<Observer>,
+) {
+    // A zero read timeout is refused by the OS; the caller only waits for a future deadline.
+    let wait = wait.map(|w| w.max(Duration::from_micros(1)));
+    if stream.set_read_timeout(wait).is_err() {
+        socket.peer_closed();
+        return;
+    }
+    let space = socket.receive_space();
+    match stream.read(space) {
+        Ok(0) => socket.peer_closed(),
+        Ok(n) => {
+            socket.commit_received(n);
+            if let Some(obs) = observer.as_mut() {
+                let data = socket.buffered();
+                obs(
+                    socket.name(),
+                    Direction::ServerToRobot,
+                    &data[data.len() - n..],
+                );
+            }
+        }
+        Err(e)
+            if matches!(
+                e.kind(),
+                io::ErrorKind::WouldBlock | io::ErrorKind::TimedOut | io::ErrorKind::Interrupted
+            ) => {}
+        Err(_) => socket.peer_closed(),
     }
 }
