@@ -267,6 +267,35 @@ impl<S: AsRef<[u8]> + AsMut<[u8]>> RecvBuffer<S> {
         &mut self,
         decoder: &mut D,
     ) -> Result<Option<D::Item<'_>>, DecodeError> {
+        self.decode_with(decoder, true)
+    }
+
+    /// [`decode`](Self::decode) without the way out: a full buffer whose message cannot
+    /// complete stays as it is (`Ok(None)`, [`is_full`](Self::is_full)), and the caller
+    /// decides what happens (the robot emulation lets the read run to its deadline, as the
+    /// controller would).
+    ///
+    /// ```
+    /// # use urscript_socket::{RecvBuffer, line::LineDecoder};
+    /// let mut buf = RecvBuffer::<[u8; 4]>::new();
+    /// buf.extend(b"long");
+    /// assert_eq!(buf.decode_without_overflow(&mut LineDecoder::new()).unwrap(), None);
+    /// assert!(buf.is_full());
+    /// ```
+    #[inline]
+    pub fn decode_without_overflow<D: Decoder>(
+        &mut self,
+        decoder: &mut D,
+    ) -> Result<Option<D::Item<'_>>, DecodeError> {
+        self.decode_with(decoder, false)
+    }
+
+    #[inline(always)]
+    fn decode_with<D: Decoder>(
+        &mut self,
+        decoder: &mut D,
+        overflow: bool,
+    ) -> Result<Option<D::Item<'_>>, DecodeError> {
         let data = &self.storage.as_ref()[self.start..self.end];
         match decoder.decode(data) {
             Ok(Status::Complete { item, consumed, .. }) => {
@@ -276,7 +305,9 @@ impl<S: AsRef<[u8]> + AsMut<[u8]>> RecvBuffer<S> {
             }
             Ok(Status::Partial { consumed }) => {
                 advance(&mut self.start, &mut self.end, consumed);
-                if self.end - self.start == data.len() && data.len() == self.storage.as_ref().len()
+                if overflow
+                    && self.end - self.start == data.len()
+                    && data.len() == self.storage.as_ref().len()
                 {
                     // Full, and no progress: the message cannot complete in this buffer.
                     if let Some(e) = decoder.overflow(data) {

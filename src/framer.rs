@@ -203,13 +203,7 @@ fn find(close: &[u8], hay: &[u8]) -> Option<usize> {
 }
 
 impl Framer {
-    const fn with(
-        shape: Shape,
-        at_eof: AtEof,
-        bound: usize,
-        window: usize,
-        report: usize,
-    ) -> Self {
+    const fn with(shape: Shape, at_eof: AtEof, bound: usize, window: usize, report: usize) -> Self {
         Framer {
             shape,
             limits: Limits {
@@ -263,7 +257,13 @@ impl Framer {
 
     /// Exactly `len` bytes (at least 1), `unit` per value.
     pub const fn counted(len: usize, unit: usize) -> Self {
-        Framer::with(Shape::Counted { len, unit }, AtEof::Truncated, len, len, len)
+        Framer::with(
+            Shape::Counted { len, unit },
+            AtEof::Truncated,
+            len,
+            len,
+            len,
+        )
     }
 
     /// `socket_read_string(prefix, suffix)`.
@@ -557,9 +557,7 @@ impl Scan {
         let hay = &frame[from..window];
         let found = match (reopen, open) {
             // A reopen is looked for together with the close: one pass (memchr2).
-            (Some(_), Some((o, _))) => {
-                memchr::memchr2(o, close[0], hay).map(|i| (i, hay[i] == o))
-            }
+            (Some(_), Some((o, _))) => memchr::memchr2(o, close[0], hay).map(|i| (i, hay[i] == o)),
             _ => find(close, hay).map(|i| (i, false)),
         };
         match found {
@@ -714,13 +712,13 @@ impl<P: Parse> Framed<P> {
     #[inline]
     pub fn decode<'a>(&mut self, buf: &'a [u8]) -> Result<Status<P::Output<'a>>, DecodeError> {
         match self.framer.next(buf)? {
-            Status::Complete { item: frame, .. } => self.parse(frame).map(|item| {
-                Status::Complete {
+            Status::Complete { item: frame, .. } => {
+                self.parse(frame).map(|item| Status::Complete {
                     item,
                     consumed: frame.consumed,
                     at: frame.at,
-                }
-            }),
+                })
+            }
             Status::Partial { consumed } => Ok(Status::Partial { consumed }),
         }
     }

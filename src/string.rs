@@ -163,7 +163,10 @@ impl ReadStringDecoder {
         let prefix = Pattern::new(&tmp[..n])?;
         let n = controller_pattern(suffix, interpret_escape, &mut tmp)?;
         let suffix = Pattern::new(&tmp[..n])?;
-        Ok(Framed::from_parts(Framer::window(prefix, suffix), ReadString))
+        Ok(Framed::from_parts(
+            Framer::window(prefix, suffix),
+            ReadString,
+        ))
     }
 
     /// Forgets the search progress (for a read that timed out: the next read starts

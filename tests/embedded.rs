@@ -72,11 +72,17 @@ fn the_buffer_bound_and_a_cut_message() {
         );
         match r.next_with(|l| l.len()).await {
             Err(Error::Decode(e)) => {
-                assert_eq!((e.kind(), e.offset()), (ErrorKind::TooLong { limit: 32 }, 32))
+                assert_eq!(
+                    (e.kind(), e.offset()),
+                    (ErrorKind::TooLong { limit: 32 }, 32)
+                )
             }
             other => panic!("{other:?}"),
         }
-        assert_eq!(r.next_with(|l| l.to_vec()).await.unwrap(), Some(b"ok".to_vec()));
+        assert_eq!(
+            r.next_with(|l| l.to_vec()).await.unwrap(),
+            Some(b"ok".to_vec())
+        );
         let mut r: MessageReader<_, _, 64> = MessageReader::new(
             Trickle {
                 data: b"ok\ncut",
