@@ -13,11 +13,15 @@
 //! number = [+-]? (digits ("." digits?)? | "." digits) ([eE] [+-]? digits)?
 //! ```
 
-use crate::number::{is_space, parse_short_decimal, write_plain_f64, MAX_PLAIN_F64_LEN};
-use crate::{ArgumentError, DecodeError, Decoder, EncodeError, ErrorKind, Sink, Status};
+use crate::framer::{Framed, Framer, Noise, Parse};
+use crate::number::{is_space, parse_float_prefix, write_plain_f64, MAX_PLAIN_F64_LEN};
+#[cfg(doc)]
+use crate::DecodeError;
+use crate::{ArgumentError, EncodeError, ErrorKind, Sink};
 
-/// The most values one `socket_read_ascii_float` call reads (and one tuple may carry).
-pub const MAX_VALUES: usize = 30;
+/// The most values one `socket_read_ascii_float` call reads (and one tuple may carry): the
+/// crate's one [`MAX_VALUES`](crate::MAX_VALUES), re-exported here.
+pub use crate::MAX_VALUES;
 
 /// Default bound on one tuple's length in bytes, parentheses included. Every tuple
 /// [`encode_float_tuple`] can produce fits (at most [`MAX_ENCODED_LEN`] bytes).
@@ -282,14 +286,16 @@ impl UrList {
 /// Robot-side decoder of one ASCII float tuple per message, as
 /// `socket_read_ascii_float(number)` reads it.
 ///
-/// Incremental: it finds the tuple's `)` with a resumable scan (remembering where it
-/// stopped, so a chunked stream is searched once), then parses the complete tuple in one
-/// pass. Bound: a tuple longer than `max_len` bytes ([`DEFAULT_MAX_TUPLE_LEN`]) is an
-/// error at the byte past the bound; the decoder then discards through the next `)`.
+/// Incremental: the framer finds the tuple's `)` with a resumable scan (remembering where
+/// it stopped, so a chunked stream is searched once), then [`FloatTuples`] parses the
+/// complete tuple in one pass. Bound: a tuple longer than `max_len` bytes
+/// ([`DEFAULT_MAX_TUPLE_LEN`]) is an error at the byte past the bound; the decoder then
+/// discards through the next `)`.
 ///
 /// Failures (a malformed number, too many values...) are errors whose
 /// [`skip`](DecodeError::skip) consumes the whole tuple, as spec section 6 asks; the robot
-/// emulation turns them into the `[0, nan...]` sentinel.
+/// emulation turns them into the `[0, nan...]` sentinel. At end of input a tuple cut off
+/// before its `)` is [`Truncated`](ErrorKind::Truncated); leading bytes alone are dropped.
 ///
 /// ```
 /// use urscript_socket::ascii_float::FloatTupleDecoder;
@@ -297,32 +303,33 @@ impl UrList {
 /// let t = dec.decode(b"( 1.414 , 3.14159, 1.616, 0.0 )").unwrap().item().unwrap();
 /// assert_eq!(t.count(), 4);
 /// assert_eq!(t.values(), [1.414, 3.14159, 1.616, 0.0]);
+/// assert!(dec.decode_eof(b"(1,2").is_err());
 /// ```
-#[derive(Debug, Clone)]
-pub struct FloatTupleDecoder {
+pub type FloatTupleDecoder = Framed<FloatTuples>;
+
+/// The parse step of [`FloatTupleDecoder`]: the text between `(` and `)` of one tuple, for a
+/// read of `number` values under a [`FloatReadPolicy`].
+#[derive(Debug, Clone, Copy)]
+pub struct FloatTuples {
     number: u8,
     policy: FloatReadPolicy,
-    max_len: usize,
-    /// Bytes at the front of `buf` already known to hold no `)`. Only meaningful while
-    /// `in_tuple` (the tuple's `(` is then `buf[0]`). If `decode` saw `(1,2` it holds 4
-    /// and the next call looks for `)` from index 4 on.
-    scanned: usize,
-    /// A `(` was seen and moved to the front of the buffer; waiting for its `)`.
-    in_tuple: bool,
-    /// After a bound or leading-byte error: dropping bytes until the resync point (`)`
-    /// after an over-long tuple, `(` after leading bytes), reporting nothing more.
-    discarding: Discard,
-    /// Absolute stream offset of `buf[0]`.
-    pos: u64,
 }
 
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-enum Discard {
-    No,
-    /// Through the next `)` (inclusive).
-    ThroughClose,
-    /// Up to the next `(` (exclusive).
-    UntilOpen,
+impl Parse for FloatTuples {
+    type Output<'a> = FloatTuple;
+    #[inline(always)]
+    fn parse(&self, inner: &[u8]) -> Result<FloatTuple, (ErrorKind, usize)> {
+        parse_tuple(inner, self.number, &self.policy)
+    }
+}
+
+fn tuple_framer(policy: &FloatReadPolicy, max_len: usize) -> Framer {
+    let noise = match policy.leading_bytes {
+        LeadingBytes::Skip => Noise::Skip,
+        LeadingBytes::Fail => Noise::Report("'(' starting a tuple"),
+    };
+    // The bound counts the parentheses: a tuple is at most `max_len` bytes.
+    Framer::bracketed(b'(', b')', noise, None, max_len.max(2), true)
 }
 
 impl FloatTupleDecoder {
@@ -349,18 +356,18 @@ impl FloatTupleDecoder {
         if !(1..=MAX_VALUES).contains(&number) {
             return Err(ArgumentError::NumberOutOfRange { number });
         }
-        Ok(FloatTupleDecoder {
+        let parser = FloatTuples {
             number: number as u8,
             policy,
-            max_len: DEFAULT_MAX_TUPLE_LEN,
-            scanned: 0,
-            in_tuple: false,
-            discarding: Discard::No,
-            pos: 0,
-        })
+        };
+        Ok(Framed::from_parts(
+            tuple_framer(&policy, DEFAULT_MAX_TUPLE_LEN),
+            parser,
+        ))
     }
 
-    /// Sets the bound on one tuple's length in bytes (at least 2).
+    /// Sets the bound on one tuple's length in bytes (at least 2, at most
+    /// [`MAX_BOUND`](crate::MAX_BOUND)).
     ///
     /// ```
     /// # use urscript_socket::ascii_float::FloatTupleDecoder;
@@ -368,8 +375,18 @@ impl FloatTupleDecoder {
     /// assert!(d.decode(b"(1.000000000)").is_err());
     /// ```
     pub fn with_max_len(mut self, max_len: usize) -> Self {
-        self.max_len = max_len.max(2);
+        self.framer = tuple_framer(&self.parser.policy, max_len);
         self
+    }
+
+    /// The bound on one tuple's length.
+    ///
+    /// ```
+    /// # use urscript_socket::ascii_float::FloatTupleDecoder;
+    /// assert_eq!(FloatTupleDecoder::new(1).unwrap().with_max_len(0).max_len(), 2);
+    /// ```
+    pub fn max_len(&self) -> usize {
+        self.framer.bound()
     }
 
     /// The `number` this decoder reads.
@@ -379,194 +396,19 @@ impl FloatTupleDecoder {
     /// assert_eq!(FloatTupleDecoder::new(6).unwrap().number(), 6);
     /// ```
     pub fn number(&self) -> usize {
-        usize::from(self.number)
-    }
-
-    /// Absolute stream offset of the next byte to decode.
-    ///
-    /// ```
-    /// # use urscript_socket::ascii_float::FloatTupleDecoder;
-    /// let mut d = FloatTupleDecoder::new(1).unwrap();
-    /// d.decode(b"(1)").unwrap();
-    /// assert_eq!(d.position(), 3);
-    /// ```
-    pub fn position(&self) -> u64 {
-        self.pos
-    }
-
-    /// Looks for the next tuple in `buf`. See [`Status`] for the contract.
-    ///
-    /// ```
-    /// # use urscript_socket::{ascii_float::FloatTupleDecoder, Status};
-    /// let mut d = FloatTupleDecoder::new(2).unwrap();
-    /// assert_eq!(d.decode(b"\n(1,").unwrap(), Status::Partial { consumed: 1 });
-    /// let t = d.decode(b"(1,2)\n").unwrap();
-    /// assert_eq!(t.consumed(), 5);
-    /// ```
-    #[inline]
-    pub fn decode(&mut self, buf: &[u8]) -> Result<Status<FloatTuple>, DecodeError> {
-        let mut lead = 0;
-        match self.discarding {
-            Discard::ThroughClose => match memchr::memchr(b')', buf) {
-                Some(i) => {
-                    self.discarding = Discard::No;
-                    lead = i + 1;
-                }
-                None => return Ok(self.partial(buf.len())),
-            },
-            Discard::UntilOpen => match memchr::memchr(b'(', buf) {
-                Some(i) => {
-                    self.discarding = Discard::No;
-                    lead = i;
-                }
-                None => return Ok(self.partial(buf.len())),
-            },
-            Discard::No => {}
-        }
-        let rest = &buf[lead..];
-        if !self.in_tuple {
-            match rest.first() {
-                None => return Ok(self.partial(lead)),
-                Some(b'(') => {}
-                Some(&found) => match self.policy.leading_bytes {
-                    LeadingBytes::Skip => match memchr::memchr(b'(', rest) {
-                        Some(i) => lead += i,
-                        None => return Ok(self.partial(buf.len())),
-                    },
-                    LeadingBytes::Fail => {
-                        let at = self.pos + lead as u64;
-                        let skip = match memchr::memchr(b'(', rest) {
-                            Some(i) => lead + i,
-                            None => {
-                                self.discarding = Discard::UntilOpen;
-                                buf.len()
-                            }
-                        };
-                        return Err(self.error(
-                            ErrorKind::UnexpectedByte {
-                                found,
-                                expected: "'(' starting a tuple",
-                            },
-                            at,
-                            skip,
-                        ));
-                    }
-                },
-            }
-            self.in_tuple = true;
-            self.scanned = 1;
-        }
-        let tuple = &buf[lead..];
-        // Resume the scan for `)` where the last call stopped; never past the bound.
-        let limit = tuple.len().min(self.max_len);
-        match memchr::memchr(b')', &tuple[self.scanned.min(limit)..limit]) {
-            Some(i) => {
-                let close = self.scanned + i;
-                let frame = &tuple[..=close];
-                let consumed = lead + close + 1;
-                self.in_tuple = false;
-                self.scanned = 0;
-                let frame_pos = self.pos + lead as u64;
-                match parse_tuple(frame, self.number, &self.policy) {
-                    Ok(item) => {
-                        self.pos += consumed as u64;
-                        Ok(Status::Complete { item, consumed })
-                    }
-                    Err((kind, at)) => Err(self.error(kind, frame_pos + at as u64, consumed)),
-                }
-            }
-            None if tuple.len() > self.max_len => {
-                // Over the bound without `)`: report at the first byte past the bound,
-                // drop what we have and discard through the next `)`.
-                let at = self.pos + (lead + self.max_len) as u64;
-                self.in_tuple = false;
-                self.scanned = 0;
-                self.discarding = Discard::ThroughClose;
-                let skip = lead + self.max_len;
-                Err(self.error(
-                    ErrorKind::TooLong {
-                        limit: self.max_len,
-                    },
-                    at,
-                    skip,
-                ))
-            }
-            None => {
-                self.scanned = limit;
-                if lead > 0 {
-                    // Move the tuple to the front of the caller's buffer.
-                    self.pos += lead as u64;
-                }
-                Ok(Status::Partial { consumed: lead })
-            }
-        }
-    }
-
-    /// At end of input: a tuple cut off before its `)` is a
-    /// [`Truncated`](ErrorKind::Truncated) error; leading bytes alone are dropped.
-    ///
-    /// ```
-    /// # use urscript_socket::ascii_float::FloatTupleDecoder;
-    /// let mut d = FloatTupleDecoder::new(2).unwrap();
-    /// assert!(d.decode_eof(b"(1,2").is_err());
-    /// assert_eq!(d.decode_eof(b"(1,2)").unwrap().unwrap().0.count(), 2);
-    /// ```
-    pub fn decode_eof(&mut self, buf: &[u8]) -> Result<Option<(FloatTuple, usize)>, DecodeError> {
-        let result = match self.decode(buf) {
-            Ok(Status::Complete { item, consumed }) => Ok(Some((item, consumed))),
-            Ok(Status::Partial { consumed }) if consumed == buf.len() => Ok(None),
-            Ok(Status::Partial { consumed }) => {
-                let at = self.pos;
-                self.pos += (buf.len() - consumed) as u64;
-                Err(DecodeError::new(ErrorKind::Truncated, at, buf.len()))
-            }
-            Err(e) => Err(e),
-        };
-        self.reset_state();
-        result
-    }
-
-    fn partial(&mut self, consumed: usize) -> Status<FloatTuple> {
-        self.pos += consumed as u64;
-        Status::Partial { consumed }
-    }
-
-    fn error(&mut self, kind: ErrorKind, at: u64, skip: usize) -> DecodeError {
-        self.pos += skip as u64;
-        DecodeError::new(kind, at, skip)
-    }
-
-    fn reset_state(&mut self) {
-        self.in_tuple = false;
-        self.scanned = 0;
-        self.discarding = Discard::No;
+        usize::from(self.parser.number)
     }
 }
 
-impl Decoder for FloatTupleDecoder {
-    type Item<'buf> = FloatTuple;
-    #[inline]
-    fn decode(&mut self, buf: &[u8]) -> Result<Status<FloatTuple>, DecodeError> {
-        FloatTupleDecoder::decode(self, buf)
-    }
-    fn decode_eof(&mut self, buf: &[u8]) -> Result<Option<(FloatTuple, usize)>, DecodeError> {
-        FloatTupleDecoder::decode_eof(self, buf)
-    }
-    fn position(&self) -> u64 {
-        self.pos
-    }
-}
-
-/// Parses a complete tuple `frame` = `( ... )`. Errors carry the offset within `frame`.
+/// Parses the text between a tuple's `(` and `)`. Errors carry the offset within `inner`.
 ///
-/// One pass over the tuple: each number is parsed in place (Clinger's exact fast path for
-/// short plain decimals, else fast-float's `parse_partial`), which also says where the
-/// number ends, so the separator check starts right there: one pass over the tuple. fast-float accepts exactly our number
-/// grammar plus `inf`/`nan`, which the first-byte check excludes; the exponent policy is
-/// checked on the (short) span fast-float consumed.
+/// One pass over the tuple: each number is parsed in place by the crate's one float
+/// grammar ([`parse_float_prefix`]: Clinger's exact fast path for short plain decimals,
+/// SWAR fraction digits, else fast-float), which also says where the number ends, so the
+/// separator check starts right there.
 #[inline]
 fn parse_tuple(
-    frame: &[u8],
+    inner: &[u8],
     number: u8,
     policy: &FloatReadPolicy,
 ) -> Result<FloatTuple, (ErrorKind, usize)> {
@@ -576,35 +418,19 @@ fn parse_tuple(
         number,
         values: [f64::NAN; MAX_VALUES],
     };
-    let end = frame.len() - 1; // index of `)`
-    let inner = &frame[..end];
-    let mut i = 1;
+    let end = inner.len();
+    let mut i = 0;
     let mut count = 0usize;
     loop {
         while i < end && is_space(inner[i]) {
             i += 1;
         }
         let token = &inner[i..];
-        let first_digit = match token {
-            [] | [b',', ..] => return Err((ErrorKind::Empty, i)),
-            [b'+' | b'-', rest @ ..] => rest.first(),
-            [first, ..] => Some(first),
-        };
-        if !matches!(first_digit, Some(b'0'..=b'9' | b'.')) {
-            return Err((ErrorKind::InvalidNumber, i));
+        if let [] | [b',', ..] = token {
+            return Err((ErrorKind::Empty, i));
         }
-        // Plain decimals of up to 15 digits (every pose value) take the exact fast path;
-        // anything else goes to fast-float.
-        let (v, len) = match parse_short_decimal(token) {
-            Some(found) => found,
-            None => fast_float2::parse_partial::<f64, _>(token)
-                .map_err(|_| (ErrorKind::InvalidNumber, i))?,
-        };
-        if !policy.allow_exponent {
-            if let Some(e) = token[..len].iter().position(|&b| b | 0x20 == b'e') {
-                return Err((ErrorKind::InvalidNumber, i + e));
-            }
-        }
+        let (v, len) = parse_float_prefix(token, policy.allow_exponent)
+            .map_err(|at| (ErrorKind::InvalidNumber, i + at))?;
         if count < number_usize {
             out.values[count] = v;
         } else if policy.extra_values == ExtraValues::Fail {
@@ -644,6 +470,7 @@ fn parse_tuple(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::{DecodeError, Status};
     use alloc::vec::Vec;
 
     fn read(number: usize, input: &[u8]) -> Result<FloatTuple, DecodeError> {

@@ -236,28 +236,85 @@ impl<S: AsRef<[u8]> + AsMut<[u8]>> RecvBuffer<S> {
     /// input is needed; on error the bad bytes are already dropped, so the next call goes
     /// on with the message after them.
     ///
+    /// A buffer smaller than the decoder's bound: when the buffer is full and the message
+    /// in it still incomplete, it can never complete here. The decoder is then asked for a
+    /// way out ([`Decoder::overflow`]): the message is reported once as
+    /// [`TooLong`](crate::ErrorKind::TooLong) with the buffer's capacity as its limit, its
+    /// bytes are dropped, the rest of it is discarded as it arrives, and decoding resyncs
+    /// on the next message. Every decoder of the crate has that way out except
+    /// [`ReadStringDecoder`](crate::string::ReadStringDecoder), which by the controller's
+    /// rule consumes nothing until complete: a full buffer stays full (`Ok(None)`).
+    ///
     /// ```
-    /// # use urscript_socket::{RecvBuffer, byte_list::ByteListDecoder};
+    /// # use urscript_socket::{RecvBuffer, byte_list::ByteListDecoder, line::LineDecoder, ErrorKind};
     /// let mut buf = RecvBuffer::<[u8; 8]>::new();
     /// let mut two = ByteListDecoder::new(2).unwrap();
     /// buf.extend(b"abc");
     /// assert_eq!(buf.decode(&mut two).unwrap(), Some(&b"ab"[..]));
     /// assert_eq!(buf.decode(&mut two).unwrap(), None);
+    ///
+    /// // 8 bytes of buffer, lines of up to 4096: a long line is reported, then skipped.
+    /// let mut buf = RecvBuffer::<[u8; 8]>::new();
+    /// let mut lines = LineDecoder::new();
+    /// buf.extend(b"too long");
+    /// let e = buf.decode(&mut lines).unwrap_err();
+    /// assert_eq!(e.kind(), ErrorKind::TooLong { limit: 8 });
+    /// buf.extend(b"ine\nok\n");
+    /// assert_eq!(buf.decode(&mut lines).unwrap(), Some(&b"ok"[..]));
     /// ```
     #[inline]
     pub fn decode<D: Decoder>(
         &mut self,
         decoder: &mut D,
     ) -> Result<Option<D::Item<'_>>, DecodeError> {
+        self.decode_with(decoder, true)
+    }
+
+    /// [`decode`](Self::decode) without the way out: a full buffer whose message cannot
+    /// complete stays as it is (`Ok(None)`, [`is_full`](Self::is_full)), and the caller
+    /// decides what happens (the robot emulation lets the read run to its deadline, as the
+    /// controller would).
+    ///
+    /// ```
+    /// # use urscript_socket::{RecvBuffer, line::LineDecoder};
+    /// let mut buf = RecvBuffer::<[u8; 4]>::new();
+    /// buf.extend(b"long");
+    /// assert_eq!(buf.decode_without_overflow(&mut LineDecoder::new()).unwrap(), None);
+    /// assert!(buf.is_full());
+    /// ```
+    #[inline]
+    pub fn decode_without_overflow<D: Decoder>(
+        &mut self,
+        decoder: &mut D,
+    ) -> Result<Option<D::Item<'_>>, DecodeError> {
+        self.decode_with(decoder, false)
+    }
+
+    #[inline(always)]
+    fn decode_with<D: Decoder>(
+        &mut self,
+        decoder: &mut D,
+        overflow: bool,
+    ) -> Result<Option<D::Item<'_>>, DecodeError> {
         let data = &self.storage.as_ref()[self.start..self.end];
         match decoder.decode(data) {
-            Ok(Status::Complete { item, consumed }) => {
+            Ok(Status::Complete { item, consumed, .. }) => {
                 // The item borrows the storage, not the indices, so they can move now.
                 advance(&mut self.start, &mut self.end, consumed);
                 Ok(Some(item))
             }
             Ok(Status::Partial { consumed }) => {
                 advance(&mut self.start, &mut self.end, consumed);
+                if overflow
+                    && self.end - self.start == data.len()
+                    && data.len() == self.storage.as_ref().len()
+                {
+                    // Full, and no progress: the message cannot complete in this buffer.
+                    if let Some(e) = decoder.overflow(data) {
+                        advance(&mut self.start, &mut self.end, e.skip());
+                        return Err(e);
+                    }
+                }
                 Ok(None)
             }
             Err(e) => {
@@ -268,26 +325,36 @@ impl<S: AsRef<[u8]> + AsMut<[u8]>> RecvBuffer<S> {
     }
 
     /// The input ended: runs [`Decoder::decode_eof`] on the held bytes and empties the
-    /// buffer of what it used.
+    /// buffer of what it used. Idempotent: once it returned `Ok(None)` or an error, the
+    /// next call returns `Ok(None)` (or the messages and errors still held after an error).
     ///
     /// ```
     /// # use urscript_socket::{RecvBuffer, line::LineDecoder};
     /// let mut buf = RecvBuffer::<[u8; 8]>::new();
+    /// let mut lines = LineDecoder::new();
     /// buf.extend(b"tail");
-    /// assert!(buf.decode_eof(&mut LineDecoder::new()).is_err()); // no LF: cut off
+    /// assert!(buf.decode_eof(&mut lines).is_err()); // no LF: cut off
     /// assert!(buf.is_empty());
+    /// assert_eq!(buf.decode_eof(&mut lines).unwrap(), None);
     /// ```
     pub fn decode_eof<D: Decoder>(
         &mut self,
         decoder: &mut D,
     ) -> Result<Option<D::Item<'_>>, DecodeError> {
         let data = &self.storage.as_ref()[self.start..self.end];
+        let before = decoder.position();
         match decoder.decode_eof(data) {
             Ok(Some((item, consumed))) => {
                 advance(&mut self.start, &mut self.end, consumed);
                 Ok(Some(item))
             }
-            Ok(None) => Ok(None),
+            Ok(None) => {
+                // Drop what the decoder accounted for (everything, except for a read
+                // that consumes nothing until complete).
+                let used = decoder.position().saturating_sub(before);
+                advance(&mut self.start, &mut self.end, used as usize);
+                Ok(None)
+            }
             Err(e) => {
                 advance(&mut self.start, &mut self.end, e.skip());
                 Err(e)

@@ -3,10 +3,12 @@
 //!
 //! Fixed-size like int32: a message is `number` bytes, counted, never scanned.
 
-use crate::{ArgumentError, DecodeError, Decoder, EncodeError, Sink, Status};
+use crate::framer::{Framed, Framer, Parse};
+use crate::{ArgumentError, EncodeError, ErrorKind, Sink};
 
-/// The most bytes one `socket_read_byte_list` call reads.
-pub const MAX_VALUES: usize = 30;
+/// The most bytes one `socket_read_byte_list` call reads: the crate's one
+/// [`MAX_VALUES`](crate::MAX_VALUES), re-exported here.
+pub use crate::MAX_VALUES;
 
 /// Writes one byte: what `socket_send_byte(v)` sends.
 ///
@@ -39,17 +41,30 @@ pub fn encode_byte_list<S: Sink + ?Sized>(
 
 /// Decoder of `number` raw bytes per message: the robot's
 /// `socket_read_byte_list(number)`, or a server's byte stream with `number = 1`.
-/// The item borrows the bytes. Bound: `number` ≤ 30 bytes.
+/// The item borrows the bytes. Bound: `number` ≤ 30 bytes. At end of input, leftover
+/// bytes short of a message are [`Truncated`](crate::ErrorKind::Truncated).
 ///
 /// ```
 /// use urscript_socket::byte_list::ByteListDecoder;
 /// let mut dec = ByteListDecoder::new(3).unwrap();
 /// assert_eq!(dec.decode(b"ack").unwrap().item(), Some(&b"ack"[..]));
+/// assert!(dec.decode(b"a").unwrap().item().is_none());
+/// assert!(ByteListDecoder::new(2).unwrap().decode_eof(b"a").is_err());
 /// ```
-#[derive(Debug, Clone)]
-pub struct ByteListDecoder {
+pub type ByteListDecoder = Framed<ByteList>;
+
+/// The parse step of [`ByteListDecoder`]: the bytes as they are.
+#[derive(Debug, Clone, Copy)]
+pub struct ByteList {
     number: u8,
-    pos: u64,
+}
+
+impl Parse for ByteList {
+    type Output<'a> = &'a [u8];
+    #[inline(always)]
+    fn parse<'a>(&self, bytes: &'a [u8]) -> Result<&'a [u8], (ErrorKind, usize)> {
+        Ok(bytes)
+    }
 }
 
 impl ByteListDecoder {
@@ -63,10 +78,11 @@ impl ByteListDecoder {
         if !(1..=MAX_VALUES).contains(&number) {
             return Err(ArgumentError::NumberOutOfRange { number });
         }
-        Ok(ByteListDecoder {
-            number: number as u8,
-            pos: 0,
-        })
+        Ok(Self::of(number as u8))
+    }
+
+    const fn of(number: u8) -> Self {
+        Framed::from_parts(Framer::counted(number as usize, 1), ByteList { number })
     }
 
     /// A decoder of one byte per message: a server reading `socket_send_byte`.
@@ -76,7 +92,7 @@ impl ByteListDecoder {
     /// assert_eq!(ByteListDecoder::single().number(), 1);
     /// ```
     pub const fn single() -> Self {
-        ByteListDecoder { number: 1, pos: 0 }
+        Self::of(1)
     }
 
     /// Bytes per message.
@@ -86,39 +102,7 @@ impl ByteListDecoder {
     /// assert_eq!(ByteListDecoder::new(3).unwrap().number(), 3);
     /// ```
     pub fn number(&self) -> usize {
-        usize::from(self.number)
-    }
-
-    /// Absolute stream offset of the next byte to decode.
-    ///
-    /// ```
-    /// # use urscript_socket::byte_list::ByteListDecoder;
-    /// let mut d = ByteListDecoder::new(1).unwrap();
-    /// d.decode(b"a").unwrap();
-    /// assert_eq!(d.position(), 1);
-    /// ```
-    pub fn position(&self) -> u64 {
-        self.pos
-    }
-
-    /// The next `number` bytes, once they are there.
-    ///
-    /// ```
-    /// # use urscript_socket::byte_list::ByteListDecoder;
-    /// let mut d = ByteListDecoder::new(2).unwrap();
-    /// assert!(d.decode(b"a").unwrap().item().is_none());
-    /// ```
-    #[inline]
-    pub fn decode<'a>(&mut self, buf: &'a [u8]) -> Result<Status<&'a [u8]>, DecodeError> {
-        let need = usize::from(self.number);
-        if buf.len() < need {
-            return Ok(Status::Partial { consumed: 0 });
-        }
-        self.pos += need as u64;
-        Ok(Status::Complete {
-            item: &buf[..need],
-            consumed: need,
-        })
+        usize::from(self.parser.number)
     }
 
     /// The bytes available when the read must end early (the "return what arrived"
@@ -130,46 +114,6 @@ impl ByteListDecoder {
     /// assert_eq!(d.take_partial(b"ab"), Some((&b"ab"[..], 2)));
     /// ```
     pub fn take_partial<'a>(&mut self, buf: &'a [u8]) -> Option<(&'a [u8], usize)> {
-        let n = buf.len().min(usize::from(self.number));
-        if n == 0 {
-            return None;
-        }
-        self.pos += n as u64;
-        Some((&buf[..n], n))
-    }
-
-    /// At end of input: leftover bytes short of a message are
-    /// [`Truncated`](crate::ErrorKind::Truncated).
-    ///
-    /// ```
-    /// # use urscript_socket::byte_list::ByteListDecoder;
-    /// assert!(ByteListDecoder::new(2).unwrap().decode_eof(b"a").is_err());
-    /// ```
-    pub fn decode_eof<'a>(
-        &mut self,
-        buf: &'a [u8],
-    ) -> Result<Option<(&'a [u8], usize)>, DecodeError> {
-        match self.decode(buf)? {
-            Status::Complete { item, consumed } => Ok(Some((item, consumed))),
-            Status::Partial { .. } if buf.is_empty() => Ok(None),
-            Status::Partial { .. } => crate::status::truncated(&mut self.pos, buf),
-        }
-    }
-}
-
-impl Decoder for ByteListDecoder {
-    type Item<'buf> = &'buf [u8];
-    #[inline]
-    fn decode<'buf>(&mut self, buf: &'buf [u8]) -> Result<Status<&'buf [u8]>, DecodeError> {
-        ByteListDecoder::decode(self, buf)
-    }
-    fn decode_eof<'buf>(
-        &mut self,
-        buf: &'buf [u8],
-    ) -> Result<Option<(&'buf [u8], usize)>, DecodeError> {
-        ByteListDecoder::decode_eof(self, buf)
-    }
-    fn position(&self) -> u64 {
-        self.pos
+        self.framer.take_counted(buf)
     }
 }

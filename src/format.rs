@@ -35,8 +35,9 @@ use crate::{ArgumentError, DecodeError, Decoder, Status};
 
 /// The most values one read or message of a counted format holds: the controller's
 /// limit for `socket_read_ascii_float`, `socket_read_binary_integer` and
-/// `socket_read_byte_list` (`number` in 1..=30).
-pub const MAX_VALUES: usize = 30;
+/// `socket_read_byte_list` (`number` in 1..=30). The crate's one
+/// [`MAX_VALUES`](crate::MAX_VALUES), re-exported here.
+pub use crate::MAX_VALUES;
 
 /// Every format on the wire between a UR robot and its server, with its parameters.
 ///
@@ -416,9 +417,10 @@ impl Decoder for AnyDecoder {
             f: impl FnOnce(T) -> Message<'b>,
         ) -> Result<Status<Message<'b>>, DecodeError> {
             s.map(|s| match s {
-                Status::Complete { item, consumed } => Status::Complete {
+                Status::Complete { item, consumed, at } => Status::Complete {
                     item: f(item),
                     consumed,
+                    at,
                 },
                 Status::Partial { consumed } => Status::Partial { consumed },
             })
@@ -433,19 +435,14 @@ impl Decoder for AnyDecoder {
             Inner::StxEtx(d) => map(d.decode(buf), Message::Text),
             Inner::Var(d) => map(d.decode(buf), Message::Var),
             Inner::VarReply(d) => map(d.decode(buf), Message::VarReply),
-            Inner::Value(d) => {
-                let at = d.position();
-                match d.decode(buf)? {
-                    Status::Complete { item, consumed } => {
-                        let line_at = at + offset_in(buf, item).unwrap_or(0) as u64;
-                        Ok(Status::Complete {
-                            item: Message::Value(value_line(item, line_at, consumed)?),
-                            consumed,
-                        })
-                    }
-                    Status::Partial { consumed } => Ok(Status::Partial { consumed }),
-                }
-            }
+            Inner::Value(d) => match d.decode(buf)? {
+                Status::Complete { item, consumed, at } => Ok(Status::Complete {
+                    item: Message::Value(value_line(item, at, consumed)?),
+                    consumed,
+                    at,
+                }),
+                Status::Partial { consumed } => Ok(Status::Partial { consumed }),
+            },
         }
     }
 
@@ -479,6 +476,20 @@ impl Decoder for AnyDecoder {
                     None => Ok(None),
                 }
             }
+        }
+    }
+
+    fn overflow(&mut self, buf: &[u8]) -> Option<DecodeError> {
+        match &mut self.0 {
+            Inner::FloatTuple(d) => d.overflow(buf),
+            Inner::Int32(d) => d.overflow(buf),
+            Inner::Bytes(d) => d.overflow(buf),
+            Inner::Line(d) | Inner::Value(d) => d.overflow(buf),
+            Inner::String(d) => d.overflow(buf),
+            Inner::Delimited(d) => d.overflow(buf),
+            Inner::StxEtx(d) => d.overflow(buf),
+            Inner::Var(d) => d.overflow(buf),
+            Inner::VarReply(d) => d.overflow(buf),
         }
     }
 

@@ -4,10 +4,12 @@
 //! Fixed-size: a message is `4 × number` bytes, so no scan is needed; the decoder only
 //! counts bytes. Values are decoded in place from the caller's buffer ([`Int32Values`]).
 
-use crate::{ArgumentError, DecodeError, Decoder, EncodeError, Sink, Status};
+use crate::framer::{Framed, Framer, Parse};
+use crate::{ArgumentError, EncodeError, ErrorKind, Sink};
 
-/// The most values one `socket_read_binary_integer` call reads.
-pub const MAX_VALUES: usize = 30;
+/// The most values one `socket_read_binary_integer` call reads: the crate's one
+/// [`MAX_VALUES`](crate::MAX_VALUES), re-exported here.
+pub use crate::MAX_VALUES;
 
 /// Writes one int32 big-endian (4 bytes): what `socket_send_int(v)` sends.
 ///
@@ -156,7 +158,8 @@ impl<'a> Int32Values<'a> {
 /// robot's `socket_send_int` stream.
 ///
 /// Holds no bytes and no scan state: a message is complete once `4 × number` bytes are
-/// buffered. Bound: `4 × number` ≤ 120 bytes.
+/// buffered. Bound: `4 × number` ≤ 120 bytes. At end of input, leftover bytes short of a
+/// message are [`Truncated`](crate::ErrorKind::Truncated).
 ///
 /// ```
 /// use urscript_socket::int32::Int32Decoder;
@@ -165,11 +168,22 @@ impl<'a> Int32Values<'a> {
 /// assert!(dec.decode(&bytes[..7]).unwrap().item().is_none());
 /// let vals = dec.decode(&bytes).unwrap().item().unwrap();
 /// assert_eq!(vals.iter().collect::<Vec<_>>(), [100, 2000, 30000]);
+/// assert!(dec.decode_eof(&[0, 0]).is_err());
 /// ```
-#[derive(Debug, Clone)]
-pub struct Int32Decoder {
+pub type Int32Decoder = Framed<Int32List>;
+
+/// The parse step of [`Int32Decoder`]: `4 × number` bytes viewed as int32 values.
+#[derive(Debug, Clone, Copy)]
+pub struct Int32List {
     number: u8,
-    pos: u64,
+}
+
+impl Parse for Int32List {
+    type Output<'a> = Int32Values<'a>;
+    #[inline(always)]
+    fn parse<'a>(&self, bytes: &'a [u8]) -> Result<Int32Values<'a>, (ErrorKind, usize)> {
+        Ok(Int32Values { bytes })
+    }
 }
 
 impl Int32Decoder {
@@ -184,10 +198,14 @@ impl Int32Decoder {
         if !(1..=MAX_VALUES).contains(&number) {
             return Err(ArgumentError::NumberOutOfRange { number });
         }
-        Ok(Int32Decoder {
-            number: number as u8,
-            pos: 0,
-        })
+        Ok(Self::of(number as u8))
+    }
+
+    const fn of(number: u8) -> Self {
+        Framed::from_parts(
+            Framer::counted(number as usize * 4, 4),
+            Int32List { number },
+        )
     }
 
     /// A decoder of one value per message: a server reading `socket_send_int`.
@@ -197,7 +215,7 @@ impl Int32Decoder {
     /// assert_eq!(Int32Decoder::single().number(), 1);
     /// ```
     pub const fn single() -> Self {
-        Int32Decoder { number: 1, pos: 0 }
+        Self::of(1)
     }
 
     /// Values per message.
@@ -207,41 +225,7 @@ impl Int32Decoder {
     /// assert_eq!(Int32Decoder::new(8).unwrap().number(), 8);
     /// ```
     pub fn number(&self) -> usize {
-        usize::from(self.number)
-    }
-
-    /// Absolute stream offset of the next byte to decode.
-    ///
-    /// ```
-    /// # use urscript_socket::int32::Int32Decoder;
-    /// let mut d = Int32Decoder::new(1).unwrap();
-    /// d.decode(&[0; 4]).unwrap();
-    /// assert_eq!(d.position(), 4);
-    /// ```
-    pub fn position(&self) -> u64 {
-        self.pos
-    }
-
-    /// The next message, once `4 × number` bytes are there.
-    ///
-    /// ```
-    /// # use urscript_socket::int32::Int32Decoder;
-    /// let mut d = Int32Decoder::new(1).unwrap();
-    /// assert_eq!(d.decode(&[0xFF; 4]).unwrap().item().unwrap().get(0), Some(-1));
-    /// ```
-    #[inline]
-    pub fn decode<'a>(&mut self, buf: &'a [u8]) -> Result<Status<Int32Values<'a>>, DecodeError> {
-        let need = usize::from(self.number) * 4;
-        if buf.len() < need {
-            return Ok(Status::Partial { consumed: 0 });
-        }
-        self.pos += need as u64;
-        Ok(Status::Complete {
-            item: Int32Values {
-                bytes: &buf[..need],
-            },
-            consumed: need,
-        })
+        usize::from(self.parser.number)
     }
 
     /// The whole values available when the read must end early (the
@@ -255,53 +239,8 @@ impl Int32Decoder {
     /// assert_eq!((vals.len(), used), (1, 4));
     /// ```
     pub fn take_partial<'a>(&mut self, buf: &'a [u8]) -> Option<(Int32Values<'a>, usize)> {
-        let whole = (buf.len() / 4).min(usize::from(self.number)) * 4;
-        if whole == 0 {
-            return None;
-        }
-        self.pos += whole as u64;
-        Some((
-            Int32Values {
-                bytes: &buf[..whole],
-            },
-            whole,
-        ))
-    }
-
-    /// At end of input: leftover bytes short of a message are
-    /// [`Truncated`](crate::ErrorKind::Truncated).
-    ///
-    /// ```
-    /// # use urscript_socket::int32::Int32Decoder;
-    /// let mut d = Int32Decoder::new(1).unwrap();
-    /// assert!(d.decode_eof(&[0, 0]).is_err());
-    /// assert!(d.decode_eof(&[]).unwrap().is_none());
-    /// ```
-    pub fn decode_eof<'a>(
-        &mut self,
-        buf: &'a [u8],
-    ) -> Result<Option<(Int32Values<'a>, usize)>, DecodeError> {
-        match self.decode(buf)? {
-            Status::Complete { item, consumed } => Ok(Some((item, consumed))),
-            Status::Partial { .. } if buf.is_empty() => Ok(None),
-            Status::Partial { .. } => crate::status::truncated(&mut self.pos, buf),
-        }
-    }
-}
-
-impl Decoder for Int32Decoder {
-    type Item<'buf> = Int32Values<'buf>;
-    #[inline]
-    fn decode<'buf>(&mut self, buf: &'buf [u8]) -> Result<Status<Int32Values<'buf>>, DecodeError> {
-        Int32Decoder::decode(self, buf)
-    }
-    fn decode_eof<'buf>(
-        &mut self,
-        buf: &'buf [u8],
-    ) -> Result<Option<(Int32Values<'buf>, usize)>, DecodeError> {
-        Int32Decoder::decode_eof(self, buf)
-    }
-    fn position(&self) -> u64 {
-        self.pos
+        self.framer
+            .take_counted(buf)
+            .map(|(bytes, n)| (Int32Values { bytes }, n))
     }
 }

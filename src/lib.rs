@@ -64,6 +64,11 @@
 #![cfg_attr(test, allow(clippy::approx_constant))]
 #![cfg_attr(docsrs, feature(doc_cfg))]
 
+/// The most values one `socket_read_ascii_float`, `socket_read_binary_integer` or
+/// `socket_read_byte_list` call reads (spec section 1): the robot's limit, and the bound on
+/// every `number` argument.
+pub const MAX_VALUES: usize = 30;
+
 #[cfg(feature = "alloc")]
 extern crate alloc;
 #[cfg(all(test, not(feature = "alloc")))]
@@ -95,6 +100,7 @@ pub mod adapters;
 
 pub use buffer::RecvBuffer;
 pub use error::{ArgumentError, DecodeError, EncodeError, ErrorKind};
+pub use framer::{Framed, Parse, MAX_BOUND};
 pub use sink::{Sink, SliceSink};
 pub use status::{Decoder, Status};
 

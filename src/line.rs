@@ -1,8 +1,8 @@
 //! Lines: `socket_send_line` on the robot (`<s>\n`, LF only) and `socket_read_line()`
 //! reading a server's `\n` or `\r\n` terminated reply.
 
-use crate::framer::{Framer, Pattern};
-use crate::{DecodeError, Decoder, EncodeError, Sink, Status};
+use crate::framer::{AtEof, Framed, Framer, Parse, Pattern};
+use crate::{EncodeError, ErrorKind, Sink};
 
 /// Default bound on a line's content, in bytes (CR included, LF excluded). A robot's
 /// `to_str` text is at most 1023 characters; 4 KiB leaves room without inviting abuse.
@@ -34,17 +34,35 @@ pub fn encode_line<S: Sink + ?Sized>(text: &[u8], sink: &mut S) -> Result<usize,
 /// longer than `max_len` ([`DEFAULT_MAX_LINE_LEN`]) is a
 /// [`TooLong`](crate::ErrorKind::TooLong) error at the first byte past the bound; the rest
 /// of that line is then discarded and decoding goes on after its LF. An unbounded line
-/// decoder lets any peer exhaust memory, hence no such option.
+/// decoder lets any peer exhaust memory, hence no such option. At end of input, bytes after
+/// the last LF are a [`Truncated`](crate::ErrorKind::Truncated) error (a robot never sends
+/// a line without its LF).
 ///
 /// ```
 /// use urscript_socket::line::LineDecoder;
 /// let mut lines = LineDecoder::new();
 /// let got = lines.decode(b"reply from the server:\r\n").unwrap().item();
 /// assert_eq!(got, Some(&b"reply from the server:"[..]));
+/// assert!(lines.decode_eof(b"tail").is_err());
 /// ```
-#[derive(Debug, Clone)]
-pub struct LineDecoder {
-    framer: Framer,
+pub type LineDecoder = Framed<Line>;
+
+/// The parse step of [`LineDecoder`]: a line's content minus one trailing CR.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Line;
+
+impl Parse for Line {
+    type Output<'a> = &'a [u8];
+    #[inline(always)]
+    fn parse<'a>(&self, line: &'a [u8]) -> Result<&'a [u8], (ErrorKind, usize)> {
+        Ok(strip_cr(line))
+    }
+}
+
+/// The framer of every LF-terminated format (lines, `SET`/`GET`, replies, value lines):
+/// content of at most `max_len` bytes before a LF; cut off at end of input = truncated.
+pub(crate) fn lf_framer(max_len: usize) -> Framer {
+    Framer::delimited(Pattern::byte(b'\n'), max_len, AtEof::Truncated)
 }
 
 impl Default for LineDecoder {
@@ -64,22 +82,18 @@ impl LineDecoder {
         Self::with_max_len(DEFAULT_MAX_LINE_LEN)
     }
 
-    /// A decoder whose lines hold at most `max_len` bytes before the LF.
+    /// A decoder whose lines hold at most `max_len` bytes before the LF. A bound above
+    /// [`MAX_BOUND`](crate::MAX_BOUND) (`usize::MAX`, say) is clamped to it: no buffer
+    /// holds more.
     ///
     /// ```
     /// # use urscript_socket::line::LineDecoder;
     /// let mut d = LineDecoder::with_max_len(3);
     /// assert!(d.decode(b"abcd\n").is_err());
+    /// assert_eq!(LineDecoder::with_max_len(usize::MAX).max_len(), urscript_socket::MAX_BOUND);
     /// ```
     pub fn with_max_len(max_len: usize) -> Self {
-        // A one-byte pattern always fits.
-        let lf = match Pattern::new(b"\n") {
-            Ok(p) => p,
-            Err(_) => Pattern::EMPTY,
-        };
-        LineDecoder {
-            framer: Framer::new(lf, max_len),
-        }
+        Framed::from_parts(lf_framer(max_len), Line)
     }
 
     /// The bound on a line's content.
@@ -89,100 +103,23 @@ impl LineDecoder {
     /// assert_eq!(LineDecoder::with_max_len(9).max_len(), 9);
     /// ```
     pub fn max_len(&self) -> usize {
-        self.framer.max_len()
-    }
-
-    /// Absolute stream offset of the next byte to decode.
-    ///
-    /// ```
-    /// # use urscript_socket::line::LineDecoder;
-    /// let mut d = LineDecoder::new();
-    /// d.decode(b"ab\n").unwrap();
-    /// assert_eq!(d.position(), 3);
-    /// ```
-    pub fn position(&self) -> u64 {
-        self.framer.pos
-    }
-
-    /// The next complete line.
-    ///
-    /// ```
-    /// # use urscript_socket::{line::LineDecoder, Status};
-    /// let mut d = LineDecoder::new();
-    /// assert_eq!(d.decode(b"a\nb").unwrap(), Status::Complete { item: &b"a"[..], consumed: 2 });
-    /// assert_eq!(d.decode(b"b").unwrap(), Status::Partial { consumed: 0 });
-    /// ```
-    #[inline]
-    pub fn decode<'a>(&mut self, buf: &'a [u8]) -> Result<Status<&'a [u8]>, DecodeError> {
-        Ok(match self.framer.next(buf)? {
-            Status::Complete { item, consumed } => Status::Complete {
-                item: strip_cr(item),
-                consumed,
-            },
-            Status::Partial { consumed } => Status::Partial { consumed },
-        })
-    }
-
-    /// At end of input: bytes after the last LF are a
-    /// [`Truncated`](crate::ErrorKind::Truncated) error (a robot never sends a line
-    /// without its LF).
-    ///
-    /// ```
-    /// # use urscript_socket::line::LineDecoder;
-    /// let mut d = LineDecoder::new();
-    /// assert_eq!(d.decode_eof(b"a\n").unwrap(), Some((&b"a"[..], 2)));
-    /// assert!(d.decode_eof(b"tail").is_err());
-    /// ```
-    pub fn decode_eof<'a>(
-        &mut self,
-        buf: &'a [u8],
-    ) -> Result<Option<(&'a [u8], usize)>, DecodeError> {
-        let r = match self.decode(buf) {
-            Ok(Status::Complete { item, consumed }) => Ok(Some((item, consumed))),
-            Ok(Status::Partial { consumed }) if consumed == buf.len() => Ok(None),
-            Ok(Status::Partial { consumed }) => {
-                let mut pos = self.framer.pos;
-                let r = crate::status::truncated(&mut pos, &buf[consumed..])
-                    .map_err(|e| DecodeError::new(e.kind(), e.offset(), buf.len()));
-                self.framer.pos = pos;
-                r
-            }
-            Err(e) => Err(e),
-        };
-        self.framer.reset();
-        r
+        self.framer.bound()
     }
 }
 
-#[inline]
-fn strip_cr(line: &[u8]) -> &[u8] {
+/// A line's content without one CR right before its LF.
+#[inline(always)]
+pub(crate) fn strip_cr(line: &[u8]) -> &[u8] {
     match line {
         [rest @ .., b'\r'] => rest,
         _ => line,
     }
 }
 
-impl Decoder for LineDecoder {
-    type Item<'buf> = &'buf [u8];
-    #[inline]
-    fn decode<'buf>(&mut self, buf: &'buf [u8]) -> Result<Status<&'buf [u8]>, DecodeError> {
-        LineDecoder::decode(self, buf)
-    }
-    fn decode_eof<'buf>(
-        &mut self,
-        buf: &'buf [u8],
-    ) -> Result<Option<(&'buf [u8], usize)>, DecodeError> {
-        LineDecoder::decode_eof(self, buf)
-    }
-    fn position(&self) -> u64 {
-        self.framer.pos
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::ErrorKind;
+    use crate::Status;
 
     #[test]
     fn bound_is_exact_and_recovers() {
@@ -198,7 +135,8 @@ mod tests {
             d.decode(b"ef\nok\n").unwrap(),
             Status::Complete {
                 item: &b"ok"[..],
-                consumed: 6
+                consumed: 6,
+                at: 11
             }
         );
     }

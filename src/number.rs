@@ -282,53 +282,45 @@ pub fn parse_short_decimal(bytes: &[u8]) -> Option<(f64, usize)> {
     Some((if neg { -v } else { v }, sign_len + used))
 }
 
-/// Checks `token` against the float grammar `[+-]? (d+ ('.' d*)? | '.' d+) ([eE] [+-]? d+)?`
-/// (the exponent only when `allow_exponent`) and parses it. On failure returns the index
-/// of the first offending byte within `token`.
+/// The crate's one float grammar, `[+-]? (d+ ('.' d*)? | '.' d+) ([eE] [+-]? d+)?` (the
+/// exponent only when `allow_exponent`), read from the start of `bytes`: the value and the
+/// bytes it used. `Err(i)`: `bytes[i]` is where it stops being a number (0 when it does
+/// not start as one). Shared by the float tuple reader and the `to_str` parser.
+///
+/// Fast path first ([`parse_short_decimal`]: Clinger, exact, SWAR fraction digits), else
+/// fast-float, which accepts exactly this grammar plus `inf`/`nan`, excluded here by the
+/// first-byte check; the exponent policy is checked on the (short) span it consumed.
+#[inline]
+pub fn parse_float_prefix(bytes: &[u8], allow_exponent: bool) -> Result<(f64, usize), usize> {
+    let first_digit = match bytes {
+        [b'+' | b'-', rest @ ..] => rest.first(),
+        _ => bytes.first(),
+    };
+    if !matches!(first_digit, Some(b'0'..=b'9' | b'.')) {
+        return Err(0);
+    }
+    // Plain decimals of up to 15 digits (every pose value) take the exact fast path;
+    // anything else goes to fast-float.
+    let (v, len) = match parse_short_decimal(bytes) {
+        Some(found) => found,
+        None => fast_float2::parse_partial::<f64, _>(bytes).map_err(|_| 0usize)?,
+    };
+    if !allow_exponent {
+        if let Some(e) = bytes[..len].iter().position(|&b| b | 0x20 == b'e') {
+            return Err(e);
+        }
+    }
+    Ok((v, len))
+}
+
+/// `token` as one number of the float grammar ([`parse_float_prefix`]), nothing after it.
+/// On failure returns the index of the first offending byte within `token`.
 #[inline]
 pub fn parse_float_token(token: &[u8], allow_exponent: bool) -> Result<f64, usize> {
-    let mut i = 0;
-    if matches!(token.first(), Some(b'+' | b'-')) {
-        i = 1;
+    match parse_float_prefix(token, allow_exponent)? {
+        (v, len) if len == token.len() => Ok(v),
+        (_, len) => Err(len),
     }
-    let int_start = i;
-    while i < token.len() && token[i].is_ascii_digit() {
-        i += 1;
-    }
-    let mut digits = i - int_start;
-    if i < token.len() && token[i] == b'.' {
-        i += 1;
-        let frac_start = i;
-        while i < token.len() && token[i].is_ascii_digit() {
-            i += 1;
-        }
-        digits += i - frac_start;
-    }
-    if digits == 0 {
-        return Err(i.min(token.len().saturating_sub(1)));
-    }
-    if i < token.len() && (token[i] == b'e' || token[i] == b'E') {
-        if !allow_exponent {
-            return Err(i);
-        }
-        i += 1;
-        if i < token.len() && (token[i] == b'+' || token[i] == b'-') {
-            i += 1;
-        }
-        let exp_start = i;
-        while i < token.len() && token[i].is_ascii_digit() {
-            i += 1;
-        }
-        if i == exp_start {
-            return Err(i.min(token.len() - 1));
-        }
-    }
-    if i != token.len() {
-        return Err(i);
-    }
-    // The grammar above is a subset of what fast-float accepts, so this cannot fail; map
-    // a failure to the token start anyway rather than trusting that.
-    fast_float2::parse::<f64, _>(token).map_err(|_| 0)
 }
 
 /// Parses a decimal int32: optional sign, one or more digits (leading zeros allowed).

@@ -3,7 +3,7 @@
 use crate::DecodeError;
 
 /// What one call to a decoder's `decode` found, in the manner of `httparse::Status`, plus
-/// the bytes the caller must drop in either case.
+/// the bytes the caller must drop in either case and, for a message, where it sits.
 ///
 /// The caller keeps the unconsumed bytes in its own buffer. After
 /// `Complete { consumed, .. }` or `Partial { consumed }` it drops `consumed` bytes from the
@@ -18,7 +18,7 @@ use crate::DecodeError;
 /// assert_eq!(lines.decode(b"hel").unwrap(), Status::Partial { consumed: 0 });
 /// assert_eq!(
 ///     lines.decode(b"hello\nwor").unwrap(),
-///     Status::Complete { item: &b"hello"[..], consumed: 6 }
+///     Status::Complete { item: &b"hello"[..], consumed: 6, at: 0 }
 /// );
 /// ```
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -29,6 +29,10 @@ pub enum Status<T> {
         item: T,
         /// Bytes of the input that the message (and anything skipped before it) used.
         consumed: usize,
+        /// Absolute stream offset of the first byte of the message's content: the line's
+        /// first byte, the first byte after `(`, STX or the prefix, the first int32 byte.
+        /// A parse error inside the content is `at` + its index there.
+        at: u64,
     },
     /// More input is needed. `consumed` bytes (noise the format skips, or the rest of an
     /// over-long message being discarded) can already be dropped.
@@ -52,11 +56,28 @@ impl<T> Status<T> {
         }
     }
 
+    /// Where the complete message's content starts in the stream (`None` if partial).
+    ///
+    /// ```
+    /// use urscript_socket::{line::LineDecoder, Status};
+    /// let mut lines = LineDecoder::new();
+    /// assert_eq!(lines.decode(b"ab\ncd\n").unwrap().at(), Some(0));
+    /// assert_eq!(lines.decode(b"cd\n").unwrap().at(), Some(3));
+    /// assert_eq!(Status::<()>::Partial { consumed: 0 }.at(), None);
+    /// ```
+    #[inline]
+    pub fn at(&self) -> Option<u64> {
+        match *self {
+            Status::Complete { at, .. } => Some(at),
+            Status::Partial { .. } => None,
+        }
+    }
+
     /// The item, if complete.
     ///
     /// ```
     /// use urscript_socket::Status;
-    /// assert_eq!(Status::Complete { item: 5, consumed: 1 }.item(), Some(5));
+    /// assert_eq!(Status::Complete { item: 5, consumed: 1, at: 0 }.item(), Some(5));
     /// ```
     #[inline]
     pub fn item(self) -> Option<T> {
@@ -92,10 +113,13 @@ pub trait Decoder {
     /// Looks at `buf` (the unconsumed bytes) for the next message.
     fn decode<'buf>(&mut self, buf: &'buf [u8]) -> Result<Status<Self::Item<'buf>>, DecodeError>;
 
-    /// The input ended (peer closed, end of file): returns a last message if the format
-    /// can end without a terminator, `Ok(None)` if `buf` is empty, and an error of kind
-    /// [`Truncated`](crate::ErrorKind::Truncated) if a message was cut off. The decoder is
-    /// reset afterwards.
+    /// The input ended (peer closed, end of file): returns the next complete message (call
+    /// again for more), a last message if the format can end without a terminator,
+    /// `Ok(None)` when nothing is left, and an error of kind
+    /// [`Truncated`](crate::ErrorKind::Truncated) if a message was cut off. Idempotent:
+    /// after an error the caller drops its `skip` and the next call on what remains returns
+    /// `Ok(None)`; after `Ok(None)` the decoder is reset and [`position`](Self::position)
+    /// accounts for every byte it dropped.
     fn decode_eof<'buf>(
         &mut self,
         buf: &'buf [u8],
@@ -103,11 +127,16 @@ pub trait Decoder {
 
     /// Bytes consumed so far: the absolute stream offset of `buf[0]` on the next call.
     fn position(&self) -> u64;
-}
 
-/// Shared helper: the error returned by `decode_eof` when unfinished bytes remain.
-pub(crate) fn truncated<T>(pos: &mut u64, buf: &[u8]) -> Result<T, DecodeError> {
-    let at = *pos;
-    *pos += buf.len() as u64;
-    Err(DecodeError::new(crate::ErrorKind::Truncated, at, buf.len()))
+    /// The caller's buffer is full (`buf` is all it holds) and `decode` still needs more:
+    /// the buffer is smaller than this decoder's bound, so the message can never complete
+    /// in it. Returns the error to report once (a [`TooLong`](crate::ErrorKind::TooLong)
+    /// whose limit is the buffer's size) after which the decoder discards the rest of that
+    /// message and resyncs on the next; the caller drops [`DecodeError::skip`] bytes.
+    /// `None` (the default) if the decoder has no way out: the caller must then report a
+    /// full buffer. [`RecvBuffer::decode`](crate::RecvBuffer::decode) calls this.
+    fn overflow(&mut self, buf: &[u8]) -> Option<DecodeError> {
+        let _ = buf;
+        None
+    }
 }

@@ -8,8 +8,8 @@
 //! * [`encode_string`], [`encode_framed_string`]: what either side writes.
 
 pub use crate::framer::MAX_PATTERN_LEN;
-use crate::framer::{Framer, Pattern};
-use crate::{ArgumentError, DecodeError, Decoder, EncodeError, Sink, Status};
+use crate::framer::{AtEof, Framed, Framer, Parse, Pattern, Shape};
+use crate::{ArgumentError, EncodeError, ErrorKind, Sink};
 
 /// The most bytes one `socket_read_string` returns, terminators included (5.x manual).
 pub const READ_STRING_LIMIT: usize = 1024;
@@ -116,7 +116,8 @@ pub fn controller_pattern(
 /// * the window is [`READ_STRING_LIMIT`] bytes from the start of the prefix (or of the
 ///   buffer): if the suffix is not within it, the window's content is returned and the
 ///   rest stays buffered;
-/// * until complete nothing is consumed, so a timeout leaves the buffer unchanged.
+/// * until complete nothing is consumed, so a timeout leaves the buffer unchanged; end of
+///   input is the robot's timeout: `Ok(None)` (the read returns `""`), nothing consumed.
 ///
 /// Linear: the prefix and suffix searches resume where they stopped.
 ///
@@ -129,17 +130,18 @@ pub fn controller_pattern(
 /// assert_eq!(first.item(), Some(&b"hello"[..]));
 /// assert_eq!(read.decode(&buf[7..]).unwrap().item(), Some(&b"world"[..]));
 /// ```
-#[derive(Debug, Clone)]
-pub struct ReadStringDecoder {
-    prefix: Pattern,
-    suffix: Pattern,
-    /// Where the content starts (just past the prefix), once the prefix was found.
-    content_start: Option<usize>,
-    /// Bytes at the front of the current search region known to hold no match start:
-    /// for the prefix search an index into `buf`, for the suffix search one into the
-    /// content.
-    scanned: usize,
-    pos: u64,
+pub type ReadStringDecoder = Framed<ReadString>;
+
+/// The parse step of [`ReadStringDecoder`]: the content as it is.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct ReadString;
+
+impl Parse for ReadString {
+    type Output<'a> = &'a [u8];
+    #[inline(always)]
+    fn parse<'a>(&self, content: &'a [u8]) -> Result<&'a [u8], (ErrorKind, usize)> {
+        Ok(content)
+    }
 }
 
 impl ReadStringDecoder {
@@ -161,25 +163,10 @@ impl ReadStringDecoder {
         let prefix = Pattern::new(&tmp[..n])?;
         let n = controller_pattern(suffix, interpret_escape, &mut tmp)?;
         let suffix = Pattern::new(&tmp[..n])?;
-        Ok(ReadStringDecoder {
-            prefix,
-            suffix,
-            content_start: None,
-            scanned: 0,
-            pos: 0,
-        })
-    }
-
-    /// Absolute stream offset of the next byte to decode.
-    ///
-    /// ```
-    /// # use urscript_socket::string::ReadStringDecoder;
-    /// let mut r = ReadStringDecoder::new(b"", b"", false).unwrap();
-    /// r.decode(b"abc").unwrap();
-    /// assert_eq!(r.position(), 3);
-    /// ```
-    pub fn position(&self) -> u64 {
-        self.pos
+        Ok(Framed::from_parts(
+            Framer::window(prefix, suffix),
+            ReadString,
+        ))
     }
 
     /// Forgets the search progress (for a read that timed out: the next read starts
@@ -193,95 +180,7 @@ impl ReadStringDecoder {
     /// assert_eq!(r.decode(b">hello<").unwrap().item(), Some(&b"hello"[..]));
     /// ```
     pub fn reset(&mut self) {
-        self.content_start = None;
-        self.scanned = 0;
-    }
-
-    /// Looks for the string in `buf`. Nothing is consumed until it completes.
-    ///
-    /// ```
-    /// # use urscript_socket::string::ReadStringDecoder;
-    /// let mut r = ReadStringDecoder::new(b">", b"<", false).unwrap();
-    /// assert!(r.decode(b"noise>hel").unwrap().item().is_none());
-    /// assert_eq!(r.decode(b"noise>hello<").unwrap().item(), Some(&b"hello"[..]));
-    /// ```
-    pub fn decode<'a>(&mut self, buf: &'a [u8]) -> Result<Status<&'a [u8]>, DecodeError> {
-        let plen = self.prefix.len();
-        let content_start = match self.content_start {
-            Some(c) => c,
-            None if plen == 0 => 0,
-            None => {
-                let from = self.scanned.saturating_sub(plen - 1).min(buf.len());
-                match self.prefix.find(&buf[from..]) {
-                    Some(i) => {
-                        let c = from + i + plen;
-                        self.content_start = Some(c);
-                        self.scanned = 0;
-                        c
-                    }
-                    None => {
-                        self.scanned = buf.len();
-                        return Ok(Status::Partial { consumed: 0 });
-                    }
-                }
-            }
-        };
-        let content = &buf[content_start..];
-        let slen = self.suffix.len();
-        // The 1024-byte window counts the prefix and the suffix.
-        let max_content = READ_STRING_LIMIT - plen - slen;
-        if slen == 0 {
-            if content.is_empty() {
-                return Ok(Status::Partial { consumed: 0 });
-            }
-            let n = content.len().min(max_content);
-            return Ok(self.complete(&content[..n], content_start + n));
-        }
-        let window = content.len().min(max_content + slen);
-        let from = self.scanned.saturating_sub(slen - 1).min(window);
-        match self.suffix.find(&content[from..window]) {
-            Some(i) => {
-                let end = from + i;
-                Ok(self.complete(&content[..end], content_start + end + slen))
-            }
-            None if content.len() >= max_content + slen => {
-                Ok(self.complete(&content[..max_content], content_start + max_content))
-            }
-            None => {
-                self.scanned = window;
-                Ok(Status::Partial { consumed: 0 })
-            }
-        }
-    }
-
-    fn complete<'a>(&mut self, item: &'a [u8], consumed: usize) -> Status<&'a [u8]> {
-        self.reset();
-        self.pos += consumed as u64;
-        Status::Complete { item, consumed }
-    }
-}
-
-impl Decoder for ReadStringDecoder {
-    type Item<'buf> = &'buf [u8];
-    #[inline]
-    fn decode<'buf>(&mut self, buf: &'buf [u8]) -> Result<Status<&'buf [u8]>, DecodeError> {
-        ReadStringDecoder::decode(self, buf)
-    }
-    /// End of input is the robot's timeout: `Ok(None)` (the read returns `""`) and the
-    /// buffer is left as it was.
-    fn decode_eof<'buf>(
-        &mut self,
-        buf: &'buf [u8],
-    ) -> Result<Option<(&'buf [u8], usize)>, DecodeError> {
-        let r = match self.decode(buf)? {
-            Status::Complete { item, consumed } => Some((item, consumed)),
-            Status::Partial { .. } => None,
-        };
-        self.reset();
-        Ok(r)
-    }
-    fn position(&self) -> u64 {
-        self.pos
+        self.framer.reset();
     }
 }
 
@@ -290,7 +189,8 @@ impl Decoder for ReadStringDecoder {
 /// item is the message without its delimiter, borrowed from the buffer.
 ///
 /// For peers that mark the end of a message only by going quiet,
-/// [`flush`](Self::flush) returns what is buffered as one message.
+/// [`flush`](DelimitedDecoder::flush) returns what is buffered as one message; end of
+/// input does the same (the bytes after the last delimiter are the last message).
 ///
 /// Bound: content longer than `max_len` ([`DEFAULT_MAX_MESSAGE_LEN`]) is a
 /// [`TooLong`](crate::ErrorKind::TooLong) error; the rest of it is discarded through the
@@ -304,9 +204,18 @@ impl Decoder for ReadStringDecoder {
 /// assert_eq!(s.item(), Some(&b"OK"[..]));
 /// assert_eq!(dec.flush(&buf[4..]), Some((&b"NE"[..], 2)));
 /// ```
-#[derive(Debug, Clone)]
-pub struct DelimitedDecoder {
-    framer: Framer,
+pub type DelimitedDecoder = Framed<Delimited>;
+
+/// The parse step of [`DelimitedDecoder`]: the message as it is.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Delimited;
+
+impl Parse for Delimited {
+    type Output<'a> = &'a [u8];
+    #[inline(always)]
+    fn parse<'a>(&self, content: &'a [u8]) -> Result<&'a [u8], (ErrorKind, usize)> {
+        Ok(content)
+    }
 }
 
 impl DelimitedDecoder {
@@ -321,20 +230,22 @@ impl DelimitedDecoder {
         Self::with_max_len(delimiter, DEFAULT_MAX_MESSAGE_LEN)
     }
 
-    /// A decoder splitting on `delimiter` whose messages hold at most `max_len` bytes.
+    /// A decoder splitting on `delimiter` whose messages hold at most `max_len` bytes
+    /// (clamped to [`MAX_BOUND`](crate::MAX_BOUND)).
     ///
     /// ```
     /// # use urscript_socket::string::DelimitedDecoder;
     /// let mut d = DelimitedDecoder::with_max_len(b";", 2).unwrap();
     /// assert!(d.decode(b"abc;").is_err());
+    /// let big = DelimitedDecoder::with_max_len(b";", usize::MAX).unwrap();
+    /// assert_eq!(big.max_len(), urscript_socket::MAX_BOUND);
     /// ```
     pub fn with_max_len(delimiter: &[u8], max_len: usize) -> Result<Self, ArgumentError> {
         if delimiter.is_empty() {
             return Err(ArgumentError::EmptyPattern);
         }
-        Ok(DelimitedDecoder {
-            framer: Framer::new(Pattern::new(delimiter)?, max_len),
-        })
+        let framer = Framer::delimited(Pattern::new(delimiter)?, max_len, AtEof::Flush);
+        Ok(Framed::from_parts(framer, Delimited))
     }
 
     /// The delimiter.
@@ -344,31 +255,20 @@ impl DelimitedDecoder {
     /// assert_eq!(DelimitedDecoder::new(b";").unwrap().delimiter(), b";");
     /// ```
     pub fn delimiter(&self) -> &[u8] {
-        self.framer.pattern().as_bytes()
+        match self.framer.shape() {
+            Shape::Delimited { close } => close.as_bytes(),
+            _ => &[],
+        }
     }
 
-    /// Absolute stream offset of the next byte to decode.
+    /// The bound on a message's content.
     ///
     /// ```
     /// # use urscript_socket::string::DelimitedDecoder;
-    /// let mut d = DelimitedDecoder::new(b";").unwrap();
-    /// d.decode(b"a;").unwrap();
-    /// assert_eq!(d.position(), 2);
+    /// assert_eq!(DelimitedDecoder::with_max_len(b";", 9).unwrap().max_len(), 9);
     /// ```
-    pub fn position(&self) -> u64 {
-        self.framer.pos
-    }
-
-    /// The next delimited message.
-    ///
-    /// ```
-    /// # use urscript_socket::string::DelimitedDecoder;
-    /// let mut d = DelimitedDecoder::new(b"<>").unwrap();
-    /// assert_eq!(d.decode(b"a<").unwrap().item(), None);
-    /// assert_eq!(d.decode(b"a<>").unwrap().item(), Some(&b"a"[..]));
-    /// ```
-    pub fn decode<'a>(&mut self, buf: &'a [u8]) -> Result<Status<&'a [u8]>, DecodeError> {
-        self.framer.next(buf)
+    pub fn max_len(&self) -> usize {
+        self.framer.bound()
     }
 
     /// Returns everything buffered as one message (at most `max_len` bytes) and resets
@@ -385,37 +285,14 @@ impl DelimitedDecoder {
     }
 }
 
-impl Decoder for DelimitedDecoder {
-    type Item<'buf> = &'buf [u8];
-    #[inline]
-    fn decode<'buf>(&mut self, buf: &'buf [u8]) -> Result<Status<&'buf [u8]>, DecodeError> {
-        self.framer.next(buf)
-    }
-    /// End of input flushes: the bytes after the last delimiter are the last message.
-    fn decode_eof<'buf>(
-        &mut self,
-        buf: &'buf [u8],
-    ) -> Result<Option<(&'buf [u8], usize)>, DecodeError> {
-        match self.framer.next(buf)? {
-            Status::Complete { item, consumed } => Ok(Some((item, consumed))),
-            Status::Partial { consumed } => Ok(self
-                .framer
-                .take_all(&buf[consumed..])
-                .map(|(item, n)| (item, n + consumed))),
-        }
-    }
-    fn position(&self) -> u64 {
-        self.framer.pos
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::Status;
 
     fn read_once<'a>(d: &mut ReadStringDecoder, buf: &'a [u8]) -> Option<(&'a [u8], usize)> {
         match d.decode(buf).unwrap() {
-            Status::Complete { item, consumed } => Some((item, consumed)),
+            Status::Complete { item, consumed, .. } => Some((item, consumed)),
             Status::Partial { consumed } => {
                 assert_eq!(consumed, 0);
                 None

@@ -17,6 +17,8 @@ use nom::bytes::complete::{tag_no_case, take_while1};
 use nom::combinator::map;
 use nom::{IResult, Parser};
 
+use crate::framer::{Framed, Parse};
+use crate::line::{lf_framer, strip_cr};
 use crate::number::{is_space, parse_float_token, parse_i32, write_i32};
 use crate::{DecodeError, EncodeError, ErrorKind, Sink};
 
@@ -547,6 +549,74 @@ pub fn parse_value(text: &[u8]) -> Result<Value<'_>, DecodeError> {
         repr: ListRepr::Text(inner),
         len: count,
     }))
+}
+
+/// Decoder of lines holding the `to_str` text of one value: what a robot's
+/// `socket_send_line(x)` puts on the wire for a number, bool, list or pose. The item is the
+/// parsed [`Value`], borrowing the line; a line that is no value is an error at the
+/// offending byte (absolute, CR LF or LF alike) and is consumed whole.
+///
+/// Framed as [`LineDecoder`](crate::line::LineDecoder) lines (LF, one CR before it
+/// dropped, bound `max_len`, truncated at end of input), parsed by [`parse_value`].
+///
+/// ```
+/// use urscript_socket::to_str::{Value, ValueLineDecoder};
+/// let mut d = ValueLineDecoder::new();
+/// let v = d.decode(b"p[1, 2, 3, 4, 5, 6]\n").unwrap().item().unwrap();
+/// assert_eq!(v, Value::Pose([1.0, 2.0, 3.0, 4.0, 5.0, 6.0]));
+/// let e = d.decode(b"[1, x]\r\n").unwrap_err();
+/// assert_eq!((e.offset(), e.skip()), (20 + 4, 8));
+/// ```
+pub type ValueLineDecoder = Framed<ValueLine>;
+
+/// The parse step of [`ValueLineDecoder`]: [`parse_value`] on one line.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct ValueLine;
+
+impl Parse for ValueLine {
+    type Output<'a> = Value<'a>;
+    fn parse<'a>(&self, line: &'a [u8]) -> Result<Value<'a>, (ErrorKind, usize)> {
+        parse_value(strip_cr(line)).map_err(|e| (e.kind(), e.offset() as usize))
+    }
+}
+
+impl Default for ValueLineDecoder {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl ValueLineDecoder {
+    /// A decoder with the line decoder's default bound.
+    ///
+    /// ```
+    /// # use urscript_socket::{line::DEFAULT_MAX_LINE_LEN, to_str::ValueLineDecoder};
+    /// assert_eq!(ValueLineDecoder::new().max_len(), DEFAULT_MAX_LINE_LEN);
+    /// ```
+    pub fn new() -> Self {
+        Self::with_max_len(crate::line::DEFAULT_MAX_LINE_LEN)
+    }
+
+    /// A decoder whose lines hold at most `max_len` bytes before the LF (clamped to
+    /// [`MAX_BOUND`](crate::MAX_BOUND)).
+    ///
+    /// ```
+    /// # use urscript_socket::to_str::ValueLineDecoder;
+    /// assert!(ValueLineDecoder::with_max_len(2).decode(b"123\n").is_err());
+    /// ```
+    pub fn with_max_len(max_len: usize) -> Self {
+        Framed::from_parts(lf_framer(max_len), ValueLine)
+    }
+
+    /// The bound on a line's content.
+    ///
+    /// ```
+    /// # use urscript_socket::to_str::ValueLineDecoder;
+    /// assert_eq!(ValueLineDecoder::with_max_len(9).max_len(), 9);
+    /// ```
+    pub fn max_len(&self) -> usize {
+        self.framer.bound()
+    }
 }
 
 #[cfg(test)]

@@ -10,10 +10,10 @@ use nom::combinator::{opt, recognize};
 use nom::sequence::preceded;
 use nom::{IResult, Parser};
 
-use crate::framer::Pattern;
-use crate::line::LineDecoder;
+use crate::framer::{Framed, Parse, Pattern};
+use crate::line::{lf_framer, strip_cr};
 use crate::number::{parse_i32, write_i32};
-use crate::{ArgumentError, DecodeError, Decoder, EncodeError, ErrorKind, Sink, Status};
+use crate::{ArgumentError, EncodeError, ErrorKind, Sink};
 
 /// Default bound on one variable line, in bytes (a 64-byte name and an int fit easily).
 pub const DEFAULT_MAX_VAR_LINE_LEN: usize = 256;
@@ -199,7 +199,8 @@ fn offset_in(line: &[u8], part: &[u8]) -> usize {
 
 /// Server-side decoder of the robot's `SET`/`GET` lines. Bound: lines of at most
 /// `max_len` bytes ([`DEFAULT_MAX_VAR_LINE_LEN`]). A malformed line is an error at the
-/// offending byte and is consumed whole; the next line decodes normally.
+/// offending byte and is consumed whole; the next line decodes normally. At end of input an
+/// unterminated line is [`Truncated`](ErrorKind::Truncated).
 ///
 /// ```
 /// use urscript_socket::var::{VarMessage, VarMessageDecoder};
@@ -208,10 +209,28 @@ fn offset_in(line: &[u8], part: &[u8]) -> usize {
 /// let first = dec.decode(buf).unwrap();
 /// assert_eq!(first.consumed(), 10);
 /// assert_eq!(first.item(), Some(VarMessage::Get { name: "POS_X" }));
+/// let e = dec.decode(b"SET A x\n").unwrap_err();
+/// assert_eq!(e.offset(), 16);
+/// assert!(VarMessageDecoder::new().decode_eof(b"GET A").is_err());
 /// ```
-#[derive(Debug, Clone, Default)]
-pub struct VarMessageDecoder {
-    lines: LineDecoder,
+pub type VarMessageDecoder = Framed<VarMessages>;
+
+/// The parse step of [`VarMessageDecoder`]: [`parse_var_message`] on one line.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct VarMessages;
+
+impl Parse for VarMessages {
+    type Output<'a> = VarMessage<'a>;
+    #[inline]
+    fn parse<'a>(&self, line: &'a [u8]) -> Result<VarMessage<'a>, (ErrorKind, usize)> {
+        parse_var_message(strip_cr(line))
+    }
+}
+
+impl Default for VarMessageDecoder {
+    fn default() -> Self {
+        Self::new()
+    }
 }
 
 impl VarMessageDecoder {
@@ -222,72 +241,7 @@ impl VarMessageDecoder {
     /// let _ = VarMessageDecoder::new();
     /// ```
     pub fn new() -> Self {
-        VarMessageDecoder {
-            lines: LineDecoder::with_max_len(DEFAULT_MAX_VAR_LINE_LEN),
-        }
-    }
-
-    /// Absolute stream offset of the next byte to decode.
-    ///
-    /// ```
-    /// # use urscript_socket::var::VarMessageDecoder;
-    /// let mut d = VarMessageDecoder::new();
-    /// d.decode(b"GET A\n").unwrap();
-    /// assert_eq!(d.position(), 6);
-    /// ```
-    pub fn position(&self) -> u64 {
-        self.lines.position()
-    }
-
-    /// The next `SET`/`GET` message.
-    ///
-    /// ```
-    /// # use urscript_socket::{var::VarMessageDecoder, ErrorKind};
-    /// let mut d = VarMessageDecoder::new();
-    /// let e = d.decode(b"SET A x\n").unwrap_err();
-    /// assert_eq!(e.offset(), 6);
-    /// ```
-    pub fn decode<'a>(&mut self, buf: &'a [u8]) -> Result<Status<VarMessage<'a>>, DecodeError> {
-        let start = self.lines.position();
-        match self.lines.decode(buf)? {
-            Status::Partial { consumed } => Ok(Status::Partial { consumed }),
-            Status::Complete { item, consumed } => {
-                let line_at = start + (consumed - item.len() - line_end_len(buf, consumed)) as u64;
-                parse_var_message(item)
-                    .map(|item| Status::Complete { item, consumed })
-                    .map_err(|(kind, at)| DecodeError::new(kind, line_at + at as u64, consumed))
-            }
-        }
-    }
-
-    /// At end of input: an unterminated line is [`Truncated`](ErrorKind::Truncated).
-    ///
-    /// ```
-    /// # use urscript_socket::var::VarMessageDecoder;
-    /// assert!(VarMessageDecoder::new().decode_eof(b"GET A").is_err());
-    /// ```
-    pub fn decode_eof<'a>(
-        &mut self,
-        buf: &'a [u8],
-    ) -> Result<Option<(VarMessage<'a>, usize)>, DecodeError> {
-        match self.decode(buf) {
-            Ok(Status::Complete { item, consumed }) => Ok(Some((item, consumed))),
-            Ok(Status::Partial { consumed }) => self
-                .lines
-                .decode_eof(&buf[consumed..])
-                .map(|_| None)
-                .map_err(|e| DecodeError::new(e.kind(), e.offset(), e.skip() + consumed)),
-            Err(e) => Err(e),
-        }
-    }
-}
-
-/// Length of the line terminator (LF, or CR LF) that ends the `consumed` bytes.
-fn line_end_len(buf: &[u8], consumed: usize) -> usize {
-    if consumed >= 2 && buf[consumed - 2] == b'\r' {
-        2
-    } else {
-        1
+        Framed::from_parts(lf_framer(DEFAULT_MAX_VAR_LINE_LEN), VarMessages)
     }
 }
 
@@ -316,36 +270,37 @@ fn ascii(name: &[u8]) -> &str {
     core::str::from_utf8(name).unwrap_or("")
 }
 
-impl Decoder for VarMessageDecoder {
-    type Item<'buf> = VarMessage<'buf>;
-    #[inline]
-    fn decode<'buf>(&mut self, buf: &'buf [u8]) -> Result<Status<VarMessage<'buf>>, DecodeError> {
-        VarMessageDecoder::decode(self, buf)
-    }
-    fn decode_eof<'buf>(
-        &mut self,
-        buf: &'buf [u8],
-    ) -> Result<Option<(VarMessage<'buf>, usize)>, DecodeError> {
-        VarMessageDecoder::decode_eof(self, buf)
-    }
-    fn position(&self) -> u64 {
-        self.lines.position()
-    }
-}
-
 /// Robot-side decoder of the server's reply to `GET name`: a line `name int` (leading
 /// zeros allowed, as gripper daemons send `PRE 077`). A reply naming another variable is a
 /// [`NameMismatch`](ErrorKind::NameMismatch) error; the emulated `get_var` then returns 0.
+/// At end of input an unterminated line is [`Truncated`](ErrorKind::Truncated).
 ///
 /// ```
-/// use urscript_socket::var::VarReplyDecoder;
+/// use urscript_socket::{var::VarReplyDecoder, ErrorKind};
 /// let mut dec = VarReplyDecoder::new("POS_X").unwrap();
 /// assert_eq!(dec.decode(b"POS_X 1234\n").unwrap().item(), Some(1234));
+/// assert_eq!(dec.decode(b"POS 1\n").unwrap_err().kind(), ErrorKind::NameMismatch);
+/// assert!(VarReplyDecoder::new("A").unwrap().decode_eof(b"A 1").is_err());
 /// ```
-#[derive(Debug, Clone)]
-pub struct VarReplyDecoder {
+pub type VarReplyDecoder = Framed<VarReply>;
+
+/// The parse step of [`VarReplyDecoder`]: `name int` for one variable name.
+#[derive(Debug, Clone, Copy)]
+pub struct VarReply {
     name: Pattern,
-    lines: LineDecoder,
+}
+
+impl Parse for VarReply {
+    type Output<'a> = i32;
+    #[inline]
+    fn parse(&self, line: &[u8]) -> Result<i32, (ErrorKind, usize)> {
+        let line = strip_cr(line);
+        let (name, token) = whole_line(line, var_reply, "`name int`")?;
+        if name != self.name.as_bytes() {
+            return Err((ErrorKind::NameMismatch, 0));
+        }
+        int_value(token, offset_in(line, token))
+    }
 }
 
 impl VarReplyDecoder {
@@ -359,81 +314,13 @@ impl VarReplyDecoder {
         if check_name(name).is_err() {
             return Err(ArgumentError::InvalidName);
         }
-        Ok(VarReplyDecoder {
+        let parser = VarReply {
             name: Pattern::new(name.as_bytes())?,
-            lines: LineDecoder::with_max_len(DEFAULT_MAX_VAR_LINE_LEN),
-        })
-    }
-
-    /// Absolute stream offset of the next byte to decode.
-    ///
-    /// ```
-    /// # use urscript_socket::var::VarReplyDecoder;
-    /// let mut d = VarReplyDecoder::new("A").unwrap();
-    /// d.decode(b"A 1\n").unwrap();
-    /// assert_eq!(d.position(), 4);
-    /// ```
-    pub fn position(&self) -> u64 {
-        self.lines.position()
-    }
-
-    /// The value of the next reply line.
-    ///
-    /// ```
-    /// # use urscript_socket::{var::VarReplyDecoder, ErrorKind};
-    /// let mut d = VarReplyDecoder::new("PRE").unwrap();
-    /// assert_eq!(d.decode(b"PRE 077\n").unwrap().item(), Some(77));
-    /// assert_eq!(d.decode(b"POS 1\n").unwrap_err().kind(), ErrorKind::NameMismatch);
-    /// ```
-    pub fn decode(&mut self, buf: &[u8]) -> Result<Status<i32>, DecodeError> {
-        let start = self.lines.position();
-        match self.lines.decode(buf)? {
-            Status::Partial { consumed } => Ok(Status::Partial { consumed }),
-            Status::Complete { item, consumed } => {
-                let line_at = start + (consumed - item.len() - line_end_len(buf, consumed)) as u64;
-                let parsed = whole_line(item, var_reply, "`name int`").and_then(|(name, token)| {
-                    if name != self.name.as_bytes() {
-                        return Err((ErrorKind::NameMismatch, 0));
-                    }
-                    int_value(token, offset_in(item, token))
-                });
-                parsed
-                    .map(|item| Status::Complete { item, consumed })
-                    .map_err(|(kind, at)| DecodeError::new(kind, line_at + at as u64, consumed))
-            }
-        }
-    }
-
-    /// At end of input: an unterminated line is [`Truncated`](ErrorKind::Truncated).
-    ///
-    /// ```
-    /// # use urscript_socket::var::VarReplyDecoder;
-    /// assert!(VarReplyDecoder::new("A").unwrap().decode_eof(b"A 1").is_err());
-    /// ```
-    pub fn decode_eof(&mut self, buf: &[u8]) -> Result<Option<(i32, usize)>, DecodeError> {
-        match self.decode(buf) {
-            Ok(Status::Complete { item, consumed }) => Ok(Some((item, consumed))),
-            Ok(Status::Partial { consumed }) => self
-                .lines
-                .decode_eof(&buf[consumed..])
-                .map(|_| None)
-                .map_err(|e| DecodeError::new(e.kind(), e.offset(), e.skip() + consumed)),
-            Err(e) => Err(e),
-        }
-    }
-}
-
-impl Decoder for VarReplyDecoder {
-    type Item<'buf> = i32;
-    #[inline]
-    fn decode(&mut self, buf: &[u8]) -> Result<Status<i32>, DecodeError> {
-        VarReplyDecoder::decode(self, buf)
-    }
-    fn decode_eof(&mut self, buf: &[u8]) -> Result<Option<(i32, usize)>, DecodeError> {
-        VarReplyDecoder::decode_eof(self, buf)
-    }
-    fn position(&self) -> u64 {
-        self.lines.position()
+        };
+        Ok(Framed::from_parts(
+            lf_framer(DEFAULT_MAX_VAR_LINE_LEN),
+            parser,
+        ))
     }
 }
 

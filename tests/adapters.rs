@@ -26,7 +26,7 @@ where
     let mut rest = bytes;
     loop {
         let (item, used) = match d.decode(rest).unwrap() {
-            Status::Complete { item, consumed } => (format!("{item:?}"), consumed),
+            Status::Complete { item, consumed, .. } => (format!("{item:?}"), consumed),
             Status::Partial { .. } => break,
         };
         out.push(item);

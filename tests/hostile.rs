@@ -245,3 +245,211 @@ fn invalid_utf8_in_text_formats() {
         "\"\\xFF\\xFE\\xC3(\""
     );
 }
+
+// ---- Issue 14, findings 6-8, and issue 10's offset bug: each failed on the old main. ----
+
+/// Finding 6: `with_max_len(usize::MAX)` panicked in debug builds (`max_len + 1`) and, in
+/// release, rejected every message at offset 18446744073709551615. Bounds are now clamped to
+/// `MAX_BOUND`, and every message decodes.
+#[test]
+fn a_bound_of_usize_max_is_clamped_not_overflowed() {
+    use urscript_socket::MAX_BOUND;
+    let mut line = LineDecoder::with_max_len(usize::MAX);
+    assert_eq!(line.max_len(), MAX_BOUND);
+    assert_eq!(line.decode(b"abc\n").unwrap().item(), Some(&b"abc"[..]));
+    assert_eq!(line.decode_eof(b"x\n").unwrap(), Some((&b"x"[..], 2)));
+    let mut delimited = DelimitedDecoder::with_max_len(b"\r\n", usize::MAX).unwrap();
+    assert_eq!(delimited.decode(b"ab\r\n").unwrap().item(), Some(&b"ab"[..]));
+    assert_eq!(delimited.decode_eof(b"tail").unwrap(), Some((&b"tail"[..], 4)));
+    let mut stx = StxEtxDecoder::with_max_len(usize::MAX);
+    assert_eq!(stx.decode(b"\x02ok\x03").unwrap().item(), Some(&b"ok"[..]));
+    let mut floats = FloatTupleDecoder::new(1).unwrap().with_max_len(usize::MAX);
+    assert_eq!(floats.decode(b"(1)").unwrap().item().unwrap().read(), [1.0]);
+    let mut values = urscript_socket::to_str::ValueLineDecoder::with_max_len(usize::MAX);
+    assert!(values.decode(b"True\n").unwrap().item().is_some());
+    // Over a long partial line the bound is never reached, and nothing wraps.
+    let mut line = LineDecoder::with_max_len(usize::MAX - 1);
+    let long = vec![b'x'; 100_000];
+    assert_eq!(line.decode(&long).unwrap().consumed(), 0);
+    assert_eq!(line.decode_eof(&long).unwrap_err().offset(), 0);
+}
+
+/// Drives `decode_eof` the way every caller must (drop `skip` after an error) and returns
+/// what each call gave: items as `Some(debug)`, errors as (kind, offset), the last `None`.
+fn eof_calls<D: Decoder>(d: &mut D, mut buf: &[u8]) -> Vec<Result<String, (ErrorKind, u64)>>
+where
+    for<'a> D::Item<'a>: std::fmt::Debug,
+{
+    let mut out = Vec::new();
+    for _ in 0..10 {
+        match d.decode_eof(buf) {
+            Ok(Some((item, n))) => {
+                out.push(Ok(format!("{item:?}")));
+                buf = &buf[n..];
+            }
+            Ok(None) => {
+                out.push(Ok("None".into()));
+                break;
+            }
+            Err(e) => {
+                out.push(Err((e.kind(), e.offset())));
+                buf = &buf[e.skip()..];
+            }
+        }
+    }
+    out
+}
+
+/// Finding 7: after an end-of-input error the offending bytes are dropped and the next call
+/// returns `Ok(None)`. The old line decoder reported an over-long tail twice (TooLong, then
+/// Truncated), the STX/ETX decoder reported its rest as noise, and a `RecvBuffer` kept the
+/// bytes a decoder had dropped at end of input, so a delimited decoder flushed them again.
+#[test]
+fn end_of_input_errors_are_final() {
+    let too_long = |limit| Err((ErrorKind::TooLong { limit }, 2));
+    let none = Ok("None".to_string());
+    let mut line = LineDecoder::with_max_len(2);
+    assert_eq!(eof_calls(&mut line, b"abcdef"), [too_long(2), none.clone()]);
+    assert_eq!(line.position(), 6);
+    let mut stx = StxEtxDecoder::with_max_len(1);
+    assert_eq!(
+        eof_calls(&mut stx, b"\x02abcdef"),
+        [too_long(1), none.clone()]
+    );
+    let mut delimited = DelimitedDecoder::with_max_len(b"<>", 2).unwrap();
+    assert_eq!(
+        eof_calls(&mut delimited, b"abcd<"),
+        [too_long(2), none.clone()]
+    );
+    // The same through a RecvBuffer: once `Ok(None)` or the error came, it stays `Ok(None)`.
+    let mut rx = RecvBuffer::<[u8; 16]>::new();
+    let mut delimited = DelimitedDecoder::with_max_len(b"<>", 2).unwrap();
+    rx.extend(b"abcd<");
+    assert_eq!(
+        rx.decode_eof(&mut delimited).unwrap_err().kind(),
+        ErrorKind::TooLong { limit: 2 }
+    );
+    for _ in 0..3 {
+        assert_eq!(rx.decode_eof(&mut delimited).unwrap(), None);
+        assert!(rx.is_empty());
+    }
+    assert_eq!(delimited.position(), 5);
+    let mut rx = RecvBuffer::<[u8; 16]>::new();
+    let mut lines = LineDecoder::new();
+    rx.extend(b"ok\ncut");
+    assert_eq!(rx.decode_eof(&mut lines).unwrap(), Some(&b"ok"[..]));
+    let e = rx.decode_eof(&mut lines).unwrap_err();
+    assert_eq!((e.kind(), e.offset()), (ErrorKind::Truncated, 3));
+    for _ in 0..3 {
+        assert_eq!(rx.decode_eof(&mut lines).unwrap(), None);
+    }
+    // Noise before `(` under the default policy: dropped, accounted, and gone.
+    let mut rx = RecvBuffer::<[u8; 16]>::new();
+    let mut floats = FloatTupleDecoder::new(1).unwrap();
+    rx.extend(b" \n ");
+    assert_eq!(rx.decode_eof(&mut floats).unwrap(), None);
+    assert!(rx.is_empty());
+    assert_eq!(floats.position(), 3);
+}
+
+/// Finding 7 through the tokio codecs, where it was seen: the line, STX/ETX and delimited
+/// codecs returned the same error forever (offsets 3, 6, 9...) from repeated `decode_eof`.
+#[cfg(feature = "tokio")]
+#[test]
+fn tokio_codecs_end_of_input_errors_are_final() {
+    use bytes::BytesMut;
+    use tokio_util::codec::Decoder as _;
+    use urscript_socket::adapters::tokio::{DelimitedCodec, LineCodec, StxEtxCodec};
+    let mut src = BytesMut::from(&b"abc"[..]);
+    let mut lines = LineCodec::new();
+    assert!(lines.decode_eof(&mut src).is_err());
+    assert!(lines.decode_eof(&mut src).unwrap().is_none());
+    let mut src = BytesMut::from(&b"\x02abc"[..]);
+    let mut stx = StxEtxCodec::new();
+    assert!(stx.decode_eof(&mut src).is_err());
+    assert!(stx.decode_eof(&mut src).unwrap().is_none());
+    let mut src = BytesMut::from(&b"abc"[..]);
+    let mut delimited = DelimitedCodec::new(b";").unwrap();
+    assert_eq!(&delimited.decode_eof(&mut src).unwrap().unwrap()[..], b"abc");
+    assert!(delimited.decode_eof(&mut src).unwrap().is_none());
+}
+
+/// Finding 8: a receive buffer smaller than its decoder's bound wedged: full, no complete
+/// message, `Ok(None)` forever. Now the message is reported once as too long for the
+/// buffer, dropped, the rest of it discarded as it comes, and the next one decodes: for
+/// every shape that can (a `socket_read_string` by its rule consumes nothing until complete).
+#[test]
+fn a_buffer_smaller_than_the_bound_reports_once_and_recovers() {
+    fn run<D: Decoder>(mut d: D, stream: &[u8]) -> (Vec<ErrorKind>, Vec<String>)
+    where
+        for<'a> D::Item<'a>: std::fmt::Debug,
+    {
+        let mut rx = RecvBuffer::<[u8; 8]>::new();
+        let (mut errors, mut items) = (Vec::new(), Vec::new());
+        let mut rest = stream;
+        let mut rounds = 0;
+        while !rest.is_empty() || !rx.is_empty() {
+            rounds += 1;
+            assert!(rounds < 1000, "wedged");
+            let n = rx.extend(rest);
+            rest = &rest[n..];
+            loop {
+                match rx.decode(&mut d) {
+                    Ok(Some(item)) => items.push(format!("{item:?}")),
+                    Ok(None) => break,
+                    Err(e) => errors.push(e.kind()),
+                }
+            }
+            if rest.is_empty() {
+                if let Ok(Some(item)) = rx.decode_eof(&mut d) {
+                    items.push(format!("{item:?}"));
+                }
+                break;
+            }
+        }
+        (errors, items)
+    }
+    let once = vec![ErrorKind::TooLong { limit: 8 }];
+    let (e, items) = run(LineDecoder::new(), b"a much longer line\nok\n");
+    assert_eq!((e, items), (once.clone(), vec!["[111, 107]".to_string()]));
+    let (e, items) = run(DelimitedDecoder::new(b"<>").unwrap(), b"0123456789<>ok<>");
+    assert_eq!((e, items.len()), (once.clone(), 1));
+    let (e, items) = run(StxEtxDecoder::new(), b"\x02payload too big\x03\x02ok\x03");
+    assert_eq!((e, items), (once.clone(), vec!["[111, 107]".to_string()]));
+    let (e, items) = run(FloatTupleDecoder::new(3).unwrap(), b"(1.5, 2.5, 3.5)(1,2,3)");
+    assert_eq!((e, items.len()), (once.clone(), 1));
+    // 12 bytes per message, none fits: each is reported once and skipped by its count, so
+    // the stream stays aligned (no error, no item from a message's tail).
+    let ints = [[0u8, 0, 0, 1, 0, 0, 0, 2, 0, 0, 0, 3]; 3].concat();
+    let (e, items) = run(urscript_socket::int32::Int32Decoder::new(3).unwrap(), &ints);
+    assert_eq!(e, [ErrorKind::TooLong { limit: 8 }; 3]);
+    assert!(items.is_empty(), "{items:?}");
+    let (e, items) = run(urscript_socket::int32::Int32Decoder::new(2).unwrap(), &ints);
+    assert_eq!((e.len(), items.len()), (0, 4), "8-byte messages fit: {items:?}");
+    // The documented exception: a read-string window waits (nothing consumed).
+    let mut rx = RecvBuffer::<[u8; 8]>::new();
+    let mut read = ReadStringDecoder::new(b">", b"<", false).unwrap();
+    rx.extend(b"0123456789");
+    assert_eq!(rx.decode(&mut read).unwrap(), None);
+    assert!(rx.is_full());
+}
+
+/// Issue 10: `printf 'p[1,2,x,4,5,6]\r\n' | ursock decode value` said byte 7; the `x` is
+/// byte 6, with LF or CR LF alike. The framer says where a line's content starts, so the
+/// value-line decoder's errors point at the byte.
+#[test]
+fn value_line_errors_point_at_the_bad_byte() {
+    use urscript_socket::to_str::ValueLineDecoder;
+    for input in [&b"p[1,2,x,4,5,6]\r\n"[..], b"p[1,2,x,4,5,6]\n"] {
+        let e = ValueLineDecoder::new().decode(input).unwrap_err();
+        assert_eq!(
+            (e.kind(), e.offset(), e.skip()),
+            (ErrorKind::InvalidNumber, 6, input.len())
+        );
+    }
+    // After other lines, and through `Status::at`.
+    let mut d = ValueLineDecoder::new();
+    let s = d.decode(b"[1, 2]\r\np[1,2,x,4,5,6]\r\n").unwrap();
+    assert_eq!((s.at(), s.consumed()), (Some(0), 8));
+    assert_eq!(d.decode(b"p[1,2,x,4,5,6]\r\n").unwrap_err().offset(), 8 + 6);
+}

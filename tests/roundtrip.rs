@@ -16,7 +16,7 @@ use urscript_socket::{SliceSink, Status};
 
 fn item<T>(s: Status<T>, len: usize) -> T {
     match s {
-        Status::Complete { item, consumed } => {
+        Status::Complete { item, consumed, .. } => {
             assert_eq!(consumed, len, "the whole message is consumed");
             item
         }

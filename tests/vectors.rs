@@ -16,7 +16,7 @@ use urscript_socket::Status;
 
 fn complete<T>(s: Status<T>) -> (T, usize) {
     match s {
-        Status::Complete { item, consumed } => (item, consumed),
+        Status::Complete { item, consumed, .. } => (item, consumed),
         Status::Partial { .. } => panic!("expected a complete message"),
     }
 }

@@ -32,7 +32,7 @@ pub fn pose_stream(n: usize) -> Vec<u8> {
 pub fn ours_floats(stream: &[u8]) -> (usize, f64) {
     let mut d = FloatTupleDecoder::new(6).unwrap();
     let (mut n, mut sum, mut rest) = (0, 0.0, stream);
-    while let Ok(Status::Complete { item, consumed }) = d.decode(rest) {
+    while let Ok(Status::Complete { item, consumed, .. }) = d.decode(rest) {
         n += 1;
         sum += item.values()[0];
         rest = &rest[consumed..];
@@ -145,7 +145,7 @@ pub fn int32_stream(n: usize) -> Vec<u8> {
 pub fn ours_int32(stream: &[u8]) -> i64 {
     let mut d = Int32Decoder::new(8).unwrap();
     let (mut sum, mut rest) = (0i64, stream);
-    while let Ok(Status::Complete { item, consumed }) = d.decode(rest) {
+    while let Ok(Status::Complete { item, consumed, .. }) = d.decode(rest) {
         for v in item.iter() {
             sum += i64::from(v);
         }
@@ -176,7 +176,7 @@ pub fn line_stream(n: usize) -> Vec<u8> {
 pub fn ours_lines(stream: &[u8]) -> (usize, usize) {
     let mut d = LineDecoder::new();
     let (mut n, mut bytes, mut rest) = (0, 0, stream);
-    while let Ok(Status::Complete { item, consumed }) = d.decode(rest) {
+    while let Ok(Status::Complete { item, consumed, .. }) = d.decode(rest) {
         n += 1;
         bytes += item.len();
         rest = &rest[consumed..];
@@ -239,7 +239,7 @@ pub fn poses(n: usize) -> Vec<[f64; 6]> {
     let mut d = FloatTupleDecoder::new(6).unwrap();
     let mut rest = &stream[..];
     let mut out = Vec::new();
-    while let Ok(Status::Complete { item, consumed }) = d.decode(rest) {
+    while let Ok(Status::Complete { item, consumed, .. }) = d.decode(rest) {
         let mut p = [0.0; 6];
         p.copy_from_slice(item.values());
         out.push(p);

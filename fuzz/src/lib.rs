@@ -38,7 +38,7 @@ where
             steps += 1;
             assert!(steps <= buf.len() + 2 + input.len(), "no progress");
             let (event, drop, more) = match dec.decode(&buf) {
-                Ok(Status::Complete { item, consumed }) => {
+                Ok(Status::Complete { item, consumed, .. }) => {
                     assert!(consumed > 0);
                     (Some(Event::Item(format!("{item:?}"))), consumed, false)
                 }

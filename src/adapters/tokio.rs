@@ -91,20 +91,25 @@ where
     D: for<'a> Decoder<Item<'a> = &'a [u8]>,
 {
     let found = if eof {
-        match dec.decode_eof(src)? {
-            Some((item, consumed)) => Some((
+        match dec.decode_eof(src) {
+            Ok(Some((item, consumed))) => Some((
                 item.as_ptr() as usize - src.as_ptr() as usize,
                 item.len(),
                 consumed,
             )),
-            None => {
+            Ok(None) => {
                 src.clear();
                 return Ok(None);
+            }
+            Err(e) => {
+                // Drop the bad bytes, so a second call does not report them again.
+                src.advance(e.skip().min(src.len()));
+                return Err(e.into());
             }
         }
     } else {
         match dec.decode(src) {
-            Ok(Status::Complete { item, consumed }) => Some((
+            Ok(Status::Complete { item, consumed, .. }) => Some((
                 item.as_ptr() as usize - src.as_ptr() as usize,
                 item.len(),
                 consumed,
@@ -157,7 +162,7 @@ where
         };
     }
     let out = match dec.decode(src) {
-        Ok(Status::Complete { item, consumed }) => Ok((Some(convert(item)), consumed)),
+        Ok(Status::Complete { item, consumed, .. }) => Ok((Some(convert(item)), consumed)),
         Ok(Status::Partial { consumed }) => Ok((None, consumed)),
         Err(e) => Err(e),
     };

@@ -272,7 +272,7 @@ impl SocketConnection {
     /// ```
     pub fn poll_read(&mut self) -> Option<ReadResult> {
         let pending = self.pending.as_mut()?;
-        let outcome = match self.rx.decode(&mut pending.reader) {
+        let outcome = match self.rx.decode_without_overflow(&mut pending.reader) {
             Ok(Some(message)) => Outcome::Done(ReadResult::from_message(&message)),
             Ok(None) => Outcome::Waiting,
             Err(e) => Outcome::Failed(e),

@@ -38,7 +38,7 @@ where
             assert!(guard < 10 * input.len() + 100, "decoder made no progress");
             // (event, bytes to drop, need more input)
             let (event, drop, more) = match dec.decode(&buf) {
-                Ok(Status::Complete { item, consumed }) => {
+                Ok(Status::Complete { item, consumed, .. }) => {
                     assert!(consumed > 0, "a complete message uses bytes");
                     (Some(Event::Item(format!("{item:?}"))), consumed, false)
                 }
