@@ -340,18 +340,19 @@ impl<R: Read, D: Decoder> MessageReader<R, D> {
         }
     }
 
-    /// Calls `f` for every message until the peer closes; stops at the first error.
+    /// Calls `f` for every message, lent from the buffer, until the peer closes; stops at
+    /// the first error. (The owned-item form is the `Iterator`.)
     ///
     /// ```
     /// # use urscript_socket::{adapters::blocking::MessageReader, int32::Int32Decoder};
     /// let bytes = [0u8, 0, 0, 1, 0, 0, 0, 2];
     /// let mut sum = 0;
     /// MessageReader::new(&bytes[..], Int32Decoder::new(1).unwrap())
-    ///     .for_each(|v| sum += v.get(0).unwrap())
+    ///     .for_each_with(|v| sum += v.get(0).unwrap())
     ///     .unwrap();
     /// assert_eq!(sum, 3);
     /// ```
-    pub fn for_each(&mut self, mut f: impl FnMut(D::Item<'_>)) -> Result<(), ReadError> {
+    pub fn for_each_with(&mut self, mut f: impl FnMut(D::Item<'_>)) -> Result<(), ReadError> {
         while self.next_with(&mut f)?.is_some() {}
         Ok(())
     }

@@ -76,6 +76,17 @@ impl<R: Read, D: Decoder, const N: usize> MessageReader<R, D, N> {
         }
     }
 
+    /// The transport, e.g. to write a reply on the same socket with [`send`].
+    ///
+    /// ```
+    /// # use urscript_socket::{adapters::embedded::MessageReader, line::LineDecoder};
+    /// let mut r: MessageReader<&[u8], _, 16> = MessageReader::new(&b""[..], LineDecoder::new());
+    /// let _transport: &mut &[u8] = r.get_mut();
+    /// ```
+    pub fn get_mut(&mut self) -> &mut R {
+        &mut self.reader
+    }
+
     /// Waits for the next message and returns `f(message)`; `Ok(None)` once the peer
     /// closed cleanly between messages.
     ///

@@ -53,12 +53,12 @@ impl Default for Int32Stream {
 impl Decoder for Int32Stream {
     type Item<'buf> = i32;
     #[inline]
-    fn decode<'buf>(&mut self, buf: &'buf [u8]) -> Result<Status<i32>, DecodeError> {
+    fn decode(&mut self, buf: &[u8]) -> Result<Status<i32>, DecodeError> {
         Ok(map_status(self.inner.decode(buf)?, |v| {
             v.get(0).unwrap_or_default()
         }))
     }
-    fn decode_eof<'buf>(&mut self, buf: &'buf [u8]) -> Result<Option<(i32, usize)>, DecodeError> {
+    fn decode_eof(&mut self, buf: &[u8]) -> Result<Option<(i32, usize)>, DecodeError> {
         Ok(self
             .inner
             .decode_eof(buf)?
@@ -104,12 +104,12 @@ impl Default for ByteStream {
 impl Decoder for ByteStream {
     type Item<'buf> = u8;
     #[inline]
-    fn decode<'buf>(&mut self, buf: &'buf [u8]) -> Result<Status<u8>, DecodeError> {
+    fn decode(&mut self, buf: &[u8]) -> Result<Status<u8>, DecodeError> {
         Ok(map_status(self.inner.decode(buf)?, |b| {
             b.first().copied().unwrap_or_default()
         }))
     }
-    fn decode_eof<'buf>(&mut self, buf: &'buf [u8]) -> Result<Option<(u8, usize)>, DecodeError> {
+    fn decode_eof(&mut self, buf: &[u8]) -> Result<Option<(u8, usize)>, DecodeError> {
         Ok(self
             .inner
             .decode_eof(buf)?
