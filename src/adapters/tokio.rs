@@ -150,15 +150,21 @@ where
     D: for<'a> Decoder<Item<'a> = &'a [u8]>,
 {
     let found = if eof {
-        match dec.decode_eof(src)? {
-            Some((item, consumed)) => Some((
+        match dec.decode_eof(src) {
+            Ok(Some((item, consumed))) => Some((
                 item.as_ptr() as usize - src.as_ptr() as usize,
                 item.len(),
                 consumed,
             )),
-            None => {
+            Ok(None) => {
                 src.clear();
                 return Ok(None);
+            }
+            Err(e) => {
+                // Drop the bad bytes as in `decode`, so a caller that goes on (the
+                // tolerant mode) does not meet them again.
+                src.advance(e.skip().min(src.len()));
+                return Err(e.into());
             }
         }
     } else {
@@ -871,7 +877,13 @@ impl<C: codec::Decoder<Error = CodecError>> codec::Decoder for Tolerant<C> {
         tolerate(self.inner.decode(src))
     }
     fn decode_eof(&mut self, src: &mut BytesMut) -> Result<Option<Self::Item>, CodecError> {
-        tolerate(self.inner.decode_eof(src))
+        let before = src.len();
+        let r = tolerate(self.inner.decode_eof(src));
+        if matches!(r, Ok(Some(Err(_)))) && src.len() == before {
+            // Nothing more will arrive: never report the same bytes twice.
+            src.clear();
+        }
+        r
     }
 }
 
