@@ -3,6 +3,9 @@
 //! over 127.0.0.1. Proof that what a new user copies survives an over-long line and a
 //! malformed one and keeps answering, on one `Framed` with request/reply and tolerant mode.
 
+// The front page uses 3.14 as data (a pose angle), not as π.
+#![allow(clippy::approx_constant)]
+
 use std::time::Duration;
 
 use futures_util::{SinkExt, StreamExt};
