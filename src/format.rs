@@ -416,14 +416,7 @@ impl Decoder for AnyDecoder {
             s: Result<Status<T>, DecodeError>,
             f: impl FnOnce(T) -> Message<'b>,
         ) -> Result<Status<Message<'b>>, DecodeError> {
-            s.map(|s| match s {
-                Status::Complete { item, consumed, at } => Status::Complete {
-                    item: f(item),
-                    consumed,
-                    at,
-                },
-                Status::Partial { consumed } => Status::Partial { consumed },
-            })
+            s.map(|s| s.map(f))
         }
         match &mut self.0 {
             Inner::FloatTuple(d) => map(d.decode(buf), Message::FloatTuple),

@@ -3,6 +3,7 @@
 
 use embedded_io_async::{Read, Write};
 
+use crate::adapters::OwnedDecoder;
 use crate::{DecodeError, Decoder, EncodeError, RecvBuffer, SliceSink};
 
 /// Why an embedded read or write failed.
@@ -43,12 +44,12 @@ impl<E: core::fmt::Debug> core::error::Error for Error<E> {}
 ///
 /// ```
 /// # tokio::runtime::Builder::new_current_thread().build().unwrap().block_on(async {
-/// use urscript_socket::{adapters::embedded::MessageReader, int32::Int32Decoder};
+/// use urscript_socket::adapters::{embedded::MessageReader, Int32Stream};
 /// let input: &[u8] = &[0, 0, 0, 7, 0xFF, 0xFF, 0xFF, 0xFF];
-/// let mut r: MessageReader<_, _, 64> = MessageReader::new(input, Int32Decoder::new(1).unwrap());
-/// assert_eq!(r.next_with(|v| v.get(0)).await.unwrap(), Some(Some(7)));
-/// assert_eq!(r.next_with(|v| v.get(0)).await.unwrap(), Some(Some(-1)));
-/// assert_eq!(r.next_with(|v| v.get(0)).await.unwrap(), None);
+/// let mut r: MessageReader<_, _, 64> = MessageReader::new(input, Int32Stream::new());
+/// assert_eq!(r.next_owned().await.unwrap(), Some(7));
+/// assert_eq!(r.next_owned().await.unwrap(), Some(-1));
+/// assert_eq!(r.next_owned().await.unwrap(), None);
 /// # });
 /// ```
 #[derive(Debug)]
@@ -73,6 +74,17 @@ impl<R: Read, D: Decoder, const N: usize> MessageReader<R, D, N> {
             rx: RecvBuffer::new(),
             eof: false,
         }
+    }
+
+    /// The transport, e.g. to write a reply on the same socket with [`send`].
+    ///
+    /// ```
+    /// # use urscript_socket::{adapters::embedded::MessageReader, line::LineDecoder};
+    /// let mut r: MessageReader<&[u8], _, 16> = MessageReader::new(&b""[..], LineDecoder::new());
+    /// let _transport: &mut &[u8] = r.get_mut();
+    /// ```
+    pub fn get_mut(&mut self) -> &mut R {
+        &mut self.reader
     }
 
     /// Waits for the next message and returns `f(message)`; `Ok(None)` once the peer
@@ -112,6 +124,23 @@ impl<R: Read, D: Decoder, const N: usize> MessageReader<R, D, N> {
                 Err(e) => return Err(Error::Io(e)),
             }
         }
+    }
+}
+
+impl<R: Read, D: OwnedDecoder, const N: usize> MessageReader<R, D, N> {
+    /// Waits for the next message and returns it owned (an `i32` from
+    /// [`Int32Stream`](crate::adapters::Int32Stream), a `FloatTuple`, ...; with `alloc`
+    /// also `Vec<u8>` lines); `Ok(None)` once the peer closed cleanly between messages.
+    ///
+    /// ```
+    /// # tokio::runtime::Builder::new_current_thread().build().unwrap().block_on(async {
+    /// use urscript_socket::adapters::{embedded::MessageReader, ByteStream};
+    /// let mut r: MessageReader<_, _, 16> = MessageReader::new(&[2u8, 3][..], ByteStream::new());
+    /// assert_eq!(r.next_owned().await.unwrap(), Some(2));
+    /// # });
+    /// ```
+    pub async fn next_owned(&mut self) -> Result<Option<D::Owned>, Error<R::Error>> {
+        self.next_with(D::to_owned_item).await
     }
 }
 
