@@ -89,6 +89,11 @@ enum Command {
         /// Only connects, closes and problems; no traffic lines.
         #[arg(long, short)]
         quiet: bool,
+        /// A terminal UI: the connections (Up/Down selects), the selected one's traffic
+        /// decoded as it arrives, and an input line sending a reply spec to it (Enter);
+        /// Esc quits.
+        #[arg(long)]
+        tui: bool,
     },
     /// A virtual robot running URScript socket calls against a server.
     Robot {
@@ -207,6 +212,7 @@ fn run(cli: Cli) -> Result<(), String> {
             log,
             json,
             quiet,
+            tui,
         } => listen::listen(listen::ListenOptions {
             bind,
             port,
@@ -222,6 +228,7 @@ fn run(cli: Cli) -> Result<(), String> {
             log,
             json,
             quiet,
+            tui,
         }),
         Command::Robot {
             connect,

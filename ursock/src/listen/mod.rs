@@ -12,6 +12,7 @@ mod dump;
 mod out;
 mod rules;
 mod spec;
+mod tui;
 mod vars;
 
 use std::collections::BTreeMap;
@@ -60,6 +61,7 @@ pub struct ListenOptions {
     pub log: Option<PathBuf>,
     pub json: bool,
     pub quiet: bool,
+    pub tui: bool,
 }
 
 struct Shared {
@@ -75,6 +77,8 @@ struct Shared {
     vars: Mutex<Vars>,
     conns: Mutex<BTreeMap<u64, Arc<Conn>>>,
     closed: AtomicU64,
+    /// Connections accepted and not yet ended (counted at accept, before the task runs).
+    open: AtomicUsize,
     exit: Notify,
 }
 
@@ -181,7 +185,10 @@ pub fn listen(opts: ListenOptions) -> Result<(), String> {
     std_listener
         .set_nonblocking(true)
         .map_err(|e| e.to_string())?;
-    let out = Out::new(opts.json, opts.quiet, log);
+    if opts.tui && opts.json {
+        return Err("--tui and --json: choose one (the log can still be JSON-free --log)".into());
+    }
+    let out = Out::new(opts.json, opts.quiet, log, opts.tui);
     if opts.json {
         out.stdout_line(&json!({"event": "listening", "addr": addr.to_string()}).to_string());
     } else {
@@ -205,14 +212,28 @@ pub fn listen(opts: ListenOptions) -> Result<(), String> {
         vars: Mutex::new(Vars::new(opts.max_vars)),
         conns: Mutex::new(BTreeMap::new()),
         closed: AtomicU64::new(0),
+        open: AtomicUsize::new(0),
         exit: Notify::new(),
     });
     let (cmd_tx, cmd_rx) = mpsc::channel::<String>(16);
-    spawn_stdin(cmd_tx);
     let rt = tokio::runtime::Builder::new_current_thread()
         .enable_all()
         .build()
         .map_err(|e| format!("cannot start the runtime: {e}"))?;
+    if opts.tui {
+        // The runtime serves robots on its own thread; this one draws and reads keys.
+        let s = Arc::clone(&shared);
+        let done = Arc::new(AtomicBool::new(false));
+        let d = Arc::clone(&done);
+        std::thread::spawn(move || {
+            let _ = rt.block_on(run(s, std_listener, cmd_rx));
+            d.store(true, Ordering::Relaxed);
+        });
+        let r = tui::run(&shared, &cmd_tx, &done);
+        shared.out.flush_log();
+        return r;
+    }
+    spawn_stdin(cmd_tx);
     let r = rt.block_on(run(Arc::clone(&shared), std_listener, cmd_rx));
     shared.out.flush_log();
     r
@@ -259,7 +280,7 @@ async fn run(
                             &format!("accepting again: recovered after {n} failed accepts in {:.1} s", since.elapsed().as_secs_f64()),
                             json!({"event": "accept-recovered", "failures": n}));
                     }
-                    let open = shared.conns.lock().unwrap_or_else(|p| p.into_inner()).len();
+                    let open = shared.open.load(Ordering::Relaxed);
                     if open >= shared.max_connections {
                         if refused == 0 {
                             shared.out.emit(Kind::Warn, None,
@@ -277,6 +298,7 @@ async fn run(
                         refused = 0;
                     }
                     next_id += 1;
+                    shared.open.fetch_add(1, Ordering::Relaxed);
                     let s = Arc::clone(&shared);
                     tokio::spawn(serve(s, next_id, stream, peer.to_string()));
                 }
@@ -566,6 +588,7 @@ async fn serve(shared: Arc<Shared>, id: u64, stream: TcpStream, peer: String) {
         Kind::Note
     };
     shared.out.emit(kind, Some(id), &text, json!({"event": "close", "reason": reason, "rx": rx, "tx": tx}));
+    shared.open.fetch_sub(1, Ordering::Relaxed);
     let closed = shared.closed.fetch_add(1, Ordering::Relaxed) + 1;
     if shared.exit_after.is_some_and(|n| closed >= n as u64) {
         shared.exit.notify_one();

@@ -4,6 +4,7 @@
 //! A closed stdout (`ursock listen | head`) ends the program quietly, as Unix tools do:
 //! nothing here panics on a failed write.
 
+use std::collections::{BTreeMap, VecDeque};
 use std::fs::File;
 use std::io::{BufWriter, ErrorKind, Write};
 use std::sync::Mutex;
@@ -22,7 +23,48 @@ pub enum Kind {
     Warn,
 }
 
+/// What the terminal UI shows: each connection's lines and the general ones, bounded.
+#[derive(Default)]
+pub struct Screen {
+    pub per_conn: BTreeMap<u64, VecDeque<String>>,
+    pub general: VecDeque<String>,
+}
+
+/// Lines kept per connection, general lines kept, connections whose lines are kept.
+const SCREEN_LINES: usize = 1000;
+const SCREEN_GENERAL: usize = 200;
+const SCREEN_CONNS: usize = 256;
+
+impl Screen {
+    fn push(&mut self, conn: Option<u64>, line: String, general: bool) {
+        if let Some(id) = conn {
+            if !self.per_conn.contains_key(&id) && self.per_conn.len() >= SCREEN_CONNS {
+                let oldest = self.per_conn.keys().next().copied();
+                if let Some(o) = oldest {
+                    self.per_conn.remove(&o);
+                }
+            }
+            let q = self.per_conn.entry(id).or_default();
+            for l in line.lines() {
+                if q.len() >= SCREEN_LINES {
+                    q.pop_front();
+                }
+                q.push_back(l.to_string());
+            }
+        }
+        if general || conn.is_none() {
+            if self.general.len() >= SCREEN_GENERAL {
+                self.general.pop_front();
+            }
+            let prefix = conn.map(|id| format!("[#{id}] ")).unwrap_or_default();
+            self.general.push_back(format!("{prefix}{}", line.lines().next().unwrap_or("")));
+        }
+    }
+}
+
 pub struct Out {
+    /// With `--tui`: lines go to the screen, not to stdout/stderr.
+    pub screen: Option<Mutex<Screen>>,
     json: bool,
     quiet: bool,
     start: Instant,
@@ -32,8 +74,9 @@ pub struct Out {
 }
 
 impl Out {
-    pub fn new(json: bool, quiet: bool, log: Option<File>) -> Self {
+    pub fn new(json: bool, quiet: bool, log: Option<File>, tui: bool) -> Self {
         Out {
+            screen: tui.then(|| Mutex::new(Screen::default())),
             json,
             quiet,
             start: Instant::now(),
@@ -53,6 +96,11 @@ impl Out {
 
     /// Writes one line to stdout. A closed pipe ends the program quietly.
     pub fn stdout_line(&self, line: &str) {
+        if let Some(screen) = &self.screen {
+            let mut sc = screen.lock().unwrap_or_else(|p| p.into_inner());
+            sc.push(None, line.to_string(), true);
+            return;
+        }
         let _guard = self.stdout.lock().unwrap_or_else(|p| p.into_inner());
         let mut out = std::io::stdout().lock();
         let r = out
@@ -116,6 +164,12 @@ impl Out {
         }
         let json_line = Value::Object(obj).to_string();
         self.log_line(if self.json { &json_line } else { &human });
+        if let Some(screen) = &self.screen {
+            let short = format!("+{rel:.3}s {} {text}", wall_clock(now));
+            let mut sc = screen.lock().unwrap_or_else(|p| p.into_inner());
+            sc.push(conn, short, kind != Kind::Traffic);
+            return;
+        }
         if kind == Kind::Warn {
             self.stderr_line(&format!("ursock: {human}"));
         }
