@@ -42,7 +42,10 @@ fn variables_belong_to_the_server() {
         .output()
         .unwrap();
     let help = String::from_utf8_lossy(&help.stdout);
-    assert!(help.contains("shared by\n") || help.contains("shared by every"), "{help}");
+    assert!(
+        help.contains("shared by\n") || help.contains("shared by every"),
+        "{help}"
+    );
 }
 
 #[test]
@@ -109,7 +112,10 @@ fn typed_reply_is_addressed_with_at_n() {
     assert!(out.contains("02 41 03  \"\\x02A\\x03\""), "{out}");
     l.type_line("list");
     let out = l.wait_for("2 connected", false);
-    assert!(out.contains("#1 127.0.0.1:") && out.contains("tx 7 B"), "{out}");
+    assert!(
+        out.contains("#1 127.0.0.1:") && out.contains("tx 7 B"),
+        "{out}"
+    );
     l.type_line("close 1");
     let mut buf = [0u8; 8];
     assert_eq!(a.read(&mut buf).unwrap(), 0, "connection 1 closed");
@@ -127,7 +133,15 @@ fn closed_stdout_exits_quietly() {
     // Issue 12: under listen every connection thread panicked on a closed stdout while
     // the listener ran on.
     let mut child = std::process::Command::new(listen_common::bin())
-        .args(["listen", "--bind", "127.0.0.1", "--port", "0", "--decode", "line"])
+        .args([
+            "listen",
+            "--bind",
+            "127.0.0.1",
+            "--port",
+            "0",
+            "--decode",
+            "line",
+        ])
         .stdin(std::process::Stdio::piped())
         .stdout(std::process::Stdio::piped())
         .stderr(std::process::Stdio::piped())
@@ -137,7 +151,11 @@ fn closed_stdout_exits_quietly() {
     let mut first = [0u8; 64];
     let n = stdout.read(&mut first).unwrap();
     let text = String::from_utf8_lossy(&first[..n]).to_string();
-    let addr = text.trim().strip_prefix("listening on ").unwrap().to_string();
+    let addr = text
+        .trim()
+        .strip_prefix("listening on ")
+        .unwrap()
+        .to_string();
     drop(stdout);
     let mut s = robot(&addr);
     for _ in 0..3 {
@@ -149,11 +167,19 @@ fn closed_stdout_exits_quietly() {
         if let Some(st) = child.try_wait().unwrap() {
             break st;
         }
-        assert!(start.elapsed() < listen_common::WAIT, "listener kept running");
+        assert!(
+            start.elapsed() < listen_common::WAIT,
+            "listener kept running"
+        );
         std::thread::sleep(Duration::from_millis(20));
     };
     let mut err = String::new();
-    child.stderr.take().unwrap().read_to_string(&mut err).unwrap();
+    child
+        .stderr
+        .take()
+        .unwrap()
+        .read_to_string(&mut err)
+        .unwrap();
     assert!(status.success(), "{status:?} {err}");
     assert!(!err.contains("panicked"), "{err}");
 }
@@ -172,7 +198,10 @@ fn json_events_are_one_object_a_line() {
         .lines()
         .map(|l| serde_json::from_str(l).unwrap_or_else(|e| panic!("{e}: {l}")))
         .collect();
-    let kinds: Vec<&str> = events.iter().map(|e| e["event"].as_str().unwrap()).collect();
+    let kinds: Vec<&str> = events
+        .iter()
+        .map(|e| e["event"].as_str().unwrap())
+        .collect();
     for k in ["listening", "connect", "rx", "decoded", "tx", "close"] {
         assert!(kinds.contains(&k), "{kinds:?}");
     }
@@ -197,10 +226,16 @@ fn long_chunks_are_wrapped_with_offsets_and_utf8_shown_as_text() {
     let out = l.wait_for("0020  ", false);
     assert!(out.contains("(43 bytes)"), "{out}");
     assert!(out.contains("0010  78 78"), "{out}");
-    assert!(out.contains(&format!("text \"{}é\\n\"", "x".repeat(40))), "{out}");
+    assert!(
+        out.contains(&format!("text \"{}é\\n\"", "x".repeat(40))),
+        "{out}"
+    );
     // Timestamps: relative and wall clock on every traffic line.
     let line = out.lines().find(|l| l.contains("<- 43")).unwrap();
-    assert!(line.contains("[#1] +") && line.contains("s ") && line.matches(':').count() >= 2, "{line}");
+    assert!(
+        line.contains("[#1] +") && line.contains("s ") && line.matches(':').count() >= 2,
+        "{line}"
+    );
 }
 
 #[test]
@@ -208,11 +243,21 @@ fn log_file_holds_the_session_and_counters_are_shown() {
     let dir = std::env::temp_dir().join(format!("ursock-listen-log-{}", std::process::id()));
     let _ = std::fs::create_dir_all(&dir);
     let path = dir.join("session.log");
-    let l = Listener::start(&["--decode", "line", "--reply", "line OK", "--log", path.to_str().unwrap()]);
+    let l = Listener::start(&[
+        "--decode",
+        "line",
+        "--reply",
+        "line OK",
+        "--log",
+        path.to_str().unwrap(),
+    ]);
     assert_eq!(ask(&l.addr, "ping\n"), "OK\n");
     l.wait_for("closed (robot closed): rx 5 B, tx 3 B", false);
     let log = std::fs::read_to_string(&path).unwrap();
-    assert!(log.contains("= \"ping\"") && log.contains("-> 3") && log.contains("rx 5 B, tx 3 B"), "{log}");
+    assert!(
+        log.contains("= \"ping\"") && log.contains("-> 3") && log.contains("rx 5 B, tx 3 B"),
+        "{log}"
+    );
     let _ = std::fs::remove_dir_all(&dir);
 }
 
@@ -226,7 +271,14 @@ fn rules_emulate_a_camera() {
         "# a camera\ntrigger => floats 0.5 -0.25\njob * => line OK\nst?tus => hex 06\n",
     )
     .unwrap();
-    let l = Listener::start(&["--decode", "line", "--rules", path.to_str().unwrap(), "--reply", "line ?"]);
+    let l = Listener::start(&[
+        "--decode",
+        "line",
+        "--rules",
+        path.to_str().unwrap(),
+        "--reply",
+        "line ?",
+    ]);
     let mut s = robot(&l.addr);
     s.write_all(b"trigger\n").unwrap();
     assert_eq!(read_n(&mut s, 11), b"(0.5,-0.25)");
@@ -262,7 +314,10 @@ fn says_why_the_robots_float_read_fails() {
     ] {
         l.type_line(typed);
         let err = l.wait_for(why, true);
-        assert!(err.contains("would return [0, nan, nan]") || why.starts_with('3'), "{typed}: {err}");
+        assert!(
+            err.contains("would return [0, nan, nan]") || why.starts_with('3'),
+            "{typed}: {err}"
+        );
     }
     let _ = s.set_read_timeout(Some(Duration::from_millis(10)));
     // A leftover LF in front of a binary read.
@@ -278,7 +333,10 @@ fn says_why_the_robots_float_read_fails() {
     l.wait_for("[#1]", false);
     l.type_line("line [0.1, 0.2, 0.3]");
     let err = l.wait_for("Python str(list)", true);
-    assert!(err.contains("socket_read_ascii_float(3) would return [0, nan, nan, nan]"), "{err}");
+    assert!(
+        err.contains("socket_read_ascii_float(3) would return [0, nan, nan, nan]"),
+        "{err}"
+    );
     drop(s);
 }
 

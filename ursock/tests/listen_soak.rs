@@ -44,8 +44,14 @@ fn many_short_connections_keep_threads_and_rss_flat() {
         after_warm_up.1,
         end.1
     );
-    assert!(end.0 <= after_warm_up.0 + 1, "threads grew: {after_warm_up:?} -> {end:?}");
-    assert!(end.1 <= after_warm_up.1 * 2 + 4096, "RSS grew: {after_warm_up:?} -> {end:?}");
+    assert!(
+        end.0 <= after_warm_up.0 + 1,
+        "threads grew: {after_warm_up:?} -> {end:?}"
+    );
+    assert!(
+        end.1 <= after_warm_up.1 * 2 + 4096,
+        "RSS grew: {after_warm_up:?} -> {end:?}"
+    );
     // The old listener held one thread per connection ever made.
     assert!(end.0 < 16, "{end:?}");
 }
@@ -54,7 +60,15 @@ fn many_short_connections_keep_threads_and_rss_flat() {
 fn a_robot_that_never_reads_does_not_block_a_good_one() {
     let big = "x".repeat(4000);
     let reply = format!("string {big}");
-    let l = Listener::start(&["--decode", "line", "--reply", &reply, "--max-queue", "65536", "-q"]);
+    let l = Listener::start(&[
+        "--decode",
+        "line",
+        "--reply",
+        &reply,
+        "--max-queue",
+        "65536",
+        "-q",
+    ]);
     // The bad robot asks and asks and never reads.
     let bad_addr = l.addr.clone();
     let bad = std::thread::spawn(move || {
@@ -73,8 +87,12 @@ fn a_robot_that_never_reads_does_not_block_a_good_one() {
             match s.read(&mut sink) {
                 Ok(0) => return true,
                 Ok(n) => total += n,
-                Err(e) if e.kind() == std::io::ErrorKind::WouldBlock
-                    || e.kind() == std::io::ErrorKind::TimedOut => return false,
+                Err(e)
+                    if e.kind() == std::io::ErrorKind::WouldBlock
+                        || e.kind() == std::io::ErrorKind::TimedOut =>
+                {
+                    return false
+                }
                 Err(_) => return true,
             }
             if total > 200 * 1024 * 1024 {
@@ -100,7 +118,8 @@ fn a_robot_that_never_reads_does_not_block_a_good_one() {
 
 #[test]
 fn descriptor_exhaustion_is_said_once_and_recovered_from() {
-    let l = Listener::start_with_fd_limit(32, &["--decode", "var", "--max-connections", "1000", "-q"]);
+    let l =
+        Listener::start_with_fd_limit(32, &["--decode", "var", "--max-connections", "1000", "-q"]);
     let mut held = Vec::new();
     for _ in 0..60 {
         held.push(robot(&l.addr)); // the kernel's backlog takes them; accept runs out
@@ -110,7 +129,10 @@ fn descriptor_exhaustion_is_said_once_and_recovered_from() {
     let err2 = l.stderr();
     assert_eq!(err2.matches("accept failed").count(), 1, "{err2}");
     assert!(err2.len() < 4096, "stderr grew to {} bytes", err2.len());
-    assert!(err.contains("Too many open files") || err.contains("os error 24"), "{err}");
+    assert!(
+        err.contains("Too many open files") || err.contains("os error 24"),
+        "{err}"
+    );
     drop(held);
     assert_eq!(ask(&l.addr, "GET Y\n"), "Y 0\n");
     l.wait_for("recovered after", true);
@@ -131,7 +153,8 @@ fn set_flood_against_max_vars_is_refused_and_bounded() {
     s.write_all(batch.as_bytes()).unwrap();
     let long = format!("SET {} 1\n", "N".repeat(200));
     s.write_all(long.as_bytes()).unwrap();
-    s.write_all(format!("GET V{:0>100}\nGET V{:0>100}\n", 5, 500).as_bytes()).unwrap();
+    s.write_all(format!("GET V{:0>100}\nGET V{:0>100}\n", 5, 500).as_bytes())
+        .unwrap();
     assert_eq!(read_line(&mut s), format!("V{:0>100} 5\n", 5));
     assert_eq!(read_line(&mut s), format!("V{:0>100} 0\n", 500));
     drop(s);

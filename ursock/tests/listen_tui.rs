@@ -36,7 +36,10 @@ impl Tmux {
             if pane.contains(needle) {
                 return pane;
             }
-            assert!(start.elapsed() < WAIT, "waited for {needle:?} in the pane:\n{pane}");
+            assert!(
+                start.elapsed() < WAIT,
+                "waited for {needle:?} in the pane:\n{pane}"
+            );
             std::thread::sleep(Duration::from_millis(50));
         }
     }
@@ -76,8 +79,22 @@ fn tui_shows_traffic_and_sends_typed_replies() {
         "{} listen --tui --bind 127.0.0.1 --port {port} --decode line --robot-reads ascii-float:2",
         listen_common::bin()
     );
-    let out = t.cmd(&["new-session", "-d", "-s", &t.session, "-x", "150", "-y", "30", &command]);
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let out = t.cmd(&[
+        "new-session",
+        "-d",
+        "-s",
+        &t.session,
+        "-x",
+        "150",
+        "-y",
+        "30",
+        &command,
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     t.wait_for("robots (Up/Down)");
     let addr = format!("127.0.0.1:{port}");
     let mut a = robot(&addr);

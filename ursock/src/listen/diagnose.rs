@@ -21,7 +21,9 @@ pub fn parse_robot_reads(s: &str) -> Result<ReadCall, String> {
             .parse()
             .map_err(|_| format!("--robot-reads {s}: N must be a number 1-30"))?;
         if !(1..=30).contains(&n) {
-            return Err(format!("--robot-reads {s}: N must be 1-30 (the controller's limit)"));
+            return Err(format!(
+                "--robot-reads {s}: N must be 1-30 (the controller's limit)"
+            ));
         }
         Ok(n)
     };
@@ -71,7 +73,8 @@ fn looks_numeric(text: &str) -> bool {
     let t = text.trim();
     (t.contains("float64(") || t.contains("array("))
         || (t.chars().any(|c| c.is_ascii_digit())
-            && t.chars().all(|c| "0123456789.,;:+-eE[]() \t\r\n".contains(c)))
+            && t.chars()
+                .all(|c| "0123456789.,;:+-eE[]() \t\r\n".contains(c)))
 }
 
 /// Warnings for sending `reply` to a robot that will do `expect` (if known).
@@ -164,7 +167,9 @@ pub fn diagnose(reply: &Reply, expect: Option<&ReadCall>, after_tuple_lf: bool) 
     if let Some(result) = simulate(&call, &reply.bytes) {
         let failed = result.starts_with("[0,") || result == "[0]";
         if failed || w.len() > before {
-            w.push(format!("the robot's socket_read_ascii_float({n}) would return {result}"));
+            w.push(format!(
+                "the robot's socket_read_ascii_float({n}) would return {result}"
+            ));
         }
     }
     w

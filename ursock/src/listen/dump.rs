@@ -54,9 +54,18 @@ pub fn chunk(bytes: &[u8], indent: &str) -> String {
     let mut s = String::new();
     let _ = write!(s, "({} bytes)", bytes.len());
     for (i, row) in bytes.chunks(ROW).enumerate() {
-        let _ = write!(s, "\n{indent}{:04X}  {:<47}  |", i * ROW, crate::show::hex(row));
+        let _ = write!(
+            s,
+            "\n{indent}{:04X}  {:<47}  |",
+            i * ROW,
+            crate::show::hex(row)
+        );
         for &b in row {
-            s.push(if (0x20..0x7F).contains(&b) { b as char } else { '.' });
+            s.push(if (0x20..0x7F).contains(&b) {
+                b as char
+            } else {
+                '.'
+            });
         }
         s.push('|');
     }

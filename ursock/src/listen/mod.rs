@@ -28,7 +28,9 @@ use tokio::net::{TcpListener, TcpStream};
 use tokio::sync::{mpsc, Notify};
 use urscript_socket::line::LineDecoder;
 use urscript_socket::robot::ReadCall;
-use urscript_socket::var::{encode_var_reply, parse_var_message, VarMessage, DEFAULT_MAX_VAR_LINE_LEN};
+use urscript_socket::var::{
+    encode_var_reply, parse_var_message, VarMessage, DEFAULT_MAX_VAR_LINE_LEN,
+};
 use urscript_socket::RecvBuffer;
 
 use crate::formats::{AnyDecoder, DecodeFormat};
@@ -103,7 +105,10 @@ impl Stats {
     }
 
     fn reason(&self) -> Option<String> {
-        self.reason.lock().unwrap_or_else(|p| p.into_inner()).clone()
+        self.reason
+            .lock()
+            .unwrap_or_else(|p| p.into_inner())
+            .clone()
     }
 }
 
@@ -174,9 +179,9 @@ pub fn listen(opts: ListenOptions) -> Result<(), String> {
         return Err("--max-connections must be at least 1".into());
     }
     let log = match &opts.log {
-        Some(p) => Some(
-            std::fs::File::create(p).map_err(|e| format!("--log {}: {e}", p.display()))?,
-        ),
+        Some(p) => {
+            Some(std::fs::File::create(p).map_err(|e| format!("--log {}: {e}", p.display()))?)
+        }
         None => None,
     };
     let std_listener = std::net::TcpListener::bind((opts.bind.as_str(), opts.port))
@@ -250,7 +255,10 @@ fn spawn_stdin(tx: mpsc::Sender<String>) {
             match stdin.lock().read_line(&mut line) {
                 Ok(0) | Err(_) => return,
                 Ok(_) => {
-                    if tx.blocking_send(line.trim_end_matches(['\n', '\r']).to_string()).is_err() {
+                    if tx
+                        .blocking_send(line.trim_end_matches(['\n', '\r']).to_string())
+                        .is_err()
+                    {
                         return;
                     }
                 }
@@ -340,7 +348,10 @@ fn operator(shared: &Shared, line: &str) {
         .collect();
     if line == "help" {
         note(
-            format!("type a reply spec ({}), `@N SPEC` for connection N, `list`, `close N`", spec::FORMATS),
+            format!(
+                "type a reply spec ({}), `@N SPEC` for connection N, `list`, `close N`",
+                spec::FORMATS
+            ),
             json!({"event": "help"}),
         );
         return;
@@ -348,17 +359,31 @@ fn operator(shared: &Shared, line: &str) {
     if line == "list" {
         let nvars = shared.vars.lock().unwrap_or_else(|p| p.into_inner()).len();
         if conns.is_empty() {
-            note(format!("no robot connected; {nvars} variables"), json!({"event": "list", "connections": [], "variables": nvars}));
+            note(
+                format!("no robot connected; {nvars} variables"),
+                json!({"event": "list", "connections": [], "variables": nvars}),
+            );
         } else if !shared.out.is_json() {
-            note(format!("{} connected; {nvars} variables", conns.len()), Value::Null);
+            note(
+                format!("{} connected; {nvars} variables", conns.len()),
+                Value::Null,
+            );
         }
         let mut all = Vec::new();
         for c in &conns {
-            let (rx, tx) = (c.stats.rx_bytes.load(Ordering::Relaxed), c.stats.tx_bytes.load(Ordering::Relaxed));
+            let (rx, tx) = (
+                c.stats.rx_bytes.load(Ordering::Relaxed),
+                c.stats.tx_bytes.load(Ordering::Relaxed),
+            );
             all.push(json!({"conn": c.id, "peer": c.peer, "rx": rx, "tx": tx, "seconds": c.since.elapsed().as_secs_f64()}));
             if !shared.out.is_json() {
                 note(
-                    format!("#{} {}  rx {rx} B  tx {tx} B  connected {:.1} s", c.id, c.peer, c.since.elapsed().as_secs_f64()),
+                    format!(
+                        "#{} {}  rx {rx} B  tx {tx} B  connected {:.1} s",
+                        c.id,
+                        c.peer,
+                        c.since.elapsed().as_secs_f64()
+                    ),
                     Value::Null,
                 );
             }
@@ -370,9 +395,18 @@ fn operator(shared: &Shared, line: &str) {
     }
     if let Some(n) = line.strip_prefix("close ") {
         let n = n.trim().trim_start_matches('#').trim_start_matches('@');
-        match n.parse::<u64>().ok().and_then(|n| conns.iter().find(|c| c.id == n)) {
+        match n
+            .parse::<u64>()
+            .ok()
+            .and_then(|n| conns.iter().find(|c| c.id == n))
+        {
             Some(c) => c.stats.kill("closed by the operator".into()),
-            None => shared.out.emit(Kind::Warn, None, &format!("close {n}: no such connection (see `list`)"), json!({"event": "error"})),
+            None => shared.out.emit(
+                Kind::Warn,
+                None,
+                &format!("close {n}: no such connection (see `list`)"),
+                json!({"event": "error"}),
+            ),
         }
         return;
     }
@@ -382,7 +416,12 @@ fn operator(shared: &Shared, line: &str) {
             match n.parse::<u64>() {
                 Ok(n) => (Some(n), s),
                 Err(_) => {
-                    shared.out.emit(Kind::Warn, None, &format!("@{n}: expected a connection number, e.g. @2 floats 1 2 3"), json!({"event": "error"}));
+                    shared.out.emit(
+                        Kind::Warn,
+                        None,
+                        &format!("@{n}: expected a connection number, e.g. @2 floats 1 2 3"),
+                        json!({"event": "error"}),
+                    );
                     return;
                 }
             }
@@ -392,7 +431,12 @@ fn operator(shared: &Shared, line: &str) {
     let reply = match spec::parse(spec_text) {
         Ok(r) => r,
         Err(e) => {
-            shared.out.emit(Kind::Warn, None, &format!("{e}; nothing sent"), json!({"event": "error"}));
+            shared.out.emit(
+                Kind::Warn,
+                None,
+                &format!("{e}; nothing sent"),
+                json!({"event": "error"}),
+            );
             return;
         }
     };
@@ -401,26 +445,43 @@ fn operator(shared: &Shared, line: &str) {
             Some(c) => c,
             None => {
                 let ids: Vec<String> = conns.iter().map(|c| format!("#{}", c.id)).collect();
-                shared.out.emit(Kind::Warn, None,
-                    &format!("no connection #{n} (connected: {}); nothing sent", if ids.is_empty() { "none".into() } else { ids.join(" ") }),
-                    json!({"event": "error"}));
+                shared.out.emit(
+                    Kind::Warn,
+                    None,
+                    &format!(
+                        "no connection #{n} (connected: {}); nothing sent",
+                        if ids.is_empty() {
+                            "none".into()
+                        } else {
+                            ids.join(" ")
+                        }
+                    ),
+                    json!({"event": "error"}),
+                );
                 return;
             }
         },
-        None => match conns.as_slice() {
-            [] => {
-                shared.out.emit(Kind::Warn, None, "no robot connected: nothing sent", json!({"event": "error"}));
-                return;
-            }
-            [c] => c,
-            many => {
-                let ids: Vec<String> = many.iter().map(|c| format!("@{}", c.id)).collect();
-                shared.out.emit(Kind::Warn, None,
+        None => {
+            match conns.as_slice() {
+                [] => {
+                    shared.out.emit(
+                        Kind::Warn,
+                        None,
+                        "no robot connected: nothing sent",
+                        json!({"event": "error"}),
+                    );
+                    return;
+                }
+                [c] => c,
+                many => {
+                    let ids: Vec<String> = many.iter().map(|c| format!("@{}", c.id)).collect();
+                    shared.out.emit(Kind::Warn, None,
                     &format!("{} robots connected ({}): say which, e.g. {} {spec_text}; nothing sent", many.len(), ids.join(" "), ids[0]),
                     json!({"event": "error"}));
-                return;
+                    return;
+                }
             }
-        },
+        }
     };
     send(shared, conn, &reply, "operator");
 }
@@ -430,7 +491,12 @@ fn operator(shared: &Shared, line: &str) {
 fn send(shared: &Shared, conn: &Conn, reply: &Reply, origin: &str) {
     let after_lf = conn.after_tuple_lf.load(Ordering::Relaxed);
     for w in diagnose::diagnose(reply, shared.robot_reads.as_ref(), after_lf) {
-        shared.out.emit(Kind::Warn, Some(conn.id), &format!("warning: {w}"), json!({"event": "diagnosis", "message": w}));
+        shared.out.emit(
+            Kind::Warn,
+            Some(conn.id),
+            &format!("warning: {w}"),
+            json!({"event": "diagnosis", "message": w}),
+        );
     }
     let len = reply.bytes.len();
     let queued = conn.stats.queued.load(Ordering::Relaxed);
@@ -446,8 +512,10 @@ fn send(shared: &Shared, conn: &Conn, reply: &Reply, origin: &str) {
         conn.stats.queued.fetch_sub(len, Ordering::Relaxed);
         return;
     }
-    conn.after_tuple_lf
-        .store(diagnose::ends_with_tuple_and_lf(&reply.bytes), Ordering::Relaxed);
+    conn.after_tuple_lf.store(
+        diagnose::ends_with_tuple_and_lf(&reply.bytes),
+        Ordering::Relaxed,
+    );
     let (data, enc) = bytes_json(&reply.bytes);
     shared.out.emit(
         Kind::Traffic,
@@ -457,11 +525,17 @@ fn send(shared: &Shared, conn: &Conn, reply: &Reply, origin: &str) {
     );
 }
 
-async fn writer(mut wr: OwnedWriteHalf, mut rx: mpsc::UnboundedReceiver<Vec<u8>>, stats: Arc<Stats>) {
+async fn writer(
+    mut wr: OwnedWriteHalf,
+    mut rx: mpsc::UnboundedReceiver<Vec<u8>>,
+    stats: Arc<Stats>,
+) {
     while let Some(bytes) = rx.recv().await {
         match wr.write_all(&bytes).await {
             Ok(()) => {
-                stats.tx_bytes.fetch_add(bytes.len() as u64, Ordering::Relaxed);
+                stats
+                    .tx_bytes
+                    .fetch_add(bytes.len() as u64, Ordering::Relaxed);
                 stats.queued.fetch_sub(bytes.len(), Ordering::Relaxed);
             }
             Err(e) => {
@@ -508,8 +582,12 @@ async fn serve(shared: Arc<Shared>, id: u64, stream: TcpStream, peer: String) {
 
     // Without --decode, lines are still split (silently) so SET/GET are answered.
     let mut decoder = match shared.decode {
-        Some(DecodeFormat::Var) => AnyDecoder::Line(LineDecoder::with_max_len(DEFAULT_MAX_VAR_LINE_LEN)),
-        Some(f) => AnyDecoder::new(f, &shared.delimiter).unwrap_or(AnyDecoder::Line(LineDecoder::new())),
+        Some(DecodeFormat::Var) => {
+            AnyDecoder::Line(LineDecoder::with_max_len(DEFAULT_MAX_VAR_LINE_LEN))
+        }
+        Some(f) => {
+            AnyDecoder::new(f, &shared.delimiter).unwrap_or(AnyDecoder::Line(LineDecoder::new()))
+        }
         None => AnyDecoder::Line(LineDecoder::new()),
     };
     let mut rx_buf = RecvBuffer::with_capacity(RX_CAPACITY);
@@ -553,7 +631,9 @@ async fn serve(shared: Arc<Shared>, id: u64, stream: TcpStream, peer: String) {
             }
             if got == 0 && decoded.len() + errors.len() == before {
                 // Cannot happen with the bounds above; never spin if it does.
-                errors.push(format!("receive buffer full ({RX_CAPACITY} bytes) with no complete message: dropped"));
+                errors.push(format!(
+                    "receive buffer full ({RX_CAPACITY} bytes) with no complete message: dropped"
+                ));
                 rx_buf.clear();
             }
         }
@@ -571,23 +651,45 @@ async fn serve(shared: Arc<Shared>, id: u64, stream: TcpStream, peer: String) {
     let killed = stats.reason();
     let refused_sets = conn.refused_sets.load(Ordering::Relaxed);
     drop(conn);
-    if killed.is_some() {
-        writer_task.abort();
-    } else if tokio::time::timeout(Duration::from_secs(1), &mut writer_task).await.is_err() {
+    // A killed connection stops at once; a closing one gets 1 s to flush its replies.
+    let flushed = killed.is_none()
+        && tokio::time::timeout(Duration::from_secs(1), &mut writer_task)
+            .await
+            .is_ok();
+    if !flushed {
         writer_task.abort();
     }
-    let reason = killed.unwrap_or_else(|| if peer_closed { "robot closed".into() } else { "closed".into() });
-    let (rx, tx) = (stats.rx_bytes.load(Ordering::Relaxed), stats.tx_bytes.load(Ordering::Relaxed));
+    let reason = killed.unwrap_or_else(|| {
+        if peer_closed {
+            "robot closed".into()
+        } else {
+            "closed".into()
+        }
+    });
+    let (rx, tx) = (
+        stats.rx_bytes.load(Ordering::Relaxed),
+        stats.tx_bytes.load(Ordering::Relaxed),
+    );
     let mut text = format!("closed ({reason}): rx {rx} B, tx {tx} B");
     if refused_sets > 1 {
-        text.push_str(&format!(", {refused_sets} SETs refused (variable table full)"));
+        text.push_str(&format!(
+            ", {refused_sets} SETs refused (variable table full)"
+        ));
     }
-    let kind = if reason.contains("not reading") || reason.contains("error") || reason.contains("failed") {
+    let kind = if reason.contains("not reading")
+        || reason.contains("error")
+        || reason.contains("failed")
+    {
         Kind::Warn
     } else {
         Kind::Note
     };
-    shared.out.emit(kind, Some(id), &text, json!({"event": "close", "reason": reason, "rx": rx, "tx": tx}));
+    shared.out.emit(
+        kind,
+        Some(id),
+        &text,
+        json!({"event": "close", "reason": reason, "rx": rx, "tx": tx}),
+    );
     shared.open.fetch_sub(1, Ordering::Relaxed);
     let closed = shared.closed.fetch_add(1, Ordering::Relaxed) + 1;
     if shared.exit_after.is_some_and(|n| closed >= n as u64) {
@@ -597,13 +699,24 @@ async fn serve(shared: Arc<Shared>, id: u64, stream: TcpStream, peer: String) {
 
 /// What one read brought: show decodes, answer variables, apply rules and `--reply`.
 /// `whole`: the chunk ended on a message boundary (nothing partial buffered).
-fn handle_chunk(shared: &Shared, conn: &Conn, decoded: Vec<Decoded>, errors: Vec<String>, whole: bool) {
+fn handle_chunk(
+    shared: &Shared,
+    conn: &Conn,
+    decoded: Vec<Decoded>,
+    errors: Vec<String>,
+    whole: bool,
+) {
     let raw_mode = shared.decode.is_none();
     let mut other_content = !whole;
     let mut replied = false;
     for e in errors {
         if !raw_mode {
-            shared.out.emit(Kind::Traffic, Some(conn.id), &format!("   ! {e}"), json!({"event": "decode-error", "error": e}));
+            shared.out.emit(
+                Kind::Traffic,
+                Some(conn.id),
+                &format!("   ! {e}"),
+                json!({"event": "decode-error", "error": e}),
+            );
         }
     }
     for d in decoded {
@@ -616,13 +729,21 @@ fn handle_chunk(shared: &Shared, conn: &Conn, decoded: Vec<Decoded>, errors: Vec
                 &format!("   ! not a variable message: {} (expected `SET name int` or `GET name`)", d.shown),
                 json!({"event": "decode-error", "error": "not a variable message", "message": d.json}));
         } else if !raw_mode {
-            shared.out.emit(Kind::Traffic, Some(conn.id), &format!("   = {}", d.shown),
-                json!({"event": "decoded", "kind": d.kind, "message": d.json}));
+            shared.out.emit(
+                Kind::Traffic,
+                Some(conn.id),
+                &format!("   = {}", d.shown),
+                json!({"event": "decoded", "kind": d.kind, "message": d.json}),
+            );
         }
         other_content = true;
         if let Some(rule) = rules::find(&shared.rules, &d.raw) {
-            shared.out.emit(Kind::Traffic, Some(conn.id), &format!("   rule {} ({}) matched", rule.line, rule.pattern),
-                json!({"event": "rule", "line": rule.line, "pattern": rule.pattern}));
+            shared.out.emit(
+                Kind::Traffic,
+                Some(conn.id),
+                &format!("   rule {} ({}) matched", rule.line, rule.pattern),
+                json!({"event": "rule", "line": rule.line, "pattern": rule.pattern}),
+            );
             send(shared, conn, &rule.reply, "rule");
             replied = true;
         } else if !raw_mode {
@@ -648,7 +769,11 @@ fn handle_var(shared: &Shared, conn: &Conn, d: &Decoded) -> bool {
         Ok(VarMessage::Set { name, value }) => {
             shared.out.emit(Kind::Traffic, Some(id), &format!("   = SET {name} {value}"),
                 json!({"event": "decoded", "kind": "set", "message": {"type": "set", "name": name, "value": value}}));
-            let outcome = shared.vars.lock().unwrap_or_else(|p| p.into_inner()).set(name, value);
+            let outcome = shared
+                .vars
+                .lock()
+                .unwrap_or_else(|p| p.into_inner())
+                .set(name, value);
             match outcome {
                 SetOutcome::Stored => {}
                 SetOutcome::Full(max) => {
@@ -671,15 +796,30 @@ fn handle_var(shared: &Shared, conn: &Conn, d: &Decoded) -> bool {
         Ok(VarMessage::Get { name }) => {
             shared.out.emit(Kind::Traffic, Some(id), &format!("   = GET {name}"),
                 json!({"event": "decoded", "kind": "get", "message": {"type": "get", "name": name}}));
-            let value = shared.vars.lock().unwrap_or_else(|p| p.into_inner()).get(name);
+            let value = shared
+                .vars
+                .lock()
+                .unwrap_or_else(|p| p.into_inner())
+                .get(name);
             if value.is_none() {
-                shared.out.emit(Kind::Note, Some(id),
+                shared.out.emit(
+                    Kind::Note,
+                    Some(id),
                     &format!("unknown variable {name} (never SET), answered 0"),
-                    json!({"event": "unknown-variable", "name": name, "answered": 0}));
+                    json!({"event": "unknown-variable", "name": name, "answered": 0}),
+                );
             }
             let mut bytes = Vec::new();
             if encode_var_reply(name, value.unwrap_or(0), &mut bytes).is_ok() {
-                send(shared, conn, &Reply { format: "var-reply".into(), bytes }, "var");
+                send(
+                    shared,
+                    conn,
+                    &Reply {
+                        format: "var-reply".into(),
+                        bytes,
+                    },
+                    "var",
+                );
             }
             true
         }

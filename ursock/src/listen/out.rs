@@ -57,7 +57,8 @@ impl Screen {
                 self.general.pop_front();
             }
             let prefix = conn.map(|id| format!("[#{id}] ")).unwrap_or_default();
-            self.general.push_back(format!("{prefix}{}", line.lines().next().unwrap_or("")));
+            self.general
+                .push_back(format!("{prefix}{}", line.lines().next().unwrap_or("")));
         }
     }
 }

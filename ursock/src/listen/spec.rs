@@ -52,7 +52,11 @@ pub fn parse(spec: &str) -> Result<Reply, String> {
             let values: Vec<String> = rest.split_whitespace().map(String::from).collect();
             encode_server(format, &values).map_err(|e| format!("{format}: {e}"))?
         }
-        other => return Err(format!("unknown reply format {other:?} (formats: {FORMATS})")),
+        other => {
+            return Err(format!(
+                "unknown reply format {other:?} (formats: {FORMATS})"
+            ))
+        }
     };
     Ok(Reply {
         format: format.to_string(),
@@ -69,7 +73,9 @@ pub fn parse_hex(s: &str) -> Result<Vec<u8>, String> {
             .or_else(|| word.strip_prefix("0X"))
             .unwrap_or(word);
         if w.len() % 2 != 0 {
-            return Err(format!("hex: {word:?} is not whole bytes (two digits each)"));
+            return Err(format!(
+                "hex: {word:?} is not whole bytes (two digits each)"
+            ));
         }
         for pair in w.as_bytes().chunks(2) {
             let text = std::str::from_utf8(pair).unwrap_or("?");
@@ -102,7 +108,9 @@ pub fn unescape(s: &str) -> Result<Vec<u8>, String> {
             Some(b'0') => out.push(0),
             Some(b'\\') => out.push(b'\\'),
             Some(b'x') => {
-                let hex = b.get(i + 2..i + 4).and_then(|h| std::str::from_utf8(h).ok());
+                let hex = b
+                    .get(i + 2..i + 4)
+                    .and_then(|h| std::str::from_utf8(h).ok());
                 let v = hex
                     .and_then(|h| u8::from_str_radix(h, 16).ok())
                     .ok_or_else(|| format!("text: \\x needs two hex digits at byte {i}"))?;

@@ -150,7 +150,9 @@ fn ui_loop(
             }
             KeyCode::Down => {
                 if let Some(i) = index {
-                    selected = rows.get((i + 1).min(rows.len().saturating_sub(1))).map(|r| r.id);
+                    selected = rows
+                        .get((i + 1).min(rows.len().saturating_sub(1)))
+                        .map(|r| r.id);
                 }
             }
             KeyCode::Enter => {

@@ -10,8 +10,10 @@ use std::time::{Duration, Instant};
 
 pub const WAIT: Duration = Duration::from_secs(30);
 
-pub fn bin() -> &'static str {
-    env!("CARGO_BIN_EXE_ursock")
+/// The binary under test; `URSOCK_BIN` overrides it (to run these tests against another
+/// build, e.g. the previous listener, and see them fail).
+pub fn bin() -> String {
+    std::env::var("URSOCK_BIN").unwrap_or_else(|_| env!("CARGO_BIN_EXE_ursock").to_string())
 }
 
 pub struct Listener {
@@ -37,7 +39,8 @@ impl Listener {
     /// `ursock listen --bind 127.0.0.1 --port 0 ARGS`.
     pub fn start(args: &[&str]) -> Listener {
         let mut cmd = Command::new(bin());
-        cmd.args(["listen", "--bind", "127.0.0.1", "--port", "0"]).args(args);
+        cmd.args(["listen", "--bind", "127.0.0.1", "--port", "0"])
+            .args(args);
         Self::spawn(cmd)
     }
 
@@ -48,7 +51,7 @@ impl Listener {
             script.push_str(&format!(" '{a}'"));
         }
         let mut cmd = Command::new("sh");
-        cmd.args(["-c", &script, bin()]);
+        cmd.args(["-c", &script, &bin()]);
         Self::spawn(cmd)
     }
 
@@ -74,7 +77,13 @@ impl Listener {
         collect(stdout, Arc::clone(&out));
         collect(child.stderr.take().unwrap(), Arc::clone(&err));
         let stdin = child.stdin.take();
-        Listener { child, addr, stdin, out, err }
+        Listener {
+            child,
+            addr,
+            stdin,
+            out,
+            err,
+        }
     }
 
     pub fn pid(&self) -> u32 {
@@ -125,7 +134,11 @@ impl Listener {
             }
             if start.elapsed() > WAIT {
                 let _ = self.child.kill();
-                panic!("listener did not exit\n--- stdout\n{}\n--- stderr\n{}", self.stdout(), self.stderr());
+                panic!(
+                    "listener did not exit\n--- stdout\n{}\n--- stderr\n{}",
+                    self.stdout(),
+                    self.stderr()
+                );
             }
             std::thread::sleep(Duration::from_millis(20));
         }
