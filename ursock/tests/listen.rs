@@ -80,7 +80,11 @@ fn exit_after_counts_robots_that_left() {
     drop(robot(&l.addr));
     drop(robot(&l.addr));
     assert!(l.wait_exit().success());
-    assert_eq!(l.stdout().matches("closed (").count(), 2, "{}", l.stdout());
+    let start = std::time::Instant::now();
+    while l.stdout().matches("closed (").count() < 2 {
+        assert!(start.elapsed() < listen_common::WAIT, "{}", l.stdout());
+        std::thread::sleep(Duration::from_millis(20));
+    }
 }
 
 #[test]
@@ -111,7 +115,8 @@ fn typed_reply_is_addressed_with_at_n() {
     assert!(out.contains("4F 4B 0D 0A  \"OK\\r\\n\""), "{out}");
     assert!(out.contains("02 41 03  \"\\x02A\\x03\""), "{out}");
     l.type_line("list");
-    let out = l.wait_for("2 connected", false);
+    let out = l.wait_for("#2 127.0.0.1:", false);
+    assert!(out.contains("2 connected; 0 variables"), "{out}");
     assert!(
         out.contains("#1 127.0.0.1:") && out.contains("tx 7 B"),
         "{out}"

@@ -648,6 +648,7 @@ async fn serve(shared: Arc<Shared>, id: u64, stream: TcpStream, peer: String) {
         .lock()
         .unwrap_or_else(|p| p.into_inner())
         .remove(&id);
+    shared.open.fetch_sub(1, Ordering::Relaxed);
     let killed = stats.reason();
     let refused_sets = conn.refused_sets.load(Ordering::Relaxed);
     drop(conn);
@@ -690,7 +691,6 @@ async fn serve(shared: Arc<Shared>, id: u64, stream: TcpStream, peer: String) {
         &text,
         json!({"event": "close", "reason": reason, "rx": rx, "tx": tx}),
     );
-    shared.open.fetch_sub(1, Ordering::Relaxed);
     let closed = shared.closed.fetch_add(1, Ordering::Relaxed) + 1;
     if shared.exit_after.is_some_and(|n| closed >= n as u64) {
         shared.exit.notify_one();
