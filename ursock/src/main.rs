@@ -49,8 +49,9 @@ enum Command {
         delimiter: String,
         /// Reply to each decoded message (or each chunk without --decode), e.g.
         /// `floats 0.1 0.2 0.3`, `line OK`, `int32 1 2`, `bytes 2 3`, `string >ok<`,
-        /// `text OK\r\n`, `hex 02 06 03`. GET is always answered from SET (an unknown
-        /// variable is answered 0 and said so).
+        /// `text OK\r\n`, `hex 02 06 03`. GET lines are always answered from SET
+        /// (without --decode and with line, var, delimiter, stx-etx); an unknown variable
+        /// is answered 0 and said so.
         #[arg(long, allow_hyphen_values = true)]
         reply: Option<String>,
         /// Replies from a file of rules, one `PATTERN => REPLY` a line (`*` and `?` are

@@ -365,3 +365,37 @@ fn max_connections_refuses_beyond_and_says_it_once() {
     assert_eq!(ask(&l.addr, "GET Z\n"), "Z 0\n");
     l.wait_for("connections were refused", true);
 }
+
+#[test]
+fn odd_typed_input_is_refused_without_panicking() {
+    let mut l = Listener::start(&[]);
+    let mut s = robot(&l.addr);
+    l.wait_for("[#1]", false);
+    for typed in [
+        "line\u{3000}x",
+        "hex 0",
+        "hex zz",
+        "text \\q",
+        "@",
+        "@x line a",
+        "nope 1",
+        "close 77",
+    ] {
+        l.type_line(typed);
+    }
+    l.type_line("line\u{3000}done");
+    // Only the two good lines reach the robot; the process is alive and said why for the rest.
+    assert_eq!(read_line(&mut s), "x\n");
+    assert_eq!(read_line(&mut s), "done\n");
+    let err = l.wait_for("close 77: no such connection", true);
+    for why in [
+        "whole bytes",
+        "not hexadecimal",
+        "unknown escape",
+        "expected a connection number",
+        "unknown reply format \"nope\"",
+    ] {
+        assert!(err.contains(why), "{why}: {err}");
+    }
+    assert!(!err.contains("panicked"), "{err}");
+}

@@ -146,10 +146,20 @@ fn own(m: &Message<'_>) -> Decoded {
         },
         other => {
             let shown = other.text();
-            let json: Value =
-                serde_json::from_str(&other.json()).unwrap_or_else(|_| json!({"text": shown}));
+            let kind = match other {
+                Message::Int(_) => "int32",
+                Message::Byte(_) => "byte",
+                Message::Var(VarMessage::Set { .. }) => "set",
+                Message::Var(VarMessage::Get { .. }) => "get",
+                _ => "value",
+            };
+            let json = match other {
+                Message::Int(v) => json!({"type": kind, "value": v}),
+                Message::Byte(b) => json!({"type": kind, "value": b}),
+                _ => json!({"type": kind, "text": shown}),
+            };
             Decoded {
-                kind: "value",
+                kind,
                 raw: shown.clone().into_bytes(),
                 shown,
                 is_text: false,

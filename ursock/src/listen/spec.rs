@@ -32,10 +32,9 @@ pub const FORMATS: &str =
 
 pub fn parse(spec: &str) -> Result<Reply, String> {
     let spec = spec.trim_start();
-    let (format, rest) = match spec.find(char::is_whitespace) {
-        Some(i) => (&spec[..i], &spec[i + 1..]),
-        None => (spec, ""),
-    };
+    // One separator (any whitespace character) after the format; the rest is kept as
+    // typed, so `line a  b` sends two spaces.
+    let (format, rest) = spec.split_once(char::is_whitespace).unwrap_or((spec, ""));
     if format.is_empty() {
         return Err(format!("empty reply spec (formats: {FORMATS})"));
     }
