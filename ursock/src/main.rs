@@ -80,6 +80,14 @@ enum Command {
         /// reading and is dropped (others are unaffected).
         #[arg(long, default_value_t = listen::DEFAULT_MAX_QUEUE)]
         max_queue: usize,
+        /// Seconds a reply may wait, from being queued, to be written before the robot is
+        /// taken as not reading and dropped (0: no limit).
+        #[arg(long, default_value_t = listen::DEFAULT_WRITE_TIMEOUT_SECS)]
+        write_timeout: f64,
+        /// Bytes of one chunk shown in its hex dump (rows of 16 with offsets); JSON events
+        /// and counters always carry the whole chunk.
+        #[arg(long, default_value_t = listen::DEFAULT_SHOW_MAX)]
+        show_max: usize,
         /// Write the whole session (every line, or every JSON event) to FILE.
         #[arg(long)]
         log: Option<std::path::PathBuf>,
@@ -210,6 +218,8 @@ fn run(cli: Cli) -> Result<(), String> {
             max_connections,
             max_vars,
             max_queue,
+            write_timeout,
+            show_max,
             log,
             json,
             quiet,
@@ -224,6 +234,8 @@ fn run(cli: Cli) -> Result<(), String> {
             max_connections,
             max_vars,
             max_queue,
+            write_timeout,
+            show_max,
             robot_reads,
             rules,
             log,

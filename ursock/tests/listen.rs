@@ -399,3 +399,85 @@ fn odd_typed_input_is_refused_without_panicking() {
     }
     assert!(!err.contains("panicked"), "{err}");
 }
+
+#[test]
+fn a_reply_after_the_robots_timeout_is_said() {
+    let mut l = Listener::start(&["--decode", "line"]);
+    let mut s = robot(&l.addr);
+    s.write_all(b"shoot\n").unwrap();
+    l.wait_for("= \"shoot\"", false);
+    std::thread::sleep(Duration::from_millis(2300));
+    l.type_line("floats 1 2");
+    assert_eq!(read_n(&mut s, 5), b"(1,2)");
+    let err = l.wait_for("after the robot's last message", true);
+    assert!(err.contains("NEXT read"), "{err}");
+    // A prompt reply says nothing.
+    s.write_all(b"shoot\n").unwrap();
+    l.wait_for("= \"shoot\"", false);
+    l.type_line("floats 3 4");
+    assert_eq!(read_n(&mut s, 5), b"(3,4)");
+    assert_eq!(
+        l.stderr().matches("after the robot's last message").count(),
+        1
+    );
+}
+
+#[test]
+fn a_robot_that_stops_reading_is_dropped_after_write_timeout() {
+    let reply = format!("string {}", "y".repeat(60_000));
+    let l = Listener::start(&[
+        "--decode",
+        "line",
+        "--reply",
+        &reply,
+        "--write-timeout",
+        "0.5",
+        "--max-queue",
+        "100000000",
+        "-q",
+    ]);
+    let mut s = robot(&l.addr);
+    for _ in 0..400 {
+        if s.write_all(b"go\n").is_err() {
+            break;
+        }
+    }
+    let err = l.wait_for("is still not written", true);
+    assert!(
+        err.contains("[#1]") && err.contains("--write-timeout"),
+        "{err}"
+    );
+    // The listener goes on serving.
+    assert_eq!(ask(&l.addr, "GET Q\n"), "Q 0\n");
+}
+
+#[test]
+fn reply_and_rules_are_checked_once_at_start() {
+    let out = std::process::Command::new(listen_common::bin())
+        .args([
+            "listen",
+            "--bind",
+            "127.0.0.1",
+            "--port",
+            "0",
+            "--exit-after",
+            "0",
+        ])
+        .args(["--reply", "line [0.1, 0.2]"])
+        .output()
+        .unwrap();
+    assert!(out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("--reply: warning:") && err.contains("Python str(list)"),
+        "{err}"
+    );
+    let bad = std::process::Command::new(listen_common::bin())
+        .args(["listen", "--port", "0", "--reply", "floats 1 x"])
+        .output()
+        .unwrap();
+    assert!(!bad.status.success());
+    let err = String::from_utf8_lossy(&bad.stderr);
+    assert_eq!(err.lines().count(), 1, "{err}");
+    assert!(err.starts_with("ursock: --reply: floats:"), "{err}");
+}

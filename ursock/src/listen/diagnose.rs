@@ -80,22 +80,37 @@ fn looks_numeric(text: &str) -> bool {
 /// Warnings for sending `reply` to a robot that will do `expect` (if known).
 /// `after_tuple_lf`: the previous reply on this connection was a float tuple + LF.
 pub fn diagnose(reply: &Reply, expect: Option<&ReadCall>, after_tuple_lf: bool) -> Vec<String> {
-    let mut w = Vec::new();
-    let text = String::from_utf8_lossy(&reply.bytes);
-    let t = text.trim();
+    let mut w: Vec<String> = leftover_lf(reply, expect, after_tuple_lf)
+        .into_iter()
+        .collect();
+    w.extend(content(reply, expect));
+    w
+}
+
+/// The one check that depends on what was sent before on the connection.
+pub fn leftover_lf(
+    reply: &Reply,
+    expect: Option<&ReadCall>,
+    after_tuple_lf: bool,
+) -> Option<String> {
     let binary_read = matches!(
         expect,
         Some(ReadCall::BinaryInteger { .. } | ReadCall::ByteList { .. })
     );
-    if after_tuple_lf && (reply.is_binary() || binary_read) {
-        w.push(
-            "a leftover LF: the previous reply ended `)\\n`; socket_read_ascii_float stops at `)` \
+    (after_tuple_lf && (reply.is_binary() || binary_read)).then(|| {
+        "a leftover LF: the previous reply ended `)\\n`; socket_read_ascii_float stops at `)` \
              and leaves the LF (0A) in the robot's buffer, so this binary read starts with it \
              and every value is shifted by one byte. Send tuples without LF (`floats`, not \
              `floats-lf`) before binary replies"
-                .to_string(),
-        );
-    }
+            .to_string()
+    })
+}
+
+/// Checks of the reply's own bytes (done once for `--reply` and rules, at start).
+pub fn content(reply: &Reply, expect: Option<&ReadCall>) -> Vec<String> {
+    let mut w = Vec::new();
+    let text = String::from_utf8_lossy(&reply.bytes);
+    let t = text.trim();
     if let Some(ReadCall::BinaryInteger { number }) = expect {
         let need = number * 4;
         if reply.bytes.len() < need {

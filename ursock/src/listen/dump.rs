@@ -47,12 +47,14 @@ fn push_char(s: &mut String, c: char) {
 /// A chunk: `68 69  "hi"` on one line when short, otherwise a header and rows of
 /// [`ROW`] bytes (`0010  ...  |text|`) followed by the text when it is valid UTF-8.
 /// Every line but the first starts with `indent`.
-pub fn chunk(bytes: &[u8], indent: &str) -> String {
-    if bytes.len() <= ROW {
+pub fn chunk(bytes: &[u8], indent: &str, max: usize) -> String {
+    let all = bytes;
+    let bytes = &bytes[..bytes.len().min(max.max(ROW))];
+    if all.len() <= ROW {
         return format!("{}  {}", crate::show::hex(bytes), text(bytes));
     }
     let mut s = String::new();
-    let _ = write!(s, "({} bytes)", bytes.len());
+    let _ = write!(s, "({} bytes)", all.len());
     for (i, row) in bytes.chunks(ROW).enumerate() {
         let _ = write!(
             s,
@@ -69,7 +71,13 @@ pub fn chunk(bytes: &[u8], indent: &str) -> String {
         }
         s.push('|');
     }
-    if !bytes.is_ascii() && std::str::from_utf8(bytes).is_ok() {
+    if bytes.len() < all.len() {
+        let _ = write!(
+            s,
+            "\n{indent}... {} more bytes not shown (--show-max {max})",
+            all.len() - bytes.len()
+        );
+    } else if !bytes.is_ascii() && std::str::from_utf8(bytes).is_ok() {
         let _ = write!(s, "\n{indent}text {}", text(bytes));
     }
     s

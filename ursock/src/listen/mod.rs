@@ -42,6 +42,11 @@ use vars::{SetOutcome, Vars};
 pub const DEFAULT_MAX_CONNECTIONS: usize = 64;
 pub const DEFAULT_MAX_VARS: usize = 1024;
 pub const DEFAULT_MAX_QUEUE: usize = 1024 * 1024;
+pub const DEFAULT_WRITE_TIMEOUT_SECS: f64 = 30.0;
+pub const DEFAULT_SHOW_MAX: usize = 1024;
+
+/// The robot's default read timeout (`socket_read_*`, and always for `socket_get_var`).
+const ROBOT_READ_TIMEOUT: Duration = Duration::from_secs(2);
 
 /// Receive buffer per connection; above every decoder's bound (4096), so a too-long
 /// message is the decoder's error, never a full buffer.
@@ -58,6 +63,8 @@ pub struct ListenOptions {
     pub max_connections: usize,
     pub max_vars: usize,
     pub max_queue: usize,
+    pub write_timeout: f64,
+    pub show_max: usize,
     pub robot_reads: Option<String>,
     pub rules: Option<PathBuf>,
     pub log: Option<PathBuf>,
@@ -75,6 +82,8 @@ struct Shared {
     robot_reads: Option<ReadCall>,
     max_connections: usize,
     max_queue: usize,
+    show_max: usize,
+    write_timeout: Duration,
     exit_after: Option<usize>,
     vars: Mutex<Vars>,
     conns: Mutex<BTreeMap<u64, Arc<Conn>>>,
@@ -116,11 +125,15 @@ struct Conn {
     id: u64,
     peer: String,
     since: Instant,
-    tx: mpsc::UnboundedSender<Vec<u8>>,
+    /// Replies for the writer, each with the moment it was queued.
+    tx: mpsc::UnboundedSender<(Instant, Vec<u8>)>,
     stats: Arc<Stats>,
     /// The last reply was a float tuple followed by LF (left in the robot's buffer).
     after_tuple_lf: AtomicBool,
     refused_sets: AtomicU64,
+    /// When the robot's last message came, if no reply has been sent since: a reply more
+    /// than [`ROBOT_READ_TIMEOUT`] later finds the robot's read already timed out.
+    waiting_since: Mutex<Option<Instant>>,
 }
 
 /// A decoded message, owned, with what rules match against.
@@ -209,6 +222,20 @@ pub fn listen(opts: ListenOptions) -> Result<(), String> {
     } else {
         out.stdout_line(&format!("listening on {addr}"));
     }
+    for (what, r) in reply.iter().map(|r| ("--reply".to_string(), r)).chain(
+        rules
+            .iter()
+            .map(|r| (format!("--rules line {}", r.line), &r.reply)),
+    ) {
+        for w in diagnose::content(r, robot_reads.as_ref()) {
+            out.emit(
+                Kind::Warn,
+                None,
+                &format!("{what}: warning: {w}"),
+                json!({"event": "diagnosis", "message": w, "source": what}),
+            );
+        }
+    }
     if opts.exit_after == Some(0) {
         // "Exit after 0 robots have come and gone": satisfied at once. Checks the options
         // and that the port can be bound.
@@ -223,6 +250,12 @@ pub fn listen(opts: ListenOptions) -> Result<(), String> {
         robot_reads,
         max_connections: opts.max_connections,
         max_queue: opts.max_queue.max(1),
+        show_max: opts.show_max,
+        write_timeout: if opts.write_timeout > 0.0 && opts.write_timeout.is_finite() {
+            Duration::try_from_secs_f64(opts.write_timeout).unwrap_or(Duration::MAX)
+        } else {
+            Duration::MAX
+        },
         exit_after: opts.exit_after,
         vars: Mutex::new(Vars::new(opts.max_vars)),
         conns: Mutex::new(BTreeMap::new()),
@@ -500,7 +533,36 @@ fn operator(shared: &Shared, line: &str) {
 /// make of it. A queue over `--max-queue` bytes means the robot is not reading: dropped.
 fn send(shared: &Shared, conn: &Conn, reply: &Reply, origin: &str) {
     let after_lf = conn.after_tuple_lf.load(Ordering::Relaxed);
-    for w in diagnose::diagnose(reply, shared.robot_reads.as_ref(), after_lf) {
+    let waited = conn
+        .waiting_since
+        .lock()
+        .unwrap_or_else(|p| p.into_inner())
+        .take()
+        .map(|t| t.elapsed());
+    if let Some(w) = waited.filter(|w| *w > ROBOT_READ_TIMEOUT) {
+        let text = format!(
+            "this reply comes {:.1} s after the robot's last message: a read with the default \
+             2 s timeout (always for socket_get_var) has already returned its sentinel \
+             ([0, nan...], [0, -1...], \"\", 0), and this reply will be seen by the robot's \
+             NEXT read; answer faster, or give the read a longer timeout=",
+            w.as_secs_f64()
+        );
+        shared.out.emit(
+            Kind::Warn,
+            Some(conn.id),
+            &format!("warning: {text}"),
+            json!({"event": "diagnosis", "message": text, "late_seconds": w.as_secs_f64()}),
+        );
+    }
+    // `--reply` and rules were checked once at start; what the operator types, each time.
+    let warnings = if origin == "operator" {
+        diagnose::diagnose(reply, shared.robot_reads.as_ref(), after_lf)
+    } else {
+        diagnose::leftover_lf(reply, shared.robot_reads.as_ref(), after_lf)
+            .into_iter()
+            .collect()
+    };
+    for w in warnings {
         shared.out.emit(
             Kind::Warn,
             Some(conn.id),
@@ -518,7 +580,7 @@ fn send(shared: &Shared, conn: &Conn, reply: &Reply, origin: &str) {
         return;
     }
     conn.stats.queued.fetch_add(len, Ordering::Relaxed);
-    if conn.tx.send(reply.bytes.clone()).is_err() {
+    if conn.tx.send((Instant::now(), reply.bytes.clone())).is_err() {
         conn.stats.queued.fetch_sub(len, Ordering::Relaxed);
         return;
     }
@@ -526,22 +588,46 @@ fn send(shared: &Shared, conn: &Conn, reply: &Reply, origin: &str) {
         diagnose::ends_with_tuple_and_lf(&reply.bytes),
         Ordering::Relaxed,
     );
+    if !shared.out.traffic_wanted() {
+        return;
+    }
     let (data, enc) = bytes_json(&reply.bytes);
     shared.out.emit(
         Kind::Traffic,
         Some(conn.id),
-        &format!("-> {:<4} {}", len, dump::chunk(&reply.bytes, "      ")),
+        &format!("-> {:<4} {}", len, dump::chunk(&reply.bytes, "      ", shared.show_max)),
         json!({"event": "tx", "origin": origin, "format": reply.format, "len": len, "data": data, "encoding": enc}),
     );
 }
 
+/// Writes queued replies in order. A reply still not handed to the kernel `stall` after
+/// it was queued means the robot reads too slowly or not at all: the connection is
+/// dropped (a slow trickle of reads does not keep it alive).
 async fn writer(
     mut wr: OwnedWriteHalf,
-    mut rx: mpsc::UnboundedReceiver<Vec<u8>>,
+    mut rx: mpsc::UnboundedReceiver<(Instant, Vec<u8>)>,
     stats: Arc<Stats>,
+    stall: Duration,
 ) {
-    while let Some(bytes) = rx.recv().await {
-        match wr.write_all(&bytes).await {
+    while let Some((queued_at, bytes)) = rx.recv().await {
+        let left = stall.saturating_sub(queued_at.elapsed());
+        let r = if stall == Duration::MAX {
+            wr.write_all(&bytes).await
+        } else {
+            match tokio::time::timeout(left, wr.write_all(&bytes)).await {
+                Ok(r) => r,
+                Err(_) => {
+                    stats.kill(format!(
+                        "the robot is not reading: a reply queued {:.1} s ago is still not \
+                         written (--write-timeout {:.1}); dropped",
+                        queued_at.elapsed().as_secs_f64(),
+                        stall.as_secs_f64()
+                    ));
+                    return;
+                }
+            }
+        };
+        match r {
             Ok(()) => {
                 stats
                     .tx_bytes
@@ -576,6 +662,7 @@ async fn serve(shared: Arc<Shared>, id: u64, stream: TcpStream, peer: String) {
         stats: Arc::clone(&stats),
         after_tuple_lf: AtomicBool::new(false),
         refused_sets: AtomicU64::new(0),
+        waiting_since: Mutex::new(None),
     });
     shared
         .conns
@@ -588,7 +675,7 @@ async fn serve(shared: Arc<Shared>, id: u64, stream: TcpStream, peer: String) {
         &format!("connected from {peer}"),
         json!({"event": "connect", "peer": peer}),
     );
-    let mut writer_task = tokio::spawn(writer(wr, rx, Arc::clone(&stats)));
+    let mut writer_task = tokio::spawn(writer(wr, rx, Arc::clone(&stats), shared.write_timeout));
 
     // Without --decode, lines are still split (silently) so SET/GET are answered.
     let mut decoder = match shared.decode {
@@ -616,11 +703,18 @@ async fn serve(shared: Arc<Shared>, id: u64, stream: TcpStream, peer: String) {
         };
         if n > 0 {
             stats.rx_bytes.fetch_add(n as u64, Ordering::Relaxed);
+            *conn.waiting_since.lock().unwrap_or_else(|p| p.into_inner()) = Some(Instant::now());
+        }
+        if n > 0 && shared.out.traffic_wanted() {
             let (data, enc) = bytes_json(&chunk[..n]);
             shared.out.emit(
                 Kind::Traffic,
                 Some(id),
-                &format!("<- {:<4} {}", n, dump::chunk(&chunk[..n], "      ")),
+                &format!(
+                    "<- {:<4} {}",
+                    n,
+                    dump::chunk(&chunk[..n], "      ", shared.show_max)
+                ),
                 json!({"event": "rx", "len": n, "data": data, "encoding": enc}),
             );
         }
@@ -779,6 +873,8 @@ fn handle_var(shared: &Shared, conn: &Conn, d: &Decoded) -> bool {
         Ok(VarMessage::Set { name, value }) => {
             shared.out.emit(Kind::Traffic, Some(id), &format!("   = SET {name} {value}"),
                 json!({"event": "decoded", "kind": "set", "message": {"type": "set", "name": name, "value": value}}));
+            // SET expects no reply: the robot is not waiting in a read for one.
+            *conn.waiting_since.lock().unwrap_or_else(|p| p.into_inner()) = None;
             let outcome = shared
                 .vars
                 .lock()

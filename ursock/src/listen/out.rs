@@ -68,6 +68,7 @@ pub struct Out {
     pub screen: Option<Mutex<Screen>>,
     json: bool,
     quiet: bool,
+    has_log: bool,
     start: Instant,
     log: Mutex<Option<BufWriter<File>>>,
     /// Serialises stdout writes so lines from several connections never interleave.
@@ -80,6 +81,7 @@ impl Out {
             screen: tui.then(|| Mutex::new(Screen::default())),
             json,
             quiet,
+            has_log: log.is_some(),
             start: Instant::now(),
             log: Mutex::new(log.map(BufWriter::new)),
             stdout: Mutex::new(()),
@@ -88,6 +90,12 @@ impl Out {
 
     pub fn is_json(&self) -> bool {
         self.json
+    }
+
+    /// Whether traffic lines go anywhere (`--quiet` without `--log` drops them): callers
+    /// skip formatting hex dumps nobody will see.
+    pub fn traffic_wanted(&self) -> bool {
+        !self.quiet || self.screen.is_some() || self.has_log
     }
 
     /// Seconds since the listener started.
@@ -139,6 +147,9 @@ impl Out {
     /// One event: `text` for people, `event` (an object) for `--json`. Both carry the
     /// connection number and the relative and wall-clock time.
     pub fn emit(&self, kind: Kind, conn: Option<u64>, text: &str, event: Value) {
+        if kind == Kind::Traffic && !self.traffic_wanted() {
+            return;
+        }
         let rel = self.rel();
         let now = SystemTime::now()
             .duration_since(UNIX_EPOCH)
@@ -175,7 +186,9 @@ impl Out {
             self.stderr_line(&format!("ursock: {human}"));
         }
         if self.json {
-            self.stdout_line(&json_line);
+            if kind != Kind::Traffic || !self.quiet {
+                self.stdout_line(&json_line);
+            }
         } else if kind == Kind::Note || (kind == Kind::Traffic && !self.quiet) {
             self.stdout_line(&human);
         }
