@@ -908,8 +908,10 @@ fn handle_var(shared: &Shared, conn: &Conn, d: &Decoded) -> bool {
                 .unwrap_or_else(|p| p.into_inner())
                 .get(name);
             if value.is_none() {
+                // Shown with the traffic it explains (a robot polling at 500 Hz must not
+                // flood a --quiet listener).
                 shared.out.emit(
-                    Kind::Note,
+                    Kind::Traffic,
                     Some(id),
                     &format!("unknown variable {name} (never SET), answered 0"),
                     json!({"event": "unknown-variable", "name": name, "answered": 0}),
