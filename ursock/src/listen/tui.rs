@@ -16,6 +16,7 @@ use super::Shared;
 struct Row {
     id: u64,
     label: String,
+    live: bool,
 }
 
 pub fn run(shared: &Shared, cmds: &mpsc::Sender<String>, done: &AtomicBool) -> Result<(), String> {
@@ -45,10 +46,12 @@ fn rows(shared: &Shared) -> Vec<Row> {
                     c.stats.rx_bytes.load(Ordering::Relaxed),
                     c.stats.tx_bytes.load(Ordering::Relaxed)
                 ),
+                live: true,
             },
             None => Row {
                 id,
                 label: format!("#{id} (closed)"),
+                live: false,
             },
         })
         .collect()
@@ -62,14 +65,21 @@ fn ui_loop(
 ) -> Result<(), String> {
     let mut input = String::new();
     let mut selected: Option<u64> = None;
+    // Until the user picks with Up/Down, the selection follows the newest live robot.
+    let mut picked = false;
     loop {
         if done.load(Ordering::Relaxed) {
             return Ok(());
         }
         let rows = rows(shared);
-        if selected.is_none_or(|s| !rows.iter().any(|r| r.id == s)) {
-            // Follow the newest live connection until the user picks one.
-            selected = rows.last().map(|r| r.id);
+        let selected_live = rows.iter().any(|r| Some(r.id) == selected && r.live);
+        if selected.is_none_or(|s| !rows.iter().any(|r| r.id == s)) || (!picked && !selected_live) {
+            selected = rows
+                .iter()
+                .rev()
+                .find(|r| r.live)
+                .or(rows.last())
+                .map(|r| r.id);
         }
         let index = rows.iter().position(|r| Some(r.id) == selected);
         let (traffic, status) = {
@@ -144,11 +154,13 @@ fn ui_loop(
             KeyCode::Esc => return Ok(()),
             KeyCode::Char('c') if key.modifiers.contains(KeyModifiers::CONTROL) => return Ok(()),
             KeyCode::Up => {
+                picked = true;
                 if let Some(i) = index {
                     selected = rows.get(i.saturating_sub(1)).map(|r| r.id);
                 }
             }
             KeyCode::Down => {
+                picked = true;
                 if let Some(i) = index {
                     selected = rows
                         .get((i + 1).min(rows.len().saturating_sub(1)))
