@@ -162,7 +162,7 @@ pub fn content(reply: &Reply, expect: Option<&ReadCall>) -> Vec<String> {
              them with `,`"
                 .to_string(),
         );
-    } else if !t.contains('(') {
+    } else if !t.contains('(') && looks_numeric(t) {
         w.push(
             "no parentheses: socket_read_ascii_float skips everything before `(` and waits for \
              one; wrap the values: `(0.1,0.2)`"

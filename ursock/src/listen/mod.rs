@@ -696,7 +696,12 @@ async fn serve(shared: Arc<Shared>, id: u64, stream: TcpStream, peer: String) {
             r = rd.read(&mut chunk) => match r {
                 Ok(n) => n,
                 Err(e) => {
-                    stats.kill(format!("read error: {e}"));
+                    if e.kind() == std::io::ErrorKind::ConnectionReset {
+                        // A robot program that stops with replies unread resets the socket.
+                        stats.kill("robot reset the connection".into());
+                    } else {
+                        stats.kill(format!("read error: {e}"));
+                    }
                     break;
                 }
             },
