@@ -379,7 +379,7 @@ impl DelimitedCodec {
 }
 
 /// Big-endian int32 (`socket_send_int`), one `i32` per item, as
-/// [`Int32Stream`](crate::adapters::Int32Stream) gives in every adapter. Encodes an `i32`
+/// [`Int32Stream`] gives in every adapter. Encodes an `i32`
 /// or a list of them (`&[i32]`, `Vec<i32>`, `[i32; N]`) for `socket_read_binary_integer`.
 ///
 /// ```
