@@ -69,7 +69,7 @@ fn the_buffer_bound_and_a_cut_message() {
         );
         assert!(matches!(
             r.next_with(|l| l.len()).await,
-            Err(Error::BufferFull)
+            Err(Error::BufferFull { capacity: 32 })
         ));
         let mut r: MessageReader<_, _, 64> = MessageReader::new(
             Trickle {
