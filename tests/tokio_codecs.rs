@@ -342,3 +342,31 @@ fn owned_forms_of_every_core_message() {
         }
     );
 }
+
+/// Both orders compose: `Tolerant<RequestReply<..>>` and `RequestReply<Tolerant<..>, ..>`.
+#[tokio::test]
+async fn tolerant_and_request_reply_compose_either_way() {
+    let input = b"SET A x\nGET A\n";
+    let outer: Vec<_> = FramedRead::new(
+        &input[..],
+        Tolerant::new(RequestReply::new(VarCodec::new(), Int32Codec::new())),
+    )
+    .collect()
+    .await;
+    let inner: Vec<_> = FramedRead::new(
+        &input[..],
+        RequestReply::new(Tolerant::new(VarCodec::new()), Int32Codec::new()),
+    )
+    .collect()
+    .await;
+    for items in [&outer, &inner] {
+        assert_eq!(items.len(), 2);
+        assert!(items[0].as_ref().unwrap().is_err());
+        assert_eq!(
+            items[1].as_ref().unwrap().as_ref().unwrap(),
+            &VarRequest::Get { name: "A".into() }
+        );
+    }
+    let mut c = Tolerant::new(RequestReply::new(VarCodec::new(), Int32Codec::new()));
+    assert_eq!(encoded(&mut c, [1, 2]).len(), 8);
+}

@@ -33,170 +33,32 @@ use std::io::{self, Read, Write};
 use std::vec::Vec;
 
 use crate::adapters::OwnedDecoder;
-use crate::{DecodeError, Decoder, EncodeError, RecvBuffer};
+use crate::{Decoder, EncodeError, RecvBuffer};
 
 /// Default receive buffer of a [`MessageReader`]: 64 KiB, above every core decoder's
 /// default bound.
 pub const DEFAULT_CAPACITY: usize = 64 * 1024;
 
-/// Why a [`MessageReader`] call failed.
+/// Why a [`MessageReader`] call failed: the adapters' [`Error`](crate::adapters::Error)
+/// over `std::io::Error`. Converts into `std::io::Error`.
 ///
 /// ```
 /// use urscript_socket::adapters::blocking::ReadError;
 /// let e = ReadError::TimedOut;
 /// assert_eq!(e.to_string(), "no complete message before the read timeout");
+/// assert_eq!(std::io::Error::from(e).kind(), std::io::ErrorKind::TimedOut);
 /// ```
-#[derive(Debug)]
-#[non_exhaustive]
-pub enum ReadError {
-    /// The transport failed.
-    Io(io::Error),
-    /// Bad bytes: what and where. The reader has already skipped them; the next call
-    /// goes on with the next message.
-    Decode(DecodeError),
-    /// The peer closed in the middle of a message (every complete message before it was
-    /// delivered first). `Decode` errors of kind `Truncated` say the same with an offset;
-    /// this variant is used when no decoder offset applies.
-    ClosedMidMessage,
-    /// The read timeout set on the transport passed first; call again to go on waiting.
-    TimedOut,
-    /// The buffer is full and still holds no complete message.
-    BufferFull {
-        /// The buffer's capacity.
-        capacity: usize,
-    },
-    /// An encoder refused the message. (Kept for compatibility: [`MessageWriter`]
-    /// reports this as [`WriteError::Encode`].)
-    Encode(EncodeError),
-}
+pub type ReadError = crate::adapters::Error<io::Error>;
 
-impl ReadError {
-    /// Whether reading can go on after this error: bad bytes (already skipped) and a
-    /// read timeout are recoverable; a transport error, a close mid-message and a full
-    /// buffer are not. The iterator ends after the first unrecoverable error.
-    ///
-    /// ```
-    /// use urscript_socket::adapters::blocking::ReadError;
-    /// assert!(ReadError::TimedOut.is_recoverable());
-    /// assert!(!ReadError::BufferFull { capacity: 8 }.is_recoverable());
-    /// ```
-    pub fn is_recoverable(&self) -> bool {
-        matches!(self, ReadError::Decode(_) | ReadError::TimedOut)
-    }
-}
-
-/// For `?` in functions returning `io::Result`: a transport error comes back as it was,
-/// bad bytes as `InvalidData`, a timeout as `TimedOut`, a cut message as
-/// `UnexpectedEof`, a full buffer as `OutOfMemory`.
-///
-/// ```
-/// use urscript_socket::adapters::blocking::ReadError;
-/// let e = std::io::Error::from(ReadError::TimedOut);
-/// assert_eq!(e.kind(), std::io::ErrorKind::TimedOut);
-/// ```
-impl From<ReadError> for io::Error {
-    fn from(e: ReadError) -> Self {
-        let kind = match &e {
-            ReadError::Io(_) => {
-                return match e {
-                    ReadError::Io(inner) => inner,
-                    _ => io::Error::other(e),
-                }
-            }
-            ReadError::Decode(_) => io::ErrorKind::InvalidData,
-            ReadError::ClosedMidMessage => io::ErrorKind::UnexpectedEof,
-            ReadError::TimedOut => io::ErrorKind::TimedOut,
-            ReadError::BufferFull { .. } => io::ErrorKind::OutOfMemory,
-            ReadError::Encode(_) => io::ErrorKind::InvalidInput,
-        };
-        io::Error::new(kind, e)
-    }
-}
-
-/// Why a [`MessageWriter::send`] failed.
+/// Why a [`MessageWriter::send`] failed (`Io` or `Encode`): the same type as
+/// [`ReadError`]. Converts into `std::io::Error`.
 ///
 /// ```
 /// use urscript_socket::{adapters::blocking::WriteError, EncodeError};
 /// let e = WriteError::Encode(EncodeError::NoValues);
 /// assert_eq!(std::io::Error::from(e).kind(), std::io::ErrorKind::InvalidInput);
 /// ```
-#[derive(Debug)]
-#[non_exhaustive]
-pub enum WriteError {
-    /// The transport failed.
-    Io(io::Error),
-    /// The encoder refused the message; nothing was written.
-    Encode(EncodeError),
-}
-
-impl core::fmt::Display for WriteError {
-    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
-        match self {
-            WriteError::Io(e) => write!(f, "transport error: {e}"),
-            WriteError::Encode(e) => write!(f, "cannot encode: {e}"),
-        }
-    }
-}
-
-impl std::error::Error for WriteError {
-    fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
-        match self {
-            WriteError::Io(e) => Some(e),
-            WriteError::Encode(e) => Some(e),
-        }
-    }
-}
-
-/// A transport error comes back as it was; a refused value as `InvalidInput`.
-impl From<WriteError> for io::Error {
-    fn from(e: WriteError) -> Self {
-        match e {
-            WriteError::Io(e) => e,
-            WriteError::Encode(_) => io::Error::new(io::ErrorKind::InvalidInput, e),
-        }
-    }
-}
-
-impl From<EncodeError> for WriteError {
-    fn from(e: EncodeError) -> Self {
-        WriteError::Encode(e)
-    }
-}
-
-impl From<io::Error> for WriteError {
-    fn from(e: io::Error) -> Self {
-        WriteError::Io(e)
-    }
-}
-
-impl core::fmt::Display for ReadError {
-    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
-        match self {
-            ReadError::Io(e) => write!(f, "transport error: {e}"),
-            ReadError::Decode(e) => write!(f, "bad input: {e}"),
-            ReadError::ClosedMidMessage => f.write_str("peer closed in the middle of a message"),
-            ReadError::TimedOut => f.write_str("no complete message before the read timeout"),
-            ReadError::BufferFull { capacity } => {
-                write!(
-                    f,
-                    "receive buffer of {capacity} bytes full without a complete message"
-                )
-            }
-            ReadError::Encode(e) => write!(f, "cannot encode: {e}"),
-        }
-    }
-}
-
-impl std::error::Error for ReadError {
-    fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
-        match self {
-            ReadError::Io(e) => Some(e),
-            ReadError::Decode(e) => Some(e),
-            ReadError::Encode(e) => Some(e),
-            _ => None,
-        }
-    }
-}
+pub type WriteError = crate::adapters::Error<io::Error>;
 
 /// Reads messages of one format from a blocking reader: a core decoder over a bounded
 /// buffer.

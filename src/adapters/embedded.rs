@@ -4,40 +4,17 @@
 use embedded_io_async::{Read, Write};
 
 use crate::adapters::OwnedDecoder;
-use crate::{DecodeError, Decoder, EncodeError, RecvBuffer, SliceSink};
+use crate::{Decoder, EncodeError, RecvBuffer, SliceSink};
 
-/// Why an embedded read or write failed.
+/// Why an embedded read or write failed: the adapters' shared error, over the socket's
+/// error type.
 ///
 /// ```
 /// use urscript_socket::adapters::embedded::Error;
-/// let e: Error<core::convert::Infallible> = Error::BufferFull;
-/// assert_eq!(format!("{e}"), "receive buffer full without a complete message");
+/// let e: Error<core::convert::Infallible> = Error::BufferFull { capacity: 256 };
+/// assert_eq!(format!("{e}"), "receive buffer of 256 bytes full without a complete message");
 /// ```
-#[derive(Debug)]
-#[non_exhaustive]
-pub enum Error<E> {
-    /// The transport failed.
-    Io(E),
-    /// Bad bytes (already skipped: calling again goes on with the next message).
-    Decode(DecodeError),
-    /// The encoder refused the message or the scratch buffer is too small.
-    Encode(EncodeError),
-    /// The buffer is full and holds no complete message.
-    BufferFull,
-}
-
-impl<E: core::fmt::Debug> core::fmt::Display for Error<E> {
-    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
-        match self {
-            Error::Io(e) => write!(f, "transport error: {e:?}"),
-            Error::Decode(e) => write!(f, "bad input: {e}"),
-            Error::Encode(e) => write!(f, "cannot encode: {e}"),
-            Error::BufferFull => f.write_str("receive buffer full without a complete message"),
-        }
-    }
-}
-
-impl<E: core::fmt::Debug> core::error::Error for Error<E> {}
+pub use crate::adapters::Error;
 
 /// Reads messages of one format from an `embedded_io_async::Read`, through a core decoder
 /// over an `N`-byte buffer (the memory bound).
@@ -116,7 +93,7 @@ impl<R: Read, D: Decoder, const N: usize> MessageReader<R, D, N> {
             }
             let space = self.rx.spare();
             if space.is_empty() {
-                return Err(Error::BufferFull);
+                return Err(Error::BufferFull { capacity: N });
             }
             match self.reader.read(space).await {
                 Ok(0) => self.eof = true,

@@ -12,11 +12,16 @@
 //!
 //! Shared by all three:
 //!
+//! * [`Error`]`<E>`: the one error type, generic over the transport's error; it converts
+//!   into `std::io::Error` for the std transports.
 //! * [`Int32Stream`] and [`ByteStream`]: a server reading the robot's `socket_send_int` /
 //!   `socket_send_byte` gets one `i32` / `u8` per message, whatever the adapter.
 //! * [`OwnedDecoder`]: the owned form of every core decoder's message (`i32`, `u8`,
 //!   `FloatTuple`; with `alloc` also `Vec<u8>`, `Vec<i32>` and `VarRequest`), which the
 //!   blocking iterator and the embedded `next_owned` yield.
+
+mod error;
+pub use error::Error;
 
 mod single;
 pub use single::{ByteStream, Int32Stream};

@@ -53,95 +53,21 @@ use crate::robot::{Policy, ReadCall, ReadResult, RobotError, SocketConnection, T
 use crate::string::{encode_string, DelimitedDecoder};
 use crate::stx_etx::{encode_stx_etx, StxEtxDecoder};
 use crate::var::{encode_var_reply, VarMessageDecoder};
-use crate::{ArgumentError, DecodeError, Decoder, EncodeError, Status};
+use crate::{ArgumentError, DecodeError, Decoder, Status};
 
-/// The error of every codec here: the transport, bad bytes (what and where), or a
-/// value the encoder refuses.
+/// The error of every codec here: the adapters' [`Error`](crate::adapters::Error) over
+/// `std::io::Error` (the transport, bad bytes with what and where, a value the encoder
+/// refuses, [`WrongCount`](crate::adapters::Error::WrongCount)). Converts into
+/// `std::io::Error`, so `?` works in a function returning `io::Result`.
 ///
 /// ```
 /// use urscript_socket::adapters::tokio::CodecError;
 /// let e = CodecError::from(std::io::Error::other("boom"));
 /// assert!(e.to_string().contains("boom"));
-/// ```
-#[derive(Debug)]
-#[non_exhaustive]
-pub enum CodecError {
-    /// The transport failed.
-    Io(std::io::Error),
-    /// Bad bytes.
-    Decode(DecodeError),
-    /// A value that cannot be encoded.
-    Encode(EncodeError),
-    /// A list of another length than the codec was made for (e.g. 5 values given to
-    /// `FloatTupleCodec::new(6)`): the robot's read would fail on it.
-    WrongCount {
-        /// Values per message the codec was made for.
-        expected: usize,
-        /// Values given.
-        found: usize,
-    },
-}
-
-impl core::fmt::Display for CodecError {
-    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
-        match self {
-            CodecError::Io(e) => write!(f, "transport error: {e}"),
-            CodecError::Decode(e) => write!(f, "bad input: {e}"),
-            CodecError::Encode(e) => write!(f, "cannot encode: {e}"),
-            CodecError::WrongCount { expected, found } => write!(
-                f,
-                "cannot encode: {found} values given to a codec of {expected} values per message"
-            ),
-        }
-    }
-}
-
-impl std::error::Error for CodecError {
-    fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
-        match self {
-            CodecError::Io(e) => Some(e),
-            CodecError::Decode(e) => Some(e),
-            CodecError::Encode(e) => Some(e),
-            CodecError::WrongCount { .. } => None,
-        }
-    }
-}
-
-impl From<std::io::Error> for CodecError {
-    fn from(e: std::io::Error) -> Self {
-        CodecError::Io(e)
-    }
-}
-
-impl From<DecodeError> for CodecError {
-    fn from(e: DecodeError) -> Self {
-        CodecError::Decode(e)
-    }
-}
-
-impl From<EncodeError> for CodecError {
-    fn from(e: EncodeError) -> Self {
-        CodecError::Encode(e)
-    }
-}
-
-/// For `?` in functions returning `io::Result`: transport errors come back as they were,
-/// the others as `InvalidData` (bad bytes) or `InvalidInput` (a value refused).
-///
-/// ```
-/// use urscript_socket::adapters::tokio::CodecError;
 /// let e = std::io::Error::from(CodecError::WrongCount { expected: 6, found: 5 });
 /// assert_eq!(e.kind(), std::io::ErrorKind::InvalidInput);
 /// ```
-impl From<CodecError> for std::io::Error {
-    fn from(e: CodecError) -> Self {
-        match e {
-            CodecError::Io(e) => e,
-            CodecError::Decode(_) => std::io::Error::new(std::io::ErrorKind::InvalidData, e),
-            _ => std::io::Error::new(std::io::ErrorKind::InvalidInput, e),
-        }
-    }
-}
+pub type CodecError = crate::adapters::Error<std::io::Error>;
 
 /// Runs a core decoder whose item is a slice of the buffer; returns the payload as
 /// `Bytes` split off `src` (no copy).
@@ -379,7 +305,7 @@ impl DelimitedCodec {
 }
 
 /// Big-endian int32 (`socket_send_int`), one `i32` per item, as
-/// [`Int32Stream`](crate::adapters::Int32Stream) gives in every adapter. Encodes an `i32`
+/// [`Int32Stream`] gives in every adapter. Encodes an `i32`
 /// or a list of them (`&[i32]`, `Vec<i32>`, `[i32; N]`) for `socket_read_binary_integer`.
 ///
 /// ```
