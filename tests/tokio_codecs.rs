@@ -370,3 +370,54 @@ async fn tolerant_and_request_reply_compose_either_way() {
     let mut c = Tolerant::new(RequestReply::new(VarCodec::new(), Int32Codec::new()));
     assert_eq!(encoded(&mut c, [1, 2]).len(), 8);
 }
+
+/// The run-time codec decodes every registry format, byte by byte as whole, and its
+/// owned items print as the borrowed messages do.
+#[test]
+fn format_codec_covers_every_registry_format() {
+    use urscript_socket::format::Format;
+    let cases: [(Format, &[u8], &str); 10] = [
+        (
+            Format::FloatTuple { number: 2 },
+            b"(1.5,-3)",
+            "[2, 1.5, -3]",
+        ),
+        (Format::Int32 { number: 1 }, &[0, 0, 0, 7], "[7]"),
+        (Format::Bytes { number: 2 }, &[2, 65], "[2, 65]"),
+        (Format::Line, b"hi\r\n", "\"hi\""),
+        (
+            Format::String {
+                prefix: b">",
+                suffix: b"<",
+                interpret_escape: false,
+            },
+            b"junk>ok<",
+            "\"ok\"",
+        ),
+        (Format::Delimited { delimiter: b";" }, b"a;", "\"a\""),
+        (Format::StxEtx, b"\x02ab\x03", "\"ab\""),
+        (Format::Var, b"GET X\n", "GET X"),
+        (Format::VarReply { name: "X" }, b"X 5\n", "5"),
+        (
+            Format::Value,
+            b"p[1, 2, 3, 0, 0, 0.5]\n",
+            "p[1, 2, 3, 0, 0, 0.5]",
+        ),
+    ];
+    for (format, bytes, text) in cases {
+        let mut whole = urscript_socket::adapters::tokio::FormatCodec::new(format).unwrap();
+        let mut buf = bytes::BytesMut::from(bytes);
+        let got = whole.decode(&mut buf).unwrap().unwrap();
+        assert_eq!(got.to_string(), text, "{format}");
+        let mut bytewise = urscript_socket::adapters::tokio::FormatCodec::new(format).unwrap();
+        let mut buf = bytes::BytesMut::new();
+        let mut items = Vec::new();
+        for b in bytes {
+            buf.extend_from_slice(&[*b]);
+            if let Some(m) = bytewise.decode(&mut buf).unwrap() {
+                items.push(m);
+            }
+        }
+        assert_eq!(items, [got], "{format}");
+    }
+}

@@ -188,3 +188,12 @@ impl From<VarMessage<'_>> for VarRequest {
         }
     }
 }
+
+/// The registry's run-time decoder: any format, owned [`OwnedMessage`] items.
+#[cfg(feature = "alloc")]
+impl OwnedDecoder for crate::format::AnyDecoder {
+    type Owned = crate::format::OwnedMessage;
+    fn to_owned_item(item: crate::format::Message<'_>) -> crate::format::OwnedMessage {
+        crate::format::OwnedMessage::from(&item)
+    }
+}

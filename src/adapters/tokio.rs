@@ -520,6 +520,54 @@ impl<S: AsRef<str>> codec::Encoder<(S, i32)> for VarCodec {
     }
 }
 
+/// Any format of the registry, chosen at run time ([`Format`](crate::format::Format)):
+/// items are [`OwnedMessage`](crate::format::OwnedMessage)s. A format added to the
+/// registry works here with no new codec. Decoding only: pair it with an encoding codec
+/// in a [`RequestReply`] to answer.
+///
+/// ```
+/// use bytes::BytesMut;
+/// use tokio_util::codec::Decoder;
+/// use urscript_socket::adapters::tokio::FormatCodec;
+/// use urscript_socket::format::{Format, OwnedMessage};
+/// let mut codec = FormatCodec::new(Format::Int32 { number: 2 }).unwrap();
+/// let mut buf = BytesMut::from(&[0, 0, 0, 1, 0xFF, 0xFF, 0xFF, 0xFF][..]);
+/// assert_eq!(codec.decode(&mut buf).unwrap(), Some(OwnedMessage::Int32(vec![1, -1])));
+/// ```
+#[derive(Debug, Clone)]
+pub struct FormatCodec {
+    inner: crate::format::AnyDecoder,
+}
+
+impl FormatCodec {
+    /// A codec for `format`, with its default bounds. Errors as [`Format::decoder`](crate::format::Format::decoder).
+    ///
+    /// ```
+    /// # use urscript_socket::{adapters::tokio::FormatCodec, format::Format};
+    /// assert!(FormatCodec::new(Format::Bytes { number: 0 }).is_err());
+    /// ```
+    pub fn new(format: crate::format::Format<'_>) -> Result<Self, ArgumentError> {
+        Ok(FormatCodec {
+            inner: format.decoder()?,
+        })
+    }
+}
+
+impl codec::Decoder for FormatCodec {
+    type Item = crate::format::OwnedMessage;
+    type Error = CodecError;
+    fn decode(&mut self, src: &mut BytesMut) -> Result<Option<Self::Item>, CodecError> {
+        decode_value(&mut self.inner, src, false, |m| {
+            crate::format::OwnedMessage::from(&m)
+        })
+    }
+    fn decode_eof(&mut self, src: &mut BytesMut) -> Result<Option<Self::Item>, CodecError> {
+        decode_value(&mut self.inner, src, true, |m| {
+            crate::format::OwnedMessage::from(&m)
+        })
+    }
+}
+
 /// ASCII float tuples: encodes what a server sends for `socket_read_ascii_float(number)`
 /// (with a trailing LF if asked), and decodes tuples as the robot reads them.
 ///
