@@ -36,7 +36,7 @@ use crate::{ArgumentError, DecodeError, Decoder, Status};
 /// The most values one read or message of a counted format holds: the controller's
 /// limit for `socket_read_ascii_float`, `socket_read_binary_integer` and
 /// `socket_read_byte_list` (`number` in 1..=30). The crate's one
-/// [`MAX_VALUES`](crate::MAX_VALUES), re-exported here.
+/// `MAX_VALUES`, re-exported here.
 pub use crate::MAX_VALUES;
 
 /// Every format on the wire between a UR robot and its server, with its parameters.

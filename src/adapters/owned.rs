@@ -189,7 +189,7 @@ impl From<VarMessage<'_>> for VarRequest {
     }
 }
 
-/// The registry's run-time decoder: any format, owned [`OwnedMessage`] items.
+/// The registry's run-time decoder: any format, owned [`OwnedMessage`](crate::format::OwnedMessage) items.
 #[cfg(feature = "alloc")]
 impl OwnedDecoder for crate::format::AnyDecoder {
     type Owned = crate::format::OwnedMessage;
