@@ -45,10 +45,6 @@ pub enum Error<E> {
     },
     /// The read timeout set on the transport passed first; call again to go on waiting.
     TimedOut,
-    /// The peer closed in the middle of a message (every complete message before it was
-    /// delivered first). `Decode` errors of kind `Truncated` say the same with an offset;
-    /// this variant is used when no decoder offset applies.
-    ClosedMidMessage,
 }
 
 impl<E> Error<E> {
@@ -84,7 +80,6 @@ impl<E: fmt::Display> fmt::Display for Error<E> {
                 "receive buffer of {capacity} bytes full without a complete message"
             ),
             Error::TimedOut => f.write_str("no complete message before the read timeout"),
-            Error::ClosedMidMessage => f.write_str("peer closed in the middle of a message"),
         }
     }
 }
@@ -143,7 +138,6 @@ impl From<Error<std::io::Error>> for std::io::Error {
             Error::Encode(_) | Error::WrongCount { .. } => K::InvalidInput,
             Error::BufferFull { .. } => K::OutOfMemory,
             Error::TimedOut => K::TimedOut,
-            Error::ClosedMidMessage => K::UnexpectedEof,
         };
         std::io::Error::new(kind, e)
     }
