@@ -12,6 +12,8 @@ mod offline;
 pub mod out;
 mod script;
 mod show;
+mod typed;
+mod vars;
 
 use clap::{Parser, Subcommand};
 use urscript_socket::robot::ReadCall;
@@ -48,7 +50,7 @@ enum Command {
         /// are still answered and `--reply` answers each chunk received.
         #[arg(long, value_enum)]
         decode: Option<DecodeFormat>,
-        /// Delimiter for `--decode delimiter` (`\r`, `\n`, `\t` are interpreted).
+        /// Delimiter for `--decode delimiter` (escapes `\r \n \t \0 \\ \xHH` are interpreted).
         #[arg(long, default_value = "\\n")]
         delimiter: String,
         /// Reply to each decoded message (or each chunk without --decode), e.g.
@@ -169,7 +171,7 @@ enum Command {
         /// The format.
         #[arg(value_enum)]
         format: DecodeFormat,
-        /// Delimiter for `delimiter` (`\r`, `\n`, `\t` are interpreted).
+        /// Delimiter for `delimiter` (escapes `\r \n \t \0 \\ \xHH` are interpreted).
         #[arg(long, default_value = "\\n")]
         delimiter: String,
         /// One JSON object per line; text as {"encoding":"utf-8","text":...}, other
@@ -205,28 +207,9 @@ enum ReadCmd {
     },
 }
 
-/// `\r`, `\n`, `\t`, `\\` in a command-line delimiter.
-fn unescape(s: &str) -> Vec<u8> {
-    let mut out = Vec::new();
-    let mut it = s.bytes().peekable();
-    while let Some(b) = it.next() {
-        if b == b'\\' {
-            match it.peek() {
-                Some(b'n') => out.push(b'\n'),
-                Some(b'r') => out.push(b'\r'),
-                Some(b't') => out.push(b'\t'),
-                Some(b'\\') => out.push(b'\\'),
-                _ => {
-                    out.push(b);
-                    continue;
-                }
-            }
-            it.next();
-        } else {
-            out.push(b);
-        }
-    }
-    out
+/// A command-line delimiter, with the escapes of [`typed::unescape`].
+fn parse_delimiter(s: &str) -> Result<Vec<u8>, String> {
+    typed::unescape(s).map_err(|e| format!("--delimiter: {e}"))
 }
 
 fn run(cli: Cli) -> Result<(), String> {
@@ -254,7 +237,7 @@ fn run(cli: Cli) -> Result<(), String> {
             bind,
             port,
             decode,
-            delimiter: unescape(&delimiter),
+            delimiter: parse_delimiter(&delimiter)?,
             reply,
             exit_after,
             max_connections,
@@ -326,7 +309,12 @@ fn run(cli: Cli) -> Result<(), String> {
             delimiter,
             json,
             allow_unterminated,
-        } => offline::decode(format, &unescape(&delimiter), json, allow_unterminated),
+        } => offline::decode(
+            format,
+            &parse_delimiter(&delimiter)?,
+            json,
+            allow_unterminated,
+        ),
     }
 }
 

@@ -13,7 +13,6 @@ mod out;
 mod rules;
 mod spec;
 mod tui;
-mod vars;
 
 use std::collections::BTreeMap;
 use std::path::PathBuf;
@@ -26,18 +25,16 @@ use tokio::io::{AsyncReadExt, AsyncWriteExt};
 use tokio::net::tcp::OwnedWriteHalf;
 use tokio::net::{TcpListener, TcpStream};
 use tokio::sync::{mpsc, Notify};
-use urscript_socket::line::LineDecoder;
 use urscript_socket::robot::ReadCall;
-use urscript_socket::var::{
-    encode_var_reply, parse_var_message, VarMessage, DEFAULT_MAX_VAR_LINE_LEN,
-};
+use urscript_socket::var::{encode_var_reply, parse_var_message, VarMessage};
 use urscript_socket::RecvBuffer;
 
-use crate::formats::{AnyDecoder, DecodeFormat};
-use crate::show::Message;
+use urscript_socket::format::{Format, Message};
+
+use crate::formats::{drain, DecodeFormat};
+use crate::vars::{self, SetOutcome, Vars};
 use out::{bytes_json, Kind, Out};
 use spec::Reply;
-use vars::{SetOutcome, Vars};
 
 pub const DEFAULT_MAX_CONNECTIONS: usize = 64;
 pub const DEFAULT_MAX_VARS: usize = 1024;
@@ -145,30 +142,31 @@ struct Decoded {
     json: Value,
 }
 
-fn own(m: &Message<'_>) -> Decoded {
+/// `text_kind`: what a text message is called (`line`, `frame`, `string`).
+fn own(m: &Message<'_>, text_kind: &'static str) -> Decoded {
     match m {
-        Message::Text(kind, t) => Decoded {
-            kind,
+        Message::Text(t) => Decoded {
+            kind: text_kind,
             shown: dump::text(t),
             raw: t.to_vec(),
             is_text: true,
             json: {
                 let (v, enc) = bytes_json(t);
-                json!({"type": kind, "value": v, "encoding": enc})
+                json!({"type": text_kind, "value": v, "encoding": enc})
             },
         },
         other => {
-            let shown = other.text();
+            let shown = crate::show::message_text(other);
             let kind = match other {
-                Message::Int(_) => "int32",
-                Message::Byte(_) => "byte",
+                Message::Int32(_) => "int32",
+                Message::Bytes(_) => "byte",
                 Message::Var(VarMessage::Set { .. }) => "set",
                 Message::Var(VarMessage::Get { .. }) => "get",
                 _ => "value",
             };
             let json = match other {
-                Message::Int(v) => json!({"type": kind, "value": v}),
-                Message::Byte(b) => json!({"type": kind, "value": b}),
+                Message::Int32(v) if v.len() == 1 => json!({"type": kind, "value": v.get(0)}),
+                Message::Bytes([b]) => json!({"type": kind, "value": b}),
                 _ => json!({"type": kind, "text": shown}),
             };
             Decoded {
@@ -196,7 +194,7 @@ pub fn listen(opts: ListenOptions) -> Result<(), String> {
         None => None,
     };
     if let Some(format) = opts.decode {
-        AnyDecoder::new(format, &opts.delimiter)?;
+        format.decoder(&opts.delimiter)?;
     }
     if opts.max_connections == 0 {
         return Err("--max-connections must be at least 1".into());
@@ -677,16 +675,15 @@ async fn serve(shared: Arc<Shared>, id: u64, stream: TcpStream, peer: String) {
     );
     let mut writer_task = tokio::spawn(writer(wr, rx, Arc::clone(&stats), shared.write_timeout));
 
-    // Without --decode, lines are still split (silently) so SET/GET are answered.
+    // Without --decode, lines are still split (silently) so SET/GET are answered; with
+    // `--decode var` too, so a malformed variable line can be shown and explained.
     let mut decoder = match shared.decode {
-        Some(DecodeFormat::Var) => {
-            AnyDecoder::Line(LineDecoder::with_max_len(DEFAULT_MAX_VAR_LINE_LEN))
-        }
-        Some(f) => {
-            AnyDecoder::new(f, &shared.delimiter).unwrap_or(AnyDecoder::Line(LineDecoder::new()))
-        }
-        None => AnyDecoder::Line(LineDecoder::new()),
-    };
+        Some(f) if f != DecodeFormat::Var => f.decoder(&shared.delimiter).ok(),
+        _ => None,
+    }
+    .map_or_else(|| Format::Line.decoder(), Ok)
+    .expect("the line decoder takes no arguments");
+    let text_kind = shared.decode.map_or("line", DecodeFormat::text_kind);
     let mut rx_buf = RecvBuffer::with_capacity(RX_CAPACITY);
     let mut chunk = vec![0u8; READ_CHUNK];
     let mut peer_closed = false;
@@ -731,10 +728,15 @@ async fn serve(shared: Arc<Shared>, id: u64, stream: TcpStream, peer: String) {
             let got = rx_buf.extend(&chunk[taken..n]);
             taken += got;
             let before = decoded.len() + errors.len();
-            decoder.drain(&mut rx_buf, eof && taken >= n, &mut |m| match m {
-                Ok(msg) => decoded.push(own(&msg)),
-                Err(e) => errors.push(e.to_string()),
-            });
+            drain(
+                &mut decoder,
+                &mut rx_buf,
+                eof && taken >= n,
+                &mut |m| match m {
+                    Ok(msg) => decoded.push(own(&msg, text_kind)),
+                    Err(e) => errors.push(e.to_string()),
+                },
+            );
             if taken >= n {
                 break;
             }
