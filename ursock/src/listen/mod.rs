@@ -7,7 +7,6 @@
 //! Limits (`--max-connections`, `--max-vars`, `--max-queue`) bound what a peer can make
 //! the listener hold; accept errors (out of descriptors) back off and are said once.
 
-mod diagnose;
 mod dump;
 mod out;
 mod rules;
@@ -31,6 +30,7 @@ use urscript_socket::RecvBuffer;
 
 use urscript_socket::format::{Format, Message};
 
+use crate::diagnose;
 use crate::formats::{drain, DecodeFormat};
 use crate::vars::{self, SetOutcome, Vars};
 use out::{bytes_json, Kind, Out};
@@ -225,7 +225,7 @@ pub fn listen(opts: ListenOptions) -> Result<(), String> {
             .iter()
             .map(|r| (format!("--rules line {}", r.line), &r.reply)),
     ) {
-        for w in diagnose::content(r, robot_reads.as_ref()) {
+        for w in diagnose::reply(&r.sent(), robot_reads.as_ref(), false) {
             out.emit(
                 Kind::Warn,
                 None,
@@ -554,9 +554,9 @@ fn send(shared: &Shared, conn: &Conn, reply: &Reply, origin: &str) {
     }
     // `--reply` and rules were checked once at start; what the operator types, each time.
     let warnings = if origin == "operator" {
-        diagnose::diagnose(reply, shared.robot_reads.as_ref(), after_lf)
+        diagnose::reply(&reply.sent(), shared.robot_reads.as_ref(), after_lf)
     } else {
-        diagnose::leftover_lf(reply, shared.robot_reads.as_ref(), after_lf)
+        diagnose::leftover_lf(&reply.sent(), shared.robot_reads.as_ref(), after_lf)
             .into_iter()
             .collect()
     };

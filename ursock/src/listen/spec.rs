@@ -6,6 +6,7 @@
 //! * `text TEXT`: TEXT with escapes interpreted (`\r`, `\n`, `\t`, `\0`, `\\`, `\xHH`);
 //! * `hex 02 41 03` (or `024103`, `0x02 0x41`): raw bytes.
 
+use crate::diagnose::Sent;
 use crate::formats::encode_server;
 
 /// A checked reply: its bytes and what kind of read it is meant for.
@@ -16,14 +17,14 @@ pub struct Reply {
 }
 
 impl Reply {
-    /// A float tuple from `floats`/`floats-lf`.
-    pub fn is_float_tuple(&self) -> bool {
-        self.format == "floats" || self.format == "floats-lf"
-    }
-
-    /// Bytes meant for a binary read (`int32`, `bytes`).
-    pub fn is_binary(&self) -> bool {
-        self.format == "int32" || self.format == "bytes"
+    /// The reply as the diagnosis rules see it: a float tuple from `floats`/`floats-lf`,
+    /// bytes meant for a binary read from `int32`/`bytes`.
+    pub fn sent(&self) -> Sent<'_> {
+        Sent {
+            bytes: &self.bytes,
+            float_tuple: self.format == "floats" || self.format == "floats-lf",
+            binary: self.format == "int32" || self.format == "bytes",
+        }
     }
 }
 
