@@ -74,6 +74,11 @@ impl DecodeFormat {
     }
 }
 
+/// `--delimiter`'s bytes, with the escapes of [`crate::typed::unescape`].
+pub fn delimiter(s: &str) -> Result<Vec<u8>, String> {
+    crate::typed::unescape(s).map_err(|e| format!("--delimiter: {e}"))
+}
+
 /// Decodes every complete message in `rx`, calling `on` for each message or error.
 /// With `eof`, the end of input is applied afterwards (the core's `decode_eof`).
 pub fn drain<S: AsRef<[u8]> + AsMut<[u8]>>(
@@ -124,11 +129,21 @@ fn one(value: &str, escapes: bool) -> Result<Vec<u8>, String> {
     text(std::slice::from_ref(&value.to_string()), escapes)
 }
 
-fn at_least_one(values: &[String], format: &str) -> Result<(), String> {
+/// The values as numbers, `what` naming their kind in errors.
+fn nums<T: std::str::FromStr>(values: &[String], what: &str) -> Result<Vec<T>, String> {
+    values.iter().map(|s| num(s, what)).collect()
+}
+
+/// [`nums`] of a counted format, which needs at least one value.
+fn counted<T: std::str::FromStr>(
+    values: &[String],
+    format: &str,
+    what: &str,
+) -> Result<Vec<T>, String> {
     if values.is_empty() {
         return Err(format!("{format}: at least one value is required"));
     }
-    Ok(())
+    nums(values, what)
 }
 
 /// Encodes what a server sends: `floats`, `int32`, `bytes`, `string`, `line`,
@@ -146,24 +161,11 @@ pub fn encode_server_with(
     let mut out = Vec::new();
     let r = match format {
         "hex" => return crate::typed::hex(values.iter().map(String::as_str)),
-        "floats" => {
-            let v: Vec<f64> = values.iter().map(|s| num(s, "float")).collect::<Result<_, _>>()?;
-            encode_float_tuple(&v, false, &mut out)
+        "floats" | "floats-lf" => {
+            encode_float_tuple(&nums(values, "float")?, format == "floats-lf", &mut out)
         }
-        "floats-lf" => {
-            let v: Vec<f64> = values.iter().map(|s| num(s, "float")).collect::<Result<_, _>>()?;
-            encode_float_tuple(&v, true, &mut out)
-        }
-        "int32" => {
-            at_least_one(values, "int32")?;
-            let v: Vec<i32> = values.iter().map(|s| num(s, "int32")).collect::<Result<_, _>>()?;
-            encode_int32_list(&v, &mut out)
-        }
-        "bytes" => {
-            at_least_one(values, "bytes")?;
-            let v: Vec<u8> = values.iter().map(|s| num(s, "byte (0-255)")).collect::<Result<_, _>>()?;
-            encode_byte_list(&v, &mut out)
-        }
+        "int32" => encode_int32_list(&counted(values, format, "int32")?, &mut out),
+        "bytes" => encode_byte_list(&counted(values, format, "byte (0-255)")?, &mut out),
         "string" => encode_string(&text(values, escapes)?, &mut out),
         "line" => encode_line(&text(values, escapes)?, &mut out),
         "framed" => {
@@ -202,20 +204,13 @@ pub fn encode_robot_with(
         "hex" => return crate::typed::hex(values.iter().map(String::as_str)),
         "line" => encode_line(&text(values, escapes)?, &mut out),
         "string" => encode_string(&text(values, escapes)?, &mut out),
-        "byte" | "bytes" => {
-            at_least_one(values, format)?;
-            for s in values {
-                encode_byte(num(s, "byte (0-255)")?, &mut out).map_err(crate::messages::encode_error)?;
-            }
-            Ok(values.len())
-        }
-        "int" | "int32" => {
-            at_least_one(values, format)?;
-            for s in values {
-                encode_int32(num(s, "int32")?, &mut out).map_err(crate::messages::encode_error)?;
-            }
-            Ok(values.len() * 4)
-        }
+        // One socket_send_byte / socket_send_int per value.
+        "byte" | "bytes" => counted(values, format, "byte (0-255)")?
+            .into_iter()
+            .try_fold(0, |n, v| Ok(n + encode_byte(v, &mut out)?)),
+        "int" | "int32" => counted(values, format, "int32")?
+            .into_iter()
+            .try_fold(0, |n, v| Ok(n + encode_int32(v, &mut out)?)),
         "set-var" => {
             need(values, 2, "set-var NAME INT")?;
             encode_set_var(&values[0], num(&values[1], "int32")?, &mut out)

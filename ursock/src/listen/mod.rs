@@ -50,23 +50,77 @@ const ROBOT_READ_TIMEOUT: Duration = Duration::from_secs(2);
 const RX_CAPACITY: usize = 16 * 1024;
 const READ_CHUNK: usize = 8 * 1024;
 
+/// `ursock listen`'s options.
+#[derive(clap::Args)]
 pub struct ListenOptions {
+    /// Address to bind.
+    #[arg(long, default_value = "0.0.0.0")]
     pub bind: String,
+    /// Port to listen on (0 picks a free one).
+    #[arg(long)]
     pub port: u16,
+    /// How to decode what robots send. Without it chunks are shown raw, SET/GET lines
+    /// are still answered and `--reply` answers each chunk received.
+    #[arg(long, value_enum)]
     pub decode: Option<DecodeFormat>,
-    pub delimiter: Vec<u8>,
+    /// Delimiter for `--decode delimiter` (escapes `\r \n \t \0 \\ \xHH` are interpreted).
+    #[arg(long, default_value = "\\n")]
+    pub delimiter: String,
+    /// Reply to each decoded message (or each chunk without --decode), e.g.
+    /// `floats 0.1 0.2 0.3`, `line OK`, `int32 1 2`, `bytes 2 3`, `string >ok<`,
+    /// `text OK\r\n`, `hex 02 06 03`. GET lines are always answered from SET
+    /// (without --decode and with line, var, delimiter, stx-etx); an unknown variable
+    /// is answered 0 and said so.
+    #[arg(long, allow_hyphen_values = true)]
     pub reply: Option<String>,
-    pub exit_after: Option<usize>,
-    pub max_connections: usize,
-    pub max_vars: usize,
-    pub max_queue: usize,
-    pub write_timeout: f64,
-    pub show_max: usize,
-    pub robot_reads: Option<String>,
+    /// Replies from a file of rules, one `PATTERN => REPLY` a line (`*` and `?` are
+    /// wildcards; first match wins; no match falls back to --reply).
+    #[arg(long)]
     pub rules: Option<PathBuf>,
+    /// The read the robot does on replies (`ascii-float:N`, `binary-integer:N`,
+    /// `byte-list:N`, `line`): each reply is checked against it and a warning says
+    /// why the robot's read would fail. Without it, number-like text replies are
+    /// checked as a `socket_read_ascii_float`.
+    #[arg(long)]
+    pub robot_reads: Option<String>,
+    /// Exit after this many robots have connected and left (0: exit right after
+    /// binding, which checks the options and the port).
+    #[arg(long)]
+    pub exit_after: Option<usize>,
+    /// Connections served at once; more are accepted and closed at once (said once
+    /// per episode).
+    #[arg(long, default_value_t = DEFAULT_MAX_CONNECTIONS)]
+    pub max_connections: usize,
+    /// Variables the server keeps (names at most 128 bytes); SET of a new name beyond
+    /// it is refused and said.
+    #[arg(long, default_value_t = DEFAULT_MAX_VARS)]
+    pub max_vars: usize,
+    /// Bytes of replies queued for one robot; a robot that lets more pile up is not
+    /// reading and is dropped (others are unaffected).
+    #[arg(long, default_value_t = DEFAULT_MAX_QUEUE)]
+    pub max_queue: usize,
+    /// Seconds a reply may wait, from being queued, to be written before the robot is
+    /// taken as not reading and dropped (0: no limit).
+    #[arg(long, default_value_t = DEFAULT_WRITE_TIMEOUT_SECS)]
+    pub write_timeout: f64,
+    /// Bytes of one chunk shown in its hex dump (rows of 16 with offsets); JSON events
+    /// and counters always carry the whole chunk.
+    #[arg(long, default_value_t = DEFAULT_SHOW_MAX)]
+    pub show_max: usize,
+    /// Write the whole session (every line, or every JSON event) to FILE.
+    #[arg(long)]
     pub log: Option<PathBuf>,
+    /// One JSON event per line on stdout (listening, connect, rx, decoded, tx, close,
+    /// diagnosis, errors); raw bytes as text when valid UTF-8, else hex (`encoding`).
+    #[arg(long)]
     pub json: bool,
+    /// Only connects, closes and problems; no traffic lines.
+    #[arg(long, short)]
     pub quiet: bool,
+    /// A terminal UI: the connections (Up/Down selects), the selected one's traffic
+    /// decoded as it arrives, and an input line sending a reply spec to it (Enter);
+    /// Esc quits.
+    #[arg(long)]
     pub tui: bool,
 }
 
@@ -193,8 +247,9 @@ pub fn listen(opts: ListenOptions) -> Result<(), String> {
         Some(s) => Some(diagnose::parse_robot_reads(s)?),
         None => None,
     };
+    let delimiter = crate::formats::delimiter(&opts.delimiter)?;
     if let Some(format) = opts.decode {
-        format.decoder(&opts.delimiter)?;
+        format.decoder(&delimiter)?;
     }
     if opts.max_connections == 0 {
         return Err("--max-connections must be at least 1".into());
@@ -242,7 +297,7 @@ pub fn listen(opts: ListenOptions) -> Result<(), String> {
     let shared = Arc::new(Shared {
         out,
         decode: opts.decode,
-        delimiter: opts.delimiter,
+        delimiter,
         reply,
         rules,
         robot_reads,
