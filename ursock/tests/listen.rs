@@ -484,3 +484,30 @@ fn reply_and_rules_are_checked_once_at_start() {
     assert_eq!(err.lines().count(), 1, "{err}");
     assert!(err.starts_with("ursock: --reply: floats:"), "{err}");
 }
+
+/// Issue 10: `listen` checks replies with the same rules as `read` and `robot`, so every
+/// read `--robot-reads` names is covered (a line read of a reply without LF too).
+#[test]
+fn listen_checks_replies_with_the_read_rules() {
+    let run = |reply: &str, reads: &str| {
+        let out = std::process::Command::new(listen_common::bin())
+            .args(["listen", "--bind", "127.0.0.1", "--port", "0"])
+            .args([
+                "--exit-after",
+                "0",
+                "--robot-reads",
+                reads,
+                "--reply",
+                reply,
+            ])
+            .output()
+            .unwrap();
+        assert!(out.status.success());
+        String::from_utf8_lossy(&out.stderr).into_owned()
+    };
+    let err = run("string OK", "line");
+    assert!(err.contains("--reply: warning: no LF"), "{err}");
+    assert!(run("line OK", "line").is_empty());
+    let err = run("bytes 1 2", "binary-integer:1");
+    assert!(err.contains("only 2 of the 4 bytes"), "{err}");
+}
