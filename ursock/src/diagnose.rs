@@ -213,9 +213,8 @@ fn binary(needed: usize, what: &str, bytes: &[u8]) -> Option<String> {
     if bytes[0] == b'\n' || bytes.starts_with(b"\r\n") {
         return Some(format!(
             "a leftover LF from an earlier text reply is in front of this binary read: it \
-             became the first byte ({}) and every value is shifted by one byte (a tuple sent \
-             as `(...)\\n` leaves its LF: socket_read_ascii_float stops at `)`); read it away \
-             first (socket_read_byte_list(1)) or have the server not send the newline",
+             became the first byte ({}); read it away first (socket_read_byte_list(1)) or \
+             have the server not send the newline",
             shown(&bytes[..bytes.len().min(8)])
         ));
     }
