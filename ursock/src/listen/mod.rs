@@ -201,7 +201,7 @@ fn own(m: &Message<'_>, text_kind: &'static str) -> Decoded {
     match m {
         Message::Text(t) => Decoded {
             kind: text_kind,
-            shown: dump::text(t),
+            shown: crate::show::quoted(t),
             raw: t.to_vec(),
             is_text: true,
             json: {
