@@ -146,29 +146,44 @@ fn counted<T: std::str::FromStr>(
     nums(values, what)
 }
 
-/// Encodes what a server sends: `floats`, `int32`, `bytes`, `string`, `line`,
-/// `framed PREFIX TEXT SUFFIX`, `var-reply NAME INT`, `hex HH...`.
-pub fn encode_server(format: &str, values: &[String]) -> Result<Vec<u8>, String> {
-    encode_server_with(format, values, false)
+/// Which end of the connection sends what [`encode`] writes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Side {
+    /// The PC-side server: `floats`, `floats-lf`, `int32`, `bytes`, `string`, `line`,
+    /// `framed PREFIX TEXT SUFFIX`, `var-reply NAME INT`, `hex HH...`.
+    Server,
+    /// The robot: `line`, `string`, `byte`, `int`, `set-var NAME INT`, `get-var NAME`,
+    /// `stx-etx TEXT`, `value TEXT` (the `to_str` form of a number, bool, list or pose),
+    /// `hex HH...`.
+    Robot,
 }
 
-/// [`encode_server`], with `escapes` interpreted in text values.
-pub fn encode_server_with(
+/// Encodes what a server sends (no escapes interpreted).
+pub fn encode_server(format: &str, values: &[String]) -> Result<Vec<u8>, String> {
+    encode(Side::Server, format, values, false)
+}
+
+/// Encodes what `side` sends in `format`; with `escapes`, `\r \n \t \0 \\ \xHH` are
+/// interpreted in text values.
+pub fn encode(
+    side: Side,
     format: &str,
     values: &[String],
     escapes: bool,
 ) -> Result<Vec<u8>, String> {
     let mut out = Vec::new();
-    let r = match format {
-        "hex" => return crate::typed::hex(values.iter().map(String::as_str)),
-        "floats" | "floats-lf" => {
+    let r = match (side, format) {
+        (_, "hex") => return crate::typed::hex(values.iter().map(String::as_str)),
+        (_, "line") => encode_line(&text(values, escapes)?, &mut out),
+        (_, "string") => encode_string(&text(values, escapes)?, &mut out),
+        (Side::Server, "floats" | "floats-lf") => {
             encode_float_tuple(&nums(values, "float")?, format == "floats-lf", &mut out)
         }
-        "int32" => encode_int32_list(&counted(values, format, "int32")?, &mut out),
-        "bytes" => encode_byte_list(&counted(values, format, "byte (0-255)")?, &mut out),
-        "string" => encode_string(&text(values, escapes)?, &mut out),
-        "line" => encode_line(&text(values, escapes)?, &mut out),
-        "framed" => {
+        (Side::Server, "int32") => encode_int32_list(&counted(values, format, "int32")?, &mut out),
+        (Side::Server, "bytes") => {
+            encode_byte_list(&counted(values, format, "byte (0-255)")?, &mut out)
+        }
+        (Side::Server, "framed") => {
             need(values, 3, "framed PREFIX TEXT SUFFIX")?;
             encode_framed_string(
                 &one(&values[0], escapes)?,
@@ -177,56 +192,38 @@ pub fn encode_server_with(
                 &mut out,
             )
         }
-        "var-reply" => {
+        (Side::Server, "var-reply") => {
             need(values, 2, "var-reply NAME INT")?;
             encode_var_reply(&values[0], num(&values[1], "int32")?, &mut out)
         }
-        other => {
+        (Side::Server, other) => {
             return Err(format!(
                 "unknown format {other:?} (floats, floats-lf, int32, bytes, string, line, framed, var-reply, hex)"
             ))
         }
-    };
-    r.map_err(crate::messages::encode_error)?;
-    Ok(out)
-}
-
-/// Encodes what the robot sends: `line`, `string`, `byte`, `int`, `set-var NAME INT`,
-/// `get-var NAME`, `stx-etx TEXT`, `value TEXT` (the `to_str` form of a number, bool,
-/// list or pose), `hex HH...`; with `escapes` interpreted in text values.
-pub fn encode_robot_with(
-    format: &str,
-    values: &[String],
-    escapes: bool,
-) -> Result<Vec<u8>, String> {
-    let mut out = Vec::new();
-    let r = match format {
-        "hex" => return crate::typed::hex(values.iter().map(String::as_str)),
-        "line" => encode_line(&text(values, escapes)?, &mut out),
-        "string" => encode_string(&text(values, escapes)?, &mut out),
         // One socket_send_byte / socket_send_int per value.
-        "byte" | "bytes" => counted(values, format, "byte (0-255)")?
+        (Side::Robot, "byte" | "bytes") => counted(values, format, "byte (0-255)")?
             .into_iter()
             .try_fold(0, |n, v| Ok(n + encode_byte(v, &mut out)?)),
-        "int" | "int32" => counted(values, format, "int32")?
+        (Side::Robot, "int" | "int32") => counted(values, format, "int32")?
             .into_iter()
             .try_fold(0, |n, v| Ok(n + encode_int32(v, &mut out)?)),
-        "set-var" => {
+        (Side::Robot, "set-var") => {
             need(values, 2, "set-var NAME INT")?;
             encode_set_var(&values[0], num(&values[1], "int32")?, &mut out)
         }
-        "get-var" => {
+        (Side::Robot, "get-var") => {
             need(values, 1, "get-var NAME")?;
             encode_get_var(&values[0], &mut out)
         }
-        "stx-etx" => encode_stx_etx(&text(values, escapes)?, &mut out),
-        "value" => {
+        (Side::Robot, "stx-etx") => encode_stx_etx(&text(values, escapes)?, &mut out),
+        (Side::Robot, "value") => {
             let text = values.join(" ");
             let value = parse_value(text.as_bytes())
                 .map_err(|e| format!("value {text:?}: {}", crate::messages::value_error(&e)))?;
             encode_value(&value, &mut out)
         }
-        other => {
+        (Side::Robot, other) => {
             return Err(format!(
                 "unknown robot format {other:?} (line, string, byte, int, set-var, get-var, stx-etx, value, hex)"
             ))

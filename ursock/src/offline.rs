@@ -6,7 +6,7 @@ use urscript_socket::format::Message;
 use urscript_socket::robot::{Policy, ReadCall, ReadResult, SocketConnection, Timeout};
 use urscript_socket::RecvBuffer;
 
-use crate::formats::{drain, encode_robot_with, encode_server_with, DecodeFormat};
+use crate::formats::{drain, DecodeFormat, Side};
 use crate::show::{hex, JsonBytes};
 use crate::{out, outln};
 
@@ -18,11 +18,8 @@ pub fn encode(
     escapes: bool,
     robot: bool,
 ) -> Result<(), String> {
-    let bytes = if robot {
-        encode_robot_with(format, values, escapes)?
-    } else {
-        encode_server_with(format, values, escapes)?
-    };
+    let side = if robot { Side::Robot } else { Side::Server };
+    let bytes = crate::formats::encode(side, format, values, escapes)?;
     if as_hex {
         outln!("{}", hex(&bytes));
     } else {
