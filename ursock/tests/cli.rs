@@ -1,29 +1,17 @@
 //! Runs the built `ursock` binary: offline commands on the spec's vectors, the demo, and
 //! `listen` talking to `robot` over 127.0.0.1.
 
-use std::io::{BufRead, BufReader, Write};
-use std::process::{Command, Stdio};
+use std::io::{BufRead, BufReader};
+use std::process::Stdio;
 
-fn ursock() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_ursock"))
-}
+mod run_common;
+
+use run_common::ursock;
 
 /// Runs `ursock args` with `stdin` and returns (exit ok, stdout, stderr).
 fn run(args: &[&str], stdin: &[u8]) -> (bool, String, String) {
-    let mut child = ursock()
-        .args(args)
-        .stdin(Stdio::piped())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .expect("spawn ursock");
-    child.stdin.take().unwrap().write_all(stdin).unwrap();
-    let out = child.wait_with_output().unwrap();
-    (
-        out.status.success(),
-        String::from_utf8_lossy(&out.stdout).into_owned(),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    )
+    let (code, out, err) = run_common::run(args, stdin);
+    (code == 0, out, err)
 }
 
 fn ok(args: &[&str], stdin: &[u8]) -> String {
