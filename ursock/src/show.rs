@@ -234,3 +234,41 @@ enum JsonMessage<'a> {
     List { value: Vec<serde_json::Value> },
     Text { text: String },
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use urscript_socket::format::Format;
+    use urscript_socket::Decoder;
+
+    #[test]
+    fn quoted_escapes_as_the_core_and_keeps_utf8_text() {
+        assert_eq!(quoted(b"a\"\\\n\r\t\x00\x7F"), r#""a\"\\\n\r\t\x00\x7F""#);
+        assert_eq!(quoted("café".as_bytes()), "\"café\"");
+        assert_eq!(quoted(b"caf\xE9 \xC3\xA9"), "\"caf\\xE9 é\"");
+        assert_eq!(quoted("\u{85}".as_bytes()), "\"\\u{0085}\"");
+    }
+
+    #[test]
+    fn messages_use_the_core_writer() {
+        let mut d = Format::Value.decoder().unwrap();
+        let m = d.decode(b"p[0.1, 0, 0, 0, 3.14159265, 0]\n").unwrap();
+        let m = m.item().unwrap();
+        assert_eq!(message_text(&m), "p[0.1, 0, 0, 0, 3.141593, 0]");
+        assert_eq!(
+            message_json(&m, "line"),
+            r#"{"type":"pose","value":[0.1,0.0,0.0,0.0,3.14159265,0.0]}"#
+        );
+        let mut d = Format::Int32 { number: 1 }.decoder().unwrap();
+        let m = d.decode(&[0, 0, 0, 100]).unwrap().item().unwrap();
+        assert_eq!(message_text(&m), "100");
+        assert_eq!(message_json(&m, "line"), r#"{"type":"int32","value":100}"#);
+        let mut d = Format::StxEtx.decoder().unwrap();
+        let m = d.decode(b"\x02hi\x03").unwrap().item().unwrap();
+        assert_eq!(message_text(&m), "\"hi\"");
+        assert_eq!(
+            message_json(&m, "frame"),
+            r#"{"type":"frame","value":{"encoding":"utf-8","text":"hi"}}"#
+        );
+    }
+}
