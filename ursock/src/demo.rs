@@ -11,9 +11,13 @@ use urscript_socket::robot::{Direction, Policy, ReadCall, ReadResult, Timeout, V
 use urscript_socket::to_str::Value;
 use urscript_socket::RecvBuffer;
 
-use crate::formats::{encode_server, AnyDecoder, DecodeFormat};
+use urscript_socket::format::Message;
+use urscript_socket::var::{encode_var_reply, VarMessage};
+
+use crate::formats::{encode_server, DecodeFormat};
 use crate::outln;
-use crate::show::{hex, quoted, text_and_hex};
+use crate::show::{hex, message_text, quoted, text_and_hex};
+use crate::vars::Vars;
 
 /// What the server expects at each step: the decoder to use and the reply to send.
 struct Expect {
@@ -83,31 +87,25 @@ fn server(listener: TcpListener, events: mpsc::Sender<String>) -> Result<(), Str
     ));
     stream.set_nodelay(true).map_err(|e| e.to_string())?;
     let mut rx = RecvBuffer::with_capacity(4096);
-    let mut vars: Vec<(String, i32)> = Vec::new();
+    let mut vars = Vars::new(crate::listen::DEFAULT_MAX_VARS);
     for step in SERVER_SCRIPT {
-        let mut dec = AnyDecoder::new(step.format, b"")?;
+        let mut dec = step.format.decoder(b"")?;
         let (text, reply) = loop {
-            match dec.next(&mut rx) {
+            match rx.decode(&mut dec) {
                 Ok(Some(msg)) => {
-                    let text = msg.text();
+                    let text = message_text(&msg);
                     let mut reply = None;
-                    if let crate::show::Message::Var(v) = &msg {
-                        match v {
-                            urscript_socket::var::VarMessage::Set { name, value } => {
-                                vars.push(((*name).to_string(), *value));
-                            }
-                            urscript_socket::var::VarMessage::Get { name } => {
-                                let value = vars
-                                    .iter()
-                                    .rev()
-                                    .find(|(n, _)| n == name)
-                                    .map_or(0, |(_, v)| *v);
-                                let mut out = Vec::new();
-                                urscript_socket::var::encode_var_reply(name, value, &mut out)
-                                    .map_err(|e| e.to_string())?;
-                                reply = Some(out);
-                            }
+                    match msg {
+                        Message::Var(VarMessage::Set { name, value }) => {
+                            let _ = vars.set(name, value);
                         }
+                        Message::Var(VarMessage::Get { name }) => {
+                            let mut out = Vec::new();
+                            encode_var_reply(name, vars.get(name).unwrap_or(0), &mut out)
+                                .map_err(|e| e.to_string())?;
+                            reply = Some(out);
+                        }
+                        _ => {}
                     }
                     break (text, reply);
                 }

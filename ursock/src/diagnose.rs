@@ -1,12 +1,17 @@
-//! Why a robot read failed, in the server writer's terms.
+//! Why a robot read failed, in the server writer's terms: the one set of rules that
+//! `read`, `robot` and `listen` share.
 //!
 //! [`diagnose`] looks at the bytes a read saw and names the usual mistakes of PC-side
 //! servers (the spec's section 8): Python `str(list)` or numpy text where a tuple was
 //! expected, decimal commas, no parentheses, more values than asked, a leftover LF in
-//! front of a binary read, a reply still arriving when the timeout passed. It is a pure
-//! function so `robot`, `read` and `listen` can share it.
+//! front of a binary read, a reply still arriving when the timeout passed. `read` and
+//! `robot` give it what the read saw; `listen` gives it what the robot's next read will
+//! see when a reply is sent ([`reply`]), with the read named by `--robot-reads` or guessed
+//! from the reply, and adds what the library's robot emulation returns for it.
 
-use urscript_socket::robot::ReadCall;
+use std::time::Duration;
+
+use urscript_socket::robot::{Policy, ReadCall, SocketConnection, Timeout};
 
 /// How many bytes of a reply a message quotes.
 const SHOWN: usize = 40;
@@ -130,7 +135,8 @@ fn floats(number: usize, bytes: &[u8]) -> Option<String> {
             .all(|b| b.is_ascii_digit() || b",.-+eE ;\t".contains(b));
         return Some(if numeric {
             format!(
-                "the values arrived without parentheses ({}): the robot reads only `(v1,v2,...)`; {fix}",
+                "no parentheses: the values arrived without parentheses ({}); the robot skips \
+                 everything before `(` and reads only `(v1,v2,...)`; {fix}",
                 shown(body)
             )
         } else {
@@ -255,6 +261,160 @@ pub fn late_reply(previous: &ReadCall, previous_line: usize) -> String {
     )
 }
 
+/// `ascii-float:N`, `binary-integer:N`, `byte-list:N`, `line` (`listen --robot-reads`).
+pub fn parse_robot_reads(s: &str) -> Result<ReadCall, String> {
+    let (kind, n) = match s.split_once(':') {
+        Some((k, n)) => (k, Some(n)),
+        None => (s, None),
+    };
+    let max = urscript_socket::format::MAX_VALUES;
+    let number = || -> Result<usize, String> {
+        let n: usize = n
+            .ok_or_else(|| format!("--robot-reads {kind}:N needs N (1-{max})"))?
+            .parse()
+            .map_err(|_| format!("--robot-reads {s}: N must be a number 1-{max}"))?;
+        if !(1..=max).contains(&n) {
+            return Err(format!(
+                "--robot-reads {s}: N must be 1-{max} (the controller's limit)"
+            ));
+        }
+        Ok(n)
+    };
+    Ok(match kind {
+        "ascii-float" => ReadCall::AsciiFloat { number: number()? },
+        "binary-integer" => ReadCall::BinaryInteger { number: number()? },
+        "byte-list" => ReadCall::ByteList { number: number()? },
+        "line" => ReadCall::Line,
+        _ => {
+            return Err(format!(
+                "--robot-reads {s}: expected ascii-float:N, binary-integer:N, byte-list:N or line"
+            ))
+        }
+    })
+}
+
+/// What a server sends, as far as the rules care: its bytes and the kind of reply.
+#[derive(Debug, Clone, Copy)]
+pub struct Sent<'a> {
+    pub bytes: &'a [u8],
+    /// A float tuple (`floats`, `floats-lf`).
+    pub float_tuple: bool,
+    /// Bytes meant for a binary read (`int32`, `bytes`).
+    pub binary: bool,
+}
+
+/// The read a reply is checked against: `expect` (`--robot-reads`), or, when that is
+/// not given, a binary read for binary replies and `socket_read_ascii_float` for text
+/// that looks like numbers (with as many values as it holds).
+fn read_for(sent: &Sent<'_>, expect: Option<&ReadCall>) -> Option<ReadCall> {
+    if let Some(call) = expect {
+        return Some(call.clone());
+    }
+    let max = urscript_socket::format::MAX_VALUES;
+    if sent.binary {
+        return Some(ReadCall::ByteList {
+            number: sent.bytes.len().clamp(1, max),
+        });
+    }
+    let text = String::from_utf8_lossy(sent.bytes);
+    (!sent.float_tuple && looks_numeric(&text)).then(|| ReadCall::AsciiFloat {
+        number: numbers(text.trim()).clamp(1, max),
+    })
+}
+
+/// What the robot's next read sees when `sent` arrives: an LF left by a previous
+/// `(...)\n` reply (`after_tuple_lf`) comes first.
+fn seen_by_read(sent: &Sent<'_>, after_tuple_lf: bool) -> Vec<u8> {
+    let mut seen = Vec::with_capacity(sent.bytes.len() + 1);
+    if after_tuple_lf {
+        seen.push(b'\n');
+    }
+    seen.extend_from_slice(sent.bytes);
+    seen
+}
+
+/// Warnings for sending `sent` to a robot that will do `expect` (if known), by the rules
+/// of [`diagnose`] applied to what the robot's read will see, plus what the library's
+/// robot emulation returns for a float read that would fail.
+pub fn reply(sent: &Sent<'_>, expect: Option<&ReadCall>, after_tuple_lf: bool) -> Vec<String> {
+    let Some(call) = read_for(sent, expect) else {
+        return Vec::new();
+    };
+    if sent.bytes.is_empty() {
+        return Vec::new();
+    }
+    let mut w: Vec<String> = diagnose(&call, &seen_by_read(sent, after_tuple_lf))
+        .into_iter()
+        .collect();
+    if let ReadCall::AsciiFloat { number } = call {
+        if let Some(result) = simulate(&call, sent.bytes) {
+            let failed = result.starts_with("[0,") || result == "[0]";
+            if failed || !w.is_empty() {
+                w.push(format!(
+                    "the robot's socket_read_ascii_float({number}) would return {result}"
+                ));
+            }
+        }
+    }
+    w
+}
+
+/// The one check of [`reply`] that depends on what was sent before on the connection (for
+/// `--reply` and rules, whose own bytes were checked once at start): a leftover LF in
+/// front of a binary read.
+pub fn leftover_lf(
+    sent: &Sent<'_>,
+    expect: Option<&ReadCall>,
+    after_tuple_lf: bool,
+) -> Option<String> {
+    let call = read_for(sent, expect)?;
+    let binary = matches!(
+        call,
+        ReadCall::BinaryInteger { .. } | ReadCall::ByteList { .. }
+    );
+    if !(after_tuple_lf && binary) {
+        return None;
+    }
+    diagnose(&call, &seen_by_read(sent, true))
+}
+
+/// What the robot's `call` returns when `bytes` is all it receives before its timeout.
+pub fn simulate(call: &ReadCall, bytes: &[u8]) -> Option<String> {
+    let mut s = SocketConnection::new("socket_0", Policy::default());
+    s.receive(bytes);
+    s.start_read(call.clone(), Timeout::Forever, Duration::ZERO)
+        .ok()?;
+    let r = s.poll_read().or_else(|| s.give_up())?;
+    Some(r.to_urscript())
+}
+
+/// A float tuple followed by a line end: the robot's float read stops at `)` and leaves
+/// the LF for the next read.
+pub fn ends_with_tuple_and_lf(bytes: &[u8]) -> bool {
+    let mut t = bytes;
+    while let [rest @ .., 0] = t {
+        t = rest;
+    }
+    t.ends_with(b")\n") || t.ends_with(b")\r\n")
+}
+
+/// How many numbers a text holds (`[0.1, 0.2]`, `0,15;0,5`, `(1 2)`).
+fn numbers(text: &str) -> usize {
+    text.split(|c: char| c == ',' || c == ';' || c.is_whitespace() || "()[]".contains(c))
+        .filter(|w| !w.is_empty() && w.parse::<f64>().is_ok())
+        .count()
+}
+
+/// Text a server meant as numbers (digits and the punctuation of lists and tuples, or
+/// numpy's reprs).
+fn looks_numeric(text: &str) -> bool {
+    let t = text.trim();
+    (t.contains("float64(") || t.contains("array("))
+        || (t.chars().any(|c| c.is_ascii_digit())
+            && t.chars()
+                .all(|c| "0123456789.,;:+-eE[]() \t\r\n".contains(c)))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -344,5 +504,76 @@ mod tests {
     fn late_reply_names_the_earlier_read() {
         let m = late_reply(&ReadCall::AsciiFloat { number: 6 }, 3);
         assert!(m.contains("socket_read_ascii_float() on line 3"), "{m}");
+    }
+
+    fn sent(bytes: &[u8]) -> Sent<'_> {
+        Sent {
+            bytes,
+            float_tuple: false,
+            binary: false,
+        }
+    }
+
+    #[test]
+    fn a_reply_is_checked_by_the_same_rules_with_the_robots_result() {
+        let two = ReadCall::AsciiFloat { number: 2 };
+        let w = reply(&sent(b"[0.1, 0.2]\n"), Some(&two), false);
+        assert!(w[0].contains("Python list, str(list)"), "{w:?}");
+        assert!(
+            w[1].contains("socket_read_ascii_float(2) would return [0, nan, nan]"),
+            "{w:?}"
+        );
+        let w = reply(&sent(b"(0,15;0,5)"), Some(&two), false);
+        assert!(w[0].contains("decimal commas"), "{w:?}");
+        let w = reply(&sent(b"0.1,0.2\n"), Some(&two), false);
+        assert!(w[0].contains("no parentheses"), "{w:?}");
+        assert!(reply(&sent(b"(1,2)"), Some(&two), false).is_empty());
+    }
+
+    #[test]
+    fn without_robot_reads_number_like_text_is_checked_as_a_float_read() {
+        let w = reply(&sent(b"[0.1, 0.2, 0.3]\n"), None, false);
+        assert!(w[0].contains("str(list)"), "{w:?}");
+        assert!(
+            w[1].contains("socket_read_ascii_float(3) would return [0, nan, nan, nan]"),
+            "{w:?}"
+        );
+        assert!(reply(&sent(b"OK\n"), None, false).is_empty());
+    }
+
+    #[test]
+    fn a_leftover_lf_is_seen_by_the_next_binary_read() {
+        let int32 = Sent {
+            bytes: &[0, 0, 0, 5],
+            float_tuple: false,
+            binary: true,
+        };
+        let one = ReadCall::BinaryInteger { number: 1 };
+        assert!(leftover_lf(&int32, Some(&one), false).is_none());
+        assert!(leftover_lf(&int32, Some(&one), true)
+            .unwrap()
+            .contains("a leftover LF"));
+        // Without --robot-reads, a binary reply is checked as a binary read.
+        assert!(leftover_lf(&int32, None, true)
+            .unwrap()
+            .contains("a leftover LF"));
+        assert!(reply(&int32, None, true)[0].contains("a leftover LF"));
+        assert!(ends_with_tuple_and_lf(b"(1,2)\r\n") && !ends_with_tuple_and_lf(b"(1,2)"));
+    }
+
+    #[test]
+    fn robot_reads_names_a_read() {
+        assert_eq!(
+            parse_robot_reads("ascii-float:6").unwrap(),
+            ReadCall::AsciiFloat { number: 6 }
+        );
+        assert_eq!(parse_robot_reads("line").unwrap(), ReadCall::Line);
+        assert!(parse_robot_reads("ascii-float:31")
+            .unwrap_err()
+            .contains("1-30"));
+        assert!(parse_robot_reads("ascii-float")
+            .unwrap_err()
+            .contains("needs N"));
+        assert!(parse_robot_reads("nope").is_err());
     }
 }

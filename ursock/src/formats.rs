@@ -1,18 +1,19 @@
-//! The formats `ursock` decodes and encodes, each mapped onto the library's core.
+//! The formats `ursock` decodes and encodes: the clap spelling of the core's format
+//! registry ([`urscript_socket::format`]) and the command-line grammar of values.
 
 use clap::ValueEnum;
-use urscript_socket::byte_list::{encode_byte, encode_byte_list, ByteListDecoder};
-use urscript_socket::int32::{encode_int32, encode_int32_list, Int32Decoder};
-use urscript_socket::line::{encode_line, LineDecoder};
-use urscript_socket::string::{encode_framed_string, encode_string, DelimitedDecoder};
-use urscript_socket::stx_etx::{encode_stx_etx, StxEtxDecoder};
+use urscript_socket::byte_list::{encode_byte, encode_byte_list};
+use urscript_socket::format::{AnyDecoder, Format, Message};
+use urscript_socket::int32::{encode_int32, encode_int32_list};
+use urscript_socket::line::encode_line;
+use urscript_socket::string::{encode_framed_string, encode_string};
+use urscript_socket::stx_etx::encode_stx_etx;
 use urscript_socket::to_str::{encode_value, parse_value};
-use urscript_socket::var::{encode_get_var, encode_set_var, encode_var_reply, VarMessageDecoder};
+use urscript_socket::var::{encode_get_var, encode_set_var, encode_var_reply};
 use urscript_socket::{ascii_float::encode_float_tuple, DecodeError, RecvBuffer};
 
-use crate::show::Message;
-
-/// What the robot sends, as a server decodes it.
+/// What the robot sends, as a server decodes it: the command line's names for the
+/// core's [`Format`]s (one value per message for the counted ones).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
 pub enum DecodeFormat {
     /// Big-endian int32 (`socket_send_int`).
@@ -31,107 +32,73 @@ pub enum DecodeFormat {
     Value,
 }
 
-/// One core decoder, chosen at run time.
-pub enum AnyDecoder {
-    Int32(Int32Decoder),
-    Byte(ByteListDecoder),
-    Line(LineDecoder),
-    StxEtx(StxEtxDecoder),
-    Delimiter(DelimitedDecoder),
-    Var(VarMessageDecoder),
-    Value(LineDecoder),
+impl DecodeFormat {
+    /// The core format this name stands for; `delimiter` is `--delimiter`'s bytes.
+    pub fn format(self, delimiter: &[u8]) -> Format<'_> {
+        match self {
+            DecodeFormat::Int32 => Format::Int32 { number: 1 },
+            DecodeFormat::Byte => Format::Bytes { number: 1 },
+            DecodeFormat::Line => Format::Line,
+            DecodeFormat::StxEtx => Format::StxEtx,
+            DecodeFormat::Delimiter => Format::Delimited { delimiter },
+            DecodeFormat::Var => Format::Var,
+            DecodeFormat::Value => Format::Value,
+        }
+    }
+
+    /// The core's decoder for this format.
+    pub fn decoder(self, delimiter: &[u8]) -> Result<AnyDecoder, String> {
+        self.format(delimiter).decoder().map_err(|e| match self {
+            DecodeFormat::Delimiter => format!("--delimiter: {e}"),
+            _ => e.to_string(),
+        })
+    }
+
+    /// What a text message of this format is called in output and JSON (`line`,
+    /// `frame`, `string`).
+    pub fn text_kind(self) -> &'static str {
+        match self {
+            DecodeFormat::StxEtx => "frame",
+            DecodeFormat::Delimiter => "string",
+            _ => "line",
+        }
+    }
+
+    /// Whether a message of this format ends with a terminator (LF or the delimiter),
+    /// so that input ending without one was cut off.
+    pub fn terminated(self) -> bool {
+        matches!(
+            self,
+            DecodeFormat::Line | DecodeFormat::Value | DecodeFormat::Var | DecodeFormat::Delimiter
+        )
+    }
 }
 
-impl AnyDecoder {
-    pub fn new(format: DecodeFormat, delimiter: &[u8]) -> Result<Self, String> {
-        Ok(match format {
-            DecodeFormat::Int32 => {
-                AnyDecoder::Int32(Int32Decoder::new(1).map_err(|e| e.to_string())?)
-            }
-            DecodeFormat::Byte => {
-                AnyDecoder::Byte(ByteListDecoder::new(1).map_err(|e| e.to_string())?)
-            }
-            DecodeFormat::Line => AnyDecoder::Line(LineDecoder::new()),
-            DecodeFormat::StxEtx => AnyDecoder::StxEtx(StxEtxDecoder::new()),
-            DecodeFormat::Delimiter => AnyDecoder::Delimiter(
-                DelimitedDecoder::new(delimiter).map_err(|e| format!("--delimiter: {e}"))?,
-            ),
-            DecodeFormat::Var => AnyDecoder::Var(VarMessageDecoder::new()),
-            DecodeFormat::Value => AnyDecoder::Value(LineDecoder::new()),
-        })
-    }
+/// `--delimiter`'s bytes, with the escapes of [`crate::typed::unescape`].
+pub fn delimiter(s: &str) -> Result<Vec<u8>, String> {
+    crate::typed::unescape(s).map_err(|e| format!("--delimiter: {e}"))
+}
 
-    /// Decodes the next complete message in `rx`, if there is one.
-    pub fn next<'b, S: AsRef<[u8]> + AsMut<[u8]>>(
-        &mut self,
-        rx: &'b mut RecvBuffer<S>,
-    ) -> Result<Option<Message<'b>>, DecodeError> {
-        Ok(match self {
-            AnyDecoder::Int32(d) => rx.decode(d)?.map(|v| Message::Int(v.get(0).unwrap_or(0))),
-            AnyDecoder::Byte(d) => rx
-                .decode(d)?
-                .map(|b| Message::Byte(b.first().copied().unwrap_or(0))),
-            AnyDecoder::Line(d) => rx.decode(d)?.map(|l| Message::Text("line", l)),
-            AnyDecoder::StxEtx(d) => rx.decode(d)?.map(|l| Message::Text("frame", l)),
-            AnyDecoder::Delimiter(d) => rx.decode(d)?.map(|l| Message::Text("string", l)),
-            AnyDecoder::Var(d) => rx.decode(d)?.map(Message::Var),
-            AnyDecoder::Value(d) => match rx.decode(d)? {
-                Some(line) => {
-                    let end = d.position();
-                    match parse_value(line) {
-                        Ok(v) => Some(Message::Value(v)),
-                        Err(e) => {
-                            // Parse offsets are within the line; the line ended at `end`
-                            // (its LF, and a CR if one was dropped, follow the text).
-                            let line_start = end.saturating_sub(line.len() as u64 + 1);
-                            return Err(DecodeError::new(e.kind(), line_start + e.offset(), 0));
-                        }
-                    }
-                }
-                None => None,
-            },
-        })
-    }
-
-    /// Decodes every complete message in `rx`, calling `on` for each message or error.
-    /// With `eof`, the end of input is applied afterwards.
-    pub fn drain<S: AsRef<[u8]> + AsMut<[u8]>>(
-        &mut self,
-        rx: &mut RecvBuffer<S>,
-        eof: bool,
-        on: &mut dyn FnMut(Result<Message<'_>, DecodeError>),
-    ) {
-        loop {
-            match self.next(rx) {
-                Ok(Some(m)) => on(Ok(m)),
-                Ok(None) => break,
-                Err(e) => on(Err(e)),
-            }
+/// Decodes every complete message in `rx`, calling `on` for each message or error.
+/// With `eof`, the end of input is applied afterwards (the core's `decode_eof`).
+pub fn drain<S: AsRef<[u8]> + AsMut<[u8]>>(
+    decoder: &mut AnyDecoder,
+    rx: &mut RecvBuffer<S>,
+    eof: bool,
+    on: &mut dyn FnMut(Result<Message<'_>, DecodeError>),
+) {
+    loop {
+        match rx.decode(decoder) {
+            Ok(Some(m)) => on(Ok(m)),
+            Ok(None) => break,
+            Err(e) => on(Err(e)),
         }
-        if eof {
-            let last = match self {
-                AnyDecoder::Int32(d) => rx
-                    .decode_eof(d)
-                    .map(|m| m.map(|v| Message::Int(v.get(0).unwrap_or(0)))),
-                AnyDecoder::Byte(d) => rx
-                    .decode_eof(d)
-                    .map(|m| m.map(|b| Message::Byte(b.first().copied().unwrap_or(0)))),
-                AnyDecoder::Line(d) | AnyDecoder::Value(d) => rx
-                    .decode_eof(d)
-                    .map(|m| m.map(|l| Message::Text("line", l))),
-                AnyDecoder::StxEtx(d) => rx
-                    .decode_eof(d)
-                    .map(|m| m.map(|l| Message::Text("frame", l))),
-                AnyDecoder::Delimiter(d) => rx
-                    .decode_eof(d)
-                    .map(|m| m.map(|l| Message::Text("string", l))),
-                AnyDecoder::Var(d) => rx.decode_eof(d).map(|m| m.map(Message::Var)),
-            };
-            match last {
-                Ok(Some(m)) => on(Ok(m)),
-                Ok(None) => {}
-                Err(e) => on(Err(e)),
-            }
+    }
+    if eof {
+        match rx.decode_eof(decoder) {
+            Ok(Some(m)) => on(Ok(m)),
+            Ok(None) => {}
+            Err(e) => on(Err(e)),
         }
     }
 }
@@ -148,80 +115,11 @@ fn need(values: &[String], n: usize, usage: &str) -> Result<(), String> {
     Ok(())
 }
 
-/// `02 41 03`, `024103`, `0x02 0x41`: the bytes of hex tokens (pairs of hex digits,
-/// spaces and `0x` optional).
-pub fn parse_hex(values: &[String]) -> Result<Vec<u8>, String> {
-    let mut out = Vec::new();
-    for v in values {
-        let digits = v
-            .strip_prefix("0x")
-            .or_else(|| v.strip_prefix("0X"))
-            .unwrap_or(v);
-        let digits: Vec<u8> = digits
-            .bytes()
-            .filter(|b| !matches!(b, b':' | b'-' | b','))
-            .collect();
-        if digits.is_empty() || digits.len() % 2 != 0 {
-            return Err(format!(
-                "{v:?} is not hex bytes (pairs of hex digits, like 02 41 03)"
-            ));
-        }
-        for pair in digits.chunks(2) {
-            let text = std::str::from_utf8(pair).unwrap_or("");
-            out.push(u8::from_str_radix(text, 16).map_err(|_| {
-                format!("{v:?} is not hex bytes (pairs of hex digits, like 02 41 03)")
-            })?);
-        }
-    }
-    if out.is_empty() {
-        return Err("usage: hex HH HH ... (at least one byte, like 02 41 03)".into());
-    }
-    Ok(out)
-}
-
-/// Typed text with `\r \n \t \0 \\ \xHH` escapes interpreted (`--escapes`); an
-/// unknown escape is an error rather than a guess.
-pub fn unescape_text(s: &str) -> Result<Vec<u8>, String> {
-    let mut out = Vec::new();
-    let mut it = s.bytes();
-    while let Some(b) = it.next() {
-        if b != b'\\' {
-            out.push(b);
-            continue;
-        }
-        match it.next() {
-            Some(b'n') => out.push(b'\n'),
-            Some(b'r') => out.push(b'\r'),
-            Some(b't') => out.push(b'\t'),
-            Some(b'0') => out.push(0),
-            Some(b'\\') => out.push(b'\\'),
-            Some(b'x') => {
-                let hi = it.next();
-                let lo = it.next();
-                let pair = [hi.unwrap_or(b'?'), lo.unwrap_or(b'?')];
-                let v = std::str::from_utf8(&pair)
-                    .ok()
-                    .and_then(|t| u8::from_str_radix(t, 16).ok())
-                    .ok_or_else(|| format!("{s:?}: \\x needs two hex digits"))?;
-                out.push(v);
-            }
-            Some(other) => {
-                return Err(format!(
-                    "{s:?}: unknown escape \\{} (known: \\r \\n \\t \\0 \\\\ \\xHH)",
-                    other as char
-                ))
-            }
-            None => return Err(format!("{s:?}: a lone \\ at the end")),
-        }
-    }
-    Ok(out)
-}
-
 /// The text of the values, joined by spaces; with `escapes`, each one unescaped.
 fn text(values: &[String], escapes: bool) -> Result<Vec<u8>, String> {
     let joined = values.join(" ");
     if escapes {
-        unescape_text(&joined)
+        crate::typed::unescape(&joined)
     } else {
         Ok(joined.into_bytes())
     }
@@ -231,49 +129,61 @@ fn one(value: &str, escapes: bool) -> Result<Vec<u8>, String> {
     text(std::slice::from_ref(&value.to_string()), escapes)
 }
 
-fn at_least_one(values: &[String], format: &str) -> Result<(), String> {
+/// The values as numbers, `what` naming their kind in errors.
+fn nums<T: std::str::FromStr>(values: &[String], what: &str) -> Result<Vec<T>, String> {
+    values.iter().map(|s| num(s, what)).collect()
+}
+
+/// [`nums`] of a counted format, which needs at least one value.
+fn counted<T: std::str::FromStr>(
+    values: &[String],
+    format: &str,
+    what: &str,
+) -> Result<Vec<T>, String> {
     if values.is_empty() {
         return Err(format!("{format}: at least one value is required"));
     }
-    Ok(())
+    nums(values, what)
 }
 
-/// Encodes what a server sends: `floats`, `int32`, `bytes`, `string`, `line`,
-/// `framed PREFIX TEXT SUFFIX`, `var-reply NAME INT`, `hex HH...`.
+/// Which end of the connection sends what [`encode`] writes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Side {
+    /// The PC-side server: `floats`, `floats-lf`, `int32`, `bytes`, `string`, `line`,
+    /// `framed PREFIX TEXT SUFFIX`, `var-reply NAME INT`, `hex HH...`.
+    Server,
+    /// The robot: `line`, `string`, `byte`, `int`, `set-var NAME INT`, `get-var NAME`,
+    /// `stx-etx TEXT`, `value TEXT` (the `to_str` form of a number, bool, list or pose),
+    /// `hex HH...`.
+    Robot,
+}
+
+/// Encodes what a server sends (no escapes interpreted).
 pub fn encode_server(format: &str, values: &[String]) -> Result<Vec<u8>, String> {
-    encode_server_with(format, values, false)
+    encode(Side::Server, format, values, false)
 }
 
-/// [`encode_server`], with `escapes` interpreted in text values.
-pub fn encode_server_with(
+/// Encodes what `side` sends in `format`; with `escapes`, `\r \n \t \0 \\ \xHH` are
+/// interpreted in text values.
+pub fn encode(
+    side: Side,
     format: &str,
     values: &[String],
     escapes: bool,
 ) -> Result<Vec<u8>, String> {
     let mut out = Vec::new();
-    let r = match format {
-        "hex" => return parse_hex(values),
-        "floats" => {
-            let v: Vec<f64> = values.iter().map(|s| num(s, "float")).collect::<Result<_, _>>()?;
-            encode_float_tuple(&v, false, &mut out)
+    let r = match (side, format) {
+        (_, "hex") => return crate::typed::hex(values.iter().map(String::as_str)),
+        (_, "line") => encode_line(&text(values, escapes)?, &mut out),
+        (_, "string") => encode_string(&text(values, escapes)?, &mut out),
+        (Side::Server, "floats" | "floats-lf") => {
+            encode_float_tuple(&nums(values, "float")?, format == "floats-lf", &mut out)
         }
-        "floats-lf" => {
-            let v: Vec<f64> = values.iter().map(|s| num(s, "float")).collect::<Result<_, _>>()?;
-            encode_float_tuple(&v, true, &mut out)
+        (Side::Server, "int32") => encode_int32_list(&counted(values, format, "int32")?, &mut out),
+        (Side::Server, "bytes") => {
+            encode_byte_list(&counted(values, format, "byte (0-255)")?, &mut out)
         }
-        "int32" => {
-            at_least_one(values, "int32")?;
-            let v: Vec<i32> = values.iter().map(|s| num(s, "int32")).collect::<Result<_, _>>()?;
-            encode_int32_list(&v, &mut out)
-        }
-        "bytes" => {
-            at_least_one(values, "bytes")?;
-            let v: Vec<u8> = values.iter().map(|s| num(s, "byte (0-255)")).collect::<Result<_, _>>()?;
-            encode_byte_list(&v, &mut out)
-        }
-        "string" => encode_string(&text(values, escapes)?, &mut out),
-        "line" => encode_line(&text(values, escapes)?, &mut out),
-        "framed" => {
+        (Side::Server, "framed") => {
             need(values, 3, "framed PREFIX TEXT SUFFIX")?;
             encode_framed_string(
                 &one(&values[0], escapes)?,
@@ -282,63 +192,38 @@ pub fn encode_server_with(
                 &mut out,
             )
         }
-        "var-reply" => {
+        (Side::Server, "var-reply") => {
             need(values, 2, "var-reply NAME INT")?;
             encode_var_reply(&values[0], num(&values[1], "int32")?, &mut out)
         }
-        other => {
+        (Side::Server, other) => {
             return Err(format!(
                 "unknown format {other:?} (floats, floats-lf, int32, bytes, string, line, framed, var-reply, hex)"
             ))
         }
-    };
-    r.map_err(crate::messages::encode_error)?;
-    Ok(out)
-}
-
-/// Encodes what the robot sends: `line`, `string`, `byte`, `int`, `set-var NAME INT`,
-/// `get-var NAME`, `stx-etx TEXT`, `value TEXT` (the `to_str` form of a number, bool,
-/// list or pose), `hex HH...`; with `escapes` interpreted in text values.
-pub fn encode_robot_with(
-    format: &str,
-    values: &[String],
-    escapes: bool,
-) -> Result<Vec<u8>, String> {
-    let mut out = Vec::new();
-    let r = match format {
-        "hex" => return parse_hex(values),
-        "line" => encode_line(&text(values, escapes)?, &mut out),
-        "string" => encode_string(&text(values, escapes)?, &mut out),
-        "byte" | "bytes" => {
-            at_least_one(values, format)?;
-            for s in values {
-                encode_byte(num(s, "byte (0-255)")?, &mut out).map_err(crate::messages::encode_error)?;
-            }
-            Ok(values.len())
-        }
-        "int" | "int32" => {
-            at_least_one(values, format)?;
-            for s in values {
-                encode_int32(num(s, "int32")?, &mut out).map_err(crate::messages::encode_error)?;
-            }
-            Ok(values.len() * 4)
-        }
-        "set-var" => {
+        // One socket_send_byte / socket_send_int per value.
+        (Side::Robot, "byte" | "bytes") => counted(values, format, "byte (0-255)")?
+            .into_iter()
+            .try_fold(0, |n, v| Ok(n + encode_byte(v, &mut out)?)),
+        (Side::Robot, "int" | "int32") => counted(values, format, "int32")?
+            .into_iter()
+            .try_fold(0, |n, v| Ok(n + encode_int32(v, &mut out)?)),
+        (Side::Robot, "set-var") => {
             need(values, 2, "set-var NAME INT")?;
             encode_set_var(&values[0], num(&values[1], "int32")?, &mut out)
         }
-        "get-var" => {
+        (Side::Robot, "get-var") => {
             need(values, 1, "get-var NAME")?;
             encode_get_var(&values[0], &mut out)
         }
-        "stx-etx" => encode_stx_etx(&text(values, escapes)?, &mut out),
-        "value" => {
+        (Side::Robot, "stx-etx") => encode_stx_etx(&text(values, escapes)?, &mut out),
+        (Side::Robot, "value") => {
             let text = values.join(" ");
             let value = parse_value(text.as_bytes())
                 .map_err(|e| format!("value {text:?}: {}", crate::messages::value_error(&e)))?;
             encode_value(&value, &mut out)
         }
-        other => {
+        (Side::Robot, other) => {
             return Err(format!(
                 "unknown robot format {other:?} (line, string, byte, int, set-var, get-var, stx-etx, value, hex)"
             ))

@@ -12,6 +12,8 @@ mod offline;
 pub mod out;
 mod script;
 mod show;
+mod typed;
+mod vars;
 
 use clap::{Parser, Subcommand};
 use urscript_socket::robot::ReadCall;
@@ -37,77 +39,7 @@ enum Command {
     /// `hex 02 41 03`), `@N SPEC` for connection N when several are connected, `list`,
     /// `close N`, `help`. Variables (SET/GET) belong to the server: one table shared by
     /// every connection, so a value SET by one connection is read back by the next.
-    Listen {
-        /// Address to bind.
-        #[arg(long, default_value = "0.0.0.0")]
-        bind: String,
-        /// Port to listen on (0 picks a free one).
-        #[arg(long)]
-        port: u16,
-        /// How to decode what robots send. Without it chunks are shown raw, SET/GET lines
-        /// are still answered and `--reply` answers each chunk received.
-        #[arg(long, value_enum)]
-        decode: Option<DecodeFormat>,
-        /// Delimiter for `--decode delimiter` (`\r`, `\n`, `\t` are interpreted).
-        #[arg(long, default_value = "\\n")]
-        delimiter: String,
-        /// Reply to each decoded message (or each chunk without --decode), e.g.
-        /// `floats 0.1 0.2 0.3`, `line OK`, `int32 1 2`, `bytes 2 3`, `string >ok<`,
-        /// `text OK\r\n`, `hex 02 06 03`. GET lines are always answered from SET
-        /// (without --decode and with line, var, delimiter, stx-etx); an unknown variable
-        /// is answered 0 and said so.
-        #[arg(long, allow_hyphen_values = true)]
-        reply: Option<String>,
-        /// Replies from a file of rules, one `PATTERN => REPLY` a line (`*` and `?` are
-        /// wildcards; first match wins; no match falls back to --reply).
-        #[arg(long)]
-        rules: Option<std::path::PathBuf>,
-        /// The read the robot does on replies (`ascii-float:N`, `binary-integer:N`,
-        /// `byte-list:N`, `line`): each reply is checked against it and a warning says
-        /// why the robot's read would fail. Without it, number-like text replies are
-        /// checked as a `socket_read_ascii_float`.
-        #[arg(long)]
-        robot_reads: Option<String>,
-        /// Exit after this many robots have connected and left (0: exit right after
-        /// binding, which checks the options and the port).
-        #[arg(long)]
-        exit_after: Option<usize>,
-        /// Connections served at once; more are accepted and closed at once (said once
-        /// per episode).
-        #[arg(long, default_value_t = listen::DEFAULT_MAX_CONNECTIONS)]
-        max_connections: usize,
-        /// Variables the server keeps (names at most 128 bytes); SET of a new name beyond
-        /// it is refused and said.
-        #[arg(long, default_value_t = listen::DEFAULT_MAX_VARS)]
-        max_vars: usize,
-        /// Bytes of replies queued for one robot; a robot that lets more pile up is not
-        /// reading and is dropped (others are unaffected).
-        #[arg(long, default_value_t = listen::DEFAULT_MAX_QUEUE)]
-        max_queue: usize,
-        /// Seconds a reply may wait, from being queued, to be written before the robot is
-        /// taken as not reading and dropped (0: no limit).
-        #[arg(long, default_value_t = listen::DEFAULT_WRITE_TIMEOUT_SECS)]
-        write_timeout: f64,
-        /// Bytes of one chunk shown in its hex dump (rows of 16 with offsets); JSON events
-        /// and counters always carry the whole chunk.
-        #[arg(long, default_value_t = listen::DEFAULT_SHOW_MAX)]
-        show_max: usize,
-        /// Write the whole session (every line, or every JSON event) to FILE.
-        #[arg(long)]
-        log: Option<std::path::PathBuf>,
-        /// One JSON event per line on stdout (listening, connect, rx, decoded, tx, close,
-        /// diagnosis, errors); raw bytes as text when valid UTF-8, else hex (`encoding`).
-        #[arg(long)]
-        json: bool,
-        /// Only connects, closes and problems; no traffic lines.
-        #[arg(long, short)]
-        quiet: bool,
-        /// A terminal UI: the connections (Up/Down selects), the selected one's traffic
-        /// decoded as it arrives, and an input line sending a reply spec to it (Enter);
-        /// Esc quits.
-        #[arg(long)]
-        tui: bool,
-    },
+    Listen(listen::ListenOptions),
     /// A virtual robot running URScript socket calls against a server.
     Robot {
         /// Open `socket_0` to HOST:PORT before the script runs.
@@ -169,7 +101,7 @@ enum Command {
         /// The format.
         #[arg(value_enum)]
         format: DecodeFormat,
-        /// Delimiter for `delimiter` (`\r`, `\n`, `\t` are interpreted).
+        /// Delimiter for `delimiter` (escapes `\r \n \t \0 \\ \xHH` are interpreted).
         #[arg(long, default_value = "\\n")]
         delimiter: String,
         /// One JSON object per line; text as {"encoding":"utf-8","text":...}, other
@@ -205,70 +137,10 @@ enum ReadCmd {
     },
 }
 
-/// `\r`, `\n`, `\t`, `\\` in a command-line delimiter.
-fn unescape(s: &str) -> Vec<u8> {
-    let mut out = Vec::new();
-    let mut it = s.bytes().peekable();
-    while let Some(b) = it.next() {
-        if b == b'\\' {
-            match it.peek() {
-                Some(b'n') => out.push(b'\n'),
-                Some(b'r') => out.push(b'\r'),
-                Some(b't') => out.push(b'\t'),
-                Some(b'\\') => out.push(b'\\'),
-                _ => {
-                    out.push(b);
-                    continue;
-                }
-            }
-            it.next();
-        } else {
-            out.push(b);
-        }
-    }
-    out
-}
-
 fn run(cli: Cli) -> Result<(), String> {
     match cli.command {
         Command::Demo => demo::run(),
-        Command::Listen {
-            bind,
-            port,
-            decode,
-            delimiter,
-            reply,
-            rules,
-            robot_reads,
-            exit_after,
-            max_connections,
-            max_vars,
-            max_queue,
-            write_timeout,
-            show_max,
-            log,
-            json,
-            quiet,
-            tui,
-        } => listen::listen(listen::ListenOptions {
-            bind,
-            port,
-            decode,
-            delimiter: unescape(&delimiter),
-            reply,
-            exit_after,
-            max_connections,
-            max_vars,
-            max_queue,
-            write_timeout,
-            show_max,
-            robot_reads,
-            rules,
-            log,
-            json,
-            quiet,
-            tui,
-        }),
+        Command::Listen(opts) => listen::listen(opts),
         Command::Robot {
             connect,
             script,
@@ -326,7 +198,12 @@ fn run(cli: Cli) -> Result<(), String> {
             delimiter,
             json,
             allow_unterminated,
-        } => offline::decode(format, &unescape(&delimiter), json, allow_unterminated),
+        } => offline::decode(
+            format,
+            &formats::delimiter(&delimiter)?,
+            json,
+            allow_unterminated,
+        ),
     }
 }
 

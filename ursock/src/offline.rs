@@ -2,10 +2,11 @@
 
 use std::io::Read;
 
+use urscript_socket::format::Message;
 use urscript_socket::robot::{Policy, ReadCall, ReadResult, SocketConnection, Timeout};
 use urscript_socket::RecvBuffer;
 
-use crate::formats::{encode_robot_with, encode_server_with, AnyDecoder, DecodeFormat};
+use crate::formats::{drain, DecodeFormat, Side};
 use crate::show::{hex, JsonBytes};
 use crate::{out, outln};
 
@@ -17,11 +18,8 @@ pub fn encode(
     escapes: bool,
     robot: bool,
 ) -> Result<(), String> {
-    let bytes = if robot {
-        encode_robot_with(format, values, escapes)?
-    } else {
-        encode_server_with(format, values, escapes)?
-    };
+    let side = if robot { Side::Robot } else { Side::Server };
+    let bytes = crate::formats::encode(side, format, values, escapes)?;
     if as_hex {
         outln!("{}", hex(&bytes));
     } else {
@@ -181,16 +179,17 @@ pub fn decode(
     json: bool,
     allow_unterminated: bool,
 ) -> Result<(), String> {
-    let mut decoder = AnyDecoder::new(format, delimiter)?;
+    let mut decoder = format.decoder(delimiter)?;
+    let kind = format.text_kind();
     let mut rx = RecvBuffer::with_capacity(1 << 20);
     let mut stdin = std::io::stdin().lock();
     let mut errors = 0usize;
-    let mut on = |m: Result<crate::show::Message<'_>, urscript_socket::DecodeError>| match m {
+    let mut on = |m: Result<Message<'_>, urscript_socket::DecodeError>| match m {
         Ok(m) => {
             if json {
-                outln!("{}", m.json());
+                outln!("{}", crate::show::message_json(&m, kind));
             } else {
-                outln!("{}", m.text());
+                outln!("{}", crate::show::message_text(&m));
             }
         }
         Err(e) => {
@@ -199,10 +198,7 @@ pub fn decode(
         }
     };
     let mut cut_off: Option<Vec<u8>> = None;
-    let terminated = matches!(
-        format,
-        DecodeFormat::Line | DecodeFormat::Value | DecodeFormat::Var | DecodeFormat::Delimiter
-    );
+    let terminated = format.terminated();
     loop {
         let space = rx.spare();
         if space.is_empty() {
@@ -216,23 +212,23 @@ pub fn decode(
         };
         rx.commit(n);
         if n > 0 {
-            decoder.drain(&mut rx, false, &mut on);
+            drain(&mut decoder, &mut rx, false, &mut on);
             continue;
         }
-        decoder.drain(&mut rx, false, &mut on);
+        drain(&mut decoder, &mut rx, false, &mut on);
         if terminated && !rx.is_empty() {
             if allow_unterminated {
                 if format != DecodeFormat::Delimiter {
                     // The library reads lines strictly; give the last one its LF.
                     rx.extend(b"\n");
                 }
-                decoder.drain(&mut rx, true, &mut on);
+                drain(&mut decoder, &mut rx, true, &mut on);
             } else {
                 cut_off = Some(rx.data().to_vec());
                 rx.clear();
             }
         } else {
-            decoder.drain(&mut rx, true, &mut on);
+            drain(&mut decoder, &mut rx, true, &mut on);
         }
         break;
     }

@@ -2,6 +2,7 @@
 
 use std::fmt::Write as _;
 
+use urscript_socket::format::{write_quoted, Message};
 use urscript_socket::to_str::{Scalar, Value};
 use urscript_socket::var::VarMessage;
 
@@ -17,35 +18,42 @@ pub fn hex(bytes: &[u8]) -> String {
     s
 }
 
-/// A quoted string literal with `\n \r \t \\ \"` and `\xHH` escapes. Valid UTF-8
-/// beyond ASCII is shown as text (`"café"`); bytes that are not UTF-8 as `\xHH`.
+/// A quoted string literal, escaped by the core's [`write_quoted`] (`\n \r \t \\ \"`,
+/// `\xHH`), except that valid UTF-8 beyond ASCII is shown as text (`"café"`); bytes
+/// that are not UTF-8 stay `\xHH`.
 pub fn quoted(bytes: &[u8]) -> String {
     let mut s = String::with_capacity(bytes.len() + 2);
     s.push('"');
     for chunk in bytes.utf8_chunks() {
-        for c in chunk.valid().chars() {
-            match c {
-                '\n' => s.push_str("\\n"),
-                '\r' => s.push_str("\\r"),
-                '\t' => s.push_str("\\t"),
-                '\\' => s.push_str("\\\\"),
-                '"' => s.push_str("\\\""),
-                ' '..='~' => s.push(c),
-                c if (c as u32) < 0x80 => {
-                    let _ = write!(s, "\\x{:02X}", c as u32);
-                }
-                c if c.is_control() => {
+        let mut rest = chunk.valid();
+        while !rest.is_empty() {
+            let ascii = rest.find(|c: char| !c.is_ascii()).unwrap_or(rest.len());
+            escaped(&mut s, &rest.as_bytes()[..ascii]);
+            rest = &rest[ascii..];
+            if let Some(c) = rest.chars().next() {
+                if c.is_control() {
                     let _ = write!(s, "\\u{{{:04X}}}", c as u32);
+                } else {
+                    s.push(c);
                 }
-                c => s.push(c),
+                rest = &rest[c.len_utf8()..];
             }
         }
-        for b in chunk.invalid() {
-            let _ = write!(s, "\\x{b:02X}");
-        }
+        escaped(&mut s, chunk.invalid());
     }
     s.push('"');
     s
+}
+
+/// `bytes` escaped as [`write_quoted`] does, without its quotes.
+fn escaped(s: &mut String, bytes: &[u8]) {
+    if bytes.is_empty() {
+        return;
+    }
+    let start = s.len();
+    let _ = write_quoted(s, bytes);
+    s.pop();
+    s.remove(start);
 }
 
 /// A read's result in URScript notation, strings as [`quoted`] (valid UTF-8 shown as
@@ -147,26 +155,6 @@ impl JsonBytes {
     }
 }
 
-/// A float in shortest round-trip form, `nan`, `inf`.
-pub fn float(v: f64) -> String {
-    if v.is_nan() {
-        "nan".into()
-    } else if v.is_infinite() {
-        if v > 0.0 { "inf" } else { "-inf" }.into()
-    } else {
-        format!("{v}")
-    }
-}
-
-fn scalar(s: Scalar) -> String {
-    match s {
-        Scalar::Int(v) => v.to_string(),
-        Scalar::Float(v) => float(v),
-        Scalar::Bool(true) => "True".into(),
-        Scalar::Bool(false) => "False".into(),
-    }
-}
-
 fn json_scalar(s: Scalar) -> serde_json::Value {
     match s {
         Scalar::Int(v) => v.into(),
@@ -175,66 +163,56 @@ fn json_scalar(s: Scalar) -> serde_json::Value {
     }
 }
 
-/// A decoded message, ready to print as text or JSON.
-pub enum Message<'a> {
-    Int(i32),
-    Byte(u8),
-    Text(&'static str, &'a [u8]),
-    Var(VarMessage<'a>),
-    Value(Value<'a>),
+/// A decoded message as one line of text: a single int32 or byte as its number, text
+/// as [`quoted`], everything else in the core's URScript notation (`SET A 1`,
+/// `p[1, 2, 3, 0, 3.141593, 0]`).
+pub fn message_text(m: &Message<'_>) -> String {
+    match m {
+        Message::Int32(v) if v.len() == 1 => v.get(0).unwrap_or(0).to_string(),
+        Message::Bytes([b]) => b.to_string(),
+        Message::Text(t) => quoted(t),
+        other => other.to_string(),
+    }
 }
 
-impl Message<'_> {
-    pub fn text(&self) -> String {
-        match self {
-            Message::Int(v) => v.to_string(),
-            Message::Byte(b) => b.to_string(),
-            Message::Text(_, t) => quoted(t),
-            Message::Var(VarMessage::Set { name, value }) => format!("SET {name} {value}"),
-            Message::Var(VarMessage::Get { name }) => format!("GET {name}"),
-            Message::Value(Value::Scalar(s)) => scalar(*s),
-            Message::Value(Value::Pose(p)) => {
-                let items: Vec<String> = p.iter().map(|v| float(*v)).collect();
-                format!("p[{}]", items.join(", "))
-            }
-            Message::Value(Value::List(l)) => {
-                let items: Vec<String> = l.iter().map(scalar).collect();
-                format!("[{}]", items.join(", "))
+/// A decoded message as one JSON object, through serde_json:
+/// `{"type":"line","value":{...}}`. `text_kind` names a text message (`line`, `frame`,
+/// `string`).
+pub fn message_json(m: &Message<'_>, text_kind: &str) -> String {
+    serde_json::to_string(&json_message(m, text_kind)).unwrap_or_default()
+}
+
+fn json_message<'a>(m: &Message<'a>, text_kind: &str) -> JsonMessage<'a> {
+    match m {
+        Message::Int32(v) if v.len() == 1 => JsonMessage::Int32 {
+            value: v.get(0).unwrap_or(0),
+        },
+        Message::Bytes([b]) => JsonMessage::Byte { value: *b },
+        Message::Text(t) => {
+            let value = JsonBytes::new(t);
+            match text_kind {
+                "frame" => JsonMessage::Frame { value },
+                "string" => JsonMessage::String { value },
+                _ => JsonMessage::Line { value },
             }
         }
-    }
-
-    /// One JSON object, through serde_json: `{"type":"line","value":{...}}`.
-    pub fn json(&self) -> String {
-        serde_json::to_string(&self.json_value()).unwrap_or_default()
-    }
-
-    fn json_value(&self) -> JsonMessage<'_> {
-        match self {
-            Message::Int(v) => JsonMessage::Int32 { value: *v },
-            Message::Byte(b) => JsonMessage::Byte { value: *b },
-            Message::Text("frame", t) => JsonMessage::Frame {
-                value: JsonBytes::new(t),
-            },
-            Message::Text("string", t) => JsonMessage::String {
-                value: JsonBytes::new(t),
-            },
-            Message::Text(_, t) => JsonMessage::Line {
-                value: JsonBytes::new(t),
-            },
-            Message::Var(VarMessage::Set { name, value }) => JsonMessage::Set {
-                name,
-                value: *value,
-            },
-            Message::Var(VarMessage::Get { name }) => JsonMessage::Get { name },
-            Message::Value(Value::Scalar(Scalar::Int(v))) => JsonMessage::Int { value: *v },
-            Message::Value(Value::Scalar(Scalar::Float(v))) => JsonMessage::Float { value: *v },
-            Message::Value(Value::Scalar(Scalar::Bool(v))) => JsonMessage::Bool { value: *v },
-            Message::Value(Value::Pose(p)) => JsonMessage::Pose { value: *p },
-            Message::Value(Value::List(l)) => JsonMessage::List {
-                value: l.iter().map(json_scalar).collect(),
-            },
-        }
+        Message::Var(VarMessage::Set { name, value }) => JsonMessage::Set {
+            name,
+            value: *value,
+        },
+        Message::Var(VarMessage::Get { name }) => JsonMessage::Get { name },
+        Message::Value(Value::Scalar(Scalar::Int(v))) => JsonMessage::Int { value: *v },
+        Message::Value(Value::Scalar(Scalar::Float(v))) => JsonMessage::Float { value: *v },
+        Message::Value(Value::Scalar(Scalar::Bool(v))) => JsonMessage::Bool { value: *v },
+        Message::Value(Value::Pose(p)) => JsonMessage::Pose { value: *p },
+        Message::Value(Value::List(l)) => JsonMessage::List {
+            value: l.iter().map(json_scalar).collect(),
+        },
+        // Formats `decode` does not offer (float tuples, var replies, lists of ints):
+        // their URScript text.
+        other => JsonMessage::Text {
+            text: other.to_string(),
+        },
     }
 }
 
@@ -254,4 +232,43 @@ enum JsonMessage<'a> {
     Bool { value: bool },
     Pose { value: [f64; 6] },
     List { value: Vec<serde_json::Value> },
+    Text { text: String },
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use urscript_socket::format::Format;
+    use urscript_socket::Decoder;
+
+    #[test]
+    fn quoted_escapes_as_the_core_and_keeps_utf8_text() {
+        assert_eq!(quoted(b"a\"\\\n\r\t\x00\x7F"), r#""a\"\\\n\r\t\x00\x7F""#);
+        assert_eq!(quoted("café".as_bytes()), "\"café\"");
+        assert_eq!(quoted(b"caf\xE9 \xC3\xA9"), "\"caf\\xE9 é\"");
+        assert_eq!(quoted("\u{85}".as_bytes()), "\"\\u{0085}\"");
+    }
+
+    #[test]
+    fn messages_use_the_core_writer() {
+        let mut d = Format::Value.decoder().unwrap();
+        let m = d.decode(b"p[0.1, 0, 0, 0, 3.14159265, 0]\n").unwrap();
+        let m = m.item().unwrap();
+        assert_eq!(message_text(&m), "p[0.1, 0, 0, 0, 3.141593, 0]");
+        assert_eq!(
+            message_json(&m, "line"),
+            r#"{"type":"pose","value":[0.1,0.0,0.0,0.0,3.14159265,0.0]}"#
+        );
+        let mut d = Format::Int32 { number: 1 }.decoder().unwrap();
+        let m = d.decode(&[0, 0, 0, 100]).unwrap().item().unwrap();
+        assert_eq!(message_text(&m), "100");
+        assert_eq!(message_json(&m, "line"), r#"{"type":"int32","value":100}"#);
+        let mut d = Format::StxEtx.decoder().unwrap();
+        let m = d.decode(b"\x02hi\x03").unwrap().item().unwrap();
+        assert_eq!(message_text(&m), "\"hi\"");
+        assert_eq!(
+            message_json(&m, "frame"),
+            r#"{"type":"frame","value":{"encoding":"utf-8","text":"hi"}}"#
+        );
+    }
 }

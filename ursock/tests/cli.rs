@@ -1,29 +1,17 @@
 //! Runs the built `ursock` binary: offline commands on the spec's vectors, the demo, and
 //! `listen` talking to `robot` over 127.0.0.1.
 
-use std::io::{BufRead, BufReader, Write};
-use std::process::{Command, Stdio};
+use std::io::{BufRead, BufReader};
+use std::process::Stdio;
 
-fn ursock() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_ursock"))
-}
+mod run_common;
+
+use run_common::ursock;
 
 /// Runs `ursock args` with `stdin` and returns (exit ok, stdout, stderr).
 fn run(args: &[&str], stdin: &[u8]) -> (bool, String, String) {
-    let mut child = ursock()
-        .args(args)
-        .stdin(Stdio::piped())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .expect("spawn ursock");
-    child.stdin.take().unwrap().write_all(stdin).unwrap();
-    let out = child.wait_with_output().unwrap();
-    (
-        out.status.success(),
-        String::from_utf8_lossy(&out.stdout).into_owned(),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    )
+    let (code, out, err) = run_common::run(args, stdin);
+    (code == 0, out, err)
 }
 
 fn ok(args: &[&str], stdin: &[u8]) -> String {
@@ -318,4 +306,48 @@ fn listen_and_robot_talk_over_loopback() {
         "{log}"
     );
     assert!(log.contains("closed"), "{log}");
+}
+
+/// Issue 10: `decode` is a map over the core's format registry. The value-line decoder
+/// and its error offsets are the core's (byte 6, also after a CR and after earlier
+/// lines), float text is the robot's own `to_str` form, and `--delimiter` takes the same
+/// escapes as `--escapes`.
+#[test]
+fn decode_uses_the_core_registry_and_writer() {
+    for input in [&b"p[1,2,x,4,5,6]\r\n"[..], b"p[1,2,x,4,5,6]\n"] {
+        let (success, _, err) = run(&["decode", "value"], input);
+        assert!(!success);
+        assert!(err.contains("at byte 6"), "{input:?}: {err}");
+    }
+    let (success, out, err) = run(&["decode", "value"], b"[1]\np[1,2,x]\n[2]\n");
+    assert!(!success);
+    assert_eq!(out, "[1]\n[2]\n");
+    assert!(err.contains("at byte 10"), "{err}");
+    assert_eq!(
+        ok(
+            &["decode", "value"],
+            b"p[0.1, 0.2, 0.3, 0, 3.14159265, 0]\n"
+        ),
+        "p[0.1, 0.2, 0.3, 0, 3.141593, 0]\n"
+    );
+    assert_eq!(
+        ok(
+            &["decode", "delimiter", "--delimiter", "\\x03"],
+            b"a\x03b\x03"
+        ),
+        "\"a\"\n\"b\"\n"
+    );
+    let (success, _, err) = run(&["decode", "delimiter", "--delimiter", "\\q"], b"");
+    assert!(
+        !success && err.contains("--delimiter") && err.contains("unknown escape"),
+        "{err}"
+    );
+    // The same escapes in `encode --escapes`.
+    assert_eq!(
+        ok(
+            &["encode", "string", "a\\x03\\0", "--escapes", "--hex"],
+            b""
+        ),
+        "61 03 00\n"
+    );
 }

@@ -310,11 +310,14 @@ fn says_why_the_robots_float_read_fails() {
     let s = robot(&l.addr);
     l.wait_for("[#1]", false);
     for (typed, why) in [
-        ("line [0.1, 0.2]", "Python str(list)"),
-        ("line [0.1 0.2]", "numpy str(array)"),
+        ("line [0.1, 0.2]", "str(list)"),
+        ("line [0.1 0.2]", "str(array)"),
         ("string (0,15;0,5)", "decimal commas"),
         ("line 0.1,0.2", "no parentheses"),
-        ("floats 1 2 3", "3 values where the robot reads 2"),
+        (
+            "floats 1 2 3",
+            "3 values arrived where the read asked for 2",
+        ),
         ("line np.float64(0.1)", "numpy 2"),
     ] {
         l.type_line(typed);
@@ -337,7 +340,7 @@ fn says_why_the_robots_float_read_fails() {
     let _s3 = robot(&l.addr);
     l.wait_for("[#1]", false);
     l.type_line("line [0.1, 0.2, 0.3]");
-    let err = l.wait_for("Python str(list)", true);
+    let err = l.wait_for("str(list)", true);
     assert!(
         err.contains("socket_read_ascii_float(3) would return [0, nan, nan, nan]"),
         "{err}"
@@ -469,7 +472,7 @@ fn reply_and_rules_are_checked_once_at_start() {
     assert!(out.status.success());
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(
-        err.contains("--reply: warning:") && err.contains("Python str(list)"),
+        err.contains("--reply: warning:") && err.contains("str(list)"),
         "{err}"
     );
     let bad = std::process::Command::new(listen_common::bin())
@@ -480,4 +483,31 @@ fn reply_and_rules_are_checked_once_at_start() {
     let err = String::from_utf8_lossy(&bad.stderr);
     assert_eq!(err.lines().count(), 1, "{err}");
     assert!(err.starts_with("ursock: --reply: floats:"), "{err}");
+}
+
+/// Issue 10: `listen` checks replies with the same rules as `read` and `robot`, so every
+/// read `--robot-reads` names is covered (a line read of a reply without LF too).
+#[test]
+fn listen_checks_replies_with_the_read_rules() {
+    let run = |reply: &str, reads: &str| {
+        let out = std::process::Command::new(listen_common::bin())
+            .args(["listen", "--bind", "127.0.0.1", "--port", "0"])
+            .args([
+                "--exit-after",
+                "0",
+                "--robot-reads",
+                reads,
+                "--reply",
+                reply,
+            ])
+            .output()
+            .unwrap();
+        assert!(out.status.success());
+        String::from_utf8_lossy(&out.stderr).into_owned()
+    };
+    let err = run("string OK", "line");
+    assert!(err.contains("--reply: warning: no LF"), "{err}");
+    assert!(run("line OK", "line").is_empty());
+    let err = run("bytes 1 2", "binary-integer:1");
+    assert!(err.contains("only 2 of the 4 bytes"), "{err}");
 }

@@ -121,7 +121,7 @@ fn tui_shows_traffic_and_sends_typed_replies() {
     // A diagnosis shows in the status line.
     t.keys("line [0.1, 0.2]");
     t.key("Enter");
-    t.wait_for("Python str(list)");
+    t.wait_for("str(list)");
     t.key("Escape");
     let start = Instant::now();
     while t.cmd(&["has-session", "-t", &t.session]).status.success() {

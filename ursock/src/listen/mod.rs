@@ -7,13 +7,11 @@
 //! Limits (`--max-connections`, `--max-vars`, `--max-queue`) bound what a peer can make
 //! the listener hold; accept errors (out of descriptors) back off and are said once.
 
-mod diagnose;
 mod dump;
 mod out;
 mod rules;
 mod spec;
 mod tui;
-mod vars;
 
 use std::collections::BTreeMap;
 use std::path::PathBuf;
@@ -26,18 +24,17 @@ use tokio::io::{AsyncReadExt, AsyncWriteExt};
 use tokio::net::tcp::OwnedWriteHalf;
 use tokio::net::{TcpListener, TcpStream};
 use tokio::sync::{mpsc, Notify};
-use urscript_socket::line::LineDecoder;
 use urscript_socket::robot::ReadCall;
-use urscript_socket::var::{
-    encode_var_reply, parse_var_message, VarMessage, DEFAULT_MAX_VAR_LINE_LEN,
-};
+use urscript_socket::var::{encode_var_reply, parse_var_message, VarMessage};
 use urscript_socket::RecvBuffer;
 
-use crate::formats::{AnyDecoder, DecodeFormat};
-use crate::show::Message;
+use urscript_socket::format::{Format, Message};
+
+use crate::diagnose;
+use crate::formats::{drain, DecodeFormat};
+use crate::vars::{self, SetOutcome, Vars};
 use out::{bytes_json, Kind, Out};
 use spec::Reply;
-use vars::{SetOutcome, Vars};
 
 pub const DEFAULT_MAX_CONNECTIONS: usize = 64;
 pub const DEFAULT_MAX_VARS: usize = 1024;
@@ -53,23 +50,77 @@ const ROBOT_READ_TIMEOUT: Duration = Duration::from_secs(2);
 const RX_CAPACITY: usize = 16 * 1024;
 const READ_CHUNK: usize = 8 * 1024;
 
+/// `ursock listen`'s options.
+#[derive(clap::Args)]
 pub struct ListenOptions {
+    /// Address to bind.
+    #[arg(long, default_value = "0.0.0.0")]
     pub bind: String,
+    /// Port to listen on (0 picks a free one).
+    #[arg(long)]
     pub port: u16,
+    /// How to decode what robots send. Without it chunks are shown raw, SET/GET lines
+    /// are still answered and `--reply` answers each chunk received.
+    #[arg(long, value_enum)]
     pub decode: Option<DecodeFormat>,
-    pub delimiter: Vec<u8>,
+    /// Delimiter for `--decode delimiter` (escapes `\r \n \t \0 \\ \xHH` are interpreted).
+    #[arg(long, default_value = "\\n")]
+    pub delimiter: String,
+    /// Reply to each decoded message (or each chunk without --decode), e.g.
+    /// `floats 0.1 0.2 0.3`, `line OK`, `int32 1 2`, `bytes 2 3`, `string >ok<`,
+    /// `text OK\r\n`, `hex 02 06 03`. GET lines are always answered from SET
+    /// (without --decode and with line, var, delimiter, stx-etx); an unknown variable
+    /// is answered 0 and said so.
+    #[arg(long, allow_hyphen_values = true)]
     pub reply: Option<String>,
-    pub exit_after: Option<usize>,
-    pub max_connections: usize,
-    pub max_vars: usize,
-    pub max_queue: usize,
-    pub write_timeout: f64,
-    pub show_max: usize,
-    pub robot_reads: Option<String>,
+    /// Replies from a file of rules, one `PATTERN => REPLY` a line (`*` and `?` are
+    /// wildcards; first match wins; no match falls back to --reply).
+    #[arg(long)]
     pub rules: Option<PathBuf>,
+    /// The read the robot does on replies (`ascii-float:N`, `binary-integer:N`,
+    /// `byte-list:N`, `line`): each reply is checked against it and a warning says
+    /// why the robot's read would fail. Without it, number-like text replies are
+    /// checked as a `socket_read_ascii_float`.
+    #[arg(long)]
+    pub robot_reads: Option<String>,
+    /// Exit after this many robots have connected and left (0: exit right after
+    /// binding, which checks the options and the port).
+    #[arg(long)]
+    pub exit_after: Option<usize>,
+    /// Connections served at once; more are accepted and closed at once (said once
+    /// per episode).
+    #[arg(long, default_value_t = DEFAULT_MAX_CONNECTIONS)]
+    pub max_connections: usize,
+    /// Variables the server keeps (names at most 128 bytes); SET of a new name beyond
+    /// it is refused and said.
+    #[arg(long, default_value_t = DEFAULT_MAX_VARS)]
+    pub max_vars: usize,
+    /// Bytes of replies queued for one robot; a robot that lets more pile up is not
+    /// reading and is dropped (others are unaffected).
+    #[arg(long, default_value_t = DEFAULT_MAX_QUEUE)]
+    pub max_queue: usize,
+    /// Seconds a reply may wait, from being queued, to be written before the robot is
+    /// taken as not reading and dropped (0: no limit).
+    #[arg(long, default_value_t = DEFAULT_WRITE_TIMEOUT_SECS)]
+    pub write_timeout: f64,
+    /// Bytes of one chunk shown in its hex dump (rows of 16 with offsets); JSON events
+    /// and counters always carry the whole chunk.
+    #[arg(long, default_value_t = DEFAULT_SHOW_MAX)]
+    pub show_max: usize,
+    /// Write the whole session (every line, or every JSON event) to FILE.
+    #[arg(long)]
     pub log: Option<PathBuf>,
+    /// One JSON event per line on stdout (listening, connect, rx, decoded, tx, close,
+    /// diagnosis, errors); raw bytes as text when valid UTF-8, else hex (`encoding`).
+    #[arg(long)]
     pub json: bool,
+    /// Only connects, closes and problems; no traffic lines.
+    #[arg(long, short)]
     pub quiet: bool,
+    /// A terminal UI: the connections (Up/Down selects), the selected one's traffic
+    /// decoded as it arrives, and an input line sending a reply spec to it (Enter);
+    /// Esc quits.
+    #[arg(long)]
     pub tui: bool,
 }
 
@@ -145,30 +196,31 @@ struct Decoded {
     json: Value,
 }
 
-fn own(m: &Message<'_>) -> Decoded {
+/// `text_kind`: what a text message is called (`line`, `frame`, `string`).
+fn own(m: &Message<'_>, text_kind: &'static str) -> Decoded {
     match m {
-        Message::Text(kind, t) => Decoded {
-            kind,
-            shown: dump::text(t),
+        Message::Text(t) => Decoded {
+            kind: text_kind,
+            shown: crate::show::quoted(t),
             raw: t.to_vec(),
             is_text: true,
             json: {
                 let (v, enc) = bytes_json(t);
-                json!({"type": kind, "value": v, "encoding": enc})
+                json!({"type": text_kind, "value": v, "encoding": enc})
             },
         },
         other => {
-            let shown = other.text();
+            let shown = crate::show::message_text(other);
             let kind = match other {
-                Message::Int(_) => "int32",
-                Message::Byte(_) => "byte",
+                Message::Int32(_) => "int32",
+                Message::Bytes(_) => "byte",
                 Message::Var(VarMessage::Set { .. }) => "set",
                 Message::Var(VarMessage::Get { .. }) => "get",
                 _ => "value",
             };
             let json = match other {
-                Message::Int(v) => json!({"type": kind, "value": v}),
-                Message::Byte(b) => json!({"type": kind, "value": b}),
+                Message::Int32(v) if v.len() == 1 => json!({"type": kind, "value": v.get(0)}),
+                Message::Bytes([b]) => json!({"type": kind, "value": b}),
                 _ => json!({"type": kind, "text": shown}),
             };
             Decoded {
@@ -195,8 +247,9 @@ pub fn listen(opts: ListenOptions) -> Result<(), String> {
         Some(s) => Some(diagnose::parse_robot_reads(s)?),
         None => None,
     };
+    let delimiter = crate::formats::delimiter(&opts.delimiter)?;
     if let Some(format) = opts.decode {
-        AnyDecoder::new(format, &opts.delimiter)?;
+        format.decoder(&delimiter)?;
     }
     if opts.max_connections == 0 {
         return Err("--max-connections must be at least 1".into());
@@ -227,7 +280,7 @@ pub fn listen(opts: ListenOptions) -> Result<(), String> {
             .iter()
             .map(|r| (format!("--rules line {}", r.line), &r.reply)),
     ) {
-        for w in diagnose::content(r, robot_reads.as_ref()) {
+        for w in diagnose::reply(&r.sent(), robot_reads.as_ref(), false) {
             out.emit(
                 Kind::Warn,
                 None,
@@ -244,7 +297,7 @@ pub fn listen(opts: ListenOptions) -> Result<(), String> {
     let shared = Arc::new(Shared {
         out,
         decode: opts.decode,
-        delimiter: opts.delimiter,
+        delimiter,
         reply,
         rules,
         robot_reads,
@@ -556,9 +609,9 @@ fn send(shared: &Shared, conn: &Conn, reply: &Reply, origin: &str) {
     }
     // `--reply` and rules were checked once at start; what the operator types, each time.
     let warnings = if origin == "operator" {
-        diagnose::diagnose(reply, shared.robot_reads.as_ref(), after_lf)
+        diagnose::reply(&reply.sent(), shared.robot_reads.as_ref(), after_lf)
     } else {
-        diagnose::leftover_lf(reply, shared.robot_reads.as_ref(), after_lf)
+        diagnose::leftover_lf(&reply.sent(), shared.robot_reads.as_ref(), after_lf)
             .into_iter()
             .collect()
     };
@@ -677,16 +730,15 @@ async fn serve(shared: Arc<Shared>, id: u64, stream: TcpStream, peer: String) {
     );
     let mut writer_task = tokio::spawn(writer(wr, rx, Arc::clone(&stats), shared.write_timeout));
 
-    // Without --decode, lines are still split (silently) so SET/GET are answered.
+    // Without --decode, lines are still split (silently) so SET/GET are answered; with
+    // `--decode var` too, so a malformed variable line can be shown and explained.
     let mut decoder = match shared.decode {
-        Some(DecodeFormat::Var) => {
-            AnyDecoder::Line(LineDecoder::with_max_len(DEFAULT_MAX_VAR_LINE_LEN))
-        }
-        Some(f) => {
-            AnyDecoder::new(f, &shared.delimiter).unwrap_or(AnyDecoder::Line(LineDecoder::new()))
-        }
-        None => AnyDecoder::Line(LineDecoder::new()),
-    };
+        Some(f) if f != DecodeFormat::Var => f.decoder(&shared.delimiter).ok(),
+        _ => None,
+    }
+    .map_or_else(|| Format::Line.decoder(), Ok)
+    .expect("the line decoder takes no arguments");
+    let text_kind = shared.decode.map_or("line", DecodeFormat::text_kind);
     let mut rx_buf = RecvBuffer::with_capacity(RX_CAPACITY);
     let mut chunk = vec![0u8; READ_CHUNK];
     let mut peer_closed = false;
@@ -731,10 +783,15 @@ async fn serve(shared: Arc<Shared>, id: u64, stream: TcpStream, peer: String) {
             let got = rx_buf.extend(&chunk[taken..n]);
             taken += got;
             let before = decoded.len() + errors.len();
-            decoder.drain(&mut rx_buf, eof && taken >= n, &mut |m| match m {
-                Ok(msg) => decoded.push(own(&msg)),
-                Err(e) => errors.push(e.to_string()),
-            });
+            drain(
+                &mut decoder,
+                &mut rx_buf,
+                eof && taken >= n,
+                &mut |m| match m {
+                    Ok(msg) => decoded.push(own(&msg, text_kind)),
+                    Err(e) => errors.push(e.to_string()),
+                },
+            );
             if taken >= n {
                 break;
             }

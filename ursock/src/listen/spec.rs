@@ -6,6 +6,7 @@
 //! * `text TEXT`: TEXT with escapes interpreted (`\r`, `\n`, `\t`, `\0`, `\\`, `\xHH`);
 //! * `hex 02 41 03` (or `024103`, `0x02 0x41`): raw bytes.
 
+use crate::diagnose::Sent;
 use crate::formats::encode_server;
 
 /// A checked reply: its bytes and what kind of read it is meant for.
@@ -16,14 +17,14 @@ pub struct Reply {
 }
 
 impl Reply {
-    /// A float tuple from `floats`/`floats-lf`.
-    pub fn is_float_tuple(&self) -> bool {
-        self.format == "floats" || self.format == "floats-lf"
-    }
-
-    /// Bytes meant for a binary read (`int32`, `bytes`).
-    pub fn is_binary(&self) -> bool {
-        self.format == "int32" || self.format == "bytes"
+    /// The reply as the diagnosis rules see it: a float tuple from `floats`/`floats-lf`,
+    /// bytes meant for a binary read from `int32`/`bytes`.
+    pub fn sent(&self) -> Sent<'_> {
+        Sent {
+            bytes: &self.bytes,
+            float_tuple: self.format == "floats" || self.format == "floats-lf",
+            binary: self.format == "int32" || self.format == "bytes",
+        }
     }
 }
 
@@ -39,8 +40,8 @@ pub fn parse(spec: &str) -> Result<Reply, String> {
         return Err(format!("empty reply spec (formats: {FORMATS})"));
     }
     let bytes = match format {
-        "hex" => parse_hex(rest)?,
-        "text" => unescape(rest)?,
+        "hex" => crate::typed::hex([rest]).map_err(|e| format!("hex: {e}"))?,
+        "text" => crate::typed::unescape(rest).map_err(|e| format!("text: {e}"))?,
         "string" => rest.as_bytes().to_vec(),
         "line" => {
             let mut v = rest.as_bytes().to_vec();
@@ -61,69 +62,4 @@ pub fn parse(spec: &str) -> Result<Reply, String> {
         format: format.to_string(),
         bytes,
     })
-}
-
-/// `02 41 03`, `024103`, `0x02,0x41`.
-pub fn parse_hex(s: &str) -> Result<Vec<u8>, String> {
-    let mut digits = Vec::new();
-    for word in s.split(|c: char| c.is_whitespace() || c == ',') {
-        let w = word
-            .strip_prefix("0x")
-            .or_else(|| word.strip_prefix("0X"))
-            .unwrap_or(word);
-        if w.len() % 2 != 0 {
-            return Err(format!(
-                "hex: {word:?} is not whole bytes (two digits each)"
-            ));
-        }
-        for pair in w.as_bytes().chunks(2) {
-            let text = std::str::from_utf8(pair).unwrap_or("?");
-            let b = u8::from_str_radix(text, 16)
-                .map_err(|_| format!("hex: {word:?} is not hexadecimal"))?;
-            digits.push(b);
-        }
-    }
-    if digits.is_empty() {
-        return Err("hex: no bytes given (e.g. hex 02 41 03)".into());
-    }
-    Ok(digits)
-}
-
-/// `\r \n \t \0 \\ \xHH` in typed text.
-pub fn unescape(s: &str) -> Result<Vec<u8>, String> {
-    let mut out = Vec::with_capacity(s.len());
-    let b = s.as_bytes();
-    let mut i = 0;
-    while i < b.len() {
-        if b[i] != b'\\' {
-            out.push(b[i]);
-            i += 1;
-            continue;
-        }
-        match b.get(i + 1) {
-            Some(b'n') => out.push(b'\n'),
-            Some(b'r') => out.push(b'\r'),
-            Some(b't') => out.push(b'\t'),
-            Some(b'0') => out.push(0),
-            Some(b'\\') => out.push(b'\\'),
-            Some(b'x') => {
-                let hex = b
-                    .get(i + 2..i + 4)
-                    .and_then(|h| std::str::from_utf8(h).ok());
-                let v = hex
-                    .and_then(|h| u8::from_str_radix(h, 16).ok())
-                    .ok_or_else(|| format!("text: \\x needs two hex digits at byte {i}"))?;
-                out.push(v);
-                i += 4;
-                continue;
-            }
-            _ => {
-                return Err(format!(
-                    "text: unknown escape at byte {i} (use \\r \\n \\t \\0 \\\\ \\xHH)"
-                ))
-            }
-        }
-        i += 2;
-    }
-    Ok(out)
 }
