@@ -259,8 +259,14 @@ fn a_bound_of_usize_max_is_clamped_not_overflowed() {
     assert_eq!(line.decode(b"abc\n").unwrap().item(), Some(&b"abc"[..]));
     assert_eq!(line.decode_eof(b"x\n").unwrap(), Some((&b"x"[..], 2)));
     let mut delimited = DelimitedDecoder::with_max_len(b"\r\n", usize::MAX).unwrap();
-    assert_eq!(delimited.decode(b"ab\r\n").unwrap().item(), Some(&b"ab"[..]));
-    assert_eq!(delimited.decode_eof(b"tail").unwrap(), Some((&b"tail"[..], 4)));
+    assert_eq!(
+        delimited.decode(b"ab\r\n").unwrap().item(),
+        Some(&b"ab"[..])
+    );
+    assert_eq!(
+        delimited.decode_eof(b"tail").unwrap(),
+        Some((&b"tail"[..], 4))
+    );
     let mut stx = StxEtxDecoder::with_max_len(usize::MAX);
     assert_eq!(stx.decode(b"\x02ok\x03").unwrap().item(), Some(&b"ok"[..]));
     let mut floats = FloatTupleDecoder::new(1).unwrap().with_max_len(usize::MAX);
@@ -370,7 +376,10 @@ fn tokio_codecs_end_of_input_errors_are_final() {
     assert!(stx.decode_eof(&mut src).unwrap().is_none());
     let mut src = BytesMut::from(&b"abc"[..]);
     let mut delimited = DelimitedCodec::new(b";").unwrap();
-    assert_eq!(&delimited.decode_eof(&mut src).unwrap().unwrap()[..], b"abc");
+    assert_eq!(
+        &delimited.decode_eof(&mut src).unwrap().unwrap()[..],
+        b"abc"
+    );
     assert!(delimited.decode_eof(&mut src).unwrap().is_none());
 }
 
@@ -416,7 +425,10 @@ fn a_buffer_smaller_than_the_bound_reports_once_and_recovers() {
     assert_eq!((e, items.len()), (once.clone(), 1));
     let (e, items) = run(StxEtxDecoder::new(), b"\x02payload too big\x03\x02ok\x03");
     assert_eq!((e, items), (once.clone(), vec!["[111, 107]".to_string()]));
-    let (e, items) = run(FloatTupleDecoder::new(3).unwrap(), b"(1.5, 2.5, 3.5)(1,2,3)");
+    let (e, items) = run(
+        FloatTupleDecoder::new(3).unwrap(),
+        b"(1.5, 2.5, 3.5)(1,2,3)",
+    );
     assert_eq!((e, items.len()), (once.clone(), 1));
     // 12 bytes per message, none fits: each is reported once and skipped by its count, so
     // the stream stays aligned (no error, no item from a message's tail).
@@ -425,7 +437,11 @@ fn a_buffer_smaller_than_the_bound_reports_once_and_recovers() {
     assert_eq!(e, [ErrorKind::TooLong { limit: 8 }; 3]);
     assert!(items.is_empty(), "{items:?}");
     let (e, items) = run(urscript_socket::int32::Int32Decoder::new(2).unwrap(), &ints);
-    assert_eq!((e.len(), items.len()), (0, 4), "8-byte messages fit: {items:?}");
+    assert_eq!(
+        (e.len(), items.len()),
+        (0, 4),
+        "8-byte messages fit: {items:?}"
+    );
     // The documented exception: a read-string window waits (nothing consumed).
     let mut rx = RecvBuffer::<[u8; 8]>::new();
     let mut read = ReadStringDecoder::new(b">", b"<", false).unwrap();
