@@ -356,14 +356,13 @@ impl Framer {
     }
 
     /// Everything buffered as one frame (flush on idle or end of input), at most the
-    /// bound, minus the rest of a message being discarded. Resets the scan.
+    /// bound, and resets the scan. `None` if nothing is held, or while the rest of an
+    /// over-long message is being discarded (that goes on through its delimiter).
     pub fn take_all<'a>(&mut self, buf: &'a [u8]) -> Option<(&'a [u8], usize)> {
-        let discarding = self.scan.state == State::Discarding;
-        self.scan.reset();
-        if discarding {
-            self.scan.pos += buf.len() as u64;
+        if self.scan.state == State::Discarding {
             return None;
         }
+        self.scan.reset();
         if buf.is_empty() {
             return None;
         }
