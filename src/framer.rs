@@ -184,6 +184,17 @@ struct Scan {
     pos: u64,
 }
 
+/// What starts and ends a delimited or bracketed frame, as the scan uses it.
+#[derive(Clone, Copy)]
+struct Ends<'c> {
+    /// The open byte and what to do with bytes before it; `None`: the frame starts at once.
+    open: Option<(u8, Noise)>,
+    /// The close: one byte, or a 1-64 byte delimiter.
+    close: &'c [u8],
+    /// An open byte inside a frame cuts it short (what was expected, for the error).
+    reopen: Option<&'static str>,
+}
+
 /// The resumable scan for one shape, with its bound.
 #[derive(Debug, Clone)]
 pub struct Framer {
@@ -307,14 +318,22 @@ impl Framer {
                 close,
                 noise,
                 reopen,
-            } => scan.delimited(
-                buf,
-                limits,
-                Some((*open, *noise)),
-                core::slice::from_ref(close),
-                *reopen,
-            ),
-            Shape::Delimited { close } => scan.delimited(buf, limits, None, close.as_bytes(), None),
+            } => {
+                let ends = Ends {
+                    open: Some((*open, *noise)),
+                    close: core::slice::from_ref(close),
+                    reopen: *reopen,
+                };
+                scan.delimited(buf, limits, ends)
+            }
+            Shape::Delimited { close } => {
+                let ends = Ends {
+                    open: None,
+                    close: close.as_bytes(),
+                    reopen: None,
+                };
+                scan.delimited(buf, limits, ends)
+            }
             Shape::Counted { len, .. } => Ok(scan.counted(buf, *len)),
             Shape::Window { prefix, suffix } => Ok(scan.window(buf, limits, prefix, suffix)),
         }
@@ -470,10 +489,9 @@ impl Scan {
         &mut self,
         buf: &'a [u8],
         limits: &Limits,
-        open: Option<(u8, Noise)>,
-        close: &[u8],
-        reopen: Option<&'static str>,
+        ends: Ends<'_>,
     ) -> Result<Status<Frame<'a>>, DecodeError> {
+        let Ends { open, close, .. } = ends;
         let clen = close.len();
         // Bytes of `buf` already dropped in this call.
         let mut lead = 0;
@@ -498,7 +516,7 @@ impl Scan {
                     None => return Ok(self.partial(buf.len())),
                 },
                 (State::InFrame { content }, _) => {
-                    return self.frame(buf, lead, content, limits, open, close, reopen);
+                    return self.frame(buf, lead, content, limits, ends);
                 }
                 // Delimited: every byte is content.
                 (_, None) => {
@@ -538,17 +556,19 @@ impl Scan {
     /// The frame starts at `buf[lead]`, its content `content` bytes later: find its close
     /// within the bound, resuming where the last call stopped.
     #[inline(always)]
-    #[allow(clippy::too_many_arguments)]
     fn frame<'a>(
         &mut self,
         buf: &'a [u8],
         lead: usize,
         content: usize,
         limits: &Limits,
-        open: Option<(u8, Noise)>,
-        close: &[u8],
-        reopen: Option<&'static str>,
+        ends: Ends<'_>,
     ) -> Result<Status<Frame<'a>>, DecodeError> {
+        let Ends {
+            open,
+            close,
+            reopen,
+        } = ends;
         let clen = close.len();
         let frame = &buf[lead..];
         let window = frame.len().min(limits.window);
@@ -668,6 +688,25 @@ impl Scan {
         }
     }
 }
+
+/// Declares a parse step that hands a frame's content on as it is (STX/ETX payloads,
+/// read strings, delimited strings): one line per format instead of one impl each.
+macro_rules! content_as_is {
+    ($(#[$doc:meta])* $name:ident) => {
+        $(#[$doc])*
+        #[derive(Debug, Clone, Copy, Default)]
+        pub struct $name;
+
+        impl $crate::Parse for $name {
+            type Output<'a> = &'a [u8];
+            #[inline(always)]
+            fn parse<'a>(&self, content: &'a [u8]) -> Result<&'a [u8], ($crate::ErrorKind, usize)> {
+                Ok(content)
+            }
+        }
+    };
+}
+pub(crate) use content_as_is;
 
 /// The pure half of a format: one complete frame's content to an item. Errors are (what,
 /// offset within `content`); [`Framed`] makes the offset absolute.

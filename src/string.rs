@@ -8,8 +8,8 @@
 //! * [`encode_string`], [`encode_framed_string`]: what either side writes.
 
 pub use crate::framer::MAX_PATTERN_LEN;
-use crate::framer::{AtEof, Framed, Framer, Parse, Pattern, Shape};
-use crate::{ArgumentError, EncodeError, ErrorKind, Sink};
+use crate::framer::{content_as_is, AtEof, Framed, Framer, Pattern, Shape};
+use crate::{ArgumentError, EncodeError, Sink};
 
 /// The most bytes one `socket_read_string` returns, terminators included (5.x manual).
 pub const READ_STRING_LIMIT: usize = 1024;
@@ -132,17 +132,10 @@ pub fn controller_pattern(
 /// ```
 pub type ReadStringDecoder = Framed<ReadString>;
 
-/// The parse step of [`ReadStringDecoder`]: the content as it is.
-#[derive(Debug, Clone, Copy, Default)]
-pub struct ReadString;
-
-impl Parse for ReadString {
-    type Output<'a> = &'a [u8];
-    #[inline(always)]
-    fn parse<'a>(&self, content: &'a [u8]) -> Result<&'a [u8], (ErrorKind, usize)> {
-        Ok(content)
-    }
-}
+content_as_is!(
+    /// The parse step of [`ReadStringDecoder`]: the content as it is.
+    ReadString
+);
 
 impl ReadStringDecoder {
     /// A read with the given URScript arguments (leading spaces dropped, escapes
@@ -206,17 +199,10 @@ impl ReadStringDecoder {
 /// ```
 pub type DelimitedDecoder = Framed<Delimited>;
 
-/// The parse step of [`DelimitedDecoder`]: the message as it is.
-#[derive(Debug, Clone, Copy, Default)]
-pub struct Delimited;
-
-impl Parse for Delimited {
-    type Output<'a> = &'a [u8];
-    #[inline(always)]
-    fn parse<'a>(&self, content: &'a [u8]) -> Result<&'a [u8], (ErrorKind, usize)> {
-        Ok(content)
-    }
-}
+content_as_is!(
+    /// The parse step of [`DelimitedDecoder`]: the message as it is.
+    Delimited
+);
 
 impl DelimitedDecoder {
     /// A decoder splitting on `delimiter`, with the default bound.
