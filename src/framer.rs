@@ -107,6 +107,16 @@ pub enum AtEof {
     Keep,
 }
 
+/// Which [`Shape`] a parse step's frames have, known at compile time ([`Parse::SHAPE`]).
+#[doc(hidden)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ShapeKind {
+    Delimited,
+    Bracketed,
+    Counted,
+    Window,
+}
+
 /// The frame shapes; see the module table.
 #[derive(Debug, Clone, Copy)]
 pub enum Shape {
@@ -303,9 +313,55 @@ impl Framer {
         self.scan.reset();
     }
 
+    /// [`next`](Self::next) for a framer whose shape is known to be `kind` at compile time
+    /// (each parse step names its shape): the match below then folds to the one arm, so a
+    /// counted read costs a length check and a line a memchr, with no dispatch and no call.
+    #[inline(always)]
+    pub fn next_as<'a>(
+        &mut self,
+        kind: ShapeKind,
+        buf: &'a [u8],
+    ) -> Result<Status<Frame<'a>>, DecodeError> {
+        let Framer {
+            shape,
+            limits,
+            scan,
+        } = self;
+        match (kind, &*shape) {
+            // A counted frame's length is its bound.
+            (ShapeKind::Counted, _) => Ok(scan.counted(buf, limits.bound)),
+            (ShapeKind::Delimited, Shape::Delimited { close }) => {
+                let ends = Ends {
+                    open: None,
+                    close: close.as_bytes(),
+                    reopen: None,
+                };
+                scan.delimited(buf, limits, ends)
+            }
+            (
+                ShapeKind::Bracketed,
+                Shape::Bracketed {
+                    open,
+                    close,
+                    noise,
+                    reopen,
+                },
+            ) => {
+                let ends = Ends {
+                    open: Some((*open, *noise)),
+                    close: core::slice::from_ref(close),
+                    reopen: *reopen,
+                };
+                scan.delimited(buf, limits, ends)
+            }
+            // A parse step paired with another shape (never built): the general path.
+            _ => self.next(buf),
+        }
+    }
+
     /// The next frame in `buf` (the caller's unconsumed bytes): the one scan-and-discard
     /// machine of the crate. Every return accounts for the bytes it tells the caller to drop.
-    #[inline]
+    #[inline(never)]
     pub fn next<'a>(&mut self, buf: &'a [u8]) -> Result<Status<Frame<'a>>, DecodeError> {
         let Framer {
             shape,
@@ -493,6 +549,16 @@ impl Scan {
     ) -> Result<Status<Frame<'a>>, DecodeError> {
         let Ends { open, close, .. } = ends;
         let clen = close.len();
+        // The common cases first: in a frame, or a delimited frame starting now.
+        match (self.state, open) {
+            (State::InFrame { content }, _) => return self.frame(buf, 0, content, limits, ends),
+            (State::Idle, None) => {
+                self.state = State::InFrame { content: 0 };
+                self.scanned = 0;
+                return self.frame(buf, 0, 0, limits, ends);
+            }
+            _ => {}
+        }
         // Bytes of `buf` already dropped in this call.
         let mut lead = 0;
         loop {
@@ -613,6 +679,59 @@ impl Scan {
         }
     }
 
+    /// A whole counted frame of `len` bytes at the front of `buf`, between frames: every
+    /// call in a steady stream, so it is only a length check (the state is already Idle).
+    #[inline(always)]
+    fn whole<'a>(&mut self, buf: &'a [u8], len: usize) -> Option<Frame<'a>> {
+        if self.state != State::Idle || buf.len() < len {
+            return None;
+        }
+        let at = self.pos;
+        self.pos += len as u64;
+        Some(Frame {
+            content: &buf[..len],
+            at,
+            consumed: len,
+        })
+    }
+
+    /// A whole frame at the front of `buf`, between frames, its content `content` bytes in
+    /// (after an open byte already checked, or at once): every call in a steady stream of
+    /// lines or tuples. On a miss the scan is left where the general step resumes it (in
+    /// the frame, `scanned` bytes searched), so no byte is searched twice.
+    #[inline(always)]
+    fn whole_delimited<'a>(
+        &mut self,
+        buf: &'a [u8],
+        limits: &Limits,
+        content: usize,
+        close: &[u8],
+    ) -> Option<Frame<'a>> {
+        if self.state != State::Idle {
+            return None;
+        }
+        let window = buf.len().min(limits.window);
+        let from = content.min(window);
+        match find(close, &buf[from..window]) {
+            Some(i) => {
+                let end = from + i;
+                let consumed = end + close.len();
+                let at = self.pos + content as u64;
+                self.pos += consumed as u64;
+                Some(Frame {
+                    content: &buf[content..end],
+                    at,
+                    consumed,
+                })
+            }
+            None => {
+                self.state = State::InFrame { content };
+                self.scanned = window;
+                None
+            }
+        }
+    }
+
     /// Counted frames: no scan, only a length.
     #[inline(always)]
     fn counted<'a>(&mut self, buf: &'a [u8], len: usize) -> Status<Frame<'a>> {
@@ -692,13 +811,14 @@ impl Scan {
 /// Declares a parse step that hands a frame's content on as it is (STX/ETX payloads,
 /// read strings, delimited strings): one line per format instead of one impl each.
 macro_rules! content_as_is {
-    ($(#[$doc:meta])* $name:ident) => {
+    ($(#[$doc:meta])* $name:ident, $shape:ident) => {
         $(#[$doc])*
         #[derive(Debug, Clone, Copy, Default)]
         pub struct $name;
 
         impl $crate::Parse for $name {
             type Output<'a> = &'a [u8];
+            const SHAPE: $crate::framer::ShapeKind = $crate::framer::ShapeKind::$shape;
             #[inline(always)]
             fn parse<'a>(&self, content: &'a [u8]) -> Result<&'a [u8], ($crate::ErrorKind, usize)> {
                 Ok(content)
@@ -713,6 +833,11 @@ pub(crate) use content_as_is;
 pub trait Parse {
     /// What a frame decodes to; borrows the frame where the format allows it.
     type Output<'a>;
+
+    /// The shape of this format's frames, so that the framer's dispatch is resolved at
+    /// compile time. Internal.
+    #[doc(hidden)]
+    const SHAPE: ShapeKind;
 
     /// Parses the content of one complete frame.
     fn parse<'a>(&self, content: &'a [u8]) -> Result<Self::Output<'a>, (ErrorKind, usize)>;
@@ -749,15 +874,36 @@ impl<P: Parse> Framed<P> {
     /// ```
     #[inline]
     pub fn decode<'a>(&mut self, buf: &'a [u8]) -> Result<Status<P::Output<'a>>, DecodeError> {
-        match self.framer.next(buf)? {
-            Status::Complete { item: frame, .. } => {
-                self.parse(frame).map(|item| Status::Complete {
-                    item,
-                    consumed: frame.consumed,
-                    at: frame.at,
-                })
+        // The common case (between frames, a whole frame there) without the general step.
+        let whole = match (P::SHAPE, &self.framer.shape) {
+            (ShapeKind::Counted, _) => self.framer.scan.whole(buf, self.framer.limits.bound),
+            (ShapeKind::Delimited, Shape::Delimited { close }) => {
+                self.framer
+                    .scan
+                    .whole_delimited(buf, &self.framer.limits, 0, close.as_bytes())
             }
-            Status::Partial { consumed } => Ok(Status::Partial { consumed }),
+            _ => None,
+        };
+        let frame = match whole {
+            Some(frame) => frame,
+            None => match self.framer.next_as(P::SHAPE, buf)? {
+                Status::Complete { item, .. } => item,
+                Status::Partial { consumed } => return Ok(Status::Partial { consumed }),
+            },
+        };
+        // One match, no combinators: a large item (a float tuple is 256 bytes) is built
+        // once in the result instead of being moved through each layer.
+        match self.parser.parse(frame.content) {
+            Ok(item) => Ok(Status::Complete {
+                item,
+                consumed: frame.consumed,
+                at: frame.at,
+            }),
+            Err((kind, off)) => Err(DecodeError::new(
+                kind,
+                frame.at + off as u64,
+                frame.consumed,
+            )),
         }
     }
 

@@ -11,8 +11,9 @@ pub use crate::framer::MAX_PATTERN_LEN;
 use crate::framer::{content_as_is, AtEof, Framed, Framer, Pattern, Shape};
 use crate::{ArgumentError, EncodeError, Sink};
 
-/// The most bytes one `socket_read_string` returns, terminators included (5.x manual).
-pub const READ_STRING_LIMIT: usize = 1024;
+/// The most bytes one `socket_read_string` returns, terminators included (5.x manual): the
+/// framer's read-string window.
+pub const READ_STRING_LIMIT: usize = crate::framer::WINDOW;
 
 /// Default bound on one delimited message's content, in bytes.
 pub const DEFAULT_MAX_MESSAGE_LEN: usize = 4096;
@@ -134,7 +135,8 @@ pub type ReadStringDecoder = Framed<ReadString>;
 
 content_as_is!(
     /// The parse step of [`ReadStringDecoder`]: the content as it is.
-    ReadString
+    ReadString,
+    Window
 );
 
 impl ReadStringDecoder {
@@ -201,6 +203,7 @@ pub type DelimitedDecoder = Framed<Delimited>;
 
 content_as_is!(
     /// The parse step of [`DelimitedDecoder`]: the message as it is.
+    Delimited,
     Delimited
 );
 

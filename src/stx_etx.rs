@@ -61,7 +61,8 @@ pub type StxEtxDecoder = Framed<StxEtx>;
 
 content_as_is!(
     /// The parse step of [`StxEtxDecoder`]: the payload as it is.
-    StxEtx
+    StxEtx,
+    Bracketed
 );
 
 impl Default for StxEtxDecoder {
