@@ -9,8 +9,10 @@ use std::error::Error;
 
 use futures_util::{SinkExt, StreamExt};
 use tokio::net::TcpListener;
-use tokio_util::codec::{FramedRead, FramedWrite};
-use urscript_socket::adapters::tokio::{AsyncRobotSocket, FloatTupleCodec, LineCodec};
+use tokio_util::codec::Framed;
+use urscript_socket::adapters::tokio::{
+    AsyncRobotSocket, FloatTupleCodec, LineCodec, RequestReply, Tolerant,
+};
 use urscript_socket::robot::{Policy, ReadCall, ReadResult, Timeout};
 
 const ROBOTS: usize = 20;
@@ -27,18 +29,19 @@ async fn main() -> Result<(), Box<dyn Error>> {
     tokio::spawn(async move {
         while let Ok((stream, _)) = listener.accept().await {
             tokio::spawn(async move {
-                let (r, w) = stream.into_split();
-                let mut requests = FramedRead::new(r, LineCodec::new());
-                let mut replies = FramedWrite::new(w, FloatTupleCodec::new(6)?);
-                while let Some(line) = requests.next().await {
-                    let line = line?;
+                // One Framed: lines in, tuples out; a bad line is reported, not fatal.
+                let codec =
+                    RequestReply::new(Tolerant::new(LineCodec::new()), FloatTupleCodec::new(6)?);
+                let mut framed = Framed::new(stream, codec);
+                while let Some(line) = framed.next().await {
+                    let Ok(line) = line? else { continue };
                     // "pose? N" asks for the pose of part N.
                     let n: i32 = std::str::from_utf8(&line)
                         .ok()
                         .and_then(|s| s.strip_prefix("pose? "))
                         .and_then(|n| n.parse().ok())
                         .unwrap_or(-1);
-                    replies.send(&pose_for(n)[..]).await?;
+                    framed.send(pose_for(n)).await?;
                 }
                 Ok::<_, Box<dyn Error + Send + Sync>>(())
             });

@@ -36,7 +36,7 @@ use crate::{ArgumentError, DecodeError, Decoder, Status};
 /// The most values one read or message of a counted format holds: the controller's
 /// limit for `socket_read_ascii_float`, `socket_read_binary_integer` and
 /// `socket_read_byte_list` (`number` in 1..=30). The crate's one
-/// [`MAX_VALUES`](crate::MAX_VALUES), re-exported here.
+/// `MAX_VALUES`, re-exported here.
 pub use crate::MAX_VALUES;
 
 /// Every format on the wire between a UR robot and its server, with its parameters.
@@ -319,6 +319,108 @@ impl fmt::Display for Message<'_> {
     }
 }
 
+/// A [`Message`] that owns its data (feature `alloc`): what an adapter hands out when
+/// the receive buffer moves on.
+///
+/// ```
+/// use urscript_socket::format::{Format, Message, OwnedMessage};
+/// use urscript_socket::Decoder;
+/// let mut d = Format::Var.decoder().unwrap();
+/// let m = d.decode(b"SET X 5\n").unwrap().item().unwrap();
+/// let owned = OwnedMessage::from(&m);
+/// assert_eq!(owned, OwnedMessage::Set { name: "X".into(), value: 5 });
+/// assert_eq!(owned.to_string(), "SET X 5");
+/// ```
+#[cfg(feature = "alloc")]
+#[derive(Debug, Clone, PartialEq)]
+#[non_exhaustive]
+pub enum OwnedMessage {
+    /// A float tuple.
+    FloatTuple(FloatTuple),
+    /// Big-endian int32 values.
+    Int32(alloc::vec::Vec<i32>),
+    /// Raw bytes.
+    Bytes(alloc::vec::Vec<u8>),
+    /// A line, a string read, a delimited string or an STX/ETX payload.
+    Text(alloc::vec::Vec<u8>),
+    /// `SET name value`.
+    Set {
+        /// Variable name.
+        name: alloc::string::String,
+        /// Its new value.
+        value: i32,
+    },
+    /// `GET name`.
+    Get {
+        /// Variable name.
+        name: alloc::string::String,
+    },
+    /// The value of a `socket_get_var` reply.
+    VarReply(i32),
+    /// A `to_str` value: a scalar, a pose or a list.
+    Value(OwnedValue),
+}
+
+/// The owned form of a [`Value`] (feature `alloc`).
+#[cfg(feature = "alloc")]
+#[derive(Debug, Clone, PartialEq)]
+pub enum OwnedValue {
+    /// A number or bool.
+    Scalar(Scalar),
+    /// `p[x, y, z, rx, ry, rz]`.
+    Pose([f64; 6]),
+    /// `[a, b, ...]`.
+    List(alloc::vec::Vec<Scalar>),
+}
+
+#[cfg(feature = "alloc")]
+impl From<&Message<'_>> for OwnedMessage {
+    fn from(m: &Message<'_>) -> Self {
+        match *m {
+            Message::FloatTuple(t) => OwnedMessage::FloatTuple(t),
+            Message::Int32(v) => OwnedMessage::Int32(v.iter().collect()),
+            Message::Bytes(b) => OwnedMessage::Bytes(b.to_vec()),
+            Message::Text(t) => OwnedMessage::Text(t.to_vec()),
+            Message::Var(VarMessage::Set { name, value }) => OwnedMessage::Set {
+                name: name.into(),
+                value,
+            },
+            Message::Var(VarMessage::Get { name }) => OwnedMessage::Get { name: name.into() },
+            Message::VarReply(v) => OwnedMessage::VarReply(v),
+            Message::Value(Value::Scalar(s)) => OwnedMessage::Value(OwnedValue::Scalar(s)),
+            Message::Value(Value::Pose(p)) => OwnedMessage::Value(OwnedValue::Pose(p)),
+            Message::Value(Value::List(l)) => {
+                OwnedMessage::Value(OwnedValue::List(l.iter().collect()))
+            }
+        }
+    }
+}
+
+/// Written as the borrowed [`Message`] is (`[2, 1.5, -3]`, `"text"`, `SET X 5`).
+#[cfg(feature = "alloc")]
+impl fmt::Display for OwnedMessage {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let m = match self {
+            OwnedMessage::Int32(v) => return write_list(v.iter().map(|&v| Scalar::Int(v)), f),
+            OwnedMessage::FloatTuple(t) => Message::FloatTuple(*t),
+            OwnedMessage::Bytes(b) => Message::Bytes(b),
+            OwnedMessage::Text(t) => Message::Text(t),
+            OwnedMessage::Set { name, value } => Message::Var(VarMessage::Set {
+                name,
+                value: *value,
+            }),
+            OwnedMessage::Get { name } => Message::Var(VarMessage::Get { name }),
+            OwnedMessage::VarReply(v) => Message::VarReply(*v),
+            OwnedMessage::Value(OwnedValue::Scalar(s)) => Message::Value(Value::Scalar(*s)),
+            OwnedMessage::Value(OwnedValue::Pose(p)) => Message::Value(Value::Pose(*p)),
+            OwnedMessage::Value(OwnedValue::List(l)) => {
+                Message::Value(Value::List(crate::to_str::List::from_items(l)))
+            }
+        };
+        m.fmt(f)
+    }
+}
+
 /// A count (at most 30) as a URScript int.
 fn count(n: usize) -> i32 {
     i32::try_from(n).unwrap_or(i32::MAX)
@@ -416,14 +518,7 @@ impl Decoder for AnyDecoder {
             s: Result<Status<T>, DecodeError>,
             f: impl FnOnce(T) -> Message<'b>,
         ) -> Result<Status<Message<'b>>, DecodeError> {
-            s.map(|s| match s {
-                Status::Complete { item, consumed, at } => Status::Complete {
-                    item: f(item),
-                    consumed,
-                    at,
-                },
-                Status::Partial { consumed } => Status::Partial { consumed },
-            })
+            s.map(|s| s.map(f))
         }
         match &mut self.0 {
             Inner::FloatTuple(d) => map(d.decode(buf), Message::FloatTuple),

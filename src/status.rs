@@ -73,6 +73,25 @@ impl<T> Status<T> {
         }
     }
 
+    /// The same status with its item converted (`consumed` and `at` unchanged).
+    ///
+    /// ```
+    /// use urscript_socket::Status;
+    /// let s = Status::Complete { item: 5, consumed: 1, at: 9 };
+    /// assert_eq!(s.map(|v| v * 2), Status::Complete { item: 10, consumed: 1, at: 9 });
+    /// ```
+    #[inline]
+    pub fn map<U>(self, f: impl FnOnce(T) -> U) -> Status<U> {
+        match self {
+            Status::Complete { item, consumed, at } => Status::Complete {
+                item: f(item),
+                consumed,
+                at,
+            },
+            Status::Partial { consumed } => Status::Partial { consumed },
+        }
+    }
+
     /// The item, if complete.
     ///
     /// ```

@@ -32,8 +32,8 @@ pub fn encode_string<S: Sink + ?Sized>(text: &[u8], sink: &mut S) -> Result<usiz
 }
 
 /// Writes `prefix`, `text`, `suffix`: a message for
-/// `socket_read_string(prefix=.., suffix=..)`. Refused if `text` contains the suffix
-/// (the robot would stop there), reporting where.
+/// `socket_read_string(prefix=.., suffix=..)`. Refused if the robot would see the suffix
+/// before the end of `text` (inside it, or begun by its last bytes), reporting where.
 ///
 /// ```
 /// use urscript_socket::string::encode_framed_string;
@@ -41,6 +41,8 @@ pub fn encode_string<S: Sink + ?Sized>(text: &[u8], sink: &mut S) -> Result<usiz
 /// encode_framed_string(b">", b"hello", b"<", &mut out).unwrap();
 /// assert_eq!(out, b">hello<");
 /// assert!(encode_framed_string(b">", b"a<b", b"<", &mut out).is_err());
+/// // The text's end and the suffix would read as an earlier suffix: refused too.
+/// assert!(encode_framed_string(b"!", b"{", b"{{", &mut out).is_err());
 /// ```
 pub fn encode_framed_string<S: Sink + ?Sized>(
     prefix: &[u8],
@@ -48,18 +50,35 @@ pub fn encode_framed_string<S: Sink + ?Sized>(
     suffix: &[u8],
     sink: &mut S,
 ) -> Result<usize, EncodeError> {
-    if !suffix.is_empty() {
-        if let Some(index) = memchr::memmem::find(text, suffix) {
-            return Err(EncodeError::ForbiddenByte {
-                byte: text[index],
-                index,
-            });
-        }
+    if let Some(index) = early_suffix(text, suffix) {
+        return Err(EncodeError::ForbiddenByte {
+            byte: text[index],
+            index,
+        });
     }
     sink.put(prefix)?;
     sink.put(text)?;
     sink.put(suffix)?;
     Ok(prefix.len() + text.len() + suffix.len())
+}
+
+/// Where the reader would see `suffix` start before the end of `text`: inside it, or
+/// straddling its end (`text = "{"`, `suffix = "{{"` reads as an empty string followed
+/// by `{`). `None` if `text` then `suffix` reads back as `text`.
+fn early_suffix(text: &[u8], suffix: &[u8]) -> Option<usize> {
+    if suffix.is_empty() {
+        return None;
+    }
+    if let Some(index) = memchr::memmem::find(text, suffix) {
+        return Some(index);
+    }
+    // An occurrence that begins in the last `suffix.len() - 1` bytes of the text.
+    let from = text.len().saturating_sub(suffix.len() - 1);
+    (from..text.len()).find(|&i| {
+        let k = text.len() - i;
+        // `text[i..] + suffix` starts with the suffix.
+        suffix.starts_with(&text[i..]) && suffix[k..] == suffix[..suffix.len() - k]
+    })
 }
 
 /// Turns a prefix or suffix argument into the bytes the controller matches: leading

@@ -690,3 +690,31 @@ fn read_results_print_by_the_robots_to_str_rules() {
     .unwrap();
     assert_eq!(pose, "p[1.234568, 0, 0, 0, 0, 0]");
 }
+
+/// A `read_string` whose prefix never arrives used to wedge the socket: 100 kB of junk
+/// filled the receive buffer and `>ok<` behind it was never read.
+#[test]
+fn junk_before_a_prefix_does_not_wedge_the_socket() {
+    let mut s = SocketConnection::new("s", Policy::default());
+    let call = ReadCall::String {
+        prefix: b">".to_vec(),
+        suffix: b"<".to_vec(),
+        interpret_escape: false,
+    };
+    s.start_read(call, Timeout::from_secs_f64(2.0), Duration::ZERO)
+        .unwrap();
+    let mut input = vec![b'x'; 100_000];
+    input.extend_from_slice(b">ok<");
+    let mut offered = &input[..];
+    let mut result = None;
+    for _ in 0..1_000 {
+        let n = s.receive(offered);
+        offered = &offered[n..];
+        if let Some(r) = s.poll_read() {
+            result = Some(r);
+            break;
+        }
+    }
+    assert_eq!(result.unwrap().to_urscript(), "\"ok\"");
+    assert!(s.buffered().len() <= Policy::default().receive_capacity);
+}

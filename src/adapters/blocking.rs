@@ -1,76 +1,85 @@
 //! Blocking adapters over `std::io::Read` and `Write`.
+//!
+//! [`MessageReader`] is an `Iterator` of owned messages (`for line in reader`), or lends
+//! each message straight from its buffer with [`next_with`](MessageReader::next_with)
+//! (no copy). [`MessageWriter`] writes each message whole. Both errors convert into
+//! `std::io::Error`, so `?` works in a function returning `io::Result`.
+//!
+//! ```no_run
+//! use std::net::TcpListener;
+//! use urscript_socket::adapters::blocking::{MessageReader, MessageWriter};
+//! use urscript_socket::{ascii_float::encode_float_tuple, line::LineDecoder};
+//!
+//! fn main() -> std::io::Result<()> {
+//!     let listener = TcpListener::bind("0.0.0.0:30000")?;
+//!     let (robot, _) = listener.accept()?;
+//!     let mut replies = MessageWriter::new(robot.try_clone()?);
+//!     for request in MessageReader::new(robot, LineDecoder::new()) {
+//!         match request {
+//!             Ok(line) if line == b"shoot" => {
+//!                 replies.send(|out| encode_float_tuple(&[0.4, -0.2, 0.3, 0.0, 3.14, 0.0], false, out))?
+//!             }
+//!             Ok(_) => {}
+//!             Err(e) if e.is_recoverable() => eprintln!("skipped: {e}"),
+//!             Err(e) => return Err(e.into()),
+//!         }
+//!     }
+//!     Ok(())
+//! }
+//! ```
 
 use std::boxed::Box;
 use std::io::{self, Read, Write};
 use std::vec::Vec;
 
-use crate::{DecodeError, Decoder, EncodeError, RecvBuffer};
+use crate::adapters::OwnedDecoder;
+use crate::{Decoder, EncodeError, RecvBuffer};
 
 /// Default receive buffer of a [`MessageReader`]: 64 KiB, above every core decoder's
 /// default bound.
 pub const DEFAULT_CAPACITY: usize = 64 * 1024;
 
-/// Why a [`MessageReader`] or [`MessageWriter`] call failed.
+/// Why a [`MessageReader`] call failed: the adapters' [`Error`](crate::adapters::Error)
+/// over `std::io::Error`. Converts into `std::io::Error`.
 ///
 /// ```
 /// use urscript_socket::adapters::blocking::ReadError;
 /// let e = ReadError::TimedOut;
 /// assert_eq!(e.to_string(), "no complete message before the read timeout");
+/// assert_eq!(std::io::Error::from(e).kind(), std::io::ErrorKind::TimedOut);
 /// ```
-#[derive(Debug)]
-#[non_exhaustive]
-pub enum ReadError {
-    /// The transport failed.
-    Io(io::Error),
-    /// Bad bytes: what and where. The reader has already skipped them; the next call
-    /// goes on with the next message.
-    Decode(DecodeError),
-    /// The peer closed in the middle of a message (every complete message before it was
-    /// delivered first). `Decode` errors of kind `Truncated` say the same with an offset;
-    /// this variant is used when no decoder offset applies.
-    ClosedMidMessage,
-    /// The read timeout set on the transport passed first; call again to go on waiting.
-    TimedOut,
-    /// The buffer is full and still holds no complete message.
-    BufferFull {
-        /// The buffer's capacity.
-        capacity: usize,
-    },
-    /// An encoder refused the message.
-    Encode(EncodeError),
-}
+pub type ReadError = crate::adapters::Error<io::Error>;
 
-impl core::fmt::Display for ReadError {
-    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
-        match self {
-            ReadError::Io(e) => write!(f, "transport error: {e}"),
-            ReadError::Decode(e) => write!(f, "bad input: {e}"),
-            ReadError::ClosedMidMessage => f.write_str("peer closed in the middle of a message"),
-            ReadError::TimedOut => f.write_str("no complete message before the read timeout"),
-            ReadError::BufferFull { capacity } => {
-                write!(
-                    f,
-                    "receive buffer of {capacity} bytes full without a complete message"
-                )
-            }
-            ReadError::Encode(e) => write!(f, "cannot encode: {e}"),
-        }
-    }
-}
-
-impl std::error::Error for ReadError {
-    fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
-        match self {
-            ReadError::Io(e) => Some(e),
-            ReadError::Decode(e) => Some(e),
-            ReadError::Encode(e) => Some(e),
-            _ => None,
-        }
-    }
-}
+/// Why a [`MessageWriter::send`] failed (`Io` or `Encode`): the same type as
+/// [`ReadError`]. Converts into `std::io::Error`.
+///
+/// ```
+/// use urscript_socket::{adapters::blocking::WriteError, EncodeError};
+/// let e = WriteError::Encode(EncodeError::NoValues);
+/// assert_eq!(std::io::Error::from(e).kind(), std::io::ErrorKind::InvalidInput);
+/// ```
+pub type WriteError = crate::adapters::Error<io::Error>;
 
 /// Reads messages of one format from a blocking reader: a core decoder over a bounded
-/// buffer. Items are handed to a closure, borrowed straight from the buffer (no copy).
+/// buffer.
+///
+/// Two ways to take messages:
+/// * as an `Iterator` of `Result<owned message, ReadError>` (the decoder's
+///   [`OwnedDecoder::Owned`]: `Vec<u8>` for lines, `i32` for [`Int32Stream`](crate::adapters::Int32Stream), ...).
+///   Recoverable errors (bad bytes, the read timeout) are yielded and the iteration goes
+///   on; it ends when the peer closes or after an unrecoverable error.
+/// * borrowed straight from the buffer, no copy: [`next_with`](Self::next_with).
+///
+/// ```
+/// use urscript_socket::{adapters::blocking::MessageReader, adapters::Int32Stream, line::LineDecoder};
+/// let lines: Vec<Vec<u8>> = MessageReader::new(&b"hello\nworld\n"[..], LineDecoder::new())
+///     .collect::<Result<_, _>>()
+///     .unwrap();
+/// assert_eq!(lines, [b"hello".to_vec(), b"world".to_vec()]);
+///
+/// let ints = MessageReader::new(&[0u8, 0, 0, 7, 0xFF, 0xFF, 0xFF, 0xFF][..], Int32Stream::new());
+/// assert_eq!(ints.map(Result::unwrap).collect::<Vec<i32>>(), [7, -1]);
+/// ```
 ///
 /// ```
 /// use urscript_socket::{adapters::blocking::MessageReader, line::LineDecoder};
@@ -88,6 +97,8 @@ pub struct MessageReader<R, D> {
     decoder: D,
     rx: RecvBuffer<Box<[u8]>>,
     eof: bool,
+    /// Set after an unrecoverable error: the iterator is over.
+    done: bool,
 }
 
 impl<R: Read, D: Decoder> MessageReader<R, D> {
@@ -113,6 +124,7 @@ impl<R: Read, D: Decoder> MessageReader<R, D> {
             decoder,
             rx: RecvBuffer::with_capacity(capacity),
             eof: false,
+            done: false,
         }
     }
 
@@ -190,20 +202,72 @@ impl<R: Read, D: Decoder> MessageReader<R, D> {
         }
     }
 
-    /// Calls `f` for every message until the peer closes; stops at the first error.
+    /// Calls `f` for every message, lent from the buffer, until the peer closes; stops at
+    /// the first error. (The owned-item form is the `Iterator`.)
     ///
     /// ```
     /// # use urscript_socket::{adapters::blocking::MessageReader, int32::Int32Decoder};
     /// let bytes = [0u8, 0, 0, 1, 0, 0, 0, 2];
     /// let mut sum = 0;
     /// MessageReader::new(&bytes[..], Int32Decoder::new(1).unwrap())
-    ///     .for_each(|v| sum += v.get(0).unwrap())
+    ///     .for_each_with(|v| sum += v.get(0).unwrap())
     ///     .unwrap();
     /// assert_eq!(sum, 3);
     /// ```
-    pub fn for_each(&mut self, mut f: impl FnMut(D::Item<'_>)) -> Result<(), ReadError> {
+    pub fn for_each_with(&mut self, mut f: impl FnMut(D::Item<'_>)) -> Result<(), ReadError> {
         while self.next_with(&mut f)?.is_some() {}
         Ok(())
+    }
+}
+
+impl<R: Read, D: OwnedDecoder> MessageReader<R, D> {
+    /// Waits for the next message and returns it owned. `Ok(None)`: the peer closed
+    /// cleanly between messages. The same as the iterator's `next`, with the error
+    /// outside the option.
+    ///
+    /// ```
+    /// # use urscript_socket::{adapters::blocking::MessageReader, var::VarMessageDecoder};
+    /// use urscript_socket::adapters::VarRequest;
+    /// let mut r = MessageReader::new(&b"SET A 1\n"[..], VarMessageDecoder::new());
+    /// assert_eq!(r.next_owned().unwrap(), Some(VarRequest::Set { name: "A".into(), value: 1 }));
+    /// assert_eq!(r.next_owned().unwrap(), None);
+    /// ```
+    pub fn next_owned(&mut self) -> Result<Option<D::Owned>, ReadError> {
+        self.next_with(D::to_owned_item)
+    }
+}
+
+/// Owned messages until the peer closes; recoverable errors (bad bytes, the transport's
+/// read timeout) are yielded and the iteration goes on, other errors are yielded once
+/// and end it.
+///
+/// ```
+/// use urscript_socket::{adapters::blocking::{MessageReader, ReadError}, line::LineDecoder};
+/// let mut r = MessageReader::new(&b"ok\nmuch too long\nok again\ncut"[..], LineDecoder::with_max_len(8));
+/// assert_eq!(r.next().unwrap().unwrap(), b"ok");
+/// assert!(matches!(r.next(), Some(Err(ReadError::Decode(_)))));   // skipped, goes on
+/// assert_eq!(r.next().unwrap().unwrap(), b"ok again");
+/// assert!(matches!(r.next(), Some(Err(ReadError::Decode(_)))));   // "cut": no LF before the end
+/// assert!(r.next().is_none());
+/// ```
+impl<R: Read, D: OwnedDecoder> Iterator for MessageReader<R, D> {
+    type Item = Result<D::Owned, ReadError>;
+
+    fn next(&mut self) -> Option<Self::Item> {
+        if self.done {
+            return None;
+        }
+        match self.next_owned() {
+            Ok(Some(item)) => Some(Ok(item)),
+            Ok(None) => {
+                self.done = true;
+                None
+            }
+            Err(e) => {
+                self.done = !e.is_recoverable();
+                Some(Err(e))
+            }
+        }
     }
 }
 
@@ -269,12 +333,11 @@ impl<W: Write> MessageWriter<W> {
     pub fn send(
         &mut self,
         encode: impl FnOnce(&mut Vec<u8>) -> Result<usize, EncodeError>,
-    ) -> Result<(), ReadError> {
+    ) -> Result<(), WriteError> {
         self.scratch.clear();
-        encode(&mut self.scratch).map_err(ReadError::Encode)?;
-        self.writer
-            .write_all(&self.scratch)
-            .map_err(ReadError::Io)?;
-        self.writer.flush().map_err(ReadError::Io)
+        encode(&mut self.scratch)?;
+        self.writer.write_all(&self.scratch)?;
+        self.writer.flush()?;
+        Ok(())
     }
 }

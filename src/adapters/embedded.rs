@@ -3,52 +3,30 @@
 
 use embedded_io_async::{Read, Write};
 
-use crate::{DecodeError, Decoder, EncodeError, RecvBuffer, SliceSink};
+use crate::adapters::OwnedDecoder;
+use crate::{Decoder, EncodeError, RecvBuffer, SliceSink};
 
-/// Why an embedded read or write failed.
+/// Why an embedded read or write failed: the adapters' shared error, over the socket's
+/// error type.
 ///
 /// ```
 /// use urscript_socket::adapters::embedded::Error;
-/// let e: Error<core::convert::Infallible> = Error::BufferFull;
-/// assert_eq!(format!("{e}"), "receive buffer full without a complete message");
+/// let e: Error<core::convert::Infallible> = Error::BufferFull { capacity: 256 };
+/// assert_eq!(format!("{e}"), "receive buffer of 256 bytes full without a complete message");
 /// ```
-#[derive(Debug)]
-#[non_exhaustive]
-pub enum Error<E> {
-    /// The transport failed.
-    Io(E),
-    /// Bad bytes (already skipped: calling again goes on with the next message).
-    Decode(DecodeError),
-    /// The encoder refused the message or the scratch buffer is too small.
-    Encode(EncodeError),
-    /// The buffer is full and holds no complete message.
-    BufferFull,
-}
-
-impl<E: core::fmt::Debug> core::fmt::Display for Error<E> {
-    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
-        match self {
-            Error::Io(e) => write!(f, "transport error: {e:?}"),
-            Error::Decode(e) => write!(f, "bad input: {e}"),
-            Error::Encode(e) => write!(f, "cannot encode: {e}"),
-            Error::BufferFull => f.write_str("receive buffer full without a complete message"),
-        }
-    }
-}
-
-impl<E: core::fmt::Debug> core::error::Error for Error<E> {}
+pub use crate::adapters::Error;
 
 /// Reads messages of one format from an `embedded_io_async::Read`, through a core decoder
 /// over an `N`-byte buffer (the memory bound).
 ///
 /// ```
 /// # tokio::runtime::Builder::new_current_thread().build().unwrap().block_on(async {
-/// use urscript_socket::{adapters::embedded::MessageReader, int32::Int32Decoder};
+/// use urscript_socket::adapters::{embedded::MessageReader, Int32Stream};
 /// let input: &[u8] = &[0, 0, 0, 7, 0xFF, 0xFF, 0xFF, 0xFF];
-/// let mut r: MessageReader<_, _, 64> = MessageReader::new(input, Int32Decoder::new(1).unwrap());
-/// assert_eq!(r.next_with(|v| v.get(0)).await.unwrap(), Some(Some(7)));
-/// assert_eq!(r.next_with(|v| v.get(0)).await.unwrap(), Some(Some(-1)));
-/// assert_eq!(r.next_with(|v| v.get(0)).await.unwrap(), None);
+/// let mut r: MessageReader<_, _, 64> = MessageReader::new(input, Int32Stream::new());
+/// assert_eq!(r.next_owned().await.unwrap(), Some(7));
+/// assert_eq!(r.next_owned().await.unwrap(), Some(-1));
+/// assert_eq!(r.next_owned().await.unwrap(), None);
 /// # });
 /// ```
 #[derive(Debug)]
@@ -73,6 +51,17 @@ impl<R: Read, D: Decoder, const N: usize> MessageReader<R, D, N> {
             rx: RecvBuffer::new(),
             eof: false,
         }
+    }
+
+    /// The transport, e.g. to write a reply on the same socket with [`send`].
+    ///
+    /// ```
+    /// # use urscript_socket::{adapters::embedded::MessageReader, line::LineDecoder};
+    /// let mut r: MessageReader<&[u8], _, 16> = MessageReader::new(&b""[..], LineDecoder::new());
+    /// let _transport: &mut &[u8] = r.get_mut();
+    /// ```
+    pub fn get_mut(&mut self) -> &mut R {
+        &mut self.reader
     }
 
     /// Waits for the next message and returns `f(message)`; `Ok(None)` once the peer
@@ -104,7 +93,7 @@ impl<R: Read, D: Decoder, const N: usize> MessageReader<R, D, N> {
             }
             let space = self.rx.spare();
             if space.is_empty() {
-                return Err(Error::BufferFull);
+                return Err(Error::BufferFull { capacity: N });
             }
             match self.reader.read(space).await {
                 Ok(0) => self.eof = true,
@@ -112,6 +101,23 @@ impl<R: Read, D: Decoder, const N: usize> MessageReader<R, D, N> {
                 Err(e) => return Err(Error::Io(e)),
             }
         }
+    }
+}
+
+impl<R: Read, D: OwnedDecoder, const N: usize> MessageReader<R, D, N> {
+    /// Waits for the next message and returns it owned (an `i32` from
+    /// [`Int32Stream`](crate::adapters::Int32Stream), a `FloatTuple`, ...; with `alloc`
+    /// also `Vec<u8>` lines); `Ok(None)` once the peer closed cleanly between messages.
+    ///
+    /// ```
+    /// # tokio::runtime::Builder::new_current_thread().build().unwrap().block_on(async {
+    /// use urscript_socket::adapters::{embedded::MessageReader, ByteStream};
+    /// let mut r: MessageReader<_, _, 16> = MessageReader::new(&[2u8, 3][..], ByteStream::new());
+    /// assert_eq!(r.next_owned().await.unwrap(), Some(2));
+    /// # });
+    /// ```
+    pub async fn next_owned(&mut self) -> Result<Option<D::Owned>, Error<R::Error>> {
+        self.next_with(D::to_owned_item).await
     }
 }
 

@@ -3,13 +3,40 @@
 //! emulation over a tokio `TcpStream` with `tokio::time` timeouts.
 //!
 //! Each codec wraps one core decoder and calls it on the `BytesMut` under the core's
-//! contract; payloads are split off the buffer as `Bytes` without copying.
+//! contract; payloads are split off the buffer as `Bytes` without copying. Encoders take
+//! what tokio-util users pass: text codecs any `AsRef<[u8]>` (`&str`, `String`,
+//! `Vec<u8>`, `Bytes`, `&[u8]`, arrays), [`FloatTupleCodec`] any `AsRef<[f64]>`,
+//! [`Int32Codec`] an `i32` or a list of them, [`ByteCodec`] a `u8` or a list.
 //!
-//! Note that `tokio_util`'s `FramedRead` ends the stream after the first decoding error.
-//! The core decoders themselves recover (the bad bytes are already skipped), so a caller
-//! that wants to go on can drive the codec with `Decoder::decode` directly.
+//! Two combinators cover what servers need beyond one codec:
+//!
+//! * [`RequestReply`]`<D, E>`: one `Framed` that decodes requests with `D` and encodes
+//!   replies with `E` (a line in, a float tuple out), no `into_split()` needed.
+//! * [`Tolerant`]`<C>`: bad bytes become an `Err(DecodeError)` *item* and the stream goes
+//!   on. Without it, `tokio_util`'s `FramedRead` ends the stream after the first
+//!   decoding error (the robot stays connected and gets only timeouts). The core
+//!   decoders recover by themselves: the bad bytes are already skipped.
+//!
+//! ```
+//! # tokio::runtime::Builder::new_current_thread().enable_all().build().unwrap().block_on(async {
+//! use futures_util::{SinkExt, StreamExt};
+//! use tokio::io::{AsyncReadExt, AsyncWriteExt};
+//! use tokio_util::codec::Framed;
+//! use urscript_socket::adapters::tokio::{FloatTupleCodec, LineCodec, RequestReply, Tolerant};
+//!
+//! let (server, mut robot) = tokio::io::duplex(256);
+//! let codec = RequestReply::new(Tolerant::new(LineCodec::with_max_len(16)), FloatTupleCodec::new(3)?);
+//! let mut framed = Framed::new(server, codec);
+//! robot.write_all(b"a line far longer than sixteen bytes\nshoot\n").await?;
+//! assert!(framed.next().await.unwrap()?.is_err());          // reported, not fatal
+//! assert_eq!(framed.next().await.unwrap()?.unwrap(), "shoot");
+//! framed.send([0.4, -0.2, 0.3]).await?;                    // no LF after the tuple
+//! let mut reply = [0u8; 14];
+//! robot.read_exact(&mut reply).await?;
+//! assert_eq!(&reply, b"(0.4,-0.2,0.3)");
+//! # Ok::<(), Box<dyn std::error::Error>>(()) }).unwrap();
+//! ```
 
-use std::string::String;
 use std::vec::Vec;
 
 use ::tokio::io::{AsyncReadExt, AsyncWriteExt};
@@ -17,72 +44,30 @@ use ::tokio::net::{TcpStream, ToSocketAddrs};
 use bytes::{Buf, Bytes, BytesMut};
 use tokio_util::codec;
 
+use crate::adapters::{ByteStream, Int32Stream};
 use crate::ascii_float::{encode_float_tuple, FloatTuple, FloatTupleDecoder};
-use crate::byte_list::{encode_byte, ByteListDecoder};
-use crate::int32::{encode_int32, Int32Decoder};
+use crate::byte_list::{encode_byte, encode_byte_list};
+use crate::int32::{encode_int32, encode_int32_list};
 use crate::line::{encode_line, LineDecoder};
 use crate::robot::{Policy, ReadCall, ReadResult, RobotError, SocketConnection, Timeout};
 use crate::string::{encode_string, DelimitedDecoder};
 use crate::stx_etx::{encode_stx_etx, StxEtxDecoder};
-use crate::var::{encode_var_reply, VarMessage, VarMessageDecoder};
-use crate::{ArgumentError, DecodeError, Decoder, EncodeError, Status};
+use crate::var::{encode_var_reply, VarMessageDecoder};
+use crate::{ArgumentError, DecodeError, Decoder, Status};
 
-/// The error of every codec here: the transport, bad bytes (what and where), or a
-/// value the encoder refuses.
+/// The error of every codec here: the adapters' [`Error`](crate::adapters::Error) over
+/// `std::io::Error` (the transport, bad bytes with what and where, a value the encoder
+/// refuses, [`WrongCount`](crate::adapters::Error::WrongCount)). Converts into
+/// `std::io::Error`, so `?` works in a function returning `io::Result`.
 ///
 /// ```
 /// use urscript_socket::adapters::tokio::CodecError;
 /// let e = CodecError::from(std::io::Error::other("boom"));
 /// assert!(e.to_string().contains("boom"));
+/// let e = std::io::Error::from(CodecError::WrongCount { expected: 6, found: 5 });
+/// assert_eq!(e.kind(), std::io::ErrorKind::InvalidInput);
 /// ```
-#[derive(Debug)]
-#[non_exhaustive]
-pub enum CodecError {
-    /// The transport failed.
-    Io(std::io::Error),
-    /// Bad bytes.
-    Decode(DecodeError),
-    /// A value that cannot be encoded.
-    Encode(EncodeError),
-}
-
-impl core::fmt::Display for CodecError {
-    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
-        match self {
-            CodecError::Io(e) => write!(f, "transport error: {e}"),
-            CodecError::Decode(e) => write!(f, "bad input: {e}"),
-            CodecError::Encode(e) => write!(f, "cannot encode: {e}"),
-        }
-    }
-}
-
-impl std::error::Error for CodecError {
-    fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
-        match self {
-            CodecError::Io(e) => Some(e),
-            CodecError::Decode(e) => Some(e),
-            CodecError::Encode(e) => Some(e),
-        }
-    }
-}
-
-impl From<std::io::Error> for CodecError {
-    fn from(e: std::io::Error) -> Self {
-        CodecError::Io(e)
-    }
-}
-
-impl From<DecodeError> for CodecError {
-    fn from(e: DecodeError) -> Self {
-        CodecError::Decode(e)
-    }
-}
-
-impl From<EncodeError> for CodecError {
-    fn from(e: EncodeError) -> Self {
-        CodecError::Encode(e)
-    }
-}
+pub type CodecError = crate::adapters::Error<std::io::Error>;
 
 /// Runs a core decoder whose item is a slice of the buffer; returns the payload as
 /// `Bytes` split off `src` (no copy).
@@ -102,7 +87,8 @@ where
                 return Ok(None);
             }
             Err(e) => {
-                // Drop the bad bytes, so a second call does not report them again.
+                // Drop the bad bytes as in `decode`, so a caller that goes on (the
+                // tolerant mode) does not meet them again.
                 src.advance(e.skip().min(src.len()));
                 return Err(e.into());
             }
@@ -197,11 +183,13 @@ macro_rules! slice_codec {
             }
         }
 
-        impl<'a> codec::Encoder<&'a [u8]> for $name {
+        /// Encodes anything that is bytes: `&str`, `String`, `Vec<u8>`, `Bytes`, `&[u8]`,
+        /// `[u8; N]`.
+        impl<T: AsRef<[u8]>> codec::Encoder<T> for $name {
             type Error = CodecError;
-            fn encode(&mut self, item: &'a [u8], dst: &mut BytesMut) -> Result<(), CodecError> {
+            fn encode(&mut self, item: T, dst: &mut BytesMut) -> Result<(), CodecError> {
                 #[allow(clippy::redundant_closure_call)]
-                ($enc)(&*self, item, dst)?;
+                ($enc)(&*self, item.as_ref(), dst)?;
                 Ok(())
             }
         }
@@ -316,7 +304,9 @@ impl DelimitedCodec {
     }
 }
 
-/// Big-endian int32 (`socket_send_int`), one value per item.
+/// Big-endian int32 (`socket_send_int`), one `i32` per item, as
+/// [`Int32Stream`] gives in every adapter. Encodes an `i32`
+/// or a list of them (`&[i32]`, `Vec<i32>`, `[i32; N]`) for `socket_read_binary_integer`.
 ///
 /// ```
 /// use bytes::BytesMut;
@@ -325,11 +315,15 @@ impl DelimitedCodec {
 /// let mut c = Int32Codec::new();
 /// let mut buf = BytesMut::new();
 /// c.encode(-1, &mut buf).unwrap();
+/// c.encode([1, 2], &mut buf).unwrap();
+/// c.encode(vec![3], &mut buf).unwrap();
+/// assert_eq!(buf.len(), 16);
 /// assert_eq!(c.decode(&mut buf).unwrap(), Some(-1));
+/// assert_eq!(c.decode(&mut buf).unwrap(), Some(1));
 /// ```
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, Default)]
 pub struct Int32Codec {
-    inner: Int32Decoder,
+    inner: Int32Stream,
 }
 
 impl Int32Codec {
@@ -344,24 +338,14 @@ impl Int32Codec {
     }
 }
 
-impl Default for Int32Codec {
-    fn default() -> Self {
-        Int32Codec {
-            inner: Int32Decoder::single(),
-        }
-    }
-}
-
 impl codec::Decoder for Int32Codec {
     type Item = i32;
     type Error = CodecError;
     fn decode(&mut self, src: &mut BytesMut) -> Result<Option<i32>, CodecError> {
-        decode_value(&mut self.inner, src, false, |v| {
-            v.get(0).unwrap_or_default()
-        })
+        decode_value(&mut self.inner, src, false, |v| v)
     }
     fn decode_eof(&mut self, src: &mut BytesMut) -> Result<Option<i32>, CodecError> {
-        decode_value(&mut self.inner, src, true, |v| v.get(0).unwrap_or_default())
+        decode_value(&mut self.inner, src, true, |v| v)
     }
 }
 
@@ -373,18 +357,73 @@ impl codec::Encoder<i32> for Int32Codec {
     }
 }
 
-/// Single bytes (`socket_send_byte`), one per item.
+/// `impl Encoder<$t>` by way of `$enc(&[..], dst)`: the list forms of a codec's item.
+macro_rules! list_encoders {
+    ($codec:ty, $elem:ty, $enc:path) => {
+        impl<'a> codec::Encoder<&'a [$elem]> for $codec {
+            type Error = CodecError;
+            fn encode(&mut self, item: &'a [$elem], dst: &mut BytesMut) -> Result<(), CodecError> {
+                $enc(item, dst)?;
+                Ok(())
+            }
+        }
+        impl<'a> codec::Encoder<&'a Vec<$elem>> for $codec {
+            type Error = CodecError;
+            fn encode(
+                &mut self,
+                item: &'a Vec<$elem>,
+                dst: &mut BytesMut,
+            ) -> Result<(), CodecError> {
+                $enc(item, dst)?;
+                Ok(())
+            }
+        }
+        impl codec::Encoder<Vec<$elem>> for $codec {
+            type Error = CodecError;
+            fn encode(&mut self, item: Vec<$elem>, dst: &mut BytesMut) -> Result<(), CodecError> {
+                $enc(&item, dst)?;
+                Ok(())
+            }
+        }
+        impl<const N: usize> codec::Encoder<[$elem; N]> for $codec {
+            type Error = CodecError;
+            fn encode(&mut self, item: [$elem; N], dst: &mut BytesMut) -> Result<(), CodecError> {
+                $enc(&item, dst)?;
+                Ok(())
+            }
+        }
+        impl<'a, const N: usize> codec::Encoder<&'a [$elem; N]> for $codec {
+            type Error = CodecError;
+            fn encode(
+                &mut self,
+                item: &'a [$elem; N],
+                dst: &mut BytesMut,
+            ) -> Result<(), CodecError> {
+                $enc(item, dst)?;
+                Ok(())
+            }
+        }
+    };
+}
+
+list_encoders!(Int32Codec, i32, encode_int32_list);
+
+/// Single bytes (`socket_send_byte`), one `u8` per item. Encodes a `u8` or a list
+/// (`&[u8]`, `Vec<u8>`, `[u8; N]`, `Bytes`) for `socket_read_byte_list`.
 ///
 /// ```
 /// use bytes::BytesMut;
-/// use tokio_util::codec::Decoder;
+/// use tokio_util::codec::{Decoder, Encoder};
 /// use urscript_socket::adapters::tokio::ByteCodec;
+/// let mut c = ByteCodec::new();
 /// let mut buf = BytesMut::from(&[2u8, 3][..]);
-/// assert_eq!(ByteCodec::new().decode(&mut buf).unwrap(), Some(2));
+/// assert_eq!(c.decode(&mut buf).unwrap(), Some(2));
+/// c.encode([10u8, 13], &mut buf).unwrap();
+/// assert_eq!(buf, &[3u8, 10, 13][..]);
 /// ```
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, Default)]
 pub struct ByteCodec {
-    inner: ByteListDecoder,
+    inner: ByteStream,
 }
 
 impl ByteCodec {
@@ -399,26 +438,14 @@ impl ByteCodec {
     }
 }
 
-impl Default for ByteCodec {
-    fn default() -> Self {
-        ByteCodec {
-            inner: ByteListDecoder::single(),
-        }
-    }
-}
-
 impl codec::Decoder for ByteCodec {
     type Item = u8;
     type Error = CodecError;
     fn decode(&mut self, src: &mut BytesMut) -> Result<Option<u8>, CodecError> {
-        decode_value(&mut self.inner, src, false, |b| {
-            b.first().copied().unwrap_or_default()
-        })
+        decode_value(&mut self.inner, src, false, |b| b)
     }
     fn decode_eof(&mut self, src: &mut BytesMut) -> Result<Option<u8>, CodecError> {
-        decode_value(&mut self.inner, src, true, |b| {
-            b.first().copied().unwrap_or_default()
-        })
+        decode_value(&mut self.inner, src, true, |b| b)
     }
 }
 
@@ -430,44 +457,21 @@ impl codec::Encoder<u8> for ByteCodec {
     }
 }
 
-/// An owned `SET`/`GET` message from the robot.
-///
-/// ```
-/// use urscript_socket::adapters::tokio::VarRequest;
-/// let r = VarRequest::Get { name: "POS_X".into() };
-/// assert_eq!(r.name(), "POS_X");
-/// ```
-#[derive(Debug, Clone, PartialEq, Eq)]
-pub enum VarRequest {
-    /// `socket_set_var(name, value)`.
-    Set {
-        /// Variable name.
-        name: String,
-        /// New value.
-        value: i32,
-    },
-    /// `socket_get_var(name)`: answer with the codec's encoder within 2 s.
-    Get {
-        /// Variable name.
-        name: String,
-    },
-}
+list_encoders!(ByteCodec, u8, encode_byte_list);
 
-impl VarRequest {
-    /// The variable's name.
-    ///
-    /// ```
-    /// # use urscript_socket::adapters::tokio::VarRequest;
-    /// assert_eq!(VarRequest::Set { name: "A".into(), value: 1 }.name(), "A");
-    /// ```
-    pub fn name(&self) -> &str {
-        match self {
-            VarRequest::Set { name, .. } | VarRequest::Get { name } => name,
-        }
+impl codec::Encoder<Bytes> for ByteCodec {
+    type Error = CodecError;
+    fn encode(&mut self, item: Bytes, dst: &mut BytesMut) -> Result<(), CodecError> {
+        encode_byte_list(&item, dst)?;
+        Ok(())
     }
 }
 
-/// `SET`/`GET` messages in, `name value\n` replies out (`(name, value)` items).
+/// The owned `SET`/`GET` message, shared by every adapter (feature `alloc`).
+pub use crate::adapters::VarRequest;
+
+/// `SET`/`GET` messages in, `name value\n` replies out (`(name, value)` items, the name
+/// any `AsRef<str>`: `&str`, `String`).
 ///
 /// ```
 /// use bytes::BytesMut;
@@ -477,7 +481,8 @@ impl VarRequest {
 /// let mut buf = BytesMut::from(&b"GET POS_X\n"[..]);
 /// assert_eq!(c.decode(&mut buf).unwrap(), Some(VarRequest::Get { name: "POS_X".into() }));
 /// c.encode(("POS_X", 1234), &mut buf).unwrap();
-/// assert_eq!(buf, &b"POS_X 1234\n"[..]);
+/// c.encode((String::from("POS_Y"), -1), &mut buf).unwrap();
+/// assert_eq!(buf, &b"POS_X 1234\nPOS_Y -1\n"[..]);
 /// ```
 #[derive(Debug, Clone, Default)]
 pub struct VarCodec {
@@ -496,53 +501,92 @@ impl VarCodec {
     }
 }
 
-fn owned(m: VarMessage<'_>) -> VarRequest {
-    match m {
-        VarMessage::Set { name, value } => VarRequest::Set {
-            name: String::from(name),
-            value,
-        },
-        VarMessage::Get { name } => VarRequest::Get {
-            name: String::from(name),
-        },
-    }
-}
-
 impl codec::Decoder for VarCodec {
     type Item = VarRequest;
     type Error = CodecError;
     fn decode(&mut self, src: &mut BytesMut) -> Result<Option<VarRequest>, CodecError> {
-        decode_value(&mut self.inner, src, false, owned)
+        decode_value(&mut self.inner, src, false, |m| VarRequest::from(m))
     }
     fn decode_eof(&mut self, src: &mut BytesMut) -> Result<Option<VarRequest>, CodecError> {
-        decode_value(&mut self.inner, src, true, owned)
+        decode_value(&mut self.inner, src, true, |m| VarRequest::from(m))
     }
 }
 
-impl<'a> codec::Encoder<(&'a str, i32)> for VarCodec {
+impl<S: AsRef<str>> codec::Encoder<(S, i32)> for VarCodec {
     type Error = CodecError;
-    fn encode(
-        &mut self,
-        (name, value): (&'a str, i32),
-        dst: &mut BytesMut,
-    ) -> Result<(), CodecError> {
-        encode_var_reply(name, value, dst)?;
+    fn encode(&mut self, (name, value): (S, i32), dst: &mut BytesMut) -> Result<(), CodecError> {
+        encode_var_reply(name.as_ref(), value, dst)?;
         Ok(())
     }
 }
 
-/// ASCII float tuples: encodes what a server sends for `socket_read_ascii_float` (with a
-/// trailing LF if asked), and decodes tuples as the robot reads them.
+/// Any format of the registry, chosen at run time ([`Format`](crate::format::Format)):
+/// items are [`OwnedMessage`](crate::format::OwnedMessage)s. A format added to the
+/// registry works here with no new codec. Decoding only: pair it with an encoding codec
+/// in a [`RequestReply`] to answer.
+///
+/// ```
+/// use bytes::BytesMut;
+/// use tokio_util::codec::Decoder;
+/// use urscript_socket::adapters::tokio::FormatCodec;
+/// use urscript_socket::format::{Format, OwnedMessage};
+/// let mut codec = FormatCodec::new(Format::Int32 { number: 2 }).unwrap();
+/// let mut buf = BytesMut::from(&[0, 0, 0, 1, 0xFF, 0xFF, 0xFF, 0xFF][..]);
+/// assert_eq!(codec.decode(&mut buf).unwrap(), Some(OwnedMessage::Int32(vec![1, -1])));
+/// ```
+#[derive(Debug, Clone)]
+pub struct FormatCodec {
+    inner: crate::format::AnyDecoder,
+}
+
+impl FormatCodec {
+    /// A codec for `format`, with its default bounds. Errors as [`Format::decoder`](crate::format::Format::decoder).
+    ///
+    /// ```
+    /// # use urscript_socket::{adapters::tokio::FormatCodec, format::Format};
+    /// assert!(FormatCodec::new(Format::Bytes { number: 0 }).is_err());
+    /// ```
+    pub fn new(format: crate::format::Format<'_>) -> Result<Self, ArgumentError> {
+        Ok(FormatCodec {
+            inner: format.decoder()?,
+        })
+    }
+}
+
+impl codec::Decoder for FormatCodec {
+    type Item = crate::format::OwnedMessage;
+    type Error = CodecError;
+    fn decode(&mut self, src: &mut BytesMut) -> Result<Option<Self::Item>, CodecError> {
+        decode_value(&mut self.inner, src, false, |m| {
+            crate::format::OwnedMessage::from(&m)
+        })
+    }
+    fn decode_eof(&mut self, src: &mut BytesMut) -> Result<Option<Self::Item>, CodecError> {
+        decode_value(&mut self.inner, src, true, |m| {
+            crate::format::OwnedMessage::from(&m)
+        })
+    }
+}
+
+/// ASCII float tuples: encodes what a server sends for `socket_read_ascii_float(number)`
+/// (with a trailing LF if asked), and decodes tuples as the robot reads them.
+///
+/// The encoder takes any `AsRef<[f64]>` (`[f64; 6]`, `&[f64]`, `Vec<f64>`) holding exactly
+/// `number` values; another count is refused with [`CodecError::WrongCount`] and nothing
+/// is written (the robot's read of it would fail).
 ///
 /// ```
 /// use bytes::BytesMut;
 /// use tokio_util::codec::{Decoder, Encoder};
-/// use urscript_socket::adapters::tokio::FloatTupleCodec;
+/// use urscript_socket::adapters::tokio::{CodecError, FloatTupleCodec};
 /// let mut c = FloatTupleCodec::new(2).unwrap();
 /// let mut buf = BytesMut::new();
-/// c.encode(&[1.5, -2.0][..], &mut buf).unwrap();
+/// c.encode([1.5, -2.0], &mut buf).unwrap();
 /// assert_eq!(buf, &b"(1.5,-2)"[..]);
 /// assert_eq!(c.decode(&mut buf).unwrap().unwrap().values(), [1.5, -2.0]);
+/// let refused = c.encode(vec![1.0, 2.0, 3.0], &mut buf);
+/// assert!(matches!(refused, Err(CodecError::WrongCount { expected: 2, found: 3 })));
+/// assert!(buf.is_empty());
 /// ```
 #[derive(Debug, Clone)]
 pub struct FloatTupleCodec {
@@ -564,7 +608,9 @@ impl FloatTupleCodec {
         })
     }
 
-    /// Whether encoded tuples end with `\n`.
+    /// Whether encoded tuples end with `\n`. Off by default: the robot's
+    /// `socket_read_ascii_float` consumes through `)`, so an LF stays in its buffer and is
+    /// what a later `socket_read_line` or `socket_read_binary_integer` sees first.
     ///
     /// ```
     /// # use urscript_socket::adapters::tokio::FloatTupleCodec;
@@ -573,6 +619,16 @@ impl FloatTupleCodec {
     pub fn with_trailing_lf(mut self, trailing_lf: bool) -> Self {
         self.trailing_lf = trailing_lf;
         self
+    }
+
+    /// Values per tuple.
+    ///
+    /// ```
+    /// # use urscript_socket::adapters::tokio::FloatTupleCodec;
+    /// assert_eq!(FloatTupleCodec::new(6).unwrap().number(), 6);
+    /// ```
+    pub fn number(&self) -> usize {
+        self.inner.number()
     }
 }
 
@@ -587,11 +643,228 @@ impl codec::Decoder for FloatTupleCodec {
     }
 }
 
-impl<'a> codec::Encoder<&'a [f64]> for FloatTupleCodec {
+impl<T: AsRef<[f64]>> codec::Encoder<T> for FloatTupleCodec {
     type Error = CodecError;
-    fn encode(&mut self, item: &'a [f64], dst: &mut BytesMut) -> Result<(), CodecError> {
-        encode_float_tuple(item, self.trailing_lf, dst)?;
+    fn encode(&mut self, item: T, dst: &mut BytesMut) -> Result<(), CodecError> {
+        let values = item.as_ref();
+        if values.len() != self.number() {
+            return Err(CodecError::WrongCount {
+                expected: self.number(),
+                found: values.len(),
+            });
+        }
+        let start = dst.len();
+        if let Err(e) = encode_float_tuple(values, self.trailing_lf, dst) {
+            dst.truncate(start);
+            return Err(e.into());
+        }
         Ok(())
+    }
+}
+
+/// One codec for one `Framed`: requests decoded with `D`, replies encoded with `E`.
+/// The commonest server (a line in, a float tuple out) needs no `into_split()`:
+///
+/// ```
+/// use tokio_util::codec::{Decoder, Encoder};
+/// use bytes::BytesMut;
+/// use urscript_socket::adapters::tokio::{FloatTupleCodec, LineCodec, RequestReply};
+/// let mut codec = RequestReply::new(LineCodec::new(), FloatTupleCodec::new(2).unwrap());
+/// let mut rx = BytesMut::from(&b"shoot\n"[..]);
+/// assert_eq!(codec.decode(&mut rx).unwrap().unwrap(), "shoot");
+/// let mut tx = BytesMut::new();
+/// codec.encode([0.5, 1.0], &mut tx).unwrap();
+/// assert_eq!(tx, &b"(0.5,1)"[..]);   // no LF appended by the line codec
+/// ```
+///
+/// With a socket: `Framed::new(stream, RequestReply::new(LineCodec::new(),
+/// FloatTupleCodec::new(6)?))`, then `framed.next().await` / `framed.send(pose).await`.
+#[derive(Debug, Clone, Default)]
+pub struct RequestReply<D, E> {
+    decoder: D,
+    encoder: E,
+}
+
+impl<D, E> RequestReply<D, E> {
+    /// Pairs a decoder of requests with an encoder of replies.
+    ///
+    /// ```
+    /// # use urscript_socket::adapters::tokio::{Int32Codec, VarCodec, RequestReply};
+    /// let c = RequestReply::new(VarCodec::new(), Int32Codec::new());
+    /// ```
+    pub fn new(decoder: D, encoder: E) -> Self {
+        RequestReply { decoder, encoder }
+    }
+
+    /// The request decoder.
+    ///
+    /// ```
+    /// # use urscript_socket::adapters::tokio::{FloatTupleCodec, LineCodec, RequestReply};
+    /// let c = RequestReply::new(LineCodec::new(), FloatTupleCodec::new(6).unwrap());
+    /// let _lines: &LineCodec = c.decoder();
+    /// ```
+    pub fn decoder(&self) -> &D {
+        &self.decoder
+    }
+
+    /// The request decoder, mutably.
+    ///
+    /// ```
+    /// # use urscript_socket::adapters::tokio::{FloatTupleCodec, LineCodec, RequestReply};
+    /// let mut c = RequestReply::new(LineCodec::new(), FloatTupleCodec::new(6).unwrap());
+    /// let _lines: &mut LineCodec = c.decoder_mut();
+    /// ```
+    pub fn decoder_mut(&mut self) -> &mut D {
+        &mut self.decoder
+    }
+
+    /// The reply encoder.
+    ///
+    /// ```
+    /// # use urscript_socket::adapters::tokio::{FloatTupleCodec, LineCodec, RequestReply};
+    /// let c = RequestReply::new(LineCodec::new(), FloatTupleCodec::new(6).unwrap());
+    /// assert_eq!(c.encoder().number(), 6);
+    /// ```
+    pub fn encoder(&self) -> &E {
+        &self.encoder
+    }
+
+    /// The reply encoder, mutably (e.g. to swap it for another reply shape).
+    ///
+    /// ```
+    /// # use urscript_socket::adapters::tokio::{FloatTupleCodec, LineCodec, RequestReply};
+    /// let mut c = RequestReply::new(LineCodec::new(), FloatTupleCodec::new(6).unwrap());
+    /// *c.encoder_mut() = FloatTupleCodec::new(3).unwrap();
+    /// ```
+    pub fn encoder_mut(&mut self) -> &mut E {
+        &mut self.encoder
+    }
+
+    /// The two halves.
+    ///
+    /// ```
+    /// # use urscript_socket::adapters::tokio::{FloatTupleCodec, LineCodec, RequestReply};
+    /// let (d, e) = RequestReply::new(LineCodec::new(), FloatTupleCodec::new(6).unwrap()).into_parts();
+    /// ```
+    pub fn into_parts(self) -> (D, E) {
+        (self.decoder, self.encoder)
+    }
+}
+
+impl<D: codec::Decoder, E> codec::Decoder for RequestReply<D, E> {
+    type Item = D::Item;
+    type Error = D::Error;
+    fn decode(&mut self, src: &mut BytesMut) -> Result<Option<D::Item>, D::Error> {
+        self.decoder.decode(src)
+    }
+    fn decode_eof(&mut self, src: &mut BytesMut) -> Result<Option<D::Item>, D::Error> {
+        self.decoder.decode_eof(src)
+    }
+}
+
+impl<T, D, E: codec::Encoder<T>> codec::Encoder<T> for RequestReply<D, E> {
+    type Error = E::Error;
+    fn encode(&mut self, item: T, dst: &mut BytesMut) -> Result<(), E::Error> {
+        self.encoder.encode(item, dst)
+    }
+}
+
+/// Tolerant mode: a bad message is an `Err(DecodeError)` item and the stream goes on.
+/// Only a transport error ends it. Wraps any codec of this module (or a
+/// [`RequestReply`] of them); encoding passes through.
+///
+/// Without it, `FramedRead`/`Framed` end the stream at the first bad message (an
+/// over-long line, a malformed `SET`): the robot stays connected and its reads time out.
+///
+/// ```
+/// use bytes::BytesMut;
+/// use tokio_util::codec::Decoder;
+/// use urscript_socket::adapters::tokio::{LineCodec, Tolerant};
+/// use urscript_socket::ErrorKind;
+/// let mut c = Tolerant::new(LineCodec::with_max_len(4));
+/// let mut buf = BytesMut::from(&b"much too long\nok\n"[..]);
+/// let bad = c.decode(&mut buf).unwrap().unwrap().unwrap_err();
+/// assert_eq!(bad.kind(), ErrorKind::TooLong { limit: 4 });
+/// assert_eq!(c.decode(&mut buf).unwrap().unwrap().unwrap(), "ok");
+/// ```
+#[derive(Debug, Clone, Default)]
+pub struct Tolerant<C> {
+    inner: C,
+}
+
+impl<C> Tolerant<C> {
+    /// Wraps `codec`.
+    ///
+    /// ```
+    /// # use urscript_socket::adapters::tokio::{Tolerant, VarCodec};
+    /// let c = Tolerant::new(VarCodec::new());
+    /// ```
+    pub fn new(codec: C) -> Self {
+        Tolerant { inner: codec }
+    }
+
+    /// The wrapped codec.
+    ///
+    /// ```
+    /// # use urscript_socket::adapters::tokio::{Tolerant, VarCodec};
+    /// let _: &VarCodec = Tolerant::new(VarCodec::new()).get_ref();
+    /// ```
+    pub fn get_ref(&self) -> &C {
+        &self.inner
+    }
+
+    /// The wrapped codec, mutably.
+    ///
+    /// ```
+    /// # use urscript_socket::adapters::tokio::{Tolerant, VarCodec};
+    /// let _: &mut VarCodec = Tolerant::new(VarCodec::new()).get_mut();
+    /// ```
+    pub fn get_mut(&mut self) -> &mut C {
+        &mut self.inner
+    }
+
+    /// The wrapped codec.
+    ///
+    /// ```
+    /// # use urscript_socket::adapters::tokio::{Tolerant, VarCodec};
+    /// let _: VarCodec = Tolerant::new(VarCodec::new()).into_inner();
+    /// ```
+    pub fn into_inner(self) -> C {
+        self.inner
+    }
+}
+
+fn tolerate<T>(
+    r: Result<Option<T>, CodecError>,
+) -> Result<Option<Result<T, DecodeError>>, CodecError> {
+    match r {
+        Ok(item) => Ok(item.map(Ok)),
+        Err(CodecError::Decode(e)) => Ok(Some(Err(e))),
+        Err(e) => Err(e),
+    }
+}
+
+impl<C: codec::Decoder<Error = CodecError>> codec::Decoder for Tolerant<C> {
+    type Item = Result<C::Item, DecodeError>;
+    type Error = CodecError;
+    fn decode(&mut self, src: &mut BytesMut) -> Result<Option<Self::Item>, CodecError> {
+        tolerate(self.inner.decode(src))
+    }
+    fn decode_eof(&mut self, src: &mut BytesMut) -> Result<Option<Self::Item>, CodecError> {
+        let before = src.len();
+        let r = tolerate(self.inner.decode_eof(src));
+        if matches!(r, Ok(Some(Err(_)))) && src.len() == before {
+            // Nothing more will arrive: never report the same bytes twice.
+            src.clear();
+        }
+        r
+    }
+}
+
+impl<T, C: codec::Encoder<T>> codec::Encoder<T> for Tolerant<C> {
+    type Error = C::Error;
+    fn encode(&mut self, item: T, dst: &mut BytesMut) -> Result<(), C::Error> {
+        self.inner.encode(item, dst)
     }
 }
 

@@ -162,14 +162,7 @@ impl ReadCall {
     /// assert_eq!(ReadCall::Line.function_name(), "socket_read_line");
     /// ```
     pub fn function_name(&self) -> &'static str {
-        match self {
-            ReadCall::AsciiFloat { .. } => "socket_read_ascii_float",
-            ReadCall::BinaryInteger { .. } => "socket_read_binary_integer",
-            ReadCall::ByteList { .. } => "socket_read_byte_list",
-            ReadCall::Line => "socket_read_line",
-            ReadCall::String { .. } => "socket_read_string",
-            ReadCall::GetVar { .. } => "socket_get_var",
-        }
+        self.format().robot_function()
     }
 
     /// The wire format this read decodes.

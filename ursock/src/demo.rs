@@ -12,7 +12,8 @@ use urscript_socket::to_str::Value;
 use urscript_socket::RecvBuffer;
 
 use crate::formats::{encode_server, AnyDecoder, DecodeFormat};
-use crate::show::{hex, quoted};
+use crate::outln;
+use crate::show::{hex, quoted, text_and_hex};
 
 /// What the server expects at each step: the decoder to use and the reply to send.
 struct Expect {
@@ -156,7 +157,11 @@ type Traffic = Arc<Mutex<Vec<(Direction, Vec<u8>)>>>;
 
 /// `label "text"` and, under it, the hex of the same bytes.
 fn show_bytes(label: &str, bytes: &[u8]) -> String {
-    format!("{label:<19}{}\n    {:<19}{}", quoted(bytes), "", hex(bytes))
+    if bytes.len() <= 16 {
+        format!("{label:<19}{}\n    {:<19}{}", quoted(bytes), "", hex(bytes))
+    } else {
+        format!("{label:<19}{}", text_and_hex(bytes, "    "))
+    }
 }
 
 struct Transcript {
@@ -170,27 +175,27 @@ impl Transcript {
     /// bytes in, and the result the robot program sees.
     fn step(&mut self, call: &str, server_events: usize, result: Option<String>) {
         self.step += 1;
-        println!("{:>2}. {call}", self.step);
+        outln!("{:>2}. {call}", self.step);
         let traffic: Vec<(Direction, Vec<u8>)> =
             std::mem::take(&mut *self.traffic.lock().unwrap_or_else(|p| p.into_inner()));
         for (dir, bytes) in &traffic {
             if *dir == Direction::RobotToServer {
-                println!("    {}", show_bytes("robot  -> server", bytes));
+                outln!("    {}", show_bytes("robot  -> server", bytes));
             }
         }
         for _ in 0..server_events {
             match self.events.recv_timeout(Duration::from_secs(5)) {
-                Ok(e) => println!("    {e}"),
-                Err(_) => println!("    (server said nothing)"),
+                Ok(e) => outln!("    {e}"),
+                Err(_) => outln!("    (server said nothing)"),
             }
         }
         for (dir, bytes) in &traffic {
             if *dir == Direction::ServerToRobot {
-                println!("    {}", show_bytes("robot  <- server", bytes));
+                outln!("    {}", show_bytes("robot  <- server", bytes));
             }
         }
         if let Some(r) = result {
-            println!("    result             {r}");
+            outln!("    result             {r}");
         }
     }
 }
@@ -202,8 +207,8 @@ pub fn run() -> Result<(), String> {
     let (tx, events) = mpsc::channel();
     let server = std::thread::spawn(move || server(listener, tx));
 
-    println!("ursock demo: a virtual UR robot (client) and a server, both on {addr}");
-    println!("Every byte below crossed a real TCP connection; every decode is the library's.\n");
+    outln!("ursock demo: a virtual UR robot (client) and a server, both on {addr}");
+    outln!("Every byte below crossed a real TCP connection; every decode is the library's.\n");
 
     let traffic: Traffic = Arc::new(Mutex::new(Vec::new()));
     let mut robot = VirtualRobot::new(Policy::default());
@@ -325,6 +330,6 @@ pub fn run() -> Result<(), String> {
         Ok(Err(msg)) => return Err(msg),
         Err(_) => return Err("the demo server thread failed".into()),
     }
-    println!("\nDone: every socket function crossed the wire and decoded as expected.");
+    outln!("\nDone: every socket function crossed the wire and decoded as expected.");
     Ok(())
 }

@@ -148,11 +148,111 @@ fn need(values: &[String], n: usize, usage: &str) -> Result<(), String> {
     Ok(())
 }
 
+/// `02 41 03`, `024103`, `0x02 0x41`: the bytes of hex tokens (pairs of hex digits,
+/// spaces and `0x` optional).
+pub fn parse_hex(values: &[String]) -> Result<Vec<u8>, String> {
+    let mut out = Vec::new();
+    for v in values {
+        let digits = v
+            .strip_prefix("0x")
+            .or_else(|| v.strip_prefix("0X"))
+            .unwrap_or(v);
+        let digits: Vec<u8> = digits
+            .bytes()
+            .filter(|b| !matches!(b, b':' | b'-' | b','))
+            .collect();
+        if digits.is_empty() || digits.len() % 2 != 0 {
+            return Err(format!(
+                "{v:?} is not hex bytes (pairs of hex digits, like 02 41 03)"
+            ));
+        }
+        for pair in digits.chunks(2) {
+            let text = std::str::from_utf8(pair).unwrap_or("");
+            out.push(u8::from_str_radix(text, 16).map_err(|_| {
+                format!("{v:?} is not hex bytes (pairs of hex digits, like 02 41 03)")
+            })?);
+        }
+    }
+    if out.is_empty() {
+        return Err("usage: hex HH HH ... (at least one byte, like 02 41 03)".into());
+    }
+    Ok(out)
+}
+
+/// Typed text with `\r \n \t \0 \\ \xHH` escapes interpreted (`--escapes`); an
+/// unknown escape is an error rather than a guess.
+pub fn unescape_text(s: &str) -> Result<Vec<u8>, String> {
+    let mut out = Vec::new();
+    let mut it = s.bytes();
+    while let Some(b) = it.next() {
+        if b != b'\\' {
+            out.push(b);
+            continue;
+        }
+        match it.next() {
+            Some(b'n') => out.push(b'\n'),
+            Some(b'r') => out.push(b'\r'),
+            Some(b't') => out.push(b'\t'),
+            Some(b'0') => out.push(0),
+            Some(b'\\') => out.push(b'\\'),
+            Some(b'x') => {
+                let hi = it.next();
+                let lo = it.next();
+                let pair = [hi.unwrap_or(b'?'), lo.unwrap_or(b'?')];
+                let v = std::str::from_utf8(&pair)
+                    .ok()
+                    .and_then(|t| u8::from_str_radix(t, 16).ok())
+                    .ok_or_else(|| format!("{s:?}: \\x needs two hex digits"))?;
+                out.push(v);
+            }
+            Some(other) => {
+                return Err(format!(
+                    "{s:?}: unknown escape \\{} (known: \\r \\n \\t \\0 \\\\ \\xHH)",
+                    other as char
+                ))
+            }
+            None => return Err(format!("{s:?}: a lone \\ at the end")),
+        }
+    }
+    Ok(out)
+}
+
+/// The text of the values, joined by spaces; with `escapes`, each one unescaped.
+fn text(values: &[String], escapes: bool) -> Result<Vec<u8>, String> {
+    let joined = values.join(" ");
+    if escapes {
+        unescape_text(&joined)
+    } else {
+        Ok(joined.into_bytes())
+    }
+}
+
+fn one(value: &str, escapes: bool) -> Result<Vec<u8>, String> {
+    text(std::slice::from_ref(&value.to_string()), escapes)
+}
+
+fn at_least_one(values: &[String], format: &str) -> Result<(), String> {
+    if values.is_empty() {
+        return Err(format!("{format}: at least one value is required"));
+    }
+    Ok(())
+}
+
 /// Encodes what a server sends: `floats`, `int32`, `bytes`, `string`, `line`,
-/// `framed PREFIX TEXT SUFFIX`, `var-reply NAME INT`.
+/// `framed PREFIX TEXT SUFFIX`, `var-reply NAME INT`, `hex HH...`.
 pub fn encode_server(format: &str, values: &[String]) -> Result<Vec<u8>, String> {
+    encode_server_with(format, values, false)
+}
+
+/// [`encode_server`], with `escapes` interpreted in text values.
+pub fn encode_server_with(
+    format: &str,
+    values: &[String],
+    escapes: bool,
+) -> Result<Vec<u8>, String> {
     let mut out = Vec::new();
     let r = match format {
+        "hex" => return parse_hex(values),
         "floats" => {
             let v: Vec<f64> = values.iter().map(|s| num(s, "float")).collect::<Result<_, _>>()?;
             encode_float_tuple(&v, false, &mut out)
@@ -162,18 +262,25 @@ pub fn encode_server(format: &str, values: &[String]) -> Result<Vec<u8>, String>
             encode_float_tuple(&v, true, &mut out)
         }
         "int32" => {
+            at_least_one(values, "int32")?;
             let v: Vec<i32> = values.iter().map(|s| num(s, "int32")).collect::<Result<_, _>>()?;
             encode_int32_list(&v, &mut out)
         }
         "bytes" => {
+            at_least_one(values, "bytes")?;
             let v: Vec<u8> = values.iter().map(|s| num(s, "byte (0-255)")).collect::<Result<_, _>>()?;
             encode_byte_list(&v, &mut out)
         }
-        "string" => encode_string(values.join(" ").as_bytes(), &mut out),
-        "line" => encode_line(values.join(" ").as_bytes(), &mut out),
+        "string" => encode_string(&text(values, escapes)?, &mut out),
+        "line" => encode_line(&text(values, escapes)?, &mut out),
         "framed" => {
             need(values, 3, "framed PREFIX TEXT SUFFIX")?;
-            encode_framed_string(values[0].as_bytes(), values[1].as_bytes(), values[2].as_bytes(), &mut out)
+            encode_framed_string(
+                &one(&values[0], escapes)?,
+                &one(&values[1], escapes)?,
+                &one(&values[2], escapes)?,
+                &mut out,
+            )
         }
         "var-reply" => {
             need(values, 2, "var-reply NAME INT")?;
@@ -181,31 +288,38 @@ pub fn encode_server(format: &str, values: &[String]) -> Result<Vec<u8>, String>
         }
         other => {
             return Err(format!(
-                "unknown format {other:?} (floats, floats-lf, int32, bytes, string, line, framed, var-reply)"
+                "unknown format {other:?} (floats, floats-lf, int32, bytes, string, line, framed, var-reply, hex)"
             ))
         }
     };
-    r.map_err(|e| e.to_string())?;
+    r.map_err(crate::messages::encode_error)?;
     Ok(out)
 }
 
 /// Encodes what the robot sends: `line`, `string`, `byte`, `int`, `set-var NAME INT`,
 /// `get-var NAME`, `stx-etx TEXT`, `value TEXT` (the `to_str` form of a number, bool,
-/// list or pose).
-pub fn encode_robot(format: &str, values: &[String]) -> Result<Vec<u8>, String> {
+/// list or pose), `hex HH...`; with `escapes` interpreted in text values.
+pub fn encode_robot_with(
+    format: &str,
+    values: &[String],
+    escapes: bool,
+) -> Result<Vec<u8>, String> {
     let mut out = Vec::new();
     let r = match format {
-        "line" => encode_line(values.join(" ").as_bytes(), &mut out),
-        "string" => encode_string(values.join(" ").as_bytes(), &mut out),
+        "hex" => return parse_hex(values),
+        "line" => encode_line(&text(values, escapes)?, &mut out),
+        "string" => encode_string(&text(values, escapes)?, &mut out),
         "byte" | "bytes" => {
+            at_least_one(values, format)?;
             for s in values {
-                encode_byte(num(s, "byte (0-255)")?, &mut out).map_err(|e| e.to_string())?;
+                encode_byte(num(s, "byte (0-255)")?, &mut out).map_err(crate::messages::encode_error)?;
             }
             Ok(values.len())
         }
         "int" | "int32" => {
+            at_least_one(values, format)?;
             for s in values {
-                encode_int32(num(s, "int32")?, &mut out).map_err(|e| e.to_string())?;
+                encode_int32(num(s, "int32")?, &mut out).map_err(crate::messages::encode_error)?;
             }
             Ok(values.len() * 4)
         }
@@ -217,18 +331,19 @@ pub fn encode_robot(format: &str, values: &[String]) -> Result<Vec<u8>, String> 
             need(values, 1, "get-var NAME")?;
             encode_get_var(&values[0], &mut out)
         }
-        "stx-etx" => encode_stx_etx(values.join(" ").as_bytes(), &mut out),
+        "stx-etx" => encode_stx_etx(&text(values, escapes)?, &mut out),
         "value" => {
             let text = values.join(" ");
-            let value = parse_value(text.as_bytes()).map_err(|e| format!("value {text:?}: {e}"))?;
+            let value = parse_value(text.as_bytes())
+                .map_err(|e| format!("value {text:?}: {}", crate::messages::value_error(&e)))?;
             encode_value(&value, &mut out)
         }
         other => {
             return Err(format!(
-                "unknown robot format {other:?} (line, string, byte, int, set-var, get-var, stx-etx, value)"
+                "unknown robot format {other:?} (line, string, byte, int, set-var, get-var, stx-etx, value, hex)"
             ))
         }
     };
-    r.map_err(|e| e.to_string())?;
+    r.map_err(crate::messages::encode_error)?;
     Ok(out)
 }

@@ -3,9 +3,13 @@
 #![forbid(unsafe_code)]
 
 mod demo;
+pub mod diagnose;
 mod formats;
 mod listen;
+mod messages;
 mod offline;
+#[macro_use]
+pub mod out;
 mod script;
 mod show;
 
@@ -16,7 +20,7 @@ use formats::DecodeFormat;
 
 /// Socket debug assistant for UR robots: every URScript socket format, both directions.
 #[derive(Parser)]
-#[command(name = "ursock", version, about, long_about = None)]
+#[command(name = "ursock", version, about = "Socket debug assistant for UR robots: every URScript socket format, both directions", long_about = None)]
 struct Cli {
     #[command(subcommand)]
     command: Command,
@@ -28,6 +32,11 @@ enum Command {
     /// prints both sides' traffic. Needs no robot.
     Demo,
     /// Listen for robots (socket_open connects here) and show their traffic decoded.
+    ///
+    /// Typed lines on stdin are sent: a reply spec (`floats 1 2 3`, `line OK`, `text a\r\n`,
+    /// `hex 02 41 03`), `@N SPEC` for connection N when several are connected, `list`,
+    /// `close N`, `help`. Variables (SET/GET) belong to the server: one table shared by
+    /// every connection, so a value SET by one connection is read back by the next.
     Listen {
         /// Address to bind.
         #[arg(long, default_value = "0.0.0.0")]
@@ -35,19 +44,69 @@ enum Command {
         /// Port to listen on (0 picks a free one).
         #[arg(long)]
         port: u16,
-        /// How to decode what robots send.
+        /// How to decode what robots send. Without it chunks are shown raw, SET/GET lines
+        /// are still answered and `--reply` answers each chunk received.
         #[arg(long, value_enum)]
         decode: Option<DecodeFormat>,
         /// Delimiter for `--decode delimiter` (`\r`, `\n`, `\t` are interpreted).
         #[arg(long, default_value = "\\n")]
         delimiter: String,
-        /// Reply to each decoded message, e.g. `floats 0.1 0.2 0.3`, `line OK`,
-        /// `int32 1 2`, `bytes 2 3`, `string >ok<`. GET is always answered from SET.
+        /// Reply to each decoded message (or each chunk without --decode), e.g.
+        /// `floats 0.1 0.2 0.3`, `line OK`, `int32 1 2`, `bytes 2 3`, `string >ok<`,
+        /// `text OK\r\n`, `hex 02 06 03`. GET lines are always answered from SET
+        /// (without --decode and with line, var, delimiter, stx-etx); an unknown variable
+        /// is answered 0 and said so.
         #[arg(long, allow_hyphen_values = true)]
         reply: Option<String>,
-        /// Exit after this many robots have connected and left.
+        /// Replies from a file of rules, one `PATTERN => REPLY` a line (`*` and `?` are
+        /// wildcards; first match wins; no match falls back to --reply).
+        #[arg(long)]
+        rules: Option<std::path::PathBuf>,
+        /// The read the robot does on replies (`ascii-float:N`, `binary-integer:N`,
+        /// `byte-list:N`, `line`): each reply is checked against it and a warning says
+        /// why the robot's read would fail. Without it, number-like text replies are
+        /// checked as a `socket_read_ascii_float`.
+        #[arg(long)]
+        robot_reads: Option<String>,
+        /// Exit after this many robots have connected and left (0: exit right after
+        /// binding, which checks the options and the port).
         #[arg(long)]
         exit_after: Option<usize>,
+        /// Connections served at once; more are accepted and closed at once (said once
+        /// per episode).
+        #[arg(long, default_value_t = listen::DEFAULT_MAX_CONNECTIONS)]
+        max_connections: usize,
+        /// Variables the server keeps (names at most 128 bytes); SET of a new name beyond
+        /// it is refused and said.
+        #[arg(long, default_value_t = listen::DEFAULT_MAX_VARS)]
+        max_vars: usize,
+        /// Bytes of replies queued for one robot; a robot that lets more pile up is not
+        /// reading and is dropped (others are unaffected).
+        #[arg(long, default_value_t = listen::DEFAULT_MAX_QUEUE)]
+        max_queue: usize,
+        /// Seconds a reply may wait, from being queued, to be written before the robot is
+        /// taken as not reading and dropped (0: no limit).
+        #[arg(long, default_value_t = listen::DEFAULT_WRITE_TIMEOUT_SECS)]
+        write_timeout: f64,
+        /// Bytes of one chunk shown in its hex dump (rows of 16 with offsets); JSON events
+        /// and counters always carry the whole chunk.
+        #[arg(long, default_value_t = listen::DEFAULT_SHOW_MAX)]
+        show_max: usize,
+        /// Write the whole session (every line, or every JSON event) to FILE.
+        #[arg(long)]
+        log: Option<std::path::PathBuf>,
+        /// One JSON event per line on stdout (listening, connect, rx, decoded, tx, close,
+        /// diagnosis, errors); raw bytes as text when valid UTF-8, else hex (`encoding`).
+        #[arg(long)]
+        json: bool,
+        /// Only connects, closes and problems; no traffic lines.
+        #[arg(long, short)]
+        quiet: bool,
+        /// A terminal UI: the connections (Up/Down selects), the selected one's traffic
+        /// decoded as it arrives, and an input line sending a reply spec to it (Enter);
+        /// Esc quits.
+        #[arg(long)]
+        tui: bool,
     },
     /// A virtual robot running URScript socket calls against a server.
     Robot {
@@ -60,13 +119,20 @@ enum Command {
         /// Calls given on the command line (repeatable).
         #[arg(short = 'e', long = "eval")]
         eval: Vec<String>,
-        /// Also print the bytes sent and received.
+        /// Also print the bytes sent and received, with times relative to the start.
         #[arg(long)]
         trace: bool,
+        /// Print each call's result as one JSON object per line.
+        #[arg(long)]
+        json: bool,
+        /// Copy everything printed (stdout and stderr notes) to FILE.
+        #[arg(long, value_name = "FILE")]
+        log: Option<std::path::PathBuf>,
     },
     /// Write the bytes a server (or with --robot, the robot) sends.
     /// Formats: floats, floats-lf, int32, bytes, string, line, framed PREFIX TEXT SUFFIX,
-    /// var-reply NAME INT; robot: line, string, byte, int, set-var, get-var, stx-etx, value.
+    /// var-reply NAME INT, hex HH...; robot: line, string, byte, int, set-var, get-var,
+    /// stx-etx, value, hex HH....
     Encode {
         /// The format.
         format: String,
@@ -76,6 +142,9 @@ enum Command {
         /// Print hex instead of raw bytes.
         #[arg(long)]
         hex: bool,
+        /// Interpret `\r \n \t \0 \\ \xHH` in text values (string, line, framed, stx-etx).
+        #[arg(long)]
+        escapes: bool,
         /// Encode the robot's sends instead of the server's.
         #[arg(long)]
         robot: bool,
@@ -85,9 +154,15 @@ enum Command {
     Read {
         #[command(subcommand)]
         call: ReadCmd,
-        /// Repeat the read K times.
+        /// Repeat the read K times (1 or more).
         #[arg(long, global = true, default_value_t = 1)]
         repeat: usize,
+        /// Print each result as one JSON object per line.
+        #[arg(long, global = true)]
+        json: bool,
+        /// Prefix each result with the time since the start (`+0.003s`).
+        #[arg(long, global = true)]
+        timestamps: bool,
     },
     /// Decode what a robot sent (stdin), one message per line.
     Decode {
@@ -97,9 +172,15 @@ enum Command {
         /// Delimiter for `delimiter` (`\r`, `\n`, `\t` are interpreted).
         #[arg(long, default_value = "\\n")]
         delimiter: String,
-        /// JSON lines.
+        /// One JSON object per line; text as {"encoding":"utf-8","text":...}, other
+        /// bytes as {"encoding":"hex","hex":...}.
         #[arg(long)]
         json: bool,
+        /// Accept a last message without its terminator at the end of input (line,
+        /// delimiter, var, value). Without it, an unterminated rest is reported as cut off,
+        /// for every format alike.
+        #[arg(long)]
+        allow_unterminated: bool,
     },
 }
 
@@ -157,36 +238,72 @@ fn run(cli: Cli) -> Result<(), String> {
             decode,
             delimiter,
             reply,
+            rules,
+            robot_reads,
             exit_after,
+            max_connections,
+            max_vars,
+            max_queue,
+            write_timeout,
+            show_max,
+            log,
+            json,
+            quiet,
+            tui,
         } => listen::listen(listen::ListenOptions {
             bind,
             port,
             decode,
             delimiter: unescape(&delimiter),
-            reply: reply.map(|r| r.split_whitespace().map(String::from).collect()),
+            reply,
             exit_after,
+            max_connections,
+            max_vars,
+            max_queue,
+            write_timeout,
+            show_max,
+            robot_reads,
+            rules,
+            log,
+            json,
+            quiet,
+            tui,
         }),
         Command::Robot {
             connect,
             script,
             eval,
             trace,
+            json,
+            log,
         } => {
+            if let Some(path) = &log {
+                out::open_log(path)?;
+            }
             let text = match script {
                 Some(path) => std::fs::read_to_string(&path)
                     .map_err(|e| format!("{}: {e}", path.display()))?,
                 None if !eval.is_empty() => eval.join("\n"),
                 None => return Err("give --script FILE or -e 'CALL'".into()),
             };
-            script::run(&text, connect.as_deref(), trace)
+            script::run(&text, connect.as_deref(), script::Options { trace, json })
         }
         Command::Encode {
             format,
             values,
             hex,
+            escapes,
             robot,
-        } => offline::encode(&format, &values, hex, robot),
-        Command::Read { call, repeat } => {
+        } => offline::encode(&format, &values, hex, escapes, robot),
+        Command::Read {
+            call,
+            repeat,
+            json,
+            timestamps,
+        } => {
+            if repeat == 0 {
+                return Err("--repeat 0: give the number of reads, 1 or more".into());
+            }
             let call = match call {
                 ReadCmd::AsciiFloat { number } => ReadCall::AsciiFloat { number },
                 ReadCmd::BinaryInteger { number } => ReadCall::BinaryInteger { number },
@@ -202,20 +319,22 @@ fn run(cli: Cli) -> Result<(), String> {
                     interpret_escape,
                 },
             };
-            offline::read(call, repeat)
+            offline::read(call, repeat, json, timestamps)
         }
         Command::Decode {
             format,
             delimiter,
             json,
-        } => offline::decode(format, &unescape(&delimiter), json),
+            allow_unterminated,
+        } => offline::decode(format, &unescape(&delimiter), json, allow_unterminated),
     }
 }
 
 fn main() {
+    out::start_clock();
     let cli = Cli::parse();
     if let Err(msg) = run(cli) {
-        eprintln!("ursock: {msg}");
+        out::note(&msg);
         std::process::exit(1);
     }
 }

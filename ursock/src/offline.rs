@@ -1,33 +1,79 @@
 //! Offline commands on stdin/stdout: `encode`, `read`, `decode`.
 
-use std::io::{Read, Write};
+use std::io::Read;
 
-use urscript_socket::robot::{Policy, ReadCall, SocketConnection, Timeout};
+use urscript_socket::robot::{Policy, ReadCall, ReadResult, SocketConnection, Timeout};
 use urscript_socket::RecvBuffer;
 
-use crate::formats::{encode_robot, encode_server, AnyDecoder, DecodeFormat};
-use crate::show::hex;
+use crate::formats::{encode_robot_with, encode_server_with, AnyDecoder, DecodeFormat};
+use crate::show::{hex, JsonBytes};
+use crate::{out, outln};
 
-/// `ursock encode FORMAT VALUES... [--hex] [--robot]`
-pub fn encode(format: &str, values: &[String], as_hex: bool, robot: bool) -> Result<(), String> {
+/// `ursock encode FORMAT VALUES... [--hex] [--escapes] [--robot]`
+pub fn encode(
+    format: &str,
+    values: &[String],
+    as_hex: bool,
+    escapes: bool,
+    robot: bool,
+) -> Result<(), String> {
     let bytes = if robot {
-        encode_robot(format, values)?
+        encode_robot_with(format, values, escapes)?
     } else {
-        encode_server(format, values)?
+        encode_server_with(format, values, escapes)?
     };
-    let mut out = std::io::stdout().lock();
-    let r = if as_hex {
-        writeln!(out, "{}", hex(&bytes))
+    if as_hex {
+        outln!("{}", hex(&bytes));
     } else {
-        out.write_all(&bytes)
-    };
-    r.and_then(|_| out.flush())
-        .map_err(|e| format!("stdout: {e}"))
+        out::bytes(&bytes);
+    }
+    Ok(())
 }
 
-/// `ursock read CALL [ARGS] [--repeat K]`: the robot's read functions over stdin; the end
-/// of input acts as the read timeout. Runs the library's robot emulation.
-pub fn read(call: ReadCall, repeat: usize) -> Result<(), String> {
+/// The most bytes of a read's input kept for its diagnosis.
+const DIAGNOSIS_WINDOW: usize = 4096;
+
+/// One read's result as a JSON line.
+#[derive(serde::Serialize)]
+pub struct ReadJson {
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub t: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub line: Option<usize>,
+    pub call: String,
+    pub result: serde_json::Value,
+    /// The call's timeout/failure sentinel (`[0, nan...]`, `""`, `0`).
+    pub sentinel: bool,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub why: Option<String>,
+}
+
+/// A read result as JSON: lists as `{"count":n,"values":[...]}` (nan as null), text as
+/// [`JsonBytes`], an int as a number.
+pub fn result_json(r: &ReadResult) -> serde_json::Value {
+    match r {
+        ReadResult::Floats(t) => serde_json::json!({
+            "count": t.count(),
+            "values": t.values().iter().map(|v| serde_json::Value::from(*v)).collect::<Vec<_>>(),
+        }),
+        ReadResult::Ints(l) => serde_json::json!({ "count": l.count(), "values": l.values() }),
+        ReadResult::Text(t) => serde_json::to_value(JsonBytes::new(t)).unwrap_or_default(),
+        ReadResult::Int(v) => serde_json::Value::from(*v),
+    }
+}
+
+/// Whether a result deserves a diagnosis: the sentinel, or fewer floats than asked.
+pub fn failed(call: &ReadCall, r: &ReadResult) -> bool {
+    r.is_sentinel()
+        || matches!((call, r), (ReadCall::AsciiFloat { number }, ReadResult::Floats(t)) if t.count() < *number)
+}
+
+/// `ursock read CALL [ARGS] [--repeat K] [--json] [--timestamps]`: the robot's read
+/// functions over stdin; the end of input acts as the read timeout. Runs the library's
+/// robot emulation. Memory is bounded: stdin is read one chunk at a time, and only while
+/// the emulated socket takes bytes; a read that cannot complete with a full receive
+/// buffer ends as on the robot, with its sentinel (as when a timeout passes).
+pub fn read(call: ReadCall, repeat: usize, json: bool, timestamps: bool) -> Result<(), String> {
     let mut socket = SocketConnection::new(
         "socket_0",
         Policy {
@@ -36,25 +82,37 @@ pub fn read(call: ReadCall, repeat: usize) -> Result<(), String> {
         },
     );
     let mut stdin = std::io::stdin().lock();
-    let mut out = std::io::stdout().lock();
     let mut chunk = vec![0u8; 64 * 1024];
-    let mut pending_input: Vec<u8> = Vec::new();
+    // Bytes read from stdin that the socket has not taken yet: at most one chunk.
+    let mut pending: Vec<u8> = Vec::new();
     let mut eof = false;
-    for _ in 0..repeat.max(1) {
+    for _ in 0..repeat {
+        // What this read sees: what was buffered before it, then what arrives.
+        let mut seen: Vec<u8> =
+            socket.buffered()[..socket.buffered().len().min(DIAGNOSIS_WINDOW)].to_vec();
+        let note_seen = |bytes: &[u8], seen: &mut Vec<u8>| {
+            let room = DIAGNOSIS_WINDOW.saturating_sub(seen.len());
+            seen.extend_from_slice(&bytes[..bytes.len().min(room)]);
+        };
         socket
             .start_read(call.clone(), Timeout::Forever, std::time::Duration::ZERO)
             .map_err(|e| e.to_string())?;
+        let mut buffer_full = false;
         let result = loop {
             if let Some(r) = socket.poll_read() {
                 break r;
             }
-            // Offer what the buffer refused before, then read more.
-            if !pending_input.is_empty() {
-                let n = socket.receive(&pending_input);
-                pending_input.drain(..n);
+            if !pending.is_empty() {
+                let n = socket.receive(&pending);
+                note_seen(&pending[..n], &mut seen);
+                pending.drain(..n);
                 if n > 0 {
                     continue;
                 }
+                // The socket takes nothing and the read is still waiting: its receive
+                // buffer is full. On the robot nothing more can arrive; the read times out.
+                buffer_full = true;
+                break socket.give_up().unwrap_or_else(|| call.sentinel());
             }
             if eof {
                 // The end of input is the timeout: the read gets its sentinel.
@@ -64,27 +122,87 @@ pub fn read(call: ReadCall, repeat: usize) -> Result<(), String> {
                 Ok(0) => eof = true,
                 Ok(n) => {
                     let taken = socket.receive(&chunk[..n]);
-                    pending_input.extend_from_slice(&chunk[taken..n]);
+                    note_seen(&chunk[..taken], &mut seen);
+                    pending.extend_from_slice(&chunk[taken..n]);
                 }
                 Err(e) if e.kind() == std::io::ErrorKind::Interrupted => {}
                 Err(e) => return Err(format!("stdin: {e}")),
             }
         };
-        writeln!(out, "{}", result.to_urscript()).map_err(|e| format!("stdout: {e}"))?;
+        let binary = matches!(
+            call,
+            ReadCall::BinaryInteger { .. } | ReadCall::ByteList { .. }
+        );
+        let mut why = if binary || failed(&call, &result) {
+            crate::diagnose::diagnose(&call, &seen)
+        } else {
+            None
+        };
+        if buffer_full {
+            let full = format!(
+                "the 1 MiB receive buffer filled and the read could not complete{}",
+                why.as_deref().map(|w| format!(": {w}")).unwrap_or_default()
+            );
+            why = Some(full);
+        }
+        let t = out::elapsed_secs();
+        if json {
+            let line = ReadJson {
+                t: timestamps.then_some(t),
+                line: None,
+                call: call.function_name().to_string(),
+                result: result_json(&result),
+                sentinel: result.is_sentinel(),
+                why,
+            };
+            outln!("{}", serde_json::to_string(&line).unwrap_or_default());
+        } else {
+            let stamp = if timestamps {
+                format!("{} ", out::stamp())
+            } else {
+                String::new()
+            };
+            outln!("{stamp}{}", crate::show::read_result(&result));
+            if let Some(w) = why {
+                out::note(&format!("why: {w}"));
+            }
+        }
     }
     Ok(())
 }
 
-/// `ursock decode FORMAT [--json]`: what a robot sent, one message per line. Every
-/// complete message is printed; each bad stretch of input gets one line on stderr and the
-/// exit status is 1.
-pub fn decode(format: DecodeFormat, delimiter: &[u8], json: bool) -> Result<(), String> {
+/// `ursock decode FORMAT [--json] [--allow-unterminated]`: what a robot sent, one message
+/// per line. Every complete message is printed; each bad stretch of input gets one line
+/// on stderr and the exit status is 1. An unterminated last message (no LF, no
+/// delimiter) is such a bad stretch for every format, unless `allow_unterminated`.
+pub fn decode(
+    format: DecodeFormat,
+    delimiter: &[u8],
+    json: bool,
+    allow_unterminated: bool,
+) -> Result<(), String> {
     let mut decoder = AnyDecoder::new(format, delimiter)?;
     let mut rx = RecvBuffer::with_capacity(1 << 20);
     let mut stdin = std::io::stdin().lock();
-    let mut out = std::io::stdout().lock();
     let mut errors = 0usize;
-    let mut write_err: Option<std::io::Error> = None;
+    let mut on = |m: Result<crate::show::Message<'_>, urscript_socket::DecodeError>| match m {
+        Ok(m) => {
+            if json {
+                outln!("{}", m.json());
+            } else {
+                outln!("{}", m.text());
+            }
+        }
+        Err(e) => {
+            errors += 1;
+            out::note(&format!("bad input: {}", crate::messages::value_error(&e)));
+        }
+    };
+    let mut cut_off: Option<Vec<u8>> = None;
+    let terminated = matches!(
+        format,
+        DecodeFormat::Line | DecodeFormat::Value | DecodeFormat::Var | DecodeFormat::Delimiter
+    );
     loop {
         let space = rx.spare();
         if space.is_empty() {
@@ -97,26 +215,36 @@ pub fn decode(format: DecodeFormat, delimiter: &[u8], json: bool) -> Result<(), 
             Err(e) => return Err(format!("stdin: {e}")),
         };
         rx.commit(n);
-        decoder.drain(&mut rx, n == 0, &mut |m| match m {
-            Ok(m) => {
-                let line = if json { m.json() } else { m.text() };
-                if let Err(e) = writeln!(out, "{line}") {
-                    write_err = Some(e);
+        if n > 0 {
+            decoder.drain(&mut rx, false, &mut on);
+            continue;
+        }
+        decoder.drain(&mut rx, false, &mut on);
+        if terminated && !rx.is_empty() {
+            if allow_unterminated {
+                if format != DecodeFormat::Delimiter {
+                    // The library reads lines strictly; give the last one its LF.
+                    rx.extend(b"\n");
                 }
+                decoder.drain(&mut rx, true, &mut on);
+            } else {
+                cut_off = Some(rx.data().to_vec());
+                rx.clear();
             }
-            Err(e) => {
-                errors += 1;
-                eprintln!("ursock: bad input: {e}");
-            }
-        });
-        if let Some(e) = write_err.take() {
-            return Err(format!("stdout: {e}"));
+        } else {
+            decoder.drain(&mut rx, true, &mut on);
         }
-        if n == 0 {
-            break;
-        }
+        break;
     }
-    out.flush().map_err(|e| format!("stdout: {e}"))?;
+    if let Some(rest) = cut_off {
+        errors += 1;
+        out::note(&format!(
+            "bad input: the last message was cut off before its terminator: {} ({} bytes at \
+             the end of input; --allow-unterminated accepts it)",
+            crate::show::quoted(&rest[..rest.len().min(80)]),
+            rest.len()
+        ));
+    }
     if errors > 0 {
         return Err(format!("{errors} bad stretch(es) of input (see above)"));
     }

@@ -180,7 +180,7 @@ fn decode_formats() {
     );
     assert_eq!(ok(&["decode", "line"], b"a\r\nb\n"), "\"a\"\n\"b\"\n");
     assert_eq!(
-        ok(&["decode", "delimiter", "--delimiter", ";"], b"a;b;c"),
+        ok(&["decode", "delimiter", "--delimiter", ";"], b"a;b;c;"),
         "\"a\"\n\"b\"\n\"c\"\n"
     );
     assert_eq!(
@@ -196,7 +196,7 @@ fn decode_formats() {
             &["decode", "value", "--json"],
             b"p[1, 2, 3, 4, 5, 6]\n[True, 2]\n"
         ),
-        "{\"type\":\"pose\",\"value\":[1,2,3,4,5,6]}\n{\"type\":\"list\",\"value\":[true,2]}\n"
+        "{\"type\":\"pose\",\"value\":[1.0,2.0,3.0,4.0,5.0,6.0]}\n{\"type\":\"list\",\"value\":[true,2]}\n"
     );
 }
 

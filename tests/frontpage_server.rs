@@ -1,0 +1,111 @@
+//! The tokio server of the rustdoc front page (`src/lib.rs`), copied as it stands there
+//! (only the address is 127.0.0.1:0 and the accept loop runs in a task), against robots
+//! over 127.0.0.1. Proof that what a new user copies survives an over-long line and a
+//! malformed one and keeps answering, on one `Framed` with request/reply and tolerant mode.
+
+// The front page uses 3.14 as data (a pose angle), not as π.
+#![allow(clippy::approx_constant)]
+
+use std::time::Duration;
+
+use futures_util::{SinkExt, StreamExt};
+use tokio::io::{AsyncReadExt, AsyncWriteExt};
+use tokio::net::{TcpListener, TcpStream};
+use tokio_util::codec::Framed;
+use urscript_socket::adapters::tokio::{
+    AsyncRobotSocket, FloatTupleCodec, LineCodec, RequestReply, Tolerant,
+};
+use urscript_socket::robot::{Policy, ReadCall, ReadResult, Timeout};
+
+/// The front page's server, from `let listener` on.
+async fn front_page_server() -> std::io::Result<std::net::SocketAddr> {
+    let listener = TcpListener::bind("127.0.0.1:0").await?;
+    let addr = listener.local_addr()?;
+    tokio::spawn(async move {
+        loop {
+            let (robot, peer) = listener.accept().await?; // the robot's socket_open
+            tokio::spawn(async move {
+                let codec =
+                    RequestReply::new(Tolerant::new(LineCodec::new()), FloatTupleCodec::new(6)?);
+                let mut framed = Framed::new(robot, codec);
+                while let Some(request) = framed.next().await {
+                    match request? {
+                        Ok(line) if line == "shoot" => {
+                            framed.send([0.4, -0.2, 0.3, 0.0, 3.14, 0.0]).await?;
+                        }
+                        Ok(line) => eprintln!("{peer}: unknown request {line:?}"),
+                        Err(bad) => eprintln!("{peer}: skipped {bad}"), // the stream goes on
+                    }
+                }
+                Ok::<_, Box<dyn std::error::Error + Send + Sync>>(())
+            });
+        }
+        #[allow(unreachable_code)]
+        Ok::<_, std::io::Error>(())
+    });
+    Ok(addr)
+}
+
+const POSE: [f64; 6] = [0.4, -0.2, 0.3, 0.0, 3.14, 0.0];
+
+#[tokio::test]
+async fn survives_an_over_long_line_and_keeps_answering() {
+    let addr = front_page_server().await.unwrap();
+    let mut robot = AsyncRobotSocket::connect(addr, "camera", Policy::default())
+        .await
+        .unwrap();
+    let over_long = vec![b'x'; 100_000]; // 25 x the codec's 4096-byte bound
+    for round in 0..5 {
+        robot.socket().send_line(&over_long);
+        robot.socket().send_line(b"shoot");
+        let r = robot
+            .read(
+                ReadCall::AsciiFloat { number: 6 },
+                Timeout::from_secs_f64(5.0),
+            )
+            .await
+            .unwrap();
+        match r {
+            ReadResult::Floats(t) => {
+                assert_eq!(t.count(), 6, "round {round}: {t:?}");
+                assert_eq!(t.values(), POSE);
+            }
+            other => panic!("round {round}: {other:?}"),
+        }
+    }
+}
+
+#[tokio::test]
+async fn raw_bytes_exact_reply_and_several_robots() {
+    let addr = front_page_server().await.unwrap();
+    let mut tasks = Vec::new();
+    for id in 0..8 {
+        tasks.push(tokio::spawn(async move {
+            let mut s = TcpStream::connect(addr).await.unwrap();
+            // Over-long line written in pieces, an unknown request, invalid UTF-8, then
+            // the real request split across writes.
+            for _ in 0..10 {
+                s.write_all(&[b'y'; 1000]).await.unwrap();
+            }
+            s.write_all(b"\nhello\n\xFF\xFE\nsho").await.unwrap();
+            tokio::time::sleep(Duration::from_millis(5 * id)).await;
+            s.write_all(b"ot\n").await.unwrap();
+            let expected = b"(0.4,-0.2,0.3,0,3.14,0)";
+            let mut reply = vec![0u8; expected.len()];
+            tokio::time::timeout(Duration::from_secs(5), s.read_exact(&mut reply))
+                .await
+                .expect("the server answers after the over-long line")
+                .unwrap();
+            assert_eq!(reply, expected, "no LF after the tuple");
+            // Still answering on the same connection.
+            s.write_all(b"shoot\nshoot\n").await.unwrap();
+            let mut two = vec![0u8; 2 * expected.len()];
+            s.read_exact(&mut two).await.unwrap();
+            assert_eq!(&two[..expected.len()], expected);
+            assert_eq!(&two[expected.len()..], expected);
+        }));
+    }
+    for t in tasks {
+        t.await.unwrap();
+    }
+}
