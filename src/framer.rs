@@ -419,11 +419,21 @@ impl Framer {
             return Ok(None);
         }
         if at_eof == AtEof::Flush {
-            return Ok(self.take_all(rest).map(|(content, n)| Frame {
-                content,
-                at: self.scan.pos - n as u64,
-                consumed: consumed + n,
-            }));
+            if let Some((content, n)) = self.take_all(rest) {
+                return Ok(Some(Frame {
+                    content,
+                    at: self.scan.pos - n as u64,
+                    consumed: consumed + n,
+                }));
+            }
+            // Nothing fits a bound of 0: the rest is over-long, reported and dropped (an
+            // empty message that consumes nothing would be returned forever).
+            let kind = ErrorKind::TooLong {
+                limit: self.limits.bound,
+            };
+            let e = DecodeError::new(kind, self.scan.pos, buf.len());
+            self.scan.pos += rest.len() as u64;
+            return Err(e);
         }
         let e = DecodeError::new(ErrorKind::Truncated, self.scan.pos, buf.len());
         self.scan.pos += rest.len() as u64;
@@ -442,6 +452,9 @@ impl Framer {
             return None;
         }
         let n = buf.len().min(self.limits.bound);
+        if n == 0 {
+            return None;
+        }
         self.scan.pos += n as u64;
         Some((&buf[..n], n))
     }
@@ -638,7 +651,13 @@ impl Scan {
         let clen = close.len();
         let frame = &buf[lead..];
         let window = frame.len().min(limits.window);
-        let from = self.scanned.saturating_sub(clen - 1).min(window);
+        // Never before the content (a caller that passed fewer bytes than last time must not
+        // make the content end before it starts).
+        let from = self
+            .scanned
+            .saturating_sub(clen - 1)
+            .max(content)
+            .min(window);
         let hay = &frame[from..window];
         let found = match (reopen, open) {
             // A reopen is looked for together with the close: one pass (memchr2).
@@ -760,6 +779,11 @@ impl Scan {
     ) -> Status<Frame<'a>> {
         let plen = prefix.len();
         let content_start = match self.state {
+            // A caller that passed fewer bytes than last time: search them afresh.
+            State::InFrame { content } if content > buf.len() => {
+                self.reset();
+                return self.window(buf, limits, prefix, suffix);
+            }
             State::InFrame { content } => content,
             _ if plen == 0 => 0,
             _ => {
