@@ -13,7 +13,7 @@
 //! number = [+-]? (digits ("." digits?)? | "." digits) ([eE] [+-]? digits)?
 //! ```
 
-use crate::framer::{Framed, Framer, Noise, Parse};
+use crate::framer::{Framed, Framer, Noise, Parse, ShapeKind};
 use crate::number::{is_space, parse_float_prefix, write_plain_f64, MAX_PLAIN_F64_LEN};
 #[cfg(doc)]
 use crate::DecodeError;
@@ -317,6 +317,7 @@ pub struct FloatTuples {
 
 impl Parse for FloatTuples {
     type Output<'a> = FloatTuple;
+    const SHAPE: ShapeKind = ShapeKind::Bracketed;
     #[inline(always)]
     fn parse(&self, inner: &[u8]) -> Result<FloatTuple, (ErrorKind, usize)> {
         parse_tuple(inner, self.number, &self.policy)

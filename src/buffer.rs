@@ -243,7 +243,9 @@ impl<S: AsRef<[u8]> + AsMut<[u8]>> RecvBuffer<S> {
     /// bytes are dropped, the rest of it is discarded as it arrives, and decoding resyncs
     /// on the next message. Every decoder of the crate has that way out except
     /// [`ReadStringDecoder`](crate::string::ReadStringDecoder), which by the controller's
-    /// rule consumes nothing until complete: a full buffer stays full (`Ok(None)`).
+    /// rule consumes nothing until complete: a full buffer stays full (`Ok(None)`). A buffer
+    /// must also hold a whole delimiter (any of 64 bytes or more does) for a
+    /// [`DelimitedDecoder`](crate::string::DelimitedDecoder) to find one.
     ///
     /// ```
     /// # use urscript_socket::{RecvBuffer, byte_list::ByteListDecoder, line::LineDecoder, ErrorKind};

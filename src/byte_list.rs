@@ -3,7 +3,7 @@
 //!
 //! Fixed-size like int32: a message is `number` bytes, counted, never scanned.
 
-use crate::framer::{Framed, Framer, Parse};
+use crate::framer::{Framed, Framer, Parse, ShapeKind};
 use crate::{ArgumentError, EncodeError, ErrorKind, Sink};
 
 /// The most bytes one `socket_read_byte_list` call reads: the crate's one
@@ -61,6 +61,7 @@ pub struct ByteList {
 
 impl Parse for ByteList {
     type Output<'a> = &'a [u8];
+    const SHAPE: ShapeKind = ShapeKind::Counted;
     #[inline(always)]
     fn parse<'a>(&self, bytes: &'a [u8]) -> Result<&'a [u8], (ErrorKind, usize)> {
         Ok(bytes)

@@ -107,6 +107,16 @@ pub enum AtEof {
     Keep,
 }
 
+/// Which [`Shape`] a parse step's frames have, known at compile time ([`Parse::SHAPE`]).
+#[doc(hidden)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ShapeKind {
+    Delimited,
+    Bracketed,
+    Counted,
+    Window,
+}
+
 /// The frame shapes; see the module table.
 #[derive(Debug, Clone, Copy)]
 pub enum Shape {
@@ -182,6 +192,17 @@ struct Scan {
     scanned: usize,
     /// Absolute stream offset of `buf[0]`.
     pos: u64,
+}
+
+/// What starts and ends a delimited or bracketed frame, as the scan uses it.
+#[derive(Clone, Copy)]
+struct Ends<'c> {
+    /// The open byte and what to do with bytes before it; `None`: the frame starts at once.
+    open: Option<(u8, Noise)>,
+    /// The close: one byte, or a 1-64 byte delimiter.
+    close: &'c [u8],
+    /// An open byte inside a frame cuts it short (what was expected, for the error).
+    reopen: Option<&'static str>,
 }
 
 /// The resumable scan for one shape, with its bound.
@@ -292,9 +313,55 @@ impl Framer {
         self.scan.reset();
     }
 
+    /// [`next`](Self::next) for a framer whose shape is known to be `kind` at compile time
+    /// (each parse step names its shape): the match below then folds to the one arm, so a
+    /// counted read costs a length check and a line a memchr, with no dispatch and no call.
+    #[inline(always)]
+    pub fn next_as<'a>(
+        &mut self,
+        kind: ShapeKind,
+        buf: &'a [u8],
+    ) -> Result<Status<Frame<'a>>, DecodeError> {
+        let Framer {
+            shape,
+            limits,
+            scan,
+        } = self;
+        match (kind, &*shape) {
+            // A counted frame's length is its bound.
+            (ShapeKind::Counted, _) => Ok(scan.counted(buf, limits.bound)),
+            (ShapeKind::Delimited, Shape::Delimited { close }) => {
+                let ends = Ends {
+                    open: None,
+                    close: close.as_bytes(),
+                    reopen: None,
+                };
+                scan.delimited(buf, limits, ends)
+            }
+            (
+                ShapeKind::Bracketed,
+                Shape::Bracketed {
+                    open,
+                    close,
+                    noise,
+                    reopen,
+                },
+            ) => {
+                let ends = Ends {
+                    open: Some((*open, *noise)),
+                    close: core::slice::from_ref(close),
+                    reopen: *reopen,
+                };
+                scan.delimited(buf, limits, ends)
+            }
+            // A parse step paired with another shape (never built): the general path.
+            _ => self.next(buf),
+        }
+    }
+
     /// The next frame in `buf` (the caller's unconsumed bytes): the one scan-and-discard
     /// machine of the crate. Every return accounts for the bytes it tells the caller to drop.
-    #[inline]
+    #[inline(never)]
     pub fn next<'a>(&mut self, buf: &'a [u8]) -> Result<Status<Frame<'a>>, DecodeError> {
         let Framer {
             shape,
@@ -307,14 +374,22 @@ impl Framer {
                 close,
                 noise,
                 reopen,
-            } => scan.delimited(
-                buf,
-                limits,
-                Some((*open, *noise)),
-                core::slice::from_ref(close),
-                *reopen,
-            ),
-            Shape::Delimited { close } => scan.delimited(buf, limits, None, close.as_bytes(), None),
+            } => {
+                let ends = Ends {
+                    open: Some((*open, *noise)),
+                    close: core::slice::from_ref(close),
+                    reopen: *reopen,
+                };
+                scan.delimited(buf, limits, ends)
+            }
+            Shape::Delimited { close } => {
+                let ends = Ends {
+                    open: None,
+                    close: close.as_bytes(),
+                    reopen: None,
+                };
+                scan.delimited(buf, limits, ends)
+            }
             Shape::Counted { len, .. } => Ok(scan.counted(buf, *len)),
             Shape::Window { prefix, suffix } => Ok(scan.window(buf, limits, prefix, suffix)),
         }
@@ -344,11 +419,21 @@ impl Framer {
             return Ok(None);
         }
         if at_eof == AtEof::Flush {
-            return Ok(self.take_all(rest).map(|(content, n)| Frame {
-                content,
-                at: self.scan.pos - n as u64,
-                consumed: consumed + n,
-            }));
+            if let Some((content, n)) = self.take_all(rest) {
+                return Ok(Some(Frame {
+                    content,
+                    at: self.scan.pos - n as u64,
+                    consumed: consumed + n,
+                }));
+            }
+            // Nothing fits a bound of 0: the rest is over-long, reported and dropped (an
+            // empty message that consumes nothing would be returned forever).
+            let kind = ErrorKind::TooLong {
+                limit: self.limits.bound,
+            };
+            let e = DecodeError::new(kind, self.scan.pos, buf.len());
+            self.scan.pos += rest.len() as u64;
+            return Err(e);
         }
         let e = DecodeError::new(ErrorKind::Truncated, self.scan.pos, buf.len());
         self.scan.pos += rest.len() as u64;
@@ -356,18 +441,20 @@ impl Framer {
     }
 
     /// Everything buffered as one frame (flush on idle or end of input), at most the
-    /// bound, minus the rest of a message being discarded. Resets the scan.
+    /// bound, and resets the scan. `None` if nothing is held, or while the rest of an
+    /// over-long message is being discarded (that goes on through its delimiter).
     pub fn take_all<'a>(&mut self, buf: &'a [u8]) -> Option<(&'a [u8], usize)> {
-        let discarding = self.scan.state == State::Discarding;
-        self.scan.reset();
-        if discarding {
-            self.scan.pos += buf.len() as u64;
+        if self.scan.state == State::Discarding {
             return None;
         }
+        self.scan.reset();
         if buf.is_empty() {
             return None;
         }
         let n = buf.len().min(self.limits.bound);
+        if n == 0 {
+            return None;
+        }
         self.scan.pos += n as u64;
         Some((&buf[..n], n))
     }
@@ -471,11 +558,20 @@ impl Scan {
         &mut self,
         buf: &'a [u8],
         limits: &Limits,
-        open: Option<(u8, Noise)>,
-        close: &[u8],
-        reopen: Option<&'static str>,
+        ends: Ends<'_>,
     ) -> Result<Status<Frame<'a>>, DecodeError> {
+        let Ends { open, close, .. } = ends;
         let clen = close.len();
+        // The common cases first: in a frame, or a delimited frame starting now.
+        match (self.state, open) {
+            (State::InFrame { content }, _) => return self.frame(buf, 0, content, limits, ends),
+            (State::Idle, None) => {
+                self.state = State::InFrame { content: 0 };
+                self.scanned = 0;
+                return self.frame(buf, 0, 0, limits, ends);
+            }
+            _ => {}
+        }
         // Bytes of `buf` already dropped in this call.
         let mut lead = 0;
         loop {
@@ -499,7 +595,7 @@ impl Scan {
                     None => return Ok(self.partial(buf.len())),
                 },
                 (State::InFrame { content }, _) => {
-                    return self.frame(buf, lead, content, limits, open, close, reopen);
+                    return self.frame(buf, lead, content, limits, ends);
                 }
                 // Delimited: every byte is content.
                 (_, None) => {
@@ -539,21 +635,29 @@ impl Scan {
     /// The frame starts at `buf[lead]`, its content `content` bytes later: find its close
     /// within the bound, resuming where the last call stopped.
     #[inline(always)]
-    #[allow(clippy::too_many_arguments)]
     fn frame<'a>(
         &mut self,
         buf: &'a [u8],
         lead: usize,
         content: usize,
         limits: &Limits,
-        open: Option<(u8, Noise)>,
-        close: &[u8],
-        reopen: Option<&'static str>,
+        ends: Ends<'_>,
     ) -> Result<Status<Frame<'a>>, DecodeError> {
+        let Ends {
+            open,
+            close,
+            reopen,
+        } = ends;
         let clen = close.len();
         let frame = &buf[lead..];
         let window = frame.len().min(limits.window);
-        let from = self.scanned.saturating_sub(clen - 1).min(window);
+        // Never before the content (a caller that passed fewer bytes than last time must not
+        // make the content end before it starts).
+        let from = self
+            .scanned
+            .saturating_sub(clen - 1)
+            .max(content)
+            .min(window);
         let hay = &frame[from..window];
         let found = match (reopen, open) {
             // A reopen is looked for together with the close: one pass (memchr2).
@@ -594,6 +698,59 @@ impl Scan {
         }
     }
 
+    /// A whole counted frame of `len` bytes at the front of `buf`, between frames: every
+    /// call in a steady stream, so it is only a length check (the state is already Idle).
+    #[inline(always)]
+    fn whole<'a>(&mut self, buf: &'a [u8], len: usize) -> Option<Frame<'a>> {
+        if self.state != State::Idle || buf.len() < len {
+            return None;
+        }
+        let at = self.pos;
+        self.pos += len as u64;
+        Some(Frame {
+            content: &buf[..len],
+            at,
+            consumed: len,
+        })
+    }
+
+    /// A whole frame at the front of `buf`, between frames, its content `content` bytes in
+    /// (after an open byte already checked, or at once): every call in a steady stream of
+    /// lines or tuples. On a miss the scan is left where the general step resumes it (in
+    /// the frame, `scanned` bytes searched), so no byte is searched twice.
+    #[inline(always)]
+    fn whole_delimited<'a>(
+        &mut self,
+        buf: &'a [u8],
+        limits: &Limits,
+        content: usize,
+        close: &[u8],
+    ) -> Option<Frame<'a>> {
+        if self.state != State::Idle {
+            return None;
+        }
+        let window = buf.len().min(limits.window);
+        let from = content.min(window);
+        match find(close, &buf[from..window]) {
+            Some(i) => {
+                let end = from + i;
+                let consumed = end + close.len();
+                let at = self.pos + content as u64;
+                self.pos += consumed as u64;
+                Some(Frame {
+                    content: &buf[content..end],
+                    at,
+                    consumed,
+                })
+            }
+            None => {
+                self.state = State::InFrame { content };
+                self.scanned = window;
+                None
+            }
+        }
+    }
+
     /// Counted frames: no scan, only a length.
     #[inline(always)]
     fn counted<'a>(&mut self, buf: &'a [u8], len: usize) -> Status<Frame<'a>> {
@@ -622,6 +779,11 @@ impl Scan {
     ) -> Status<Frame<'a>> {
         let plen = prefix.len();
         let content_start = match self.state {
+            // A caller that passed fewer bytes than last time: search them afresh.
+            State::InFrame { content } if content > buf.len() => {
+                self.reset();
+                return self.window(buf, limits, prefix, suffix);
+            }
             State::InFrame { content } => content,
             _ if plen == 0 => 0,
             _ => {
@@ -670,11 +832,36 @@ impl Scan {
     }
 }
 
+/// Declares a parse step that hands a frame's content on as it is (STX/ETX payloads,
+/// read strings, delimited strings): one line per format instead of one impl each.
+macro_rules! content_as_is {
+    ($(#[$doc:meta])* $name:ident, $shape:ident) => {
+        $(#[$doc])*
+        #[derive(Debug, Clone, Copy, Default)]
+        pub struct $name;
+
+        impl $crate::Parse for $name {
+            type Output<'a> = &'a [u8];
+            const SHAPE: $crate::framer::ShapeKind = $crate::framer::ShapeKind::$shape;
+            #[inline(always)]
+            fn parse<'a>(&self, content: &'a [u8]) -> Result<&'a [u8], ($crate::ErrorKind, usize)> {
+                Ok(content)
+            }
+        }
+    };
+}
+pub(crate) use content_as_is;
+
 /// The pure half of a format: one complete frame's content to an item. Errors are (what,
 /// offset within `content`); [`Framed`] makes the offset absolute.
 pub trait Parse {
     /// What a frame decodes to; borrows the frame where the format allows it.
     type Output<'a>;
+
+    /// The shape of this format's frames, so that the framer's dispatch is resolved at
+    /// compile time. Internal.
+    #[doc(hidden)]
+    const SHAPE: ShapeKind;
 
     /// Parses the content of one complete frame.
     fn parse<'a>(&self, content: &'a [u8]) -> Result<Self::Output<'a>, (ErrorKind, usize)>;
@@ -711,15 +898,36 @@ impl<P: Parse> Framed<P> {
     /// ```
     #[inline]
     pub fn decode<'a>(&mut self, buf: &'a [u8]) -> Result<Status<P::Output<'a>>, DecodeError> {
-        match self.framer.next(buf)? {
-            Status::Complete { item: frame, .. } => {
-                self.parse(frame).map(|item| Status::Complete {
-                    item,
-                    consumed: frame.consumed,
-                    at: frame.at,
-                })
+        // The common case (between frames, a whole frame there) without the general step.
+        let whole = match (P::SHAPE, &self.framer.shape) {
+            (ShapeKind::Counted, _) => self.framer.scan.whole(buf, self.framer.limits.bound),
+            (ShapeKind::Delimited, Shape::Delimited { close }) => {
+                self.framer
+                    .scan
+                    .whole_delimited(buf, &self.framer.limits, 0, close.as_bytes())
             }
-            Status::Partial { consumed } => Ok(Status::Partial { consumed }),
+            _ => None,
+        };
+        let frame = match whole {
+            Some(frame) => frame,
+            None => match self.framer.next_as(P::SHAPE, buf)? {
+                Status::Complete { item, .. } => item,
+                Status::Partial { consumed } => return Ok(Status::Partial { consumed }),
+            },
+        };
+        // One match, no combinators: a large item (a float tuple is 256 bytes) is built
+        // once in the result instead of being moved through each layer.
+        match self.parser.parse(frame.content) {
+            Ok(item) => Ok(Status::Complete {
+                item,
+                consumed: frame.consumed,
+                at: frame.at,
+            }),
+            Err((kind, off)) => Err(DecodeError::new(
+                kind,
+                frame.at + off as u64,
+                frame.consumed,
+            )),
         }
     }
 

@@ -4,7 +4,7 @@
 //! Fixed-size: a message is `4 × number` bytes, so no scan is needed; the decoder only
 //! counts bytes. Values are decoded in place from the caller's buffer ([`Int32Values`]).
 
-use crate::framer::{Framed, Framer, Parse};
+use crate::framer::{Framed, Framer, Parse, ShapeKind};
 use crate::{ArgumentError, EncodeError, ErrorKind, Sink};
 
 /// The most values one `socket_read_binary_integer` call reads: the crate's one
@@ -180,6 +180,7 @@ pub struct Int32List {
 
 impl Parse for Int32List {
     type Output<'a> = Int32Values<'a>;
+    const SHAPE: ShapeKind = ShapeKind::Counted;
     #[inline(always)]
     fn parse<'a>(&self, bytes: &'a [u8]) -> Result<Int32Values<'a>, (ErrorKind, usize)> {
         Ok(Int32Values { bytes })

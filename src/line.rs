@@ -1,7 +1,7 @@
 //! Lines: `socket_send_line` on the robot (`<s>\n`, LF only) and `socket_read_line()`
 //! reading a server's `\n` or `\r\n` terminated reply.
 
-use crate::framer::{AtEof, Framed, Framer, Parse, Pattern};
+use crate::framer::{AtEof, Framed, Framer, Parse, Pattern, ShapeKind};
 use crate::{EncodeError, ErrorKind, Sink};
 
 /// Default bound on a line's content, in bytes (CR included, LF excluded). A robot's
@@ -53,6 +53,7 @@ pub struct Line;
 
 impl Parse for Line {
     type Output<'a> = &'a [u8];
+    const SHAPE: ShapeKind = ShapeKind::Delimited;
     #[inline(always)]
     fn parse<'a>(&self, line: &'a [u8]) -> Result<&'a [u8], (ErrorKind, usize)> {
         Ok(strip_cr(line))

@@ -1,8 +1,8 @@
 //! STX/ETX framing: `socket_send_byte(2)`, `socket_send_string(s)`, `socket_send_byte(3)`
 //! puts `02 <s> 03` on the wire, the most common way robot programs frame a message.
 
-use crate::framer::{Framed, Framer, Noise, Parse};
-use crate::{EncodeError, ErrorKind, Sink};
+use crate::framer::{content_as_is, Framed, Framer, Noise};
+use crate::{EncodeError, Sink};
 
 /// Start of text, `socket_send_byte(2)`.
 pub const STX: u8 = 2;
@@ -39,13 +39,13 @@ pub fn encode_stx_etx<S: Sink + ?Sized>(
 /// Server-side decoder of STX/ETX frames; the item is the payload, borrowed.
 ///
 /// * Bytes outside a frame are reported once per run, as an
-///   [`UnexpectedByte`](ErrorKind::UnexpectedByte) error at the run's first byte, and
+///   [`UnexpectedByte`](crate::ErrorKind::UnexpectedByte) error at the run's first byte, and
 ///   dropped up to the next STX.
 /// * An STX inside a frame means the frame was cut short: an error at that STX, and a
 ///   new frame starts there.
 /// * Bound: a payload longer than `max_len` ([`DEFAULT_MAX_FRAME_LEN`]) is a
-///   [`TooLong`](ErrorKind::TooLong) error; the rest is discarded through the next ETX.
-/// * At end of input an open frame is [`Truncated`](ErrorKind::Truncated).
+///   [`TooLong`](crate::ErrorKind::TooLong) error; the rest is discarded through the next ETX.
+/// * At end of input an open frame is [`Truncated`](crate::ErrorKind::Truncated).
 ///
 /// ```
 /// use urscript_socket::stx_etx::StxEtxDecoder;
@@ -59,17 +59,11 @@ pub fn encode_stx_etx<S: Sink + ?Sized>(
 /// ```
 pub type StxEtxDecoder = Framed<StxEtx>;
 
-/// The parse step of [`StxEtxDecoder`]: the payload as it is.
-#[derive(Debug, Clone, Copy, Default)]
-pub struct StxEtx;
-
-impl Parse for StxEtx {
-    type Output<'a> = &'a [u8];
-    #[inline(always)]
-    fn parse<'a>(&self, payload: &'a [u8]) -> Result<&'a [u8], (ErrorKind, usize)> {
-        Ok(payload)
-    }
-}
+content_as_is!(
+    /// The parse step of [`StxEtxDecoder`]: the payload as it is.
+    StxEtx,
+    Bracketed
+);
 
 impl Default for StxEtxDecoder {
     fn default() -> Self {
@@ -122,7 +116,7 @@ impl StxEtxDecoder {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::Status;
+    use crate::{ErrorKind, Status};
 
     #[test]
     fn cut_frame_then_next() {

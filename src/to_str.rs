@@ -17,7 +17,7 @@ use nom::bytes::complete::{tag_no_case, take_while1};
 use nom::combinator::map;
 use nom::{IResult, Parser};
 
-use crate::framer::{Framed, Parse};
+use crate::framer::{Framed, Parse, ShapeKind};
 use crate::line::{lf_framer, strip_cr};
 use crate::number::{is_space, parse_float_token, parse_i32, write_i32};
 use crate::{DecodeError, EncodeError, ErrorKind, Sink};
@@ -575,6 +575,7 @@ pub struct ValueLine;
 
 impl Parse for ValueLine {
     type Output<'a> = Value<'a>;
+    const SHAPE: ShapeKind = ShapeKind::Delimited;
     fn parse<'a>(&self, line: &'a [u8]) -> Result<Value<'a>, (ErrorKind, usize)> {
         parse_value(strip_cr(line)).map_err(|e| (e.kind(), e.offset() as usize))
     }

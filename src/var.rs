@@ -1,8 +1,8 @@
 //! Variables: the robot's `socket_set_var(name, v)` (`SET name v\n`) and
 //! `socket_get_var(name)` (`GET name\n`, answered by the server with `name v\n`).
 //!
-//! Each message is one line: the [`LineDecoder`] frames it, then a small nom parser
-//! (complete mode, run once per line) reads it.
+//! Each message is one line: the LF framer of [`LineDecoder`](crate::line::LineDecoder)
+//! frames it, then a small nom parser (complete mode, run once per line) reads it.
 
 use nom::bytes::complete::{tag, take_while1};
 use nom::character::complete::space1;
@@ -10,7 +10,7 @@ use nom::combinator::{opt, recognize};
 use nom::sequence::preceded;
 use nom::{IResult, Parser};
 
-use crate::framer::{Framed, Parse, Pattern};
+use crate::framer::{Framed, Parse, Pattern, ShapeKind};
 use crate::line::{lf_framer, strip_cr};
 use crate::number::{parse_i32, write_i32};
 use crate::{ArgumentError, EncodeError, ErrorKind, Sink};
@@ -221,6 +221,7 @@ pub struct VarMessages;
 
 impl Parse for VarMessages {
     type Output<'a> = VarMessage<'a>;
+    const SHAPE: ShapeKind = ShapeKind::Delimited;
     #[inline]
     fn parse<'a>(&self, line: &'a [u8]) -> Result<VarMessage<'a>, (ErrorKind, usize)> {
         parse_var_message(strip_cr(line))
@@ -292,6 +293,7 @@ pub struct VarReply {
 
 impl Parse for VarReply {
     type Output<'a> = i32;
+    const SHAPE: ShapeKind = ShapeKind::Delimited;
     #[inline]
     fn parse(&self, line: &[u8]) -> Result<i32, (ErrorKind, usize)> {
         let line = strip_cr(line);

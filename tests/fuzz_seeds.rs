@@ -67,6 +67,13 @@ fn decoder_seeds_are_split_invariant() {
     // The differential target's seeds, read by every decoder.
     replay("split_invariance", || LineDecoder::with_max_len(8), 9);
     replay("split_invariance", || StxEtxDecoder::with_max_len(8), 10);
+    replay(
+        "split_invariance",
+        || urscript_socket::to_str::ValueLineDecoder::with_max_len(8),
+        9,
+    );
+    // The API target's seeds are structured (arbitrary), but any bytes are a stream.
+    replay("api", || LineDecoder::with_max_len(8), 9);
 }
 
 #[test]

@@ -474,3 +474,37 @@ fn value_line_errors_point_at_the_bad_byte() {
     assert_eq!((s.at(), s.consumed()), (Some(0), 8));
     assert_eq!(d.decode(b"p[1,2,x,4,5,6]\r\n").unwrap_err().offset(), 8 + 6);
 }
+
+/// Found by the `api` fuzz target: a caller that breaks the contract (passes fewer bytes
+/// than it was told to keep) made the read-string window slice past the buffer's end
+/// (`range start index 5 out of range`), a panic reachable from the public API. Now the
+/// decoder searches such a buffer afresh, and a bracketed frame never ends before it starts.
+#[test]
+fn a_caller_that_passes_fewer_bytes_gets_no_panic() {
+    let mut read = ReadStringDecoder::new(b">>>>", b"<", false).unwrap();
+    assert!(read.decode(b">>>>ab").unwrap().item().is_none());
+    assert!(read.decode(b"").unwrap().item().is_none());
+    assert_eq!(read.decode_eof(b"").unwrap(), None);
+    assert!(read.decode(b">>>>ab").unwrap().item().is_none());
+    assert_eq!(read.decode(b"xy<").unwrap().item(), None);
+    let mut floats = FloatTupleDecoder::new(1).unwrap();
+    assert!(floats.decode(b"(1").unwrap().item().is_none());
+    let _ = floats.decode(b")");
+    let mut stx = StxEtxDecoder::new();
+    assert!(stx.decode(b"\x02ab").unwrap().item().is_none());
+    let _ = stx.decode(b"\x03");
+}
+
+/// Found by `recv_buffer_of_any_size_never_wedges`: a delimited decoder with a bound of 0
+/// flushed an empty message that consumed nothing at end of input, forever. Now the rest is
+/// reported over-long once and dropped.
+#[test]
+fn a_zero_bound_flush_ends() {
+    // Half a two-byte delimiter is held: nothing of it fits a bound of 0.
+    let mut d = DelimitedDecoder::with_max_len(b"<>", 0).unwrap();
+    let e = d.decode_eof(b"<").unwrap_err();
+    assert_eq!((e.kind(), e.skip()), (ErrorKind::TooLong { limit: 0 }, 1));
+    assert_eq!(d.decode_eof(b"").unwrap(), None);
+    assert_eq!(d.position(), 1);
+    assert_eq!(d.flush(b"<"), None);
+}

@@ -8,13 +8,14 @@ use urscript_socket::int32::Int32Decoder;
 use urscript_socket::line::LineDecoder;
 use urscript_socket::string::{DelimitedDecoder, ReadStringDecoder};
 use urscript_socket::stx_etx::StxEtxDecoder;
+use urscript_socket::to_str::ValueLineDecoder;
 use urscript_socket::var::{VarMessageDecoder, VarReplyDecoder};
 use urscript_socket_fuzz::check_split;
 
 fuzz_target!(|data: &[u8]| {
     let Some((&pick, data)) = data.split_first() else { return };
     let n = usize::from(pick >> 4) % 6 + 1;
-    match pick % 10 {
+    match pick % 11 {
         0 | 1 => {
             let policy = FloatReadPolicy {
                 leading_bytes: if pick & 16 != 0 { LeadingBytes::Fail } else { LeadingBytes::Skip },
@@ -31,6 +32,7 @@ fuzz_target!(|data: &[u8]| {
         6 => check_split(|| StxEtxDecoder::with_max_len(n * 3), data, n * 3 + 2),
         7 => check_split(VarMessageDecoder::new, data, 257),
         8 => check_split(|| VarReplyDecoder::new("A").unwrap(), data, 257),
-        _ => check_split(|| ReadStringDecoder::new(b"<<", br"\r", true).unwrap(), data, usize::MAX),
+        9 => check_split(|| ReadStringDecoder::new(b"<<", br"\r", true).unwrap(), data, usize::MAX),
+        _ => check_split(|| ValueLineDecoder::with_max_len(n * 3), data, n * 3 + 1),
     }
 });
