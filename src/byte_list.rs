@@ -7,7 +7,7 @@ use crate::framer::{Framed, Framer, Parse, ShapeKind};
 use crate::{ArgumentError, EncodeError, ErrorKind, Sink};
 
 /// The most bytes one `socket_read_byte_list` call reads: the crate's one
-/// [`MAX_VALUES`](crate::MAX_VALUES), re-exported here.
+/// `MAX_VALUES`, re-exported here.
 pub use crate::MAX_VALUES;
 
 /// Writes one byte: what `socket_send_byte(v)` sends.

@@ -867,7 +867,7 @@ pub trait Parse {
     fn parse<'a>(&self, content: &'a [u8]) -> Result<Self::Output<'a>, (ErrorKind, usize)>;
 }
 
-/// A decoder: the [`Framer`] for a format's frame shape and the format's [`Parse`]. Every
+/// A decoder: the framer for a format's frame shape and the format's [`Parse`]. Every
 /// decoder of the crate is one of these (`LineDecoder` is `Framed<Line>`, ...), so the
 /// [`Decoder`] contract is implemented once, here.
 ///

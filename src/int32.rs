@@ -8,7 +8,7 @@ use crate::framer::{Framed, Framer, Parse, ShapeKind};
 use crate::{ArgumentError, EncodeError, ErrorKind, Sink};
 
 /// The most values one `socket_read_binary_integer` call reads: the crate's one
-/// [`MAX_VALUES`](crate::MAX_VALUES), re-exported here.
+/// `MAX_VALUES`, re-exported here.
 pub use crate::MAX_VALUES;
 
 /// Writes one int32 big-endian (4 bytes): what `socket_send_int(v)` sends.
