@@ -20,7 +20,7 @@ use crate::DecodeError;
 use crate::{ArgumentError, EncodeError, ErrorKind, Sink};
 
 /// The most values one `socket_read_ascii_float` call reads (and one tuple may carry): the
-/// crate's one [`MAX_VALUES`](crate::MAX_VALUES), re-exported here.
+/// crate's one `MAX_VALUES`, re-exported here.
 pub use crate::MAX_VALUES;
 
 /// Default bound on one tuple's length in bytes, parentheses included. Every tuple
