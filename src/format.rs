@@ -29,7 +29,7 @@ use crate::int32::{Int32Decoder, Int32Values};
 use crate::line::LineDecoder;
 use crate::string::{DelimitedDecoder, ReadStringDecoder};
 use crate::stx_etx::StxEtxDecoder;
-use crate::to_str::{parse_value, write_list, Scalar, Value};
+use crate::to_str::{write_list, Scalar, Value, ValueLineDecoder};
 use crate::var::{VarMessage, VarMessageDecoder, VarReplyDecoder};
 use crate::{ArgumentError, DecodeError, Decoder, Status};
 
@@ -206,7 +206,7 @@ impl Format<'_> {
             Format::StxEtx => Inner::StxEtx(StxEtxDecoder::new()),
             Format::Var => Inner::Var(VarMessageDecoder::new()),
             Format::VarReply { name } => Inner::VarReply(VarReplyDecoder::new(name)?),
-            Format::Value => Inner::Value(LineDecoder::new()),
+            Format::Value => Inner::Value(ValueLineDecoder::new()),
         }))
     }
 }
@@ -475,8 +475,7 @@ enum Inner {
     StxEtx(StxEtxDecoder),
     Var(VarMessageDecoder),
     VarReply(VarReplyDecoder),
-    /// A line decoder whose lines are parsed as `to_str` text.
-    Value(LineDecoder),
+    Value(ValueLineDecoder),
 }
 
 impl AnyDecoder {
@@ -495,19 +494,6 @@ pub(crate) enum Counted<'d> {
     Int32(&'d mut Int32Decoder),
     Bytes(&'d mut ByteListDecoder),
     Other,
-}
-
-/// Where `item` starts in `buf`, if it is a sub-slice of it.
-fn offset_in(buf: &[u8], item: &[u8]) -> Option<usize> {
-    let start = (item.as_ptr() as usize).checked_sub(buf.as_ptr() as usize)?;
-    (start + item.len() <= buf.len()).then_some(start)
-}
-
-/// Parses a complete line as `to_str` text; errors point at the absolute offset of the
-/// bad byte (`line_at` is where the line starts in the stream) and tell the caller to
-/// drop the whole line (`consumed` bytes), so decoding goes on after it.
-fn value_line(line: &[u8], line_at: u64, consumed: usize) -> Result<Value<'_>, DecodeError> {
-    parse_value(line).map_err(|e| DecodeError::new(e.kind(), line_at + e.offset(), consumed))
 }
 
 impl Decoder for AnyDecoder {
@@ -530,14 +516,7 @@ impl Decoder for AnyDecoder {
             Inner::StxEtx(d) => map(d.decode(buf), Message::Text),
             Inner::Var(d) => map(d.decode(buf), Message::Var),
             Inner::VarReply(d) => map(d.decode(buf), Message::VarReply),
-            Inner::Value(d) => match d.decode(buf)? {
-                Status::Complete { item, consumed, at } => Ok(Status::Complete {
-                    item: Message::Value(value_line(item, at, consumed)?),
-                    consumed,
-                    at,
-                }),
-                Status::Partial { consumed } => Ok(Status::Partial { consumed }),
-            },
+            Inner::Value(d) => map(d.decode(buf), Message::Value),
         }
     }
 
@@ -561,16 +540,7 @@ impl Decoder for AnyDecoder {
             Inner::StxEtx(d) => map(d.decode_eof(buf), Message::Text),
             Inner::Var(d) => map(d.decode_eof(buf), Message::Var),
             Inner::VarReply(d) => map(d.decode_eof(buf), Message::VarReply),
-            Inner::Value(d) => {
-                let at = d.position();
-                match d.decode_eof(buf)? {
-                    Some((item, n)) => {
-                        let line_at = at + offset_in(buf, item).unwrap_or(0) as u64;
-                        Ok(Some((Message::Value(value_line(item, line_at, n)?), n)))
-                    }
-                    None => Ok(None),
-                }
-            }
+            Inner::Value(d) => map(d.decode_eof(buf), Message::Value),
         }
     }
 
@@ -579,7 +549,8 @@ impl Decoder for AnyDecoder {
             Inner::FloatTuple(d) => d.overflow(buf),
             Inner::Int32(d) => d.overflow(buf),
             Inner::Bytes(d) => d.overflow(buf),
-            Inner::Line(d) | Inner::Value(d) => d.overflow(buf),
+            Inner::Line(d) => d.overflow(buf),
+            Inner::Value(d) => d.overflow(buf),
             Inner::String(d) => d.overflow(buf),
             Inner::Delimited(d) => d.overflow(buf),
             Inner::StxEtx(d) => d.overflow(buf),
@@ -593,7 +564,8 @@ impl Decoder for AnyDecoder {
             Inner::FloatTuple(d) => d.position(),
             Inner::Int32(d) => d.position(),
             Inner::Bytes(d) => d.position(),
-            Inner::Line(d) | Inner::Value(d) => d.position(),
+            Inner::Line(d) => d.position(),
+            Inner::Value(d) => d.position(),
             Inner::String(d) => d.position(),
             Inner::Delimited(d) => d.position(),
             Inner::StxEtx(d) => d.position(),
