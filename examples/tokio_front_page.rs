@@ -11,7 +11,7 @@
 use futures_util::{SinkExt, StreamExt};
 use tokio::net::TcpListener;
 use tokio_util::codec::Framed;
-use urscript_socket::adapters::tokio::{
+use urscript_socket::adapters::tokio_codec::{
     AsyncRobotSocket, FloatTupleCodec, LineCodec, RequestReply, Tolerant,
 };
 use urscript_socket::robot::{Policy, ReadCall, Timeout};

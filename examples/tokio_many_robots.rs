@@ -10,7 +10,7 @@ use std::error::Error;
 use futures_util::{SinkExt, StreamExt};
 use tokio::net::TcpListener;
 use tokio_util::codec::Framed;
-use urscript_socket::adapters::tokio::{
+use urscript_socket::adapters::tokio_codec::{
     AsyncRobotSocket, FloatTupleCodec, LineCodec, RequestReply, Tolerant,
 };
 use urscript_socket::robot::{Policy, ReadCall, ReadResult, Timeout};

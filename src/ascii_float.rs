@@ -17,7 +17,7 @@ use crate::framer::{Framed, Framer, Noise, Parse, ShapeKind};
 use crate::number::{is_space, parse_float_prefix, write_plain_f64, MAX_PLAIN_F64_LEN};
 #[cfg(doc)]
 use crate::DecodeError;
-use crate::{ArgumentError, EncodeError, ErrorKind, Sink};
+use crate::{ArgumentError, ByteSink, EncodeError, ErrorKind};
 
 /// The most values one `socket_read_ascii_float` call reads (and one tuple may carry): the
 /// crate's one `MAX_VALUES`, re-exported here.
@@ -41,7 +41,7 @@ pub const MAX_ENCODED_LEN: usize = MAX_VALUES * MAX_PLAIN_F64_LEN + (MAX_VALUES 
 /// encode_float_tuple(&[1.414, 3.14159, 0.0, -2e-7], true, &mut out).unwrap();
 /// assert_eq!(out, b"(1.414,3.14159,0,-0.0000002)\n");
 /// ```
-pub fn encode_float_tuple<S: Sink + ?Sized>(
+pub fn encode_float_tuple<S: ByteSink + ?Sized>(
     values: &[f64],
     trailing_lf: bool,
     sink: &mut S,

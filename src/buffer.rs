@@ -1,11 +1,11 @@
-//! [`RecvBuffer`]: a bounded receive buffer that drives any [`Decoder`].
+//! [`RecvBuffer`]: a bounded receive buffer that drives any [`Decode`].
 //!
 //! Transports deliver bytes in arbitrary pieces (smoltcp even hands one segment over as
 //! two slices when its ring buffer wraps). `RecvBuffer` keeps the unconsumed bytes in a
 //! fixed storage chosen by the caller, feeds them to a decoder and drops what the decoder
 //! used. It never grows: its capacity is the storage's length.
 
-use crate::{DecodeError, Decoder, Status};
+use crate::{Decode, DecodeError, Status};
 
 /// A fixed-capacity receive buffer. `S` is the storage: `[u8; N]` for no-allocation use,
 /// or `Vec<u8>`/`Box<[u8]>` (feature `alloc`) sized once.
@@ -238,7 +238,7 @@ impl<S: AsRef<[u8]> + AsMut<[u8]>> RecvBuffer<S> {
     ///
     /// A buffer smaller than the decoder's bound: when the buffer is full and the message
     /// in it still incomplete, it can never complete here. The decoder is then asked for a
-    /// way out ([`Decoder::overflow`]): the message is reported once as
+    /// way out ([`Decode::overflow`]): the message is reported once as
     /// [`TooLong`](crate::ErrorKind::TooLong) with the buffer's capacity as its limit, its
     /// bytes are dropped, the rest of it is discarded as it arrives, and decoding resyncs
     /// on the next message. Every decoder of the crate has that way out except
@@ -265,7 +265,7 @@ impl<S: AsRef<[u8]> + AsMut<[u8]>> RecvBuffer<S> {
     /// assert_eq!(buf.decode(&mut lines).unwrap(), Some(&b"ok"[..]));
     /// ```
     #[inline]
-    pub fn decode<D: Decoder>(
+    pub fn decode<D: Decode>(
         &mut self,
         decoder: &mut D,
     ) -> Result<Option<D::Item<'_>>, DecodeError> {
@@ -285,7 +285,7 @@ impl<S: AsRef<[u8]> + AsMut<[u8]>> RecvBuffer<S> {
     /// assert!(buf.is_full());
     /// ```
     #[inline]
-    pub fn decode_without_overflow<D: Decoder>(
+    pub fn decode_without_overflow<D: Decode>(
         &mut self,
         decoder: &mut D,
     ) -> Result<Option<D::Item<'_>>, DecodeError> {
@@ -293,7 +293,7 @@ impl<S: AsRef<[u8]> + AsMut<[u8]>> RecvBuffer<S> {
     }
 
     #[inline(always)]
-    fn decode_with<D: Decoder>(
+    fn decode_with<D: Decode>(
         &mut self,
         decoder: &mut D,
         overflow: bool,
@@ -326,7 +326,7 @@ impl<S: AsRef<[u8]> + AsMut<[u8]>> RecvBuffer<S> {
         }
     }
 
-    /// The input ended: runs [`Decoder::decode_eof`] on the held bytes and empties the
+    /// The input ended: runs [`Decode::decode_eof`] on the held bytes and empties the
     /// buffer of what it used. Idempotent: once it returned `Ok(None)` or an error, the
     /// next call returns `Ok(None)` (or the messages and errors still held after an error).
     ///
@@ -339,7 +339,7 @@ impl<S: AsRef<[u8]> + AsMut<[u8]>> RecvBuffer<S> {
     /// assert!(buf.is_empty());
     /// assert_eq!(buf.decode_eof(&mut lines).unwrap(), None);
     /// ```
-    pub fn decode_eof<D: Decoder>(
+    pub fn decode_eof<D: Decode>(
         &mut self,
         decoder: &mut D,
     ) -> Result<Option<D::Item<'_>>, DecodeError> {

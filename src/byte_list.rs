@@ -4,7 +4,7 @@
 //! Fixed-size like int32: a message is `number` bytes, counted, never scanned.
 
 use crate::framer::{Framed, Framer, Parse, ShapeKind};
-use crate::{ArgumentError, EncodeError, ErrorKind, Sink};
+use crate::{ArgumentError, ByteSink, EncodeError, ErrorKind};
 
 /// The most bytes one `socket_read_byte_list` call reads: the crate's one
 /// `MAX_VALUES`, re-exported here.
@@ -18,7 +18,7 @@ pub use crate::MAX_VALUES;
 /// encode_byte(2, &mut out).unwrap();
 /// assert_eq!(out, [2]);
 /// ```
-pub fn encode_byte<S: Sink + ?Sized>(value: u8, sink: &mut S) -> Result<usize, EncodeError> {
+pub fn encode_byte<S: ByteSink + ?Sized>(value: u8, sink: &mut S) -> Result<usize, EncodeError> {
     sink.put(&[value])?;
     Ok(1)
 }
@@ -31,7 +31,7 @@ pub fn encode_byte<S: Sink + ?Sized>(value: u8, sink: &mut S) -> Result<usize, E
 /// encode_byte_list(&[100, 200, 44], &mut out).unwrap();
 /// assert_eq!(out, [0x64, 0xC8, 0x2C]);
 /// ```
-pub fn encode_byte_list<S: Sink + ?Sized>(
+pub fn encode_byte_list<S: ByteSink + ?Sized>(
     values: &[u8],
     sink: &mut S,
 ) -> Result<usize, EncodeError> {

@@ -7,7 +7,7 @@
 //!
 //! ```
 //! use urscript_socket::format::{Format, Message};
-//! use urscript_socket::{Decoder, RecvBuffer};
+//! use urscript_socket::{Decode, RecvBuffer};
 //!
 //! // A server that lets its user pick the format at run time.
 //! let format: Format = "var".parse().unwrap();
@@ -31,7 +31,7 @@ use crate::string::{DelimitedDecoder, ReadStringDecoder};
 use crate::stx_etx::StxEtxDecoder;
 use crate::to_str::{write_list, Scalar, Value, ValueLineDecoder};
 use crate::var::{VarMessage, VarMessageDecoder, VarReplyDecoder};
-use crate::{ArgumentError, DecodeError, Decoder, Status};
+use crate::{ArgumentError, Decode, DecodeError, Status};
 
 /// The most values one read or message of a counted format holds: the controller's
 /// limit for `socket_read_ascii_float`, `socket_read_binary_integer` and
@@ -324,7 +324,7 @@ impl fmt::Display for Message<'_> {
 ///
 /// ```
 /// use urscript_socket::format::{Format, Message, OwnedMessage};
-/// use urscript_socket::Decoder;
+/// use urscript_socket::Decode;
 /// let mut d = Format::Var.decoder().unwrap();
 /// let m = d.decode(b"SET X 5\n").unwrap().item().unwrap();
 /// let owned = OwnedMessage::from(&m);
@@ -455,7 +455,7 @@ pub fn write_quoted(s: &mut impl fmt::Write, bytes: &[u8]) -> fmt::Result {
 ///
 /// ```
 /// use urscript_socket::format::{Format, Message};
-/// use urscript_socket::Decoder;
+/// use urscript_socket::Decode;
 /// let mut d = Format::Value.decoder().unwrap();
 /// let m = d.decode(b"p[1, 2, 3, 0, 0, 0.5]\n").unwrap().item().unwrap();
 /// assert_eq!(m.to_string(), "p[1, 2, 3, 0, 0, 0.5]");
@@ -496,7 +496,7 @@ pub(crate) enum Counted<'d> {
     Other,
 }
 
-impl Decoder for AnyDecoder {
+impl Decode for AnyDecoder {
     type Item<'buf> = Message<'buf>;
 
     fn decode<'buf>(&mut self, buf: &'buf [u8]) -> Result<Status<Message<'buf>>, DecodeError> {

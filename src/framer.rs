@@ -10,11 +10,11 @@
 //! | [`Shape::Window`] | `socket_read_string(prefix, suffix)` | the bytes after the prefix, before the suffix, in a 1024-byte window |
 //!
 //! A format is a [`Framer`] plus a pure [`Parse`] of one complete frame; [`Framed`] joins
-//! the two and implements [`Decoder`] once for all of them. The parser gets the frame's
+//! the two and implements [`Decode`] once for all of them. The parser gets the frame's
 //! content and reports errors as offsets within it; the framer knows where the content sits
 //! in the stream ([`Status::Complete`]'s `at`), so nobody else counts bytes.
 
-use crate::{ArgumentError, DecodeError, Decoder, ErrorKind, Status};
+use crate::{ArgumentError, Decode, DecodeError, ErrorKind, Status};
 
 /// The longest prefix, suffix or delimiter stored inline (no allocation, no lifetime).
 pub const MAX_PATTERN_LEN: usize = 64;
@@ -869,7 +869,7 @@ pub trait Parse {
 
 /// A decoder: the framer for a format's frame shape and the format's [`Parse`]. Every
 /// decoder of the crate is one of these (`LineDecoder` is `Framed<Line>`, ...), so the
-/// [`Decoder`] contract is implemented once, here.
+/// [`Decode`] contract is implemented once, here.
 ///
 /// `decode`, `decode_eof` and `position` are also inherent methods, so calling them needs
 /// no trait import.
@@ -980,7 +980,7 @@ impl<P: Parse> Framed<P> {
     }
 }
 
-impl<P: Parse> Decoder for Framed<P> {
+impl<P: Parse> Decode for Framed<P> {
     type Item<'buf> = P::Output<'buf>;
 
     #[inline]

@@ -5,7 +5,7 @@
 //! counts bytes. Values are decoded in place from the caller's buffer ([`Int32Values`]).
 
 use crate::framer::{Framed, Framer, Parse, ShapeKind};
-use crate::{ArgumentError, EncodeError, ErrorKind, Sink};
+use crate::{ArgumentError, ByteSink, EncodeError, ErrorKind};
 
 /// The most values one `socket_read_binary_integer` call reads: the crate's one
 /// `MAX_VALUES`, re-exported here.
@@ -20,7 +20,7 @@ pub use crate::MAX_VALUES;
 /// assert_eq!(out, [0xFF, 0xFF, 0xFF, 0xFF]);
 /// ```
 #[inline]
-pub fn encode_int32<S: Sink + ?Sized>(value: i32, sink: &mut S) -> Result<usize, EncodeError> {
+pub fn encode_int32<S: ByteSink + ?Sized>(value: i32, sink: &mut S) -> Result<usize, EncodeError> {
     sink.put(&value.to_be_bytes())?;
     Ok(4)
 }
@@ -35,7 +35,7 @@ pub fn encode_int32<S: Sink + ?Sized>(value: i32, sink: &mut S) -> Result<usize,
 /// encode_int32_list(&[100, 2000, 30000], &mut out).unwrap();
 /// assert_eq!(out, [0, 0, 0, 0x64, 0, 0, 0x07, 0xD0, 0, 0, 0x75, 0x30]);
 /// ```
-pub fn encode_int32_list<S: Sink + ?Sized>(
+pub fn encode_int32_list<S: ByteSink + ?Sized>(
     values: &[i32],
     sink: &mut S,
 ) -> Result<usize, EncodeError> {

@@ -15,11 +15,11 @@
 //!
 //! | you are writing | use | feature |
 //! |---|---|---|
-//! | a tokio server (vision, PLC gateway, camera, driver) | `adapters::tokio`: `Framed` + `RequestReply<Tolerant<LineCodec>, FloatTupleCodec>` and friends | `tokio` |
+//! | a tokio server (vision, PLC gateway, camera, driver) | `adapters::tokio_codec`: `Framed` + `RequestReply<Tolerant<LineCodec>, FloatTupleCodec>` and friends | `tokio` |
 //! | a blocking server, a thread per robot | `adapters::blocking`: `MessageReader` (an `Iterator`), `MessageWriter` | `std` (default) |
 //! | firmware on embassy-net or smoltcp, no allocator | `adapters::embedded`: `MessageReader<_, _, N>`, `send` | `embedded-io-async` |
 //! | your own event loop, another runtime, a test harness | the core: a decoder, [`RecvBuffer`], an `encode_*` function | none (`no_std`) |
-//! | a test of your server without a robot | `robot::VirtualRobot`, `adapters::tokio::AsyncRobotSocket` | `std` / `tokio` |
+//! | a test of your server without a robot | `robot::VirtualRobot`, `adapters::tokio_codec::AsyncRobotSocket` | `std` / `tokio` |
 //!
 //! | the robot calls | the server decodes with | the server answers with |
 //! |---|---|---|
@@ -47,7 +47,7 @@
 //! use futures_util::{SinkExt, StreamExt};
 //! use tokio::net::TcpListener;
 //! use tokio_util::codec::Framed;
-//! use urscript_socket::adapters::tokio::{FloatTupleCodec, LineCodec, RequestReply, Tolerant};
+//! use urscript_socket::adapters::tokio_codec::{FloatTupleCodec, LineCodec, RequestReply, Tolerant};
 //!
 //! #[tokio::main]
 //! async fn main() -> std::io::Result<()> {
@@ -182,7 +182,7 @@
 //! | [`var`] | `SET name v`, `GET name` | `name v` replies |
 //! | [`to_str`] | text of numbers, bools, lists, poses | |
 //!
-//! Every decoder follows one contract ([`Decoder`], [`Status`]): the caller owns the
+//! Every decoder follows one contract ([`Decode`], [`Status`]): the caller owns the
 //! buffer, the decoder remembers how far it looked, and complete messages borrow the
 //! buffer. [`RecvBuffer`] packages that loop over a fixed storage.
 //!
@@ -253,8 +253,8 @@ pub mod adapters;
 pub use buffer::RecvBuffer;
 pub use error::{ArgumentError, DecodeError, EncodeError, ErrorKind};
 pub use framer::{Framed, Parse, MAX_BOUND};
-pub use sink::{Sink, SliceSink};
-pub use status::{Decoder, Status};
+pub use sink::{ByteSink, SliceSink};
+pub use status::{Decode, Status};
 
 /// The README's code, compiled as a doc test so it cannot rot.
 #[cfg(doctest)]

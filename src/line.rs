@@ -2,7 +2,7 @@
 //! reading a server's `\n` or `\r\n` terminated reply.
 
 use crate::framer::{AtEof, Framed, Framer, Parse, Pattern, ShapeKind};
-use crate::{EncodeError, ErrorKind, Sink};
+use crate::{ByteSink, EncodeError, ErrorKind};
 
 /// Default bound on a line's content, in bytes (CR included, LF excluded). A robot's
 /// `to_str` text is at most 1023 characters; 4 KiB leaves room without inviting abuse.
@@ -18,7 +18,7 @@ pub const DEFAULT_MAX_LINE_LEN: usize = 4096;
 /// assert_eq!(out, b"hello\n");
 /// assert!(encode_line(b"a\nb", &mut out).is_err());
 /// ```
-pub fn encode_line<S: Sink + ?Sized>(text: &[u8], sink: &mut S) -> Result<usize, EncodeError> {
+pub fn encode_line<S: ByteSink + ?Sized>(text: &[u8], sink: &mut S) -> Result<usize, EncodeError> {
     if let Some(index) = memchr::memchr(b'\n', text) {
         return Err(EncodeError::ForbiddenByte { byte: b'\n', index });
     }

@@ -1,4 +1,4 @@
-//! Where encoders write: the [`Sink`] trait, a fixed slice ([`SliceSink`]) and, with
+//! Where encoders write: the [`ByteSink`] trait, a fixed slice ([`SliceSink`]) and, with
 //! `alloc`, a `Vec<u8>`.
 
 use crate::EncodeError;
@@ -9,19 +9,19 @@ use crate::EncodeError;
 /// On error the sink may hold the first part of the message; callers discard it.
 ///
 /// ```
-/// use urscript_socket::{Sink, SliceSink};
+/// use urscript_socket::{ByteSink, SliceSink};
 /// let mut storage = [0u8; 4];
 /// let mut sink = SliceSink::new(&mut storage);
 /// sink.put(b"ab").unwrap();
 /// assert!(sink.put(b"cde").is_err());
 /// assert_eq!(sink.written(), b"ab");
 /// ```
-pub trait Sink {
+pub trait ByteSink {
     /// Appends all of `bytes`, or nothing and an error.
     fn put(&mut self, bytes: &[u8]) -> Result<(), EncodeError>;
 }
 
-impl<S: Sink + ?Sized> Sink for &mut S {
+impl<S: ByteSink + ?Sized> ByteSink for &mut S {
     #[inline]
     fn put(&mut self, bytes: &[u8]) -> Result<(), EncodeError> {
         (**self).put(bytes)
@@ -29,7 +29,7 @@ impl<S: Sink + ?Sized> Sink for &mut S {
 }
 
 #[cfg(feature = "alloc")]
-impl Sink for alloc::vec::Vec<u8> {
+impl ByteSink for alloc::vec::Vec<u8> {
     #[inline]
     fn put(&mut self, bytes: &[u8]) -> Result<(), EncodeError> {
         self.extend_from_slice(bytes);
@@ -38,7 +38,7 @@ impl Sink for alloc::vec::Vec<u8> {
 }
 
 #[cfg(feature = "tokio")]
-impl Sink for bytes::BytesMut {
+impl ByteSink for bytes::BytesMut {
     #[inline]
     fn put(&mut self, bytes: &[u8]) -> Result<(), EncodeError> {
         self.extend_from_slice(bytes);
@@ -46,7 +46,7 @@ impl Sink for bytes::BytesMut {
     }
 }
 
-/// A [`Sink`] over a caller's fixed buffer; the bound is the buffer's length.
+/// A [`ByteSink`] over a caller's fixed buffer; the bound is the buffer's length.
 ///
 /// ```
 /// use urscript_socket::{int32::encode_int32, SliceSink};
@@ -76,7 +76,7 @@ impl<'a> SliceSink<'a> {
     /// The bytes written so far.
     ///
     /// ```
-    /// # use urscript_socket::{Sink, SliceSink};
+    /// # use urscript_socket::{ByteSink, SliceSink};
     /// let mut b = [0u8; 2];
     /// let mut s = SliceSink::new(&mut b);
     /// s.put(b"x").unwrap();
@@ -89,7 +89,7 @@ impl<'a> SliceSink<'a> {
     /// Number of bytes written so far.
     ///
     /// ```
-    /// # use urscript_socket::{Sink, SliceSink};
+    /// # use urscript_socket::{ByteSink, SliceSink};
     /// let mut b = [0u8; 2];
     /// let mut s = SliceSink::new(&mut b);
     /// s.put(b"xy").unwrap();
@@ -113,7 +113,7 @@ impl<'a> SliceSink<'a> {
     /// Forgets what was written, keeping the buffer.
     ///
     /// ```
-    /// # use urscript_socket::{Sink, SliceSink};
+    /// # use urscript_socket::{ByteSink, SliceSink};
     /// let mut b = [0u8; 2];
     /// let mut s = SliceSink::new(&mut b);
     /// s.put(b"xy").unwrap();
@@ -125,7 +125,7 @@ impl<'a> SliceSink<'a> {
     }
 }
 
-impl Sink for SliceSink<'_> {
+impl ByteSink for SliceSink<'_> {
     #[inline]
     fn put(&mut self, bytes: &[u8]) -> Result<(), EncodeError> {
         let free = self.buf.len() - self.len;

@@ -1,4 +1,4 @@
-//! The result of one decoding step, and the [`Decoder`] trait every format implements.
+//! The result of one decoding step, and the [`Decode`] trait every format implements.
 
 use crate::DecodeError;
 
@@ -117,7 +117,7 @@ impl<T> Status<T> {
 /// at most a few words of state; the largest message it will buffer is its documented bound.
 ///
 /// ```
-/// use urscript_socket::{Decoder, RecvBuffer, int32::Int32Decoder};
+/// use urscript_socket::{Decode, RecvBuffer, int32::Int32Decoder};
 /// let mut buf = RecvBuffer::<[u8; 64]>::new();
 /// let mut ints = Int32Decoder::new(1).unwrap();
 /// buf.extend(&[0, 0, 0]);
@@ -125,7 +125,7 @@ impl<T> Status<T> {
 /// buf.extend(&[100]);
 /// assert_eq!(buf.decode(&mut ints).unwrap().unwrap().get(0), Some(100));
 /// ```
-pub trait Decoder {
+pub trait Decode {
     /// What a complete message decodes to; borrows the buffer where it can.
     type Item<'buf>;
 

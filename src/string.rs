@@ -9,7 +9,7 @@
 
 pub use crate::framer::MAX_PATTERN_LEN;
 use crate::framer::{content_as_is, AtEof, Framed, Framer, Pattern, Shape};
-use crate::{ArgumentError, EncodeError, Sink};
+use crate::{ArgumentError, ByteSink, EncodeError};
 
 /// The most bytes one `socket_read_string` returns, terminators included (5.x manual): the
 /// framer's read-string window.
@@ -26,7 +26,10 @@ pub const DEFAULT_MAX_MESSAGE_LEN: usize = 4096;
 /// encode_string(b"hi", &mut out).unwrap();
 /// assert_eq!(out, b"hi");
 /// ```
-pub fn encode_string<S: Sink + ?Sized>(text: &[u8], sink: &mut S) -> Result<usize, EncodeError> {
+pub fn encode_string<S: ByteSink + ?Sized>(
+    text: &[u8],
+    sink: &mut S,
+) -> Result<usize, EncodeError> {
     sink.put(text)?;
     Ok(text.len())
 }
@@ -44,7 +47,7 @@ pub fn encode_string<S: Sink + ?Sized>(text: &[u8], sink: &mut S) -> Result<usiz
 /// // The text's end and the suffix would read as an earlier suffix: refused too.
 /// assert!(encode_framed_string(b"!", b"{", b"{{", &mut out).is_err());
 /// ```
-pub fn encode_framed_string<S: Sink + ?Sized>(
+pub fn encode_framed_string<S: ByteSink + ?Sized>(
     prefix: &[u8],
     text: &[u8],
     suffix: &[u8],

@@ -2,7 +2,7 @@
 //! puts `02 <s> 03` on the wire, the most common way robot programs frame a message.
 
 use crate::framer::{content_as_is, Framed, Framer, Noise};
-use crate::{EncodeError, Sink};
+use crate::{ByteSink, EncodeError};
 
 /// Start of text, `socket_send_byte(2)`.
 pub const STX: u8 = 2;
@@ -20,7 +20,7 @@ pub const DEFAULT_MAX_FRAME_LEN: usize = 4096;
 /// encode_stx_etx(b"hi", &mut out).unwrap();
 /// assert_eq!(out, [0x02, 0x68, 0x69, 0x03]);
 /// ```
-pub fn encode_stx_etx<S: Sink + ?Sized>(
+pub fn encode_stx_etx<S: ByteSink + ?Sized>(
     payload: &[u8],
     sink: &mut S,
 ) -> Result<usize, EncodeError> {

@@ -20,7 +20,7 @@ use nom::{IResult, Parser};
 use crate::framer::{Framed, Parse, ShapeKind};
 use crate::line::{lf_framer, strip_cr};
 use crate::number::{is_space, parse_float_token, parse_i32, write_i32};
-use crate::{DecodeError, EncodeError, ErrorKind, Sink};
+use crate::{ByteSink, DecodeError, EncodeError, ErrorKind};
 
 /// The longest text the robot produces for one value.
 pub const MAX_TO_STR_LEN: usize = 1023;
@@ -198,7 +198,7 @@ impl Iterator for ListIter<'_> {
 /// encode_value(&Value::List(List::from_items(&items)), &mut out).unwrap();
 /// assert_eq!(out, b"[True, False, True]");
 /// ```
-pub fn encode_value<S: Sink + ?Sized>(
+pub fn encode_value<S: ByteSink + ?Sized>(
     value: &Value<'_>,
     sink: &mut S,
 ) -> Result<usize, EncodeError> {
@@ -222,7 +222,7 @@ pub fn encode_value<S: Sink + ?Sized>(
 /// encode_float(2.123456123456, &mut out).unwrap();
 /// assert_eq!(out, b"2.123456");
 /// ```
-pub fn encode_float<S: Sink + ?Sized>(value: f64, sink: &mut S) -> Result<usize, EncodeError> {
+pub fn encode_float<S: ByteSink + ?Sized>(value: f64, sink: &mut S) -> Result<usize, EncodeError> {
     encode_value(&Value::Scalar(Scalar::Float(value)), sink)
 }
 
@@ -231,7 +231,7 @@ struct Counted<'s, S: ?Sized> {
     len: usize,
 }
 
-impl<S: Sink + ?Sized> Counted<'_, S> {
+impl<S: ByteSink + ?Sized> Counted<'_, S> {
     fn put(&mut self, bytes: &[u8]) -> Result<(), EncodeError> {
         if self.len + bytes.len() > MAX_TO_STR_LEN {
             return Err(EncodeError::TooLong {
@@ -244,7 +244,7 @@ impl<S: Sink + ?Sized> Counted<'_, S> {
     }
 }
 
-fn put_list<S: Sink + ?Sized>(
+fn put_list<S: ByteSink + ?Sized>(
     items: impl Iterator<Item = Scalar>,
     out: &mut Counted<'_, S>,
 ) -> Result<(), EncodeError> {
@@ -276,7 +276,10 @@ impl<const N: usize> core::fmt::Write for StackText<N> {
     }
 }
 
-fn put_scalar<S: Sink + ?Sized>(s: Scalar, out: &mut Counted<'_, S>) -> Result<(), EncodeError> {
+fn put_scalar<S: ByteSink + ?Sized>(
+    s: Scalar,
+    out: &mut Counted<'_, S>,
+) -> Result<(), EncodeError> {
     match s {
         Scalar::Int(v) => {
             let mut text = [0u8; 11];

@@ -13,7 +13,7 @@ use nom::{IResult, Parser};
 use crate::framer::{Framed, Parse, Pattern, ShapeKind};
 use crate::line::{lf_framer, strip_cr};
 use crate::number::{parse_i32, write_i32};
-use crate::{ArgumentError, EncodeError, ErrorKind, Sink};
+use crate::{ArgumentError, ByteSink, EncodeError, ErrorKind};
 
 /// Default bound on one variable line, in bytes (a 64-byte name and an int fit easily).
 pub const DEFAULT_MAX_VAR_LINE_LEN: usize = 256;
@@ -30,7 +30,7 @@ fn check_name(name: &str) -> Result<(), EncodeError> {
     Ok(())
 }
 
-fn put_named<S: Sink + ?Sized>(
+fn put_named<S: ByteSink + ?Sized>(
     head: &[u8],
     name: &str,
     value: Option<i32>,
@@ -61,7 +61,7 @@ fn put_named<S: Sink + ?Sized>(
 /// encode_set_var("POS_Y", 2200, &mut out).unwrap();
 /// assert_eq!(out, b"SET POS_Y 2200\n");
 /// ```
-pub fn encode_set_var<S: Sink + ?Sized>(
+pub fn encode_set_var<S: ByteSink + ?Sized>(
     name: &str,
     value: i32,
     sink: &mut S,
@@ -77,7 +77,10 @@ pub fn encode_set_var<S: Sink + ?Sized>(
 /// encode_get_var("POS_X", &mut out).unwrap();
 /// assert_eq!(out, b"GET POS_X\n");
 /// ```
-pub fn encode_get_var<S: Sink + ?Sized>(name: &str, sink: &mut S) -> Result<usize, EncodeError> {
+pub fn encode_get_var<S: ByteSink + ?Sized>(
+    name: &str,
+    sink: &mut S,
+) -> Result<usize, EncodeError> {
     put_named(b"GET ", name, None, sink)
 }
 
@@ -89,7 +92,7 @@ pub fn encode_get_var<S: Sink + ?Sized>(name: &str, sink: &mut S) -> Result<usiz
 /// encode_var_reply("POS_X", 1234, &mut out).unwrap();
 /// assert_eq!(out, b"POS_X 1234\n");
 /// ```
-pub fn encode_var_reply<S: Sink + ?Sized>(
+pub fn encode_var_reply<S: ByteSink + ?Sized>(
     name: &str,
     value: i32,
     sink: &mut S,

@@ -7,7 +7,7 @@ use std::time::{Duration, Instant};
 
 use futures_util::{SinkExt, StreamExt};
 use urscript_socket::adapters::blocking::{MessageReader, ReadError};
-use urscript_socket::adapters::tokio::{AsyncRobotSocket, FloatTupleCodec, LineCodec};
+use urscript_socket::adapters::tokio_codec::{AsyncRobotSocket, FloatTupleCodec, LineCodec};
 use urscript_socket::byte_list::ByteListDecoder;
 use urscript_socket::int32::Int32Decoder;
 use urscript_socket::line::LineDecoder;
@@ -15,10 +15,10 @@ use urscript_socket::robot::{Policy, ReadCall, ReadResult, Timeout};
 use urscript_socket::string::DelimitedDecoder;
 use urscript_socket::stx_etx::StxEtxDecoder;
 use urscript_socket::var::VarMessageDecoder;
-use urscript_socket::{Decoder, ErrorKind, Status};
+use urscript_socket::{Decode, ErrorKind, Status};
 
 /// Decodes `bytes` in one call per message: the unit-level reference.
-fn unit_decode<D: Decoder>(mut d: D, bytes: &[u8]) -> Vec<String>
+fn unit_decode<D: Decode>(mut d: D, bytes: &[u8]) -> Vec<String>
 where
     for<'a> D::Item<'a>: std::fmt::Debug,
 {
@@ -37,7 +37,7 @@ where
 
 /// Sends `bytes` to a `MessageReader` over TCP, written as `chunk`-byte writes with a
 /// flush and a pause between them, and returns the decoded messages.
-fn over_tcp<D: Decoder + Send + 'static>(d: D, bytes: Vec<u8>, chunk: usize) -> Vec<String>
+fn over_tcp<D: Decode + Send + 'static>(d: D, bytes: Vec<u8>, chunk: usize) -> Vec<String>
 where
     for<'a> D::Item<'a>: std::fmt::Debug,
 {

@@ -11,7 +11,7 @@ use urscript_socket::line::LineDecoder;
 use urscript_socket::string::{DelimitedDecoder, ReadStringDecoder};
 use urscript_socket::stx_etx::StxEtxDecoder;
 use urscript_socket::var::{VarMessageDecoder, VarReplyDecoder};
-use urscript_socket::{Decoder, RecvBuffer, SliceSink};
+use urscript_socket::{Decode, RecvBuffer, SliceSink};
 
 struct Counting;
 
@@ -39,7 +39,7 @@ static GLOBAL: Counting = Counting;
 
 /// Decodes `stream` in 61-byte pieces through a fixed `RecvBuffer`, returning
 /// (messages, allocations during the decode).
-fn count<D: Decoder>(mut d: D, stream: &[u8]) -> (usize, usize) {
+fn count<D: Decode>(mut d: D, stream: &[u8]) -> (usize, usize) {
     let mut rx = RecvBuffer::<[u8; 8192]>::new();
     let before = allocations();
     let mut n = 0;

@@ -12,7 +12,7 @@ use futures_util::{SinkExt, StreamExt};
 use tokio::io::{AsyncReadExt, AsyncWriteExt};
 use tokio::net::{TcpListener, TcpStream};
 use tokio_util::codec::Framed;
-use urscript_socket::adapters::tokio::{
+use urscript_socket::adapters::tokio_codec::{
     AsyncRobotSocket, FloatTupleCodec, LineCodec, RequestReply, Tolerant,
 };
 use urscript_socket::robot::{Policy, ReadCall, ReadResult, Timeout};

@@ -30,7 +30,7 @@ fn seeds(target: &str) -> Vec<Vec<u8>> {
 /// Every seed, whole and in pieces of every size from 1 to 9.
 fn replay<D>(target: &str, make: impl Fn() -> D, bound: usize)
 where
-    D: urscript_socket::Decoder,
+    D: urscript_socket::Decode,
     for<'a> D::Item<'a>: std::fmt::Debug,
 {
     for seed in seeds(target) {

@@ -11,13 +11,13 @@ use urscript_socket::string::{DelimitedDecoder, ReadStringDecoder};
 use urscript_socket::stx_etx::StxEtxDecoder;
 use urscript_socket::to_str::parse_value;
 use urscript_socket::var::{VarMessageDecoder, VarReplyDecoder};
-use urscript_socket::{Decoder, ErrorKind, RecvBuffer};
+use urscript_socket::{Decode, ErrorKind, RecvBuffer};
 
 const HUNDRED_MB: usize = 100 << 20;
 
 /// Streams `total` bytes of `filler` in 64 KiB pieces, then `tail`, through `d` over a
 /// fixed 64 KiB buffer. Returns (errors seen, good messages after the flood).
-fn flood<D: Decoder>(
+fn flood<D: Decode>(
     mut d: D,
     start: &[u8],
     filler: u8,
@@ -287,7 +287,7 @@ fn a_bound_of_usize_max_is_clamped_not_overflowed() {
 
 /// Drives `decode_eof` the way every caller must (drop `skip` after an error) and returns
 /// what each call gave: items as `Some(debug)`, errors as (kind, offset), the last `None`.
-fn eof_calls<D: Decoder>(d: &mut D, mut buf: &[u8]) -> Vec<Result<String, (ErrorKind, u64)>>
+fn eof_calls<D: Decode>(d: &mut D, mut buf: &[u8]) -> Vec<Result<String, (ErrorKind, u64)>>
 where
     for<'a> D::Item<'a>: std::fmt::Debug,
 {
@@ -370,7 +370,7 @@ fn end_of_input_errors_are_final() {
 fn tokio_codecs_end_of_input_errors_are_final() {
     use bytes::BytesMut;
     use tokio_util::codec::Decoder as _;
-    use urscript_socket::adapters::tokio::{DelimitedCodec, LineCodec, StxEtxCodec};
+    use urscript_socket::adapters::tokio_codec::{DelimitedCodec, LineCodec, StxEtxCodec};
     let mut src = BytesMut::from(&b"abc"[..]);
     let mut lines = LineCodec::new();
     assert!(lines.decode_eof(&mut src).is_err());
@@ -394,7 +394,7 @@ fn tokio_codecs_end_of_input_errors_are_final() {
 /// every shape that can (a `socket_read_string` by its rule consumes nothing until complete).
 #[test]
 fn a_buffer_smaller_than_the_bound_reports_once_and_recovers() {
-    fn run<D: Decoder>(mut d: D, stream: &[u8]) -> (Vec<ErrorKind>, Vec<String>)
+    fn run<D: Decode>(mut d: D, stream: &[u8]) -> (Vec<ErrorKind>, Vec<String>)
     where
         for<'a> D::Item<'a>: std::fmt::Debug,
     {

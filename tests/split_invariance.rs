@@ -14,7 +14,7 @@ use urscript_socket::string::{DelimitedDecoder, ReadStringDecoder};
 use urscript_socket::stx_etx::StxEtxDecoder;
 use urscript_socket::to_str::ValueLineDecoder;
 use urscript_socket::var::{VarMessageDecoder, VarReplyDecoder};
-use urscript_socket::{ArgumentError, Decoder, ErrorKind, RecvBuffer, MAX_BOUND};
+use urscript_socket::{ArgumentError, Decode, ErrorKind, RecvBuffer, MAX_BOUND};
 
 mod common;
 use common::{check, feed, Event};
@@ -236,7 +236,7 @@ proptest! {
     /// (full with no way on), whatever the buffer's size against the decoder's bound.
     #[test]
     fn recv_buffer_of_any_size_never_wedges(cap in 1usize..40, max in any_bound(), input in stream(&[b"a", b"bc", b"\n", b"\x02", b"\x03", b"(", b"1,", b")"], 80)) {
-        fn drain<D: Decoder>(mut d: D, cap: usize, input: &[u8]) {
+        fn drain<D: Decode>(mut d: D, cap: usize, input: &[u8]) {
             let mut rx = RecvBuffer::with_capacity(cap);
             let mut rest = input;
             while !rest.is_empty() {
@@ -266,7 +266,7 @@ proptest! {
 /// bound, and the next frame decodes after it.
 #[test]
 fn bound_and_bound_plus_one_for_every_shape() {
-    fn events<D: Decoder>(make: impl Fn() -> D, input: &[u8], bound: usize) -> Vec<Event>
+    fn events<D: Decode>(make: impl Fn() -> D, input: &[u8], bound: usize) -> Vec<Event>
     where
         for<'a> D::Item<'a>: std::fmt::Debug,
     {

@@ -6,7 +6,7 @@ use bytes::{Bytes, BytesMut};
 use futures_util::{SinkExt, StreamExt};
 use tokio::io::{AsyncReadExt, AsyncWriteExt};
 use tokio_util::codec::{Decoder, Encoder, Framed, FramedRead};
-use urscript_socket::adapters::tokio::{
+use urscript_socket::adapters::tokio_codec::{
     ByteCodec, CodecError, DelimitedCodec, FloatTupleCodec, Int32Codec, LineCodec, RequestReply,
     StxEtxCodec, Tolerant, VarCodec, VarRequest,
 };
@@ -405,11 +405,12 @@ fn format_codec_covers_every_registry_format() {
         ),
     ];
     for (format, bytes, text) in cases {
-        let mut whole = urscript_socket::adapters::tokio::FormatCodec::new(format).unwrap();
+        let mut whole = urscript_socket::adapters::tokio_codec::FormatCodec::new(format).unwrap();
         let mut buf = bytes::BytesMut::from(bytes);
         let got = whole.decode(&mut buf).unwrap().unwrap();
         assert_eq!(got.to_string(), text, "{format}");
-        let mut bytewise = urscript_socket::adapters::tokio::FormatCodec::new(format).unwrap();
+        let mut bytewise =
+            urscript_socket::adapters::tokio_codec::FormatCodec::new(format).unwrap();
         let mut buf = bytes::BytesMut::new();
         let mut items = Vec::new();
         for b in bytes {

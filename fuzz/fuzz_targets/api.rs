@@ -17,7 +17,7 @@ use urscript_socket::string::{DelimitedDecoder, ReadStringDecoder};
 use urscript_socket::stx_etx::StxEtxDecoder;
 use urscript_socket::to_str::ValueLineDecoder;
 use urscript_socket::var::{VarMessageDecoder, VarReplyDecoder};
-use urscript_socket::{Decoder, RecvBuffer, MAX_BOUND};
+use urscript_socket::{Decode, RecvBuffer, MAX_BOUND};
 
 #[derive(Debug, Arbitrary)]
 enum Make {
@@ -65,7 +65,7 @@ fn bound(b: usize) -> usize {
 /// exceptions to "a full buffer always gets a way out" (a read-string window; a delimiter
 /// longer than the buffer). `extra` runs the decoder's own calls (flush, take_partial, reset)
 /// and returns the bytes they used.
-fn run<D: Decoder>(
+fn run<D: Decode>(
     mut d: D,
     capacity: usize,
     may_wedge: bool,

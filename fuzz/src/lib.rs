@@ -4,7 +4,7 @@
 
 use std::fmt::Debug;
 
-use urscript_socket::{Decoder, ErrorKind, Status};
+use urscript_socket::{Decode, ErrorKind, Status};
 
 /// What a decoder produced: items (rendered) and errors (kind, absolute offset).
 #[derive(Debug, PartialEq)]
@@ -17,7 +17,7 @@ pub enum Event {
 /// checks that at most `bound` unconsumed bytes are held after each piece.
 pub fn drive<D>(mut dec: D, input: &[u8], sizes: &[u8], bound: usize) -> Vec<Event>
 where
-    D: Decoder,
+    D: Decode,
     for<'a> D::Item<'a>: Debug,
 {
     let mut events = Vec::new();
@@ -73,7 +73,7 @@ pub fn split_input(data: &[u8]) -> (&[u8], &[u8]) {
 /// Whole vs. one byte at a time vs. fuzzer-chosen chunks: all must agree.
 pub fn check_split<D>(make: impl Fn() -> D, data: &[u8], bound: usize)
 where
-    D: Decoder,
+    D: Decode,
     for<'a> D::Item<'a>: Debug,
 {
     let (sizes, input) = split_input(data);

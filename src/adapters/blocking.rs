@@ -33,7 +33,7 @@ use std::io::{self, Read, Write};
 use std::vec::Vec;
 
 use crate::adapters::OwnedDecoder;
-use crate::{Decoder, EncodeError, RecvBuffer};
+use crate::{Decode, EncodeError, RecvBuffer};
 
 /// Default receive buffer of a [`MessageReader`]: 64 KiB, above every core decoder's
 /// default bound.
@@ -101,7 +101,7 @@ pub struct MessageReader<R, D> {
     done: bool,
 }
 
-impl<R: Read, D: Decoder> MessageReader<R, D> {
+impl<R: Read, D: Decode> MessageReader<R, D> {
     /// A reader with a [`DEFAULT_CAPACITY`] buffer.
     ///
     /// ```

@@ -4,7 +4,7 @@
 use embedded_io_async::{Read, Write};
 
 use crate::adapters::OwnedDecoder;
-use crate::{Decoder, EncodeError, RecvBuffer, SliceSink};
+use crate::{Decode, EncodeError, RecvBuffer, SliceSink};
 
 /// Why an embedded read or write failed: the adapters' shared error, over the socket's
 /// error type.
@@ -37,7 +37,7 @@ pub struct MessageReader<R, D, const N: usize> {
     eof: bool,
 }
 
-impl<R: Read, D: Decoder, const N: usize> MessageReader<R, D, N> {
+impl<R: Read, D: Decode, const N: usize> MessageReader<R, D, N> {
     /// Wraps `reader`; the buffer is `N` bytes inside the value.
     ///
     /// ```

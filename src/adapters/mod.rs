@@ -1,5 +1,5 @@
 //! Transport adapters: thin layers that move bytes between a transport and the core.
-//! None of them parses a format: each drives a core [`Decoder`](crate::Decoder) over a
+//! None of them parses a format: each drives a core [`Decode`](crate::Decode) over a
 //! bounded [`RecvBuffer`](crate::RecvBuffer) and writes what a core encoder produced.
 //!
 //! * `blocking` (feature `std`): `std::io::Read`/`Write`, a `TcpStream` in practice;
@@ -36,7 +36,7 @@ pub mod blocking;
 #[cfg(feature = "embedded-io-async")]
 pub mod embedded;
 #[cfg(feature = "tokio")]
-pub mod tokio;
+pub mod tokio_codec;
 #[cfg(feature = "std")]
 pub(crate) mod virtual_robot;
 

@@ -21,7 +21,7 @@ use crate::stx_etx::StxEtxDecoder;
 use crate::var::VarReplyDecoder;
 #[cfg(feature = "alloc")]
 use crate::var::{VarMessage, VarMessageDecoder};
-use crate::Decoder;
+use crate::Decode;
 
 /// A core decoder whose messages have an owned form: the blocking reader's iterator
 /// yields [`Owned`](Self::Owned) items, so nothing borrows the receive buffer.
@@ -39,13 +39,13 @@ use crate::Decoder;
 ///
 /// ```
 /// # #[cfg(feature = "alloc")] {
-/// use urscript_socket::{adapters::OwnedDecoder, line::LineDecoder, Decoder};
+/// use urscript_socket::{adapters::OwnedDecoder, line::LineDecoder, Decode};
 /// let mut lines = LineDecoder::new();
 /// let line: Vec<u8> = LineDecoder::to_owned_item(lines.decode(b"hi\n").unwrap().item().unwrap());
 /// assert_eq!(line, b"hi");
 /// # }
 /// ```
-pub trait OwnedDecoder: Decoder {
+pub trait OwnedDecoder: Decode {
     /// The message, owning its data.
     type Owned;
     /// Copies a decoded message out of the buffer.

@@ -3,14 +3,14 @@
 
 use crate::byte_list::ByteListDecoder;
 use crate::int32::Int32Decoder;
-use crate::{DecodeError, Decoder, Status};
+use crate::{Decode, DecodeError, Status};
 
 /// A server reading the robot's `socket_send_int(v)`: one big-endian int32 per message,
 /// decoded to an `i32`. (For `n` values per message use
 /// [`Int32Decoder::new(n)`](crate::int32::Int32Decoder::new).)
 ///
 /// ```
-/// use urscript_socket::{adapters::Int32Stream, Decoder};
+/// use urscript_socket::{adapters::Int32Stream, Decode};
 /// let mut ints = Int32Stream::new();
 /// let status = ints.decode(&[0xFF, 0xFF, 0xFF, 0xFE, 0]).unwrap();
 /// assert_eq!(status.item(), Some(-2));
@@ -40,7 +40,7 @@ impl Default for Int32Stream {
     }
 }
 
-impl Decoder for Int32Stream {
+impl Decode for Int32Stream {
     type Item<'buf> = i32;
     #[inline]
     fn decode(&mut self, buf: &[u8]) -> Result<Status<i32>, DecodeError> {
@@ -63,7 +63,7 @@ impl Decoder for Int32Stream {
 /// A server reading the robot's `socket_send_byte(v)`: one `u8` per message.
 ///
 /// ```
-/// use urscript_socket::{adapters::ByteStream, Decoder};
+/// use urscript_socket::{adapters::ByteStream, Decode};
 /// let mut bytes = ByteStream::new();
 /// assert_eq!(bytes.decode(&[2, 3]).unwrap().item(), Some(2));
 /// ```
@@ -92,7 +92,7 @@ impl Default for ByteStream {
     }
 }
 
-impl Decoder for ByteStream {
+impl Decode for ByteStream {
     type Item<'buf> = u8;
     #[inline]
     fn decode(&mut self, buf: &[u8]) -> Result<Status<u8>, DecodeError> {

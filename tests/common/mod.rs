@@ -2,7 +2,7 @@
 
 use std::fmt::Debug;
 
-use urscript_socket::{Decoder, ErrorKind, Status};
+use urscript_socket::{Decode, ErrorKind, Status};
 
 #[derive(Debug, PartialEq)]
 pub enum Event {
@@ -14,7 +14,7 @@ pub enum Event {
 /// the most bytes the decoder may leave unconsumed before it must decide.
 pub fn feed<D>(mut dec: D, input: &[u8], cuts: &[usize], bound: usize) -> Vec<Event>
 where
-    D: Decoder,
+    D: Decode,
     for<'a> D::Item<'a>: Debug,
 {
     let mut events = Vec::new();
@@ -74,7 +74,7 @@ where
 /// Whole, one byte at a time, and the given cuts must agree.
 pub fn check<D>(make: impl Fn() -> D, input: &[u8], cuts: &[usize], bound: usize)
 where
-    D: Decoder,
+    D: Decode,
     for<'a> D::Item<'a>: Debug,
 {
     let whole = feed(make(), input, &[], usize::MAX);

@@ -239,7 +239,7 @@ enum JsonMessage<'a> {
 mod tests {
     use super::*;
     use urscript_socket::format::Format;
-    use urscript_socket::Decoder;
+    use urscript_socket::Decode;
 
     #[test]
     fn quoted_escapes_as_the_core_and_keeps_utf8_text() {

@@ -22,7 +22,7 @@
 //! use futures_util::{SinkExt, StreamExt};
 //! use tokio::io::{AsyncReadExt, AsyncWriteExt};
 //! use tokio_util::codec::Framed;
-//! use urscript_socket::adapters::tokio::{FloatTupleCodec, LineCodec, RequestReply, Tolerant};
+//! use urscript_socket::adapters::tokio_codec::{FloatTupleCodec, LineCodec, RequestReply, Tolerant};
 //!
 //! let (server, mut robot) = tokio::io::duplex(256);
 //! let codec = RequestReply::new(Tolerant::new(LineCodec::with_max_len(16)), FloatTupleCodec::new(3)?);
@@ -53,7 +53,7 @@ use crate::robot::{Policy, ReadCall, ReadResult, RobotError, SocketConnection, T
 use crate::string::{encode_string, DelimitedDecoder};
 use crate::stx_etx::{encode_stx_etx, StxEtxDecoder};
 use crate::var::{encode_var_reply, VarMessageDecoder};
-use crate::{ArgumentError, DecodeError, Decoder, Status};
+use crate::{ArgumentError, Decode, DecodeError, Status};
 
 /// The error of every codec here: the adapters' [`Error`](crate::adapters::Error) over
 /// `std::io::Error` (the transport, bad bytes with what and where, a value the encoder
@@ -61,7 +61,7 @@ use crate::{ArgumentError, DecodeError, Decoder, Status};
 /// `std::io::Error`, so `?` works in a function returning `io::Result`.
 ///
 /// ```
-/// use urscript_socket::adapters::tokio::CodecError;
+/// use urscript_socket::adapters::tokio_codec::CodecError;
 /// let e = CodecError::from(std::io::Error::other("boom"));
 /// assert!(e.to_string().contains("boom"));
 /// let e = std::io::Error::from(CodecError::WrongCount { expected: 6, found: 5 });
@@ -73,7 +73,7 @@ pub type CodecError = crate::adapters::Error<std::io::Error>;
 /// `Bytes` split off `src` (no copy).
 fn decode_slice<D>(dec: &mut D, src: &mut BytesMut, eof: bool) -> Result<Option<Bytes>, CodecError>
 where
-    D: for<'a> Decoder<Item<'a> = &'a [u8]>,
+    D: for<'a> Decode<Item<'a> = &'a [u8]>,
 {
     let found = if eof {
         match dec.decode_eof(src) {
@@ -124,7 +124,7 @@ fn decode_value<D, T>(
     convert: impl FnOnce(D::Item<'_>) -> T,
 ) -> Result<Option<T>, CodecError>
 where
-    D: Decoder,
+    D: Decode,
 {
     if eof {
         let out = match dec.decode_eof(src) {
@@ -202,7 +202,7 @@ slice_codec!(
     /// ```
     /// use bytes::BytesMut;
     /// use tokio_util::codec::Decoder;
-    /// use urscript_socket::adapters::tokio::LineCodec;
+    /// use urscript_socket::adapters::tokio_codec::LineCodec;
     /// let mut buf = BytesMut::from(&b"hello\r\nwor"[..]);
     /// assert_eq!(LineCodec::new().decode(&mut buf).unwrap().unwrap(), &b"hello"[..]);
     /// assert_eq!(buf, &b"wor"[..]);
@@ -216,7 +216,7 @@ impl LineCodec {
     /// A codec with the core's default line bound.
     ///
     /// ```
-    /// # use urscript_socket::adapters::tokio::LineCodec;
+    /// # use urscript_socket::adapters::tokio_codec::LineCodec;
     /// let c = LineCodec::new();
     /// ```
     pub fn new() -> Self {
@@ -228,7 +228,7 @@ impl LineCodec {
     /// A codec whose lines hold at most `max_len` bytes.
     ///
     /// ```
-    /// # use urscript_socket::adapters::tokio::LineCodec;
+    /// # use urscript_socket::adapters::tokio_codec::LineCodec;
     /// let c = LineCodec::with_max_len(256);
     /// ```
     pub fn with_max_len(max_len: usize) -> Self {
@@ -244,7 +244,7 @@ slice_codec!(
     /// ```
     /// use bytes::BytesMut;
     /// use tokio_util::codec::{Decoder, Encoder};
-    /// use urscript_socket::adapters::tokio::StxEtxCodec;
+    /// use urscript_socket::adapters::tokio_codec::StxEtxCodec;
     /// let mut c = StxEtxCodec::new();
     /// let mut buf = BytesMut::new();
     /// c.encode(&b"hi"[..], &mut buf).unwrap();
@@ -259,7 +259,7 @@ impl StxEtxCodec {
     /// A codec with the core's default frame bound.
     ///
     /// ```
-    /// # use urscript_socket::adapters::tokio::StxEtxCodec;
+    /// # use urscript_socket::adapters::tokio_codec::StxEtxCodec;
     /// let c = StxEtxCodec::new();
     /// ```
     pub fn new() -> Self {
@@ -276,7 +276,7 @@ slice_codec!(
     /// ```
     /// use bytes::BytesMut;
     /// use tokio_util::codec::Decoder;
-    /// use urscript_socket::adapters::tokio::DelimitedCodec;
+    /// use urscript_socket::adapters::tokio_codec::DelimitedCodec;
     /// let mut c = DelimitedCodec::new(b";").unwrap();
     /// let mut buf = BytesMut::from(&b"a;b"[..]);
     /// assert_eq!(c.decode(&mut buf).unwrap().unwrap(), &b"a"[..]);
@@ -294,7 +294,7 @@ impl DelimitedCodec {
     /// A codec splitting on `delimiter` (1 to 64 bytes).
     ///
     /// ```
-    /// # use urscript_socket::adapters::tokio::DelimitedCodec;
+    /// # use urscript_socket::adapters::tokio_codec::DelimitedCodec;
     /// assert!(DelimitedCodec::new(b"").is_err());
     /// ```
     pub fn new(delimiter: &[u8]) -> Result<Self, ArgumentError> {
@@ -311,7 +311,7 @@ impl DelimitedCodec {
 /// ```
 /// use bytes::BytesMut;
 /// use tokio_util::codec::{Decoder, Encoder};
-/// use urscript_socket::adapters::tokio::Int32Codec;
+/// use urscript_socket::adapters::tokio_codec::Int32Codec;
 /// let mut c = Int32Codec::new();
 /// let mut buf = BytesMut::new();
 /// c.encode(-1, &mut buf).unwrap();
@@ -330,7 +330,7 @@ impl Int32Codec {
     /// A codec of single int32 values.
     ///
     /// ```
-    /// # use urscript_socket::adapters::tokio::Int32Codec;
+    /// # use urscript_socket::adapters::tokio_codec::Int32Codec;
     /// let c = Int32Codec::new();
     /// ```
     pub fn new() -> Self {
@@ -414,7 +414,7 @@ list_encoders!(Int32Codec, i32, encode_int32_list);
 /// ```
 /// use bytes::BytesMut;
 /// use tokio_util::codec::{Decoder, Encoder};
-/// use urscript_socket::adapters::tokio::ByteCodec;
+/// use urscript_socket::adapters::tokio_codec::ByteCodec;
 /// let mut c = ByteCodec::new();
 /// let mut buf = BytesMut::from(&[2u8, 3][..]);
 /// assert_eq!(c.decode(&mut buf).unwrap(), Some(2));
@@ -430,7 +430,7 @@ impl ByteCodec {
     /// A codec of single bytes.
     ///
     /// ```
-    /// # use urscript_socket::adapters::tokio::ByteCodec;
+    /// # use urscript_socket::adapters::tokio_codec::ByteCodec;
     /// let c = ByteCodec::new();
     /// ```
     pub fn new() -> Self {
@@ -476,7 +476,7 @@ pub use crate::adapters::VarRequest;
 /// ```
 /// use bytes::BytesMut;
 /// use tokio_util::codec::{Decoder, Encoder};
-/// use urscript_socket::adapters::tokio::{VarCodec, VarRequest};
+/// use urscript_socket::adapters::tokio_codec::{VarCodec, VarRequest};
 /// let mut c = VarCodec::new();
 /// let mut buf = BytesMut::from(&b"GET POS_X\n"[..]);
 /// assert_eq!(c.decode(&mut buf).unwrap(), Some(VarRequest::Get { name: "POS_X".into() }));
@@ -493,7 +493,7 @@ impl VarCodec {
     /// A codec with the core's default line bound.
     ///
     /// ```
-    /// # use urscript_socket::adapters::tokio::VarCodec;
+    /// # use urscript_socket::adapters::tokio_codec::VarCodec;
     /// let c = VarCodec::new();
     /// ```
     pub fn new() -> Self {
@@ -528,7 +528,7 @@ impl<S: AsRef<str>> codec::Encoder<(S, i32)> for VarCodec {
 /// ```
 /// use bytes::BytesMut;
 /// use tokio_util::codec::Decoder;
-/// use urscript_socket::adapters::tokio::FormatCodec;
+/// use urscript_socket::adapters::tokio_codec::FormatCodec;
 /// use urscript_socket::format::{Format, OwnedMessage};
 /// let mut codec = FormatCodec::new(Format::Int32 { number: 2 }).unwrap();
 /// let mut buf = BytesMut::from(&[0, 0, 0, 1, 0xFF, 0xFF, 0xFF, 0xFF][..]);
@@ -543,7 +543,7 @@ impl FormatCodec {
     /// A codec for `format`, with its default bounds. Errors as [`Format::decoder`](crate::format::Format::decoder).
     ///
     /// ```
-    /// # use urscript_socket::{adapters::tokio::FormatCodec, format::Format};
+    /// # use urscript_socket::{adapters::tokio_codec::FormatCodec, format::Format};
     /// assert!(FormatCodec::new(Format::Bytes { number: 0 }).is_err());
     /// ```
     pub fn new(format: crate::format::Format<'_>) -> Result<Self, ArgumentError> {
@@ -578,7 +578,7 @@ impl codec::Decoder for FormatCodec {
 /// ```
 /// use bytes::BytesMut;
 /// use tokio_util::codec::{Decoder, Encoder};
-/// use urscript_socket::adapters::tokio::{CodecError, FloatTupleCodec};
+/// use urscript_socket::adapters::tokio_codec::{CodecError, FloatTupleCodec};
 /// let mut c = FloatTupleCodec::new(2).unwrap();
 /// let mut buf = BytesMut::new();
 /// c.encode([1.5, -2.0], &mut buf).unwrap();
@@ -598,7 +598,7 @@ impl FloatTupleCodec {
     /// A codec of `number`-value tuples (1..=30), no trailing LF.
     ///
     /// ```
-    /// # use urscript_socket::adapters::tokio::FloatTupleCodec;
+    /// # use urscript_socket::adapters::tokio_codec::FloatTupleCodec;
     /// assert!(FloatTupleCodec::new(31).is_err());
     /// ```
     pub fn new(number: usize) -> Result<Self, ArgumentError> {
@@ -613,7 +613,7 @@ impl FloatTupleCodec {
     /// what a later `socket_read_line` or `socket_read_binary_integer` sees first.
     ///
     /// ```
-    /// # use urscript_socket::adapters::tokio::FloatTupleCodec;
+    /// # use urscript_socket::adapters::tokio_codec::FloatTupleCodec;
     /// let c = FloatTupleCodec::new(6).unwrap().with_trailing_lf(true);
     /// ```
     pub fn with_trailing_lf(mut self, trailing_lf: bool) -> Self {
@@ -624,7 +624,7 @@ impl FloatTupleCodec {
     /// Values per tuple.
     ///
     /// ```
-    /// # use urscript_socket::adapters::tokio::FloatTupleCodec;
+    /// # use urscript_socket::adapters::tokio_codec::FloatTupleCodec;
     /// assert_eq!(FloatTupleCodec::new(6).unwrap().number(), 6);
     /// ```
     pub fn number(&self) -> usize {
@@ -668,7 +668,7 @@ impl<T: AsRef<[f64]>> codec::Encoder<T> for FloatTupleCodec {
 /// ```
 /// use tokio_util::codec::{Decoder, Encoder};
 /// use bytes::BytesMut;
-/// use urscript_socket::adapters::tokio::{FloatTupleCodec, LineCodec, RequestReply};
+/// use urscript_socket::adapters::tokio_codec::{FloatTupleCodec, LineCodec, RequestReply};
 /// let mut codec = RequestReply::new(LineCodec::new(), FloatTupleCodec::new(2).unwrap());
 /// let mut rx = BytesMut::from(&b"shoot\n"[..]);
 /// assert_eq!(codec.decode(&mut rx).unwrap().unwrap(), "shoot");
@@ -689,7 +689,7 @@ impl<D, E> RequestReply<D, E> {
     /// Pairs a decoder of requests with an encoder of replies.
     ///
     /// ```
-    /// # use urscript_socket::adapters::tokio::{Int32Codec, VarCodec, RequestReply};
+    /// # use urscript_socket::adapters::tokio_codec::{Int32Codec, VarCodec, RequestReply};
     /// let c = RequestReply::new(VarCodec::new(), Int32Codec::new());
     /// ```
     pub fn new(decoder: D, encoder: E) -> Self {
@@ -699,7 +699,7 @@ impl<D, E> RequestReply<D, E> {
     /// The request decoder.
     ///
     /// ```
-    /// # use urscript_socket::adapters::tokio::{FloatTupleCodec, LineCodec, RequestReply};
+    /// # use urscript_socket::adapters::tokio_codec::{FloatTupleCodec, LineCodec, RequestReply};
     /// let c = RequestReply::new(LineCodec::new(), FloatTupleCodec::new(6).unwrap());
     /// let _lines: &LineCodec = c.decoder();
     /// ```
@@ -710,7 +710,7 @@ impl<D, E> RequestReply<D, E> {
     /// The request decoder, mutably.
     ///
     /// ```
-    /// # use urscript_socket::adapters::tokio::{FloatTupleCodec, LineCodec, RequestReply};
+    /// # use urscript_socket::adapters::tokio_codec::{FloatTupleCodec, LineCodec, RequestReply};
     /// let mut c = RequestReply::new(LineCodec::new(), FloatTupleCodec::new(6).unwrap());
     /// let _lines: &mut LineCodec = c.decoder_mut();
     /// ```
@@ -721,7 +721,7 @@ impl<D, E> RequestReply<D, E> {
     /// The reply encoder.
     ///
     /// ```
-    /// # use urscript_socket::adapters::tokio::{FloatTupleCodec, LineCodec, RequestReply};
+    /// # use urscript_socket::adapters::tokio_codec::{FloatTupleCodec, LineCodec, RequestReply};
     /// let c = RequestReply::new(LineCodec::new(), FloatTupleCodec::new(6).unwrap());
     /// assert_eq!(c.encoder().number(), 6);
     /// ```
@@ -732,7 +732,7 @@ impl<D, E> RequestReply<D, E> {
     /// The reply encoder, mutably (e.g. to swap it for another reply shape).
     ///
     /// ```
-    /// # use urscript_socket::adapters::tokio::{FloatTupleCodec, LineCodec, RequestReply};
+    /// # use urscript_socket::adapters::tokio_codec::{FloatTupleCodec, LineCodec, RequestReply};
     /// let mut c = RequestReply::new(LineCodec::new(), FloatTupleCodec::new(6).unwrap());
     /// *c.encoder_mut() = FloatTupleCodec::new(3).unwrap();
     /// ```
@@ -743,7 +743,7 @@ impl<D, E> RequestReply<D, E> {
     /// The two halves.
     ///
     /// ```
-    /// # use urscript_socket::adapters::tokio::{FloatTupleCodec, LineCodec, RequestReply};
+    /// # use urscript_socket::adapters::tokio_codec::{FloatTupleCodec, LineCodec, RequestReply};
     /// let (d, e) = RequestReply::new(LineCodec::new(), FloatTupleCodec::new(6).unwrap()).into_parts();
     /// ```
     pub fn into_parts(self) -> (D, E) {
@@ -779,7 +779,7 @@ impl<T, D, E: codec::Encoder<T>> codec::Encoder<T> for RequestReply<D, E> {
 /// ```
 /// use bytes::BytesMut;
 /// use tokio_util::codec::Decoder;
-/// use urscript_socket::adapters::tokio::{LineCodec, Tolerant};
+/// use urscript_socket::adapters::tokio_codec::{LineCodec, Tolerant};
 /// use urscript_socket::ErrorKind;
 /// let mut c = Tolerant::new(LineCodec::with_max_len(4));
 /// let mut buf = BytesMut::from(&b"much too long\nok\n"[..]);
@@ -796,7 +796,7 @@ impl<C> Tolerant<C> {
     /// Wraps `codec`.
     ///
     /// ```
-    /// # use urscript_socket::adapters::tokio::{Tolerant, VarCodec};
+    /// # use urscript_socket::adapters::tokio_codec::{Tolerant, VarCodec};
     /// let c = Tolerant::new(VarCodec::new());
     /// ```
     pub fn new(codec: C) -> Self {
@@ -806,7 +806,7 @@ impl<C> Tolerant<C> {
     /// The wrapped codec.
     ///
     /// ```
-    /// # use urscript_socket::adapters::tokio::{Tolerant, VarCodec};
+    /// # use urscript_socket::adapters::tokio_codec::{Tolerant, VarCodec};
     /// let _: &VarCodec = Tolerant::new(VarCodec::new()).get_ref();
     /// ```
     pub fn get_ref(&self) -> &C {
@@ -816,7 +816,7 @@ impl<C> Tolerant<C> {
     /// The wrapped codec, mutably.
     ///
     /// ```
-    /// # use urscript_socket::adapters::tokio::{Tolerant, VarCodec};
+    /// # use urscript_socket::adapters::tokio_codec::{Tolerant, VarCodec};
     /// let _: &mut VarCodec = Tolerant::new(VarCodec::new()).get_mut();
     /// ```
     pub fn get_mut(&mut self) -> &mut C {
@@ -826,7 +826,7 @@ impl<C> Tolerant<C> {
     /// The wrapped codec.
     ///
     /// ```
-    /// # use urscript_socket::adapters::tokio::{Tolerant, VarCodec};
+    /// # use urscript_socket::adapters::tokio_codec::{Tolerant, VarCodec};
     /// let _: VarCodec = Tolerant::new(VarCodec::new()).into_inner();
     /// ```
     pub fn into_inner(self) -> C {
@@ -874,7 +874,7 @@ impl<T, C: codec::Encoder<T>> codec::Encoder<T> for Tolerant<C> {
 ///
 /// ```no_run
 /// # async fn demo() -> Result<(), urscript_socket::robot::RobotError> {
-/// use urscript_socket::adapters::tokio::AsyncRobotSocket;
+/// use urscript_socket::adapters::tokio_codec::AsyncRobotSocket;
 /// use urscript_socket::robot::{Policy, ReadCall, Timeout};
 /// let mut robot = AsyncRobotSocket::connect("127.0.0.1:30000", "socket_0", Policy::default()).await?;
 /// robot.socket().send_line(b"shoot");
@@ -895,7 +895,7 @@ impl AsyncRobotSocket {
     ///
     /// ```no_run
     /// # async fn demo() {
-    /// # use urscript_socket::{adapters::tokio::AsyncRobotSocket, robot::Policy};
+    /// # use urscript_socket::{adapters::tokio_codec::AsyncRobotSocket, robot::Policy};
     /// let s = AsyncRobotSocket::connect("127.0.0.1:30000", "socket_0", Policy::default()).await;
     /// # }
     /// ```
@@ -916,7 +916,7 @@ impl AsyncRobotSocket {
     /// The sans-IO socket: queue sends here (`send_line`, `send_int`, `set_var`...).
     ///
     /// ```no_run
-    /// # async fn demo(robot: &mut urscript_socket::adapters::tokio::AsyncRobotSocket) {
+    /// # async fn demo(robot: &mut urscript_socket::adapters::tokio_codec::AsyncRobotSocket) {
     /// robot.socket().send_int(7);
     /// # }
     /// ```
@@ -929,7 +929,7 @@ impl AsyncRobotSocket {
     /// on the controller.
     ///
     /// ```no_run
-    /// # async fn demo(robot: &mut urscript_socket::adapters::tokio::AsyncRobotSocket) {
+    /// # async fn demo(robot: &mut urscript_socket::adapters::tokio_codec::AsyncRobotSocket) {
     /// robot.socket().send_line(b"go");
     /// assert!(robot.flush().await.unwrap());
     /// # }
@@ -946,7 +946,7 @@ impl AsyncRobotSocket {
     /// read completes, fails, the peer closes, or the timeout passes (the sentinel).
     ///
     /// ```no_run
-    /// # async fn demo(robot: &mut urscript_socket::adapters::tokio::AsyncRobotSocket) {
+    /// # async fn demo(robot: &mut urscript_socket::adapters::tokio_codec::AsyncRobotSocket) {
     /// use urscript_socket::robot::{ReadCall, Timeout};
     /// let r = robot.read(ReadCall::Line, Timeout::from_secs_f64(0.5)).await.unwrap();
     /// # }
