@@ -232,7 +232,7 @@ pub(crate) fn lex(src: &str) -> Result<Vec<Token>, ParseError> {
     }
     let offset = src.len();
     let col = u32::try_from(src[line_start..offset].chars().count() + 1).unwrap_or(u32::MAX);
-    if !matches!(out.last(), Some(Token { kind: Tok::Newline, .. }) | None) {
+    if depth == 0 && !matches!(out.last(), Some(Token { kind: Tok::Newline, .. }) | None) {
         out.push(Token {
             kind: Tok::Newline,
             line,

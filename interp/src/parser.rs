@@ -386,7 +386,7 @@ impl Parser {
                 if self.peek().kind == Tok::Assign {
                     return Err(self.err_here("cannot assign to this expression"));
                 }
-                if !matches!(e, Expr::Call { .. }) {
+                if !matches!(e, Expr::Call { .. } | Expr::Run(_)) {
                     return Err(self.not_a_statement(e));
                 }
                 self.end_of_statement()?;
