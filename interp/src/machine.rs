@@ -986,8 +986,8 @@ fn store_index(b: &mut Value, i: &Value, v: Value) -> Result<(), String> {
     }
 }
 
-/// The binary operators. Ints: 32-bit, wrapping on overflow; `/` and `%` of two ints are
-/// integer division and remainder (truncating) and fail on 0. A float on either side
+/// The binary operators. Ints: 32-bit, wrapping on overflow; `/` of two ints is a float
+/// division, `%` of two ints the truncating remainder; both fail on an int 0. A float on either side
 /// makes the result a float. Poses add and subtract element-wise.
 pub(crate) fn binary(op: BinOp, l: Value, r: Value) -> Result<Value, String> {
     use Value::{Bool, Float, Int, Pose};
@@ -1050,7 +1050,9 @@ pub(crate) fn binary(op: BinOp, l: Value, r: Value) -> Result<Value, String> {
             BinOp::Div | BinOp::Rem if *b == 0 => {
                 return Err(format!("division by zero ({a} {sym} 0)"))
             }
-            BinOp::Div => a.wrapping_div(*b),
+            // As UR's own driver scripts rely on (`params[1] / MULT_jointstate`, two
+            // ints): `/` of two ints is a float.
+            BinOp::Div => return Ok(Float(f64::from(*a) / f64::from(*b))),
             _ => a.wrapping_rem(*b),
         })),
         (Pose(a), Pose(b)) if matches!(op, BinOp::Add | BinOp::Sub) => {

@@ -41,8 +41,9 @@ fn comments_and_step_markers() {
 
 #[test]
 fn arithmetic_int_and_float_rules() {
-    assert_eq!(one("7 / 2"), "3");
-    assert_eq!(one("-7 / 2"), "-3");
+    assert_eq!(one("7 / 2"), "3.5");
+    assert_eq!(one("-7 / 2"), "-3.5");
+    assert_eq!(one("1500000 / 1000000"), "1.5");
     assert_eq!(one("7 / 2.0"), "3.5");
     assert_eq!(one("7 % 3"), "1");
     assert_eq!(one("2 + 3 * 4"), "14");
