@@ -62,15 +62,17 @@ enum Received {
 
 /// Runs `machine` against real servers until it ends, fails, or `max_time` passes.
 /// `on_event` sees every event first (print it, log it); a runtime error is the `Err`.
+/// The machine stays with the caller, to read its globals or arm state afterwards.
 ///
 /// ```no_run
 /// use urscript_interp::{drive, Config, Machine, Program};
 /// let program = Program::parse(&std::fs::read_to_string("prog.script")?)?;
-/// let outcome = drive::run_tcp(Machine::new(program, Config::default()), &drive::Options::default(), |e| println!("{e:?}"))?;
+/// let mut machine = Machine::new(program, Config::default());
+/// let outcome = drive::run_tcp(&mut machine, &drive::Options::default(), |e| println!("{e:?}"))?;
 /// # Ok::<(), Box<dyn std::error::Error>>(())
 /// ```
 pub fn run_tcp(
-    mut machine: Machine,
+    machine: &mut Machine,
     options: &Options,
     mut on_event: impl FnMut(&Event),
 ) -> Result<Outcome, RuntimeError> {

@@ -7,7 +7,7 @@ use crate::lexer::{Tok, Token};
 use crate::value::Value;
 
 /// Nesting bound of blocks and expressions, so hostile input cannot overflow the stack.
-const MAX_DEPTH: usize = 200;
+const MAX_DEPTH: usize = 64;
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub(crate) enum BinOp {
