@@ -868,8 +868,8 @@ impl Machine {
                 let q = six(&a[0], name)?;
                 let t = num(&a[3], name)?;
                 if t > 0.0 {
-                    for k in 0..6 {
-                        self.arm.qd[k] = (q[k] - self.arm.q[k]) / t;
+                    for ((qd, new), old) in self.arm.qd.iter_mut().zip(q).zip(self.arm.q) {
+                        *qd = (new - old) / t;
                     }
                 }
                 self.arm.q = q;
@@ -890,13 +890,13 @@ impl Machine {
                 };
                 if name == "speedj" {
                     self.arm.qd = qd;
-                    for k in 0..6 {
-                        self.arm.q[k] += qd[k] * t;
+                    for (q, v) in self.arm.q.iter_mut().zip(qd) {
+                        *q += v * t;
                     }
                 } else {
                     self.arm.tcp_speed = qd;
-                    for k in 0..6 {
-                        self.arm.pose[k] += qd[k] * t;
+                    for (x, v) in self.arm.pose.iter_mut().zip(qd) {
+                        *x += v * t;
                     }
                 }
                 Ok(NativeOut::Block(self.wait_for(secs(t), Value::None)))

@@ -301,7 +301,9 @@ impl Compiler {
 
     fn stmt(&mut self, s: &Stmt) -> Result<(), ParseError> {
         self.line = s.line;
-        if !matches!(s.kind, StmtKind::Def(_)) {
+        // A `while` counts once per iteration instead (below), so even an empty loop
+        // meets the per-step statement bound.
+        if !matches!(s.kind, StmtKind::Def(_) | StmtKind::While(..)) {
             self.emit(Op::Stmt);
         }
         match &s.kind {
@@ -354,6 +356,7 @@ impl Compiler {
             }
             StmtKind::While(cond, body) => {
                 let start = self.here();
+                self.emit(Op::Stmt);
                 self.expr(cond)?;
                 let exit = self.emit(Op::JumpIfFalse(0));
                 self.loops.push((start, Vec::new()));

@@ -188,7 +188,7 @@ pub(crate) fn lex(src: &str) -> Result<Vec<Token>, ParseError> {
         }
         if c == '"' || c == '\'' {
             let body = &rest[1..];
-            let Some(end) = body.find(|x: char| x == c || x == '\n') else {
+            let Some(end) = body.find([c, '\n']) else {
                 return Err(err("string literal not closed".into()));
             };
             if body[end..].starts_with('\n') {

@@ -26,6 +26,7 @@
 //! the machine next has something to do (`None`: only an input can wake it).
 
 use std::collections::VecDeque;
+use std::f64::consts::FRAC_PI_2;
 use std::sync::Arc;
 use std::time::Duration;
 
@@ -224,7 +225,7 @@ pub(crate) struct Arm {
 impl Default for Arm {
     fn default() -> Self {
         Arm {
-            q: [0.0, -1.5708, 0.0, -1.5708, 0.0, 0.0],
+            q: [0.0, -FRAC_PI_2, 0.0, -FRAC_PI_2, 0.0, 0.0],
             qd: [0.0; 6],
             pose: [0.0; 6],
             tcp_speed: [0.0; 6],
