@@ -5,7 +5,7 @@
 //! Commanded state and the time each command takes, not dynamics:
 //! - `movej(q, a=1.4, v=1.05, t=0, r=0)`: takes `t` if given, else the largest joint
 //!   distance / `v`; `movel(pose, a=1.2, v=0.25, t=0, r=0)` and `movep`: `t`, else the
-//!   straight-line distance / `v`. Every motion takes at least one step. A motion sets the
+//!   straight-line distance / `v`; `movec(via, to, ...)`: like `movel` to `to`. Every motion takes at least one step. A motion sets the
 //!   commanded joints (`movej` with a list) or pose (`movel` with a pose) to its target
 //!   when it starts; there is no kinematics, so a `movej` does not change the pose and a
 //!   `movel` does not change the joints (`movej`/`movel` given the other kind of target
@@ -138,6 +138,9 @@ const OTHERS: &[&str] = &[
     "stopl",
     "get_actual_joint_positions",
     "get_target_joint_positions",
+    "get_joint_positions",
+    "get_actual_joint_positions_history",
+    "movec",
     "get_actual_joint_speeds",
     "get_target_joint_speeds",
     "get_actual_tcp_pose",
@@ -908,9 +911,37 @@ impl Machine {
                 let st = self.config.step_time;
                 Ok(NativeOut::Block(self.wait_for(st, Value::None)))
             }
-            "get_actual_joint_positions" | "get_target_joint_positions" => {
+            "get_actual_joint_positions" | "get_target_joint_positions" | "get_joint_positions" => {
                 bind(name, &[], args, kw)?;
                 v(floats(self.arm.q))
+            }
+            "get_actual_joint_positions_history" => {
+                bind(name, &[("steps", i(0))], args, kw)?;
+                v(floats(self.arm.q))
+            }
+            "movec" => {
+                // Moves to `pose_to` through `pose_via`: timed as a straight line to the
+                // target (no arc), like `movel`.
+                let a = bind(
+                    name,
+                    &[("pose_via", None), ("pose_to", None), ("a", f(1.2)), ("v", f(0.25)), ("r", f(0.0)), ("mode", i(0))],
+                    args,
+                    kw,
+                )?;
+                let target = six(&a[1], name)?;
+                let speed = num(&a[3], name)?;
+                let dist = if matches!(a[1], Value::List(_)) {
+                    let d = (0..6).map(|k| (target[k] - self.arm.q[k]).abs()).fold(0.0, f64::max);
+                    self.arm.q = target;
+                    d
+                } else {
+                    let p = self.arm.pose;
+                    let d = (0..3).map(|k| (target[k] - p[k]).powi(2)).sum::<f64>().sqrt();
+                    self.arm.pose = target;
+                    d
+                };
+                let dur = if speed > 0.0 { dist / speed } else { 0.0 };
+                Ok(NativeOut::Block(self.wait_for(secs(dur), Value::None)))
             }
             "get_actual_joint_speeds" | "get_target_joint_speeds" => {
                 bind(name, &[], args, kw)?;

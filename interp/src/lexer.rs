@@ -220,6 +220,11 @@ pub(crate) fn lex(src: &str) -> Result<Vec<Token>, ParseError> {
                 '<' => (Tok::Lt, 1),
                 '>' => (Tok::Gt, 1),
                 '.' => (Tok::Dot, 1),
+                '{' => {
+                    return Err(err(
+                        "a template placeholder (`{{...}}` or `{% ... %}`) must be filled in before the program runs".into(),
+                    ))
+                }
                 other => return Err(err(format!("unexpected character `{other}`"))),
             },
         };

@@ -917,9 +917,13 @@ fn pop(stack: &mut Vec<Value>, line: u32) -> Result<Value, RuntimeError> {
         .ok_or_else(|| RuntimeError::new(line, "internal error: stack empty"))
 }
 
+/// A condition's truth: a bool, or a number (non-zero is true: UR's own External Control
+/// script tests a float, `if has_qnear:`). Anything else is a type error.
 fn as_bool(v: &Value, what: &str) -> Result<bool, String> {
     match v {
         Value::Bool(b) => Ok(*b),
+        Value::Int(i) => Ok(*i != 0),
+        Value::Float(f) => Ok(*f != 0.0),
         other => Err(format!(
             "type error: `{what}` needs a bool, got {} {}",
             other.type_name(),
@@ -988,10 +992,12 @@ fn store_index(b: &mut Value, i: &Value, v: Value) -> Result<(), String> {
 }
 
 /// The binary operators. Ints: 32-bit, wrapping on overflow; `/` of two ints is a float
-/// division, `%` of two ints the truncating remainder; both fail on an int 0. A float on either side
-/// makes the result a float. Poses add and subtract element-wise.
+/// division, `%` of two ints the truncating remainder; both fail on an int 0. A float on
+/// either side makes the result a float. Poses add and subtract element-wise; lists of
+/// numbers add, subtract, multiply and divide element-wise with a list of the same length
+/// or a number (`q + qd * steptime`, `[...] / MULT`, as UR's driver scripts do).
 pub(crate) fn binary(op: BinOp, l: Value, r: Value) -> Result<Value, String> {
-    use Value::{Bool, Float, Int, Pose};
+    use Value::{Bool, Float, Int, List, Pose};
     let type_err = |l: &Value, r: &Value, sym: &str| {
         Err(format!(
             "type error: {} {sym} {} ({} {sym} {})",
@@ -1056,6 +1062,31 @@ pub(crate) fn binary(op: BinOp, l: Value, r: Value) -> Result<Value, String> {
             BinOp::Div => return Ok(Float(f64::from(*a) / f64::from(*b))),
             _ => a.wrapping_rem(*b),
         })),
+        (List(a), List(b)) if matches!(op, BinOp::Add | BinOp::Sub | BinOp::Mul | BinOp::Div) => {
+            if a.len() != b.len() {
+                return Err(format!(
+                    "lists of different lengths: {} {sym} {}",
+                    l.to_source(),
+                    r.to_source()
+                ));
+            }
+            let items: Result<Vec<Value>, String> = a
+                .iter()
+                .zip(b)
+                .map(|(x, y)| binary(op, x.clone(), y.clone()))
+                .collect();
+            Ok(List(items?))
+        }
+        (List(a), s) if s.as_f64().is_some() && matches!(op, BinOp::Add | BinOp::Sub | BinOp::Mul | BinOp::Div) => {
+            let items: Result<Vec<Value>, String> =
+                a.iter().map(|x| binary(op, x.clone(), s.clone())).collect();
+            Ok(List(items?))
+        }
+        (s, List(b)) if s.as_f64().is_some() && matches!(op, BinOp::Add | BinOp::Sub | BinOp::Mul) => {
+            let items: Result<Vec<Value>, String> =
+                b.iter().map(|x| binary(op, s.clone(), x.clone())).collect();
+            Ok(List(items?))
+        }
         (Pose(a), Pose(b)) if matches!(op, BinOp::Add | BinOp::Sub) => {
             let mut p = *a;
             for (x, y) in p.iter_mut().zip(b) {

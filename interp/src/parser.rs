@@ -534,6 +534,9 @@ impl Parser {
                 _ => return Ok(lhs),
             };
             self.bump();
+            // A line ending in an operator continues on the next one (UR's own
+            // External Control script splits `elif a or` / `b:` that way).
+            self.skip_newlines();
             let rhs = self.binary(level + 1)?;
             lhs = Expr::Binary(op, Box::new(lhs), Box::new(rhs));
         }

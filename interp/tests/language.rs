@@ -181,7 +181,6 @@ fn runtime_errors_say_the_line() {
     assert_eq!(runtime_error("x = 1\n\ny = x + \"a\"\n"), "line 3: type error: int + string (1 + \"a\")");
     assert_eq!(runtime_error("x = 1 / 0\n"), "line 1: division by zero (1 / 0)");
     assert_eq!(runtime_error("x = y\n"), "line 1: unknown variable `y`");
-    assert_eq!(runtime_error("if 1:\n  x = 1\nend\n"), "line 1: type error: `condition` needs a bool, got int 1");
     assert_eq!(runtime_error("l = [1]\nl[1.5] = 2\n"), "line 2: type error: an index must be an int, got float 1.5");
     assert_eq!(runtime_error("rq_activate()\n"), "line 1: `rq_activate` is not a built-in this interpreter supports (stub it to run past it)");
     assert_eq!(runtime_error("def f(a):\n  return a\nend\nf()\n"), "line 4: `f` needs argument `a`");
@@ -191,6 +190,32 @@ fn runtime_errors_say_the_line() {
 #[test]
 fn an_empty_infinite_loop_is_stopped() {
     assert!(runtime_error("while True:\nend\n").starts_with("line 1: thread `<program>` ran 100000 statements"));
+}
+
+#[test]
+fn list_arithmetic_is_element_wise() {
+    assert_eq!(one("[1, 2, 3] + [10, 20, 30]"), "[11, 22, 33]");
+    assert_eq!(one("[1.0, 2.0] * 0.5"), "[0.5, 1]");
+    assert_eq!(one("2 * [1, 2] - [1, 1]"), "[1, 3]");
+    assert_eq!(one("[1000000, 2500000] / 1000000"), "[1, 2.5]");
+    assert!(runtime_error("x = [1, 2] + [1]\n").contains("lists of different lengths"));
+    assert!(runtime_error("x = [1, 2] + \"a\"\n").contains("type error"));
+}
+
+#[test]
+fn a_line_ending_in_an_operator_continues() {
+    assert_eq!(msgs("x = 1\nif x == 2 or\n  x == 1:\n  textmsg(\"yes\")\nend\ny = 1 +\n 2\ntextmsg(y)\n"), ["yes", "3"]);
+}
+
+#[test]
+fn numbers_as_conditions() {
+    assert_eq!(msgs("if 0.5:\n  textmsg(\"a\")\nend\nif 0:\n  textmsg(\"b\")\nend\n"), ["a"]);
+    assert!(runtime_error("if \"x\":\n  sync()\nend\n").contains("needs a bool, got string"));
+}
+
+#[test]
+fn template_placeholders_must_be_filled() {
+    assert_eq!(parse_err("x = {{JOINT_STATE_REPLACE}}\n"), "line 1, column 5: a template placeholder (`{{...}}` or `{% ... %}`) must be filled in before the program runs");
 }
 
 #[test]
