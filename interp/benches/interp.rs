@@ -51,12 +51,18 @@ fn statements(c: &mut Criterion) {
 }
 
 fn servo_step(c: &mut Criterion) {
+    servo_step_with(c, true);
+    servo_step_with(c, false);
+}
+
+fn servo_step_with(c: &mut Criterion, trace: bool) {
     let src = std::fs::read_to_string(concat!(
         env!("CARGO_MANIFEST_DIR"),
         "/tests/programs/external_control_like.script"
     ))
     .unwrap();
-    let mut m = Machine::new(Program::parse(&src).unwrap(), Config::default());
+    let config = Config { trace_socket_calls: trace, ..Config::default() };
+    let mut m = Machine::new(Program::parse(&src).unwrap(), config);
     let mut now = Duration::ZERO;
     // Connect the three sockets.
     for _ in 0..4 {
@@ -71,7 +77,8 @@ fn servo_step(c: &mut Criterion) {
     let mut i: i32 = 0;
     let mut g = c.benchmark_group("interp");
     g.throughput(Throughput::Elements(1));
-    g.bench_function("external_control_servo_step_2ms", |b| {
+    let name = if trace { "external_control_servo_step_2ms_traced" } else { "external_control_servo_step_2ms_untraced" };
+    g.bench_function(name, |b| {
         b.iter(|| {
             i = i.wrapping_add(1);
             let q = i % 1000 * 1000;

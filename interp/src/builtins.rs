@@ -34,6 +34,9 @@ use crate::machine::{Event, Machine, NativeOut, Stub, Wait};
 use crate::sockets::ReadSpec;
 use crate::value::Value;
 
+/// The longest string `str_cat` makes, as on the controller.
+pub const MAX_STRING_LEN: usize = 1023;
+
 const SOCKET_FUNCTIONS: &[&str] = &[
     "socket_open",
     "socket_close",
@@ -366,7 +369,11 @@ impl Machine {
             return Ok(NativeOut::Value(v));
         }
         if name.starts_with("socket_") && SOCKET_FUNCTIONS.contains(&name) {
-            let text = call_text(name, &args, &kw);
+            let text = if self.config.trace_socket_calls {
+                call_text(name, &args, &kw)
+            } else {
+                String::new()
+            };
             return self.socket_call(name, args, kw, line, text);
         }
         if NO_OPS.contains(&name) {
@@ -393,17 +400,22 @@ impl Machine {
         text: String,
     ) -> Result<NativeOut, String> {
         let sock = || s("socket_0");
+        let tracing = self.config.trace_socket_calls;
         let done = |m: &mut Machine, v: Value| {
-            let t = format!("{text} -> {}", v.to_source());
-            m.trace(line, t);
+            if tracing {
+                let t = format!("{text} -> {}", v.to_source());
+                m.trace(line, t);
+            }
             Ok(NativeOut::Value(v))
         };
         let read = |m: &mut Machine, socket: String, spec: ReadSpec, timeout: f64| {
             match m.sockets.start_read(&socket, &spec)? {
                 Some(v) => {
                     m.flush(&socket);
-                    let t = format!("{text} -> {}", v.to_source());
-                    m.trace(line, t);
+                    if tracing {
+                        let t = format!("{text} -> {}", v.to_source());
+                        m.trace(line, t);
+                    }
                     Ok(NativeOut::Value(v))
                 }
                 None => {
@@ -468,7 +480,9 @@ impl Machine {
                         socket_name: socket,
                     });
                 }
-                self.trace(line, text);
+                if tracing {
+                    self.trace(line, text);
+                }
                 Ok(NativeOut::Value(Value::None))
             }
             "socket_send_string" | "socket_send_line" => {
@@ -623,6 +637,13 @@ impl Machine {
                 let a = bind(name, &[("op1", None), ("op2", None)], args, kw)?;
                 let mut out = a[0].to_str_bytes();
                 out.extend(a[1].to_str_bytes());
+                // The controller's strings hold at most 1023 characters.
+                if out.len() > MAX_STRING_LEN {
+                    return Err(format!(
+                        "`str_cat`: the result would be {} characters, more than {MAX_STRING_LEN}",
+                        out.len()
+                    ));
+                }
                 v(Value::Str(out))
             }
             "str_len" | "str_empty" => {

@@ -36,6 +36,9 @@ use crate::parser::{BinOp, Scope};
 use crate::sockets::{Policy, ReadSpec, Sockets};
 use crate::value::Value;
 
+/// The most threads that may run at once (the program's own included).
+pub const MAX_THREADS: usize = 64;
+
 /// What replaces a function the program calls (a built-in not supported, or one to
 /// override), set with [`Config::stub`].
 #[derive(Debug, Clone, PartialEq)]
@@ -65,6 +68,9 @@ pub struct Config {
     pub stubs: Vec<(String, Stub)>,
     /// Statements a thread may run in one step without consuming time (default 100 000).
     pub max_statements_per_step: u32,
+    /// Emit an [`Event::Call`] for every socket call (default true). Off, the machine
+    /// does not format the calls at all.
+    pub trace_socket_calls: bool,
     /// Emit an [`Event::Call`] for every built-in call, not only socket calls.
     pub trace_all_calls: bool,
 }
@@ -76,6 +82,7 @@ impl Default for Config {
             policy: Policy::default(),
             stubs: Vec::new(),
             max_statements_per_step: 100_000,
+            trace_socket_calls: true,
             trace_all_calls: false,
         }
     }
@@ -274,7 +281,10 @@ pub struct Machine {
 
 impl Machine {
     /// A machine about to run `program`'s first step at time 0.
-    pub fn new(program: Program, config: Config) -> Self {
+    ///
+    /// A step time below 100 µs is raised to 100 µs.
+    pub fn new(program: Program, mut config: Config) -> Self {
+        config.step_time = config.step_time.max(Duration::from_micros(100));
         let globals = vec![None; program.names.len()];
         let main = Thread {
             name: program.funcs[0].name.clone(),
@@ -447,11 +457,13 @@ impl Machine {
         for t in &mut self.threads {
             if let Wait::Connect { socket, call, line } = &t.wait {
                 if socket == socket_name {
-                    let text = match &result {
-                        Ok(()) => format!("{call} -> True"),
-                        Err(e) => format!("{call} -> False ({e})"),
-                    };
-                    self.events.push_back(Event::Call { line: *line, text });
+                    if self.config.trace_socket_calls {
+                        let text = match &result {
+                            Ok(()) => format!("{call} -> True"),
+                            Err(e) => format!("{call} -> False ({e})"),
+                        };
+                        self.events.push_back(Event::Call { line: *line, text });
+                    }
                     t.wait = Wait::Resume(Value::Bool(ok));
                 }
             }
@@ -486,10 +498,12 @@ impl Machine {
             }
             let (call, line) = (call.clone(), *line);
             if let Some(v) = self.sockets.poll(socket_name) {
-                self.events.push_back(Event::Call {
-                    line,
-                    text: format!("{call} -> {}", v.to_source()),
-                });
+                if self.config.trace_socket_calls {
+                    self.events.push_back(Event::Call {
+                        line,
+                        text: format!("{call} -> {}", v.to_source()),
+                    });
+                }
                 self.threads[i].wait = Wait::Resume(v);
             }
         }
@@ -570,10 +584,12 @@ impl Machine {
                     line,
                 } if d <= self.step => {
                     let v = self.sockets.timeout(&socket, &spec);
-                    self.events.push_back(Event::Call {
-                        line,
-                        text: format!("{call} -> {} (timeout)", v.to_source()),
-                    });
+                    if self.config.trace_socket_calls {
+                        self.events.push_back(Event::Call {
+                            line,
+                            text: format!("{call} -> {} (timeout)", v.to_source()),
+                        });
+                    }
                     self.threads[i].stack.push(v);
                     (true, Wait::None)
                 }
@@ -601,7 +617,10 @@ impl Machine {
                 match flow {
                     Ok(Flow::Blocked) => {}
                     Ok(Flow::Finished) => {
-                        self.threads[i].done = true;
+                        let t = &mut self.threads[i];
+                        t.done = true;
+                        t.frames = Vec::new();
+                        t.stack = Vec::new();
                         if i == 0 {
                             self.stop(State::Finished);
                         }
@@ -819,6 +838,14 @@ impl Machine {
                 }
                 Op::Halt => return Ok(Flow::Halt),
                 Op::Run(fid) => {
+                    let live = self.threads.iter().filter(|t| !t.done).count();
+                    if live >= MAX_THREADS {
+                        return Err(fail(format!(
+                            "`run {}()`: more than {MAX_THREADS} threads running",
+                            prog.funcs[fid as usize].name
+                        )));
+                    }
+                    // Finished threads keep their slot: handles stay unique.
                     let id = self.threads.len() as u32;
                     self.threads.push(Thread {
                         name: prog.funcs[fid as usize].name.clone(),
@@ -856,6 +883,8 @@ impl Machine {
                         }
                         if let Some(t) = self.threads.get_mut(id as usize) {
                             t.done = true;
+                            t.frames = Vec::new();
+                            t.stack = Vec::new();
                             // A read it was waiting for ends with it.
                             if let Wait::Read { socket, spec, .. } =
                                 std::mem::replace(&mut t.wait, Wait::None)

@@ -147,6 +147,7 @@ fn strings() {
     assert_eq!(one("to_num(\" -2.5e1 \")"), "-25");
     assert!(runtime_error("to_num(\"abc\")\n").contains("is not a number"));
     assert!(runtime_error("str_len(5)\n").contains("needs a string, got int 5"));
+    assert!(runtime_error("s = \"ab\"\nwhile True:\n  s = str_cat(s, s)\nend\n").contains("more than 1023"));
 }
 
 #[test]

@@ -117,3 +117,12 @@ fn killing_a_thread_blocked_in_a_read_frees_the_socket() {
     assert_eq!(h.m.state(), &State::Finished);
     assert_eq!(h.messages, ["0"]);
 }
+
+#[test]
+fn starting_threads_without_end_is_bounded() {
+    let src = "thread t():\n  while True:\n    sync()\n  end\nend\nwhile True:\n  run t()\nend\n";
+    let mut h = Harness::new(src, Config::default());
+    h.run_silent(Duration::from_secs(1));
+    let State::Error(e) = h.m.state() else { panic!("{:?}", h.m.state()) };
+    assert_eq!(e.to_string(), "line 7: `run t()`: more than 64 threads running");
+}
