@@ -92,6 +92,7 @@ const NO_OPS: &[&str] = &[
 
 const OTHERS: &[&str] = &[
     "textmsg",
+    "varmsg",
     "popup",
     "sync",
     "sleep",
@@ -598,6 +599,12 @@ impl Machine {
             "textmsg" => {
                 let a = bind(name, &[("s1", None), ("s2", s(""))], args, kw)?;
                 let text = format!("{}{}", a[0].to_str(), a[1].to_str());
+                self.events.push_back(Event::Message(text));
+                v(Value::None)
+            }
+            "varmsg" => {
+                let a = bind(name, &[("name", None), ("value", None)], args, kw)?;
+                let text = format!("{} = {}", a[0].to_str(), a[1].to_str());
                 self.events.push_back(Event::Message(text));
                 v(Value::None)
             }

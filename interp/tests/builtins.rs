@@ -217,7 +217,10 @@ fn io_and_registers() {
 
 #[test]
 fn textmsg_and_popup() {
-    assert_eq!(messages("textmsg(\"a\")\ntextmsg(\"b\", 2)\npopup(\"hello\", \"Title\", warning=True)\n"), ["a", "b2", "popup \"Title\": hello"]);
+    assert_eq!(
+        messages("textmsg(\"a\")\ntextmsg(\"b\", 2)\npopup(\"hello\", \"Title\", warning=True)\nvarmsg(\"x\", [1, 2])\n"),
+        ["a", "b2", "popup \"Title\": hello", "x = [1, 2]"]
+    );
 }
 
 #[test]
