@@ -65,3 +65,19 @@ pub use error::{ParseError, RuntimeError};
 pub use machine::{Config, Event, Machine, State, Stub};
 pub use sockets::{Policy, Timeout};
 pub use value::Value;
+
+/// Reads a URScript constant: a number, `True`/`False`, a string, a list or a pose of
+/// constants (as a stub's value on a command line).
+///
+/// ```
+/// use urscript_interp::{parse_constant, Value};
+/// assert_eq!(parse_constant("[1, -2.5]").unwrap(), Value::List(vec![Value::Int(1), Value::Float(-2.5)]));
+/// assert!(parse_constant("x").is_err());
+/// ```
+pub fn parse_constant(text: &str) -> Result<Value, ParseError> {
+    let toks = lexer::lex(text)?;
+    let mut p = parser::Parser::new(toks);
+    let e = p.expr()?;
+    p.end_of_constant()?;
+    parser::const_value(&e).ok_or_else(|| ParseError::new(1, 1, "not a constant".into()))
+}

@@ -88,6 +88,34 @@ impl Default for Config {
     }
 }
 
+impl Stub {
+    /// Reads a command-line stub: `NAME` (does nothing) or `NAME=VALUE`, the value a
+    /// URScript constant (`3`, `-0.5`, `True`, `"ok"`, `[1, 2]`, `p[0, 0, 0.1, 0, 0, 0]`).
+    ///
+    /// ```
+    /// use urscript_interp::{Stub, Value};
+    /// assert_eq!(Stub::from_arg("rq_activate").unwrap(), ("rq_activate".to_string(), Stub::NoOp));
+    /// assert_eq!(Stub::from_arg("rq_pos=-3").unwrap().1, Stub::Return(Value::Int(-3)));
+    /// assert!(Stub::from_arg("x=1 +").is_err());
+    /// ```
+    pub fn from_arg(arg: &str) -> Result<(String, Stub), String> {
+        let (name, value) = match arg.split_once('=') {
+            Some((n, v)) => (n.trim(), Some(v)),
+            None => (arg.trim(), None),
+        };
+        if name.is_empty() || !name.chars().all(|c| c.is_ascii_alphanumeric() || c == '_') {
+            return Err(format!("`{name}` is not a function name"));
+        }
+        let stub = match value {
+            None => Stub::NoOp,
+            Some(v) => Stub::Return(crate::parse_constant(v).map_err(|e| {
+                format!("the value of stub `{name}`: {}", e.message())
+            })?),
+        };
+        Ok((name.to_string(), stub))
+    }
+}
+
 impl Config {
     /// A CB3 controller: 8 ms steps (125 Hz).
     pub fn cb3() -> Self {

@@ -283,6 +283,31 @@ impl Parser {
     fn statement_kind(&mut self) -> Result<StmtKind, ParseError> {
         let word = match &self.peek().kind {
             Tok::Ident(w) => w.clone(),
+            // `p[i] = v`: an element of a variable named `p` (not a pose literal).
+            Tok::PoseOpen => {
+                let save = (self.pos, self.depth);
+                self.bump();
+                if let Ok(first) = self.expr() {
+                    if self.eat(&Tok::RBracket) {
+                        if let Ok(mut indices) = self.target_indices() {
+                            if self.eat(&Tok::Assign) {
+                                indices.insert(0, first);
+                                let value = self.expr()?;
+                                self.end_of_statement()?;
+                                return Ok(StmtKind::Assign {
+                                    scope: Scope::Auto,
+                                    name: "p".into(),
+                                    indices,
+                                    value: Some(value),
+                                });
+                            }
+                        }
+                    }
+                }
+                (self.pos, self.depth) = save;
+                let e = self.expr()?;
+                return Err(self.not_a_statement(e));
+            }
             _ => {
                 let e = self.expr()?;
                 return Err(self.not_a_statement(e));
@@ -493,6 +518,16 @@ impl Parser {
         })
     }
 
+    /// Only line ends may follow (after a constant).
+    pub fn end_of_constant(&mut self) -> Result<(), ParseError> {
+        self.skip_newlines();
+        if self.peek().kind == Tok::Eof {
+            Ok(())
+        } else {
+            Err(self.expected("the end of the value"))
+        }
+    }
+
     pub fn expr(&mut self) -> Result<Expr, ParseError> {
         self.enter()?;
         let e = self.binary(0)?;
@@ -699,7 +734,7 @@ impl Parser {
 
 /// The value of a constant expression (a parameter default): literals, negated numbers,
 /// lists and poses of constants.
-fn const_value(e: &Expr) -> Option<Value> {
+pub(crate) fn const_value(e: &Expr) -> Option<Value> {
     match e {
         Expr::Lit(v) => Some(v.clone()),
         Expr::Unary(UnOp::Neg, inner) => match const_value(inner)? {
