@@ -69,7 +69,11 @@ fn external_control_like_program_against_a_tcp_reverse_server() {
     // the newer target, as on a robot.
     let last = messages.last().cloned().unwrap_or_default();
     let n: i32 = last.strip_prefix("servo steps: ").and_then(|n| n.parse().ok()).unwrap_or(0);
-    assert!((1..=10).contains(&n), "{messages:?}");
+    // (0 only if a stalled test machine delivered everything in one step.)
+    assert!((0..=10).contains(&n) && last.starts_with("servo steps: "), "{messages:?}");
+    if n == 0 {
+        return;
+    }
     // It ends on one of the messages' joints: the last one, unless the stop message came
     // in the same step and the servo thread ended before servoing it.
     let q = machine.joint_positions();
