@@ -36,6 +36,26 @@ impl Default for Options {
     }
 }
 
+/// What [`run_tcp`] reports as it runs: the machine's events, and what the servers sent
+/// (for a `--trace` that shows both directions).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Activity<'a> {
+    /// An event of the machine, before the driver acts on it.
+    Event(&'a Event),
+    /// Bytes a server sent on a socket, as read.
+    Received {
+        /// The socket's name.
+        socket_name: &'a str,
+        /// The bytes.
+        bytes: &'a [u8],
+    },
+    /// A server closed its end.
+    PeerClosed {
+        /// The socket's name.
+        socket_name: &'a str,
+    },
+}
+
 /// How a program run by [`run_tcp`] ended without error.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Outcome {
@@ -61,20 +81,21 @@ enum Received {
 }
 
 /// Runs `machine` against real servers until it ends, fails, or `max_time` passes.
-/// `on_event` sees every event first (print it, log it); a runtime error is the `Err`.
+/// `on_activity` sees every event first, and every read from a server (print them, log
+/// them); a runtime error is the `Err`.
 /// The machine stays with the caller, to read its globals or arm state afterwards.
 ///
 /// ```no_run
 /// use urscript_interp::{drive, Config, Machine, Program};
 /// let program = Program::parse(&std::fs::read_to_string("prog.script")?)?;
 /// let mut machine = Machine::new(program, Config::default());
-/// let outcome = drive::run_tcp(&mut machine, &drive::Options::default(), |e| println!("{e:?}"))?;
+/// let outcome = drive::run_tcp(&mut machine, &drive::Options::default(), |a| println!("{a:?}"))?;
 /// # Ok::<(), Box<dyn std::error::Error>>(())
 /// ```
 pub fn run_tcp(
     machine: &mut Machine,
     options: &Options,
-    mut on_event: impl FnMut(&Event),
+    mut on_activity: impl FnMut(Activity<'_>),
 ) -> Result<Outcome, RuntimeError> {
     let start = Instant::now();
     let mut conns: HashMap<String, Conn> = HashMap::new();
@@ -86,7 +107,7 @@ pub fn run_tcp(
         }
         machine.run_until(now);
         while let Some(event) = machine.poll_event() {
-            on_event(&event);
+            on_activity(Activity::Event(&event));
             match event {
                 Event::Connect {
                     socket_name,
@@ -113,6 +134,9 @@ pub fn run_tcp(
                     if let Some(c) = conns.get_mut(&socket_name) {
                         if write_all(&mut c.stream, &bytes).is_err() {
                             c.closed = true;
+                            on_activity(Activity::PeerClosed {
+                                socket_name: &socket_name,
+                            });
                             machine.handle_peer_closed(&socket_name);
                         }
                     }
@@ -147,12 +171,17 @@ pub fn run_tcp(
                 None => {}
                 Some(Received::Bytes(bytes)) => {
                     got_any = true;
+                    on_activity(Activity::Received {
+                        socket_name: name,
+                        bytes: &bytes,
+                    });
                     let n = machine.handle_received(name, &bytes);
                     c.backlog.extend_from_slice(&bytes[n..]);
                 }
                 Some(Received::Closed) => {
                     got_any = true;
                     c.closed = true;
+                    on_activity(Activity::PeerClosed { socket_name: name });
                     machine.handle_peer_closed(name);
                 }
             }

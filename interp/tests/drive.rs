@@ -3,7 +3,7 @@ use std::io::{Read, Write};
 use std::net::TcpListener;
 use std::time::Duration;
 
-use urscript_interp::drive::{run_tcp, Options, Outcome};
+use urscript_interp::drive::{run_tcp, Activity, Options, Outcome};
 use urscript_interp::{Config, Event, Machine, Program};
 
 fn int32s(v: &[i32]) -> Vec<u8> {
@@ -55,13 +55,15 @@ fn external_control_like_program_against_a_tcp_reverse_server() {
     let mut machine = Machine::new(Program::parse(&src).unwrap(), Config::default());
     let mut messages = Vec::new();
     let options = Options { max_time: Some(Duration::from_secs(10)), ..Options::default() };
-    let outcome = run_tcp(&mut machine, &options, |e| {
-        if let Event::Message(m) = e {
-            messages.push(m.clone());
-        }
+    let mut received = 0;
+    let outcome = run_tcp(&mut machine, &options, |a| match a {
+        Activity::Event(Event::Message(m)) => messages.push(m.clone()),
+        Activity::Received { socket_name: "reverse_socket", bytes } => received += bytes.len(),
+        _ => {}
     })
     .unwrap();
     assert_eq!(outcome, Outcome::Finished);
+    assert_eq!(received, 11 * 32);
     rev.join().unwrap();
     assert_eq!(traj.join().unwrap(), int32s(&[0]));
     cmd.join().unwrap();
@@ -101,8 +103,8 @@ fn runtime_error_and_refused_connection() {
     let err = run_tcp(
         &mut Machine::new(Program::parse(&src).unwrap(), Config::default()),
         &Options::default(),
-        |e| {
-            if let Event::Message(m) = e {
+        |a| {
+            if let Activity::Event(Event::Message(m)) = a {
                 msgs.push(m.clone());
             }
         },
