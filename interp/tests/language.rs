@@ -227,3 +227,9 @@ fn float_division_by_zero_is_infinite() {
 fn a_variable_named_p_can_be_indexed_and_assigned() {
     assert_eq!(msgs("p = get_actual_tcp_pose()\np[2] = 0.5\nl = [p[2], 1]\ntextmsg(p, l)\n"), ["p[0, 0, 0.5, 0, 0, 0][0.5, 1]"]);
 }
+
+#[test]
+fn real_world_syntax_variants() {
+    let src = "def empty():\r\nend\r\nsec secondary():\r\n  textmsg(\"sec\")\r\nend\r\ndef f(): # comment after the colon\n\treturn\nend\nx=1\nif(x==1): textmsg(\"inline\") end\nwhile x < 3: x = x + 1 end\nthread t():\n  return\nend\nh = run t()\njoin h\nempty()\nsecondary()\ntextmsg(not(x == 3), [-1, -2.5])\ntextmsg(1., .5)\ntextmsg(f())\n";
+    assert_eq!(msgs(src), ["inline", "sec", "False[-1, -2.5]", "10.5", "None"]);
+}
