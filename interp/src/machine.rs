@@ -9,9 +9,12 @@
 //! time: `sync()` (to the next step), `sleep(t)` and motion (to the step where the time is
 //! over), a socket read whose bytes have not all arrived (until they arrive, checked at
 //! each step, or its timeout), `socket_open` (until the driver reports the connection),
-//! `join` of a thread that still runs. A thread that runs more than
+//! `join` of a thread that still runs. This is the manual's "Thread scheduling": 2 ms
+//! frames, each runnable thread scheduled round robin, a thread that has used its frame
+//! waits for the next. A thread that runs more than
 //! [`Config::max_statements_per_step`] statements in one step without consuming time is a
-//! runtime error, as the controller stops a loop without `sync()`.
+//! runtime error, as the controller stops a thread that "used too much time" (a loop
+//! without `sync()`).
 //!
 //! Threads only switch where time is consumed, so `enter_critical`/`exit_critical` never
 //! needs to hold the others back: a thread inside a critical section already runs alone
@@ -680,7 +683,7 @@ impl Machine {
                     self.budget += 1;
                     if self.budget > self.config.max_statements_per_step {
                         return Err(fail(format!(
-                            "thread `{}` ran {} statements in one step without consuming time (a loop needs `sync()`, `sleep()` or another call that takes time)",
+                            "thread `{}` used too much time: {} statements in one step without consuming time (a loop needs `sync()`, `sleep()` or another call that takes time)",
                             th.name, self.config.max_statements_per_step
                         )));
                     }

@@ -184,12 +184,12 @@ fn runtime_errors_say_the_line() {
     assert_eq!(runtime_error("l = [1]\nl[1.5] = 2\n"), "line 2: type error: an index must be an int, got float 1.5");
     assert_eq!(runtime_error("rq_activate()\n"), "line 1: `rq_activate` is not a built-in this interpreter supports (stub it to run past it)");
     assert_eq!(runtime_error("def f(a):\n  return a\nend\nf()\n"), "line 4: `f` needs argument `a`");
-    assert!(runtime_error("while True:\n  x = 1\nend\n").starts_with("line 1: thread `<program>` ran 100000 statements in one step without consuming time"));
+    assert!(runtime_error("while True:\n  x = 1\nend\n").starts_with("line 1: thread `<program>` used too much time: 100000 statements in one step without consuming time"));
 }
 
 #[test]
 fn an_empty_infinite_loop_is_stopped() {
-    assert!(runtime_error("while True:\nend\n").starts_with("line 1: thread `<program>` ran 100000 statements"));
+    assert!(runtime_error("while True:\nend\n").starts_with("line 1: thread `<program>` used too much time: 100000 statements"));
 }
 
 #[test]
