@@ -24,6 +24,8 @@ pub(crate) enum Op {
     /// Stack: indices (1 or 2), value.
     StoreIndex(Sym, Scope, u8),
     Index,
+    /// `name[i]` without copying the whole list: stack holds the index.
+    LoadIndex(Sym),
     MakeList(u32),
     MakePose(u32),
     Neg,
@@ -444,11 +446,18 @@ impl Compiler {
                 }
                 self.emit(Op::MakePose(items.len() as u32));
             }
-            Expr::Index(base, i) => {
-                self.expr(base)?;
-                self.expr(i)?;
-                self.emit(Op::Index);
-            }
+            Expr::Index(base, i) => match base.as_ref() {
+                Expr::Name(n) => {
+                    let s = self.sym(n);
+                    self.expr(i)?;
+                    self.emit(Op::LoadIndex(s));
+                }
+                _ => {
+                    self.expr(base)?;
+                    self.expr(i)?;
+                    self.emit(Op::Index);
+                }
+            },
             Expr::Unary(op, inner) => {
                 self.expr(inner)?;
                 self.emit(match op {

@@ -730,6 +730,25 @@ impl Machine {
                         }
                     }
                 }
+                Op::LoadIndex(s) => {
+                    let i = pop(&mut th.stack, line)?;
+                    let base = frame
+                        .locals
+                        .iter()
+                        .rev()
+                        .find(|(n, _)| *n == s)
+                        .and_then(|(_, v)| v.as_ref())
+                        .or_else(|| self.globals[s as usize].as_ref());
+                    match base {
+                        Some(b) => th.stack.push(index(b, &i).map_err(fail)?),
+                        None => {
+                            return Err(fail(format!(
+                                "unknown variable `{}`",
+                                prog.names[s as usize]
+                            )))
+                        }
+                    }
+                }
                 Op::Index => {
                     let i = pop(&mut th.stack, line)?;
                     let b = pop(&mut th.stack, line)?;
