@@ -410,7 +410,8 @@ impl Machine {
             Ok(NativeOut::Value(v))
         };
         let read = |m: &mut Machine, socket: String, spec: ReadSpec, timeout: f64| {
-            match m.sockets.start_read(&socket, &spec)? {
+            let now = m.now();
+            match m.sockets.start_read(&socket, &spec, timeout, now)? {
                 Some(v) => {
                     m.flush(&socket);
                     if tracing {
@@ -421,11 +422,9 @@ impl Machine {
                 }
                 None => {
                     m.flush(&socket);
-                    let deadline = m.deadline(spec.wait_limit(timeout));
                     Ok(NativeOut::Block(Wait::Read {
                         socket,
                         spec,
-                        deadline,
                         call: text.clone(),
                         line,
                     }))

@@ -137,7 +137,7 @@ pub fn run_tcp(
                             on_activity(Activity::PeerClosed {
                                 socket_name: &socket_name,
                             });
-                            machine.handle_peer_closed(&socket_name);
+                            machine.handle_send_failed(&socket_name);
                         }
                     }
                 }

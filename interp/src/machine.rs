@@ -199,7 +199,6 @@ pub(crate) enum Wait {
     Read {
         socket: String,
         spec: ReadSpec,
-        deadline: Option<u64>,
         call: String,
         line: u32,
     },
@@ -430,7 +429,13 @@ impl Machine {
     }
 
     fn next_wake_step(&self) -> Option<u64> {
-        let mut best: Option<u64> = None;
+        // A waiting read's deadline is the robot model's, not the interpreter's: its
+        // step is the first whose time is at or after it.
+        let st = self.config.step_time.as_nanos().max(1);
+        let mut best: Option<u64> = self
+            .sockets
+            .poll_timeout()
+            .map(|d| u64::try_from(d.as_nanos().div_ceil(st)).unwrap_or(u64::MAX).max(self.step));
         for t in &self.threads {
             if t.done {
                 continue;
@@ -438,7 +443,7 @@ impl Machine {
             let at = match &t.wait {
                 Wait::None | Wait::Resume(_) => Some(self.step),
                 Wait::Steps { until, .. } => Some((*until).max(self.step)),
-                Wait::Read { deadline, .. } => deadline.map(|d| d.max(self.step)),
+                Wait::Read { .. } => None,
                 Wait::Connect { .. } => None,
                 Wait::Join(id) => match self.threads.get(*id as usize) {
                     Some(j) if !j.done => None,
@@ -515,6 +520,13 @@ impl Machine {
         self.poll_reads(socket_name);
     }
 
+    /// Writing to `socket_name` failed (the peer is gone): later `socket_send_*` calls
+    /// on it return `False`, and reads waiting on it end with their sentinels.
+    pub fn handle_send_failed(&mut self, socket_name: &str) {
+        self.sockets.send_failed(socket_name);
+        self.handle_peer_closed(socket_name);
+    }
+
     /// Completes a read waiting on `socket_name` if its bytes are there.
     fn poll_reads(&mut self, socket_name: &str) {
         for i in 0..self.threads.len() {
@@ -580,11 +592,6 @@ impl Machine {
         }
     }
 
-    /// The deadline step of a read that may wait `d`.
-    pub(crate) fn deadline(&self, d: Option<Duration>) -> Option<u64> {
-        d.map(|d| self.step.saturating_add(self.steps_for(d).max(1)))
-    }
-
     fn run_step(&mut self) {
         let mut i = 0;
         while i < self.threads.len() {
@@ -610,20 +617,29 @@ impl Machine {
                 Wait::Read {
                     socket,
                     spec,
-                    deadline: Some(d),
                     call,
                     line,
-                } if d <= self.step => {
-                    let v = self.sockets.timeout(&socket, &spec);
-                    if self.config.trace_socket_calls {
-                        self.events.push_back(Event::Call {
-                            line,
-                            text: format!("{call} -> {} (timeout)", v.to_source()),
-                        });
+                } => match self.sockets.handle_timeout(&socket, &spec, self.now()) {
+                    Some(v) => {
+                        if self.config.trace_socket_calls {
+                            self.events.push_back(Event::Call {
+                                line,
+                                text: format!("{call} -> {} (timeout)", v.to_source()),
+                            });
+                        }
+                        self.threads[i].stack.push(v);
+                        (true, Wait::None)
                     }
-                    self.threads[i].stack.push(v);
-                    (true, Wait::None)
-                }
+                    None => (
+                        false,
+                        Wait::Read {
+                            socket,
+                            spec,
+                            call,
+                            line,
+                        },
+                    ),
+                },
                 Wait::Join(id) if self.threads.get(id as usize).is_none_or(|t| t.done) => {
                     (true, Wait::None)
                 }
@@ -936,10 +952,10 @@ impl Machine {
                             t.frames = Vec::new();
                             t.stack = Vec::new();
                             // A read it was waiting for ends with it.
-                            if let Wait::Read { socket, spec, .. } =
+                            if let Wait::Read { socket, .. } =
                                 std::mem::replace(&mut t.wait, Wait::None)
                             {
-                                self.sockets.timeout(&socket, &spec);
+                                self.sockets.give_up(&socket);
                             }
                         }
                     }

@@ -2,6 +2,8 @@
 //! sockets, what each read function returns, and the conversion of its results into
 //! URScript values. Everything else in the crate goes through [`Sockets`].
 
+use std::time::Duration;
+
 use urscript_socket::robot::{ReadCall, ReadResult, Robot};
 pub use urscript_socket::robot::{Policy, Timeout};
 
@@ -46,19 +48,6 @@ impl ReadSpec {
     pub fn sentinel(&self) -> Value {
         convert(self.call().sentinel())
     }
-
-    /// How long the read may wait: its `timeout` argument, except `socket_get_var`, which
-    /// always waits 2 s. `None` = forever.
-    pub fn wait_limit(&self, timeout_secs: f64) -> Option<std::time::Duration> {
-        let t = match self {
-            ReadSpec::GetVar(_) => Timeout::default(),
-            _ => Timeout::from_secs_f64(timeout_secs),
-        };
-        match t {
-            Timeout::Forever => None,
-            Timeout::After(d) => Some(d),
-        }
-    }
 }
 
 fn convert(r: ReadResult) -> Value {
@@ -80,42 +69,38 @@ fn convert(r: ReadResult) -> Value {
     }
 }
 
-/// The robot's open sockets.
+/// The robot's open sockets: the robot model's one socket table. Every read's deadline
+/// lives in the model (started with the program time, resolved with
+/// [`handle_timeout`](Self::handle_timeout)); the interpreter keeps no clock of its own.
 #[derive(Debug)]
 pub(crate) struct Sockets {
     robot: Robot,
-    open: Vec<String>,
 }
 
 impl Sockets {
     pub fn new(policy: Policy) -> Self {
         Sockets {
             robot: Robot::new(policy),
-            open: Vec::new(),
         }
     }
 
     pub fn open(&mut self, name: &str) {
         self.robot.socket_open(name);
-        if !self.is_open(name) {
-            self.open.push(name.to_string());
-        }
     }
 
     pub fn close(&mut self, name: &str) -> bool {
-        self.open.retain(|n| n != name);
         self.robot.socket_close(name)
     }
 
-    pub fn is_open(&self, name: &str) -> bool {
-        self.open.iter().any(|n| n == name)
+    pub fn is_open(&mut self, name: &str) -> bool {
+        self.robot.socket(name).is_some()
     }
 
     pub fn open_names(&self) -> Vec<String> {
-        self.open.clone()
+        self.robot.names().map(str::to_string).collect()
     }
 
-    /// Runs `f` on the open socket `name`; false if it is not open.
+    /// Runs `f` on the open socket `name`; `None` if it is not open.
     fn with<T>(
         &mut self,
         name: &str,
@@ -124,27 +109,33 @@ impl Sockets {
         self.robot.socket(name).map(f)
     }
 
+    /// `socket_send_string`: false if the socket is not open or the peer is gone.
     pub fn send_string(&mut self, name: &str, bytes: &[u8]) -> bool {
-        self.with(name, |s| s.send_string(bytes)).is_some()
+        self.with(name, |s| s.send_string(bytes)).unwrap_or(false)
     }
 
     pub fn send_line(&mut self, name: &str, bytes: &[u8]) -> bool {
-        self.with(name, |s| s.send_line(bytes)).is_some()
+        self.with(name, |s| s.send_line(bytes)).unwrap_or(false)
     }
 
     pub fn send_byte(&mut self, name: &str, b: u8) -> bool {
-        self.with(name, |s| s.send_byte(b)).is_some()
+        self.with(name, |s| s.send_byte(b)).unwrap_or(false)
     }
 
     pub fn send_int(&mut self, name: &str, v: i32) -> bool {
-        self.with(name, |s| s.send_int(v)).is_some()
+        self.with(name, |s| s.send_int(v)).unwrap_or(false)
+    }
+
+    /// The transport could not write: later sends on `name` return false.
+    pub fn send_failed(&mut self, name: &str) {
+        self.with(name, |s| s.send_failed());
     }
 
     /// `SET var value\n`; an invalid name is an error message.
     pub fn set_var(&mut self, name: &str, var: &str, v: i32) -> Result<bool, String> {
         match self.with(name, |s| s.set_var(var, v)) {
             None => Ok(false),
-            Some(Ok(())) => Ok(true),
+            Some(Ok(ok)) => Ok(ok),
             Some(Err(e)) => Err(e.to_string()),
         }
     }
@@ -153,12 +144,21 @@ impl Sockets {
         self.with(name, |s| s.take_outgoing()).unwrap_or_default()
     }
 
-    /// Starts a read: `Ok(Some(v))` if it completes from the buffered bytes at once,
-    /// `Ok(None)` if it must wait; an argument the robot refuses is an error message.
-    pub fn start_read(&mut self, name: &str, spec: &ReadSpec) -> Result<Option<Value>, String> {
+    /// Starts a read at program time `now` that may wait `timeout` seconds (the model
+    /// makes `socket_get_var` wait 2 s whatever is asked): `Ok(Some(v))` if it completes
+    /// from the buffered bytes at once, `Ok(None)` if it must wait; an argument the robot
+    /// refuses is an error message.
+    pub fn start_read(
+        &mut self,
+        name: &str,
+        spec: &ReadSpec,
+        timeout_secs: f64,
+        now: Duration,
+    ) -> Result<Option<Value>, String> {
         let call = spec.call();
+        let timeout = Timeout::from_secs_f64(timeout_secs);
         match self.with(name, |s| {
-            s.start_read(call)?;
+            s.start_read(call, timeout, now)?;
             Ok::<_, urscript_socket::robot::RobotError>(s.poll_read().map(convert))
         }) {
             None => Ok(Some(spec.sentinel())),
@@ -172,11 +172,24 @@ impl Sockets {
         self.with(name, |s| s.poll_read().map(convert)).flatten()
     }
 
-    /// The pending read timed out: its sentinel (or its policy's partial result).
-    pub fn timeout(&mut self, name: &str, spec: &ReadSpec) -> Value {
-        self.with(name, |s| s.handle_timeout().map(convert))
-            .flatten()
-            .unwrap_or_else(|| spec.sentinel())
+    /// The earliest deadline of any pending read (the model's).
+    pub fn poll_timeout(&self) -> Option<Duration> {
+        self.robot.poll_timeout()
+    }
+
+    /// Time `now` came: the pending read's sentinel (or its policy's partial result) if
+    /// its deadline has passed, `None` if it still waits. A socket that is no longer open
+    /// gives the sentinel.
+    pub fn handle_timeout(&mut self, name: &str, spec: &ReadSpec, now: Duration) -> Option<Value> {
+        match self.with(name, |s| s.handle_timeout(now).map(convert)) {
+            None => Some(spec.sentinel()),
+            Some(v) => v,
+        }
+    }
+
+    /// Ends the pending read now (its thread was killed, or the program stops).
+    pub fn give_up(&mut self, name: &str) {
+        self.with(name, |s| s.give_up());
     }
 
     /// Bytes from the server; returns how many the receive buffer accepted.
