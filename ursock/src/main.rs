@@ -307,7 +307,9 @@ fn run(cli: Cli) -> Result<(), String> {
                     std::time::Duration::try_from_secs_f64(s)
                         .ok()
                         .filter(|_| s > 0.0)
-                        .ok_or_else(|| format!("--max-time {s}: give a number of seconds above 0"))?,
+                        .ok_or_else(|| {
+                            format!("--max-time {s}: give a number of seconds above 0")
+                        })?,
                 ),
             };
             let step_time = std::time::Duration::try_from_secs_f64(step_time)

@@ -180,10 +180,7 @@ fn split_traced(text: &str) -> Option<Traced<'_>> {
 
 /// The top-level arguments of a traced call, split on commas outside strings/brackets.
 fn call_args(call: &str) -> Vec<&str> {
-    let Some(inner) = call
-        .find('(')
-        .and_then(|o| call[o + 1..].strip_suffix(')'))
-    else {
+    let Some(inner) = call.find('(').and_then(|o| call[o + 1..].strip_suffix(')')) else {
         return Vec::new();
     };
     let (mut out, mut depth, mut in_str, mut start) = (Vec::new(), 0i32, false, 0);
@@ -257,8 +254,14 @@ fn socket_and_read(name: &str, args: &[&str]) -> (String, Option<ReadCall>) {
         "socket_read_byte_list" => Some(ReadCall::ByteList { number: number() }),
         "socket_read_line" => Some(ReadCall::Line),
         "socket_read_string" => Some(ReadCall::String {
-            prefix: arg(args, "prefix", 1).map(unquote).unwrap_or_default().into_bytes(),
-            suffix: arg(args, "suffix", 2).map(unquote).unwrap_or_default().into_bytes(),
+            prefix: arg(args, "prefix", 1)
+                .map(unquote)
+                .unwrap_or_default()
+                .into_bytes(),
+            suffix: arg(args, "suffix", 2)
+                .map(unquote)
+                .unwrap_or_default()
+                .into_bytes(),
             interpret_escape: arg(args, "interpret_escape", 3) == Some("True"),
         }),
         _ => None,
@@ -329,30 +332,24 @@ fn leftover<'a>(read: &ReadCall, seen: &'a [u8]) -> Option<&'a [u8]> {
     seen.get(end..).filter(|rest| !rest.is_empty())
 }
 
-/// The line `line` of the program as written, if it is one call of `name` (optionally
-/// assigned: `x = name(...)`): the old one-call-per-line output shows it as written.
-fn shown_as_written<'a>(source: &[&'a str], line: u32, name: &str) -> Option<&'a str> {
+/// The variable the line `line` assigns the call of `name` to, when the line is just
+/// that (`x = name(...)`): printed in front of the call, as the old one-call-per-line
+/// output showed it.
+fn assigned_to<'a>(source: &[&'a str], line: u32, name: &str) -> Option<&'a str> {
     let text = source.get((line as usize).checked_sub(1)?)?;
     let code = strip_comment(text).trim();
-    let call = match code.split_once('=') {
-        Some((target, rest))
-            if !target.trim().is_empty()
-                && target
-                    .trim()
-                    .chars()
-                    .all(|c| c.is_ascii_alphanumeric() || c == '_')
-                && !rest.starts_with('=') =>
-        {
-            rest.trim()
-        }
-        _ => code,
-    };
-    (call.starts_with(name)
+    let (target, rest) = code.split_once('=')?;
+    let target = target.trim();
+    let call = rest.trim();
+    (!target.is_empty()
+        && target
+            .chars()
+            .all(|c| c.is_ascii_alphanumeric() || c == '_')
+        && !rest.starts_with('=')
+        && call.starts_with(name)
         && call[name.len()..].trim_start().starts_with('(')
-        && call.ends_with(')')
-        && call.matches('(').count() == call.matches(')').count()
         && split_traced(&format!("{call} -> x")).is_some_and(|t| t.call.len() == call.len()))
-    .then_some(code)
+    .then_some(target)
 }
 
 fn strip_comment(line: &str) -> &str {
@@ -509,7 +506,11 @@ pub fn run(script: &str, connect_to: Option<&str>, opts: Options) -> Result<(), 
                     if !(t.name.starts_with("socket_") || is_message || stubbed) {
                         continue;
                     }
-                    let shown = shown_as_written(&source, line, t.name).unwrap_or(t.call);
+                    let shown = match assigned_to(&source, line, t.name) {
+                        Some(target) => format!("{target} = {}", t.call),
+                        None => t.call.to_string(),
+                    };
+                    let shown = shown.as_str();
                     if is_message {
                         let text = messages.pop_front().unwrap_or_default();
                         if json {
@@ -526,7 +527,10 @@ pub fn run(script: &str, connect_to: Option<&str>, opts: Options) -> Result<(), 
                     if t.name == "socket_open" {
                         if let Some(reason) = result.strip_prefix("False") {
                             why = Some(open_failures.remove(&socket).unwrap_or_else(|| {
-                                reason.trim().trim_matches(|c| c == '(' || c == ')').to_string()
+                                reason
+                                    .trim()
+                                    .trim_matches(|c| c == '(' || c == ')')
+                                    .to_string()
                             }));
                             result = "False".into();
                         }
@@ -549,11 +553,11 @@ pub fn run(script: &str, connect_to: Option<&str>, opts: Options) -> Result<(), 
                             ReadCall::BinaryInteger { .. } | ReadCall::ByteList { .. }
                         );
                         if binary || read_failed(read, value) {
-                            why = crate::diagnose::diagnose(read, &seen).map(|w| format!("why: {w}"));
+                            why =
+                                crate::diagnose::diagnose(read, &seen).map(|w| format!("why: {w}"));
                         }
                         if let Some((prev, prev_line, sent_since)) = c.timed_out.take() {
-                            let waiting =
-                                first_at.is_some_and(|at| at.elapsed() >= LATE_WINDOW);
+                            let waiting = first_at.is_some_and(|at| at.elapsed() >= LATE_WINDOW);
                             if waiting && !sent_since {
                                 let late = crate::diagnose::late_reply(&prev, prev_line as usize);
                                 why = Some(match why {
@@ -571,7 +575,9 @@ pub fn run(script: &str, connect_to: Option<&str>, opts: Options) -> Result<(), 
                     }
                     if json {
                         let why = why.map(|w| w.trim_start_matches("why: ").to_string());
-                        let value = result.trim_end_matches(" (timeout)").trim_end_matches(" (stub)");
+                        let value = result
+                            .trim_end_matches(" (timeout)")
+                            .trim_end_matches(" (stub)");
                         report(json, line, shown, t.name, value, why);
                     } else {
                         report(json, line, shown, t.name, &result, why);
@@ -663,12 +669,12 @@ mod tests {
     }
 
     #[test]
-    fn lines_of_one_call_are_shown_as_written() {
-        let src = ["x = socket_read_ascii_float(3)  # pose", "if socket_open(h, 1):"];
-        assert_eq!(
-            shown_as_written(&src, 1, "socket_read_ascii_float"),
-            Some("x = socket_read_ascii_float(3)")
-        );
-        assert_eq!(shown_as_written(&src, 2, "socket_open"), None);
+    fn assignments_of_one_call_show_their_variable() {
+        let src = [
+            "x = socket_read_ascii_float(3)  # pose",
+            "if socket_open(h, 1):",
+        ];
+        assert_eq!(assigned_to(&src, 1, "socket_read_ascii_float"), Some("x"));
+        assert_eq!(assigned_to(&src, 2, "socket_open"), None);
     }
 }
