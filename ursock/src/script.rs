@@ -340,6 +340,10 @@ fn assigned_to<'a>(source: &[&'a str], line: u32, name: &str) -> Option<&'a str>
     let code = strip_comment(text).trim();
     let (target, rest) = code.split_once('=')?;
     let target = target.trim();
+    let target = target
+        .strip_prefix("local ")
+        .or_else(|| target.strip_prefix("global "))
+        .map_or(target, str::trim);
     let call = rest.trim();
     (!target.is_empty()
         && target
