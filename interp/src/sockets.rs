@@ -4,8 +4,8 @@
 
 use std::time::Duration;
 
-use urscript_socket::robot::{ReadCall, ReadResult, Robot};
 pub use urscript_socket::robot::{Policy, Timeout};
+use urscript_socket::robot::{ReadCall, ReadResult, Robot};
 
 use crate::value::Value;
 

@@ -306,7 +306,7 @@ fn result_json(result: &str) -> serde_json::Value {
 fn read_failed(read: &ReadCall, result: &str) -> bool {
     let count = result
         .strip_prefix('[')
-        .and_then(|r| r.split(|c| c == ',' || c == ']').next())
+        .and_then(|r| r.split([',', ']']).next())
         .and_then(|c| c.trim().parse::<usize>().ok());
     match (read, count) {
         (ReadCall::AsciiFloat { number }, Some(c)) => c < *number,
@@ -368,6 +368,25 @@ fn strip_comment(line: &str) -> &str {
     line
 }
 
+/// Control characters of a result made visible (`\r`, `\n`, `\t`, `\xHH`), as the
+/// robot's strings are shown elsewhere in `ursock`.
+fn visible(text: &str) -> std::borrow::Cow<'_, str> {
+    if !text.chars().any(char::is_control) {
+        return text.into();
+    }
+    let mut out = String::with_capacity(text.len() + 8);
+    for c in text.chars() {
+        match c {
+            '\r' => out.push_str("\\r"),
+            '\n' => out.push_str("\\n"),
+            '\t' => out.push_str("\\t"),
+            c if c.is_control() => out.push_str(&format!("\\x{:02X}", c as u32)),
+            c => out.push(c),
+        }
+    }
+    out.into()
+}
+
 /// Prints one call: text (`shown -> result`, the reason on stderr) or one JSON object.
 fn report(json: bool, line: u32, shown: &str, call: &str, result: &str, why: Option<String>) {
     if json {
@@ -383,9 +402,9 @@ fn report(json: bool, line: u32, shown: &str, call: &str, result: &str, why: Opt
         outln!("{}", serde_json::to_string(&ev).unwrap_or_default());
     } else {
         if result.is_empty() || result == "None" {
-            outln!("{shown}");
+            outln!("{}", visible(shown));
         } else {
-            outln!("{shown} -> {result}");
+            outln!("{} -> {}", visible(shown), visible(result));
         }
         if let Some(w) = why {
             out::note(&format!("line {line}: {w}"));
@@ -670,6 +689,12 @@ mod tests {
         let (socket, read) = socket_and_read(t.name, &call_args(t.call));
         assert_eq!(socket, "c");
         assert!(matches!(read, Some(ReadCall::String { suffix, .. }) if suffix == b")"));
+    }
+
+    #[test]
+    fn control_characters_are_shown_escaped() {
+        assert_eq!(visible("\"TRG\r\""), "\"TRG\\r\"");
+        assert_eq!(visible("a\u{1}"), "a\\x01");
     }
 
     #[test]

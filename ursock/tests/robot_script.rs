@@ -189,7 +189,7 @@ fn external_control_server(
         rev.write_all(&int32s(&[1000, 3, 0, 0, 0, 0, 0, 2]))
             .unwrap();
         for k in 0..3 {
-            let mut p: Vec<i32> = (0..6).map(|j| (k * 100_000 + j * 10_000) as i32).collect();
+            let mut p: Vec<i32> = (0..6).map(|j| k * 100_000 + j * 10_000).collect();
             p.push(100);
             traj.write_all(&int32s(&p)).unwrap();
         }
