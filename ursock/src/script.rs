@@ -566,6 +566,17 @@ pub fn run(script: &str, connect_to: Option<&str>, opts: Options) -> Result<(), 
                         } else {
                             format!("{}: the socket \"{socket}\" is not open", t.name)
                         });
+                    } else if t.name == "socket_get_var" {
+                        // Its reply line is not the next read's input.
+                        if let Some(c) = conns.get_mut(&socket) {
+                            match c.seen.iter().position(|&b| b == b'\n') {
+                                Some(i) => drop(c.seen.drain(..=i)),
+                                None => c.seen.clear(),
+                            }
+                            if c.seen.is_empty() {
+                                c.first_at = None;
+                            }
+                        }
                     } else if let (Some(read), Some(c)) = (&read, conns.get_mut(&socket)) {
                         let timed_out_now = result.ends_with(" (timeout)");
                         let value = result.trim_end_matches(" (timeout)");
