@@ -469,6 +469,7 @@ pub fn run(script: &str, connect_to: Option<&str>, opts: Options) -> Result<(), 
     let start = Instant::now();
     let mut open_failures: HashMap<String, String> = HashMap::new();
     let mut messages: VecDeque<String> = VecDeque::new();
+    let mut last_why: HashMap<u32, String> = HashMap::new();
     let mut buf = vec![0u8; 16 * 1024];
     loop {
         let now = start.elapsed();
@@ -614,6 +615,19 @@ pub fn run(script: &str, connect_to: Option<&str>, opts: Options) -> Result<(), 
                             .trim_end_matches(" (stub)");
                         report(json, line, shown, t.name, value, why);
                     } else {
+                        // A loop polling with a timeout would repeat the same note at
+                        // every turn: a note is said again only when it changes.
+                        let why = match why {
+                            Some(w) if last_why.get(&line) == Some(&w) => None,
+                            Some(w) => {
+                                last_why.insert(line, w.clone());
+                                Some(w)
+                            }
+                            None => {
+                                last_why.remove(&line);
+                                None
+                            }
+                        };
                         report(json, line, shown, t.name, &result, why);
                     }
                 }
