@@ -40,15 +40,21 @@ enum Command {
     /// `close N`, `help`. Variables (SET/GET) belong to the server: one table shared by
     /// every connection, so a value SET by one connection is read back by the next.
     Listen(listen::ListenOptions),
-    /// A virtual robot running URScript socket calls against a server.
+    /// A virtual robot running a URScript program against real servers, in real time:
+    /// prints each socket call and what it returned, and textmsg/popup text.
+    ///
+    /// Exits 0 when the program ends or halts (or --max-time passes), non-zero with
+    /// `line N:` on a runtime error; a parse error names line and column and nothing is
+    /// sent.
     Robot {
-        /// Open `socket_0` to HOST:PORT before the script runs.
+        /// Open `socket_0` to HOST:PORT before the program runs.
         #[arg(long)]
         connect: Option<String>,
-        /// A file of calls, one per line.
+        /// A URScript program: a file of statements, or one top-level `def` (as drivers
+        /// send it to the controller), which is run.
         #[arg(long, conflicts_with = "eval")]
         script: Option<std::path::PathBuf>,
-        /// Calls given on the command line (repeatable).
+        /// Program lines given on the command line (repeatable).
         #[arg(short = 'e', long = "eval")]
         eval: Vec<String>,
         /// Also print the bytes sent and received, with times relative to the start.
@@ -60,6 +66,18 @@ enum Command {
         /// Copy everything printed (stdout and stderr notes) to FILE.
         #[arg(long, value_name = "FILE")]
         log: Option<std::path::PathBuf>,
+        /// End the program after SECONDS (for programs that loop forever); exit 0 if
+        /// nothing failed before.
+        #[arg(long, value_name = "SECONDS")]
+        max_time: Option<f64>,
+        /// The controller's step in seconds: 0.002 (e-Series, the default), 0.008 (CB3).
+        #[arg(long, value_name = "SECONDS", default_value_t = 0.002)]
+        step_time: f64,
+        /// Replace a function the program calls (a built-in not supported, or a helper of
+        /// a URCap): `NAME` does nothing, `NAME=VALUE` returns the URScript constant VALUE
+        /// (`0`, `True`, `"ok"`, `[1, 2]`, `p[0,0,0,0,0,0]`). Repeatable.
+        #[arg(long, value_name = "NAME[=VALUE]")]
+        stub: Vec<String>,
     },
     /// Write the bytes a server (or with --robot, the robot) sends.
     /// Formats: floats, floats-lf, int32, bytes, string, line, framed PREFIX TEXT SUFFIX,
@@ -148,17 +166,51 @@ fn run(cli: Cli) -> Result<(), String> {
             trace,
             json,
             log,
+            max_time,
+            step_time,
+            stub,
         } => {
             if let Some(path) = &log {
                 out::open_log(path)?;
             }
+            let max_time = match max_time {
+                None => None,
+                Some(s) => Some(
+                    std::time::Duration::try_from_secs_f64(s)
+                        .ok()
+                        .filter(|_| s > 0.0)
+                        .ok_or_else(|| {
+                            format!("--max-time {s}: give a number of seconds above 0")
+                        })?,
+                ),
+            };
+            let step_time = std::time::Duration::try_from_secs_f64(step_time)
+                .ok()
+                .filter(|d| *d >= std::time::Duration::from_micros(100) && d.as_secs_f64() <= 1.0)
+                .ok_or_else(|| {
+                    format!("--step-time {step_time}: give seconds between 0.0001 and 1 (0.002 e-Series, 0.008 CB3)")
+                })?;
+            let stubs = stub
+                .iter()
+                .map(|s| urscript_interp::Stub::from_arg(s).map_err(|e| format!("--stub {s}: {e}")))
+                .collect::<Result<Vec<_>, _>>()?;
             let text = match script {
                 Some(path) => std::fs::read_to_string(&path)
                     .map_err(|e| format!("{}: {e}", path.display()))?,
                 None if !eval.is_empty() => eval.join("\n"),
                 None => return Err("give --script FILE or -e 'CALL'".into()),
             };
-            script::run(&text, connect.as_deref(), script::Options { trace, json })
+            script::run(
+                &text,
+                connect.as_deref(),
+                script::Options {
+                    trace,
+                    json,
+                    max_time,
+                    step_time,
+                    stubs,
+                },
+            )
         }
         Command::Encode {
             format,

@@ -1,269 +1,55 @@
-//! `ursock robot`: a virtual robot running socket calls written as URScript, one per line.
+//! `ursock robot`: a virtual robot running a URScript program against real servers.
 //!
-//! The subset: `[name =] function(arg, ..., key=arg)` with string literals (no escapes,
-//! as in URScript), numbers, `True`/`False`, lists `[...]` and poses `p[...]`, variables
-//! assigned earlier, `#` comments. List and pose literals are read by the library's
-//! `to_str` parser.
+//! The program (a `--script` file or `-e` lines) is run by `urscript-interp`: parsed whole
+//! first (a syntax error names line and column, and nothing is sent), then run by its
+//! sans-IO [`Machine`] in real time. This module is the driver: it connects the sockets
+//! the program opens (`std::net`, non-blocking), writes what it sends, feeds it what the
+//! servers send, and prints each socket call with its result, `textmsg`/`popup` text and
+//! stubbed calls, with the read-failure diagnosis of [`crate::diagnose`].
+//!
+//! The old one-call-per-line scripts are URScript statements and run unchanged.
 
-use std::collections::HashMap;
-use std::sync::{Arc, Mutex};
+use std::collections::{HashMap, VecDeque};
+use std::io::{ErrorKind, Read, Write};
+use std::net::{Shutdown, TcpStream, ToSocketAddrs};
 use std::time::{Duration, Instant};
 
-use urscript_socket::robot::{
-    Direction, Policy, ReadCall, ReadResult, RobotError, Timeout, VirtualRobot, DEFAULT_SOCKET_NAME,
-};
-use urscript_socket::to_str::{parse_value, Scalar, Value};
+use urscript_interp::{Config, Event, Machine, Program, State, Stub};
+use urscript_socket::robot::{ReadCall, DEFAULT_SOCKET_NAME};
 
 use crate::out;
 use crate::show::{text_and_hex, JsonBytes};
 
-/// An argument value.
-#[derive(Debug, Clone)]
-enum Arg {
-    Str(Vec<u8>),
-    Num(f64),
-    Bool(bool),
-    /// A list or pose literal, kept as text and read with `to_str::parse_value`.
-    Bracketed(String),
-    /// The result of an earlier read.
-    Result(Box<ReadResult>),
-}
-
-struct Call {
-    target: Option<String>,
-    function: String,
-    positional: Vec<Arg>,
-    named: Vec<(String, Arg)>,
-}
-
-/// Splits a line into a call. Errors are messages without the line number.
-fn parse_line(line: &str, vars: &HashMap<String, ReadResult>) -> Result<Option<Call>, String> {
-    let code = strip_comment(line).trim();
-    if code.is_empty() {
-        return Ok(None);
-    }
-    let (target, rest) = match code.find('=') {
-        Some(eq) if is_ident(code[..eq].trim()) && !code[..eq].contains('(') => {
-            (Some(code[..eq].trim().to_string()), code[eq + 1..].trim())
-        }
-        _ => (None, code),
-    };
-    let open = rest
-        .find('(')
-        .ok_or_else(|| format!("expected a call like `f(...)`, found `{rest}`"))?;
-    let function = rest[..open].trim().to_string();
-    if !is_ident(&function) {
-        return Err(format!("`{function}` is not a function name"));
-    }
-    let inner = rest[open + 1..]
-        .strip_suffix(')')
-        .ok_or_else(|| format!("missing `)` at the end of `{rest}`"))?;
-    let mut call = Call {
-        target,
-        function,
-        positional: Vec::new(),
-        named: Vec::new(),
-    };
-    for raw in split_args(inner)? {
-        let raw = raw.trim();
-        if raw.is_empty() {
-            return Err("empty argument".into());
-        }
-        match raw.find('=') {
-            Some(eq) if is_ident(raw[..eq].trim()) && !raw.starts_with('"') => {
-                call.named.push((
-                    raw[..eq].trim().to_string(),
-                    parse_arg(raw[eq + 1..].trim(), vars)?,
-                ));
-            }
-            _ => call.positional.push(parse_arg(raw, vars)?),
-        }
-    }
-    Ok(Some(call))
-}
-
-fn is_ident(s: &str) -> bool {
-    let mut chars = s.chars();
-    matches!(chars.next(), Some(c) if c.is_ascii_alphabetic() || c == '_')
-        && chars.all(|c| c.is_ascii_alphanumeric() || c == '_')
-}
-
-fn strip_comment(line: &str) -> &str {
-    let mut in_str = false;
-    for (i, c) in line.char_indices() {
-        match c {
-            '"' => in_str = !in_str,
-            '#' if !in_str => return &line[..i],
-            _ => {}
-        }
-    }
-    line
-}
-
-/// Splits on commas outside strings and brackets.
-fn split_args(s: &str) -> Result<Vec<&str>, String> {
-    let (mut out, mut depth, mut in_str, mut start) = (Vec::new(), 0i32, false, 0);
-    for (i, c) in s.char_indices() {
-        match c {
-            '"' => in_str = !in_str,
-            '[' if !in_str => depth += 1,
-            ']' if !in_str => depth -= 1,
-            ',' if !in_str && depth == 0 => {
-                out.push(&s[start..i]);
-                start = i + 1;
-            }
-            _ => {}
-        }
-    }
-    if in_str {
-        return Err("unterminated string literal".into());
-    }
-    if depth != 0 {
-        return Err("unbalanced brackets".into());
-    }
-    if !s.trim().is_empty() {
-        out.push(&s[start..]);
-    }
-    Ok(out)
-}
-
-fn parse_arg(raw: &str, vars: &HashMap<String, ReadResult>) -> Result<Arg, String> {
-    if let Some(body) = raw.strip_prefix('"') {
-        let text = body
-            .strip_suffix('"')
-            .ok_or_else(|| format!("bad string literal {raw}"))?;
-        return Ok(Arg::Str(text.as_bytes().to_vec()));
-    }
-    if raw.starts_with('[') || raw.starts_with("p[") {
-        parse_value(raw.as_bytes()).map_err(|e| format!("bad list or pose `{raw}`: {e}"))?;
-        return Ok(Arg::Bracketed(raw.to_string()));
-    }
-    match raw {
-        "True" => return Ok(Arg::Bool(true)),
-        "False" => return Ok(Arg::Bool(false)),
-        _ => {}
-    }
-    if let Some(v) = vars.get(raw) {
-        return Ok(Arg::Result(Box::new(v.clone())));
-    }
-    raw.parse::<f64>()
-        .map(Arg::Num)
-        .map_err(|_| format!("`{raw}` is not a literal or a known variable"))
-}
-
-/// Binds positional and named arguments to a function's parameter list.
-struct Args {
-    values: Vec<Option<Arg>>,
-    names: &'static [&'static str],
-}
-
-impl Args {
-    fn bind(call: &Call, names: &'static [&'static str]) -> Result<Self, String> {
-        if call.positional.len() > names.len() {
-            return Err(format!(
-                "{} takes at most {} arguments",
-                call.function,
-                names.len()
-            ));
-        }
-        let mut values: Vec<Option<Arg>> = vec![None; names.len()];
-        for (slot, a) in values.iter_mut().zip(&call.positional) {
-            *slot = Some(a.clone());
-        }
-        for (k, v) in &call.named {
-            let i = names
-                .iter()
-                .position(|n| n == k)
-                .ok_or_else(|| format!("{} has no parameter `{k}`", call.function))?;
-            values[i] = Some(v.clone());
-        }
-        Ok(Args { values, names })
-    }
-
-    fn get(&self, i: usize) -> Option<&Arg> {
-        self.values.get(i).and_then(Option::as_ref)
-    }
-
-    fn str_or(&self, i: usize, default: &str) -> Result<Vec<u8>, String> {
-        match self.get(i) {
-            None => Ok(default.as_bytes().to_vec()),
-            Some(Arg::Str(s)) => Ok(s.clone()),
-            Some(_) => Err(format!("`{}` must be a string", self.names[i])),
-        }
-    }
-
-    fn name_or_default(&self, i: usize) -> Result<String, String> {
-        Ok(String::from_utf8_lossy(&self.str_or(i, DEFAULT_SOCKET_NAME)?).into_owned())
-    }
-
-    fn num(&self, i: usize) -> Result<f64, String> {
-        match self.get(i) {
-            Some(Arg::Num(v)) => Ok(*v),
-            Some(_) => Err(format!("`{}` must be a number", self.names[i])),
-            None => Err(format!("missing argument `{}`", self.names[i])),
-        }
-    }
-
-    fn int(&self, i: usize) -> Result<i64, String> {
-        let v = self.num(i)?;
-        if v.fract() != 0.0 || !(-2147483648.0..=2147483647.0).contains(&v) {
-            return Err(format!("`{}` must be an int32", self.names[i]));
-        }
-        Ok(v as i64)
-    }
-
-    fn bool_or(&self, i: usize, default: bool) -> Result<bool, String> {
-        match self.get(i) {
-            None => Ok(default),
-            Some(Arg::Bool(b)) => Ok(*b),
-            Some(_) => Err(format!("`{}` must be True or False", self.names[i])),
-        }
-    }
-
-    fn timeout(&self, i: usize) -> Result<Timeout, String> {
-        match self.get(i) {
-            None => Ok(Timeout::default()),
-            Some(Arg::Num(s)) => Ok(Timeout::from_secs_f64(*s)),
-            Some(_) => Err("`timeout` must be a number of seconds".into()),
-        }
-    }
-}
-
-/// What `ursock robot` prints besides each call and its result.
+/// How `ursock robot` runs and what it prints besides each call and its result.
 pub struct Options {
     /// The bytes sent and received, with relative times.
     pub trace: bool,
     /// One JSON object per line instead of text.
     pub json: bool,
+    /// End the program after this long (a success if nothing failed before).
+    pub max_time: Option<Duration>,
+    /// The controller's step: 2 ms (e-Series), 8 ms (CB3).
+    pub step_time: Duration,
+    /// Functions replaced by a no-op or a value.
+    pub stubs: Vec<(String, Stub)>,
 }
 
-/// What the server sent during the current read, for its diagnosis.
-#[derive(Default)]
-struct Received {
-    bytes: Vec<u8>,
-    first_at: Option<Instant>,
-}
-
-/// Per socket: a read that timed out, for the late-reply note of the next read.
-struct TimedOut {
-    call: ReadCall,
-    line: usize,
-    sent_since: bool,
-}
-
-/// Data that a read finds within this many milliseconds of its start, with no send since
-/// the previous read on that socket timed out, was waiting: that read's late reply (no
-/// new request could have been answered). Generous, so a loaded machine does not miss it.
-const LATE_WINDOW_MS: u128 = 50;
+/// Data that a read finds this long before it ends, with no send since the previous read
+/// on that socket timed out, was waiting: that read's late reply (a pending read ends as
+/// soon as its bytes arrive, so bytes older than this were there before it started).
+const LATE_WINDOW: Duration = Duration::from_millis(50);
 
 /// Keeps the first bytes of a read's input for [`crate::diagnose::diagnose`].
 const WINDOW: usize = 4096;
 
-fn trace_event(json: bool, name: &str, dir: Direction, bytes: &[u8]) {
-    let (arrow, tag) = match dir {
-        Direction::RobotToServer => ("->", "tx"),
-        Direction::ServerToRobot => ("<-", "rx"),
-    };
+/// How long a `socket_open` may take to connect before it returns False.
+const CONNECT_TIMEOUT: Duration = Duration::from_secs(2);
+
+/// The longest sleep between two rounds of reading the sockets.
+const POLL_INTERVAL: Duration = Duration::from_millis(1);
+
+fn trace_event(json: bool, name: &str, tx: bool, bytes: &[u8]) {
+    let (arrow, tag) = if tx { ("->", "tx") } else { ("<-", "rx") };
     if json {
         let ev = serde_json::json!({
             "t": out::elapsed_secs(),
@@ -314,165 +100,219 @@ fn open_failure(host: &str, port: u16, e: &std::io::Error) -> String {
     format!("socket_open(\"{host}\", {port}) failed: {hint} ({e})")
 }
 
-/// Runs `script` (the text of a file or `-e` lines) against a virtual robot; `connect`
-/// opens `socket_0` first. Prints each call and its result; returns an error naming the
-/// line for unsupported script. As on the controller, a failed `socket_open` and a send
-/// to a server that has gone return False and the program goes on; the reason is said
-/// on stderr (and in `--log`).
-pub fn run(script: &str, connect: Option<&str>, opts: Options) -> Result<(), String> {
-    let mut robot = VirtualRobot::new(Policy::default());
-    let received: Arc<Mutex<Received>> = Arc::default();
-    {
-        let received = Arc::clone(&received);
-        let (trace, json) = (opts.trace, opts.json);
-        robot.set_observer(move |name, dir, bytes| {
-            if dir == Direction::ServerToRobot {
-                let mut r = received.lock().unwrap_or_else(|p| p.into_inner());
-                r.first_at.get_or_insert_with(Instant::now);
-                let room = WINDOW.saturating_sub(r.bytes.len());
-                r.bytes.extend_from_slice(&bytes[..bytes.len().min(room)]);
+fn connect(host: &str, port: u16) -> std::io::Result<TcpStream> {
+    let mut last = std::io::Error::new(ErrorKind::InvalidInput, "no address");
+    for addr in (host, port).to_socket_addrs()? {
+        match TcpStream::connect_timeout(&addr, CONNECT_TIMEOUT) {
+            Ok(s) => {
+                s.set_nonblocking(true)?;
+                let _ = s.set_nodelay(true);
+                return Ok(s);
             }
-            if trace {
-                trace_event(json, name, dir, bytes);
-            }
-        });
-    }
-    let report = |line: usize,
-                  shown: &str,
-                  call: &str,
-                  result: serde_json::Value,
-                  text: &str,
-                  sentinel: bool,
-                  why: Option<String>| {
-        if opts.json {
-            let ev = crate::offline::ReadJson {
-                t: Some(out::elapsed_secs()),
-                line: Some(line),
-                call: call.to_string(),
-                result,
-                sentinel,
-                why,
-            };
-            outln!("{}", serde_json::to_string(&ev).unwrap_or_default());
-        } else {
-            if text.is_empty() {
-                outln!("{shown}");
-            } else {
-                outln!("{shown} -> {text}");
-            }
-            if let Some(w) = why {
-                out::note(&format!("line {line}: why: {w}"));
-            }
-        }
-    };
-    if let Some(addr) = connect {
-        let (host, port) = split_host_port(addr)?;
-        let shown = format!("socket_open(\"{host}\", {port}, \"{DEFAULT_SOCKET_NAME}\")");
-        match open_or_reason(&mut robot, (host.as_str(), port), DEFAULT_SOCKET_NAME)
-            .map_err(|e| e.to_string())?
-        {
-            Ok(()) => report(0, &shown, "socket_open", true.into(), "True", false, None),
-            Err(e) => {
-                let reason = open_failure(&host, port, &e);
-                let why = opts.json.then(|| reason.clone());
-                report(0, &shown, "socket_open", false.into(), "False", true, why);
-                return Err(reason);
-            }
+            Err(e) => last = e,
         }
     }
-    let mut vars: HashMap<String, ReadResult> = HashMap::new();
-    let mut timed_out: HashMap<String, TimedOut> = HashMap::new();
-    // What a read left in the socket's buffer for the next one (the LF after `)`), per
-    // socket, as far as the CLI can tell from the bytes it saw.
-    let mut carry: HashMap<String, Vec<u8>> = HashMap::new();
-    for (n, line) in script.lines().enumerate() {
-        let lineno = n + 1;
-        let call = match parse_line(line, &vars).map_err(|e| format!("line {lineno}: {e}"))? {
-            Some(c) => c,
-            None => continue,
-        };
-        let shown = strip_comment(line).trim().to_string();
-        *received.lock().unwrap_or_else(|p| p.into_inner()) = Received::default();
-        let started = Instant::now();
-        let outcome = execute(&mut robot, &call).map_err(|e| format!("line {lineno}: {e}"))?;
-        let f = call.function.as_str();
-        match outcome {
-            Outcome::Sent => report(lineno, &shown, f, serde_json::Value::Null, "", false, None),
-            Outcome::Printed(text) => {
-                let result = match text.as_str() {
-                    "True" => true.into(),
-                    "False" => false.into(),
-                    t => t.into(),
-                };
-                if f.starts_with("socket_send") {
-                    for t in timed_out.values_mut() {
-                        t.sent_since = true;
-                    }
-                }
-                report(lineno, &shown, f, result, &text, false, None)
+    Err(last)
+}
+
+fn write_all(stream: &mut TcpStream, mut bytes: &[u8]) -> std::io::Result<()> {
+    while !bytes.is_empty() {
+        match stream.write(bytes) {
+            Ok(0) => return Err(ErrorKind::WriteZero.into()),
+            Ok(n) => bytes = &bytes[n..],
+            Err(e) if e.kind() == ErrorKind::WouldBlock => {
+                std::thread::sleep(Duration::from_micros(100))
             }
-            Outcome::Failed(reason) => {
-                // In JSON the reason is the event's `why`; in text, a note on stderr.
-                let why = opts.json.then(|| reason.clone());
-                report(lineno, &shown, f, false.into(), "False", false, why);
-                if !opts.json {
-                    out::note(&format!("line {lineno}: {reason}"));
-                }
-            }
-            Outcome::Result(r, socket, read) => {
-                let mut why = None;
-                let got = std::mem::take(&mut *received.lock().unwrap_or_else(|p| p.into_inner()));
-                if let Some(read) = &read {
-                    let mut seen = carry.remove(&socket).unwrap_or_default();
-                    seen.extend_from_slice(&got.bytes);
-                    let binary = matches!(
-                        read,
-                        ReadCall::BinaryInteger { .. } | ReadCall::ByteList { .. }
-                    );
-                    if binary || crate::offline::failed(read, &r) {
-                        why = crate::diagnose::diagnose(read, &seen);
-                    }
-                    if let Some(t) = timed_out.remove(&socket) {
-                        let waiting = got.first_at.is_some_and(|at| {
-                            at.duration_since(started).as_millis() < LATE_WINDOW_MS
-                        });
-                        if waiting && !t.sent_since {
-                            let late = crate::diagnose::late_reply(&t.call, t.line);
-                            why = Some(match why {
-                                Some(w) => format!("{late}; {w}"),
-                                None => late,
-                            });
-                        }
-                    }
-                    if r.is_sentinel() {
-                        timed_out.insert(
-                            socket.clone(),
-                            TimedOut {
-                                call: read.clone(),
-                                line: lineno,
-                                sent_since: false,
-                            },
-                        );
-                    } else if let Some(rest) = leftover(read, &seen) {
-                        carry.insert(socket.clone(), rest.to_vec());
-                    }
-                }
-                report(
-                    lineno,
-                    &shown,
-                    f,
-                    crate::offline::result_json(&r),
-                    &crate::show::read_result(&r),
-                    r.is_sentinel(),
-                    why,
-                );
-                if let Some(t) = &call.target {
-                    vars.insert(t.clone(), *r);
-                }
-            }
+            Err(e) if e.kind() == ErrorKind::Interrupted => {}
+            Err(e) => return Err(e),
         }
     }
     Ok(())
+}
+
+/// One open connection of the program.
+struct Conn {
+    stream: TcpStream,
+    /// Bytes read but not yet accepted by the socket's receive buffer.
+    backlog: Vec<u8>,
+    closed: bool,
+    /// A write failed or the peer reset the connection: sends return False.
+    broken: bool,
+    /// What the server sent since the last read on this socket ended (for the diagnosis).
+    seen: Vec<u8>,
+    /// When the first of `seen` arrived.
+    first_at: Option<Instant>,
+    /// The previous read on this socket timed out: (its call, its line, a send since).
+    timed_out: Option<(ReadCall, u32, bool)>,
+}
+
+/// A call traced by the machine: `name(args) -> result`, split.
+struct Traced<'a> {
+    call: &'a str,
+    name: &'a str,
+    result: &'a str,
+}
+
+/// Splits `f(a, "x)", b) -> r` at the `)` that closes the call (strings have no escapes).
+fn split_traced(text: &str) -> Option<Traced<'_>> {
+    let open = text.find('(')?;
+    let (mut depth, mut in_str) = (0i32, false);
+    for (i, c) in text.char_indices().skip(open) {
+        match c {
+            '"' => in_str = !in_str,
+            '(' | '[' if !in_str => depth += 1,
+            ')' | ']' if !in_str => {
+                depth -= 1;
+                if depth == 0 && c == ')' {
+                    let result = text[i + 1..].strip_prefix(" -> ")?;
+                    return Some(Traced {
+                        call: &text[..=i],
+                        name: &text[..open],
+                        result,
+                    });
+                }
+            }
+            _ => {}
+        }
+    }
+    None
+}
+
+/// The top-level arguments of a traced call, split on commas outside strings/brackets.
+fn call_args(call: &str) -> Vec<&str> {
+    let Some(inner) = call.find('(').and_then(|o| call[o + 1..].strip_suffix(')')) else {
+        return Vec::new();
+    };
+    let (mut out, mut depth, mut in_str, mut start) = (Vec::new(), 0i32, false, 0);
+    for (i, c) in inner.char_indices() {
+        match c {
+            '"' => in_str = !in_str,
+            '[' | '(' if !in_str => depth += 1,
+            ']' | ')' if !in_str => depth -= 1,
+            ',' if !in_str && depth == 0 => {
+                out.push(inner[start..i].trim());
+                start = i + 1;
+            }
+            _ => {}
+        }
+    }
+    if !inner.trim().is_empty() {
+        out.push(inner[start..].trim());
+    }
+    out
+}
+
+/// Argument `key` of a traced call: by keyword, else at position `pos`.
+fn arg<'a>(args: &[&'a str], key: &str, pos: usize) -> Option<&'a str> {
+    let positional: Vec<&str> = args
+        .iter()
+        .copied()
+        .filter(|a| !is_keyword_arg(a))
+        .collect();
+    args.iter()
+        .find_map(|a| {
+            a.split_once('=')
+                .filter(|(k, _)| k.trim() == key && is_keyword_arg(a))
+                .map(|(_, v)| v.trim())
+        })
+        .or_else(|| positional.get(pos).copied())
+}
+
+fn is_keyword_arg(a: &str) -> bool {
+    a.split_once('=').is_some_and(|(k, _)| {
+        let k = k.trim();
+        !k.is_empty() && k.chars().all(|c| c.is_ascii_alphanumeric() || c == '_')
+    })
+}
+
+fn unquote(s: &str) -> String {
+    s.strip_prefix('"')
+        .and_then(|s| s.strip_suffix('"'))
+        .unwrap_or(s)
+        .to_string()
+}
+
+/// The socket a traced socket call used, and the read it made (for the diagnosis).
+fn socket_and_read(name: &str, args: &[&str]) -> (String, Option<ReadCall>) {
+    let number = || {
+        arg(args, "number", 0)
+            .and_then(|n| n.parse::<usize>().ok())
+            .unwrap_or(1)
+    };
+    let sock_pos = match name {
+        "socket_read_line" | "socket_read_string" | "socket_close" => 0,
+        "socket_open" => 2,
+        "socket_set_var" => 2,
+        _ => 1,
+    };
+    let socket = arg(args, "socket_name", sock_pos)
+        .map(unquote)
+        .unwrap_or_else(|| DEFAULT_SOCKET_NAME.to_string());
+    let read = match name {
+        "socket_read_ascii_float" => Some(ReadCall::AsciiFloat { number: number() }),
+        "socket_read_binary_integer" => Some(ReadCall::BinaryInteger { number: number() }),
+        "socket_read_byte_list" => Some(ReadCall::ByteList { number: number() }),
+        "socket_read_line" => Some(ReadCall::Line),
+        "socket_read_string" => Some(ReadCall::String {
+            prefix: arg(args, "prefix", 1)
+                .map(unquote)
+                .unwrap_or_default()
+                .into_bytes(),
+            suffix: arg(args, "suffix", 2)
+                .map(unquote)
+                .unwrap_or_default()
+                .into_bytes(),
+            interpret_escape: arg(args, "interpret_escape", 3) == Some("True"),
+        }),
+        _ => None,
+    };
+    (socket, read)
+}
+
+/// A result as JSON: `[n, a, b]` as `{"count": n, "values": [a, b]}` (nan as null),
+/// strings as text, ints, bools.
+fn result_json(result: &str) -> serde_json::Value {
+    if let Some(inner) = result.strip_prefix('[').and_then(|r| r.strip_suffix(']')) {
+        let items: Vec<serde_json::Value> = inner
+            .split(',')
+            .map(|x| {
+                let x = x.trim();
+                x.parse::<i64>()
+                    .map(serde_json::Value::from)
+                    .or_else(|_| x.parse::<f64>().map(serde_json::Value::from))
+                    .unwrap_or(serde_json::Value::Null)
+            })
+            .collect();
+        let count = items.first().cloned().unwrap_or_default();
+        return serde_json::json!({ "count": count, "values": items.get(1..).unwrap_or_default() });
+    }
+    if result.starts_with('"') {
+        return serde_json::to_value(JsonBytes::new(unquote(result).as_bytes()))
+            .unwrap_or_default();
+    }
+    match result {
+        "True" => true.into(),
+        "False" => false.into(),
+        "None" => serde_json::Value::Null,
+        r => r
+            .parse::<i64>()
+            .map(serde_json::Value::from)
+            .or_else(|_| r.parse::<f64>().map(serde_json::Value::from))
+            .unwrap_or_else(|_| r.into()),
+    }
+}
+
+/// A read's result is its sentinel (`[0, ...]`, `""`) or fewer floats than asked.
+fn read_failed(read: &ReadCall, result: &str) -> bool {
+    let count = result
+        .strip_prefix('[')
+        .and_then(|r| r.split([',', ']']).next())
+        .and_then(|c| c.trim().parse::<usize>().ok());
+    match (read, count) {
+        (ReadCall::AsciiFloat { number }, Some(c)) => c < *number,
+        (_, Some(c)) => c == 0,
+        (_, None) => result == "\"\"",
+    }
 }
 
 /// The bytes a successful read left buffered, from what it saw: the read consumes
@@ -492,182 +332,403 @@ fn leftover<'a>(read: &ReadCall, seen: &'a [u8]) -> Option<&'a [u8]> {
     seen.get(end..).filter(|rest| !rest.is_empty())
 }
 
-enum Outcome {
-    Sent,
-    Printed(String),
-    /// A socket_open or send that returns False on the robot, and why.
-    Failed(String),
-    /// A read's result, its socket name and the read call (`None` for get_var).
-    Result(Box<ReadResult>, String, Option<ReadCall>),
+/// The variable the line `line` assigns the call of `name` to, when the line is just
+/// that (`x = name(...)`): printed in front of the call, as the old one-call-per-line
+/// output showed it.
+fn assigned_to<'a>(source: &[&'a str], line: u32, name: &str) -> Option<&'a str> {
+    let text = source.get((line as usize).checked_sub(1)?)?;
+    let code = strip_comment(text).trim();
+    let (target, rest) = code.split_once('=')?;
+    let target = target.trim();
+    let target = target
+        .strip_prefix("local ")
+        .or_else(|| target.strip_prefix("global "))
+        .map_or(target, str::trim);
+    let call = rest.trim();
+    (!target.is_empty()
+        && target
+            .chars()
+            .all(|c| c.is_ascii_alphanumeric() || c == '_')
+        && !rest.starts_with('=')
+        && call.starts_with(name)
+        && call[name.len()..].trim_start().starts_with('(')
+        && split_traced(&format!("{call} -> x")).is_some_and(|t| t.call.len() == call.len()))
+    .then_some(target)
 }
 
-fn value_text(arg: &Arg) -> Result<Vec<u8>, String> {
-    let mut out = Vec::new();
-    let encode = |v: &Value<'_>, out: &mut Vec<u8>| {
-        urscript_socket::to_str::encode_value(v, out).map_err(|e| e.to_string())
+fn strip_comment(line: &str) -> &str {
+    let mut in_str = false;
+    for (i, c) in line.char_indices() {
+        match c {
+            '"' => in_str = !in_str,
+            '#' if !in_str => return &line[..i],
+            _ => {}
+        }
+    }
+    line
+}
+
+/// Control characters of a result made visible (`\r`, `\n`, `\t`, `\xHH`), as the
+/// robot's strings are shown elsewhere in `ursock`.
+fn visible(text: &str) -> std::borrow::Cow<'_, str> {
+    if !text.chars().any(char::is_control) {
+        return text.into();
+    }
+    let mut out = String::with_capacity(text.len() + 8);
+    for c in text.chars() {
+        match c {
+            '\r' => out.push_str("\\r"),
+            '\n' => out.push_str("\\n"),
+            '\t' => out.push_str("\\t"),
+            c if c.is_control() => out.push_str(&format!("\\x{:02X}", c as u32)),
+            c => out.push(c),
+        }
+    }
+    out.into()
+}
+
+/// Prints one call: text (`shown -> result`, the reason on stderr) or one JSON object.
+fn report(json: bool, line: u32, shown: &str, call: &str, result: &str, why: Option<String>) {
+    if json {
+        let sentinel = result.starts_with("[0,") || result == "\"\"";
+        let ev = crate::offline::ReadJson {
+            t: Some(out::elapsed_secs()),
+            line: Some(line as usize),
+            call: call.to_string(),
+            result: result_json(result),
+            sentinel,
+            why,
+        };
+        outln!("{}", serde_json::to_string(&ev).unwrap_or_default());
+    } else {
+        if result.is_empty() || result == "None" {
+            outln!("{}", visible(shown));
+        } else {
+            outln!("{} -> {}", visible(shown), visible(result));
+        }
+        if let Some(w) = why {
+            out::note(&format!("line {line}: {w}"));
+        }
+    }
+}
+
+const SEND_FUNCTIONS: &[&str] = &[
+    "socket_send_string",
+    "socket_send_line",
+    "socket_send_byte",
+    "socket_send_bytes",
+    "socket_send_int",
+    "socket_set_var",
+];
+
+/// Runs `script` (the text of a file or `-e` lines) as a URScript program against real
+/// servers; `connect` opens `socket_0` first. Prints each socket call and its result and
+/// the program's messages. As on the controller, a failed `socket_open` and a send to a
+/// server that has gone return False and the program goes on; the reason is said on
+/// stderr (and in `--log`). A parse error (nothing sent) or a runtime error is the `Err`,
+/// naming the line.
+pub fn run(script: &str, connect_to: Option<&str>, opts: Options) -> Result<(), String> {
+    let program = Program::parse(script).map_err(|e| e.to_string())?;
+    let source: Vec<&str> = script.lines().collect();
+    let config = Config {
+        step_time: opts.step_time,
+        stubs: opts.stubs.clone(),
+        trace_socket_calls: true,
+        trace_all_calls: true,
+        ..Config::default()
     };
-    match arg {
-        Arg::Str(s) => {
-            out.extend_from_slice(s);
-        }
-        Arg::Num(v) if v.fract() == 0.0 && v.abs() < 2147483648.0 => {
-            encode(&Value::Scalar(Scalar::Int(*v as i32)), &mut out)?;
-        }
-        Arg::Num(v) => {
-            encode(&Value::Scalar(Scalar::Float(*v)), &mut out)?;
-        }
-        Arg::Bool(b) => {
-            encode(&Value::Scalar(Scalar::Bool(*b)), &mut out)?;
-        }
-        Arg::Bracketed(text) => {
-            let v = parse_value(text.as_bytes()).map_err(|e| e.to_string())?;
-            encode(&v, &mut out)?;
-        }
-        Arg::Result(r) => {
-            out.extend_from_slice(r.to_urscript().as_bytes());
-        }
-    }
-    Ok(out)
-}
-
-fn execute(robot: &mut VirtualRobot, call: &Call) -> Result<Outcome, String> {
-    let e = |e: RobotError| match e {
-        RobotError::Encode(x) => format!("cannot send: {}", crate::messages::encode_error(x)),
-        other => other.to_string(),
+    let mut machine = Machine::new(program, config);
+    let json = opts.json;
+    let mut conns: HashMap<String, Conn> = HashMap::new();
+    let new_conn = |stream| Conn {
+        stream,
+        backlog: Vec::new(),
+        closed: false,
+        broken: false,
+        seen: Vec::new(),
+        first_at: None,
+        timed_out: None,
     };
-    let f = call.function.as_str();
-    Ok(match f {
-        "socket_open" => {
-            let a = Args::bind(call, &["address", "port", "socket_name"])?;
-            let host = String::from_utf8_lossy(&a.str_or(0, "")?).into_owned();
-            let port = a.int(1)?;
-            let port = u16::try_from(port).map_err(|_| "port must be 0..=65535".to_string())?;
-            match open_or_reason(robot, (host.as_str(), port), &a.name_or_default(2)?).map_err(e)? {
-                Ok(()) => Outcome::Printed("True".into()),
-                Err(err) => Outcome::Failed(open_failure(&host, port, &err)),
+    if let Some(addr) = connect_to {
+        let (host, port) = split_host_port(addr)?;
+        let shown = format!("socket_open(\"{host}\", {port}, \"{DEFAULT_SOCKET_NAME}\")");
+        match connect(&host, port) {
+            Ok(stream) => {
+                report(json, 0, &shown, "socket_open", "True", None);
+                conns.insert(DEFAULT_SOCKET_NAME.to_string(), new_conn(stream));
+                machine.handle_connected(DEFAULT_SOCKET_NAME, Ok(()));
+            }
+            Err(e) => {
+                let reason = open_failure(&host, port, &e);
+                let why = json.then(|| reason.clone());
+                report(json, 0, &shown, "socket_open", "False", why);
+                return Err(reason);
             }
         }
-        "socket_close" => {
-            let a = Args::bind(call, &["socket_name"])?;
-            robot.socket_close(&a.name_or_default(0)?);
-            Outcome::Sent
+    }
+    let start = Instant::now();
+    let mut open_failures: HashMap<String, String> = HashMap::new();
+    let mut messages: VecDeque<String> = VecDeque::new();
+    let mut last_why: HashMap<u32, String> = HashMap::new();
+    let mut buf = vec![0u8; 16 * 1024];
+    loop {
+        let now = start.elapsed();
+        if opts.max_time.is_some_and(|m| now >= m) {
+            out::note(&format!(
+                "--max-time {}s reached: the program was ended",
+                opts.max_time.unwrap_or_default().as_secs_f64()
+            ));
+            return Ok(());
         }
-        "socket_send_string" | "socket_send_line" => {
-            let a = Args::bind(call, &["str", "socket_name"])?;
-            let text = value_text(a.get(0).ok_or("missing argument `str`")?)?;
-            let name = a.name_or_default(1)?;
-            sent(f, if f == "socket_send_line" {
-                robot.socket_send_line(&text, &name)
-            } else {
-                robot.socket_send_string(&text, &name)
-            })?
-        }
-        "socket_send_byte" => {
-            let a = Args::bind(call, &["value", "socket_name"])?;
-            let v = u8::try_from(a.int(0)?).map_err(|_| "`value` must be 0..=255".to_string())?;
-            sent(f, robot.socket_send_byte(v, &a.name_or_default(1)?))?
-        }
-        "socket_send_int" => {
-            let a = Args::bind(call, &["value", "socket_name"])?;
-            sent(f, robot.socket_send_int(a.int(0)? as i32, &a.name_or_default(1)?))?
-        }
-        "socket_set_var" => {
-            let a = Args::bind(call, &["name", "value", "socket_name"])?;
-            let name = String::from_utf8_lossy(&a.str_or(0, "")?).into_owned();
-            match sent(f, robot.socket_set_var(&name, a.int(1)? as i32, &a.name_or_default(2)?))? {
-                Outcome::Printed(_) => Outcome::Sent,
-                other => other,
+        machine.run_until(now);
+        while let Some(event) = machine.poll_event() {
+            match event {
+                Event::Connect {
+                    socket_name,
+                    host,
+                    port,
+                } => match connect(&host, port) {
+                    Ok(stream) => {
+                        if let Some(old) = conns.insert(socket_name.clone(), new_conn(stream)) {
+                            let _ = old.stream.shutdown(Shutdown::Both);
+                        }
+                        machine.handle_connected(&socket_name, Ok(()));
+                    }
+                    Err(e) => {
+                        let reason = open_failure(&host, port, &e);
+                        open_failures.insert(socket_name.clone(), reason.clone());
+                        machine.handle_connected(&socket_name, Err(reason));
+                    }
+                },
+                Event::Transmit { socket_name, bytes } => {
+                    if opts.trace {
+                        trace_event(json, &socket_name, true, &bytes);
+                    }
+                    if let Some(c) = conns.get_mut(&socket_name) {
+                        if let Some(t) = c.timed_out.as_mut() {
+                            t.2 = true;
+                        }
+                        if !c.broken && write_all(&mut c.stream, &bytes).is_err() {
+                            c.closed = true;
+                            c.broken = true;
+                            machine.handle_send_failed(&socket_name);
+                        }
+                    }
+                }
+                Event::Close { socket_name } => {
+                    if let Some(c) = conns.remove(&socket_name) {
+                        let _ = c.stream.shutdown(Shutdown::Both);
+                    }
+                }
+                Event::Message(text) => messages.push_back(text),
+                Event::Call { line, text } => {
+                    let Some(t) = split_traced(&text) else {
+                        continue;
+                    };
+                    let is_message = matches!(t.name, "textmsg" | "popup" | "varmsg");
+                    let stubbed = t.result.ends_with(" (stub)");
+                    if !(t.name.starts_with("socket_") || is_message || stubbed) {
+                        continue;
+                    }
+                    let shown = match assigned_to(&source, line, t.name) {
+                        Some(target) => format!("{target} = {}", t.call),
+                        None => t.call.to_string(),
+                    };
+                    let shown = shown.as_str();
+                    if is_message {
+                        let text = messages.pop_front().unwrap_or_default();
+                        if json {
+                            report(json, line, shown, t.name, &format!("\"{text}\""), None);
+                        } else {
+                            report(json, line, shown, t.name, &text, None);
+                        }
+                        continue;
+                    }
+                    let args = call_args(t.call);
+                    let (socket, read) = socket_and_read(t.name, &args);
+                    let mut result = t.result.to_string();
+                    let mut why = None;
+                    if t.name == "socket_open" {
+                        if let Some(reason) = result.strip_prefix("False") {
+                            why = Some(open_failures.remove(&socket).unwrap_or_else(|| {
+                                reason
+                                    .trim()
+                                    .trim_matches(|c| c == '(' || c == ')')
+                                    .to_string()
+                            }));
+                            result = "False".into();
+                        }
+                    } else if SEND_FUNCTIONS.contains(&t.name) && result == "False" {
+                        why = Some(if conns.contains_key(&socket) {
+                            format!(
+                                "{}: the connection is broken (a write failed); the server has probably closed it",
+                                t.name
+                            )
+                        } else {
+                            format!("{}: the socket \"{socket}\" is not open", t.name)
+                        });
+                    } else if t.name == "socket_get_var" {
+                        // Its reply line is not the next read's input.
+                        if let Some(c) = conns.get_mut(&socket) {
+                            match c.seen.iter().position(|&b| b == b'\n') {
+                                Some(i) => drop(c.seen.drain(..=i)),
+                                None => c.seen.clear(),
+                            }
+                            if c.seen.is_empty() {
+                                c.first_at = None;
+                            }
+                        }
+                    } else if let (Some(read), Some(c)) = (&read, conns.get_mut(&socket)) {
+                        let timed_out_now = result.ends_with(" (timeout)");
+                        let value = result.trim_end_matches(" (timeout)");
+                        let seen = std::mem::take(&mut c.seen);
+                        let first_at = c.first_at.take();
+                        let binary = matches!(
+                            read,
+                            ReadCall::BinaryInteger { .. } | ReadCall::ByteList { .. }
+                        );
+                        if binary || read_failed(read, value) {
+                            why =
+                                crate::diagnose::diagnose(read, &seen).map(|w| format!("why: {w}"));
+                        }
+                        if let Some((prev, prev_line, sent_since)) = c.timed_out.take() {
+                            let waiting = first_at.is_some_and(|at| at.elapsed() >= LATE_WINDOW);
+                            if waiting && !sent_since {
+                                let late = crate::diagnose::late_reply(&prev, prev_line as usize);
+                                why = Some(match why {
+                                    Some(w) => format!("why: {late}; {}", &w[5..]),
+                                    None => format!("why: {late}"),
+                                });
+                            }
+                        }
+                        if timed_out_now || read_failed(read, value) {
+                            c.timed_out = Some((read.clone(), line, false));
+                        } else if let Some(rest) = leftover(read, &seen) {
+                            c.first_at = Some(Instant::now());
+                            c.seen = rest.to_vec();
+                        }
+                    }
+                    if json {
+                        let why = why.map(|w| w.trim_start_matches("why: ").to_string());
+                        let value = result
+                            .trim_end_matches(" (timeout)")
+                            .trim_end_matches(" (stub)");
+                        report(json, line, shown, t.name, value, why);
+                    } else {
+                        // A loop polling with a timeout would repeat the same note at
+                        // every turn: a note is said again only when it changes.
+                        let why = match why {
+                            Some(w) if last_why.get(&line) == Some(&w) => None,
+                            Some(w) => {
+                                last_why.insert(line, w.clone());
+                                Some(w)
+                            }
+                            None => {
+                                last_why.remove(&line);
+                                None
+                            }
+                        };
+                        report(json, line, shown, t.name, &result, why);
+                    }
+                }
             }
         }
-        "socket_get_var" => {
-            let a = Args::bind(call, &["name", "socket_name"])?;
-            let name = String::from_utf8_lossy(&a.str_or(0, "")?).into_owned();
-            let socket = a.name_or_default(1)?;
-            let v = robot.socket_get_var(&name, &socket).map_err(e)?;
-            Outcome::Result(Box::new(ReadResult::Int(v)), socket, None)
+        match machine.state() {
+            State::Running => {}
+            State::Finished | State::Halted => return Ok(()),
+            State::Error(e) => return Err(e.to_string()),
         }
-        "socket_read_ascii_float" | "socket_read_binary_integer" | "socket_read_byte_list" => {
-            let a = Args::bind(call, &["number", "socket_name", "timeout"])?;
-            let number = usize::try_from(a.int(0)?).unwrap_or(0);
-            let read = match f {
-                "socket_read_ascii_float" => ReadCall::AsciiFloat { number },
-                "socket_read_binary_integer" => ReadCall::BinaryInteger { number },
-                _ => ReadCall::ByteList { number },
-            };
-            let socket = a.name_or_default(1)?;
-            let r = robot.read(read.clone(), &socket, a.timeout(2)?).map_err(e)?;
-            Outcome::Result(Box::new(r), socket, Some(read))
-        }
-        "socket_read_line" => {
-            let a = Args::bind(call, &["socket_name", "timeout"])?;
-            let socket = a.name_or_default(0)?;
-            let r = robot.read(ReadCall::Line, &socket, a.timeout(1)?).map_err(e)?;
-            Outcome::Result(Box::new(r), socket, Some(ReadCall::Line))
-        }
-        "socket_read_string" => {
-            let a = Args::bind(call, &["socket_name", "prefix", "suffix", "interpret_escape", "timeout"])?;
-            let read = ReadCall::String {
-                prefix: a.str_or(1, "")?,
-                suffix: a.str_or(2, "")?,
-                interpret_escape: a.bool_or(3, false)?,
-            };
-            let socket = a.name_or_default(0)?;
-            let r = robot.read(read.clone(), &socket, a.timeout(4)?).map_err(e)?;
-            Outcome::Result(Box::new(r), socket, Some(read))
-        }
-        "sleep" => {
-            let a = Args::bind(call, &["t"])?;
-            let t = a.num(0)?;
-            if !(0.0..=3600.0).contains(&t) {
-                return Err("sleep takes 0 to 3600 seconds".into());
+        let mut got_any = false;
+        for (name, c) in conns.iter_mut() {
+            if !c.backlog.is_empty() {
+                let n = machine.handle_received(name, &c.backlog);
+                c.backlog.drain(..n);
+                if !c.backlog.is_empty() {
+                    continue; // the receive buffer is full: read no more from it now
+                }
             }
-            std::thread::sleep(Duration::from_secs_f64(t));
-            Outcome::Sent
-        }
-        "textmsg" => {
-            let mut text = Vec::new();
-            for arg in &call.positional {
-                text.extend(value_text(arg)?);
+            if c.broken {
+                continue;
             }
-            Outcome::Printed(String::from_utf8_lossy(&text).into_owned())
+            if c.closed {
+                // The peer closed its end: a reset after it (the peer is gone, a write
+                // reached nobody) makes later sends fail, as on the controller.
+                if matches!(c.stream.take_error(), Ok(Some(_)) | Err(_)) {
+                    c.broken = true;
+                    machine.handle_send_failed(name);
+                }
+                continue;
+            }
+            match c.stream.read(&mut buf) {
+                Ok(0) => {
+                    got_any = true;
+                    c.closed = true;
+                    machine.handle_peer_closed(name);
+                }
+                Ok(n) => {
+                    got_any = true;
+                    let bytes = &buf[..n];
+                    if opts.trace {
+                        trace_event(json, name, false, bytes);
+                    }
+                    c.first_at.get_or_insert_with(Instant::now);
+                    let room = WINDOW.saturating_sub(c.seen.len());
+                    c.seen.extend_from_slice(&bytes[..n.min(room)]);
+                    let taken = machine.handle_received(name, bytes);
+                    c.backlog.extend_from_slice(&bytes[taken..]);
+                }
+                Err(e) if matches!(e.kind(), ErrorKind::WouldBlock | ErrorKind::Interrupted) => {}
+                Err(_) => {
+                    got_any = true;
+                    c.closed = true;
+                    machine.handle_peer_closed(name);
+                }
+            }
         }
-        other => {
-            return Err(format!(
-                "unsupported call `{other}` (supported: socket_open, socket_close, socket_send_string, \
-                 socket_send_line, socket_send_byte, socket_send_int, socket_set_var, socket_get_var, \
-                 socket_read_ascii_float, socket_read_binary_integer, socket_read_byte_list, \
-                 socket_read_line, socket_read_string, sleep, textmsg)"
-            ))
+        if !got_any {
+            let now = start.elapsed();
+            let mut wait = POLL_INTERVAL;
+            if let Some(t) = machine.poll_timeout() {
+                wait = wait.min(t.saturating_sub(now));
+            }
+            if let Some(m) = opts.max_time {
+                wait = wait.min(m.saturating_sub(now));
+            }
+            if !wait.is_zero() {
+                std::thread::sleep(wait);
+            }
         }
-    })
-}
-
-/// A send's outcome as the robot program sees it: True, or False with the reason when
-/// the connection failed (the server closed it, a reset...). Misuse stays an error.
-fn sent(function: &str, r: Result<bool, RobotError>) -> Result<Outcome, String> {
-    match r {
-        Ok(true) => Ok(Outcome::Printed("True".into())),
-        Ok(false) => Ok(Outcome::Failed(format!(
-            "{function}: the connection is broken (a write failed); the server has probably closed it"
-        ))),
-        Err(RobotError::Io(e)) => Ok(Outcome::Failed(format!(
-            "{function}: the connection failed ({e}); the server has probably closed it"
-        ))),
-        Err(e) => Err(e.to_string()),
     }
 }
 
-/// `socket_open` with the operating system's reason when it returns False.
-fn open_or_reason(
-    robot: &mut VirtualRobot,
-    address: (&str, u16),
-    socket_name: &str,
-) -> Result<Result<(), std::io::Error>, RobotError> {
-    if robot.socket_open(address, socket_name)? {
-        return Ok(Ok(()));
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn traced_calls_split_at_their_closing_paren() {
+        let t = split_traced("socket_read_string(\"c\", suffix=\")\") -> \"a -> b\"").unwrap();
+        assert_eq!(t.name, "socket_read_string");
+        assert_eq!(t.result, "\"a -> b\"");
+        assert_eq!(call_args(t.call), ["\"c\"", "suffix=\")\""]);
+        let (socket, read) = socket_and_read(t.name, &call_args(t.call));
+        assert_eq!(socket, "c");
+        assert!(matches!(read, Some(ReadCall::String { suffix, .. }) if suffix == b")"));
     }
-    Ok(Err(match robot.last_open_error() {
-        Some(e) => std::io::Error::new(e.kind(), e.to_string()),
-        None => std::io::Error::other("connection failed"),
-    }))
+
+    #[test]
+    fn control_characters_are_shown_escaped() {
+        assert_eq!(visible("\"TRG\r\""), "\"TRG\\r\"");
+        assert_eq!(visible("a\u{1}"), "a\\x01");
+    }
+
+    #[test]
+    fn assignments_of_one_call_show_their_variable() {
+        let src = [
+            "x = socket_read_ascii_float(3)  # pose",
+            "if socket_open(h, 1):",
+        ];
+        assert_eq!(assigned_to(&src, 1, "socket_read_ascii_float"), Some("x"));
+        assert_eq!(assigned_to(&src, 2, "socket_open"), None);
+    }
 }

@@ -1,0 +1,543 @@
+//! From the syntax tree to the bytecode each thread runs. A stack machine: every thread
+//! keeps its own value stack and call frames, so any thread can stop at a call that
+//! consumes time (`sync()`, a blocking read) and resume later where it was.
+
+use std::collections::HashMap;
+
+use crate::error::ParseError;
+use crate::parser::{BinOp, Expr, FuncDef, Scope, Stmt, StmtKind};
+use crate::value::Value;
+
+/// Index of a name in [`Program::names`].
+pub(crate) type Sym = u32;
+
+/// No named arguments.
+pub(crate) const NO_KW: u32 = u32::MAX;
+
+#[derive(Debug, Clone, Copy)]
+pub(crate) enum Op {
+    /// A statement starts: counts toward the per-step budget.
+    Stmt,
+    Const(u32),
+    Load(Sym),
+    Store(Sym, Scope),
+    /// Stack: indices (1 or 2), value.
+    StoreIndex(Sym, Scope, u8),
+    Index,
+    /// `name[i]` without copying the whole list: stack holds the index.
+    LoadIndex(Sym),
+    MakeList(u32),
+    MakePose(u32),
+    Neg,
+    Not,
+    Bin(BinOp),
+    Jump(u32),
+    JumpIfFalse(u32),
+    /// `and`: a false left side is the result.
+    JumpIfFalseKeep(u32),
+    /// `or`: a true left side is the result.
+    JumpIfTrueKeep(u32),
+    /// The right side of `and`/`or` must be a bool.
+    CheckBool,
+    /// Call a user function: id, positional + named argument count, named-argument list.
+    Call(u32, u16, u32),
+    /// Call a built-in (or a stub) by name.
+    Native(Sym, u16, u32),
+    Return,
+    ReturnNone,
+    Pop,
+    Halt,
+    Run(u32),
+    Join,
+    Kill,
+    EnterCritical,
+    ExitCritical,
+}
+
+#[derive(Debug, Clone)]
+pub(crate) struct Func {
+    pub name: String,
+    pub params: Vec<(Sym, Option<Value>)>,
+    pub ops: Vec<Op>,
+    pub lines: Vec<u32>,
+    pub is_thread: bool,
+    /// The program's own body: plain assignments make globals.
+    pub program_scope: bool,
+}
+
+/// A parsed and compiled program, ready to run in a [`Machine`](crate::Machine).
+///
+/// ```
+/// use urscript_interp::Program;
+/// let p = Program::parse("def prog():\n  textmsg(\"hi\")\nend\n").unwrap();
+/// assert_eq!(p.entry_name(), Some("prog"));
+/// assert_eq!(p.called_builtins(), ["textmsg"]);
+/// ```
+#[derive(Debug, Clone)]
+pub struct Program {
+    pub(crate) names: Vec<String>,
+    pub(crate) consts: Vec<Value>,
+    pub(crate) funcs: Vec<Func>,
+    pub(crate) kwnames: Vec<Vec<Sym>>,
+    /// Names called that are not user functions, with the first line calling each.
+    pub(crate) natives: Vec<(Sym, u32)>,
+    entry: Option<String>,
+}
+
+impl Program {
+    /// Parses and compiles a whole program. Nothing runs yet.
+    ///
+    /// A file that is one top-level `def` (optionally followed by a call of it, the form
+    /// drivers send to the controller) runs that function as the program; otherwise the
+    /// top-level statements run, with the `def`s and `thread`s available to them.
+    ///
+    /// ```
+    /// use urscript_interp::Program;
+    /// let e = Program::parse("x = 1\nfor i in y:\n").unwrap_err();
+    /// assert_eq!(e.to_string(), "line 2, column 1: `for` loops are not URScript (use `while`)");
+    /// ```
+    pub fn parse(src: &str) -> Result<Program, ParseError> {
+        let toks = crate::lexer::lex(src)?;
+        let stmts = crate::parser::Parser::new(toks).program()?;
+        Compiler::default().program(stmts)
+    }
+
+    /// The name of the top-level `def` that is the program, if the file is one.
+    pub fn entry_name(&self) -> Option<&str> {
+        self.entry.as_deref()
+    }
+
+    /// Every function the program calls that it does not define (built-ins, or names to
+    /// stub), in order of first call.
+    pub fn called_builtins(&self) -> Vec<&str> {
+        self.natives
+            .iter()
+            .map(|(s, _)| self.names[*s as usize].as_str())
+            .collect()
+    }
+
+    /// Like [`called_builtins`](Self::called_builtins) with the first line calling each.
+    pub fn called_builtins_with_lines(&self) -> Vec<(&str, u32)> {
+        self.natives
+            .iter()
+            .map(|(s, l)| (self.names[*s as usize].as_str(), *l))
+            .collect()
+    }
+}
+
+#[derive(Default)]
+struct Compiler {
+    names: Vec<String>,
+    name_ids: HashMap<String, Sym>,
+    consts: Vec<Value>,
+    funcs: Vec<Func>,
+    func_ids: HashMap<String, u32>,
+    kwnames: Vec<Vec<Sym>>,
+    natives: Vec<(Sym, u32)>,
+    // Current function being compiled.
+    ops: Vec<Op>,
+    lines: Vec<u32>,
+    line: u32,
+    /// Per open loop: its start and the `break` jumps to patch.
+    loops: Vec<(u32, Vec<usize>)>,
+}
+
+fn err(line: u32, msg: String) -> ParseError {
+    ParseError::new(line, 1, msg)
+}
+
+impl Compiler {
+    fn sym(&mut self, name: &str) -> Sym {
+        if let Some(&s) = self.name_ids.get(name) {
+            return s;
+        }
+        let s = self.names.len() as Sym;
+        self.names.push(name.to_string());
+        self.name_ids.insert(name.to_string(), s);
+        s
+    }
+
+    fn emit(&mut self, op: Op) -> usize {
+        self.ops.push(op);
+        self.lines.push(self.line);
+        self.ops.len() - 1
+    }
+
+    fn here(&self) -> u32 {
+        self.ops.len() as u32
+    }
+
+    fn patch(&mut self, at: usize, target: u32) {
+        match &mut self.ops[at] {
+            Op::Jump(t) | Op::JumpIfFalse(t) | Op::JumpIfFalseKeep(t) | Op::JumpIfTrueKeep(t) => {
+                *t = target
+            }
+            _ => {}
+        }
+    }
+
+    /// Gives every `def`/`thread`, at any depth, its id (ids from 1; 0 is the program).
+    fn collect(&mut self, stmts: &[Stmt], out: &mut Vec<FuncDef>) -> Result<(), ParseError> {
+        for s in stmts {
+            match &s.kind {
+                StmtKind::Def(f) => {
+                    if self.func_ids.contains_key(&f.name) {
+                        return Err(err(f.line, format!("`{}` is defined twice", f.name)));
+                    }
+                    self.func_ids.insert(f.name.clone(), out.len() as u32 + 1);
+                    out.push(f.clone());
+                    self.collect(&f.body, out)?;
+                }
+                StmtKind::If {
+                    branches,
+                    otherwise,
+                } => {
+                    for (_, b) in branches {
+                        self.collect(b, out)?;
+                    }
+                    self.collect(otherwise, out)?;
+                }
+                StmtKind::While(_, b) => self.collect(b, out)?,
+                _ => {}
+            }
+        }
+        Ok(())
+    }
+
+    fn program(mut self, stmts: Vec<Stmt>) -> Result<Program, ParseError> {
+        // The form drivers send: one `def` (and perhaps threads/defs), perhaps followed
+        // by a call of it.
+        let defs: Vec<&FuncDef> = stmts
+            .iter()
+            .filter_map(|s| match &s.kind {
+                StmtKind::Def(f) if !f.is_thread => Some(f),
+                _ => None,
+            })
+            .collect();
+        let others: Vec<&Stmt> = stmts
+            .iter()
+            .filter(|s| !matches!(s.kind, StmtKind::Def(_)))
+            .collect();
+        let entry: Option<String> = match (defs.as_slice(), others.as_slice()) {
+            (ds, []) if !ds.is_empty() => ds.last().map(|d| d.name.clone()),
+            (ds, [one]) => match &one.kind {
+                StmtKind::Expr(Expr::Call { name, args, kwargs })
+                    if args.is_empty()
+                        && kwargs.is_empty()
+                        && ds.iter().any(|d| d.name == *name && d.params.is_empty()) =>
+                {
+                    Some(name.clone())
+                }
+                _ => None,
+            },
+            _ => None,
+        };
+        let mut defs = Vec::new();
+        self.collect(&stmts, &mut defs)?;
+        let main_body: Vec<Stmt> = match &entry {
+            Some(name) => defs
+                .iter()
+                .find(|d| d.name == *name)
+                .map(|d| d.body.clone())
+                .unwrap_or_default(),
+            None => stmts,
+        };
+        // The program itself is function 0.
+        self.funcs.push(Func {
+            name: entry.clone().unwrap_or_else(|| "<program>".into()),
+            params: Vec::new(),
+            ops: Vec::new(),
+            lines: Vec::new(),
+            is_thread: false,
+            program_scope: true,
+        });
+        for d in &defs {
+            let params = d
+                .params
+                .iter()
+                .map(|(n, v)| (self.sym(n), v.clone()))
+                .collect();
+            self.funcs.push(Func {
+                name: d.name.clone(),
+                params,
+                ops: Vec::new(),
+                lines: Vec::new(),
+                is_thread: d.is_thread,
+                program_scope: false,
+            });
+        }
+        self.function(0, &main_body, 1)?;
+        for (i, d) in defs.iter().enumerate() {
+            // The entry def's body is the program; compiled once, as function 0.
+            self.function(i + 1, &d.body, d.line)?;
+        }
+        Ok(Program {
+            names: self.names,
+            consts: self.consts,
+            funcs: self.funcs,
+            kwnames: self.kwnames,
+            natives: self.natives,
+            entry,
+        })
+    }
+
+    fn function(&mut self, id: usize, body: &[Stmt], line: u32) -> Result<(), ParseError> {
+        self.ops.clear();
+        self.lines.clear();
+        self.loops.clear();
+        self.line = line;
+        self.block(body)?;
+        self.line = body.last().map_or(line, |s| s.line);
+        self.emit(Op::ReturnNone);
+        self.funcs[id].ops = std::mem::take(&mut self.ops);
+        self.funcs[id].lines = std::mem::take(&mut self.lines);
+        Ok(())
+    }
+
+    fn block(&mut self, body: &[Stmt]) -> Result<(), ParseError> {
+        for s in body {
+            self.stmt(s)?;
+        }
+        Ok(())
+    }
+
+    fn stmt(&mut self, s: &Stmt) -> Result<(), ParseError> {
+        self.line = s.line;
+        // A `while` counts once per iteration instead (below), so even an empty loop
+        // meets the per-step statement bound.
+        if !matches!(s.kind, StmtKind::Def(_) | StmtKind::While(..)) {
+            self.emit(Op::Stmt);
+        }
+        match &s.kind {
+            StmtKind::Assign {
+                scope,
+                name,
+                indices,
+                value,
+            } => {
+                let sym = self.sym(name);
+                let Some(value) = value else {
+                    // `global x` / `local x` alone declares nothing we need to track.
+                    return Ok(());
+                };
+                if indices.len() > 2 {
+                    return Err(err(s.line, "assignment with more than two indices".into()));
+                }
+                for i in indices {
+                    self.expr(i)?;
+                }
+                self.expr(value)?;
+                if indices.is_empty() {
+                    self.emit(Op::Store(sym, *scope));
+                } else {
+                    self.emit(Op::StoreIndex(sym, *scope, indices.len() as u8));
+                }
+            }
+            StmtKind::Expr(e) => {
+                self.expr(e)?;
+                self.emit(Op::Pop);
+            }
+            StmtKind::If {
+                branches,
+                otherwise,
+            } => {
+                let mut ends = Vec::new();
+                for (cond, body) in branches {
+                    self.expr(cond)?;
+                    let skip = self.emit(Op::JumpIfFalse(0));
+                    self.block(body)?;
+                    ends.push(self.emit(Op::Jump(0)));
+                    let h = self.here();
+                    self.patch(skip, h);
+                }
+                self.block(otherwise)?;
+                let h = self.here();
+                for e in ends {
+                    self.patch(e, h);
+                }
+            }
+            StmtKind::While(cond, body) => {
+                let start = self.here();
+                self.emit(Op::Stmt);
+                self.expr(cond)?;
+                let exit = self.emit(Op::JumpIfFalse(0));
+                self.loops.push((start, Vec::new()));
+                self.block(body)?;
+                self.line = s.line;
+                self.emit(Op::Jump(start));
+                let h = self.here();
+                self.patch(exit, h);
+                if let Some((_, breaks)) = self.loops.pop() {
+                    for b in breaks {
+                        self.patch(b, h);
+                    }
+                }
+            }
+            StmtKind::Break => {
+                if self.loops.is_empty() {
+                    return Err(err(s.line, "`break` outside a `while` loop".into()));
+                }
+                let j = self.emit(Op::Jump(0));
+                if let Some((_, breaks)) = self.loops.last_mut() {
+                    breaks.push(j);
+                }
+            }
+            StmtKind::Continue => {
+                let Some(&(start, _)) = self.loops.last() else {
+                    return Err(err(s.line, "`continue` outside a `while` loop".into()));
+                };
+                self.emit(Op::Jump(start));
+            }
+            StmtKind::Return(e) => match e {
+                Some(e) => {
+                    self.expr(e)?;
+                    self.emit(Op::Return);
+                }
+                None => {
+                    self.emit(Op::ReturnNone);
+                }
+            },
+            StmtKind::Halt => {
+                self.emit(Op::Halt);
+            }
+            StmtKind::Def(_) => {}
+            StmtKind::Join(e) => {
+                self.expr(e)?;
+                self.emit(Op::Join);
+            }
+            StmtKind::Kill(e) => {
+                self.expr(e)?;
+                self.emit(Op::Kill);
+            }
+            StmtKind::EnterCritical => {
+                self.emit(Op::EnterCritical);
+            }
+            StmtKind::ExitCritical => {
+                self.emit(Op::ExitCritical);
+            }
+        }
+        Ok(())
+    }
+
+    fn constant(&mut self, v: Value) -> u32 {
+        self.consts.push(v);
+        (self.consts.len() - 1) as u32
+    }
+
+    fn expr(&mut self, e: &Expr) -> Result<(), ParseError> {
+        match e {
+            Expr::Lit(v) => {
+                let c = self.constant(v.clone());
+                self.emit(Op::Const(c));
+            }
+            Expr::Name(n) => {
+                let s = self.sym(n);
+                self.emit(Op::Load(s));
+            }
+            Expr::List(items) => {
+                for i in items {
+                    self.expr(i)?;
+                }
+                self.emit(Op::MakeList(items.len() as u32));
+            }
+            Expr::Pose(items) => {
+                for i in items {
+                    self.expr(i)?;
+                }
+                self.emit(Op::MakePose(items.len() as u32));
+            }
+            Expr::Index(base, i) => match base.as_ref() {
+                Expr::Name(n) => {
+                    let s = self.sym(n);
+                    self.expr(i)?;
+                    self.emit(Op::LoadIndex(s));
+                }
+                _ => {
+                    self.expr(base)?;
+                    self.expr(i)?;
+                    self.emit(Op::Index);
+                }
+            },
+            Expr::Unary(op, inner) => {
+                self.expr(inner)?;
+                self.emit(match op {
+                    crate::parser::UnOp::Neg => Op::Neg,
+                    crate::parser::UnOp::Not => Op::Not,
+                });
+            }
+            Expr::Binary(BinOp::And, l, r) | Expr::Binary(BinOp::Or, l, r) => {
+                let is_and = matches!(e, Expr::Binary(BinOp::And, ..));
+                self.expr(l)?;
+                let j = self.emit(if is_and {
+                    Op::JumpIfFalseKeep(0)
+                } else {
+                    Op::JumpIfTrueKeep(0)
+                });
+                self.expr(r)?;
+                self.emit(Op::CheckBool);
+                let h = self.here();
+                self.patch(j, h);
+            }
+            Expr::Binary(op, l, r) => {
+                self.expr(l)?;
+                self.expr(r)?;
+                self.emit(Op::Bin(*op));
+            }
+            Expr::Run(name) => match self.func_ids.get(name) {
+                Some(&id) if self.funcs[id as usize].is_thread => {
+                    self.emit(Op::Run(id));
+                }
+                Some(_) => {
+                    return Err(err(
+                        self.line,
+                        format!("`run {name}()`: `{name}` is a function, not a thread"),
+                    ));
+                }
+                None => {
+                    return Err(err(
+                        self.line,
+                        format!("`run {name}()`: no thread named `{name}`"),
+                    ))
+                }
+            },
+            Expr::Call { name, args, kwargs } => {
+                let argc = args.len() + kwargs.len();
+                if argc > 255 {
+                    return Err(err(self.line, format!("too many arguments to `{name}`")));
+                }
+                for a in args {
+                    self.expr(a)?;
+                }
+                for (_, v) in kwargs {
+                    self.expr(v)?;
+                }
+                let kw = if kwargs.is_empty() {
+                    NO_KW
+                } else {
+                    let names = kwargs.iter().map(|(k, _)| self.sym(k)).collect();
+                    self.kwnames.push(names);
+                    (self.kwnames.len() - 1) as u32
+                };
+                match self.func_ids.get(name) {
+                    Some(&id) if self.funcs[id as usize].is_thread => {
+                        return Err(err(
+                            self.line,
+                            format!("`{name}` is a thread: start it with `run {name}()`"),
+                        ));
+                    }
+                    Some(&id) => {
+                        self.emit(Op::Call(id, argc as u16, kw));
+                    }
+                    None => {
+                        let s = self.sym(name);
+                        if !self.natives.iter().any(|(n, _)| *n == s) {
+                            self.natives.push((s, self.line));
+                        }
+                        self.emit(Op::Native(s, argc as u16, kw));
+                    }
+                }
+            }
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,276 @@
+//! Tokens of URScript. Newlines end statements except inside `(...)` and `[...]`, where a
+//! statement may continue over lines. `#` starts a comment to the end of the line; a line
+//! starting with `$` (PolyScope's `$ 1 "Robot Program"` step markers) is skipped too.
+
+use nom::branch::alt;
+use nom::bytes::complete::take_while1;
+use nom::character::complete::{char, digit0, digit1, one_of};
+use nom::combinator::{opt, recognize};
+use nom::{IResult, Parser};
+
+use crate::error::ParseError;
+
+/// One token with its 1-based position.
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct Token {
+    pub kind: Tok,
+    pub line: u32,
+    pub col: u32,
+}
+
+/// Token kinds.
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) enum Tok {
+    Int(i32),
+    Float(f64),
+    Str(String),
+    Ident(String),
+    /// `p[`: the opening of a pose literal (no space between `p` and `[`).
+    PoseOpen,
+    LParen,
+    RParen,
+    LBracket,
+    RBracket,
+    Comma,
+    Colon,
+    Assign,
+    Plus,
+    Minus,
+    Star,
+    Slash,
+    Percent,
+    Eq,
+    Ne,
+    Lt,
+    Le,
+    Gt,
+    Ge,
+    Dot,
+    Newline,
+    Eof,
+}
+
+impl Tok {
+    /// How the token is shown in an error message.
+    pub fn describe(&self) -> String {
+        match self {
+            Tok::Int(v) => format!("number `{v}`"),
+            Tok::Float(v) => format!("number `{v}`"),
+            Tok::Str(s) => format!("string \"{s}\""),
+            Tok::Ident(s) => format!("`{s}`"),
+            Tok::PoseOpen => "`p[`".into(),
+            Tok::LParen => "`(`".into(),
+            Tok::RParen => "`)`".into(),
+            Tok::LBracket => "`[`".into(),
+            Tok::RBracket => "`]`".into(),
+            Tok::Comma => "`,`".into(),
+            Tok::Colon => "`:`".into(),
+            Tok::Assign => "`=`".into(),
+            Tok::Plus => "`+`".into(),
+            Tok::Minus => "`-`".into(),
+            Tok::Star => "`*`".into(),
+            Tok::Slash => "`/`".into(),
+            Tok::Percent => "`%`".into(),
+            Tok::Eq => "`==`".into(),
+            Tok::Ne => "`!=`".into(),
+            Tok::Lt => "`<`".into(),
+            Tok::Le => "`<=`".into(),
+            Tok::Gt => "`>`".into(),
+            Tok::Ge => "`>=`".into(),
+            Tok::Dot => "`.`".into(),
+            Tok::Newline => "end of line".into(),
+            Tok::Eof => "end of program".into(),
+        }
+    }
+}
+
+/// A number literal: `12`, `1.5`, `.5`, `1.`, `1e-3`, `2.5E+2` (no sign: unary minus is an
+/// operator).
+fn number(input: &str) -> IResult<&str, &str> {
+    let exponent = (one_of("eE"), opt(one_of("+-")), digit1);
+    alt((
+        recognize((digit1, opt((char('.'), digit0)), opt(exponent))),
+        recognize((
+            char('.'),
+            digit1,
+            opt((one_of("eE"), opt(one_of("+-")), digit1)),
+        )),
+    ))
+    .parse(input)
+}
+
+fn ident(input: &str) -> IResult<&str, &str> {
+    take_while1(|c: char| c.is_ascii_alphanumeric() || c == '_')(input)
+}
+
+/// Splits `src` into tokens.
+pub(crate) fn lex(src: &str) -> Result<Vec<Token>, ParseError> {
+    let mut out = Vec::new();
+    let mut rest = src;
+    let mut line = 1u32;
+    let mut line_start = 0usize; // byte offset of the current line in src
+    let mut depth = 0usize; // open ( and [
+    let mut at_line_start = true;
+    while !rest.is_empty() {
+        let offset = src.len() - rest.len();
+        let col = u32::try_from(src[line_start..offset].chars().count() + 1).unwrap_or(u32::MAX);
+        let c = rest.chars().next().unwrap_or(' ');
+        let err = |what: String| ParseError::new(line, col, what);
+        if c == '\n' {
+            if depth == 0
+                && !matches!(
+                    out.last(),
+                    Some(Token {
+                        kind: Tok::Newline,
+                        ..
+                    }) | None
+                )
+            {
+                out.push(Token {
+                    kind: Tok::Newline,
+                    line,
+                    col,
+                });
+            }
+            rest = &rest[1..];
+            line += 1;
+            line_start = offset + 1;
+            at_line_start = true;
+            continue;
+        }
+        if c == ' ' || c == '\t' || c == '\r' || c == '\u{feff}' {
+            rest = &rest[c.len_utf8()..];
+            continue;
+        }
+        if c == '#' || (c == '$' && at_line_start) {
+            let end = rest.find('\n').unwrap_or(rest.len());
+            rest = &rest[end..];
+            continue;
+        }
+        if c == '\\'
+            && rest[1..]
+                .trim_start_matches([' ', '\t', '\r'])
+                .starts_with('\n')
+        {
+            // Explicit line continuation.
+            let nl = rest.find('\n').unwrap_or(rest.len());
+            rest = &rest[nl.saturating_add(1).min(rest.len())..];
+            line += 1;
+            line_start = src.len() - rest.len();
+            continue;
+        }
+        at_line_start = false;
+        let mut push = |kind: Tok, len: usize, rest: &mut &str| {
+            out.push(Token { kind, line, col });
+            *rest = &rest[len..];
+        };
+        if c.is_ascii_digit() || (c == '.' && rest[1..].starts_with(|d: char| d.is_ascii_digit())) {
+            let Ok((after, text)) = number(rest) else {
+                return Err(err(format!("invalid number `{}`", &rest[..1])));
+            };
+            if after.starts_with(|d: char| d.is_ascii_alphabetic() || d == '_') {
+                return Err(err(format!("invalid number `{text}{}`", &after[..1])));
+            }
+            let kind = if text.bytes().all(|b| b.is_ascii_digit()) {
+                match text.parse::<i32>() {
+                    Ok(v) => Tok::Int(v),
+                    Err(_) => {
+                        return Err(err(format!(
+                            "integer literal `{text}` does not fit 32 bits"
+                        )))
+                    }
+                }
+            } else {
+                match text.parse::<f64>() {
+                    Ok(v) => Tok::Float(v),
+                    Err(_) => return Err(err(format!("invalid number `{text}`"))),
+                }
+            };
+            push(kind, text.len(), &mut rest);
+            continue;
+        }
+        if c.is_ascii_alphabetic() || c == '_' {
+            let Ok((after, name)) = ident(rest) else {
+                return Err(err("invalid name".into()));
+            };
+            if name == "p" && after.starts_with('[') {
+                depth += 1;
+                push(Tok::PoseOpen, 2, &mut rest);
+            } else {
+                push(Tok::Ident(name.to_string()), name.len(), &mut rest);
+            }
+            continue;
+        }
+        if c == '"' || c == '\'' {
+            let body = &rest[1..];
+            let Some(end) = body.find([c, '\n']) else {
+                return Err(err("string literal not closed".into()));
+            };
+            if body[end..].starts_with('\n') {
+                return Err(err("string literal not closed on its line".into()));
+            }
+            let text = body[..end].to_string();
+            push(Tok::Str(text), end + 2, &mut rest);
+            continue;
+        }
+        let two = rest.get(..2).unwrap_or("");
+        let (kind, len) = match two {
+            "==" => (Tok::Eq, 2),
+            "!=" => (Tok::Ne, 2),
+            "<=" => (Tok::Le, 2),
+            ">=" => (Tok::Ge, 2),
+            _ => match c {
+                '(' => (Tok::LParen, 1),
+                ')' => (Tok::RParen, 1),
+                '[' => (Tok::LBracket, 1),
+                ']' => (Tok::RBracket, 1),
+                ',' => (Tok::Comma, 1),
+                ':' => (Tok::Colon, 1),
+                '=' => (Tok::Assign, 1),
+                '+' => (Tok::Plus, 1),
+                '-' => (Tok::Minus, 1),
+                '*' => (Tok::Star, 1),
+                '/' => (Tok::Slash, 1),
+                '%' => (Tok::Percent, 1),
+                '<' => (Tok::Lt, 1),
+                '>' => (Tok::Gt, 1),
+                '.' => (Tok::Dot, 1),
+                '{' => {
+                    return Err(err(
+                        "a template placeholder (`{{...}}` or `{% ... %}`) must be filled in before the program runs".into(),
+                    ))
+                }
+                other => return Err(err(format!("unexpected character `{other}`"))),
+            },
+        };
+        match kind {
+            Tok::LParen | Tok::LBracket => depth += 1,
+            Tok::RParen | Tok::RBracket => depth = depth.saturating_sub(1),
+            _ => {}
+        }
+        push(kind, len, &mut rest);
+    }
+    let offset = src.len();
+    let col = u32::try_from(src[line_start..offset].chars().count() + 1).unwrap_or(u32::MAX);
+    if depth == 0
+        && !matches!(
+            out.last(),
+            Some(Token {
+                kind: Tok::Newline,
+                ..
+            }) | None
+        )
+    {
+        out.push(Token {
+            kind: Tok::Newline,
+            line,
+            col,
+        });
+    }
+    out.push(Token {
+        kind: Tok::Eof,
+        line,
+        col,
+    });
+    Ok(out)
+}

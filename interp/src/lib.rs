@@ -1,0 +1,83 @@
+//! # urscript-interp
+//!
+//! A URScript interpreter over [`urscript_socket`]'s robot model, so a server can be
+//! tested against the robot program it will really run, without a robot or UR's
+//! simulator.
+//!
+//! - [`Program::parse`] reads a whole program first: a syntax error, or a construct not
+//!   supported, names its line and column before anything runs.
+//! - [`Machine`] runs it **sans-IO** (quinn-proto style): time and socket events are
+//!   inputs ([`Machine::run_until`], [`Machine::handle_connected`],
+//!   [`Machine::handle_received`]), and what the program does comes out as [`Event`]s
+//!   ([`Machine::poll_event`]): connections to open, bytes to send, `textmsg`/`popup`
+//!   text, and a trace of every socket call with its result. Tests run in virtual time.
+//! - [`drive::run_tcp`] runs a machine in real time against real TCP servers.
+//!
+//! See [`machine`] for the time model (steps, thread order) and [`builtins`] for the
+//! built-ins and the virtual arm.
+//!
+//! ```
+//! use std::time::Duration;
+//! use urscript_interp::{Config, Event, Machine, Program, State};
+//!
+//! let program = Program::parse(r#"
+//! def vision():
+//!   socket_open("10.0.0.5", 5000, "camera")
+//!   socket_send_line("shoot", "camera")
+//!   pose = socket_read_ascii_float(6, "camera")
+//!   if pose[0] == 6:
+//!     textmsg("x = ", pose[1])
+//!   end
+//! end
+//! "#).unwrap();
+//! let mut m = Machine::new(program, Config::default());
+//! m.run_until(Duration::ZERO);
+//! assert!(matches!(m.poll_event(), Some(Event::Connect { port: 5000, .. })));
+//! m.handle_connected("camera", Ok(()));
+//! m.run_until(Duration::from_millis(2));
+//! while let Some(e) = m.poll_event() {
+//!     if let Event::Transmit { bytes, .. } = e { assert_eq!(bytes, b"shoot\n"); }
+//! }
+//! m.handle_received("camera", b"(0.4,-0.2,0.3,0,3.14,0)\n");
+//! m.run_until(Duration::from_millis(4));
+//! assert_eq!(m.state(), &State::Finished);
+//! let messages: Vec<Event> = std::iter::from_fn(|| m.poll_event())
+//!     .filter(|e| matches!(e, Event::Message(_)))
+//!     .collect();
+//! assert_eq!(messages, [Event::Message("x = 0.4".into())]);
+//! ```
+#![forbid(unsafe_code)]
+#![warn(missing_docs)]
+
+pub mod builtins;
+mod compile;
+pub mod drive;
+mod error;
+mod lexer;
+pub mod machine;
+mod parser;
+mod pose;
+mod sockets;
+mod value;
+
+pub use compile::Program;
+pub use error::{ParseError, RuntimeError};
+pub use machine::{Config, Event, Machine, State, Stub};
+pub use sockets::{Policy, Timeout};
+pub use value::Value;
+
+/// Reads a URScript constant: a number, `True`/`False`, a string, a list or a pose of
+/// constants (as a stub's value on a command line).
+///
+/// ```
+/// use urscript_interp::{parse_constant, Value};
+/// assert_eq!(parse_constant("[1, -2.5]").unwrap(), Value::List(vec![Value::Int(1), Value::Float(-2.5)]));
+/// assert!(parse_constant("x").is_err());
+/// ```
+pub fn parse_constant(text: &str) -> Result<Value, ParseError> {
+    let toks = lexer::lex(text)?;
+    let mut p = parser::Parser::new(toks);
+    let e = p.expr()?;
+    p.end_of_constant()?;
+    parser::const_value(&e).ok_or_else(|| ParseError::new(1, 1, "not a constant".into()))
+}

@@ -1,0 +1,765 @@
+//! Recursive-descent parser from tokens to the syntax tree. Expressions use precedence
+//! climbing with URScript's levels, lowest first: `or`, `xor`, `and`, `not`, comparisons
+//! (`== != < <= > >=`), `+ -`, `* / %`, unary `-`, then indexing and calls.
+
+use crate::error::ParseError;
+use crate::lexer::{Tok, Token};
+use crate::value::Value;
+
+/// Nesting bound of blocks and expressions, so hostile input cannot overflow the stack.
+const MAX_DEPTH: usize = 64;
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum BinOp {
+    Or,
+    Xor,
+    And,
+    Eq,
+    Ne,
+    Lt,
+    Le,
+    Gt,
+    Ge,
+    Add,
+    Sub,
+    Mul,
+    Div,
+    Rem,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum UnOp {
+    Neg,
+    Not,
+}
+
+#[derive(Debug, Clone)]
+pub(crate) enum Expr {
+    Lit(Value),
+    Name(String),
+    List(Vec<Expr>),
+    Pose(Vec<Expr>),
+    Index(Box<Expr>, Box<Expr>),
+    Call {
+        name: String,
+        args: Vec<Expr>,
+        kwargs: Vec<(String, Expr)>,
+    },
+    Unary(UnOp, Box<Expr>),
+    Binary(BinOp, Box<Expr>, Box<Expr>),
+    /// `run name()`.
+    Run(String),
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Scope {
+    Auto,
+    Local,
+    Global,
+}
+
+#[derive(Debug, Clone)]
+pub(crate) struct FuncDef {
+    pub name: String,
+    pub params: Vec<(String, Option<Value>)>,
+    pub body: Vec<Stmt>,
+    pub is_thread: bool,
+    pub line: u32,
+}
+
+#[derive(Debug, Clone)]
+pub(crate) enum StmtKind {
+    Assign {
+        scope: Scope,
+        name: String,
+        indices: Vec<Expr>,
+        value: Option<Expr>,
+    },
+    Expr(Expr),
+    If {
+        branches: Vec<(Expr, Vec<Stmt>)>,
+        otherwise: Vec<Stmt>,
+    },
+    While(Expr, Vec<Stmt>),
+    Break,
+    Continue,
+    Return(Option<Expr>),
+    Halt,
+    Def(FuncDef),
+    Join(Expr),
+    Kill(Expr),
+    EnterCritical,
+    ExitCritical,
+}
+
+#[derive(Debug, Clone)]
+pub(crate) struct Stmt {
+    pub kind: StmtKind,
+    pub line: u32,
+}
+
+/// Words that cannot be variable names.
+const KEYWORDS: &[&str] = &[
+    "def",
+    "sec",
+    "thread",
+    "end",
+    "if",
+    "elif",
+    "else",
+    "while",
+    "return",
+    "break",
+    "continue",
+    "halt",
+    "run",
+    "join",
+    "kill",
+    "global",
+    "local",
+    "and",
+    "or",
+    "xor",
+    "not",
+    "True",
+    "False",
+    "enter_critical",
+    "exit_critical",
+];
+
+/// Words of URScript (or of Python-like languages) this interpreter does not support.
+const UNSUPPORTED: &[(&str, &str)] = &[
+    ("for", "`for` loops are not URScript (use `while`)"),
+    ("struct", "`struct` is not supported"),
+    ("lambda", "`lambda` is not URScript"),
+    ("import", "`import` is not URScript"),
+];
+
+pub(crate) struct Parser {
+    toks: Vec<Token>,
+    pos: usize,
+    depth: usize,
+}
+
+impl Parser {
+    pub fn new(toks: Vec<Token>) -> Self {
+        Parser {
+            toks,
+            pos: 0,
+            depth: 0,
+        }
+    }
+
+    fn peek(&self) -> &Token {
+        // The lexer always ends the list with Eof, and `bump` never passes it.
+        &self.toks[self.pos.min(self.toks.len() - 1)]
+    }
+
+    fn peek_at(&self, n: usize) -> &Tok {
+        &self.toks[(self.pos + n).min(self.toks.len() - 1)].kind
+    }
+
+    fn bump(&mut self) -> Token {
+        let t = self.peek().clone();
+        if t.kind != Tok::Eof {
+            self.pos += 1;
+        }
+        t
+    }
+
+    fn err_here(&self, what: impl Into<String>) -> ParseError {
+        let t = self.peek();
+        ParseError::new(t.line, t.col, what.into())
+    }
+
+    fn expected(&self, what: &str) -> ParseError {
+        let t = self.peek();
+        self.err_here(format!("expected {what}, found {}", t.kind.describe()))
+    }
+
+    fn eat(&mut self, kind: &Tok) -> bool {
+        if &self.peek().kind == kind {
+            self.bump();
+            true
+        } else {
+            false
+        }
+    }
+
+    fn expect(&mut self, kind: &Tok, what: &str) -> Result<(), ParseError> {
+        if self.eat(kind) {
+            Ok(())
+        } else {
+            Err(self.expected(what))
+        }
+    }
+
+    fn is_word(&self, word: &str) -> bool {
+        matches!(&self.peek().kind, Tok::Ident(w) if w == word)
+    }
+
+    fn eat_word(&mut self, word: &str) -> bool {
+        if self.is_word(word) {
+            self.bump();
+            true
+        } else {
+            false
+        }
+    }
+
+    fn name(&mut self, what: &str) -> Result<String, ParseError> {
+        match &self.peek().kind {
+            Tok::Ident(w) if !KEYWORDS.contains(&w.as_str()) => {
+                let w = w.clone();
+                self.bump();
+                Ok(w)
+            }
+            Tok::Ident(w) => Err(self.err_here(format!("expected {what}, found keyword `{w}`"))),
+            _ => Err(self.expected(what)),
+        }
+    }
+
+    fn skip_newlines(&mut self) {
+        while self.eat(&Tok::Newline) {}
+    }
+
+    fn end_of_statement(&mut self) -> Result<(), ParseError> {
+        if self.eat(&Tok::Newline) || self.peek().kind == Tok::Eof {
+            return Ok(());
+        }
+        // `if x: y = 1 end` style: a block keyword may follow on the same line.
+        if ["end", "elif", "else"].iter().any(|w| self.is_word(w)) {
+            return Ok(());
+        }
+        Err(self.expected("end of line"))
+    }
+
+    fn enter(&mut self) -> Result<(), ParseError> {
+        self.depth += 1;
+        if self.depth > MAX_DEPTH {
+            return Err(self.err_here("program nested too deeply"));
+        }
+        Ok(())
+    }
+
+    /// The whole program: statements to the end.
+    pub fn program(&mut self) -> Result<Vec<Stmt>, ParseError> {
+        let mut out = Vec::new();
+        self.skip_newlines();
+        while self.peek().kind != Tok::Eof {
+            if ["end", "elif", "else"].iter().any(|w| self.is_word(w)) {
+                let t = self.peek().kind.describe();
+                return Err(self.err_here(format!("{t} without an open block")));
+            }
+            out.push(self.statement()?);
+            self.skip_newlines();
+        }
+        Ok(out)
+    }
+
+    /// Statements until one of `stops` (not consumed).
+    fn block(&mut self, stops: &[&str]) -> Result<Vec<Stmt>, ParseError> {
+        self.enter()?;
+        let mut out = Vec::new();
+        self.skip_newlines();
+        while !stops.iter().any(|w| self.is_word(w)) {
+            if self.peek().kind == Tok::Eof {
+                let list = stops.join("`/`");
+                return Err(self.err_here(format!("expected `{list}` before the end of program")));
+            }
+            out.push(self.statement()?);
+            self.skip_newlines();
+        }
+        self.depth -= 1;
+        Ok(out)
+    }
+
+    fn statement(&mut self) -> Result<Stmt, ParseError> {
+        let line = self.peek().line;
+        let kind = self.statement_kind()?;
+        Ok(Stmt { kind, line })
+    }
+
+    fn statement_kind(&mut self) -> Result<StmtKind, ParseError> {
+        let word = match &self.peek().kind {
+            Tok::Ident(w) => w.clone(),
+            // `p[i] = v`: an element of a variable named `p` (not a pose literal).
+            Tok::PoseOpen => {
+                let save = (self.pos, self.depth);
+                self.bump();
+                if let Ok(first) = self.expr() {
+                    if self.eat(&Tok::RBracket) {
+                        if let Ok(mut indices) = self.target_indices() {
+                            if self.eat(&Tok::Assign) {
+                                indices.insert(0, first);
+                                let value = self.expr()?;
+                                self.end_of_statement()?;
+                                return Ok(StmtKind::Assign {
+                                    scope: Scope::Auto,
+                                    name: "p".into(),
+                                    indices,
+                                    value: Some(value),
+                                });
+                            }
+                        }
+                    }
+                }
+                (self.pos, self.depth) = save;
+                let e = self.expr()?;
+                return Err(self.not_a_statement(e));
+            }
+            _ => {
+                let e = self.expr()?;
+                return Err(self.not_a_statement(e));
+            }
+        };
+        if let Some((_, why)) = UNSUPPORTED.iter().find(|(w, _)| *w == word) {
+            return Err(self.err_here(*why));
+        }
+        match word.as_str() {
+            "def" | "sec" | "thread" => {
+                let line = self.bump().line;
+                let f = self.func(word == "thread", line)?;
+                Ok(StmtKind::Def(f))
+            }
+            "if" => self.if_stmt(),
+            "while" => {
+                self.bump();
+                let cond = self.expr()?;
+                self.expect(&Tok::Colon, "`:` after the `while` condition")?;
+                let body = self.block(&["end"])?;
+                self.bump();
+                self.end_of_statement()?;
+                Ok(StmtKind::While(cond, body))
+            }
+            "break" | "continue" | "halt" | "enter_critical" | "exit_critical" => {
+                self.bump();
+                self.end_of_statement()?;
+                Ok(match word.as_str() {
+                    "break" => StmtKind::Break,
+                    "continue" => StmtKind::Continue,
+                    "halt" => StmtKind::Halt,
+                    "enter_critical" => StmtKind::EnterCritical,
+                    _ => StmtKind::ExitCritical,
+                })
+            }
+            "return" => {
+                self.bump();
+                let value =
+                    if matches!(self.peek().kind, Tok::Newline | Tok::Eof) || self.is_word("end") {
+                        None
+                    } else {
+                        Some(self.expr()?)
+                    };
+                self.end_of_statement()?;
+                Ok(StmtKind::Return(value))
+            }
+            "join" | "kill" => {
+                self.bump();
+                let e = self.expr()?;
+                self.end_of_statement()?;
+                Ok(if word == "join" {
+                    StmtKind::Join(e)
+                } else {
+                    StmtKind::Kill(e)
+                })
+            }
+            "global" | "local" => {
+                self.bump();
+                let scope = if word == "global" {
+                    Scope::Global
+                } else {
+                    Scope::Local
+                };
+                let name = self.name("a variable name")?;
+                let indices = self.target_indices()?;
+                let value = if self.eat(&Tok::Assign) {
+                    Some(self.expr()?)
+                } else {
+                    None
+                };
+                self.end_of_statement()?;
+                Ok(StmtKind::Assign {
+                    scope,
+                    name,
+                    indices,
+                    value,
+                })
+            }
+            "end" | "elif" | "else" => {
+                Err(self.err_here(format!("`{word}` without an open block")))
+            }
+            _ => {
+                // An assignment `name = v`, `name[i] = v`, or an expression statement.
+                if !KEYWORDS.contains(&word.as_str()) {
+                    let save = (self.pos, self.depth);
+                    self.bump();
+                    if let Ok(indices) = self.target_indices() {
+                        if self.eat(&Tok::Assign) {
+                            let value = self.expr()?;
+                            self.end_of_statement()?;
+                            return Ok(StmtKind::Assign {
+                                scope: Scope::Auto,
+                                name: word,
+                                indices,
+                                value: Some(value),
+                            });
+                        }
+                    }
+                    (self.pos, self.depth) = save;
+                }
+                let e = self.expr()?;
+                if self.peek().kind == Tok::Assign {
+                    return Err(self.err_here("cannot assign to this expression"));
+                }
+                if !matches!(e, Expr::Call { .. } | Expr::Run(_)) {
+                    return Err(self.not_a_statement(e));
+                }
+                self.end_of_statement()?;
+                Ok(StmtKind::Expr(e))
+            }
+        }
+    }
+
+    fn not_a_statement(&self, _e: Expr) -> ParseError {
+        if self.peek().kind == Tok::Dot {
+            return self.err_here("member access `.` (structs) is not supported");
+        }
+        self.err_here(format!(
+            "expected a statement (a call or an assignment), found an expression before {}",
+            self.peek().kind.describe()
+        ))
+    }
+
+    /// `[i]` or `[i][j]` after an assignment target.
+    fn target_indices(&mut self) -> Result<Vec<Expr>, ParseError> {
+        let mut out = Vec::new();
+        while self.peek().kind == Tok::LBracket {
+            self.bump();
+            out.push(self.expr()?);
+            self.expect(&Tok::RBracket, "`]`")?;
+        }
+        Ok(out)
+    }
+
+    fn if_stmt(&mut self) -> Result<StmtKind, ParseError> {
+        self.bump();
+        let mut branches = Vec::new();
+        let cond = self.expr()?;
+        self.expect(&Tok::Colon, "`:` after the `if` condition")?;
+        let body = self.block(&["end", "elif", "else"])?;
+        branches.push((cond, body));
+        let mut otherwise = Vec::new();
+        loop {
+            if self.eat_word("elif") {
+                let cond = self.expr()?;
+                self.expect(&Tok::Colon, "`:` after the `elif` condition")?;
+                let body = self.block(&["end", "elif", "else"])?;
+                branches.push((cond, body));
+            } else if self.eat_word("else") {
+                self.expect(&Tok::Colon, "`:` after `else`")?;
+                otherwise = self.block(&["end"])?;
+            } else {
+                self.bump(); // `end`
+                break;
+            }
+        }
+        self.end_of_statement()?;
+        Ok(StmtKind::If {
+            branches,
+            otherwise,
+        })
+    }
+
+    fn func(&mut self, is_thread: bool, line: u32) -> Result<FuncDef, ParseError> {
+        let name = self.name("a function name")?;
+        self.expect(&Tok::LParen, "`(` after the function name")?;
+        let mut params = Vec::new();
+        let mut seen_default = false;
+        if !self.eat(&Tok::RParen) {
+            loop {
+                let p = self.name("a parameter name")?;
+                let default = if self.eat(&Tok::Assign) {
+                    seen_default = true;
+                    let t = self.peek().clone();
+                    let e = self.expr()?;
+                    Some(const_value(&e).ok_or_else(|| {
+                        ParseError::new(
+                            t.line,
+                            t.col,
+                            format!("the default of parameter `{p}` must be a constant"),
+                        )
+                    })?)
+                } else {
+                    if seen_default {
+                        return Err(self.err_here(format!(
+                            "parameter `{p}` without a default follows one with a default"
+                        )));
+                    }
+                    None
+                };
+                params.push((p, default));
+                if self.eat(&Tok::RParen) {
+                    break;
+                }
+                self.expect(&Tok::Comma, "`,` or `)` in the parameter list")?;
+            }
+        }
+        if is_thread && !params.is_empty() {
+            return Err(self.err_here("a thread takes no parameters"));
+        }
+        self.expect(&Tok::Colon, "`:` after the parameter list")?;
+        let body = self.block(&["end"])?;
+        self.bump();
+        self.end_of_statement()?;
+        Ok(FuncDef {
+            name,
+            params,
+            body,
+            is_thread,
+            line,
+        })
+    }
+
+    /// Only line ends may follow (after a constant).
+    pub fn end_of_constant(&mut self) -> Result<(), ParseError> {
+        self.skip_newlines();
+        if self.peek().kind == Tok::Eof {
+            Ok(())
+        } else {
+            Err(self.expected("the end of the value"))
+        }
+    }
+
+    pub fn expr(&mut self) -> Result<Expr, ParseError> {
+        self.enter()?;
+        let e = self.binary(0)?;
+        self.depth -= 1;
+        Ok(e)
+    }
+
+    /// Levels: 0 or, 1 xor, 2 and, 3 not (unary), 4 comparisons, 5 + -, 6 * / %.
+    fn binary(&mut self, level: u8) -> Result<Expr, ParseError> {
+        if level == 3 {
+            if self.eat_word("not") {
+                self.enter()?;
+                let e = self.binary(3)?;
+                self.depth -= 1;
+                return Ok(Expr::Unary(UnOp::Not, Box::new(e)));
+            }
+            return self.binary(4);
+        }
+        if level == 7 {
+            return self.unary();
+        }
+        let mut lhs = self.binary(level + 1)?;
+        loop {
+            let op = match (level, &self.peek().kind) {
+                (0, Tok::Ident(w)) if w == "or" => BinOp::Or,
+                (1, Tok::Ident(w)) if w == "xor" => BinOp::Xor,
+                (2, Tok::Ident(w)) if w == "and" => BinOp::And,
+                (4, Tok::Eq) => BinOp::Eq,
+                (4, Tok::Ne) => BinOp::Ne,
+                (4, Tok::Lt) => BinOp::Lt,
+                (4, Tok::Le) => BinOp::Le,
+                (4, Tok::Gt) => BinOp::Gt,
+                (4, Tok::Ge) => BinOp::Ge,
+                (5, Tok::Plus) => BinOp::Add,
+                (5, Tok::Minus) => BinOp::Sub,
+                (6, Tok::Star) => BinOp::Mul,
+                (6, Tok::Slash) => BinOp::Div,
+                (6, Tok::Percent) => BinOp::Rem,
+                _ => return Ok(lhs),
+            };
+            self.bump();
+            // A line ending in an operator continues on the next one (UR's own
+            // External Control script splits `elif a or` / `b:` that way).
+            self.skip_newlines();
+            let rhs = self.binary(level + 1)?;
+            lhs = Expr::Binary(op, Box::new(lhs), Box::new(rhs));
+        }
+    }
+
+    fn unary(&mut self) -> Result<Expr, ParseError> {
+        if self.eat(&Tok::Minus) {
+            self.enter()?;
+            let e = self.unary()?;
+            self.depth -= 1;
+            return Ok(match e {
+                Expr::Lit(Value::Int(v)) => Expr::Lit(Value::Int(v.wrapping_neg())),
+                Expr::Lit(Value::Float(v)) => Expr::Lit(Value::Float(-v)),
+                e => Expr::Unary(UnOp::Neg, Box::new(e)),
+            });
+        }
+        if self.eat(&Tok::Plus) {
+            return self.unary();
+        }
+        self.postfix()
+    }
+
+    fn postfix(&mut self) -> Result<Expr, ParseError> {
+        let mut e = self.primary()?;
+        loop {
+            match self.peek().kind {
+                Tok::LBracket => {
+                    self.bump();
+                    let i = self.expr()?;
+                    self.expect(&Tok::RBracket, "`]` after the index")?;
+                    e = Expr::Index(Box::new(e), Box::new(i));
+                }
+                Tok::Dot => {
+                    return Err(self.err_here("member access `.` (structs) is not supported"))
+                }
+                _ => return Ok(e),
+            }
+        }
+    }
+
+    fn items(&mut self, close: &Tok, what: &str) -> Result<Vec<Expr>, ParseError> {
+        let mut items = Vec::new();
+        if self.eat(close) {
+            return Ok(items);
+        }
+        loop {
+            items.push(self.expr()?);
+            if self.eat(close) {
+                return Ok(items);
+            }
+            self.expect(&Tok::Comma, what)?;
+            if self.eat(close) {
+                return Ok(items);
+            }
+        }
+    }
+
+    fn primary(&mut self) -> Result<Expr, ParseError> {
+        let t = self.peek().clone();
+        match t.kind {
+            Tok::Int(v) => {
+                self.bump();
+                Ok(Expr::Lit(Value::Int(v)))
+            }
+            Tok::Float(v) => {
+                self.bump();
+                Ok(Expr::Lit(Value::Float(v)))
+            }
+            Tok::Str(s) => {
+                self.bump();
+                Ok(Expr::Lit(Value::Str(s.into_bytes())))
+            }
+            Tok::LParen => {
+                self.bump();
+                let e = self.expr()?;
+                self.expect(&Tok::RParen, "`)`")?;
+                Ok(e)
+            }
+            Tok::LBracket => {
+                self.bump();
+                Ok(Expr::List(
+                    self.items(&Tok::RBracket, "`,` or `]` in the list")?,
+                ))
+            }
+            Tok::PoseOpen => {
+                self.bump();
+                let items = self.items(&Tok::RBracket, "`,` or `]` in the pose")?;
+                match items.len() {
+                    6 => Ok(Expr::Pose(items)),
+                    // `p[i]`: a variable named `p`, indexed.
+                    1 => {
+                        let mut it = items.into_iter();
+                        let i = it.next().unwrap_or(Expr::Lit(Value::Int(0)));
+                        Ok(Expr::Index(Box::new(Expr::Name("p".into())), Box::new(i)))
+                    }
+                    n => Err(ParseError::new(
+                        t.line,
+                        t.col,
+                        format!("a pose has 6 values, this one has {n}"),
+                    )),
+                }
+            }
+            Tok::Ident(ref w) => {
+                match w.as_str() {
+                    "True" => {
+                        self.bump();
+                        return Ok(Expr::Lit(Value::Bool(true)));
+                    }
+                    "False" => {
+                        self.bump();
+                        return Ok(Expr::Lit(Value::Bool(false)));
+                    }
+                    "run" => {
+                        self.bump();
+                        let name = self.name("a thread name after `run`")?;
+                        self.expect(&Tok::LParen, "`(` after the thread name")?;
+                        self.expect(&Tok::RParen, "`)`: a thread takes no arguments")?;
+                        return Ok(Expr::Run(name));
+                    }
+                    _ => {}
+                }
+                if let Some((_, why)) = UNSUPPORTED.iter().find(|(u, _)| u == w) {
+                    return Err(self.err_here(*why));
+                }
+                let name = self.name("an expression")?;
+                if self.peek().kind != Tok::LParen {
+                    return Ok(Expr::Name(name));
+                }
+                self.bump();
+                let mut args = Vec::new();
+                let mut kwargs: Vec<(String, Expr)> = Vec::new();
+                if !self.eat(&Tok::RParen) {
+                    loop {
+                        let is_kw = matches!(self.peek().kind, Tok::Ident(_))
+                            && *self.peek_at(1) == Tok::Assign;
+                        if is_kw {
+                            let k = self.name("an argument name")?;
+                            self.bump();
+                            let v = self.expr()?;
+                            if kwargs.iter().any(|(n, _)| *n == k) {
+                                return Err(self.err_here(format!("argument `{k}` given twice")));
+                            }
+                            kwargs.push((k, v));
+                        } else {
+                            if !kwargs.is_empty() {
+                                return Err(self
+                                    .err_here("a positional argument cannot follow a named one"));
+                            }
+                            args.push(self.expr()?);
+                        }
+                        if self.eat(&Tok::RParen) {
+                            break;
+                        }
+                        self.expect(&Tok::Comma, "`,` or `)` in the argument list")?;
+                    }
+                }
+                Ok(Expr::Call { name, args, kwargs })
+            }
+            _ => Err(self.expected("an expression")),
+        }
+    }
+}
+
+/// The value of a constant expression (a parameter default): literals, negated numbers,
+/// lists and poses of constants.
+pub(crate) fn const_value(e: &Expr) -> Option<Value> {
+    match e {
+        Expr::Lit(v) => Some(v.clone()),
+        Expr::Unary(UnOp::Neg, inner) => match const_value(inner)? {
+            Value::Int(v) => Some(Value::Int(v.wrapping_neg())),
+            Value::Float(v) => Some(Value::Float(-v)),
+            _ => None,
+        },
+        Expr::List(items) => items
+            .iter()
+            .map(const_value)
+            .collect::<Option<_>>()
+            .map(Value::List),
+        Expr::Pose(items) => {
+            let mut p = [0.0; 6];
+            for (slot, e) in p.iter_mut().zip(items) {
+                *slot = const_value(e)?.as_f64()?;
+            }
+            Some(Value::Pose(p))
+        }
+        _ => None,
+    }
+}

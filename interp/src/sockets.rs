@@ -1,0 +1,203 @@
+//! The one place the interpreter touches `urscript_socket::robot`: the robot's open
+//! sockets, what each read function returns, and the conversion of its results into
+//! URScript values. Everything else in the crate goes through [`Sockets`].
+
+use std::time::Duration;
+
+pub use urscript_socket::robot::{Policy, Timeout};
+use urscript_socket::robot::{ReadCall, ReadResult, Robot};
+
+use crate::value::Value;
+
+/// A read function and its arguments, in the interpreter's terms.
+#[derive(Debug, Clone)]
+pub(crate) enum ReadSpec {
+    AsciiFloat(usize),
+    BinaryInteger(usize),
+    ByteList(usize),
+    Line,
+    String {
+        prefix: Vec<u8>,
+        suffix: Vec<u8>,
+        interpret_escape: bool,
+    },
+    GetVar(String),
+}
+
+impl ReadSpec {
+    fn call(&self) -> ReadCall {
+        match self {
+            ReadSpec::AsciiFloat(n) => ReadCall::AsciiFloat { number: *n },
+            ReadSpec::BinaryInteger(n) => ReadCall::BinaryInteger { number: *n },
+            ReadSpec::ByteList(n) => ReadCall::ByteList { number: *n },
+            ReadSpec::Line => ReadCall::Line,
+            ReadSpec::String {
+                prefix,
+                suffix,
+                interpret_escape,
+            } => ReadCall::String {
+                prefix: prefix.clone(),
+                suffix: suffix.clone(),
+                interpret_escape: *interpret_escape,
+            },
+            ReadSpec::GetVar(name) => ReadCall::GetVar { name: name.clone() },
+        }
+    }
+
+    /// What the read returns on timeout, failure, or on a socket that is not open.
+    pub fn sentinel(&self) -> Value {
+        convert(self.call().sentinel())
+    }
+}
+
+fn convert(r: ReadResult) -> Value {
+    match r {
+        ReadResult::Floats(t) => {
+            let mut v = Vec::with_capacity(t.values().len() + 1);
+            v.push(Value::Float(t.count() as f64));
+            v.extend(t.values().iter().map(|&x| Value::Float(x)));
+            Value::List(v)
+        }
+        ReadResult::Ints(l) => {
+            let mut v = Vec::with_capacity(l.values().len() + 1);
+            v.push(Value::Int(i32::try_from(l.count()).unwrap_or(i32::MAX)));
+            v.extend(l.values().iter().map(|&x| Value::Int(x)));
+            Value::List(v)
+        }
+        ReadResult::Text(t) => Value::Str(t),
+        ReadResult::Int(i) => Value::Int(i),
+    }
+}
+
+/// The robot's open sockets: the robot model's one socket table. Every read's deadline
+/// lives in the model (started with the program time, resolved with
+/// [`handle_timeout`](Self::handle_timeout)); the interpreter keeps no clock of its own.
+#[derive(Debug)]
+pub(crate) struct Sockets {
+    robot: Robot,
+}
+
+impl Sockets {
+    pub fn new(policy: Policy) -> Self {
+        Sockets {
+            robot: Robot::new(policy),
+        }
+    }
+
+    pub fn open(&mut self, name: &str) {
+        self.robot.socket_open(name);
+    }
+
+    pub fn close(&mut self, name: &str) -> bool {
+        self.robot.socket_close(name)
+    }
+
+    pub fn is_open(&mut self, name: &str) -> bool {
+        self.robot.socket(name).is_some()
+    }
+
+    pub fn open_names(&self) -> Vec<String> {
+        self.robot.names().map(str::to_string).collect()
+    }
+
+    /// Runs `f` on the open socket `name`; `None` if it is not open.
+    fn with<T>(
+        &mut self,
+        name: &str,
+        f: impl FnOnce(&mut urscript_socket::robot::SocketConnection) -> T,
+    ) -> Option<T> {
+        self.robot.socket(name).map(f)
+    }
+
+    /// `socket_send_string`: false if the socket is not open or the peer is gone.
+    pub fn send_string(&mut self, name: &str, bytes: &[u8]) -> bool {
+        self.with(name, |s| s.send_string(bytes)).unwrap_or(false)
+    }
+
+    pub fn send_line(&mut self, name: &str, bytes: &[u8]) -> bool {
+        self.with(name, |s| s.send_line(bytes)).unwrap_or(false)
+    }
+
+    pub fn send_byte(&mut self, name: &str, b: u8) -> bool {
+        self.with(name, |s| s.send_byte(b)).unwrap_or(false)
+    }
+
+    pub fn send_int(&mut self, name: &str, v: i32) -> bool {
+        self.with(name, |s| s.send_int(v)).unwrap_or(false)
+    }
+
+    /// The transport could not write: later sends on `name` return false.
+    pub fn send_failed(&mut self, name: &str) {
+        self.with(name, |s| s.send_failed());
+    }
+
+    /// `SET var value\n`; an invalid name is an error message.
+    pub fn set_var(&mut self, name: &str, var: &str, v: i32) -> Result<bool, String> {
+        match self.with(name, |s| s.set_var(var, v)) {
+            None => Ok(false),
+            Some(Ok(ok)) => Ok(ok),
+            Some(Err(e)) => Err(e.to_string()),
+        }
+    }
+
+    pub fn take_outgoing(&mut self, name: &str) -> Vec<u8> {
+        self.with(name, |s| s.take_outgoing()).unwrap_or_default()
+    }
+
+    /// Starts a read at program time `now` that may wait `timeout` seconds (the model
+    /// makes `socket_get_var` wait 2 s whatever is asked): `Ok(Some(v))` if it completes
+    /// from the buffered bytes at once, `Ok(None)` if it must wait; an argument the robot
+    /// refuses is an error message.
+    pub fn start_read(
+        &mut self,
+        name: &str,
+        spec: &ReadSpec,
+        timeout_secs: f64,
+        now: Duration,
+    ) -> Result<Option<Value>, String> {
+        let call = spec.call();
+        let timeout = Timeout::from_secs_f64(timeout_secs);
+        match self.with(name, |s| {
+            s.start_read(call, timeout, now)?;
+            Ok::<_, urscript_socket::robot::RobotError>(s.poll_read().map(convert))
+        }) {
+            None => Ok(Some(spec.sentinel())),
+            Some(Ok(v)) => Ok(v),
+            Some(Err(e)) => Err(e.to_string()),
+        }
+    }
+
+    /// The pending read's result, if the bytes now buffered complete it.
+    pub fn poll(&mut self, name: &str) -> Option<Value> {
+        self.with(name, |s| s.poll_read().map(convert)).flatten()
+    }
+
+    /// The earliest deadline of any pending read (the model's).
+    pub fn poll_timeout(&self) -> Option<Duration> {
+        self.robot.poll_timeout()
+    }
+
+    /// Time `now` came: the pending read's sentinel (or its policy's partial result) if
+    /// its deadline has passed, `None` if it still waits. A socket that is no longer open
+    /// gives the sentinel.
+    pub fn handle_timeout(&mut self, name: &str, spec: &ReadSpec, now: Duration) -> Option<Value> {
+        match self.with(name, |s| s.handle_timeout(now).map(convert)) {
+            None => Some(spec.sentinel()),
+            Some(v) => v,
+        }
+    }
+
+    /// Ends the pending read now (its thread was killed, or the program stops).
+    pub fn give_up(&mut self, name: &str) {
+        self.with(name, |s| s.give_up());
+    }
+
+    /// Bytes from the server; returns how many the receive buffer accepted.
+    pub fn receive(&mut self, name: &str, bytes: &[u8]) -> usize {
+        self.with(name, |s| s.receive(bytes)).unwrap_or(0)
+    }
+
+    pub fn peer_closed(&mut self, name: &str) {
+        self.with(name, |s| s.peer_closed());
+    }
+}

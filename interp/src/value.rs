@@ -1,0 +1,181 @@
+//! URScript values and their text.
+
+use std::fmt;
+
+use urscript_socket::to_str::{encode_value, List, Scalar, Value as WireValue};
+
+/// A URScript value.
+///
+/// ```
+/// use urscript_interp::Value;
+/// assert_eq!(Value::Pose([1.0, 2.0, 3.0, 0.0, 0.0, 0.5]).to_str(), "p[1, 2, 3, 0, 0, 0.5]");
+/// assert_eq!(Value::List(vec![Value::Int(1), Value::Bool(true)]).to_str(), "[1, True]");
+/// ```
+#[derive(Debug, Clone)]
+pub enum Value {
+    /// 32-bit signed integer.
+    Int(i32),
+    /// Float.
+    Float(f64),
+    /// `True` / `False`.
+    Bool(bool),
+    /// A string: bytes, no encoding (URScript strings are byte arrays).
+    Str(Vec<u8>),
+    /// `[a, b, ...]`.
+    List(Vec<Value>),
+    /// `p[x, y, z, rx, ry, rz]`.
+    Pose([f64; 6]),
+    /// A thread handle from `run`.
+    Thread(u32),
+    /// What a function without `return value` returns.
+    None,
+}
+
+/// Equality as the `==` operator sees it: numbers compare by value across int and float.
+impl PartialEq for Value {
+    fn eq(&self, other: &Self) -> bool {
+        match (self, other) {
+            (Value::Int(a), Value::Int(b)) => a == b,
+            (Value::Str(a), Value::Str(b)) => a == b,
+            (Value::Bool(a), Value::Bool(b)) => a == b,
+            (Value::List(a), Value::List(b)) => a == b,
+            (Value::Pose(a), Value::Pose(b)) => a == b,
+            (Value::Thread(a), Value::Thread(b)) => a == b,
+            (Value::None, Value::None) => true,
+            (a, b) => match (a.as_f64(), b.as_f64()) {
+                (Some(x), Some(y)) => x == y,
+                _ => false,
+            },
+        }
+    }
+}
+
+impl Value {
+    /// The value as a float if it is a number.
+    ///
+    /// ```
+    /// # use urscript_interp::Value;
+    /// assert_eq!(Value::Int(2).as_f64(), Some(2.0));
+    /// ```
+    pub fn as_f64(&self) -> Option<f64> {
+        match self {
+            Value::Int(v) => Some(f64::from(*v)),
+            Value::Float(v) => Some(*v),
+            _ => None,
+        }
+    }
+
+    /// URScript's name of the value's type, for error messages.
+    ///
+    /// ```
+    /// # use urscript_interp::Value;
+    /// assert_eq!(Value::Float(1.0).type_name(), "float");
+    /// ```
+    pub fn type_name(&self) -> &'static str {
+        match self {
+            Value::Int(_) => "int",
+            Value::Float(_) => "float",
+            Value::Bool(_) => "bool",
+            Value::Str(_) => "string",
+            Value::List(_) => "list",
+            Value::Pose(_) => "pose",
+            Value::Thread(_) => "thread",
+            Value::None => "none",
+        }
+    }
+
+    fn scalar(&self) -> Option<Scalar> {
+        match self {
+            Value::Int(v) => Some(Scalar::Int(*v)),
+            Value::Float(v) => Some(Scalar::Float(*v)),
+            Value::Bool(v) => Some(Scalar::Bool(*v)),
+            _ => None,
+        }
+    }
+
+    /// The text `to_str`, `textmsg` and `socket_send_string` give: the crate's `to_str`
+    /// writer for numbers, bools, lists and poses; a string as its bytes.
+    ///
+    /// ```
+    /// # use urscript_interp::Value;
+    /// assert_eq!(Value::Float(2.123456123456).to_str(), "2.123456");
+    /// assert_eq!(Value::Str(b"hi".to_vec()).to_str(), "hi");
+    /// ```
+    pub fn to_str(&self) -> String {
+        String::from_utf8_lossy(&self.to_str_bytes()).into_owned()
+    }
+
+    /// [`to_str`](Self::to_str) as bytes (a string's bytes unchanged).
+    ///
+    /// ```
+    /// # use urscript_interp::Value;
+    /// assert_eq!(Value::Int(-3).to_str_bytes(), b"-3");
+    /// ```
+    pub fn to_str_bytes(&self) -> Vec<u8> {
+        let mut out = Vec::new();
+        self.write_text(&mut out, false);
+        out
+    }
+
+    /// The value as URScript source: like [`to_str`](Self::to_str) but strings quoted
+    /// (used by the call trace).
+    ///
+    /// ```
+    /// # use urscript_interp::Value;
+    /// assert_eq!(Value::Str(b"hi".to_vec()).to_source(), "\"hi\"");
+    /// ```
+    pub fn to_source(&self) -> String {
+        let mut out = Vec::new();
+        self.write_text(&mut out, true);
+        String::from_utf8_lossy(&out).into_owned()
+    }
+
+    fn write_text(&self, out: &mut Vec<u8>, quote: bool) {
+        // The crate's writer bounds its text at 1023 characters; past that (long lists)
+        // the items are written one by one.
+        let start = out.len();
+        let wire = match self {
+            Value::Pose(p) => Some(encode_value(&WireValue::Pose(*p), out)),
+            Value::List(items) => {
+                let scalars: Option<Vec<Scalar>> = items.iter().map(Value::scalar).collect();
+                scalars.map(|s| encode_value(&WireValue::List(List::from_items(&s)), out))
+            }
+            other => other
+                .scalar()
+                .map(|s| encode_value(&WireValue::Scalar(s), out)),
+        };
+        if let Some(Ok(_)) = wire {
+            return;
+        }
+        out.truncate(start);
+        {
+            match self {
+                Value::Str(s) if quote => {
+                    out.push(b'"');
+                    out.extend_from_slice(s);
+                    out.push(b'"');
+                }
+                Value::Str(s) => out.extend_from_slice(s),
+                Value::List(items) => {
+                    out.push(b'[');
+                    for (i, v) in items.iter().enumerate() {
+                        if i > 0 {
+                            out.extend_from_slice(b", ");
+                        }
+                        v.write_text(out, quote);
+                    }
+                    out.push(b']');
+                }
+                Value::Thread(id) => out.extend_from_slice(format!("<thread {id}>").as_bytes()),
+                Value::None => out.extend_from_slice(b"None"),
+                _ => {}
+            }
+        }
+    }
+}
+
+impl fmt::Display for Value {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(&self.to_source())
+    }
+}

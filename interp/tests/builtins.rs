@@ -1,0 +1,355 @@
+//! Built-ins, one by one.
+mod common;
+use std::time::Duration;
+
+use common::{int32s, messages, runtime_error, Harness, Input};
+use urscript_interp::{Config, Event, Machine, Program, State, Stub, Value};
+
+fn one(expr: &str) -> String {
+    messages(&format!("textmsg({expr})\n"))[0].clone()
+}
+
+fn sock(body: &str) -> String {
+    format!("socket_open(\"127.0.0.1\", 5000)\n{body}")
+}
+
+/// Runs `body` after opening socket_0, with `server` answering.
+fn with_server(body: &str, server: impl FnMut(Input<'_>) -> Vec<(String, Vec<u8>)>) -> Harness {
+    let mut h = Harness::new(&sock(body), Config::default());
+    h.run(Duration::from_secs(10), server);
+    assert_eq!(
+        h.m.state(),
+        &State::Finished,
+        "{:?} {:?}",
+        h.messages,
+        h.calls
+    );
+    h
+}
+
+fn preloaded(body: &str, data: &'static [u8]) -> Harness {
+    with_server(body, move |i| match i {
+        Input::Connected(..) => vec![("socket_0".into(), data.to_vec())],
+        _ => Vec::new(),
+    })
+}
+
+#[test]
+fn socket_sends() {
+    let h = preloaded(
+        "socket_send_string(\"hi\")\nsocket_send_line(\"hello\")\nsocket_send_byte(2)\nsocket_send_int(-1)\nsocket_set_var(\"POS_Y\", 2200)\nsocket_send_string(p[1.0, 2.0, 3.0, 4.0, 5.0, 6.0])\nsocket_send_line([True, False])\nsocket_send_string(2.123456123456)\nok = socket_send_line(\"x\", socket_name=\"nope\")\ntextmsg(ok)\n",
+        b"",
+    );
+    let mut want =
+        b"hihello\n\x02\xFF\xFF\xFF\xFFSET POS_Y 2200\np[1, 2, 3, 4, 5, 6][True, False]\n2.123456"
+            .to_vec();
+    assert_eq!(h.sent("socket_0"), want.as_slice());
+    want.clear();
+    assert_eq!(h.messages, ["False"]);
+    assert!(
+        h.calls
+            .iter()
+            .any(|c| c == "2: socket_send_string(\"hi\") -> True"),
+        "{:?}",
+        h.calls
+    );
+}
+
+#[test]
+fn socket_reads_from_the_spec_vectors() {
+    let h = preloaded(
+        "textmsg(socket_read_ascii_float(4))\ntextmsg(socket_read_binary_integer(3))\ntextmsg(socket_read_byte_list(3))\ntextmsg(socket_read_line())\ntextmsg(socket_read_string(prefix=\">\", suffix=\"<\"))\ntextmsg(socket_read_string(\"socket_0\", \">\", \"<\"))\n",
+        b"( 1.414 , 3.14159, 1.616, 0.0 )\x00\x00\x00\x64\x00\x00\x07\xD0\x00\x00\x75\x30\x64\xC8\x2Creply from the server:\r\nnoise>hello<>world<",
+    );
+    assert_eq!(
+        h.messages,
+        [
+            "[4, 1.414, 3.14159, 1.616, 0]",
+            "[3, 100, 2000, 30000]",
+            "[3, 100, 200, 44]",
+            "reply from the server:",
+            "hello",
+            "world"
+        ]
+    );
+}
+
+#[test]
+fn socket_read_timeouts_give_sentinels_after_their_timeout() {
+    let mut h = Harness::new(
+        &sock("a = socket_read_ascii_float(3, timeout=0.5)\nb = socket_read_binary_integer(2, \"socket_0\", 0.25)\nc = socket_read_string()\nd = socket_get_var(\"X\")\ntextmsg(a)\ntextmsg(b)\ntextmsg(str_len(c), d)\n"),
+        Config::default(),
+    );
+    h.run_silent(Duration::from_secs(10));
+    assert_eq!(h.m.state(), &State::Finished);
+    assert_eq!(h.messages, ["[0, nan, nan, nan]", "[0, -1, -1]", "00"]);
+    // 0.5 + 0.25 + 2 + 2 seconds, plus the connect step.
+    assert!((h.now.as_secs_f64() - 4.75).abs() < 0.01, "{:?}", h.now);
+    assert_eq!(h.sent("socket_0"), b"GET X\n");
+}
+
+#[test]
+fn socket_read_with_zero_timeout_waits_forever() {
+    let mut h = Harness::new(
+        &sock("x = socket_read_line(timeout=0)\ntextmsg(x)\n"),
+        Config::default(),
+    );
+    h.run_silent(Duration::from_secs(20));
+    assert_eq!(h.m.state(), &State::Running);
+    assert_eq!(h.m.poll_timeout(), None);
+    h.m.handle_received("socket_0", b"late\n");
+    h.run_silent(Duration::from_secs(21));
+    assert_eq!(h.messages, ["late"]);
+}
+
+#[test]
+fn socket_get_var() {
+    let h = with_server("textmsg(socket_get_var(\"POS_X\"))\n", |i| match i {
+        Input::Received(_, b"GET POS_X\n") => vec![("socket_0".into(), b"POS_X 0077\n".to_vec())],
+        _ => Vec::new(),
+    });
+    assert_eq!(h.messages, ["77"]);
+}
+
+#[test]
+fn socket_read_on_a_socket_not_open_returns_the_sentinel_at_once() {
+    assert_eq!(
+        messages("textmsg(socket_read_byte_list(2, \"none\"))\n"),
+        ["[0, -1, -1]"]
+    );
+}
+
+#[test]
+fn socket_open_failure_returns_false_and_the_program_goes_on() {
+    let mut h = Harness::new(
+        "ok = socket_open(\"10.0.0.1\", 5000, \"cam\")\ntextmsg(ok)\n",
+        Config::default(),
+    );
+    h.refuse.push(5000);
+    h.run_silent(Duration::from_secs(1));
+    assert_eq!(h.messages, ["False"]);
+    assert_eq!(
+        h.connects,
+        [("cam".to_string(), "10.0.0.1".to_string(), 5000)]
+    );
+}
+
+#[test]
+fn socket_close_and_program_end_close_sockets() {
+    let mut h = Harness::new("socket_open(\"h\", 1, \"a\")\nsocket_open(\"h\", 2, \"b\")\nsocket_close(\"a\")\nsocket_close(\"never_opened\")\n", Config::default());
+    h.run_silent(Duration::from_secs(1));
+    assert_eq!(h.closed, ["a", "b"]);
+}
+
+#[test]
+fn socket_argument_errors() {
+    assert_eq!(
+        runtime_error("socket_read_ascii_float(31)\n"),
+        "line 1: `socket_read_ascii_float`: number must be 1..30, got 31"
+    );
+    assert_eq!(
+        runtime_error("socket_send_byte(256)\n"),
+        "line 1: `socket_send_byte`: value must be 0..255, got 256"
+    );
+    assert_eq!(
+        runtime_error("socket_open(\"h\", 70000)\n"),
+        "line 1: `socket_open`: port 70000 out of range"
+    );
+    assert_eq!(
+        runtime_error("socket_read_line(\"s\", bogus=1)\n"),
+        "line 1: `socket_read_line` has no parameter `bogus`"
+    );
+}
+
+#[test]
+fn peer_closing_resolves_pending_reads() {
+    let mut h = Harness::new(
+        &sock("x = socket_read_binary_integer(1, timeout=0)\ntextmsg(x)\n"),
+        Config::default(),
+    );
+    h.run_silent(Duration::from_millis(10));
+    h.m.handle_peer_closed("socket_0");
+    h.run_silent(Duration::from_millis(20));
+    assert_eq!(h.messages, ["[0, -1]"]);
+}
+
+#[test]
+fn strings() {
+    assert_eq!(one("str_cat(\"a\", 1.5)"), "a1.5");
+    assert_eq!(
+        one("str_cat(p[1, 2, 3, 0, 0, 0], [1, 2])"),
+        "p[1, 2, 3, 0, 0, 0][1, 2]"
+    );
+    assert_eq!(one("str_len(\"hello\")"), "5");
+    assert_eq!(one("str_sub(\"hello\", 1, 3)"), "ell");
+    assert_eq!(one("str_sub(\"hello\", 2)"), "llo");
+    assert_eq!(one("str_sub(\"hello\", 9)"), "");
+    assert_eq!(one("str_find(\"a,b,c\", \",\")"), "1");
+    assert_eq!(one("str_find(\"a,b,c\", \",\", 2)"), "3");
+    assert_eq!(one("str_find(\"abc\", \"x\")"), "-1");
+    assert_eq!(one("str_at(\"abc\", 2)"), "c");
+    assert_eq!(one("str_empty(\"\")"), "True");
+    assert_eq!(one("to_str(2.123456123456)"), "2.123456");
+    assert_eq!(one("to_str(True)"), "True");
+    assert_eq!(one("to_num(\"12\") + 1"), "13");
+    assert_eq!(one("to_num(\" -2.5e1 \")"), "-25");
+    assert!(runtime_error("to_num(\"abc\")\n").contains("is not a number"));
+    assert!(runtime_error("str_len(5)\n").contains("needs a string, got int 5"));
+    assert!(
+        runtime_error("s = \"ab\"\nwhile True:\n  s = str_cat(s, s)\nend\n")
+            .contains("more than 1023")
+    );
+}
+
+#[test]
+fn math() {
+    assert_eq!(one("sin(0)"), "0");
+    assert_eq!(one("cos(0)"), "1");
+    assert_eq!(one("tan(0)"), "0");
+    assert_eq!(one("asin(1)"), "1.570796");
+    assert_eq!(one("acos(1)"), "0");
+    assert_eq!(one("atan(1)"), "0.785398");
+    assert_eq!(one("atan2(1, 1)"), "0.785398");
+    assert_eq!(one("sqrt(16)"), "4");
+    assert_eq!(one("pow(2, 10)"), "1024");
+    assert_eq!(one("floor(2.7)"), "2");
+    assert_eq!(one("floor(-2.5)"), "-3");
+    assert_eq!(one("ceil(2.1)"), "3");
+    assert_eq!(one("log(10, 1000)"), "3");
+    assert_eq!(one("norm(-3)"), "3");
+    assert_eq!(one("norm([3, 4])"), "5");
+    assert_eq!(one("d2r(180)"), "3.141593");
+    assert_eq!(one("r2d(3.14159265358979)"), "180");
+    assert_eq!(one("length([1, 2, 3])"), "3");
+    assert_eq!(one("get_list_length([])"), "0");
+    assert_eq!(one("binary_list_to_integer([True, False, True])"), "5");
+    assert_eq!(one("integer_to_binary_list(6)[1]"), "True");
+    assert_eq!(one("length(integer_to_binary_list(6))"), "32");
+    assert_eq!(one("random() < 1"), "True");
+    assert_eq!(
+        one("point_dist(p[0, 0, 0, 0, 0, 0], p[3, 4, 0, 0, 0, 0])"),
+        "5"
+    );
+    assert_eq!(
+        one("pose_trans(p[1, 0, 0, 0, 0, 1.5707963], p[1, 0, 0, 0, 0, 0])"),
+        "p[1, 1, 0, 0, 0, 1.570796]"
+    );
+    assert_eq!(
+        one("pose_inv(p[1, 2, 3, 0, 0, 0])"),
+        "p[-1, -2, -3, 0, 0, 0]"
+    );
+    assert_eq!(
+        one("pose_add(p[1, 2, 3, 0, 0, 0.5], p[1, 1, 1, 0, 0, 0.25])"),
+        "p[2, 3, 4, 0, 0, 0.75]"
+    );
+    assert_eq!(
+        one("pose_sub(p[1, 2, 3, 0, 0, 0.5], p[1, 1, 1, 0, 0, 0.25])"),
+        "p[0, 1, 2, 0, 0, 0.25]"
+    );
+    assert_eq!(
+        one("interpolate_pose(p[0, 0, 0, 0, 0, 0], p[1, 2, 0, 0, 0, 0], 0.5)"),
+        "p[0.5, 1, 0, 0, 0, 0]"
+    );
+    assert!(runtime_error("sqrt(-1)\n").contains("outside its domain"));
+}
+
+#[test]
+fn time_builtins() {
+    let mut h = Harness::new(
+        "textmsg(get_steptime())\nsleep(0.1)\nsync()\nsync()\n",
+        Config::cb3(),
+    );
+    h.run_silent(Duration::from_secs(1));
+    assert_eq!(h.messages, ["0.008"]);
+    // sleep(0.1) is 13 steps of 8 ms, then two more steps.
+    assert_eq!(h.now, Duration::from_millis(8 * 15));
+}
+
+#[test]
+fn virtual_arm_motion_takes_time() {
+    let src = "movej([1, 0, 0, 0, 0, 0], v=0.5)\ntextmsg(get_actual_joint_positions())\nmovel(p[0.1, 0, 0, 0, 0, 0], v=0.1)\ntextmsg(get_actual_tcp_pose())\nmovej([0, 0, 0, 0, 0, 0], t=0.5)\nservoj([0.1, 0, 0, 0, 0, 0], t=0.008)\ntextmsg(get_target_joint_speeds()[0])\nspeedj([1, 0, 0, 0, 0, 0], 2, 0.1)\nstopj(2)\ntextmsg(get_actual_joint_speeds())\ntextmsg(get_inverse_kin(p[0, 0, 0, 0, 0, 0]))\n";
+    let mut h = Harness::new(src, Config::default());
+    h.run_silent(Duration::from_secs(10));
+    assert_eq!(h.m.state(), &State::Finished);
+    assert_eq!(
+        h.messages,
+        [
+            "[1, 0, 0, 0, 0, 0]",
+            "p[0.1, 0, 0, 0, 0, 0]",
+            "12.5",
+            "[0, 0, 0, 0, 0, 0]",
+            "[0.2, 0, 0, 0, 0, 0]"
+        ]
+    );
+    // From the start position [0, -pi/2, 0, -pi/2, 0, 0] the first movej's longest
+    // joint moves pi/2 at 0.5 rad/s: 3.142 s; then 1 s + 0.5 s + 8 ms + 0.1 s + one step.
+    assert_eq!(
+        h.now,
+        Duration::from_millis(3142 + 1000 + 500 + 8 + 100 + 2)
+    );
+}
+
+#[test]
+fn io_and_registers() {
+    let src = "set_standard_digital_out(3, True)\nset_tool_digital_out(1, True)\nset_configurable_digital_out(0, True)\nwrite_output_integer_register(5, 42)\nwrite_output_float_register(0, 1.5)\nwrite_output_boolean_register(63, True)\nset_standard_analog_out(1, 0.7)\ntextmsg(get_standard_digital_out(3), get_standard_digital_out(2))\ntextmsg(get_tool_digital_out(1), get_configurable_digital_out(0))\ntextmsg(read_output_integer_register(5), read_output_float_register(0))\ntextmsg(read_output_boolean_register(63), read_input_integer_register(0))\ntextmsg(get_standard_digital_in(0), tool_contact())\nset_payload(1.5, [0, 0, 0.05])\nset_tcp(p[0, 0, 0.1, 0, 0, 0])\n";
+    assert_eq!(
+        messages(src),
+        ["TrueFalse", "TrueTrue", "421.5", "True0", "False0"]
+    );
+    assert!(runtime_error("set_standard_digital_out(20, True)\n").contains("no output 20"));
+}
+
+#[test]
+fn textmsg_and_popup() {
+    assert_eq!(
+        messages("textmsg(\"a\")\ntextmsg(\"b\", 2)\npopup(\"hello\", \"Title\", warning=True)\nvarmsg(\"x\", [1, 2])\n"),
+        ["a", "b2", "popup \"Title\": hello", "x = [1, 2]"]
+    );
+}
+
+#[test]
+fn stubs_replace_unknown_functions() {
+    let p = Program::parse(
+        "rq_activate()\nx = rq_current_pos()\ntextmsg(x)\nmovej([1, 2, 3, 4, 5, 6])\n",
+    )
+    .unwrap();
+    let config = Config::default()
+        .stub("rq_activate", Stub::NoOp)
+        .stub("rq_current_pos", Stub::Return(Value::Int(3)))
+        .stub("movej", Stub::NoOp);
+    let mut m = Machine::new(p, config);
+    assert!(m.unknown_functions().is_empty());
+    m.run_until(Duration::ZERO);
+    assert_eq!(m.state(), &State::Finished);
+    let events: Vec<Event> = std::iter::from_fn(|| m.poll_event()).collect();
+    assert!(events.contains(&Event::Message("3".into())));
+    assert!(events.contains(&Event::Call {
+        line: 2,
+        text: "rq_current_pos() -> 3 (stub)".into()
+    }));
+    assert_eq!(m.joint_positions()[0], 0.0);
+}
+
+#[test]
+fn unknown_functions_are_listed_before_running() {
+    let p = Program::parse(
+        "def prog():\n  if False:\n    force_mode_example()\n  end\n  sync()\nend\n",
+    )
+    .unwrap();
+    let m = Machine::new(p, Config::default());
+    assert_eq!(
+        m.unknown_functions(),
+        [("force_mode_example".to_string(), 3)]
+    );
+}
+
+#[test]
+fn binary_int_stream_drained_until_empty() {
+    // The trajectory-cancel idiom: read until result[0] <= 0.
+    let h = preloaded(
+        "n = 0\nwhile True:\n  r = socket_read_binary_integer(2, timeout=0.01)\n  if r[0] <= 0:\n    break\n  end\n  n = n + 1\nend\ntextmsg(n)\n",
+        &[0, 0, 0, 1, 0, 0, 0, 2, 0, 0, 0, 3, 0, 0, 0, 4, 0, 0, 0, 5, 0, 0, 0, 6],
+    );
+    assert_eq!(h.messages, ["3"]);
+    let _ = int32s(&[]);
+}

@@ -1,0 +1,319 @@
+//! The language, construct by construct.
+mod common;
+use common::{messages, runtime_error};
+use urscript_interp::Program;
+
+fn msgs(src: &str) -> Vec<String> {
+    messages(src)
+}
+
+fn one(expr: &str) -> String {
+    let m = msgs(&format!("textmsg({expr})\n"));
+    m[0].clone()
+}
+
+fn parse_err(src: &str) -> String {
+    Program::parse(src).unwrap_err().to_string()
+}
+
+#[test]
+fn literals() {
+    assert_eq!(one("42"), "42");
+    assert_eq!(one("-7"), "-7");
+    assert_eq!(one("1.5"), "1.5");
+    assert_eq!(one("1e-3"), "0.001");
+    assert_eq!(one("2.5E+2"), "250");
+    assert_eq!(one(".5"), "0.5");
+    assert_eq!(one("True"), "True");
+    assert_eq!(one("False"), "False");
+    assert_eq!(one("\"a\\n\""), "a\\n"); // no escapes in string literals
+    assert_eq!(one("[1, 2.5, True]"), "[1, 2.5, True]");
+    assert_eq!(one("[]"), "[]");
+    assert_eq!(
+        one("p[0.1, -0.2, 0.3, 0, 3.14, 0]"),
+        "p[0.1, -0.2, 0.3, 0, 3.14, 0]"
+    );
+    assert_eq!(one("[[1, 2], [3, 4]]"), "[[1, 2], [3, 4]]");
+}
+
+#[test]
+fn comments_and_step_markers() {
+    let m = msgs(
+        "# a comment\n$ 1 \"Robot Program\"\nx = 1 # trailing\ntextmsg(\"#not a comment\", x)\n",
+    );
+    assert_eq!(m, ["#not a comment1"]);
+}
+
+#[test]
+fn arithmetic_int_and_float_rules() {
+    assert_eq!(one("7 / 2"), "3.5");
+    assert_eq!(one("-7 / 2"), "-3.5");
+    assert_eq!(one("1500000 / 1000000"), "1.5");
+    assert_eq!(one("7 / 2.0"), "3.5");
+    assert_eq!(one("7 % 3"), "1");
+    assert_eq!(one("2 + 3 * 4"), "14");
+    assert_eq!(one("(2 + 3) * 4"), "20");
+    assert_eq!(one("10 - 2 - 3"), "5");
+    assert_eq!(one("1 + 0.5"), "1.5");
+    assert_eq!(one("-(2 + 3)"), "-5");
+    assert_eq!(one("2147483647 + 1"), "-2147483648");
+    assert_eq!(
+        one("p[1, 2, 3, 0, 0, 0] + p[1, 1, 1, 0, 0, 0]"),
+        "p[2, 3, 4, 0, 0, 0]"
+    );
+}
+
+#[test]
+fn comparisons_and_booleans_precedence() {
+    assert_eq!(one("1 < 2 and 2 < 3"), "True");
+    assert_eq!(one("not 1 == 2"), "True");
+    assert_eq!(one("True or False and False"), "True");
+    assert_eq!(one("True xor True"), "False");
+    assert_eq!(one("False or True xor True"), "False");
+    assert_eq!(one("1 == 1.0"), "True");
+    assert_eq!(one("\"a\" == \"a\""), "True");
+    assert_eq!(one("[1, 2] != [1, 2]"), "False");
+    assert_eq!(one("2 >= 2"), "True");
+    assert_eq!(one("not True or True"), "True");
+}
+
+#[test]
+fn short_circuit_avoids_evaluating_the_right_side() {
+    assert_eq!(one("False and undefined_var > 0"), "False");
+    assert_eq!(one("True or undefined_var > 0"), "True");
+}
+
+#[test]
+fn indexing_and_element_assignment() {
+    let m = msgs("l = [1, 2, 3]\nl[1] = 20\nq = p[0, 0, 0, 0, 0, 0]\nq[2] = 0.5\nm = [[1, 2], [3, 4]]\nm[1][0] = 30\ntextmsg(l, q)\ntextmsg(m[1], l[2])\ntextmsg(q[2])\n");
+    assert_eq!(m, ["[1, 20, 3]p[0, 0, 0.5, 0, 0, 0]", "[30, 4]3", "0.5"]);
+}
+
+#[test]
+fn statements_continue_inside_brackets() {
+    let m = msgs("x = [1,\n  2,\n  3]\ny = (1 +\n 2)\ntextmsg(x, y)\n");
+    assert_eq!(m, ["[1, 2, 3]3"]);
+}
+
+#[test]
+fn if_elif_else() {
+    let src = "def f(x):\n  if x < 0:\n    return \"neg\"\n  elif x == 0:\n    return \"zero\"\n  else:\n    return \"pos\"\n  end\nend\ntextmsg(f(-1), f(0))\ntextmsg(f(5))\n";
+    assert_eq!(msgs(src), ["negzero", "pos"]);
+}
+
+#[test]
+fn while_break_continue() {
+    let src = "i = 0\ns = 0\nwhile True:\n  i = i + 1\n  if i > 10:\n    break\n  end\n  if i % 2 == 0:\n    continue\n  end\n  s = s + i\nend\ntextmsg(s)\n";
+    assert_eq!(msgs(src), ["25"]);
+}
+
+#[test]
+fn defaults_named_arguments_recursion() {
+    let src = "def f(a, b=10, c=-1):\n  return a + b * c\nend\ndef fact(n):\n  if n <= 1:\n    return 1\n  end\n  return n * fact(n - 1)\nend\ntextmsg(f(1))\ntextmsg(f(1, c=2))\ntextmsg(f(1, 2, 3))\ntextmsg(fact(10))\n";
+    assert_eq!(msgs(src), ["-9", "21", "7", "3628800"]);
+}
+
+#[test]
+fn function_called_before_its_definition() {
+    assert_eq!(msgs("textmsg(g())\ndef g():\n  return 5\nend\n"), ["5"]);
+}
+
+#[test]
+fn scoping_global_local() {
+    // Program-level variables are global; a function assigning one changes it; a new
+    // name assigned in a function is local; `local` shadows; `global` creates a global.
+    let src = "def prog():\n  a = 1\n  def set_a():\n    a = 2\n    b = 3\n  end\n  def shadow():\n    local a = 100\n    return a\n  end\n  def make():\n    global c = 7\n  end\n  set_a()\n  textmsg(a, shadow())\n  textmsg(a)\n  make()\n  textmsg(c)\nend\n";
+    assert_eq!(msgs(src), ["2100", "2", "7"]);
+    assert!(
+        runtime_error("def f():\n  b = 3\nend\nf()\ntextmsg(b)\n").contains("unknown variable `b`")
+    );
+}
+
+#[test]
+fn one_top_level_def_is_the_program() {
+    assert_eq!(msgs("def prog():\n  textmsg(\"ran\")\nend\n"), ["ran"]);
+    // ... also when the file calls it.
+    assert_eq!(
+        msgs("def prog():\n  textmsg(\"ran\")\nend\nprog()\n"),
+        ["ran"]
+    );
+    assert_eq!(
+        Program::parse("def a():\nend\nx = 1\n")
+            .unwrap()
+            .entry_name(),
+        None
+    );
+}
+
+#[test]
+fn halt_stops_the_program() {
+    let h = common::run("textmsg(\"a\")\nhalt\ntextmsg(\"b\")\n");
+    assert_eq!(h.m.state(), &urscript_interp::State::Halted);
+    assert_eq!(h.messages, ["a"]);
+}
+
+#[test]
+fn threads_run_join_kill() {
+    let src = "global n = 0\nthread counter():\n  while True:\n    n = n + 1\n    sync()\n  end\nend\nthread finite():\n  sleep(0.01)\n  textmsg(\"finite done\")\nend\nt = run counter()\nf = run finite()\njoin f\ntextmsg(\"joined at n=\", n)\nkill t\nm = n\nsleep(0.1)\ntextmsg(n == m)\n";
+    assert_eq!(msgs(src), ["finite done", "joined at n=6", "True"]);
+}
+
+#[test]
+fn join_and_kill_of_a_thread_never_started_do_nothing() {
+    assert_eq!(msgs("h = 0\njoin h\nkill h\ntextmsg(\"ok\")\n"), ["ok"]);
+}
+
+#[test]
+fn critical_section_with_time_inside_lets_others_run() {
+    let src = "global flag = False\nthread setter():\n  flag = True\nend\nenter_critical\nrun setter()\nsync()\nseen = flag\nexit_critical\ntextmsg(seen)\n";
+    assert_eq!(msgs(src), ["True"]);
+}
+
+#[test]
+fn main_ending_stops_threads() {
+    let h = common::run(
+        "thread forever():\n  while True:\n    sync()\n  end\nend\nrun forever()\nsleep(0.02)\n",
+    );
+    assert_eq!(h.m.state(), &urscript_interp::State::Finished);
+    assert!(h.now < std::time::Duration::from_millis(100));
+}
+
+#[test]
+fn parse_errors_name_line_column_and_construct() {
+    assert_eq!(
+        parse_err("x = 1\nfor i in l:\n"),
+        "line 2, column 1: `for` loops are not URScript (use `while`)"
+    );
+    assert_eq!(
+        parse_err("if x > 1\n  y = 2\nend\n"),
+        "line 1, column 9: expected `:` after the `if` condition, found end of line"
+    );
+    assert_eq!(
+        parse_err("while True:\n  sync()\n"),
+        "line 3, column 1: expected `end` before the end of program"
+    );
+    assert_eq!(
+        parse_err("x = (1 +\n"),
+        "line 2, column 1: expected an expression, found end of program"
+    );
+    assert_eq!(
+        parse_err("end\n"),
+        "line 1, column 1: `end` without an open block"
+    );
+    assert_eq!(
+        parse_err("x = s.field\n"),
+        "line 1, column 6: member access `.` (structs) is not supported"
+    );
+    assert_eq!(
+        parse_err("x = \"abc\n"),
+        "line 1, column 5: string literal not closed on its line"
+    );
+    assert_eq!(
+        parse_err("x = 99999999999\n"),
+        "line 1, column 5: integer literal `99999999999` does not fit 32 bits"
+    );
+    assert_eq!(
+        parse_err("break\n"),
+        "line 1, column 1: `break` outside a `while` loop"
+    );
+    assert_eq!(
+        parse_err("x = run nothing()\n"),
+        "line 1, column 1: `run nothing()`: no thread named `nothing`"
+    );
+    assert_eq!(
+        parse_err("def f(a=1, b):\nend\n"),
+        "line 1, column 13: parameter `b` without a default follows one with a default"
+    );
+    assert_eq!(
+        parse_err("x = p[1, 2]\n"),
+        "line 1, column 5: a pose has 6 values, this one has 2"
+    );
+    assert_eq!(parse_err("1 + 2\n"), "line 1, column 6: expected a statement (a call or an assignment), found an expression before end of line");
+}
+
+#[test]
+fn runtime_errors_say_the_line() {
+    assert_eq!(
+        runtime_error("l = [1, 2]\nx = l[2]\n"),
+        "line 2: index out of range: index 2, length 2"
+    );
+    assert_eq!(
+        runtime_error("x = 1\n\ny = x + \"a\"\n"),
+        "line 3: type error: int + string (1 + \"a\")"
+    );
+    assert_eq!(
+        runtime_error("x = 1 / 0\n"),
+        "line 1: division by zero (1 / 0)"
+    );
+    assert_eq!(runtime_error("x = y\n"), "line 1: unknown variable `y`");
+    assert_eq!(
+        runtime_error("l = [1]\nl[1.5] = 2\n"),
+        "line 2: type error: an index must be an int, got float 1.5"
+    );
+    assert_eq!(runtime_error("rq_activate()\n"), "line 1: `rq_activate` is not a built-in this interpreter supports (stub it to run past it)");
+    assert_eq!(
+        runtime_error("def f(a):\n  return a\nend\nf()\n"),
+        "line 4: `f` needs argument `a`"
+    );
+    assert!(runtime_error("while True:\n  x = 1\nend\n").starts_with("line 1: thread `<program>` used too much time: 100000 statements in one step without consuming time"));
+}
+
+#[test]
+fn an_empty_infinite_loop_is_stopped() {
+    assert!(runtime_error("while True:\nend\n")
+        .starts_with("line 1: thread `<program>` used too much time: 100000 statements"));
+}
+
+#[test]
+fn list_arithmetic_is_element_wise() {
+    assert_eq!(one("[1, 2, 3] + [10, 20, 30]"), "[11, 22, 33]");
+    assert_eq!(one("[1.0, 2.0] * 0.5"), "[0.5, 1]");
+    assert_eq!(one("2 * [1, 2] - [1, 1]"), "[1, 3]");
+    assert_eq!(one("[1000000, 2500000] / 1000000"), "[1, 2.5]");
+    assert!(runtime_error("x = [1, 2] + [1]\n").contains("lists of different lengths"));
+    assert!(runtime_error("x = [1, 2] + \"a\"\n").contains("type error"));
+}
+
+#[test]
+fn a_line_ending_in_an_operator_continues() {
+    assert_eq!(
+        msgs("x = 1\nif x == 2 or\n  x == 1:\n  textmsg(\"yes\")\nend\ny = 1 +\n 2\ntextmsg(y)\n"),
+        ["yes", "3"]
+    );
+}
+
+#[test]
+fn numbers_as_conditions() {
+    assert_eq!(
+        msgs("if 0.5:\n  textmsg(\"a\")\nend\nif 0:\n  textmsg(\"b\")\nend\n"),
+        ["a"]
+    );
+    assert!(runtime_error("if \"x\":\n  sync()\nend\n").contains("needs a bool, got string"));
+}
+
+#[test]
+fn template_placeholders_must_be_filled() {
+    assert_eq!(parse_err("x = {{JOINT_STATE_REPLACE}}\n"), "line 1, column 5: a template placeholder (`{{...}}` or `{% ... %}`) must be filled in before the program runs");
+}
+
+#[test]
+fn float_division_by_zero_is_infinite() {
+    assert_eq!(one("1.0 / 0 > 1000000"), "True");
+}
+
+#[test]
+fn a_variable_named_p_can_be_indexed_and_assigned() {
+    assert_eq!(
+        msgs("p = get_actual_tcp_pose()\np[2] = 0.5\nl = [p[2], 1]\ntextmsg(p, l)\n"),
+        ["p[0, 0, 0.5, 0, 0, 0][0.5, 1]"]
+    );
+}
+
+#[test]
+fn real_world_syntax_variants() {
+    let src = "def empty():\r\nend\r\nsec secondary():\r\n  textmsg(\"sec\")\r\nend\r\ndef f(): # comment after the colon\n\treturn\nend\nx=1\nif(x==1): textmsg(\"inline\") end\nwhile x < 3: x = x + 1 end\nthread t():\n  return\nend\nh = run t()\njoin h\nempty()\nsecondary()\ntextmsg(not(x == 3), [-1, -2.5])\ntextmsg(1., .5)\ntextmsg(f())\n";
+    assert_eq!(
+        msgs(src),
+        ["inline", "sec", "False[-1, -2.5]", "10.5", "None"]
+    );
+}
