@@ -1,8 +1,9 @@
 //! Real public robot programs, which are not in this repository (their licences are
 //! their authors'): set `URSCRIPT_EXTERNAL_CONTROL` to the path of UR Client Library's
 //! `resources/external_control.urscript` with its placeholders filled (ports 50001,
-//! 50003, 50004; `MULT_jointstate` 1000000) and this test drives it through a servoj
-//! session with a fake driver. Without the variable it does nothing.
+//! 50003, 50004; `MULT_jointstate` 1000000) and run
+//! `cargo test -p urscript-interp --test real_programs -- --ignored`: this test drives it
+//! through a servoj session with a fake driver.
 mod common;
 use std::time::Duration;
 
@@ -10,10 +11,10 @@ use common::{int32s, Harness, Input};
 use urscript_interp::{Config, State};
 
 #[test]
+#[ignore = "needs URSCRIPT_EXTERNAL_CONTROL: a real program that is not in this repository"]
 fn external_control_servo_session() {
-    let Ok(path) = std::env::var("URSCRIPT_EXTERNAL_CONTROL") else {
-        return;
-    };
+    let path = std::env::var("URSCRIPT_EXTERNAL_CONTROL")
+        .expect("set URSCRIPT_EXTERNAL_CONTROL to the filled external_control.urscript");
     let src = std::fs::read_to_string(path).unwrap();
     let mut h = Harness::new(&src, Config::default());
     let unknown = h.m.unknown_functions();
