@@ -459,7 +459,6 @@ impl Machine {
                         socket_name: socket.clone(),
                     });
                 }
-                self.connecting(&socket);
                 self.events.push_back(Event::Connect {
                     socket_name: socket.clone(),
                     host,
