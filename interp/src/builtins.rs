@@ -5,7 +5,9 @@
 //! Commanded state and the time each command takes, not dynamics:
 //! - `movej(q, a=1.4, v=1.05, t=0, r=0)`: takes `t` if given, else the largest joint
 //!   distance / `v`; `movel(pose, a=1.2, v=0.25, t=0, r=0)` and `movep`: `t`, else the
-//!   straight-line distance / `v`; `movec(via, to, ...)`: like `movel` to `to`. Every motion takes at least one step. A motion sets the
+//!   straight-line distance / `v`; `movec(via, to, ...)`: like `movel` to `to`;
+//!   `optimovej`/`optimovel`: like `movej`/`movel` (their `a`, `v` are fractions on the
+//!   robot; here they are taken as speeds). `direct_torque`: one step. Every motion takes at least one step. A motion sets the
 //!   commanded joints (`movej` with a list) or pose (`movel` with a pose) to its target
 //!   when it starts; there is no kinematics, so a `movej` does not change the pose and a
 //!   `movel` does not change the joints (`movej`/`movel` given the other kind of target
@@ -145,6 +147,9 @@ const OTHERS: &[&str] = &[
     "get_joint_positions",
     "get_actual_joint_positions_history",
     "movec",
+    "optimovej",
+    "optimovel",
+    "direct_torque",
     "get_actual_joint_speeds",
     "get_target_joint_speeds",
     "get_actual_tcp_pose",
@@ -466,7 +471,6 @@ impl Machine {
                         socket_name: socket.clone(),
                     });
                 }
-                self.connecting(&socket);
                 self.events.push_back(Event::Connect {
                     socket_name: socket.clone(),
                     host,
@@ -887,29 +891,54 @@ impl Machine {
                 v(Value::Pose(out))
             }
             // The virtual arm.
-            "movej" | "movel" | "movep" => {
-                let (da, dv) = if name == "movej" {
-                    (1.4, 1.05)
-                } else {
-                    (1.2, 0.25)
-                };
+            "direct_torque" => {
+                // Torque control has no model here: the call takes one step.
                 let a = bind(
                     name,
                     &[
-                        ("q", None),
-                        ("a", f(da)),
-                        ("v", f(dv)),
-                        ("t", f(0.0)),
-                        ("r", f(0.0)),
+                        ("torque", None),
+                        ("friction_comp", OPT),
+                        ("viscous_scale", OPT),
+                        ("coulomb_scale", OPT),
                     ],
                     args,
                     kw,
                 )?;
+                six(&a[0], name)?;
+                let st = self.config.step_time;
+                Ok(NativeOut::Block(self.wait_for(st, Value::None)))
+            }
+            "movej" | "movel" | "movep" | "optimovej" | "optimovel" => {
+                let joint_like = matches!(name, "movej" | "optimovej");
+                let (da, dv) = if joint_like { (1.4, 1.05) } else { (1.2, 0.25) };
+                let a = if name.starts_with("optimove") {
+                    // No `t`: optimovej(q, a=0.3, v=0.3, r=0).
+                    let mut a = bind(
+                        name,
+                        &[("q", None), ("a", f(0.3)), ("v", f(0.3)), ("r", f(0.0))],
+                        args,
+                        kw,
+                    )?;
+                    a.insert(3, Value::Float(0.0));
+                    a
+                } else {
+                    bind(
+                        name,
+                        &[
+                            ("q", None),
+                            ("a", f(da)),
+                            ("v", f(dv)),
+                            ("t", f(0.0)),
+                            ("r", f(0.0)),
+                        ],
+                        args,
+                        kw,
+                    )?
+                };
                 let target = six(&a[0], name)?;
                 let speed = num(&a[2], name)?;
                 let t = num(&a[3], name)?;
-                let is_pose = matches!(a[0], Value::Pose(_))
-                    || name != "movej" && !matches!(a[0], Value::List(_));
+                let is_pose = matches!(a[0], Value::Pose(_));
                 let dist = if is_pose {
                     let p = self.arm.pose;
                     let d = (0..3)

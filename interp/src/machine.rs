@@ -302,8 +302,6 @@ pub struct Machine {
     state: State,
     pub(crate) sockets: Sockets,
     pub(crate) arm: Arm,
-    /// Hosts of `socket_open` calls waiting for the driver, by socket name.
-    connecting: Vec<String>,
     /// Statements run by the current thread in this step.
     budget: u32,
     /// The thread running now.
@@ -340,7 +338,6 @@ impl Machine {
             events: VecDeque::new(),
             state: State::Running,
             arm: Arm::default(),
-            connecting: Vec::new(),
             budget: 0,
             current: 0,
         }
@@ -491,7 +488,6 @@ impl Machine {
     /// The driver's answer to [`Event::Connect`]: the connection is up, or failed with a
     /// reason (then `socket_open` returns `False` and the program goes on).
     pub fn handle_connected(&mut self, socket_name: &str, result: Result<(), String>) {
-        self.connecting.retain(|n| n != socket_name);
         let ok = result.is_ok();
         if ok {
             self.sockets.open(socket_name);
@@ -584,10 +580,6 @@ impl Machine {
                 bytes,
             });
         }
-    }
-
-    pub(crate) fn connecting(&mut self, name: &str) {
-        self.connecting.push(name.to_string());
     }
 
     /// A wait that ends after `d` of program time (at least one step).

@@ -353,3 +353,13 @@ fn binary_int_stream_drained_until_empty() {
     assert_eq!(h.messages, ["3"]);
     let _ = int32s(&[]);
 }
+
+#[test]
+fn optimove_and_movec_and_direct_torque() {
+    let mut h = Harness::new("optimovej([0, -1.5707963267948966, 0.3, -1.5707963267948966, 0, 0], a=0.5, v=0.3)\nmovec(p[0, 0, 0, 0, 0, 0], p[0.1, 0, 0, 0, 0, 0], v=0.1)\ndirect_torque([0, 0, 0, 0, 0, 0])\ntextmsg(get_joint_positions()[2])\n", Config::default());
+    h.run_silent(Duration::from_secs(10));
+    assert_eq!(h.m.state(), &State::Finished);
+    assert_eq!(h.messages, ["0.3"]);
+    // 0.3 rad at 0.3 rad/s, 0.1 m at 0.1 m/s, one step.
+    assert_eq!(h.now, Duration::from_millis(1000 + 1000 + 2));
+}

@@ -151,3 +151,20 @@ fn starting_threads_without_end_is_bounded() {
         "line 7: `run t()`: more than 64 threads running"
     );
 }
+
+#[test]
+fn machine_is_send_and_reports_time_and_sockets() {
+    fn assert_send<T: Send>() {}
+    assert_send::<Machine>();
+    assert_send::<Program>();
+    let p = Program::parse("socket_open(\"h\", 1, \"a\")\nsleep(0.1)\n").unwrap();
+    let mut m = Machine::new(p, Config::cb3());
+    m.run_until(Duration::ZERO);
+    m.handle_connected("a", Ok(()));
+    m.run_until(Duration::from_millis(8));
+    assert_eq!(m.open_sockets(), ["a"]);
+    assert_eq!(m.now(), Duration::from_millis(16));
+    m.run_until(Duration::from_secs(1));
+    assert_eq!(m.state(), &State::Finished);
+    assert!(m.open_sockets().is_empty());
+}
