@@ -16,9 +16,9 @@ use urscript_socket::adapters::tokio_codec::{
 };
 use urscript_socket::robot::{Policy, ReadCall, Timeout};
 
-#[tokio::main]
-async fn main() -> Result<(), Box<dyn std::error::Error>> {
-    // The server, as on the front page (bound to an ephemeral port on 127.0.0.1).
+/// The front page's server, from `let listener` on (bound to an ephemeral port on
+/// 127.0.0.1, the accept loop in a task). `tests/frontpage_server.rs` runs this one too.
+pub async fn front_page_server() -> std::io::Result<std::net::SocketAddr> {
     let listener = TcpListener::bind("127.0.0.1:0").await?;
     let addr = listener.local_addr()?;
     tokio::spawn(async move {
@@ -43,6 +43,12 @@ async fn main() -> Result<(), Box<dyn std::error::Error>> {
         #[allow(unreachable_code)]
         Ok::<_, std::io::Error>(())
     });
+    Ok(addr)
+}
+
+#[tokio::main]
+async fn main() -> Result<(), Box<dyn std::error::Error>> {
+    let addr = front_page_server().await?;
 
     // The robot: socket_send_line(<5000 x's>), socket_send_line("shoot"),
     // pose = socket_read_ascii_float(6), three times.

@@ -1,5 +1,5 @@
-//! The tokio server of the rustdoc front page (`src/lib.rs`), copied as it stands there
-//! (only the address is 127.0.0.1:0 and the accept loop runs in a task), against robots
+//! The tokio server of the rustdoc front page (`src/lib.rs`), as the `tokio_front_page`
+//! example holds it (only the address is 127.0.0.1:0 and the accept loop runs in a task), against robots
 //! over 127.0.0.1. Proof that what a new user copies survives an over-long line and a
 //! malformed one and keeps answering, on one `Framed` with request/reply and tolerant mode.
 
@@ -8,43 +8,16 @@
 
 use std::time::Duration;
 
-use futures_util::{SinkExt, StreamExt};
 use tokio::io::{AsyncReadExt, AsyncWriteExt};
-use tokio::net::{TcpListener, TcpStream};
-use tokio_util::codec::Framed;
-use urscript_socket::adapters::tokio_codec::{
-    AsyncRobotSocket, FloatTupleCodec, LineCodec, RequestReply, Tolerant,
-};
+use tokio::net::TcpStream;
+use urscript_socket::adapters::tokio_codec::AsyncRobotSocket;
 use urscript_socket::robot::{Policy, ReadCall, ReadResult, Timeout};
 
-/// The front page's server, from `let listener` on.
-async fn front_page_server() -> std::io::Result<std::net::SocketAddr> {
-    let listener = TcpListener::bind("127.0.0.1:0").await?;
-    let addr = listener.local_addr()?;
-    tokio::spawn(async move {
-        loop {
-            let (robot, peer) = listener.accept().await?; // the robot's socket_open
-            tokio::spawn(async move {
-                let codec =
-                    RequestReply::new(Tolerant::new(LineCodec::new()), FloatTupleCodec::new(6)?);
-                let mut framed = Framed::new(robot, codec);
-                while let Some(request) = framed.next().await {
-                    match request? {
-                        Ok(line) if line == "shoot" => {
-                            framed.send([0.4, -0.2, 0.3, 0.0, 3.14, 0.0]).await?;
-                        }
-                        Ok(line) => eprintln!("{peer}: unknown request {line:?}"),
-                        Err(bad) => eprintln!("{peer}: skipped {bad}"), // the stream goes on
-                    }
-                }
-                Ok::<_, Box<dyn std::error::Error + Send + Sync>>(())
-            });
-        }
-        #[allow(unreachable_code)]
-        Ok::<_, std::io::Error>(())
-    });
-    Ok(addr)
-}
+// The front page's server lives in the example CI runs; this test drives the same code.
+#[path = "../examples/tokio_front_page.rs"]
+#[allow(dead_code)]
+mod example;
+use example::front_page_server;
 
 const POSE: [f64; 6] = [0.4, -0.2, 0.3, 0.0, 3.14, 0.0];
 

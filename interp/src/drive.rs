@@ -202,25 +202,31 @@ pub fn run_tcp(
     }
 }
 
-fn connect(host: &str, port: u16, timeout: Duration) -> Result<TcpStream, String> {
-    let addrs = (host, port)
-        .to_socket_addrs()
-        .map_err(|e| format!("cannot resolve {host}: {e}"))?;
-    let mut last = format!("no address for {host}");
-    for addr in addrs {
+/// Connects to `host:port` as `socket_open` does (each resolved address in turn, at most
+/// `timeout` each), returning a non-blocking stream with Nagle off; the error is the
+/// operating system's reason for the last address tried.
+pub fn connect_stream(host: &str, port: u16, timeout: Duration) -> std::io::Result<TcpStream> {
+    let mut last = std::io::Error::new(ErrorKind::InvalidInput, "no address");
+    for addr in (host, port).to_socket_addrs()? {
         match TcpStream::connect_timeout(&addr, timeout) {
             Ok(s) => {
-                s.set_nonblocking(true).map_err(|e| e.to_string())?;
+                s.set_nonblocking(true)?;
                 let _ = s.set_nodelay(true);
                 return Ok(s);
             }
-            Err(e) => last = format!("{addr}: {e}"),
+            Err(e) => last = e,
         }
     }
     Err(last)
 }
 
-fn write_all(stream: &mut TcpStream, mut bytes: &[u8]) -> std::io::Result<()> {
+fn connect(host: &str, port: u16, timeout: Duration) -> Result<TcpStream, String> {
+    connect_stream(host, port, timeout).map_err(|e| format!("{host}:{port}: {e}"))
+}
+
+/// Writes all of `bytes` to a non-blocking stream, waiting briefly while its send buffer
+/// is full.
+pub fn write_all(stream: &mut TcpStream, mut bytes: &[u8]) -> std::io::Result<()> {
     while !bytes.is_empty() {
         match stream.write(bytes) {
             Ok(0) => return Err(ErrorKind::WriteZero.into()),

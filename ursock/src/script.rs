@@ -10,8 +10,8 @@
 //! The old one-call-per-line scripts are URScript statements and run unchanged.
 
 use std::collections::{HashMap, VecDeque};
-use std::io::{ErrorKind, Read, Write};
-use std::net::{Shutdown, TcpStream, ToSocketAddrs};
+use std::io::{ErrorKind, Read};
+use std::net::{Shutdown, TcpStream};
 use std::time::{Duration, Instant};
 
 use urscript_interp::{Config, Event, Machine, Program, State, Stub};
@@ -101,33 +101,7 @@ fn open_failure(host: &str, port: u16, e: &std::io::Error) -> String {
 }
 
 fn connect(host: &str, port: u16) -> std::io::Result<TcpStream> {
-    let mut last = std::io::Error::new(ErrorKind::InvalidInput, "no address");
-    for addr in (host, port).to_socket_addrs()? {
-        match TcpStream::connect_timeout(&addr, CONNECT_TIMEOUT) {
-            Ok(s) => {
-                s.set_nonblocking(true)?;
-                let _ = s.set_nodelay(true);
-                return Ok(s);
-            }
-            Err(e) => last = e,
-        }
-    }
-    Err(last)
-}
-
-fn write_all(stream: &mut TcpStream, mut bytes: &[u8]) -> std::io::Result<()> {
-    while !bytes.is_empty() {
-        match stream.write(bytes) {
-            Ok(0) => return Err(ErrorKind::WriteZero.into()),
-            Ok(n) => bytes = &bytes[n..],
-            Err(e) if e.kind() == ErrorKind::WouldBlock => {
-                std::thread::sleep(Duration::from_micros(100))
-            }
-            Err(e) if e.kind() == ErrorKind::Interrupted => {}
-            Err(e) => return Err(e),
-        }
-    }
-    Ok(())
+    urscript_interp::drive::connect_stream(host, port, CONNECT_TIMEOUT)
 }
 
 /// One open connection of the program.
@@ -508,7 +482,9 @@ pub fn run(script: &str, connect_to: Option<&str>, opts: Options) -> Result<(), 
                         if let Some(t) = c.timed_out.as_mut() {
                             t.2 = true;
                         }
-                        if !c.broken && write_all(&mut c.stream, &bytes).is_err() {
+                        if !c.broken
+                            && urscript_interp::drive::write_all(&mut c.stream, &bytes).is_err()
+                        {
                             c.closed = true;
                             c.broken = true;
                             machine.handle_send_failed(&socket_name);
