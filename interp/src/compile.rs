@@ -4,15 +4,42 @@
 
 use std::collections::HashMap;
 
-use crate::error::ParseError;
+use crate::builtins::{self, Builtin};
+use crate::error::{ParseError, ParseErrorKind};
 use crate::parser::{BinOp, Expr, FuncDef, Scope, Stmt, StmtKind};
 use crate::value::Value;
 
 /// Index of a name in [`Program::names`].
 pub(crate) type Sym = u32;
 
-/// No named arguments.
-pub(crate) const NO_KW: u32 = u32::MAX;
+/// A place in the source: 1-based line and column.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub(crate) struct Pos {
+    pub line: u32,
+    pub col: u32,
+}
+
+/// One call in the program, resolved once by the compiler.
+#[derive(Debug, Clone)]
+pub(crate) struct CallSite {
+    /// The function's name.
+    pub name: Sym,
+    /// Its built-in entry, if it is one (and the program does not define it).
+    pub builtin: Option<&'static Builtin>,
+    /// Arguments on the stack: positional, then named.
+    pub argc: u16,
+    /// How many of them are positional.
+    pub positional: u16,
+    /// The names of the named ones, in order.
+    pub kwnames: Vec<Sym>,
+    /// For each argument, the parameter it fills (checked at compile time); empty for a
+    /// function that is neither defined nor built in (a stub takes anything).
+    pub slots: Vec<u8>,
+    /// `x = f(...)`: the variable the statement assigns the result to.
+    pub assigned: Option<Sym>,
+    /// Where the call is.
+    pub at: Pos,
+}
 
 #[derive(Debug, Clone, Copy)]
 pub(crate) enum Op {
@@ -39,10 +66,10 @@ pub(crate) enum Op {
     JumpIfTrueKeep(u32),
     /// The right side of `and`/`or` must be a bool.
     CheckBool,
-    /// Call a user function: id, positional + named argument count, named-argument list.
-    Call(u32, u16, u32),
-    /// Call a built-in (or a stub) by name.
-    Native(Sym, u16, u32),
+    /// Call a user function: its id, its call site.
+    Call(u32, u32),
+    /// Call a built-in (or a stub): its call site.
+    Native(u32),
     Return,
     ReturnNone,
     Pop,
@@ -59,7 +86,8 @@ pub(crate) struct Func {
     pub name: String,
     pub params: Vec<(Sym, Option<Value>)>,
     pub ops: Vec<Op>,
-    pub lines: Vec<u32>,
+    /// Where each op comes from.
+    pub lines: Vec<Pos>,
     pub is_thread: bool,
     /// The program's own body: plain assignments make globals.
     pub program_scope: bool,
@@ -78,7 +106,8 @@ pub struct Program {
     pub(crate) names: Vec<String>,
     pub(crate) consts: Vec<Value>,
     pub(crate) funcs: Vec<Func>,
-    pub(crate) kwnames: Vec<Vec<Sym>>,
+    /// Every call, by [`Op::Call`]/[`Op::Native`] index.
+    pub(crate) sites: Vec<CallSite>,
     /// Names called that are not user functions, with the first line calling each.
     pub(crate) natives: Vec<(Sym, u32)>,
     entry: Option<String>,
@@ -132,18 +161,25 @@ struct Compiler {
     consts: Vec<Value>,
     funcs: Vec<Func>,
     func_ids: HashMap<String, u32>,
-    kwnames: Vec<Vec<Sym>>,
+    sites: Vec<CallSite>,
     natives: Vec<(Sym, u32)>,
     // Current function being compiled.
     ops: Vec<Op>,
-    lines: Vec<u32>,
-    line: u32,
+    lines: Vec<Pos>,
+    pos: Pos,
     /// Per open loop: its start and the `break` jumps to patch.
     loops: Vec<(u32, Vec<usize>)>,
 }
 
-fn err(line: u32, msg: String) -> ParseError {
-    ParseError::new(line, 1, msg)
+fn err(at: Pos, msg: String) -> ParseError {
+    ParseError::with_kind(ParseErrorKind::Compile, at.line, at.col, msg)
+}
+
+fn pos_of(s: &Stmt) -> Pos {
+    Pos {
+        line: s.line,
+        col: s.col,
+    }
 }
 
 impl Compiler {
@@ -159,7 +195,7 @@ impl Compiler {
 
     fn emit(&mut self, op: Op) -> usize {
         self.ops.push(op);
-        self.lines.push(self.line);
+        self.lines.push(self.pos);
         self.ops.len() - 1
     }
 
@@ -182,7 +218,8 @@ impl Compiler {
             match &s.kind {
                 StmtKind::Def(f) => {
                     if self.func_ids.contains_key(&f.name) {
-                        return Err(err(f.line, format!("`{}` is defined twice", f.name)));
+                        let at = pos_of(s);
+                        return Err(err(at, format!("`{}` is defined twice", f.name)));
                     }
                     self.func_ids.insert(f.name.clone(), out.len() as u32 + 1);
                     out.push(f.clone());
@@ -221,10 +258,11 @@ impl Compiler {
         let entry: Option<String> = match (defs.as_slice(), others.as_slice()) {
             (ds, []) if !ds.is_empty() => ds.last().map(|d| d.name.clone()),
             (ds, [one]) => match &one.kind {
-                StmtKind::Expr(Expr::Call { name, args, kwargs })
-                    if args.is_empty()
-                        && kwargs.is_empty()
-                        && ds.iter().any(|d| d.name == *name && d.params.is_empty()) =>
+                StmtKind::Expr(Expr::Call {
+                    name, args, kwargs, ..
+                }) if args.is_empty()
+                    && kwargs.is_empty()
+                    && ds.iter().any(|d| d.name == *name && d.params.is_empty()) =>
                 {
                     Some(name.clone())
                 }
@@ -275,7 +313,7 @@ impl Compiler {
             names: self.names,
             consts: self.consts,
             funcs: self.funcs,
-            kwnames: self.kwnames,
+            sites: self.sites,
             natives: self.natives,
             entry,
         })
@@ -285,9 +323,12 @@ impl Compiler {
         self.ops.clear();
         self.lines.clear();
         self.loops.clear();
-        self.line = line;
+        self.pos = Pos { line, col: 1 };
         self.block(body)?;
-        self.line = body.last().map_or(line, |s| s.line);
+        self.pos = body.last().map_or(self.pos, |s| Pos {
+            line: s.line,
+            col: 1,
+        });
         self.emit(Op::ReturnNone);
         self.funcs[id].ops = std::mem::take(&mut self.ops);
         self.funcs[id].lines = std::mem::take(&mut self.lines);
@@ -302,7 +343,7 @@ impl Compiler {
     }
 
     fn stmt(&mut self, s: &Stmt) -> Result<(), ParseError> {
-        self.line = s.line;
+        self.pos = pos_of(s);
         // A `while` counts once per iteration instead (below), so even an empty loop
         // meets the per-step statement bound.
         if !matches!(s.kind, StmtKind::Def(_) | StmtKind::While(..)) {
@@ -321,12 +362,21 @@ impl Compiler {
                     return Ok(());
                 };
                 if indices.len() > 2 {
-                    return Err(err(s.line, "assignment with more than two indices".into()));
+                    let at = self.pos;
+                    return Err(err(at, "assignment with more than two indices".into()));
                 }
                 for i in indices {
                     self.expr(i)?;
                 }
-                self.expr(value)?;
+                match value {
+                    Expr::Call {
+                        name,
+                        args,
+                        kwargs,
+                        at,
+                    } if indices.is_empty() => self.call(name, args, kwargs, *at, Some(sym))?,
+                    _ => self.expr(value)?,
+                }
                 if indices.is_empty() {
                     self.emit(Op::Store(sym, *scope));
                 } else {
@@ -363,7 +413,7 @@ impl Compiler {
                 let exit = self.emit(Op::JumpIfFalse(0));
                 self.loops.push((start, Vec::new()));
                 self.block(body)?;
-                self.line = s.line;
+                self.pos = pos_of(s);
                 self.emit(Op::Jump(start));
                 let h = self.here();
                 self.patch(exit, h);
@@ -375,7 +425,7 @@ impl Compiler {
             }
             StmtKind::Break => {
                 if self.loops.is_empty() {
-                    return Err(err(s.line, "`break` outside a `while` loop".into()));
+                    return Err(err(pos_of(s), "`break` outside a `while` loop".into()));
                 }
                 let j = self.emit(Op::Jump(0));
                 if let Some((_, breaks)) = self.loops.last_mut() {
@@ -384,7 +434,7 @@ impl Compiler {
             }
             StmtKind::Continue => {
                 let Some(&(start, _)) = self.loops.last() else {
-                    return Err(err(s.line, "`continue` outside a `while` loop".into()));
+                    return Err(err(pos_of(s), "`continue` outside a `while` loop".into()));
                 };
                 self.emit(Op::Jump(start));
             }
@@ -483,61 +533,117 @@ impl Compiler {
                 self.expr(r)?;
                 self.emit(Op::Bin(*op));
             }
-            Expr::Run(name) => match self.func_ids.get(name) {
-                Some(&id) if self.funcs[id as usize].is_thread => {
-                    self.emit(Op::Run(id));
-                }
-                Some(_) => {
-                    return Err(err(
-                        self.line,
-                        format!("`run {name}()`: `{name}` is a function, not a thread"),
-                    ));
-                }
-                None => {
-                    return Err(err(
-                        self.line,
-                        format!("`run {name}()`: no thread named `{name}`"),
-                    ))
-                }
-            },
-            Expr::Call { name, args, kwargs } => {
-                let argc = args.len() + kwargs.len();
-                if argc > 255 {
-                    return Err(err(self.line, format!("too many arguments to `{name}`")));
-                }
-                for a in args {
-                    self.expr(a)?;
-                }
-                for (_, v) in kwargs {
-                    self.expr(v)?;
-                }
-                let kw = if kwargs.is_empty() {
-                    NO_KW
-                } else {
-                    let names = kwargs.iter().map(|(k, _)| self.sym(k)).collect();
-                    self.kwnames.push(names);
-                    (self.kwnames.len() - 1) as u32
+            Expr::Run(name, at) => {
+                let at = Pos {
+                    line: at.0,
+                    col: at.1,
                 };
                 match self.func_ids.get(name) {
                     Some(&id) if self.funcs[id as usize].is_thread => {
+                        self.emit(Op::Run(id));
+                    }
+                    Some(_) => {
                         return Err(err(
-                            self.line,
-                            format!("`{name}` is a thread: start it with `run {name}()`"),
+                            at,
+                            format!("`run {name}()`: `{name}` is a function, not a thread"),
                         ));
                     }
-                    Some(&id) => {
-                        self.emit(Op::Call(id, argc as u16, kw));
-                    }
                     None => {
-                        let s = self.sym(name);
-                        if !self.natives.iter().any(|(n, _)| *n == s) {
-                            self.natives.push((s, self.line));
-                        }
-                        self.emit(Op::Native(s, argc as u16, kw));
+                        return Err(err(at, format!("`run {name}()`: no thread named `{name}`")))
                     }
                 }
             }
+            Expr::Call {
+                name,
+                args,
+                kwargs,
+                at,
+            } => self.call(name, args, kwargs, *at, None)?,
         }
+        Ok(())
+    }
+
+    /// A call: its arguments, then `Op::Call` (a function of the program) or
+    /// `Op::Native` (a built-in, or a name left for a stub), with the arguments checked
+    /// against the parameters here, before anything runs.
+    fn call(
+        &mut self,
+        name: &str,
+        args: &[Expr],
+        kwargs: &[(String, Expr)],
+        at: (u32, u32),
+        assigned: Option<Sym>,
+    ) -> Result<(), ParseError> {
+        let at = Pos {
+            line: at.0,
+            col: at.1,
+        };
+        let argc = args.len() + kwargs.len();
+        if argc > 255 {
+            return Err(err(at, format!("too many arguments to `{name}`")));
+        }
+        for a in args {
+            self.expr(a)?;
+        }
+        for (_, v) in kwargs {
+            self.expr(v)?;
+        }
+        let named: Vec<&str> = kwargs.iter().map(|(k, _)| k.as_str()).collect();
+        let kwnames: Vec<Sym> = named.iter().map(|k| self.sym(k)).collect();
+        let user = self.func_ids.get(name).copied();
+        let builtin = if user.is_some() {
+            None
+        } else {
+            builtins::lookup(name)
+        };
+        let slots = if let Some(id) = user {
+            let f = &self.funcs[id as usize];
+            if f.is_thread {
+                return Err(err(
+                    at,
+                    format!("`{name}` is a thread: start it with `run {name}()`"),
+                ));
+            }
+            let names = &self.names;
+            let params = f
+                .params
+                .iter()
+                .map(|(p, d)| (names[*p as usize].as_str(), d.is_some()));
+            builtins::match_args(name, params, args.len(), &named).map_err(|m| err(at, m))?
+        } else if let Some(b) = builtin {
+            let params = b
+                .params
+                .iter()
+                .map(|p| (p.name, p.default != builtins::Default::Required));
+            builtins::match_args(name, params, args.len(), &named).map_err(|m| err(at, m))?
+        } else {
+            Vec::new()
+        };
+        let sym = self.sym(name);
+        self.sites.push(CallSite {
+            name: sym,
+            builtin,
+            argc: argc as u16,
+            positional: args.len() as u16,
+            kwnames,
+            slots,
+            assigned,
+            at,
+        });
+        let site = (self.sites.len() - 1) as u32;
+        let saved = std::mem::replace(&mut self.pos, at);
+        match user {
+            Some(id) => {
+                self.emit(Op::Call(id, site));
+            }
+            None => {
+                if !self.natives.iter().any(|(n, _)| *n == sym) {
+                    self.natives.push((sym, at.line));
+                }
+                self.emit(Op::Native(site));
+            }
+        }
+        self.pos = saved;
         Ok(())
     }
 }

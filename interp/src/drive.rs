@@ -1,11 +1,25 @@
-//! Running a [`Machine`] in real time against real TCP servers (`std::net`), for a CLI or
-//! an integration test.
+//! Running a [`Machine`] in real time against real TCP servers (`std::net`): **the** driver
+//! loop, used by `ursock robot` and by library users alike. What a front end needs to
+//! show (bytes per socket, connect failures, peers that close) reaches it through an
+//! observer ([`Activity`]); the front end keeps no loop of its own.
 //!
-//! [`run_tcp`] is a small poll loop: program time is the real time since the start
-//! (`Instant`), `socket_open` connects with a blocking `TcpStream::connect_timeout` (the
-//! program does not advance meanwhile), sends are written out at once, and received bytes
-//! are read from non-blocking sockets each round. Between rounds the loop sleeps until the
-//! machine's next timeout, at most [`Options::poll_interval`].
+//! [`Driver`] is a small poll loop. Program time is the real time since the start
+//! (`Instant`). Each round it runs the machine up to its next step that is due (one step
+//! at a time when the program has fallen behind real time, so the sockets are serviced
+//! between any two steps), acts on the machine's events, writes what is queued and reads
+//! what the servers sent. `socket_open` connects with a blocking
+//! `TcpStream::connect_timeout` (the program does not advance meanwhile). Between rounds
+//! it sleeps until the machine's next timeout, at most [`Options::poll_interval`].
+//!
+//! ## Bounds
+//! - Bytes the program sends are written without blocking; what a server does not read
+//!   waits in a per-socket queue of at most [`MAX_UNSENT`] bytes. Past that the
+//!   connection counts as broken, as a failed write does: later sends on it return
+//!   `False`, and reads on it end with their sentinels. [`Options::max_time`] is honoured
+//!   whatever the servers do.
+//! - Bytes read from a server that the socket's receive buffer cannot take yet stay in a
+//!   backlog, and no more is read from that server until the program has taken them (a
+//!   full TCP window, as on the robot).
 
 use std::collections::HashMap;
 use std::io::{ErrorKind, Read, Write};
@@ -13,9 +27,13 @@ use std::net::{Shutdown, TcpStream, ToSocketAddrs};
 use std::time::{Duration, Instant};
 
 use crate::error::RuntimeError;
-use crate::machine::{Event, Machine, State};
+use crate::event::Event;
+use crate::machine::{Machine, State};
 
-/// How [`run_tcp`] runs.
+/// The most bytes a socket keeps queued for a server that does not read them.
+pub const MAX_UNSENT: usize = 16 * 1024 * 1024;
+
+/// How a [`Driver`] runs.
 #[derive(Debug, Clone)]
 pub struct Options {
     /// End a program that runs longer than this (it counts as a success).
@@ -36,8 +54,8 @@ impl Default for Options {
     }
 }
 
-/// What [`run_tcp`] reports as it runs: the machine's events, and what the servers sent
-/// (for a `--trace` that shows both directions).
+/// What a [`Driver`] reports as it runs: the machine's events, and what the servers did
+/// (for a trace that shows both directions, or a diagnosis of failed reads).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Activity<'a> {
     /// An event of the machine, before the driver acts on it.
@@ -54,9 +72,17 @@ pub enum Activity<'a> {
         /// The socket's name.
         socket_name: &'a str,
     },
+    /// Writing to a server failed (it reset the connection, or left more than
+    /// [`MAX_UNSENT`] bytes unread): later sends on the socket return `False`.
+    SendFailed {
+        /// The socket's name.
+        socket_name: &'a str,
+        /// Why, in words.
+        reason: &'a str,
+    },
 }
 
-/// How a program run by [`run_tcp`] ended without error.
+/// How a program run by a [`Driver`] ended without error.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Outcome {
     /// The program ended.
@@ -67,23 +93,281 @@ pub enum Outcome {
     MaxTime,
 }
 
+/// One open connection of the program.
 struct Conn {
     stream: TcpStream,
     /// Bytes read but not yet accepted by the socket's receive buffer.
     backlog: Vec<u8>,
+    /// Bytes the program sent that the server has not taken yet.
+    unsent: Vec<u8>,
+    /// The server closed its end.
     closed: bool,
+    /// A write failed: nothing more is written or read.
+    broken: bool,
 }
 
-/// What a peer sent or did in one round.
-enum Received {
-    Bytes(Vec<u8>),
-    Closed,
+impl Conn {
+    fn new(stream: TcpStream) -> Self {
+        Conn {
+            stream,
+            backlog: Vec::new(),
+            unsent: Vec::new(),
+            closed: false,
+            broken: false,
+        }
+    }
 }
 
-/// Runs `machine` against real servers until it ends, fails, or `max_time` passes.
-/// `on_activity` sees every event first, and every read from a server (print them, log
-/// them); a runtime error is the `Err`.
-/// The machine stays with the caller, to read its globals or arm state afterwards.
+/// The real-time TCP driver of a [`Machine`]. See the module docs.
+///
+/// ```no_run
+/// use urscript_interp::{drive::{Driver, Options}, Config, Machine, Program};
+/// let program = Program::parse(&std::fs::read_to_string("prog.script")?)?;
+/// let mut machine = Machine::new(program, Config::default());
+/// let mut driver = Driver::new(Options::default());
+/// driver.connect(&mut machine, "socket_0", "127.0.0.1", 30000)?; // opened before the start
+/// let outcome = driver.run(&mut machine, |a| println!("{a:?}"))?;
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+pub struct Driver {
+    options: Options,
+    conns: HashMap<String, Conn>,
+    buf: Vec<u8>,
+}
+
+impl Driver {
+    /// A driver with no connection open.
+    pub fn new(options: Options) -> Self {
+        Driver {
+            options,
+            conns: HashMap::new(),
+            buf: vec![0u8; 16 * 1024],
+        }
+    }
+
+    /// Opens `socket_name` to `host:port` before the program starts, as if the program
+    /// had called `socket_open` (the CLI's `--connect`). The error is the reason, in
+    /// words ([`describe_connect_error`]).
+    pub fn connect(
+        &mut self,
+        machine: &mut Machine,
+        socket_name: &str,
+        host: &str,
+        port: u16,
+    ) -> Result<(), String> {
+        let stream = connect_stream(host, port, self.options.connect_timeout)
+            .map_err(|e| describe_connect_error(host, port, &e))?;
+        self.conns
+            .insert(socket_name.to_string(), Conn::new(stream));
+        machine.handle_connected(socket_name, Ok(()));
+        Ok(())
+    }
+
+    /// Runs `machine` against real servers until it ends, fails, or
+    /// [`Options::max_time`] passes. `on_activity` sees every event first, and every
+    /// read from a server; a runtime error is the `Err`. The machine stays with the
+    /// caller, to read its globals or arm state afterwards.
+    pub fn run(
+        &mut self,
+        machine: &mut Machine,
+        mut on_activity: impl FnMut(Activity<'_>),
+    ) -> Result<Outcome, RuntimeError> {
+        let start = Instant::now();
+        loop {
+            let elapsed = start.elapsed();
+            if self.options.max_time.is_some_and(|m| elapsed >= m) {
+                return Ok(Outcome::MaxTime);
+            }
+            // Run up to the first step with something to do, never past real time: a
+            // program that has fallen behind runs one busy step per round, and the
+            // sockets are serviced between any two of them.
+            let due = machine.poll_timeout().map_or(elapsed, |t| t.min(elapsed));
+            machine.run_until(due);
+            self.act_on_events(machine, &mut on_activity);
+            match machine.state() {
+                State::Running => {}
+                State::Finished => return Ok(Outcome::Finished),
+                State::Halted => return Ok(Outcome::Halted),
+                State::Error(e) => return Err(e.clone()),
+            }
+            let busy = self.service_sockets(machine, &mut on_activity);
+            let behind = machine.poll_timeout().is_some_and(|t| t <= start.elapsed());
+            if !busy && !behind {
+                let now = start.elapsed();
+                let mut wait = self.options.poll_interval;
+                if let Some(t) = machine.poll_timeout() {
+                    wait = wait.min(t.saturating_sub(now));
+                }
+                if let Some(m) = self.options.max_time {
+                    wait = wait.min(m.saturating_sub(now));
+                }
+                if !wait.is_zero() {
+                    std::thread::sleep(wait);
+                }
+            }
+        }
+    }
+
+    fn act_on_events(&mut self, machine: &mut Machine, on_activity: &mut impl FnMut(Activity<'_>)) {
+        while let Some(event) = machine.poll_event() {
+            on_activity(Activity::Event(&event));
+            match event {
+                Event::Connect {
+                    socket_name,
+                    host,
+                    port,
+                } => match connect_stream(&host, port, self.options.connect_timeout) {
+                    Ok(stream) => {
+                        if let Some(old) = self.conns.insert(socket_name.clone(), Conn::new(stream))
+                        {
+                            let _ = old.stream.shutdown(Shutdown::Both);
+                        }
+                        machine.handle_connected(&socket_name, Ok(()));
+                    }
+                    Err(e) => {
+                        let why = describe_connect_error(&host, port, &e);
+                        machine.handle_connected(&socket_name, Err(why));
+                    }
+                },
+                Event::Transmit { socket_name, bytes } => {
+                    if let Some(c) = self.conns.get_mut(&socket_name) {
+                        if !c.broken {
+                            c.unsent.extend_from_slice(&bytes);
+                            if let Err(reason) = flush(c) {
+                                fail_send(machine, c, &socket_name, &reason, on_activity);
+                            }
+                        }
+                    }
+                }
+                Event::Close { socket_name } => {
+                    if let Some(mut c) = self.conns.remove(&socket_name) {
+                        // What the program sent before closing still goes out, as far
+                        // as the server takes it now.
+                        let _ = flush(&mut c);
+                        let _ = c.stream.shutdown(Shutdown::Both);
+                    }
+                }
+                Event::Message(_) | Event::Call(_) => {}
+            }
+        }
+    }
+
+    /// Writes what is queued, reads what arrived; true if anything moved.
+    fn service_sockets(
+        &mut self,
+        machine: &mut Machine,
+        on_activity: &mut impl FnMut(Activity<'_>),
+    ) -> bool {
+        let mut busy = false;
+        for (name, c) in self.conns.iter_mut() {
+            if c.broken {
+                continue;
+            }
+            if !c.unsent.is_empty() {
+                let before = c.unsent.len();
+                if let Err(reason) = flush(c) {
+                    fail_send(machine, c, name, &reason, on_activity);
+                    continue;
+                }
+                busy |= c.unsent.len() != before;
+            }
+            if !c.backlog.is_empty() {
+                let n = machine.handle_received(name, &c.backlog);
+                c.backlog.drain(..n);
+                busy |= n > 0;
+                if !c.backlog.is_empty() {
+                    continue; // the receive buffer is full: read no more from it now
+                }
+            }
+            if c.closed {
+                // The peer closed its end: a reset after it (the peer is gone, a write
+                // reached nobody) makes later sends fail, as on the controller.
+                if matches!(c.stream.take_error(), Ok(Some(_)) | Err(_)) {
+                    fail_send(
+                        machine,
+                        c,
+                        name,
+                        "the server reset the connection",
+                        on_activity,
+                    );
+                }
+                continue;
+            }
+            match c.stream.read(&mut self.buf) {
+                Ok(0) => {
+                    busy = true;
+                    c.closed = true;
+                    on_activity(Activity::PeerClosed { socket_name: name });
+                    machine.handle_peer_closed(name);
+                }
+                Ok(n) => {
+                    busy = true;
+                    let bytes = &self.buf[..n];
+                    on_activity(Activity::Received {
+                        socket_name: name,
+                        bytes,
+                    });
+                    let taken = machine.handle_received(name, bytes);
+                    c.backlog.extend_from_slice(&bytes[taken..]);
+                }
+                Err(e) if matches!(e.kind(), ErrorKind::WouldBlock | ErrorKind::Interrupted) => {}
+                Err(_) => {
+                    busy = true;
+                    c.closed = true;
+                    on_activity(Activity::PeerClosed { socket_name: name });
+                    machine.handle_peer_closed(name);
+                }
+            }
+        }
+        busy
+    }
+}
+
+/// Marks a connection broken: the machine's later sends on it return `False`.
+fn fail_send(
+    machine: &mut Machine,
+    c: &mut Conn,
+    name: &str,
+    reason: &str,
+    on_activity: &mut impl FnMut(Activity<'_>),
+) {
+    c.broken = true;
+    c.closed = true;
+    c.unsent = Vec::new();
+    on_activity(Activity::SendFailed {
+        socket_name: name,
+        reason,
+    });
+    machine.handle_send_failed(name);
+}
+
+/// Writes as much of the queue as the server takes now, without blocking; an error
+/// (the reason) if the write failed or the queue passed [`MAX_UNSENT`].
+fn flush(c: &mut Conn) -> Result<(), String> {
+    let mut written = 0;
+    let result = loop {
+        if written == c.unsent.len() {
+            break Ok(());
+        }
+        match c.stream.write(&c.unsent[written..]) {
+            Ok(0) => break Err("the server stopped taking bytes".to_string()),
+            Ok(n) => written += n,
+            Err(e) if e.kind() == ErrorKind::WouldBlock => break Ok(()),
+            Err(e) if e.kind() == ErrorKind::Interrupted => {}
+            Err(e) => break Err(format!("a write failed ({e})")),
+        }
+    };
+    c.unsent.drain(..written);
+    result?;
+    if c.unsent.len() > MAX_UNSENT {
+        return Err(format!(
+            "the server left more than {MAX_UNSENT} bytes unread"
+        ));
+    }
+    Ok(())
+}
+
+/// Runs `machine` with a new [`Driver`]: see [`Driver::run`].
 ///
 /// ```no_run
 /// use urscript_interp::{drive, Config, Machine, Program};
@@ -95,111 +379,9 @@ enum Received {
 pub fn run_tcp(
     machine: &mut Machine,
     options: &Options,
-    mut on_activity: impl FnMut(Activity<'_>),
+    on_activity: impl FnMut(Activity<'_>),
 ) -> Result<Outcome, RuntimeError> {
-    let start = Instant::now();
-    let mut conns: HashMap<String, Conn> = HashMap::new();
-    let mut buf = vec![0u8; 16 * 1024];
-    loop {
-        let now = start.elapsed();
-        if options.max_time.is_some_and(|m| now >= m) {
-            return Ok(Outcome::MaxTime);
-        }
-        machine.run_until(now);
-        while let Some(event) = machine.poll_event() {
-            on_activity(Activity::Event(&event));
-            match event {
-                Event::Connect {
-                    socket_name,
-                    host,
-                    port,
-                } => {
-                    let result = connect(&host, port, options.connect_timeout);
-                    match result {
-                        Ok(stream) => {
-                            conns.insert(
-                                socket_name.clone(),
-                                Conn {
-                                    stream,
-                                    backlog: Vec::new(),
-                                    closed: false,
-                                },
-                            );
-                            machine.handle_connected(&socket_name, Ok(()));
-                        }
-                        Err(e) => machine.handle_connected(&socket_name, Err(e)),
-                    }
-                }
-                Event::Transmit { socket_name, bytes } => {
-                    if let Some(c) = conns.get_mut(&socket_name) {
-                        if write_all(&mut c.stream, &bytes).is_err() {
-                            c.closed = true;
-                            on_activity(Activity::PeerClosed {
-                                socket_name: &socket_name,
-                            });
-                            machine.handle_send_failed(&socket_name);
-                        }
-                    }
-                }
-                Event::Close { socket_name } => {
-                    if let Some(c) = conns.remove(&socket_name) {
-                        let _ = c.stream.shutdown(Shutdown::Both);
-                    }
-                }
-                Event::Message(_) | Event::Call { .. } => {}
-            }
-        }
-        match machine.state() {
-            State::Running => {}
-            State::Finished => return Ok(Outcome::Finished),
-            State::Halted => return Ok(Outcome::Halted),
-            State::Error(e) => return Err(e.clone()),
-        }
-        let mut got_any = false;
-        for (name, c) in conns.iter_mut() {
-            if !c.backlog.is_empty() {
-                let n = machine.handle_received(name, &c.backlog);
-                c.backlog.drain(..n);
-                if !c.backlog.is_empty() {
-                    continue; // the receive buffer is full: read no more from it now
-                }
-            }
-            if c.closed {
-                continue;
-            }
-            match read_some(&mut c.stream, &mut buf) {
-                None => {}
-                Some(Received::Bytes(bytes)) => {
-                    got_any = true;
-                    on_activity(Activity::Received {
-                        socket_name: name,
-                        bytes: &bytes,
-                    });
-                    let n = machine.handle_received(name, &bytes);
-                    c.backlog.extend_from_slice(&bytes[n..]);
-                }
-                Some(Received::Closed) => {
-                    got_any = true;
-                    c.closed = true;
-                    on_activity(Activity::PeerClosed { socket_name: name });
-                    machine.handle_peer_closed(name);
-                }
-            }
-        }
-        if !got_any {
-            let now = start.elapsed();
-            let mut wait = options.poll_interval;
-            if let Some(t) = machine.poll_timeout() {
-                wait = wait.min(t.saturating_sub(now));
-            }
-            if let Some(m) = options.max_time {
-                wait = wait.min(m.saturating_sub(now));
-            }
-            if !wait.is_zero() {
-                std::thread::sleep(wait);
-            }
-        }
-    }
+    Driver::new(options.clone()).run(machine, on_activity)
 }
 
 /// Connects to `host:port` as `socket_open` does (each resolved address in turn, at most
@@ -220,32 +402,26 @@ pub fn connect_stream(host: &str, port: u16, timeout: Duration) -> std::io::Resu
     Err(last)
 }
 
-fn connect(host: &str, port: u16, timeout: Duration) -> Result<TcpStream, String> {
-    connect_stream(host, port, timeout).map_err(|e| format!("{host}:{port}: {e}"))
-}
-
-/// Writes all of `bytes` to a non-blocking stream, waiting briefly while its send buffer
-/// is full.
-pub fn write_all(stream: &mut TcpStream, mut bytes: &[u8]) -> std::io::Result<()> {
-    while !bytes.is_empty() {
-        match stream.write(bytes) {
-            Ok(0) => return Err(ErrorKind::WriteZero.into()),
-            Ok(n) => bytes = &bytes[n..],
-            Err(e) if e.kind() == ErrorKind::WouldBlock => {
-                std::thread::sleep(Duration::from_micros(100))
-            }
-            Err(e) if e.kind() == ErrorKind::Interrupted => {}
-            Err(e) => return Err(e),
+/// Why a connection failed, in words: what it usually means, and the OS reason.
+///
+/// ```
+/// use std::io::{Error, ErrorKind};
+/// let e = Error::from(ErrorKind::ConnectionRefused);
+/// let why = urscript_interp::drive::describe_connect_error("10.0.0.5", 5000, &e);
+/// assert!(why.starts_with("socket_open(\"10.0.0.5\", 5000) failed: connection refused"));
+/// ```
+pub fn describe_connect_error(host: &str, port: u16, e: &std::io::Error) -> String {
+    use std::io::ErrorKind as K;
+    let hint = match e.kind() {
+        K::ConnectionRefused => {
+            "connection refused: nothing listens on that port (is the server running?)"
         }
-    }
-    Ok(())
-}
-
-fn read_some(stream: &mut TcpStream, buf: &mut [u8]) -> Option<Received> {
-    match stream.read(buf) {
-        Ok(0) => Some(Received::Closed),
-        Ok(n) => Some(Received::Bytes(buf[..n].to_vec())),
-        Err(e) if matches!(e.kind(), ErrorKind::WouldBlock | ErrorKind::Interrupted) => None,
-        Err(_) => Some(Received::Closed),
-    }
+        K::TimedOut => "timed out: no answer from that host (wrong address, firewall or cable?)",
+        K::InvalidInput => "not a valid address",
+        _ if e.to_string().contains("lookup") || e.to_string().contains("resolve") => {
+            "unknown host name"
+        }
+        _ => "cannot connect",
+    };
+    format!("socket_open(\"{host}\", {port}) failed: {hint} ({e})")
 }

@@ -1,18 +1,36 @@
-//! The two errors of the interpreter: a program that does not parse, and a program that
-//! fails while it runs.
+//! The interpreter's errors, typed: a program that does not parse or compile
+//! ([`ParseError`], with its [`ParseErrorKind`]), and a program that fails while it runs
+//! ([`RuntimeError`], with its [`RuntimeErrorKind`]). Each names the line and column.
 
 use std::fmt;
 
-/// The program text is not URScript this interpreter accepts: a syntax error, or a
-/// construct not supported, named. Displayed as `line L, column C: what`.
+/// Which stage refused the program.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[non_exhaustive]
+pub enum ParseErrorKind {
+    /// The text is not URScript: a token or construct out of place, or one this
+    /// interpreter does not support (named).
+    Syntax,
+    /// It parses, but the controller would refuse to compile it: a call with the wrong
+    /// arguments, `break` outside a loop, a function defined twice, `run` of a
+    /// function...
+    Compile,
+}
+
+/// The program text is not URScript this interpreter accepts, found before anything
+/// runs. Displayed as `line L, column C: what`.
 ///
 /// ```
-/// use urscript_interp::Program;
+/// use urscript_interp::{ParseErrorKind, Program};
 /// let e = Program::parse("x = (1 +\n").unwrap_err();
-/// assert_eq!(e.line(), 2);
+/// assert_eq!((e.line(), e.kind()), (2, ParseErrorKind::Syntax));
+/// let e = Program::parse("x = 1\n  socket_open(\"h\")\n").unwrap_err();
+/// assert_eq!((e.line(), e.column(), e.kind()), (2, 3, ParseErrorKind::Compile));
+/// assert_eq!(e.message(), "`socket_open` needs argument `port`");
 /// ```
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct ParseError {
+    kind: ParseErrorKind,
     line: u32,
     column: u32,
     message: String,
@@ -20,11 +38,21 @@ pub struct ParseError {
 
 impl ParseError {
     pub(crate) fn new(line: u32, column: u32, message: String) -> Self {
+        Self::with_kind(ParseErrorKind::Syntax, line, column, message)
+    }
+
+    pub(crate) fn with_kind(kind: ParseErrorKind, line: u32, column: u32, message: String) -> Self {
         ParseError {
+            kind,
             line,
             column,
             message,
         }
+    }
+
+    /// Syntax or compile error.
+    pub fn kind(&self) -> ParseErrorKind {
+        self.kind
     }
 
     /// 1-based line of the offending token.
@@ -55,21 +83,70 @@ impl fmt::Display for ParseError {
 
 impl std::error::Error for ParseError {}
 
-/// The program failed while running (index out of range, type error, unknown variable or
-/// function, integer division by zero, a thread that never consumes time...). Displayed as
-/// `line N: what`.
+/// What kind of failure stopped a running program.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[non_exhaustive]
+pub enum RuntimeErrorKind {
+    /// A value of the wrong type for an operator, a condition or an argument.
+    Type,
+    /// An index outside a list or pose.
+    Index,
+    /// Integer division (or remainder) by zero.
+    DivisionByZero,
+    /// A variable read before it was assigned.
+    UnknownVariable,
+    /// A function that is neither defined, built in, nor stubbed.
+    UnknownFunction,
+    /// A built-in refused an argument's value (a port out of range, `asin(2)`...).
+    Argument,
+    /// A thread ran too long in one step without consuming time.
+    TooMuchTime,
+    /// A bound of the machine: threads, call depth.
+    Limit,
+    /// A bug of the interpreter (please report it).
+    Internal,
+}
+
+/// The program failed while running. Displayed as `line N: what`; [`column`](Self::column)
+/// points at the call or the statement.
+///
+/// ```
+/// use std::time::Duration;
+/// use urscript_interp::{Config, Machine, Program, RuntimeErrorKind, State};
+/// let mut m = Machine::new(Program::parse("x = [1, 2]\ny = x[5]\n").unwrap(), Config::default());
+/// m.run_until(Duration::ZERO);
+/// let State::Error(e) = m.state() else { panic!() };
+/// assert_eq!((e.line(), e.kind()), (2, RuntimeErrorKind::Index));
+/// ```
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct RuntimeError {
+    kind: RuntimeErrorKind,
     line: u32,
+    column: u32,
     message: String,
 }
 
 impl RuntimeError {
     pub(crate) fn new(line: u32, message: impl Into<String>) -> Self {
+        let message = message.into();
         RuntimeError {
+            kind: RuntimeErrorKind::of(&message),
             line,
-            message: message.into(),
+            column: 1,
+            message,
         }
+    }
+
+    pub(crate) fn at(line: u32, column: u32, message: impl Into<String>) -> Self {
+        RuntimeError {
+            column,
+            ..Self::new(line, message)
+        }
+    }
+
+    /// What kind of failure.
+    pub fn kind(&self) -> RuntimeErrorKind {
+        self.kind
     }
 
     /// 1-based line of the statement that failed.
@@ -77,9 +154,41 @@ impl RuntimeError {
         self.line
     }
 
+    /// 1-based column of the statement or call that failed.
+    pub fn column(&self) -> u32 {
+        self.column
+    }
+
     /// What was wrong, without the line.
     pub fn message(&self) -> &str {
         &self.message
+    }
+}
+
+impl RuntimeErrorKind {
+    /// The kind of a message the machine or a built-in wrote. Messages are made in one
+    /// crate with these openings, so the kind is exact.
+    fn of(message: &str) -> Self {
+        let starts = |p: &str| message.starts_with(p);
+        if starts("type error") {
+            RuntimeErrorKind::Type
+        } else if starts("index out of range") {
+            RuntimeErrorKind::Index
+        } else if starts("division by zero") {
+            RuntimeErrorKind::DivisionByZero
+        } else if starts("unknown variable") {
+            RuntimeErrorKind::UnknownVariable
+        } else if message.contains("is not a built-in") {
+            RuntimeErrorKind::UnknownFunction
+        } else if starts("thread `") && message.contains("used too much time") {
+            RuntimeErrorKind::TooMuchTime
+        } else if starts("internal error") {
+            RuntimeErrorKind::Internal
+        } else if message.contains("threads running") || message.contains("nested too deeply") {
+            RuntimeErrorKind::Limit
+        } else {
+            RuntimeErrorKind::Argument
+        }
     }
 }
 

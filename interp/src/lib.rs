@@ -9,8 +9,12 @@
 //! - [`Machine`] runs it **sans-IO** (quinn-proto style): time and socket events are
 //!   inputs ([`Machine::run_until`], [`Machine::handle_connected`],
 //!   [`Machine::handle_received`]), and what the program does comes out as [`Event`]s
-//!   ([`Machine::poll_event`]): connections to open, bytes to send, `textmsg`/`popup`
-//!   text, and a trace of every socket call with its result. Tests run in virtual time.
+//!   ([`Machine::poll_event`]): connections to open, bytes to send, typed messages
+//!   (`textmsg`, `popup`), and a typed [`CallRecord`] of every socket call (line,
+//!   column, arguments, result, outcome, the read rule used). Tests run in virtual time.
+//! - [`builtins`] is one table: each built-in one entry (name, parameters with defaults,
+//!   what it does, the code), grouped by the manual's chapters. [`Program::parse`]
+//!   resolves every call to its entry and checks its arguments before anything runs.
 //! - [`drive::run_tcp`] runs a machine in real time against real TCP servers.
 //!
 //! See [`machine`] for the time model (steps, thread order) and [`builtins`] for the
@@ -41,18 +45,23 @@
 //! m.handle_received("camera", b"(0.4,-0.2,0.3,0,3.14,0)\n");
 //! m.run_until(Duration::from_millis(4));
 //! assert_eq!(m.state(), &State::Finished);
-//! let messages: Vec<Event> = std::iter::from_fn(|| m.poll_event())
-//!     .filter(|e| matches!(e, Event::Message(_)))
+//! let messages: Vec<String> = std::iter::from_fn(|| m.poll_event())
+//!     .filter_map(|e| match e {
+//!         Event::Message(msg) => Some(msg.text),
+//!         _ => None,
+//!     })
 //!     .collect();
-//! assert_eq!(messages, [Event::Message("x = 0.4".into())]);
+//! assert_eq!(messages, ["x = 0.4"]);
 //! ```
 #![forbid(unsafe_code)]
 #![warn(missing_docs)]
 
 pub mod builtins;
 mod compile;
+mod controller;
 pub mod drive;
 mod error;
+pub mod event;
 mod lexer;
 pub mod machine;
 mod parser;
@@ -61,8 +70,9 @@ mod sockets;
 mod value;
 
 pub use compile::Program;
-pub use error::{ParseError, RuntimeError};
-pub use machine::{Config, Event, Machine, State, Stub};
+pub use error::{ParseError, ParseErrorKind, RuntimeError, RuntimeErrorKind};
+pub use event::{CallRecord, Event, Message, MessageKind, Outcome, ReadRecord};
+pub use machine::{Config, Machine, State, Stub};
 pub use sockets::{Policy, Timeout};
 pub use value::Value;
 

@@ -29,14 +29,19 @@
 //! the machine next has something to do (`None`: only an input can wake it).
 
 use std::collections::VecDeque;
-use std::f64::consts::FRAC_PI_2;
 use std::sync::Arc;
 use std::time::Duration;
 
-use crate::compile::{Op, Program, Sym, NO_KW};
+use urscript_socket::robot::ReadCall;
+
+use crate::builtins::{Args, Out};
+use crate::compile::{CallSite, Op, Program, Sym};
+use crate::controller::{Arm, Controller};
 use crate::error::RuntimeError;
+pub use crate::event::Event;
+use crate::event::{CallRecord, Outcome, ReadRecord};
 use crate::parser::{BinOp, Scope};
-use crate::sockets::{Policy, ReadSpec, Sockets};
+use crate::sockets::{Policy, Sockets};
 use crate::value::Value;
 
 /// The most threads that may run at once (the program's own included).
@@ -72,7 +77,7 @@ pub struct Config {
     /// Statements a thread may run in one step without consuming time (default 100 000).
     pub max_statements_per_step: u32,
     /// Emit an [`Event::Call`] for every socket call (default true). Off, the machine
-    /// does not format the calls at all.
+    /// does not record the calls at all.
     pub trace_socket_calls: bool,
     /// Emit an [`Event::Call`] for every built-in call, not only socket calls.
     pub trace_all_calls: bool,
@@ -136,44 +141,6 @@ impl Config {
     }
 }
 
-/// What the machine asks of its driver, or reports.
-#[derive(Debug, Clone, PartialEq)]
-pub enum Event {
-    /// `socket_open`: connect to `host:port`, then call
-    /// [`Machine::handle_connected`] with the outcome.
-    Connect {
-        /// The socket's name in the program.
-        socket_name: String,
-        /// The address argument.
-        host: String,
-        /// The port argument.
-        port: u16,
-    },
-    /// Bytes the program sent on a socket.
-    Transmit {
-        /// The socket's name.
-        socket_name: String,
-        /// The bytes, in order.
-        bytes: Vec<u8>,
-    },
-    /// The program closed a socket (or ended with it open).
-    Close {
-        /// The socket's name.
-        socket_name: String,
-    },
-    /// `textmsg(...)` or `popup(...)` text.
-    Message(String),
-    /// A call and what it returned, as URScript text:
-    /// `socket_read_ascii_float(6, "camera") -> [6, 0.1, ...]`. Every socket call is
-    /// traced; other built-ins with [`Config::trace_all_calls`].
-    Call {
-        /// The line of the call.
-        line: u32,
-        /// The call and its result.
-        text: String,
-    },
-}
-
 /// Where the program is.
 #[derive(Debug, Clone, PartialEq)]
 pub enum State {
@@ -196,18 +163,16 @@ pub(crate) enum Wait {
     Steps { until: u64, result: Value },
     /// Resumes at the next step with this value (a read completed by received bytes).
     Resume(Value),
-    /// A socket read waiting for bytes.
+    /// A socket read waiting for bytes, with its call's record (when traced).
     Read {
         socket: String,
-        spec: ReadSpec,
-        call: String,
-        line: u32,
+        call: ReadCall,
+        record: Option<Box<CallRecord>>,
     },
     /// `socket_open` waiting for the driver.
     Connect {
         socket: String,
-        call: String,
-        line: u32,
+        record: Option<Box<CallRecord>>,
     },
     /// `join` of a running thread.
     Join(u32),
@@ -231,9 +196,11 @@ pub(crate) struct Thread {
     critical: u32,
 }
 
-/// What a built-in did.
-pub(crate) enum NativeOut {
+/// What a built-in call did to its thread.
+enum Called {
+    /// It returned this value.
     Value(Value),
+    /// The thread waits.
     Block(Wait),
 }
 
@@ -241,42 +208,6 @@ enum Flow {
     Blocked,
     Finished,
     Halt,
-}
-
-/// The virtual arm: commanded state, not dynamics (see [`crate::builtins`]).
-#[derive(Debug, Clone)]
-pub(crate) struct Arm {
-    pub q: [f64; 6],
-    pub qd: [f64; 6],
-    pub pose: [f64; 6],
-    pub tcp_speed: [f64; 6],
-    pub tcp: [f64; 6],
-    pub digital_out: [bool; 18],
-    pub tool_out: [bool; 2],
-    pub analog_out: [f64; 2],
-    pub int_regs: [i32; 48],
-    pub float_regs: [f64; 48],
-    pub bool_regs: [bool; 64],
-    pub random_state: u64,
-}
-
-impl Default for Arm {
-    fn default() -> Self {
-        Arm {
-            q: [0.0, -FRAC_PI_2, 0.0, -FRAC_PI_2, 0.0, 0.0],
-            qd: [0.0; 6],
-            pose: [0.0; 6],
-            tcp_speed: [0.0; 6],
-            tcp: [0.0; 6],
-            digital_out: [false; 18],
-            tool_out: [false; 2],
-            analog_out: [0.0; 2],
-            int_regs: [0; 48],
-            float_regs: [0.0; 48],
-            bool_regs: [false; 64],
-            random_state: 0x2545_F491_4F6C_DD1D,
-        }
-    }
 }
 
 /// A program running in virtual time. See the module docs for the time model.
@@ -288,7 +219,7 @@ impl Default for Arm {
 /// let mut m = Machine::new(prog, Config::default());
 /// m.run_until(Duration::from_millis(10));
 /// assert_eq!(m.state(), &State::Finished);
-/// assert_eq!(m.poll_event(), Some(Event::Message("done 3".into())));
+/// assert!(matches!(m.poll_event(), Some(Event::Message(msg)) if msg.text == "done 3"));
 /// ```
 #[derive(Debug)]
 pub struct Machine {
@@ -296,12 +227,11 @@ pub struct Machine {
     pub(crate) config: Config,
     globals: Vec<Option<Value>>,
     threads: Vec<Thread>,
-    /// The next step to run.
-    step: u64,
-    pub(crate) events: VecDeque<Event>,
+    /// The controller's state: the arm, the sockets, the step to run next, events.
+    ctl: Controller,
+    /// For each call site, the stub that answers it (by index in `config.stubs`).
+    site_stubs: Vec<Option<u32>>,
     state: State,
-    pub(crate) sockets: Sockets,
-    pub(crate) arm: Arm,
     /// Statements run by the current thread in this step.
     budget: u32,
     /// The thread running now.
@@ -328,16 +258,33 @@ impl Machine {
             done: false,
             critical: 0,
         };
+        // A stub wins over a built-in, not over a function the program defines.
+        let site_stubs = program
+            .sites
+            .iter()
+            .map(|site| {
+                let name = &program.names[site.name as usize];
+                config
+                    .stubs
+                    .iter()
+                    .position(|(n, _)| n == name)
+                    .map(|i| i as u32)
+            })
+            .collect();
         Machine {
-            sockets: Sockets::new(config.policy),
+            ctl: Controller {
+                step_time: config.step_time,
+                step: 0,
+                arm: Arm::default(),
+                sockets: Sockets::new(config.policy),
+                events: VecDeque::new(),
+            },
+            site_stubs,
             prog: Arc::new(program),
             config,
             globals,
             threads: vec![main],
-            step: 0,
-            events: VecDeque::new(),
             state: State::Running,
-            arm: Arm::default(),
             budget: 0,
             current: 0,
         }
@@ -374,7 +321,7 @@ impl Machine {
 
     /// The virtual time of the next step to run.
     pub fn now(&self) -> Duration {
-        self.step_time_at(self.step)
+        self.step_time_at(self.ctl.step)
     }
 
     fn step_time_at(&self, step: u64) -> Duration {
@@ -394,7 +341,7 @@ impl Machine {
 
     /// The next event, oldest first.
     pub fn poll_event(&mut self) -> Option<Event> {
-        self.events.pop_front()
+        self.ctl.events.pop_front()
     }
 
     /// The value of a global variable, if set.
@@ -412,12 +359,12 @@ impl Machine {
 
     /// The arm's commanded joint positions.
     pub fn joint_positions(&self) -> [f64; 6] {
-        self.arm.q
+        self.ctl.arm.q
     }
 
     /// The arm's commanded tool pose.
     pub fn tcp_pose(&self) -> [f64; 6] {
-        self.arm.pose
+        self.ctl.arm.pose
     }
 
     /// When the machine next has something to do: the time of the next step if a thread
@@ -434,23 +381,23 @@ impl Machine {
         // A waiting read's deadline is the robot model's, not the interpreter's: its
         // step is the first whose time is at or after it.
         let st = self.config.step_time.as_nanos().max(1);
-        let mut best: Option<u64> = self.sockets.poll_timeout().map(|d| {
+        let mut best: Option<u64> = self.ctl.sockets.poll_timeout().map(|d| {
             u64::try_from(d.as_nanos().div_ceil(st))
                 .unwrap_or(u64::MAX)
-                .max(self.step)
+                .max(self.ctl.step)
         });
         for t in &self.threads {
             if t.done {
                 continue;
             }
             let at = match &t.wait {
-                Wait::None | Wait::Resume(_) => Some(self.step),
-                Wait::Steps { until, .. } => Some((*until).max(self.step)),
+                Wait::None | Wait::Resume(_) => Some(self.ctl.step),
+                Wait::Steps { until, .. } => Some((*until).max(self.ctl.step)),
                 Wait::Read { .. } => None,
                 Wait::Connect { .. } => None,
                 Wait::Join(id) => match self.threads.get(*id as usize) {
                     Some(j) if !j.done => None,
-                    _ => Some(self.step),
+                    _ => Some(self.ctl.step),
                 },
             };
             if let Some(at) = at {
@@ -467,14 +414,14 @@ impl Machine {
         let target = u64::try_from(now.as_nanos() / st)
             .unwrap_or(u64::MAX - 1)
             .saturating_add(1);
-        while self.state == State::Running && self.step < target {
+        while self.state == State::Running && self.ctl.step < target {
             match self.next_wake_step() {
                 Some(s) if s < target => {
-                    self.step = self.step.max(s);
+                    self.ctl.step = self.ctl.step.max(s);
                     self.run_step();
-                    self.step += 1;
+                    self.ctl.step += 1;
                 }
-                _ => self.step = target,
+                _ => self.ctl.step = target,
             }
         }
     }
@@ -490,73 +437,79 @@ impl Machine {
     pub fn handle_connected(&mut self, socket_name: &str, result: Result<(), String>) {
         let ok = result.is_ok();
         if ok {
-            self.sockets.open(socket_name);
+            self.ctl.sockets.open(socket_name);
         }
         for t in &mut self.threads {
-            if let Wait::Connect { socket, call, line } = &t.wait {
-                if socket == socket_name {
-                    if self.config.trace_socket_calls {
-                        let text = match &result {
-                            Ok(()) => format!("{call} -> True"),
-                            Err(e) => format!("{call} -> False ({e})"),
-                        };
-                        self.events.push_back(Event::Call { line: *line, text });
-                    }
-                    t.wait = Wait::Resume(Value::Bool(ok));
-                }
+            let Wait::Connect { socket, record } = &mut t.wait else {
+                continue;
+            };
+            if socket != socket_name {
+                continue;
             }
+            if let Some(mut r) = record.take() {
+                r.result = Value::Bool(ok);
+                if let Err(why) = &result {
+                    r.outcome = Outcome::Failed(why.clone());
+                }
+                self.ctl.events.push_back(Event::Call(r));
+            }
+            t.wait = Wait::Resume(Value::Bool(ok));
         }
     }
 
     /// Bytes the server sent on `socket_name`. Returns how many the socket's receive
     /// buffer accepted (the rest must be offered again later, as a full TCP window would).
     pub fn handle_received(&mut self, socket_name: &str, bytes: &[u8]) -> usize {
-        let n = self.sockets.receive(socket_name, bytes);
+        let n = self.ctl.sockets.receive(socket_name, bytes);
         self.poll_reads(socket_name);
         n
     }
 
     /// The server closed `socket_name`: reads waiting on it end with their sentinels.
     pub fn handle_peer_closed(&mut self, socket_name: &str) {
-        self.sockets.peer_closed(socket_name);
+        self.ctl.sockets.peer_closed(socket_name);
         self.poll_reads(socket_name);
     }
 
     /// Writing to `socket_name` failed (the peer is gone): later `socket_send_*` calls
     /// on it return `False`, and reads waiting on it end with their sentinels.
     pub fn handle_send_failed(&mut self, socket_name: &str) {
-        self.sockets.send_failed(socket_name);
+        self.ctl.sockets.send_failed(socket_name);
         self.handle_peer_closed(socket_name);
     }
 
     /// Completes a read waiting on `socket_name` if its bytes are there.
     fn poll_reads(&mut self, socket_name: &str) {
-        for i in 0..self.threads.len() {
+        for t in &mut self.threads {
             let Wait::Read {
-                socket, call, line, ..
-            } = &self.threads[i].wait
+                socket,
+                call,
+                record,
+            } = &mut t.wait
             else {
                 continue;
             };
-            if socket != socket_name || self.threads[i].done {
+            if socket != socket_name || t.done {
                 continue;
             }
-            let (call, line) = (call.clone(), *line);
-            if let Some(v) = self.sockets.poll(socket_name) {
-                if self.config.trace_socket_calls {
-                    self.events.push_back(Event::Call {
-                        line,
-                        text: format!("{call} -> {}", v.to_source()),
+            if let Some(r) = self.ctl.sockets.poll(socket_name) {
+                let v = crate::sockets::to_value(&r);
+                if let Some(mut rec) = record.take() {
+                    rec.result = v.clone();
+                    rec.read = Some(ReadRecord {
+                        call: call.clone(),
+                        result: r,
                     });
+                    self.ctl.events.push_back(Event::Call(rec));
                 }
-                self.threads[i].wait = Wait::Resume(v);
+                t.wait = Wait::Resume(v);
             }
         }
     }
 
     /// Names of the sockets open now.
     pub fn open_sockets(&self) -> Vec<String> {
-        self.sockets.open_names()
+        self.ctl.sockets.open_names()
     }
 
     fn stop(&mut self, state: State) {
@@ -564,28 +517,15 @@ impl Machine {
         for t in &mut self.threads {
             t.done = true;
         }
-        for name in self.sockets.open_names() {
-            self.flush(&name);
-            self.sockets.close(&name);
-            self.events.push_back(Event::Close { socket_name: name });
-        }
-    }
-
-    /// Queues the socket's outgoing bytes as an event.
-    pub(crate) fn flush(&mut self, name: &str) {
-        let bytes = self.sockets.take_outgoing(name);
-        if !bytes.is_empty() {
-            self.events.push_back(Event::Transmit {
-                socket_name: name.to_string(),
-                bytes,
-            });
+        for name in self.ctl.sockets.open_names() {
+            self.ctl.close(&name);
         }
     }
 
     /// A wait that ends after `d` of program time (at least one step).
-    pub(crate) fn wait_for(&self, d: Duration, result: Value) -> Wait {
+    fn wait_for(&self, d: Duration, result: Value) -> Wait {
         Wait::Steps {
-            until: self.step.saturating_add(self.steps_for(d).max(1)),
+            until: self.ctl.step.saturating_add(self.steps_for(d).max(1)),
             result,
         }
     }
@@ -608,22 +548,22 @@ impl Machine {
                     self.threads[i].stack.push(v);
                     (true, Wait::None)
                 }
-                Wait::Steps { until, result } if until <= self.step => {
+                Wait::Steps { until, result } if until <= self.ctl.step => {
                     self.threads[i].stack.push(result);
                     (true, Wait::None)
                 }
                 Wait::Read {
                     socket,
-                    spec,
                     call,
-                    line,
-                } => match self.sockets.handle_timeout(&socket, &spec, self.now()) {
-                    Some(v) => {
-                        if self.config.trace_socket_calls {
-                            self.events.push_back(Event::Call {
-                                line,
-                                text: format!("{call} -> {} (timeout)", v.to_source()),
-                            });
+                    record,
+                } => match self.ctl.sockets.handle_timeout(&socket, &call, self.now()) {
+                    Some(r) => {
+                        let v = crate::sockets::to_value(&r);
+                        if let Some(mut rec) = record {
+                            rec.result = v.clone();
+                            rec.outcome = Outcome::TimedOut;
+                            rec.read = Some(ReadRecord { call, result: r });
+                            self.ctl.events.push_back(Event::Call(rec));
                         }
                         self.threads[i].stack.push(v);
                         (true, Wait::None)
@@ -632,9 +572,8 @@ impl Machine {
                         false,
                         Wait::Read {
                             socket,
-                            spec,
                             call,
-                            line,
+                            record,
                         },
                     ),
                 },
@@ -680,18 +619,19 @@ impl Machine {
 
     fn exec(&mut self, th: &mut Thread, prog: &Program) -> Result<Flow, RuntimeError> {
         let mut line = 0;
+        let mut col;
         loop {
             let Some(frame) = th.frames.last_mut() else {
                 return Ok(Flow::Finished);
             };
             let func = &prog.funcs[frame.func as usize];
             let pc = frame.pc as usize;
-            let (Some(&op), Some(&l)) = (func.ops.get(pc), func.lines.get(pc)) else {
+            let (Some(&op), Some(&at)) = (func.ops.get(pc), func.lines.get(pc)) else {
                 return Err(RuntimeError::new(line, "internal error: code ended"));
             };
-            line = l;
+            (line, col) = (at.line, at.col);
             frame.pc += 1;
-            let fail = |m: String| RuntimeError::new(line, m);
+            let fail = |m: String| RuntimeError::at(line, col, m);
             match op {
                 Op::Stmt => {
                     self.budget += 1;
@@ -836,12 +776,13 @@ impl Machine {
                     let v = th.stack.last().cloned().unwrap_or(Value::None);
                     as_bool(&v, "and/or").map_err(fail)?;
                 }
-                Op::Call(fid, argc, kw) => {
+                Op::Call(fid, site) => {
+                    let site = &prog.sites[site as usize];
                     let args = th
                         .stack
-                        .split_off(th.stack.len().saturating_sub(argc as usize));
+                        .split_off(th.stack.len().saturating_sub(usize::from(site.argc)));
                     let callee = &prog.funcs[fid as usize];
-                    let locals = bind_user(prog, callee, args, kw).map_err(fail)?;
+                    let locals = bind_user(callee, site, args);
                     if th.frames.len() >= 256 {
                         return Err(fail(format!(
                             "calls nested too deeply (256) calling `{}`",
@@ -856,36 +797,16 @@ impl Machine {
                         base,
                     });
                 }
-                Op::Native(s, argc, kw) => {
+                Op::Native(site) => {
+                    let id = site as usize;
+                    let site = &prog.sites[id];
                     let args = th
                         .stack
-                        .split_off(th.stack.len().saturating_sub(argc as usize));
-                    let name = prog.names[s as usize].as_str();
-                    let kwargs: Vec<(&str, Value)> = if kw == NO_KW {
-                        Vec::new()
-                    } else {
-                        let names = &prog.kwnames[kw as usize];
-                        let split = args.len().saturating_sub(names.len());
-                        let mut args = args;
-                        let kwv = args.split_off(split);
-                        let out: Vec<(&str, Value)> = names
-                            .iter()
-                            .map(|n| prog.names[*n as usize].as_str())
-                            .zip(kwv)
-                            .collect();
-                        let r = self.call_native(name, args, out, line).map_err(fail)?;
-                        match r {
-                            NativeOut::Value(v) => th.stack.push(v),
-                            NativeOut::Block(w) => {
-                                th.wait = w;
-                                return Ok(Flow::Blocked);
-                            }
-                        }
-                        continue;
-                    };
-                    match self.call_native(name, args, kwargs, line).map_err(fail)? {
-                        NativeOut::Value(v) => th.stack.push(v),
-                        NativeOut::Block(w) => {
+                        .split_off(th.stack.len().saturating_sub(usize::from(site.argc)));
+                    let stub = self.site_stubs.get(id).copied().flatten();
+                    match self.call_native(prog, site, stub, args).map_err(fail)? {
+                        Called::Value(v) => th.stack.push(v),
+                        Called::Block(w) => {
                             th.wait = w;
                             return Ok(Flow::Blocked);
                         }
@@ -961,7 +882,7 @@ impl Machine {
                             if let Wait::Read { socket, .. } =
                                 std::mem::replace(&mut t.wait, Wait::None)
                             {
-                                self.sockets.give_up(&socket);
+                                self.ctl.sockets.give_up(&socket);
                             }
                         }
                     }
@@ -1215,57 +1136,131 @@ pub(crate) fn binary(op: BinOp, l: Value, r: Value) -> Result<Value, String> {
     }
 }
 
-/// Binds a user function's arguments: positional first, then named, then defaults.
+/// Binds a user function's arguments to its parameters, as the compiler matched them
+/// (every parameter without a default is given: the compiler checked).
 fn bind_user(
-    prog: &Program,
     callee: &crate::compile::Func,
-    mut args: Vec<Value>,
-    kw: u32,
-) -> Result<Vec<(Sym, Option<Value>)>, String> {
-    let names: &[Sym] = if kw == NO_KW {
-        &[]
-    } else {
-        &prog.kwnames[kw as usize]
-    };
-    let kwv = args.split_off(args.len().saturating_sub(names.len()));
-    if args.len() > callee.params.len() {
-        return Err(format!(
-            "`{}` takes {} arguments, {} given",
-            callee.name,
-            callee.params.len(),
-            args.len()
-        ));
+    site: &CallSite,
+    args: Vec<Value>,
+) -> Vec<(Sym, Option<Value>)> {
+    let mut out: Vec<(Sym, Option<Value>)> = callee
+        .params
+        .iter()
+        .map(|(p, default)| (*p, default.clone()))
+        .collect();
+    for (slot, v) in site.slots.iter().zip(args) {
+        if let Some(o) = out.get_mut(usize::from(*slot)) {
+            o.1 = Some(v);
+        }
     }
-    let mut slots: Vec<Option<Value>> = vec![None; callee.params.len()];
-    for (slot, v) in slots.iter_mut().zip(args) {
-        *slot = Some(v);
-    }
-    for (n, v) in names.iter().zip(kwv) {
-        let Some(k) = callee.params.iter().position(|(p, _)| p == n) else {
+    out
+}
+
+impl Machine {
+    /// Calls a built-in (or the stub that replaces it) from call site `site`.
+    fn call_native(
+        &mut self,
+        prog: &Program,
+        site: &CallSite,
+        stub: Option<u32>,
+        args: Vec<Value>,
+    ) -> Result<Called, String> {
+        let name = &prog.names[site.name as usize];
+        let traced = match site.builtin {
+            _ if stub.is_some() => true,
+            Some(b) if b.domain == crate::builtins::Domain::Sockets => {
+                self.config.trace_socket_calls || self.config.trace_all_calls
+            }
+            _ => self.config.trace_all_calls,
+        };
+        let mut record = traced.then(|| {
+            let positional = usize::from(site.positional).min(args.len());
+            Box::new(CallRecord {
+                line: site.at.line,
+                column: site.at.col,
+                name: name.clone(),
+                builtin: site.builtin,
+                args: args[..positional].to_vec(),
+                kwargs: site
+                    .kwnames
+                    .iter()
+                    .map(|k| prog.names[*k as usize].clone())
+                    .zip(args[positional..].iter().cloned())
+                    .collect(),
+                assigned_to: site.assigned.map(|s| prog.names[s as usize].clone()),
+                result: Value::None,
+                outcome: Outcome::Returned,
+                socket: None,
+                read: None,
+            })
+        });
+        if let Some(i) = stub {
+            let v = match self.config.stubs.get(i as usize).map(|(_, s)| s) {
+                Some(Stub::Return(v)) => v.clone(),
+                _ => Value::None,
+            };
+            if let Some(mut r) = record {
+                r.result = v.clone();
+                r.outcome = Outcome::Stubbed;
+                self.ctl.events.push_back(Event::Call(r));
+            }
+            return Ok(Called::Value(v));
+        }
+        let Some(builtin) = site.builtin else {
             return Err(format!(
-                "`{}` has no parameter `{}`",
-                callee.name, prog.names[*n as usize]
+                "`{name}` is not a built-in this interpreter supports (stub it to run past it)"
             ));
         };
-        if slots[k].is_some() {
-            return Err(format!(
-                "argument `{}` of `{}` given twice",
-                prog.names[*n as usize], callee.name
-            ));
-        }
-        slots[k] = Some(v);
-    }
-    let mut out = Vec::with_capacity(slots.len());
-    for ((p, default), v) in callee.params.iter().zip(slots) {
-        match v.or_else(|| default.clone()) {
-            Some(v) => out.push((*p, Some(v))),
-            None => {
-                return Err(format!(
-                    "`{}` needs argument `{}`",
-                    callee.name, prog.names[*p as usize]
-                ))
+        let mut v: Vec<Value> = builtin
+            .params
+            .iter()
+            .map(|p| p.default.value().unwrap_or(Value::None))
+            .collect();
+        for (slot, a) in site.slots.iter().zip(args) {
+            if let Some(x) = v.get_mut(usize::from(*slot)) {
+                *x = a;
             }
         }
+        let mut a = Args {
+            name: builtin.name,
+            params: builtin.params,
+            v,
+            positional: usize::from(site.positional),
+            line: site.at.line,
+            read: None,
+            failure: None,
+        };
+        if let Some(r) = record.as_mut() {
+            if let Some(k) = builtin.param("socket_name") {
+                r.socket = a.text(k).ok();
+            }
+        }
+        let out = (builtin.run)(&mut self.ctl, &mut a)?;
+        if let Some(r) = record.as_mut() {
+            r.read = a.read.take();
+            if let Some(why) = a.failure.take() {
+                r.outcome = Outcome::Failed(why);
+            }
+        }
+        let (value, wait) = match out {
+            Out::Value(v) => (v, None),
+            Out::Wait(d, v) => (v, Some(d)),
+            Out::Read { socket, call } => {
+                return Ok(Called::Block(Wait::Read {
+                    socket,
+                    call,
+                    record,
+                }))
+            }
+            Out::Connect { socket } => return Ok(Called::Block(Wait::Connect { socket, record })),
+        };
+        if let Some(mut r) = record {
+            r.result = value.clone();
+            self.ctl.events.push_back(Event::Call(r));
+        }
+        Ok(match wait {
+            Some(d) => Called::Block(self.wait_for(d, value)),
+            None => Called::Value(value),
+        })
     }
-    Ok(out)
 }

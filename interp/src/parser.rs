@@ -44,11 +44,13 @@ pub(crate) enum Expr {
         name: String,
         args: Vec<Expr>,
         kwargs: Vec<(String, Expr)>,
+        /// Line and column of the name.
+        at: (u32, u32),
     },
     Unary(UnOp, Box<Expr>),
     Binary(BinOp, Box<Expr>, Box<Expr>),
-    /// `run name()`.
-    Run(String),
+    /// `run name()`, with the line and column of the name.
+    Run(String, (u32, u32)),
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -96,6 +98,7 @@ pub(crate) enum StmtKind {
 pub(crate) struct Stmt {
     pub kind: StmtKind,
     pub line: u32,
+    pub col: u32,
 }
 
 /// Words that cannot be variable names.
@@ -275,9 +278,9 @@ impl Parser {
     }
 
     fn statement(&mut self) -> Result<Stmt, ParseError> {
-        let line = self.peek().line;
+        let (line, col) = (self.peek().line, self.peek().col);
         let kind = self.statement_kind()?;
-        Ok(Stmt { kind, line })
+        Ok(Stmt { kind, line, col })
     }
 
     fn statement_kind(&mut self) -> Result<StmtKind, ParseError> {
@@ -412,7 +415,7 @@ impl Parser {
                 if self.peek().kind == Tok::Assign {
                     return Err(self.err_here("cannot assign to this expression"));
                 }
-                if !matches!(e, Expr::Call { .. } | Expr::Run(_)) {
+                if !matches!(e, Expr::Call { .. } | Expr::Run(..)) {
                     return Err(self.not_a_statement(e));
                 }
                 self.end_of_statement()?;
@@ -689,10 +692,11 @@ impl Parser {
                     }
                     "run" => {
                         self.bump();
+                        let at = (self.peek().line, self.peek().col);
                         let name = self.name("a thread name after `run`")?;
                         self.expect(&Tok::LParen, "`(` after the thread name")?;
                         self.expect(&Tok::RParen, "`)`: a thread takes no arguments")?;
-                        return Ok(Expr::Run(name));
+                        return Ok(Expr::Run(name, at));
                     }
                     _ => {}
                 }
@@ -731,7 +735,12 @@ impl Parser {
                         self.expect(&Tok::Comma, "`,` or `)` in the argument list")?;
                     }
                 }
-                Ok(Expr::Call { name, args, kwargs })
+                Ok(Expr::Call {
+                    name,
+                    args,
+                    kwargs,
+                    at: (t.line, t.col),
+                })
             }
             _ => Err(self.expected("an expression")),
         }

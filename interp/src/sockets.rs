@@ -9,48 +9,8 @@ use urscript_socket::robot::{ReadCall, ReadResult, Robot};
 
 use crate::value::Value;
 
-/// A read function and its arguments, in the interpreter's terms.
-#[derive(Debug, Clone)]
-pub(crate) enum ReadSpec {
-    AsciiFloat(usize),
-    BinaryInteger(usize),
-    ByteList(usize),
-    Line,
-    String {
-        prefix: Vec<u8>,
-        suffix: Vec<u8>,
-        interpret_escape: bool,
-    },
-    GetVar(String),
-}
-
-impl ReadSpec {
-    fn call(&self) -> ReadCall {
-        match self {
-            ReadSpec::AsciiFloat(n) => ReadCall::AsciiFloat { number: *n },
-            ReadSpec::BinaryInteger(n) => ReadCall::BinaryInteger { number: *n },
-            ReadSpec::ByteList(n) => ReadCall::ByteList { number: *n },
-            ReadSpec::Line => ReadCall::Line,
-            ReadSpec::String {
-                prefix,
-                suffix,
-                interpret_escape,
-            } => ReadCall::String {
-                prefix: prefix.clone(),
-                suffix: suffix.clone(),
-                interpret_escape: *interpret_escape,
-            },
-            ReadSpec::GetVar(name) => ReadCall::GetVar { name: name.clone() },
-        }
-    }
-
-    /// What the read returns on timeout, failure, or on a socket that is not open.
-    pub fn sentinel(&self) -> Value {
-        convert(self.call().sentinel())
-    }
-}
-
-fn convert(r: ReadResult) -> Value {
+/// A read's result as the URScript value the program gets.
+pub(crate) fn to_value(r: &ReadResult) -> Value {
     match r {
         ReadResult::Floats(t) => {
             let mut v = Vec::with_capacity(t.values().len() + 1);
@@ -64,8 +24,8 @@ fn convert(r: ReadResult) -> Value {
             v.extend(l.values().iter().map(|&x| Value::Int(x)));
             Value::List(v)
         }
-        ReadResult::Text(t) => Value::Str(t),
-        ReadResult::Int(i) => Value::Int(i),
+        ReadResult::Text(t) => Value::Str(t.clone()),
+        ReadResult::Int(i) => Value::Int(*i),
     }
 }
 
@@ -126,6 +86,11 @@ impl Sockets {
         self.with(name, |s| s.send_int(v)).unwrap_or(false)
     }
 
+    /// A send on `name` would fail because the connection is broken (a write failed).
+    pub fn is_broken(&mut self, name: &str) -> bool {
+        self.with(name, |s| s.is_send_broken()).unwrap_or(false)
+    }
+
     /// The transport could not write: later sends on `name` return false.
     pub fn send_failed(&mut self, name: &str) {
         self.with(name, |s| s.send_failed());
@@ -145,31 +110,30 @@ impl Sockets {
     }
 
     /// Starts a read at program time `now` that may wait `timeout` seconds (the model
-    /// makes `socket_get_var` wait 2 s whatever is asked): `Ok(Some(v))` if it completes
-    /// from the buffered bytes at once, `Ok(None)` if it must wait; an argument the robot
-    /// refuses is an error message.
+    /// makes `socket_get_var` wait 2 s whatever is asked): `Ok(Some(r))` if it completes
+    /// from the buffered bytes at once (or the socket is not open: the sentinel),
+    /// `Ok(None)` if it must wait; an argument the robot refuses is an error message.
     pub fn start_read(
         &mut self,
         name: &str,
-        spec: &ReadSpec,
+        call: &ReadCall,
         timeout_secs: f64,
         now: Duration,
-    ) -> Result<Option<Value>, String> {
-        let call = spec.call();
+    ) -> Result<Option<ReadResult>, String> {
         let timeout = Timeout::from_secs_f64(timeout_secs);
         match self.with(name, |s| {
-            s.start_read(call, timeout, now)?;
-            Ok::<_, urscript_socket::robot::RobotError>(s.poll_read().map(convert))
+            s.start_read(call.clone(), timeout, now)?;
+            Ok::<_, urscript_socket::robot::RobotError>(s.poll_read())
         }) {
-            None => Ok(Some(spec.sentinel())),
-            Some(Ok(v)) => Ok(v),
+            None => Ok(Some(call.sentinel())),
+            Some(Ok(r)) => Ok(r),
             Some(Err(e)) => Err(e.to_string()),
         }
     }
 
     /// The pending read's result, if the bytes now buffered complete it.
-    pub fn poll(&mut self, name: &str) -> Option<Value> {
-        self.with(name, |s| s.poll_read().map(convert)).flatten()
+    pub fn poll(&mut self, name: &str) -> Option<ReadResult> {
+        self.with(name, |s| s.poll_read()).flatten()
     }
 
     /// The earliest deadline of any pending read (the model's).
@@ -180,9 +144,14 @@ impl Sockets {
     /// Time `now` came: the pending read's sentinel (or its policy's partial result) if
     /// its deadline has passed, `None` if it still waits. A socket that is no longer open
     /// gives the sentinel.
-    pub fn handle_timeout(&mut self, name: &str, spec: &ReadSpec, now: Duration) -> Option<Value> {
-        match self.with(name, |s| s.handle_timeout(now).map(convert)) {
-            None => Some(spec.sentinel()),
+    pub fn handle_timeout(
+        &mut self,
+        name: &str,
+        call: &ReadCall,
+        now: Duration,
+    ) -> Option<ReadResult> {
+        match self.with(name, |s| s.handle_timeout(now)) {
+            None => Some(call.sentinel()),
             Some(v) => v,
         }
     }

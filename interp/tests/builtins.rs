@@ -3,7 +3,7 @@ mod common;
 use std::time::Duration;
 
 use common::{int32s, messages, runtime_error, Harness, Input};
-use urscript_interp::{Config, Event, Machine, Program, State, Stub, Value};
+use urscript_interp::{Config, Event, Machine, MessageKind, Outcome, Program, State, Stub, Value};
 
 fn one(expr: &str) -> String {
     messages(&format!("textmsg({expr})\n"))[0].clone()
@@ -155,10 +155,13 @@ fn socket_argument_errors() {
         runtime_error("socket_open(\"h\", 70000)\n"),
         "line 1: `socket_open`: port 70000 out of range"
     );
+    // Argument names and counts are checked when the program compiles, before it runs.
+    let e = Program::parse("x = 1\nif x:\n  socket_read_line(\"s\", bogus=1)\nend\n").unwrap_err();
     assert_eq!(
-        runtime_error("socket_read_line(\"s\", bogus=1)\n"),
-        "line 1: `socket_read_line` has no parameter `bogus`"
+        e.to_string(),
+        "line 3, column 3: `socket_read_line` has no parameter `bogus` (its parameters: socket_name, timeout)"
     );
+    assert_eq!(e.kind(), urscript_interp::ParseErrorKind::Compile);
 }
 
 #[test]
@@ -305,6 +308,25 @@ fn textmsg_and_popup() {
         messages("textmsg(\"a\")\ntextmsg(\"b\", 2)\npopup(\"hello\", \"Title\", warning=True)\nvarmsg(\"x\", [1, 2])\n"),
         ["a", "b2", "popup \"Title\": hello", "x = [1, 2]"]
     );
+    // Each message says which function showed it, a popup with its title and flags.
+    let mut m = Machine::new(
+        Program::parse("popup(\"hello\", \"Title\", warning=True)\n").unwrap(),
+        Config::default(),
+    );
+    m.run_until(Duration::ZERO);
+    let Some(Event::Message(msg)) = m.poll_event() else {
+        panic!("no message")
+    };
+    assert_eq!(msg.line, 1);
+    assert_eq!(
+        msg.kind,
+        MessageKind::Popup {
+            title: "Title".into(),
+            warning: true,
+            error: false,
+            blocking: false
+        }
+    );
 }
 
 #[test]
@@ -322,11 +344,20 @@ fn stubs_replace_unknown_functions() {
     m.run_until(Duration::ZERO);
     assert_eq!(m.state(), &State::Finished);
     let events: Vec<Event> = std::iter::from_fn(|| m.poll_event()).collect();
-    assert!(events.contains(&Event::Message("3".into())));
-    assert!(events.contains(&Event::Call {
-        line: 2,
-        text: "rq_current_pos() -> 3 (stub)".into()
-    }));
+    assert!(events
+        .iter()
+        .any(|e| matches!(e, Event::Message(m) if m.text == "3")));
+    let stubbed = events
+        .iter()
+        .find_map(|e| match e {
+            Event::Call(c) if c.name == "rq_current_pos" => Some(c),
+            _ => None,
+        })
+        .expect("the stub's call is recorded");
+    assert_eq!(stubbed.to_string(), "rq_current_pos() -> 3 (stub)");
+    assert_eq!((stubbed.line, stubbed.column), (2, 5));
+    assert_eq!(stubbed.outcome, Outcome::Stubbed);
+    assert_eq!(stubbed.assigned_to.as_deref(), Some("x"));
     assert_eq!(m.joint_positions()[0], 0.0);
 }
 

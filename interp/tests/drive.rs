@@ -60,7 +60,7 @@ fn external_control_like_program_against_a_tcp_reverse_server() {
     };
     let mut received = 0;
     let outcome = run_tcp(&mut machine, &options, |a| match a {
-        Activity::Event(Event::Message(m)) => messages.push(m.clone()),
+        Activity::Event(Event::Message(m)) => messages.push(m.text.clone()),
         Activity::Received {
             socket_name: "reverse_socket",
             bytes,
@@ -127,7 +127,7 @@ fn runtime_error_and_refused_connection() {
         &Options::default(),
         |a| {
             if let Activity::Event(Event::Message(m)) = a {
-                msgs.push(m.clone());
+                msgs.push(m.text.clone());
             }
         },
     )

@@ -1,7 +1,7 @@
 //! The language, construct by construct.
 mod common;
 use common::{messages, runtime_error};
-use urscript_interp::Program;
+use urscript_interp::{Program, State};
 
 fn msgs(src: &str) -> Vec<String> {
     messages(src)
@@ -218,7 +218,7 @@ fn parse_errors_name_line_column_and_construct() {
     );
     assert_eq!(
         parse_err("x = run nothing()\n"),
-        "line 1, column 1: `run nothing()`: no thread named `nothing`"
+        "line 1, column 9: `run nothing()`: no thread named `nothing`"
     );
     assert_eq!(
         parse_err("def f(a=1, b):\nend\n"),
@@ -251,11 +251,75 @@ fn runtime_errors_say_the_line() {
         "line 2: type error: an index must be an int, got float 1.5"
     );
     assert_eq!(runtime_error("rq_activate()\n"), "line 1: `rq_activate` is not a built-in this interpreter supports (stub it to run past it)");
-    assert_eq!(
-        runtime_error("def f(a):\n  return a\nend\nf()\n"),
-        "line 4: `f` needs argument `a`"
-    );
     assert!(runtime_error("while True:\n  x = 1\nend\n").starts_with("line 1: thread `<program>` used too much time: 100000 statements in one step without consuming time"));
+}
+
+#[test]
+fn calls_are_checked_when_the_program_compiles_with_line_and_column() {
+    use urscript_interp::ParseErrorKind;
+    let e = Program::parse("textmsg(\"never shown\")\ndef f(a):\n  return a\nend\nx = 1 + f()\n")
+        .unwrap_err();
+    assert_eq!(e.to_string(), "line 5, column 9: `f` needs argument `a`");
+    assert_eq!(e.kind(), ParseErrorKind::Compile);
+    for (src, want) in [
+        (
+            "  sleep()\n",
+            "line 1, column 3: `sleep` needs argument `t`",
+        ),
+        (
+            "sync(1)\n",
+            "line 1, column 1: `sync` takes exactly 0 arguments, 1 given",
+        ),
+        (
+            "x = [textmsg(1, 2, 3)]\n",
+            "line 1, column 6: `textmsg` takes at most 2 arguments, 3 given",
+        ),
+        (
+            "def g(a, b=1):\nend\ng(1, a=2)\n",
+            "line 3, column 1: argument `a` of `g` given twice",
+        ),
+        (
+            "movej([0,0,0,0,0,0], speed=1)\n",
+            "line 1, column 1: `movej` has no parameter `speed` (its parameters: q, a, v, t, r)",
+        ),
+        (
+            "x = 1\nwhile x:\n  continue\nend\nif x:\n    break\nend\n",
+            "line 6, column 5: `break` outside a `while` loop",
+        ),
+    ] {
+        let e = Program::parse(src).unwrap_err();
+        assert_eq!(e.to_string(), want, "{src}");
+        assert_eq!(e.kind(), ParseErrorKind::Compile, "{src}");
+    }
+    // A syntax error is its own kind.
+    assert_eq!(
+        Program::parse("x = (\n").unwrap_err().kind(),
+        ParseErrorKind::Syntax
+    );
+}
+
+#[test]
+fn runtime_errors_are_typed_with_line_and_column() {
+    use urscript_interp::RuntimeErrorKind as K;
+    for (src, kind, line, col) in [
+        ("l = [1]\nx = l[1]\n", K::Index, 2, 1),
+        ("x = 1 + \"a\"\n", K::Type, 1, 1),
+        ("x = 1 % 0\n", K::DivisionByZero, 1, 1),
+        ("x = y\n", K::UnknownVariable, 1, 1),
+        ("x = 1\nif x:\n  y = asin(2)\nend\n", K::Argument, 3, 7),
+        ("x = 1\n  rq_activate()\n", K::UnknownFunction, 2, 3),
+        ("while True:\nend\n", K::TooMuchTime, 1, 1),
+    ] {
+        let h = common::run(src);
+        let State::Error(e) = h.m.state() else {
+            panic!("{src}: no error")
+        };
+        assert_eq!(
+            (e.kind(), e.line(), e.column()),
+            (kind, line, col),
+            "{src}: {e}"
+        );
+    }
 }
 
 #[test]

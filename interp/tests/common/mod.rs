@@ -4,7 +4,7 @@
 use std::collections::HashMap;
 use std::time::Duration;
 
-use urscript_interp::{Config, Event, Machine, Program, State};
+use urscript_interp::{Config, Event, Machine, MessageKind, Program, State};
 
 /// What the fake server sees.
 pub enum Input<'a> {
@@ -94,11 +94,17 @@ impl Harness {
                         Vec::new()
                     }
                     Event::Message(m) => {
-                        self.messages.push(m);
+                        // Popups as `popup "Title": text`, the log lines as their text.
+                        self.messages.push(match m.kind {
+                            MessageKind::Popup { title, .. } => {
+                                format!("popup \"{title}\": {}", m.text)
+                            }
+                            _ => m.text,
+                        });
                         Vec::new()
                     }
-                    Event::Call { line, text } => {
-                        self.calls.push(format!("{line}: {text}"));
+                    Event::Call(c) => {
+                        self.calls.push(format!("{}: {c}", c.line));
                         Vec::new()
                     }
                 };

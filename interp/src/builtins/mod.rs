@@ -1,0 +1,470 @@
+//! The built-in functions: **one table**, one entry per function (name, parameters with
+//! their defaults, what it does, the code), grouped in modules by domain as UR's script
+//! manual groups them. The compiler resolves a call to its entry once and checks its
+//! arguments (count, names) with line and column before anything runs; the machine then
+//! calls the entry's code with the arguments bound, defaults filled.
+//!
+//! Adding a built-in is one entry in its domain's `TABLE` (and its function beside it).
+//!
+//! | module | what |
+//! | --- | --- |
+//! | [`sockets`] | every `socket_*` function of the e-Series 5.x manual |
+//! | [`motion`] | moves, servo/speed control, the arm's state, settings of the arm |
+//! | [`io`] | digital/analog I/O, tool I/O, the RTDE registers |
+//! | [`math`] | numbers, lists of numbers, bits, `random` |
+//! | [`strings`] | strings, `to_str`/`to_num`, list length |
+//! | [`poses`] | pose arithmetic and kinematics |
+//! | [`messages`] | `textmsg`, `varmsg`, `popup` |
+//! | [`time`] | `sync`, `sleep`, `get_steptime` |
+//!
+//! ## The virtual arm
+//! Commanded state and the time each command takes, not dynamics: see [`motion`] and
+//! [`io`] for what each function does to it.
+
+use std::sync::OnceLock;
+use std::time::Duration;
+
+use crate::controller::Controller;
+use crate::value::Value;
+
+pub mod io;
+pub mod math;
+pub mod messages;
+pub mod motion;
+pub mod poses;
+pub mod sockets;
+pub mod strings;
+pub mod time;
+
+pub use strings::MAX_STRING_LEN;
+
+/// The manual's chapter a built-in belongs to.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[non_exhaustive]
+pub enum Domain {
+    /// `socket_*`.
+    Sockets,
+    /// Motion, the arm's state and settings.
+    Motion,
+    /// I/O and registers.
+    Io,
+    /// Math.
+    Math,
+    /// Strings and lists.
+    Strings,
+    /// Poses and kinematics.
+    Poses,
+    /// Messages to the operator and the log.
+    Messages,
+    /// Threads and time.
+    Time,
+}
+
+/// A parameter's default.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Default {
+    /// No default: the argument must be given.
+    Required,
+    /// Optional without a value (the function behaves differently when it is left out).
+    Absent,
+    /// An int.
+    Int(i32),
+    /// A float.
+    Float(f64),
+    /// A bool.
+    Bool(bool),
+    /// A string.
+    Str(&'static str),
+    /// A list of floats.
+    Floats(&'static [f64]),
+    /// A list of ints.
+    Ints(&'static [i32]),
+    /// A pose.
+    Pose([f64; 6]),
+}
+
+impl Default {
+    /// The value an argument left out takes (`None` for a required one).
+    pub fn value(&self) -> Option<Value> {
+        Some(match *self {
+            Default::Required => return None,
+            Default::Absent => Value::None,
+            Default::Int(i) => Value::Int(i),
+            Default::Float(f) => Value::Float(f),
+            Default::Bool(b) => Value::Bool(b),
+            Default::Str(s) => Value::Str(s.as_bytes().to_vec()),
+            Default::Floats(v) => Value::List(v.iter().map(|&x| Value::Float(x)).collect()),
+            Default::Ints(v) => Value::List(v.iter().map(|&x| Value::Int(x)).collect()),
+            Default::Pose(p) => Value::Pose(p),
+        })
+    }
+}
+
+/// One parameter of a built-in.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Param {
+    /// Its name, as keyword arguments use it.
+    pub name: &'static str,
+    /// Its default.
+    pub default: Default,
+}
+
+/// A required parameter.
+pub(crate) const fn req(name: &'static str) -> Param {
+    Param {
+        name,
+        default: Default::Required,
+    }
+}
+
+/// An optional parameter with this default.
+pub(crate) const fn opt(name: &'static str, default: Default) -> Param {
+    Param { name, default }
+}
+
+/// The `socket_name="socket_0"` parameter every socket function has.
+pub(crate) const SOCKET_NAME: Param = opt("socket_name", Default::Str("socket_0"));
+
+/// What a built-in's code returns to the machine.
+pub(crate) enum Out {
+    /// Returns this value now.
+    Value(Value),
+    /// Takes this much program time (at least one step), then returns the value.
+    Wait(Duration, Value),
+    /// A socket read waiting for bytes (started in the socket model).
+    Read {
+        socket: String,
+        call: urscript_socket::robot::ReadCall,
+    },
+    /// `socket_open`, waiting for the driver's answer.
+    Connect { socket: String },
+}
+
+/// The code of a built-in.
+pub(crate) type Handler = fn(&mut Controller, &mut Args) -> Result<Out, String>;
+
+/// A built-in function: one entry of the table.
+#[derive(Clone, Copy)]
+pub struct Builtin {
+    /// Its URScript name.
+    pub name: &'static str,
+    /// Its chapter.
+    pub domain: Domain,
+    /// Its parameters, in order.
+    pub params: &'static [Param],
+    /// What it does here, in one sentence.
+    pub summary: &'static str,
+    pub(crate) run: Handler,
+}
+
+impl Builtin {
+    pub(crate) const fn new(
+        name: &'static str,
+        domain: Domain,
+        params: &'static [Param],
+        summary: &'static str,
+        run: Handler,
+    ) -> Self {
+        Builtin {
+            name,
+            domain,
+            params,
+            summary,
+            run,
+        }
+    }
+
+    /// The index of parameter `name`.
+    pub fn param(&self, name: &str) -> Option<usize> {
+        self.params.iter().position(|p| p.name == name)
+    }
+
+    /// The signature as the manual writes it: `socket_open(address, port, socket_name="socket_0")`.
+    ///
+    /// ```
+    /// let b = urscript_interp::builtins::lookup("socket_read_line").unwrap();
+    /// assert_eq!(b.signature(), r#"socket_read_line(socket_name="socket_0", timeout=2.0)"#);
+    /// ```
+    pub fn signature(&self) -> String {
+        let params: Vec<String> = self
+            .params
+            .iter()
+            .map(|p| match p.default.value() {
+                None => p.name.to_string(),
+                Some(Value::None) => format!("{}=None", p.name),
+                Some(Value::Float(f)) if f.fract() == 0.0 && f.abs() < 1e15 => {
+                    format!("{}={f:.1}", p.name)
+                }
+                Some(v) => format!("{}={}", p.name, v.to_source()),
+            })
+            .collect();
+        format!("{}({})", self.name, params.join(", "))
+    }
+}
+
+impl std::fmt::Debug for Builtin {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Builtin")
+            .field("name", &self.name)
+            .field("domain", &self.domain)
+            .finish_non_exhaustive()
+    }
+}
+
+/// Two entries are the same built-in if they have the same name (names are unique).
+impl PartialEq for Builtin {
+    fn eq(&self, other: &Self) -> bool {
+        self.name == other.name
+    }
+}
+
+/// Every built-in, sorted by name (names are unique: a test proves it).
+///
+/// ```
+/// let all = urscript_interp::builtins::all();
+/// assert!(all.iter().any(|b| b.name == "socket_read_ascii_float"));
+/// assert!(all.windows(2).all(|w| w[0].name < w[1].name));
+/// ```
+pub fn all() -> &'static [Builtin] {
+    static ALL: OnceLock<Vec<Builtin>> = OnceLock::new();
+    ALL.get_or_init(|| {
+        let mut v: Vec<Builtin> = [
+            sockets::TABLE,
+            motion::TABLE,
+            io::TABLE,
+            math::TABLE,
+            strings::TABLE,
+            poses::TABLE,
+            messages::TABLE,
+            time::TABLE,
+        ]
+        .concat();
+        v.sort_by(|a, b| a.name.cmp(b.name));
+        v
+    })
+}
+
+/// The built-in called `name`.
+///
+/// ```
+/// use urscript_interp::builtins::{lookup, Domain};
+/// assert_eq!(lookup("socket_open").unwrap().domain, Domain::Sockets);
+/// assert!(lookup("rq_activate").is_none()); // a URCap's function, not the controller's
+/// ```
+pub fn lookup(name: &str) -> Option<&'static Builtin> {
+    let all = all();
+    all.binary_search_by(|b| b.name.cmp(name))
+        .ok()
+        .map(|i| &all[i])
+}
+
+/// True if `name` is a built-in of this interpreter.
+///
+/// ```
+/// assert!(urscript_interp::builtins::is_builtin("socket_read_ascii_float"));
+/// assert!(!urscript_interp::builtins::is_builtin("rq_activate"));
+/// ```
+pub fn is_builtin(name: &str) -> bool {
+    lookup(name).is_some()
+}
+
+/// Checks a call's arguments against parameters at compile time: `positional` given by
+/// position, then `named` by name. Returns, for each argument in order, the index of the
+/// parameter it fills; or what is wrong.
+pub(crate) fn match_args<'p>(
+    fname: &str,
+    params: impl ExactSizeIterator<Item = (&'p str, bool)> + Clone,
+    positional: usize,
+    named: &[&str],
+) -> Result<Vec<u8>, String> {
+    let n = params.len();
+    if positional > n {
+        return Err(format!(
+            "`{fname}` takes {} {n} argument{}, {positional} given",
+            if params.clone().any(|(_, has_default)| has_default) {
+                "at most"
+            } else {
+                "exactly"
+            },
+            if n == 1 { "" } else { "s" }
+        ));
+    }
+    let mut filled = vec![false; n];
+    let mut slots = Vec::with_capacity(positional + named.len());
+    for (k, f) in filled.iter_mut().enumerate().take(positional) {
+        *f = true;
+        slots.push(k as u8);
+    }
+    for k in named {
+        let Some(at) = params.clone().position(|(p, _)| p == *k) else {
+            let names: Vec<&str> = params.clone().map(|(p, _)| p).collect();
+            return Err(format!(
+                "`{fname}` has no parameter `{k}` (its parameters: {})",
+                if names.is_empty() {
+                    "none".to_string()
+                } else {
+                    names.join(", ")
+                }
+            ));
+        };
+        if filled[at] {
+            return Err(format!("argument `{k}` of `{fname}` given twice"));
+        }
+        filled[at] = true;
+        slots.push(at as u8);
+    }
+    for ((p, has_default), f) in params.zip(&filled) {
+        if !f && !has_default {
+            return Err(format!("`{fname}` needs argument `{p}`"));
+        }
+    }
+    Ok(slots)
+}
+
+/// A built-in call's arguments, bound to its parameters (defaults filled), and what the
+/// code reports besides its value.
+pub(crate) struct Args {
+    /// The built-in's name (for error messages).
+    pub name: &'static str,
+    /// The built-in's parameters.
+    pub params: &'static [Param],
+    /// One value per parameter.
+    pub v: Vec<Value>,
+    /// How many arguments were given by position (the first `positional` of `v`).
+    pub positional: usize,
+    /// The line of the call.
+    pub line: u32,
+    /// A read that completed at once (for the call record).
+    pub read: Option<crate::event::ReadRecord>,
+    /// Why the call returned its failure value.
+    pub failure: Option<String>,
+}
+
+impl Args {
+    fn bad(&self, i: usize, what: &str) -> String {
+        let v = &self.v[i];
+        format!(
+            "type error: `{}` argument `{}` needs {what}, got {} {}",
+            self.name,
+            self.params.get(i).map_or("?", |p| p.name),
+            v.type_name(),
+            v.to_source()
+        )
+    }
+
+    /// Argument `i` as a number (an int or a float).
+    pub fn num(&self, i: usize) -> Result<f64, String> {
+        self.v[i].as_f64().ok_or_else(|| self.bad(i, "a number"))
+    }
+
+    /// Argument `i` as an int (a float with no fraction is accepted).
+    pub fn int(&self, i: usize) -> Result<i32, String> {
+        match &self.v[i] {
+            Value::Int(x) => Ok(*x),
+            Value::Float(x) if x.fract() == 0.0 && x.abs() <= f64::from(i32::MAX) => Ok(*x as i32),
+            _ => Err(self.bad(i, "an int")),
+        }
+    }
+
+    /// Argument `i` as a string's bytes.
+    pub fn bytes(&self, i: usize) -> Result<&[u8], String> {
+        match &self.v[i] {
+            Value::Str(s) => Ok(s),
+            _ => Err(self.bad(i, "a string")),
+        }
+    }
+
+    /// Argument `i` as text (a socket or variable name).
+    pub fn text(&self, i: usize) -> Result<String, String> {
+        Ok(String::from_utf8_lossy(self.bytes(i)?).into_owned())
+    }
+
+    /// Argument `i` as a bool (an int: non-zero is true).
+    pub fn boolean(&self, i: usize) -> Result<bool, String> {
+        match &self.v[i] {
+            Value::Bool(b) => Ok(*b),
+            Value::Int(x) => Ok(*x != 0),
+            _ => Err(self.bad(i, "a bool")),
+        }
+    }
+
+    /// Argument `i` as six numbers (a pose or a list of 6 numbers).
+    pub fn six(&self, i: usize) -> Result<[f64; 6], String> {
+        match &self.v[i] {
+            Value::Pose(p) => Ok(*p),
+            Value::List(items) if items.len() == 6 => {
+                let mut out = [0.0; 6];
+                for (o, x) in out.iter_mut().zip(items) {
+                    *o = x.as_f64().ok_or_else(|| self.bad(i, "6 numbers"))?;
+                }
+                Ok(out)
+            }
+            _ => Err(self.bad(i, "6 numbers")),
+        }
+    }
+
+    /// Argument `i` was left out (its default is [`Default::Absent`]).
+    pub fn is_absent(&self, i: usize) -> bool {
+        matches!(self.v[i], Value::None)
+    }
+}
+
+/// Six floats as a URScript list.
+pub(crate) fn floats(v: [f64; 6]) -> Value {
+    Value::List(v.iter().map(|&x| Value::Float(x)).collect())
+}
+
+/// Seconds as a duration (negative: zero; too large: the longest).
+pub(crate) fn secs(x: f64) -> Duration {
+    Duration::try_from_secs_f64(x.max(0.0)).unwrap_or(Duration::MAX)
+}
+
+/// Does nothing and returns nothing: settings the virtual arm has no use for.
+pub(crate) fn accept(_: &mut Controller, _: &mut Args) -> Result<Out, String> {
+    Ok(Out::Value(Value::None))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn names_are_unique_and_every_default_is_a_value() {
+        let all = all();
+        for w in all.windows(2) {
+            assert_ne!(w[0].name, w[1].name, "defined twice");
+        }
+        for b in all {
+            let mut seen_default = false;
+            for p in b.params {
+                let has = p.default != Default::Required;
+                assert!(
+                    has || !seen_default,
+                    "{}: required `{}` after an optional one",
+                    b.name,
+                    p.name
+                );
+                seen_default |= has;
+            }
+            assert!(!b.summary.is_empty(), "{} has no summary", b.name);
+            assert!(b.params.len() < 256);
+        }
+    }
+
+    #[test]
+    fn argument_matching_names_what_is_wrong() {
+        let p = [("a", false), ("b", true)];
+        assert_eq!(
+            match_args("f", p.iter().copied(), 1, &["b"]),
+            Ok(vec![0, 1])
+        );
+        let e = match_args("f", p.iter().copied(), 3, &[]).unwrap_err();
+        assert_eq!(e, "`f` takes at most 2 arguments, 3 given");
+        let e = match_args("f", p.iter().copied(), 0, &["b"]).unwrap_err();
+        assert_eq!(e, "`f` needs argument `a`");
+        let e = match_args("f", p.iter().copied(), 1, &["a"]).unwrap_err();
+        assert_eq!(e, "argument `a` of `f` given twice");
+        let e = match_args("f", p.iter().copied(), 0, &["c"]).unwrap_err();
+        assert_eq!(e, "`f` has no parameter `c` (its parameters: a, b)");
+    }
+}

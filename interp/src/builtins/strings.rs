@@ -1,0 +1,181 @@
+//! Strings and lists: `str_*`, `to_str`, `to_num`, `length`.
+
+use urscript_socket::to_str::{parse_value, Scalar, Value as WireValue};
+
+use super::{opt, req, Args, Builtin, Default, Domain, Out};
+use crate::controller::Controller;
+use crate::value::Value;
+
+/// The longest string `str_cat` makes, as on the controller.
+pub const MAX_STRING_LEN: usize = 1023;
+
+const D: Domain = Domain::Strings;
+
+pub(super) const TABLE: &[Builtin] = &[
+    Builtin::new(
+        "str_cat",
+        D,
+        &[req("op1"), req("op2")],
+        "The two values' texts joined (at most 1023 characters).",
+        str_cat,
+    ),
+    Builtin::new(
+        "str_len",
+        D,
+        &[req("str")],
+        "The string's length in bytes.",
+        str_len,
+    ),
+    Builtin::new(
+        "str_empty",
+        D,
+        &[req("str")],
+        "True if the string is empty.",
+        str_len,
+    ),
+    Builtin::new(
+        "str_sub",
+        D,
+        &[req("src"), req("index"), opt("len", Default::Int(-1))],
+        "The part of src from index, len bytes long (-1: to the end).",
+        str_sub,
+    ),
+    Builtin::new(
+        "str_find",
+        D,
+        &[
+            req("src"),
+            req("target"),
+            opt("start_from", Default::Int(0)),
+        ],
+        "The index of target in src from start_from, or -1.",
+        str_find,
+    ),
+    Builtin::new(
+        "str_at",
+        D,
+        &[req("src"), req("index")],
+        "The one-byte string at index (\"\" past the end).",
+        str_at,
+    ),
+    Builtin::new(
+        "to_str",
+        D,
+        &[req("val")],
+        "The value's text, as the controller writes it.",
+        to_str,
+    ),
+    Builtin::new(
+        "to_num",
+        D,
+        &[req("str")],
+        "The number the string holds (int or float).",
+        to_num,
+    ),
+    Builtin::new(
+        "length",
+        D,
+        &[req("v")],
+        "The length of a list or string (6 for a pose).",
+        length,
+    ),
+    Builtin::new(
+        "get_list_length",
+        D,
+        &[req("v")],
+        "The length of a list (as `length`).",
+        length,
+    ),
+];
+
+fn str_cat(_: &mut Controller, a: &mut Args) -> Result<Out, String> {
+    let mut out = a.v[0].to_str_bytes();
+    out.extend(a.v[1].to_str_bytes());
+    // The controller's strings hold at most 1023 characters.
+    if out.len() > MAX_STRING_LEN {
+        return Err(format!(
+            "`str_cat`: the result would be {} characters, more than {MAX_STRING_LEN}",
+            out.len()
+        ));
+    }
+    Ok(Out::Value(Value::Str(out)))
+}
+
+fn str_len(_: &mut Controller, a: &mut Args) -> Result<Out, String> {
+    let st = a.bytes(0)?;
+    Ok(Out::Value(if a.name == "str_len" {
+        Value::Int(i32::try_from(st.len()).unwrap_or(i32::MAX))
+    } else {
+        Value::Bool(st.is_empty())
+    }))
+}
+
+fn str_sub(_: &mut Controller, a: &mut Args) -> Result<Out, String> {
+    let start = usize::try_from(a.int(1)?).unwrap_or(usize::MAX);
+    let len = a.int(2)?;
+    let src = a.bytes(0)?;
+    let start = start.min(src.len());
+    let end = match usize::try_from(len) {
+        Ok(l) => start.saturating_add(l).min(src.len()),
+        Err(_) => src.len(),
+    };
+    Ok(Out::Value(Value::Str(src[start..end].to_vec())))
+}
+
+fn str_find(_: &mut Controller, a: &mut Args) -> Result<Out, String> {
+    let from = usize::try_from(a.int(2)?).unwrap_or(0);
+    let (src, target) = (a.bytes(0)?, a.bytes(1)?);
+    let from = from.min(src.len());
+    let found = if target.is_empty() {
+        Some(from)
+    } else {
+        src[from..]
+            .windows(target.len())
+            .position(|w| w == target)
+            .map(|p| p + from)
+    };
+    Ok(Out::Value(Value::Int(
+        found.map_or(-1, |p| i32::try_from(p).unwrap_or(-1)),
+    )))
+}
+
+fn str_at(_: &mut Controller, a: &mut Args) -> Result<Out, String> {
+    let k = a.int(1)?;
+    let src = a.bytes(0)?;
+    let at = usize::try_from(k).ok().and_then(|k| src.get(k));
+    Ok(Out::Value(Value::Str(
+        at.map(|c| vec![*c]).unwrap_or_default(),
+    )))
+}
+
+fn to_str(_: &mut Controller, a: &mut Args) -> Result<Out, String> {
+    Ok(Out::Value(Value::Str(a.v[0].to_str_bytes())))
+}
+
+fn to_num(_: &mut Controller, a: &mut Args) -> Result<Out, String> {
+    let st = a.bytes(0)?;
+    match parse_value(st) {
+        Ok(WireValue::Scalar(Scalar::Int(x))) => Ok(Out::Value(Value::Int(x))),
+        Ok(WireValue::Scalar(Scalar::Float(x))) => Ok(Out::Value(Value::Float(x))),
+        _ => Err(format!(
+            "`to_num`: \"{}\" is not a number",
+            String::from_utf8_lossy(st)
+        )),
+    }
+}
+
+fn length(_: &mut Controller, a: &mut Args) -> Result<Out, String> {
+    let n = match &a.v[0] {
+        Value::List(items) => items.len(),
+        Value::Str(st) => st.len(),
+        Value::Pose(_) => 6,
+        other => {
+            return Err(format!(
+                "type error: `{}` of a {}",
+                a.name,
+                other.type_name()
+            ))
+        }
+    };
+    Ok(Out::Value(Value::Int(i32::try_from(n).unwrap_or(i32::MAX))))
+}

@@ -1,0 +1,184 @@
+//! What a running program tells its driver: typed events, never text to parse back.
+//!
+//! A driver acts on [`Event::Connect`], [`Event::Transmit`] and [`Event::Close`]; a
+//! printer shows [`Event::Message`] (what `textmsg`, `varmsg` and `popup` said) and
+//! [`Event::Call`] (a [`CallRecord`]: which built-in ran at which line, with which
+//! arguments, what it returned and how).
+
+use std::fmt;
+
+use urscript_socket::robot::{ReadCall, ReadResult};
+
+use crate::builtins::Builtin;
+use crate::value::Value;
+
+/// What the machine asks of its driver, or reports.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Event {
+    /// `socket_open`: connect to `host:port`, then call
+    /// [`Machine::handle_connected`](crate::Machine::handle_connected) with the outcome.
+    Connect {
+        /// The socket's name in the program.
+        socket_name: String,
+        /// The address argument.
+        host: String,
+        /// The port argument.
+        port: u16,
+    },
+    /// Bytes the program sent on a socket.
+    Transmit {
+        /// The socket's name.
+        socket_name: String,
+        /// The bytes, in order.
+        bytes: Vec<u8>,
+    },
+    /// The program closed a socket (or ended with it open).
+    Close {
+        /// The socket's name.
+        socket_name: String,
+    },
+    /// What `textmsg`, `varmsg` or `popup` showed.
+    Message(Message),
+    /// A built-in (or stubbed) call and what it returned. Every socket call is recorded;
+    /// other built-ins with [`Config::trace_all_calls`](crate::Config::trace_all_calls).
+    /// A call that waits (a read, `socket_open`) is recorded when it returns.
+    Call(Box<CallRecord>),
+}
+
+/// Which function showed a [`Message`].
+#[derive(Debug, Clone, PartialEq)]
+pub enum MessageKind {
+    /// `textmsg(s1, s2="")`: the log line.
+    Textmsg,
+    /// `varmsg(name, value)`.
+    Varmsg,
+    /// `popup(s, title, warning, error, blocking)`.
+    Popup {
+        /// The popup's title.
+        title: String,
+        /// Shown as a warning.
+        warning: bool,
+        /// Shown as an error.
+        error: bool,
+        /// The program would wait for the operator (the virtual operator closes it at
+        /// once).
+        blocking: bool,
+    },
+}
+
+/// A message the program showed (PolyScope's log or a popup).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Message {
+    /// The line of the call.
+    pub line: u32,
+    /// Which function.
+    pub kind: MessageKind,
+    /// The text, as the controller composes it (`textmsg("x = ", 1)` shows `x = 1`).
+    pub text: String,
+    /// The call's arguments as given (for a printer that shows the call).
+    pub args: Vec<Value>,
+}
+
+/// How a recorded call ended.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Outcome {
+    /// It returned normally (a read whose bytes arrived, a send that was queued).
+    Returned,
+    /// A read's timeout passed (or its socket closed) first: the result is what the
+    /// robot returns then, its sentinel or a partial result by the socket policy.
+    TimedOut,
+    /// A stub answered ([`Config::stub`](crate::Config::stub)); nothing else ran.
+    Stubbed,
+    /// It returned its failure value (`False`) for this reason: a connection refused, a
+    /// socket that is not open, a broken connection.
+    Failed(String),
+}
+
+/// A socket read a call made, and the robot model's typed result.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ReadRecord {
+    /// The read rule used (function and arguments).
+    pub call: ReadCall,
+    /// What the robot model returned, before it became a URScript value.
+    pub result: ReadResult,
+}
+
+/// One call of a built-in or a stub, as the machine ran it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct CallRecord {
+    /// The line of the call.
+    pub line: u32,
+    /// The column of the call's name.
+    pub column: u32,
+    /// The function's name.
+    pub name: String,
+    /// The built-in's table entry (`None` for a stub of a name that is not built in).
+    pub builtin: Option<&'static Builtin>,
+    /// Positional arguments, as evaluated.
+    pub args: Vec<Value>,
+    /// Named arguments, as evaluated, in the order written.
+    pub kwargs: Vec<(String, Value)>,
+    /// The variable the statement assigns the result to, when the statement is
+    /// `name = call(...)`.
+    pub assigned_to: Option<String>,
+    /// What the call returned to the program.
+    pub result: Value,
+    /// How it ended.
+    pub outcome: Outcome,
+    /// The socket it used (its `socket_name` argument, default included).
+    pub socket: Option<String>,
+    /// The read it made, for the socket read functions and `socket_get_var`.
+    pub read: Option<ReadRecord>,
+}
+
+impl CallRecord {
+    /// The call as URScript source with its evaluated arguments:
+    /// `socket_read_ascii_float(6, "camera")`.
+    ///
+    /// ```
+    /// use urscript_interp::{CallRecord, Outcome, Value};
+    /// let c = CallRecord {
+    ///     line: 1, column: 1, name: "f".into(), builtin: None,
+    ///     args: vec![Value::Int(1)], kwargs: vec![("k".into(), Value::Str(b"v".to_vec()))],
+    ///     assigned_to: None, result: Value::None, outcome: Outcome::Stubbed,
+    ///     socket: None, read: None,
+    /// };
+    /// assert_eq!(c.source(), r#"f(1, k="v")"#);
+    /// ```
+    pub fn source(&self) -> String {
+        let mut out = String::with_capacity(self.name.len() + 16);
+        out.push_str(&self.name);
+        out.push('(');
+        let mut first = true;
+        let mut sep = |out: &mut String| {
+            if !std::mem::take(&mut first) {
+                out.push_str(", ");
+            }
+        };
+        for a in &self.args {
+            sep(&mut out);
+            out.push_str(&a.to_source());
+        }
+        for (k, v) in &self.kwargs {
+            sep(&mut out);
+            out.push_str(k);
+            out.push('=');
+            out.push_str(&v.to_source());
+        }
+        out.push(')');
+        out
+    }
+}
+
+/// `name(args) -> result`, with ` (timeout)`, ` (stub)` or ` (failed: why)` after it.
+impl fmt::Display for CallRecord {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{} -> {}", self.source(), self.result)?;
+        match &self.outcome {
+            Outcome::Returned => Ok(()),
+            Outcome::TimedOut => f.write_str(" (timeout)"),
+            Outcome::Stubbed => f.write_str(" (stub)"),
+            Outcome::Failed(why) => write!(f, " ({why})"),
+        }
+    }
+}
