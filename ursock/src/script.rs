@@ -1,24 +1,26 @@
 //! `ursock robot`: a virtual robot running a URScript program against real servers.
 //!
-//! The program (a `--script` file or `-e` lines) is run by `urscript-interp`: parsed whole
-//! first (a syntax error names line and column, and nothing is sent), then run by its
-//! sans-IO [`Machine`] in real time. This module is the driver: it connects the sockets
-//! the program opens (`std::net`, non-blocking), writes what it sends, feeds it what the
-//! servers send, and prints each socket call with its result, `textmsg`/`popup` text and
-//! stubbed calls, with the read-failure diagnosis of [`crate::diagnose`].
+//! The program (a `--script` file or `-e` lines) is run by `urscript-interp`: parsed and
+//! compiled whole first (an error names line and column, and nothing is sent), then run
+//! in real time by the interpreter's one driver ([`Driver`]). This module only watches:
+//! it turns the machine's typed events ([`CallRecord`], [`Message`]) and the driver's
+//! activity (bytes per socket, closed peers, failed writes) into [`report`] events,
+//! printed for people or as JSON lines, and adds the read-failure diagnosis of
+//! [`crate::diagnose`] from the bytes each socket received.
 //!
 //! The old one-call-per-line scripts are URScript statements and run unchanged.
 
-use std::collections::{HashMap, VecDeque};
-use std::io::{ErrorKind, Read};
-use std::net::{Shutdown, TcpStream};
+use std::collections::HashMap;
 use std::time::{Duration, Instant};
 
-use urscript_interp::{Config, Event, Machine, Program, State, Stub};
-use urscript_socket::robot::{ReadCall, DEFAULT_SOCKET_NAME};
+use urscript_interp::drive::{self, Activity, Driver};
+use urscript_interp::{
+    CallRecord, Config, Event, Machine, Message, MessageKind, Outcome, Program, Stub,
+};
+use urscript_socket::robot::{ReadCall, ReadResult, DEFAULT_SOCKET_NAME};
 
 use crate::out;
-use crate::show::{text_and_hex, JsonBytes};
+use crate::report;
 
 /// How `ursock robot` runs and what it prints besides each call and its result.
 pub struct Options {
@@ -45,29 +47,6 @@ const WINDOW: usize = 4096;
 /// How long a `socket_open` may take to connect before it returns False.
 const CONNECT_TIMEOUT: Duration = Duration::from_secs(2);
 
-/// The longest sleep between two rounds of reading the sockets.
-const POLL_INTERVAL: Duration = Duration::from_millis(1);
-
-fn trace_event(json: bool, name: &str, tx: bool, bytes: &[u8]) {
-    let (arrow, tag) = if tx { ("->", "tx") } else { ("<-", "rx") };
-    if json {
-        let ev = serde_json::json!({
-            "t": out::elapsed_secs(),
-            "event": tag,
-            "socket": name,
-            "len": bytes.len(),
-            "bytes": JsonBytes::new(bytes),
-        });
-        outln!("{ev}");
-    } else {
-        outln!(
-            "    {} {name} {arrow} {}",
-            out::stamp(),
-            text_and_hex(bytes, "        ")
-        );
-    }
-}
-
 /// `socket_open("host", port, "socket_0")` for a `--connect HOST:PORT` argument.
 fn split_host_port(addr: &str) -> Result<(String, u16), String> {
     let (host, port) = addr.rsplit_once(':').ok_or_else(|| {
@@ -83,209 +62,140 @@ fn split_host_port(addr: &str) -> Result<(String, u16), String> {
     Ok((host, port))
 }
 
-/// Why a connection failed, in words: the OS reason plus what it usually means.
-fn open_failure(host: &str, port: u16, e: &std::io::Error) -> String {
-    use std::io::ErrorKind as K;
-    let hint = match e.kind() {
-        K::ConnectionRefused => {
-            "connection refused: nothing listens on that port (is the server running?)"
-        }
-        K::TimedOut => "timed out: no answer from that host (wrong address, firewall or cable?)",
-        K::InvalidInput => "not a valid address",
-        _ if e.to_string().contains("lookup") || e.to_string().contains("resolve") => {
-            "unknown host name"
-        }
-        _ => "cannot connect",
-    };
-    format!("socket_open(\"{host}\", {port}) failed: {hint} ({e})")
-}
-
-fn connect(host: &str, port: u16) -> std::io::Result<TcpStream> {
-    urscript_interp::drive::connect_stream(host, port, CONNECT_TIMEOUT)
-}
-
-/// One open connection of the program.
-struct Conn {
-    stream: TcpStream,
-    /// Bytes read but not yet accepted by the socket's receive buffer.
-    backlog: Vec<u8>,
-    closed: bool,
-    /// A write failed or the peer reset the connection: sends return False.
-    broken: bool,
-    /// What the server sent since the last read on this socket ended (for the diagnosis).
-    seen: Vec<u8>,
-    /// When the first of `seen` arrived.
+/// What the CLI remembers of one socket, for the diagnosis of its reads.
+#[derive(Default)]
+struct Seen {
+    /// What the server sent since the last read on this socket ended.
+    bytes: Vec<u8>,
+    /// When the first of `bytes` arrived.
     first_at: Option<Instant>,
     /// The previous read on this socket timed out: (its call, its line, a send since).
     timed_out: Option<(ReadCall, u32, bool)>,
 }
 
-/// A call traced by the machine: `name(args) -> result`, split.
-struct Traced<'a> {
-    call: &'a str,
-    name: &'a str,
-    result: &'a str,
+/// Control characters made visible (`\r`, `\n`, `\t`, `\xHH`), as the robot's strings
+/// are shown elsewhere in `ursock`.
+fn visible(text: &str) -> std::borrow::Cow<'_, str> {
+    if !text.chars().any(char::is_control) {
+        return text.into();
+    }
+    let mut out = String::with_capacity(text.len() + 8);
+    for c in text.chars() {
+        match c {
+            '\r' => out.push_str("\\r"),
+            '\n' => out.push_str("\\n"),
+            '\t' => out.push_str("\\t"),
+            c if c.is_control() => out.push_str(&format!("\\x{:02X}", c as u32)),
+            c => out.push(c),
+        }
+    }
+    out.into()
 }
 
-/// Splits `f(a, "x)", b) -> r` at the `)` that closes the call (strings have no escapes).
-fn split_traced(text: &str) -> Option<Traced<'_>> {
-    let open = text.find('(')?;
-    let (mut depth, mut in_str) = (0i32, false);
-    for (i, c) in text.char_indices().skip(open) {
-        match c {
-            '"' => in_str = !in_str,
-            '(' | '[' if !in_str => depth += 1,
-            ')' | ']' if !in_str => {
-                depth -= 1;
-                if depth == 0 && c == ')' {
-                    let result = text[i + 1..].strip_prefix(" -> ")?;
-                    return Some(Traced {
-                        call: &text[..=i],
-                        name: &text[..open],
-                        result,
-                    });
+/// The printer: every event goes through [`Printer::emit`], as JSON or for people.
+struct Printer {
+    json: bool,
+    /// The last note said for each line: a polling loop says it once until it changes.
+    last_why: HashMap<u32, String>,
+}
+
+impl Printer {
+    fn emit(&mut self, event: report::Event) {
+        if self.json {
+            outln!("{}", event.to_json());
+            return;
+        }
+        match &event {
+            report::Event::Call(c) => {
+                let shown = visible(&c.source);
+                match &c.shown_result {
+                    None => outln!("{shown}"),
+                    Some(r) => outln!("{shown} -> {}", visible(r)),
+                }
+                // A loop polling with a timeout would repeat the same note at every turn:
+                // a note is said again only when it changes.
+                match &c.why {
+                    Some(w) if self.last_why.get(&c.line) == Some(w) => {}
+                    Some(w) => {
+                        self.last_why.insert(c.line, w.clone());
+                        out::note(&format!("line {}: {w}", c.line));
+                    }
+                    None => {
+                        self.last_why.remove(&c.line);
+                    }
                 }
             }
-            _ => {}
-        }
-    }
-    None
-}
-
-/// The top-level arguments of a traced call, split on commas outside strings/brackets.
-fn call_args(call: &str) -> Vec<&str> {
-    let Some(inner) = call.find('(').and_then(|o| call[o + 1..].strip_suffix(')')) else {
-        return Vec::new();
-    };
-    let (mut out, mut depth, mut in_str, mut start) = (Vec::new(), 0i32, false, 0);
-    for (i, c) in inner.char_indices() {
-        match c {
-            '"' => in_str = !in_str,
-            '[' | '(' if !in_str => depth += 1,
-            ']' | ')' if !in_str => depth -= 1,
-            ',' if !in_str && depth == 0 => {
-                out.push(inner[start..i].trim());
-                start = i + 1;
+            report::Event::Message(m) => outln!("{} -> {}", visible(&m.source), visible(&m.text)),
+            report::Event::Tx(t) | report::Event::Rx(t) => {
+                let (arrow, name) = match &event {
+                    report::Event::Tx(_) => ("->", t.socket.as_deref().unwrap_or("")),
+                    _ => ("<-", t.socket.as_deref().unwrap_or("")),
+                };
+                outln!(
+                    "    {} {name} {arrow} {}",
+                    out::stamp(),
+                    crate::show::text_and_hex(&t.bytes.0, "        ")
+                );
             }
+            report::Event::Note(n) => out::note(&n.text),
             _ => {}
         }
     }
-    if !inner.trim().is_empty() {
-        out.push(inner[start..].trim());
-    }
-    out
 }
 
-/// Argument `key` of a traced call: by keyword, else at position `pos`.
-fn arg<'a>(args: &[&'a str], key: &str, pos: usize) -> Option<&'a str> {
-    let positional: Vec<&str> = args
-        .iter()
-        .copied()
-        .filter(|a| !is_keyword_arg(a))
-        .collect();
-    args.iter()
-        .find_map(|a| {
-            a.split_once('=')
-                .filter(|(k, _)| k.trim() == key && is_keyword_arg(a))
-                .map(|(_, v)| v.trim())
-        })
-        .or_else(|| positional.get(pos).copied())
-}
-
-fn is_keyword_arg(a: &str) -> bool {
-    a.split_once('=').is_some_and(|(k, _)| {
-        let k = k.trim();
-        !k.is_empty() && k.chars().all(|c| c.is_ascii_alphanumeric() || c == '_')
-    })
-}
-
-fn unquote(s: &str) -> String {
-    s.strip_prefix('"')
-        .and_then(|s| s.strip_suffix('"'))
-        .unwrap_or(s)
-        .to_string()
-}
-
-/// The socket a traced socket call used, and the read it made (for the diagnosis).
-fn socket_and_read(name: &str, args: &[&str]) -> (String, Option<ReadCall>) {
-    let number = || {
-        arg(args, "number", 0)
-            .and_then(|n| n.parse::<usize>().ok())
-            .unwrap_or(1)
+/// A call record as a report event: the call as URScript (with `x = ` when the
+/// statement assigns it), the typed result, and the reason it failed if it did.
+fn call_event(c: &CallRecord, why: Option<String>) -> report::Call {
+    let source = match &c.assigned_to {
+        Some(target) => format!("{target} = {}", c.source()),
+        None => c.source(),
     };
-    let sock_pos = match name {
-        "socket_read_line" | "socket_read_string" | "socket_close" => 0,
-        "socket_open" => 2,
-        "socket_set_var" => 2,
-        _ => 1,
+    let result = match &c.read {
+        Some(r) => report::Value::from(&r.result),
+        None => report::Value::from_interp(&c.result),
     };
-    let socket = arg(args, "socket_name", sock_pos)
-        .map(unquote)
-        .unwrap_or_else(|| DEFAULT_SOCKET_NAME.to_string());
-    let read = match name {
-        "socket_read_ascii_float" => Some(ReadCall::AsciiFloat { number: number() }),
-        "socket_read_binary_integer" => Some(ReadCall::BinaryInteger { number: number() }),
-        "socket_read_byte_list" => Some(ReadCall::ByteList { number: number() }),
-        "socket_read_line" => Some(ReadCall::Line),
-        "socket_read_string" => Some(ReadCall::String {
-            prefix: arg(args, "prefix", 1)
-                .map(unquote)
-                .unwrap_or_default()
-                .into_bytes(),
-            suffix: arg(args, "suffix", 2)
-                .map(unquote)
-                .unwrap_or_default()
-                .into_bytes(),
-            interpret_escape: arg(args, "interpret_escape", 3) == Some("True"),
+    let sentinel = c.read.as_ref().is_some_and(|r| failed_read(&r.call, &r.result));
+    let (outcome, suffix) = match &c.outcome {
+        Outcome::Returned => (report::CallOutcome::Returned, ""),
+        Outcome::TimedOut => (report::CallOutcome::TimedOut, " (timeout)"),
+        Outcome::Stubbed => (report::CallOutcome::Stubbed, " (stub)"),
+        Outcome::Failed(_) => (report::CallOutcome::Failed, ""),
+        _ => (report::CallOutcome::Returned, ""),
+    };
+    let shown_result = match &c.result {
+        urscript_interp::Value::None if c.outcome != Outcome::Stubbed => None,
+        v => Some(format!("{v}{suffix}")),
+    };
+    report::Call {
+        t: report::now(),
+        line: c.line,
+        column: c.column,
+        call: c.name.clone(),
+        source,
+        socket: c.socket.clone(),
+        args: c
+            .args
+            .iter()
+            .chain(c.kwargs.iter().map(|(_, v)| v))
+            .map(report::Value::from_interp)
+            .collect(),
+        result,
+        outcome,
+        sentinel,
+        why: why.or_else(|| match &c.outcome {
+            Outcome::Failed(w) => Some(format!("{}: {w}", c.name)),
+            _ => None,
         }),
-        _ => None,
-    };
-    (socket, read)
-}
-
-/// A result as JSON: `[n, a, b]` as `{"count": n, "values": [a, b]}` (nan as null),
-/// strings as text, ints, bools.
-fn result_json(result: &str) -> serde_json::Value {
-    if let Some(inner) = result.strip_prefix('[').and_then(|r| r.strip_suffix(']')) {
-        let items: Vec<serde_json::Value> = inner
-            .split(',')
-            .map(|x| {
-                let x = x.trim();
-                x.parse::<i64>()
-                    .map(serde_json::Value::from)
-                    .or_else(|_| x.parse::<f64>().map(serde_json::Value::from))
-                    .unwrap_or(serde_json::Value::Null)
-            })
-            .collect();
-        let count = items.first().cloned().unwrap_or_default();
-        return serde_json::json!({ "count": count, "values": items.get(1..).unwrap_or_default() });
-    }
-    if result.starts_with('"') {
-        return serde_json::to_value(JsonBytes::new(unquote(result).as_bytes()))
-            .unwrap_or_default();
-    }
-    match result {
-        "True" => true.into(),
-        "False" => false.into(),
-        "None" => serde_json::Value::Null,
-        r => r
-            .parse::<i64>()
-            .map(serde_json::Value::from)
-            .or_else(|_| r.parse::<f64>().map(serde_json::Value::from))
-            .unwrap_or_else(|_| r.into()),
+        shown_result,
     }
 }
 
-/// A read's result is its sentinel (`[0, ...]`, `""`) or fewer floats than asked.
-fn read_failed(read: &ReadCall, result: &str) -> bool {
-    let count = result
-        .strip_prefix('[')
-        .and_then(|r| r.split([',', ']']).next())
-        .and_then(|c| c.trim().parse::<usize>().ok());
-    match (read, count) {
-        (ReadCall::AsciiFloat { number }, Some(c)) => c < *number,
-        (_, Some(c)) => c == 0,
-        (_, None) => result == "\"\"",
+/// A read's result is its sentinel, or (floats) fewer values than asked.
+fn failed_read(call: &ReadCall, result: &ReadResult) -> bool {
+    match (call, result) {
+        (ReadCall::AsciiFloat { number }, ReadResult::Floats(t)) => t.count() < *number,
+        (ReadCall::GetVar { .. }, _) => false,
+        _ => result.is_sentinel(),
     }
 }
 
@@ -306,373 +216,217 @@ fn leftover<'a>(read: &ReadCall, seen: &'a [u8]) -> Option<&'a [u8]> {
     seen.get(end..).filter(|rest| !rest.is_empty())
 }
 
-/// The variable the line `line` assigns the call of `name` to, when the line is just
-/// that (`x = name(...)`): printed in front of the call, as the old one-call-per-line
-/// output showed it.
-fn assigned_to<'a>(source: &[&'a str], line: u32, name: &str) -> Option<&'a str> {
-    let text = source.get((line as usize).checked_sub(1)?)?;
-    let code = strip_comment(text).trim();
-    let (target, rest) = code.split_once('=')?;
-    let target = target.trim();
-    let target = target
-        .strip_prefix("local ")
-        .or_else(|| target.strip_prefix("global "))
-        .map_or(target, str::trim);
-    let call = rest.trim();
-    (!target.is_empty()
-        && target
-            .chars()
-            .all(|c| c.is_ascii_alphanumeric() || c == '_')
-        && !rest.starts_with('=')
-        && call.starts_with(name)
-        && call[name.len()..].trim_start().starts_with('(')
-        && split_traced(&format!("{call} -> x")).is_some_and(|t| t.call.len() == call.len()))
-    .then_some(target)
-}
-
-fn strip_comment(line: &str) -> &str {
-    let mut in_str = false;
-    for (i, c) in line.char_indices() {
-        match c {
-            '"' => in_str = !in_str,
-            '#' if !in_str => return &line[..i],
-            _ => {}
+/// The diagnosis of a read that ended: why it failed (from what its socket received),
+/// and whether it found the late reply of the previous read.
+fn diagnose_read(c: &CallRecord, seen: &mut Seen) -> Option<String> {
+    let read = c.read.as_ref()?;
+    if matches!(read.call, ReadCall::GetVar { .. }) {
+        // Its reply line is not the next read's input.
+        match seen.bytes.iter().position(|&b| b == b'\n') {
+            Some(i) => drop(seen.bytes.drain(..=i)),
+            None => seen.bytes.clear(),
         }
-    }
-    line
-}
-
-/// Control characters of a result made visible (`\r`, `\n`, `\t`, `\xHH`), as the
-/// robot's strings are shown elsewhere in `ursock`.
-fn visible(text: &str) -> std::borrow::Cow<'_, str> {
-    if !text.chars().any(char::is_control) {
-        return text.into();
-    }
-    let mut out = String::with_capacity(text.len() + 8);
-    for c in text.chars() {
-        match c {
-            '\r' => out.push_str("\\r"),
-            '\n' => out.push_str("\\n"),
-            '\t' => out.push_str("\\t"),
-            c if c.is_control() => out.push_str(&format!("\\x{:02X}", c as u32)),
-            c => out.push(c),
+        if seen.bytes.is_empty() {
+            seen.first_at = None;
         }
+        return None;
     }
-    out.into()
-}
-
-/// Prints one call: text (`shown -> result`, the reason on stderr) or one JSON object.
-fn report(json: bool, line: u32, shown: &str, call: &str, result: &str, why: Option<String>) {
-    if json {
-        let sentinel = result.starts_with("[0,") || result == "\"\"";
-        let ev = crate::offline::ReadJson {
-            t: Some(out::elapsed_secs()),
-            line: Some(line as usize),
-            call: call.to_string(),
-            result: result_json(result),
-            sentinel,
-            why,
-        };
-        outln!("{}", serde_json::to_string(&ev).unwrap_or_default());
+    let bytes = std::mem::take(&mut seen.bytes);
+    let first_at = seen.first_at.take();
+    let failed = failed_read(&read.call, &read.result);
+    let binary = matches!(
+        read.call,
+        ReadCall::BinaryInteger { .. } | ReadCall::ByteList { .. }
+    );
+    let mut why = if binary || failed {
+        crate::diagnose::diagnose(&read.call, &bytes)
     } else {
-        if result.is_empty() || result == "None" {
-            outln!("{}", visible(shown));
-        } else {
-            outln!("{} -> {}", visible(shown), visible(result));
-        }
-        if let Some(w) = why {
-            out::note(&format!("line {line}: {w}"));
+        None
+    };
+    if let Some((prev, prev_line, sent_since)) = seen.timed_out.take() {
+        let waiting = first_at.is_some_and(|at| at.elapsed() >= LATE_WINDOW);
+        if waiting && !sent_since {
+            let late = crate::diagnose::late_reply(&prev, prev_line as usize);
+            why = Some(match why {
+                Some(w) => format!("{late}; {w}"),
+                None => late,
+            });
         }
     }
+    if c.outcome == Outcome::TimedOut || failed {
+        seen.timed_out = Some((read.call.clone(), c.line, false));
+    } else if let Some(rest) = leftover(&read.call, &bytes) {
+        seen.first_at = Some(Instant::now());
+        seen.bytes = rest.to_vec();
+    }
+    why.map(|w| format!("why: {w}"))
 }
 
-const SEND_FUNCTIONS: &[&str] = &[
-    "socket_send_string",
-    "socket_send_line",
-    "socket_send_byte",
-    "socket_send_bytes",
-    "socket_send_int",
-    "socket_set_var",
-];
+/// A message as a report event, with the call that showed it.
+fn message_event(m: &Message) -> report::ProgramMessage {
+    let (kind, name) = match m.kind {
+        MessageKind::Textmsg => (report::MessageKind::Textmsg, "textmsg"),
+        MessageKind::Varmsg => (report::MessageKind::Varmsg, "varmsg"),
+        _ => (report::MessageKind::Popup, "popup"),
+    };
+    let args: Vec<String> = m.args.iter().map(|v| v.to_source()).collect();
+    report::ProgramMessage {
+        t: report::now(),
+        line: m.line,
+        kind,
+        text: m.text.clone(),
+        source: format!("{name}({})", args.join(", ")),
+    }
+}
 
 /// Runs `script` (the text of a file or `-e` lines) as a URScript program against real
 /// servers; `connect` opens `socket_0` first. Prints each socket call and its result and
 /// the program's messages. As on the controller, a failed `socket_open` and a send to a
 /// server that has gone return False and the program goes on; the reason is said on
-/// stderr (and in `--log`). A parse error (nothing sent) or a runtime error is the `Err`,
-/// naming the line.
+/// stderr (and in `--log`). A compile error (nothing sent) or a runtime error is the
+/// `Err`, naming the line.
 pub fn run(script: &str, connect_to: Option<&str>, opts: Options) -> Result<(), String> {
     let program = Program::parse(script).map_err(|e| e.to_string())?;
-    let source: Vec<&str> = script.lines().collect();
     let config = Config {
         step_time: opts.step_time,
         stubs: opts.stubs.clone(),
         trace_socket_calls: true,
-        trace_all_calls: true,
+        trace_all_calls: false,
         ..Config::default()
     };
     let mut machine = Machine::new(program, config);
-    let json = opts.json;
-    let mut conns: HashMap<String, Conn> = HashMap::new();
-    let new_conn = |stream| Conn {
-        stream,
-        backlog: Vec::new(),
-        closed: false,
-        broken: false,
-        seen: Vec::new(),
-        first_at: None,
-        timed_out: None,
+    let mut driver = Driver::new(drive::Options {
+        max_time: opts.max_time,
+        connect_timeout: CONNECT_TIMEOUT,
+        ..drive::Options::default()
+    });
+    let mut printer = Printer {
+        json: opts.json,
+        last_why: HashMap::new(),
     };
     if let Some(addr) = connect_to {
         let (host, port) = split_host_port(addr)?;
-        let shown = format!("socket_open(\"{host}\", {port}, \"{DEFAULT_SOCKET_NAME}\")");
-        match connect(&host, port) {
-            Ok(stream) => {
-                report(json, 0, &shown, "socket_open", "True", None);
-                conns.insert(DEFAULT_SOCKET_NAME.to_string(), new_conn(stream));
-                machine.handle_connected(DEFAULT_SOCKET_NAME, Ok(()));
-            }
-            Err(e) => {
-                let reason = open_failure(&host, port, &e);
-                let why = json.then(|| reason.clone());
-                report(json, 0, &shown, "socket_open", "False", why);
-                return Err(reason);
-            }
-        }
+        let opened = driver.connect(&mut machine, DEFAULT_SOCKET_NAME, &host, port);
+        printer.emit(report::Event::Call(report::Call {
+            t: report::now(),
+            line: 0,
+            column: 0,
+            call: "socket_open".into(),
+            source: format!("socket_open(\"{host}\", {port}, \"{DEFAULT_SOCKET_NAME}\")"),
+            socket: Some(DEFAULT_SOCKET_NAME.into()),
+            args: vec![
+                report::Value::String(host.clone().into_bytes()),
+                report::Value::Int(port.into()),
+                report::Value::String(DEFAULT_SOCKET_NAME.as_bytes().to_vec()),
+            ],
+            result: report::Value::Bool(opened.is_ok()),
+            outcome: if opened.is_ok() {
+                report::CallOutcome::Returned
+            } else {
+                report::CallOutcome::Failed
+            },
+            sentinel: false,
+            why: opened.as_ref().err().filter(|_| opts.json).cloned(),
+            shown_result: Some(if opened.is_ok() { "True" } else { "False" }.into()),
+        }));
+        opened?;
     }
-    let start = Instant::now();
-    let mut open_failures: HashMap<String, String> = HashMap::new();
-    let mut messages: VecDeque<String> = VecDeque::new();
-    let mut last_why: HashMap<u32, String> = HashMap::new();
-    let mut buf = vec![0u8; 16 * 1024];
-    loop {
-        let now = start.elapsed();
-        if opts.max_time.is_some_and(|m| now >= m) {
-            out::note(&format!(
-                "--max-time {}s reached: the program was ended",
-                opts.max_time.unwrap_or_default().as_secs_f64()
-            ));
-            return Ok(());
+    let mut seen: HashMap<String, Seen> = HashMap::new();
+    let trace = opts.trace;
+    let result = driver.run(&mut machine, |activity| match activity {
+        Activity::Event(Event::Call(c)) => {
+            let why = c
+                .socket
+                .as_ref()
+                .and_then(|s| diagnose_read(c, seen.entry(s.clone()).or_default()));
+            printer.emit(report::Event::Call(call_event(c, why)));
         }
-        machine.run_until(now);
-        while let Some(event) = machine.poll_event() {
-            match event {
-                Event::Connect {
+        Activity::Event(Event::Message(m)) => {
+            printer.emit(report::Event::Message(message_event(m)));
+        }
+        Activity::Event(Event::Transmit { socket_name, bytes }) => {
+            if let Some(t) = seen
+                .get_mut(socket_name)
+                .and_then(|s| s.timed_out.as_mut())
+            {
+                t.2 = true;
+            }
+            if trace {
+                printer.emit(report::Event::Tx(report::Traffic::socket(
+                    report::now(),
                     socket_name,
-                    host,
-                    port,
-                } => match connect(&host, port) {
-                    Ok(stream) => {
-                        if let Some(old) = conns.insert(socket_name.clone(), new_conn(stream)) {
-                            let _ = old.stream.shutdown(Shutdown::Both);
-                        }
-                        machine.handle_connected(&socket_name, Ok(()));
-                    }
-                    Err(e) => {
-                        let reason = open_failure(&host, port, &e);
-                        open_failures.insert(socket_name.clone(), reason.clone());
-                        machine.handle_connected(&socket_name, Err(reason));
-                    }
-                },
-                Event::Transmit { socket_name, bytes } => {
-                    if opts.trace {
-                        trace_event(json, &socket_name, true, &bytes);
-                    }
-                    if let Some(c) = conns.get_mut(&socket_name) {
-                        if let Some(t) = c.timed_out.as_mut() {
-                            t.2 = true;
-                        }
-                        if !c.broken
-                            && urscript_interp::drive::write_all(&mut c.stream, &bytes).is_err()
-                        {
-                            c.closed = true;
-                            c.broken = true;
-                            machine.handle_send_failed(&socket_name);
-                        }
-                    }
-                }
-                Event::Close { socket_name } => {
-                    if let Some(c) = conns.remove(&socket_name) {
-                        let _ = c.stream.shutdown(Shutdown::Both);
-                    }
-                }
-                Event::Message(text) => messages.push_back(text),
-                Event::Call { line, text } => {
-                    let Some(t) = split_traced(&text) else {
-                        continue;
-                    };
-                    let is_message = matches!(t.name, "textmsg" | "popup" | "varmsg");
-                    let stubbed = t.result.ends_with(" (stub)");
-                    if !(t.name.starts_with("socket_") || is_message || stubbed) {
-                        continue;
-                    }
-                    let shown = match assigned_to(&source, line, t.name) {
-                        Some(target) => format!("{target} = {}", t.call),
-                        None => t.call.to_string(),
-                    };
-                    let shown = shown.as_str();
-                    if is_message {
-                        let text = messages.pop_front().unwrap_or_default();
-                        if json {
-                            report(json, line, shown, t.name, &format!("\"{text}\""), None);
-                        } else {
-                            report(json, line, shown, t.name, &text, None);
-                        }
-                        continue;
-                    }
-                    let args = call_args(t.call);
-                    let (socket, read) = socket_and_read(t.name, &args);
-                    let mut result = t.result.to_string();
-                    let mut why = None;
-                    if t.name == "socket_open" {
-                        if let Some(reason) = result.strip_prefix("False") {
-                            why = Some(open_failures.remove(&socket).unwrap_or_else(|| {
-                                reason
-                                    .trim()
-                                    .trim_matches(|c| c == '(' || c == ')')
-                                    .to_string()
-                            }));
-                            result = "False".into();
-                        }
-                    } else if SEND_FUNCTIONS.contains(&t.name) && result == "False" {
-                        why = Some(if conns.contains_key(&socket) {
-                            format!(
-                                "{}: the connection is broken (a write failed); the server has probably closed it",
-                                t.name
-                            )
-                        } else {
-                            format!("{}: the socket \"{socket}\" is not open", t.name)
-                        });
-                    } else if t.name == "socket_get_var" {
-                        // Its reply line is not the next read's input.
-                        if let Some(c) = conns.get_mut(&socket) {
-                            match c.seen.iter().position(|&b| b == b'\n') {
-                                Some(i) => drop(c.seen.drain(..=i)),
-                                None => c.seen.clear(),
-                            }
-                            if c.seen.is_empty() {
-                                c.first_at = None;
-                            }
-                        }
-                    } else if let (Some(read), Some(c)) = (&read, conns.get_mut(&socket)) {
-                        let timed_out_now = result.ends_with(" (timeout)");
-                        let value = result.trim_end_matches(" (timeout)");
-                        let seen = std::mem::take(&mut c.seen);
-                        let first_at = c.first_at.take();
-                        let binary = matches!(
-                            read,
-                            ReadCall::BinaryInteger { .. } | ReadCall::ByteList { .. }
-                        );
-                        if binary || read_failed(read, value) {
-                            why =
-                                crate::diagnose::diagnose(read, &seen).map(|w| format!("why: {w}"));
-                        }
-                        if let Some((prev, prev_line, sent_since)) = c.timed_out.take() {
-                            let waiting = first_at.is_some_and(|at| at.elapsed() >= LATE_WINDOW);
-                            if waiting && !sent_since {
-                                let late = crate::diagnose::late_reply(&prev, prev_line as usize);
-                                why = Some(match why {
-                                    Some(w) => format!("why: {late}; {}", &w[5..]),
-                                    None => format!("why: {late}"),
-                                });
-                            }
-                        }
-                        if timed_out_now || read_failed(read, value) {
-                            c.timed_out = Some((read.clone(), line, false));
-                        } else if let Some(rest) = leftover(read, &seen) {
-                            c.first_at = Some(Instant::now());
-                            c.seen = rest.to_vec();
-                        }
-                    }
-                    if json {
-                        let why = why.map(|w| w.trim_start_matches("why: ").to_string());
-                        let value = result
-                            .trim_end_matches(" (timeout)")
-                            .trim_end_matches(" (stub)");
-                        report(json, line, shown, t.name, value, why);
-                    } else {
-                        // A loop polling with a timeout would repeat the same note at
-                        // every turn: a note is said again only when it changes.
-                        let why = match why {
-                            Some(w) if last_why.get(&line) == Some(&w) => None,
-                            Some(w) => {
-                                last_why.insert(line, w.clone());
-                                Some(w)
-                            }
-                            None => {
-                                last_why.remove(&line);
-                                None
-                            }
-                        };
-                        report(json, line, shown, t.name, &result, why);
-                    }
-                }
+                    bytes,
+                )));
             }
         }
-        match machine.state() {
-            State::Running => {}
-            State::Finished | State::Halted => return Ok(()),
-            State::Error(e) => return Err(e.to_string()),
+        Activity::Event(Event::Connect { socket_name, .. }) => {
+            // A new connection: nothing seen on it yet.
+            seen.remove(socket_name);
         }
-        let mut got_any = false;
-        for (name, c) in conns.iter_mut() {
-            if !c.backlog.is_empty() {
-                let n = machine.handle_received(name, &c.backlog);
-                c.backlog.drain(..n);
-                if !c.backlog.is_empty() {
-                    continue; // the receive buffer is full: read no more from it now
-                }
+        Activity::Received { socket_name, bytes } => {
+            if trace {
+                printer.emit(report::Event::Rx(report::Traffic::socket(
+                    report::now(),
+                    socket_name,
+                    bytes,
+                )));
             }
-            if c.broken {
-                continue;
-            }
-            if c.closed {
-                // The peer closed its end: a reset after it (the peer is gone, a write
-                // reached nobody) makes later sends fail, as on the controller.
-                if matches!(c.stream.take_error(), Ok(Some(_)) | Err(_)) {
-                    c.broken = true;
-                    machine.handle_send_failed(name);
-                }
-                continue;
-            }
-            match c.stream.read(&mut buf) {
-                Ok(0) => {
-                    got_any = true;
-                    c.closed = true;
-                    machine.handle_peer_closed(name);
-                }
-                Ok(n) => {
-                    got_any = true;
-                    let bytes = &buf[..n];
-                    if opts.trace {
-                        trace_event(json, name, false, bytes);
-                    }
-                    c.first_at.get_or_insert_with(Instant::now);
-                    let room = WINDOW.saturating_sub(c.seen.len());
-                    c.seen.extend_from_slice(&bytes[..n.min(room)]);
-                    let taken = machine.handle_received(name, bytes);
-                    c.backlog.extend_from_slice(&bytes[taken..]);
-                }
-                Err(e) if matches!(e.kind(), ErrorKind::WouldBlock | ErrorKind::Interrupted) => {}
-                Err(_) => {
-                    got_any = true;
-                    c.closed = true;
-                    machine.handle_peer_closed(name);
-                }
+            let s = seen.entry(socket_name.to_string()).or_default();
+            s.first_at.get_or_insert_with(Instant::now);
+            let room = WINDOW.saturating_sub(s.bytes.len());
+            s.bytes.extend_from_slice(&bytes[..bytes.len().min(room)]);
+        }
+        Activity::PeerClosed { socket_name } => {
+            if opts.json {
+                printer.emit(report::Event::PeerClosed(report::PeerClosed {
+                    t: report::now(),
+                    socket: socket_name.to_string(),
+                }));
             }
         }
-        if !got_any {
-            let now = start.elapsed();
-            let mut wait = POLL_INTERVAL;
-            if let Some(t) = machine.poll_timeout() {
-                wait = wait.min(t.saturating_sub(now));
+        _ => {}
+    });
+    let end = |outcome| {
+        report::Event::End(report::End {
+            t: report::now(),
+            outcome,
+        })
+    };
+    match result {
+        Ok(drive::Outcome::MaxTime) => {
+            printer.emit(report::Event::Note(report::Note {
+                t: report::now(),
+                text: format!(
+                    "--max-time {}s reached: the program was ended",
+                    opts.max_time.unwrap_or_default().as_secs_f64()
+                ),
+            }));
+            if opts.json {
+                printer.emit(end(report::EndOutcome::MaxTime));
             }
-            if let Some(m) = opts.max_time {
-                wait = wait.min(m.saturating_sub(now));
+            Ok(())
+        }
+        Ok(o) => {
+            if opts.json {
+                printer.emit(end(if o == drive::Outcome::Halted {
+                    report::EndOutcome::Halted
+                } else {
+                    report::EndOutcome::Finished
+                }));
             }
-            if !wait.is_zero() {
-                std::thread::sleep(wait);
+            Ok(())
+        }
+        Err(e) => {
+            if opts.json {
+                printer.emit(report::Event::Error(report::Error {
+                    t: report::now(),
+                    line: Some(e.line()),
+                    column: Some(e.column()),
+                    text: e.message().to_string(),
+                }));
+                printer.emit(end(report::EndOutcome::Error));
             }
+            Err(e.to_string())
         }
     }
 }
@@ -682,29 +436,31 @@ mod tests {
     use super::*;
 
     #[test]
-    fn traced_calls_split_at_their_closing_paren() {
-        let t = split_traced("socket_read_string(\"c\", suffix=\")\") -> \"a -> b\"").unwrap();
-        assert_eq!(t.name, "socket_read_string");
-        assert_eq!(t.result, "\"a -> b\"");
-        assert_eq!(call_args(t.call), ["\"c\"", "suffix=\")\""]);
-        let (socket, read) = socket_and_read(t.name, &call_args(t.call));
-        assert_eq!(socket, "c");
-        assert!(matches!(read, Some(ReadCall::String { suffix, .. }) if suffix == b")"));
-    }
-
-    #[test]
     fn control_characters_are_shown_escaped() {
         assert_eq!(visible("\"TRG\r\""), "\"TRG\\r\"");
         assert_eq!(visible("a\u{1}"), "a\\x01");
     }
 
     #[test]
-    fn assignments_of_one_call_show_their_variable() {
-        let src = [
-            "x = socket_read_ascii_float(3)  # pose",
-            "if socket_open(h, 1):",
-        ];
-        assert_eq!(assigned_to(&src, 1, "socket_read_ascii_float"), Some("x"));
-        assert_eq!(assigned_to(&src, 2, "socket_open"), None);
+    fn a_read_fails_on_its_sentinel_or_on_fewer_floats_than_asked() {
+        let floats = |s: &[u8]| {
+            let mut r = urscript_socket::robot::SocketConnection::new("s", Default::default());
+            r.receive(s);
+            r.start_read(
+                ReadCall::AsciiFloat { number: 2 },
+                urscript_socket::robot::Timeout::Forever,
+                Duration::ZERO,
+            )
+            .unwrap();
+            r.poll_read().unwrap()
+        };
+        let two = ReadCall::AsciiFloat { number: 2 };
+        assert!(!failed_read(&two, &floats(b"(1,2)")));
+        assert!(failed_read(&two, &floats(b"(1)")));
+        assert!(failed_read(&ReadCall::Line, &ReadCall::Line.sentinel()));
+        assert!(!failed_read(
+            &ReadCall::GetVar { name: "X".into() },
+            &ReadResult::Int(0)
+        ));
     }
 }
