@@ -8,6 +8,7 @@ mod formats;
 mod listen;
 mod messages;
 mod offline;
+pub mod report;
 #[macro_use]
 pub mod out;
 mod script;

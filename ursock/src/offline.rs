@@ -7,7 +7,7 @@ use urscript_socket::robot::{Policy, ReadCall, ReadResult, SocketConnection, Tim
 use urscript_socket::RecvBuffer;
 
 use crate::formats::{drain, DecodeFormat, Side};
-use crate::show::{hex, JsonBytes};
+use crate::show::hex;
 use crate::{out, outln};
 
 /// `ursock encode FORMAT VALUES... [--hex] [--escapes] [--robot]`
@@ -31,7 +31,8 @@ pub fn encode(
 /// The most bytes of a read's input kept for its diagnosis.
 const DIAGNOSIS_WINDOW: usize = 4096;
 
-/// One read's result as a JSON line.
+/// One `robot` call's result as a JSON line (the `robot` subcommand's; `read` reports
+/// through [`crate::report::Event::Read`]).
 #[derive(serde::Serialize)]
 pub struct ReadJson {
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -44,20 +45,6 @@ pub struct ReadJson {
     pub sentinel: bool,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub why: Option<String>,
-}
-
-/// A read result as JSON: lists as `{"count":n,"values":[...]}` (nan as null), text as
-/// [`JsonBytes`], an int as a number.
-pub fn result_json(r: &ReadResult) -> serde_json::Value {
-    match r {
-        ReadResult::Floats(t) => serde_json::json!({
-            "count": t.count(),
-            "values": t.values().iter().map(|v| serde_json::Value::from(*v)).collect::<Vec<_>>(),
-        }),
-        ReadResult::Ints(l) => serde_json::json!({ "count": l.count(), "values": l.values() }),
-        ReadResult::Text(t) => serde_json::to_value(JsonBytes::new(t)).unwrap_or_default(),
-        ReadResult::Int(v) => serde_json::Value::from(*v),
-    }
 }
 
 /// Whether a result deserves a diagnosis: the sentinel, or fewer floats than asked.
@@ -143,30 +130,34 @@ pub fn read(call: ReadCall, repeat: usize, json: bool, timestamps: bool) -> Resu
             );
             why = Some(full);
         }
-        let t = out::elapsed_secs();
-        if json {
-            let line = ReadJson {
-                t: timestamps.then_some(t),
-                line: None,
-                call: call.function_name().to_string(),
-                result: result_json(&result),
-                sentinel: result.is_sentinel(),
-                why,
-            };
-            outln!("{}", serde_json::to_string(&line).unwrap_or_default());
-        } else {
-            let stamp = if timestamps {
-                format!("{} ", out::stamp())
-            } else {
-                String::new()
-            };
-            outln!("{stamp}{}", crate::show::read_result(&result));
-            if let Some(w) = why {
-                out::note(&format!("why: {w}"));
-            }
-        }
+        let event = crate::report::Read {
+            t: crate::report::now(),
+            call: call.function_name().to_string(),
+            result: crate::report::Value::from(&result),
+            sentinel: result.is_sentinel(),
+            why,
+        };
+        show_read(&event, &result, json, timestamps);
     }
     Ok(())
+}
+
+/// One read's event: the JSON line, or for people the result in URScript notation
+/// (prefixed by `+0.003s` with `timestamps`) and the reason on stderr.
+fn show_read(event: &crate::report::Read, result: &ReadResult, json: bool, timestamps: bool) {
+    if json {
+        outln!("{}", crate::report::Event::Read(event.clone()).to_json());
+        return;
+    }
+    let stamp = if timestamps {
+        format!("+{:.3}s ", event.t)
+    } else {
+        String::new()
+    };
+    outln!("{stamp}{}", crate::show::read_result(result));
+    if let Some(w) = &event.why {
+        out::note(&format!("why: {w}"));
+    }
 }
 
 /// `ursock decode FORMAT [--json] [--allow-unterminated]`: what a robot sent, one message
@@ -187,7 +178,9 @@ pub fn decode(
     let mut on = |m: Result<Message<'_>, urscript_socket::DecodeError>| match m {
         Ok(m) => {
             if json {
-                outln!("{}", crate::show::message_json(&m, kind));
+                // The typed message alone: `decode --json`'s line format predates the
+                // event stream and is kept (see docs/json-events.md).
+                outln!("{}", crate::report::TypedMessage::new(&m, kind).to_json());
             } else {
                 outln!("{}", crate::show::message_text(&m));
             }

@@ -68,9 +68,9 @@ pub fn stamp() -> String {
     format!("+{:.3}s", elapsed_secs())
 }
 
-/// Seconds since [`start_clock`], rounded to the millisecond (the `t` of JSON events).
+/// Seconds since [`start_clock`], rounded to the microsecond (the `t` of JSON events).
 pub fn elapsed_secs() -> f64 {
-    (start().elapsed().as_secs_f64() * 1000.0).round() / 1000.0
+    (start().elapsed().as_secs_f64() * 1e6).round() / 1e6
 }
 
 static LOG: Mutex<Option<File>> = Mutex::new(None);

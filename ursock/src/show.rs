@@ -3,8 +3,6 @@
 use std::fmt::Write as _;
 
 use urscript_socket::format::{write_quoted, Message};
-use urscript_socket::to_str::{Scalar, Value};
-use urscript_socket::var::VarMessage;
 
 /// `00 00 00 64`
 pub fn hex(bytes: &[u8]) -> String {
@@ -155,14 +153,6 @@ impl JsonBytes {
     }
 }
 
-fn json_scalar(s: Scalar) -> serde_json::Value {
-    match s {
-        Scalar::Int(v) => v.into(),
-        Scalar::Float(v) => v.into(),
-        Scalar::Bool(b) => b.into(),
-    }
-}
-
 /// A decoded message as one line of text: a single int32 or byte as its number, text
 /// as [`quoted`], everything else in the core's URScript notation (`SET A 1`,
 /// `p[1, 2, 3, 0, 3.141593, 0]`).
@@ -175,69 +165,10 @@ pub fn message_text(m: &Message<'_>) -> String {
     }
 }
 
-/// A decoded message as one JSON object, through serde_json:
-/// `{"type":"line","value":{...}}`. `text_kind` names a text message (`line`, `frame`,
-/// `string`).
-pub fn message_json(m: &Message<'_>, text_kind: &str) -> String {
-    serde_json::to_string(&json_message(m, text_kind)).unwrap_or_default()
-}
-
-fn json_message<'a>(m: &Message<'a>, text_kind: &str) -> JsonMessage<'a> {
-    match m {
-        Message::Int32(v) if v.len() == 1 => JsonMessage::Int32 {
-            value: v.get(0).unwrap_or(0),
-        },
-        Message::Bytes([b]) => JsonMessage::Byte { value: *b },
-        Message::Text(t) => {
-            let value = JsonBytes::new(t);
-            match text_kind {
-                "frame" => JsonMessage::Frame { value },
-                "string" => JsonMessage::String { value },
-                _ => JsonMessage::Line { value },
-            }
-        }
-        Message::Var(VarMessage::Set { name, value }) => JsonMessage::Set {
-            name,
-            value: *value,
-        },
-        Message::Var(VarMessage::Get { name }) => JsonMessage::Get { name },
-        Message::Value(Value::Scalar(Scalar::Int(v))) => JsonMessage::Int { value: *v },
-        Message::Value(Value::Scalar(Scalar::Float(v))) => JsonMessage::Float { value: *v },
-        Message::Value(Value::Scalar(Scalar::Bool(v))) => JsonMessage::Bool { value: *v },
-        Message::Value(Value::Pose(p)) => JsonMessage::Pose { value: *p },
-        Message::Value(Value::List(l)) => JsonMessage::List {
-            value: l.iter().map(json_scalar).collect(),
-        },
-        // Formats `decode` does not offer (float tuples, var replies, lists of ints):
-        // their URScript text.
-        other => JsonMessage::Text {
-            text: other.to_string(),
-        },
-    }
-}
-
-/// The JSON shape of a decoded message (non-finite floats become `null`).
-#[derive(serde::Serialize)]
-#[serde(tag = "type", rename_all = "lowercase")]
-enum JsonMessage<'a> {
-    Int32 { value: i32 },
-    Byte { value: u8 },
-    Line { value: JsonBytes },
-    Frame { value: JsonBytes },
-    String { value: JsonBytes },
-    Set { name: &'a str, value: i32 },
-    Get { name: &'a str },
-    Int { value: i32 },
-    Float { value: f64 },
-    Bool { value: bool },
-    Pose { value: [f64; 6] },
-    List { value: Vec<serde_json::Value> },
-    Text { text: String },
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::report::TypedMessage;
     use urscript_socket::format::Format;
     use urscript_socket::Decode;
 
@@ -256,18 +187,21 @@ mod tests {
         let m = m.item().unwrap();
         assert_eq!(message_text(&m), "p[0.1, 0, 0, 0, 3.141593, 0]");
         assert_eq!(
-            message_json(&m, "line"),
+            TypedMessage::new(&m, "line").to_json(),
             r#"{"type":"pose","value":[0.1,0.0,0.0,0.0,3.14159265,0.0]}"#
         );
         let mut d = Format::Int32 { number: 1 }.decoder().unwrap();
         let m = d.decode(&[0, 0, 0, 100]).unwrap().item().unwrap();
         assert_eq!(message_text(&m), "100");
-        assert_eq!(message_json(&m, "line"), r#"{"type":"int32","value":100}"#);
+        assert_eq!(
+            TypedMessage::new(&m, "line").to_json(),
+            r#"{"type":"int32","value":100}"#
+        );
         let mut d = Format::StxEtx.decoder().unwrap();
         let m = d.decode(b"\x02hi\x03").unwrap().item().unwrap();
         assert_eq!(message_text(&m), "\"hi\"");
         assert_eq!(
-            message_json(&m, "frame"),
+            TypedMessage::new(&m, "frame").to_json(),
             r#"{"type":"frame","value":{"encoding":"utf-8","text":"hi"}}"#
         );
     }

@@ -211,14 +211,33 @@ fn json_events_are_one_object_a_line() {
         assert!(kinds.contains(&k), "{kinds:?}");
     }
     let rx: Vec<&serde_json::Value> = events.iter().filter(|e| e["event"] == "rx").collect();
-    assert_eq!(rx[0]["data"], "café\n");
-    assert_eq!(rx[0]["encoding"], "utf8");
-    assert_eq!(rx[1]["data"], "E9 0A");
-    assert_eq!(rx[1]["encoding"], "hex");
+    assert_eq!(
+        rx[0]["bytes"],
+        serde_json::json!({"encoding": "utf-8", "text": "café\n"})
+    );
+    assert_eq!(
+        rx[1]["bytes"],
+        serde_json::json!({"encoding": "hex", "hex": "e90a"})
+    );
+    assert_eq!(rx[0]["len"], 6);
+    assert_eq!(rx[0]["conn"], 1);
     let decoded = events.iter().find(|e| e["event"] == "decoded").unwrap();
-    assert_eq!(decoded["message"]["value"], "café");
-    for e in &events[1..] {
-        assert!(e["t"].is_number() && e["time"].is_string(), "{e}");
+    assert_eq!(
+        decoded["message"],
+        serde_json::json!({"type": "line", "value": {"encoding": "utf-8", "text": "café"}})
+    );
+    assert_eq!(decoded["text"], "\"café\"");
+    let tx = events.iter().find(|e| e["event"] == "tx").unwrap();
+    assert_eq!(tx["origin"], "reply");
+    assert_eq!(tx["bytes"]["text"], "ok\n");
+    // One time field (`t`, seconds, rounded to the microsecond) and the wall clock.
+    let mut last = 0.0;
+    for e in &events {
+        let t = e["t"].as_f64().unwrap_or_else(|| panic!("no t: {e}"));
+        assert!(t >= last, "{e}");
+        assert_eq!((t * 1e6).round() / 1e6, t, "{e}");
+        last = t;
+        assert!(e["time"].is_string(), "{e}");
     }
 }
 

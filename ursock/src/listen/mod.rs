@@ -19,7 +19,6 @@ use std::sync::atomic::{AtomicBool, AtomicU64, AtomicUsize, Ordering};
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
-use serde_json::{json, Value};
 use tokio::io::{AsyncReadExt, AsyncWriteExt};
 use tokio::net::tcp::OwnedWriteHalf;
 use tokio::net::{TcpListener, TcpStream};
@@ -32,8 +31,9 @@ use urscript_socket::format::{Format, Message};
 
 use crate::diagnose;
 use crate::formats::{drain, DecodeFormat};
+use crate::report::{self, now, Bytes, Event, TypedMessage};
 use crate::vars::{self, SetOutcome, Vars};
-use out::{bytes_json, Kind, Out};
+use out::{Kind, Out};
 use spec::Reply;
 
 pub const DEFAULT_MAX_CONNECTIONS: usize = 64;
@@ -133,7 +133,6 @@ struct Shared {
     robot_reads: Option<ReadCall>,
     max_connections: usize,
     max_queue: usize,
-    show_max: usize,
     write_timeout: Duration,
     exit_after: Option<usize>,
     vars: Mutex<Vars>,
@@ -189,46 +188,29 @@ struct Conn {
 
 /// A decoded message, owned, with what rules match against.
 struct Decoded {
-    kind: &'static str,
     shown: String,
     raw: Vec<u8>,
     is_text: bool,
-    json: Value,
+    typed: TypedMessage,
 }
 
 /// `text_kind`: what a text message is called (`line`, `frame`, `string`).
 fn own(m: &Message<'_>, text_kind: &'static str) -> Decoded {
+    let typed = TypedMessage::new(m, text_kind);
     match m {
         Message::Text(t) => Decoded {
-            kind: text_kind,
             shown: crate::show::quoted(t),
             raw: t.to_vec(),
             is_text: true,
-            json: {
-                let (v, enc) = bytes_json(t);
-                json!({"type": text_kind, "value": v, "encoding": enc})
-            },
+            typed,
         },
         other => {
             let shown = crate::show::message_text(other);
-            let kind = match other {
-                Message::Int32(_) => "int32",
-                Message::Bytes(_) => "byte",
-                Message::Var(VarMessage::Set { .. }) => "set",
-                Message::Var(VarMessage::Get { .. }) => "get",
-                _ => "value",
-            };
-            let json = match other {
-                Message::Int32(v) if v.len() == 1 => json!({"type": kind, "value": v.get(0)}),
-                Message::Bytes([b]) => json!({"type": kind, "value": b}),
-                _ => json!({"type": kind, "text": shown}),
-            };
             Decoded {
-                kind,
                 raw: shown.clone().into_bytes(),
                 shown,
                 is_text: false,
-                json,
+                typed,
             }
         }
     }
@@ -269,11 +251,18 @@ pub fn listen(opts: ListenOptions) -> Result<(), String> {
     if opts.tui && opts.json {
         return Err("--tui and --json: choose one (the log can still be JSON-free --log)".into());
     }
-    let out = Out::new(opts.json, opts.quiet, log, opts.tui);
+    let out = Out::new(opts.json, opts.quiet, log, opts.tui, opts.show_max);
+    let listening = Event::Listening(report::Listening {
+        t: now(),
+        addr: addr.to_string(),
+    });
     if opts.json {
-        out.stdout_line(&json!({"event": "listening", "addr": addr.to_string()}).to_string());
+        let since_epoch = std::time::SystemTime::now()
+            .duration_since(std::time::UNIX_EPOCH)
+            .unwrap_or_default();
+        out.stdout_line(&out.json_line(&listening, since_epoch));
     } else {
-        out.stdout_line(&format!("listening on {addr}"));
+        out.stdout_line(&out::human(&listening, opts.show_max).join("\n"));
     }
     for (what, r) in reply.iter().map(|r| ("--reply".to_string(), r)).chain(
         rules
@@ -283,9 +272,13 @@ pub fn listen(opts: ListenOptions) -> Result<(), String> {
         for w in diagnose::reply(&r.sent(), robot_reads.as_ref(), false) {
             out.emit(
                 Kind::Warn,
-                None,
-                &format!("{what}: warning: {w}"),
-                json!({"event": "diagnosis", "message": w, "source": what}),
+                Event::Diagnosis(report::Diagnosis {
+                    t: now(),
+                    conn: None,
+                    source: Some(what.clone()),
+                    text: w,
+                    late_seconds: None,
+                }),
             );
         }
     }
@@ -303,7 +296,6 @@ pub fn listen(opts: ListenOptions) -> Result<(), String> {
         robot_reads,
         max_connections: opts.max_connections,
         max_queue: opts.max_queue.max(1),
-        show_max: opts.show_max,
         write_timeout: if opts.write_timeout > 0.0 && opts.write_timeout.is_finite() {
             Duration::try_from_secs_f64(opts.write_timeout).unwrap_or(Duration::MAX)
         } else {
@@ -380,25 +372,32 @@ async fn run(
             r = listener.accept() => match r {
                 Ok((stream, peer)) => {
                     if let Some((since, n, _)) = failing.take() {
-                        shared.out.emit(Kind::Warn, None,
-                            &format!("accepting again: recovered after {n} failed accepts in {:.1} s", since.elapsed().as_secs_f64()),
-                            json!({"event": "accept-recovered", "failures": n}));
+                        shared.out.emit(Kind::Warn, Event::AcceptRecovered(report::AcceptRecovered {
+                            t: now(),
+                            failures: n,
+                            seconds: since.elapsed().as_secs_f64(),
+                        }));
                     }
                     let open = shared.open.load(Ordering::Relaxed);
                     if open >= shared.max_connections {
                         if refused == 0 {
-                            shared.out.emit(Kind::Warn, None,
-                                &format!("refused connection from {peer}: {open} connections open (--max-connections {}); further refusals are counted", shared.max_connections),
-                                json!({"event": "refused", "peer": peer.to_string(), "open": open}));
+                            shared.out.emit(Kind::Warn, Event::Refused(report::Refused {
+                                t: now(),
+                                peer: peer.to_string(),
+                                open,
+                                max_connections: shared.max_connections,
+                            }));
                         }
                         refused += 1;
                         drop(stream);
                         continue;
                     }
                     if refused > 0 {
-                        shared.out.emit(Kind::Warn, None,
-                            &format!("accepting again: {refused} connections were refused while {} were open", shared.max_connections),
-                            json!({"event": "refusals-ended", "refused": refused}));
+                        shared.out.emit(Kind::Warn, Event::RefusalsEnded(report::RefusalsEnded {
+                            t: now(),
+                            refused,
+                            max_connections: shared.max_connections,
+                        }));
                         refused = 0;
                     }
                     next_id += 1;
@@ -409,9 +408,10 @@ async fn run(
                 Err(e) => {
                     let (since, n, delay) = failing.unwrap_or((Instant::now(), 0, Duration::from_millis(50)));
                     if n == 0 {
-                        shared.out.emit(Kind::Warn, None,
-                            &format!("accept failed: {e}; retrying with back-off (100 ms doubling to 1 s), quiet until it recovers"),
-                            json!({"event": "accept-error", "error": e.to_string()}));
+                        shared.out.emit(Kind::Warn, Event::AcceptError(report::AcceptError {
+                            t: now(),
+                            text: format!("accept failed: {e}; retrying with back-off (100 ms doubling to 1 s), quiet until it recovers"),
+                        }));
                     }
                     let delay = (delay * 2).min(Duration::from_secs(1));
                     failing = Some((since, n + 1, delay));
@@ -434,7 +434,17 @@ fn operator(shared: &Shared, line: &str) {
     if line.is_empty() {
         return;
     }
-    let note = |text: String, ev: Value| shared.out.emit(Kind::Note, None, &text, ev);
+    let error = |text: String| {
+        shared.out.emit(
+            Kind::Warn,
+            Event::Error(report::Error {
+                t: now(),
+                line: None,
+                column: None,
+                text,
+            }),
+        )
+    };
     let conns: Vec<Arc<Conn>> = shared
         .conns
         .lock()
@@ -443,50 +453,38 @@ fn operator(shared: &Shared, line: &str) {
         .cloned()
         .collect();
     if line == "help" {
-        note(
-            format!(
-                "type a reply spec ({}), `@N SPEC` for connection N, `list`, `close N`",
-                spec::FORMATS
-            ),
-            json!({"event": "help"}),
+        shared.out.emit(
+            Kind::Note,
+            Event::Help(report::Note {
+                t: now(),
+                text: format!(
+                    "type a reply spec ({}), `@N SPEC` for connection N, `list`, `close N`",
+                    spec::FORMATS
+                ),
+            }),
         );
         return;
     }
     if line == "list" {
-        let nvars = shared.vars.lock().unwrap_or_else(|p| p.into_inner()).len();
-        if conns.is_empty() {
-            note(
-                format!("no robot connected; {nvars} variables"),
-                json!({"event": "list", "connections": [], "variables": nvars}),
-            );
-        } else if !shared.out.is_json() {
-            note(
-                format!("{} connected; {nvars} variables", conns.len()),
-                Value::Null,
-            );
-        }
-        let mut all = Vec::new();
-        for c in &conns {
-            let (rx, tx) = (
-                c.stats.rx_bytes.load(Ordering::Relaxed),
-                c.stats.tx_bytes.load(Ordering::Relaxed),
-            );
-            all.push(json!({"conn": c.id, "peer": c.peer, "rx": rx, "tx": tx, "seconds": c.since.elapsed().as_secs_f64()}));
-            if !shared.out.is_json() {
-                note(
-                    format!(
-                        "#{} {}  rx {rx} B  tx {tx} B  connected {:.1} s",
-                        c.id,
-                        c.peer,
-                        c.since.elapsed().as_secs_f64()
-                    ),
-                    Value::Null,
-                );
-            }
-        }
-        if shared.out.is_json() && !conns.is_empty() {
-            note(String::new(), json!({"event": "list", "connections": all}));
-        }
+        let variables = shared.vars.lock().unwrap_or_else(|p| p.into_inner()).len();
+        let connections = conns
+            .iter()
+            .map(|c| report::ConnInfo {
+                conn: c.id,
+                peer: c.peer.clone(),
+                rx: c.stats.rx_bytes.load(Ordering::Relaxed),
+                tx: c.stats.tx_bytes.load(Ordering::Relaxed),
+                seconds: c.since.elapsed().as_secs_f64(),
+            })
+            .collect();
+        shared.out.emit(
+            Kind::Note,
+            Event::List(report::List {
+                t: now(),
+                connections,
+                variables,
+            }),
+        );
         return;
     }
     if let Some(n) = line.strip_prefix("close ") {
@@ -497,12 +495,7 @@ fn operator(shared: &Shared, line: &str) {
             .and_then(|n| conns.iter().find(|c| c.id == n))
         {
             Some(c) => c.stats.kill("closed by the operator".into()),
-            None => shared.out.emit(
-                Kind::Warn,
-                None,
-                &format!("close {n}: no such connection (see `list`)"),
-                json!({"event": "error"}),
-            ),
+            None => error(format!("close {n}: no such connection (see `list`)")),
         }
         return;
     }
@@ -512,12 +505,9 @@ fn operator(shared: &Shared, line: &str) {
             match n.parse::<u64>() {
                 Ok(n) => (Some(n), s),
                 Err(_) => {
-                    shared.out.emit(
-                        Kind::Warn,
-                        None,
-                        &format!("@{n}: expected a connection number, e.g. @2 floats 1 2 3"),
-                        json!({"event": "error"}),
-                    );
+                    error(format!(
+                        "@{n}: expected a connection number, e.g. @2 floats 1 2 3"
+                    ));
                     return;
                 }
             }
@@ -527,12 +517,7 @@ fn operator(shared: &Shared, line: &str) {
     let reply = match spec::parse(spec_text) {
         Ok(r) => r,
         Err(e) => {
-            shared.out.emit(
-                Kind::Warn,
-                None,
-                &format!("{e}; nothing sent"),
-                json!({"event": "error"}),
-            );
+            error(format!("{e}; nothing sent"));
             return;
         }
     };
@@ -541,43 +526,34 @@ fn operator(shared: &Shared, line: &str) {
             Some(c) => c,
             None => {
                 let ids: Vec<String> = conns.iter().map(|c| format!("#{}", c.id)).collect();
-                shared.out.emit(
-                    Kind::Warn,
-                    None,
-                    &format!(
-                        "no connection #{n} (connected: {}); nothing sent",
-                        if ids.is_empty() {
-                            "none".into()
-                        } else {
-                            ids.join(" ")
-                        }
-                    ),
-                    json!({"event": "error"}),
-                );
+                error(format!(
+                    "no connection #{n} (connected: {}); nothing sent",
+                    if ids.is_empty() {
+                        "none".into()
+                    } else {
+                        ids.join(" ")
+                    }
+                ));
                 return;
             }
         },
-        None => {
-            match conns.as_slice() {
-                [] => {
-                    shared.out.emit(
-                        Kind::Warn,
-                        None,
-                        "no robot connected: nothing sent",
-                        json!({"event": "error"}),
-                    );
-                    return;
-                }
-                [c] => c,
-                many => {
-                    let ids: Vec<String> = many.iter().map(|c| format!("@{}", c.id)).collect();
-                    shared.out.emit(Kind::Warn, None,
-                    &format!("{} robots connected ({}): say which, e.g. {} {spec_text}; nothing sent", many.len(), ids.join(" "), ids[0]),
-                    json!({"event": "error"}));
-                    return;
-                }
+        None => match conns.as_slice() {
+            [] => {
+                error("no robot connected: nothing sent".into());
+                return;
             }
-        }
+            [c] => c,
+            many => {
+                let ids: Vec<String> = many.iter().map(|c| format!("@{}", c.id)).collect();
+                error(format!(
+                    "{} robots connected ({}): say which, e.g. {} {spec_text}; nothing sent",
+                    many.len(),
+                    ids.join(" "),
+                    ids[0]
+                ));
+                return;
+            }
+        },
     };
     send(shared, conn, &reply, "operator");
 }
@@ -602,9 +578,13 @@ fn send(shared: &Shared, conn: &Conn, reply: &Reply, origin: &str) {
         );
         shared.out.emit(
             Kind::Warn,
-            Some(conn.id),
-            &format!("warning: {text}"),
-            json!({"event": "diagnosis", "message": text, "late_seconds": w.as_secs_f64()}),
+            Event::Diagnosis(report::Diagnosis {
+                t: now(),
+                conn: Some(conn.id),
+                source: None,
+                text,
+                late_seconds: Some(w.as_secs_f64()),
+            }),
         );
     }
     // `--reply` and rules were checked once at start; what the operator types, each time.
@@ -618,9 +598,13 @@ fn send(shared: &Shared, conn: &Conn, reply: &Reply, origin: &str) {
     for w in warnings {
         shared.out.emit(
             Kind::Warn,
-            Some(conn.id),
-            &format!("warning: {w}"),
-            json!({"event": "diagnosis", "message": w}),
+            Event::Diagnosis(report::Diagnosis {
+                t: now(),
+                conn: Some(conn.id),
+                source: None,
+                text: w,
+                late_seconds: None,
+            }),
         );
     }
     let len = reply.bytes.len();
@@ -644,12 +628,17 @@ fn send(shared: &Shared, conn: &Conn, reply: &Reply, origin: &str) {
     if !shared.out.traffic_wanted() {
         return;
     }
-    let (data, enc) = bytes_json(&reply.bytes);
     shared.out.emit(
         Kind::Traffic,
-        Some(conn.id),
-        &format!("-> {:<4} {}", len, dump::chunk(&reply.bytes, "      ", shared.show_max)),
-        json!({"event": "tx", "origin": origin, "format": reply.format, "len": len, "data": data, "encoding": enc}),
+        Event::Tx(report::Traffic {
+            t: now(),
+            socket: None,
+            conn: Some(conn.id),
+            len,
+            bytes: Bytes(reply.bytes.clone()),
+            origin: Some(origin.to_string()),
+            format: Some(reply.format.clone()),
+        }),
     );
 }
 
@@ -724,9 +713,11 @@ async fn serve(shared: Arc<Shared>, id: u64, stream: TcpStream, peer: String) {
         .insert(id, Arc::clone(&conn));
     shared.out.emit(
         Kind::Note,
-        Some(id),
-        &format!("connected from {peer}"),
-        json!({"event": "connect", "peer": peer}),
+        Event::Connect(report::Connect {
+            t: now(),
+            conn: id,
+            peer: peer.clone(),
+        }),
     );
     let mut writer_task = tokio::spawn(writer(wr, rx, Arc::clone(&stats), shared.write_timeout));
 
@@ -763,16 +754,17 @@ async fn serve(shared: Arc<Shared>, id: u64, stream: TcpStream, peer: String) {
             *conn.waiting_since.lock().unwrap_or_else(|p| p.into_inner()) = Some(Instant::now());
         }
         if n > 0 && shared.out.traffic_wanted() {
-            let (data, enc) = bytes_json(&chunk[..n]);
             shared.out.emit(
                 Kind::Traffic,
-                Some(id),
-                &format!(
-                    "<- {:<4} {}",
-                    n,
-                    dump::chunk(&chunk[..n], "      ", shared.show_max)
-                ),
-                json!({"event": "rx", "len": n, "data": data, "encoding": enc}),
+                Event::Rx(report::Traffic {
+                    t: now(),
+                    socket: None,
+                    conn: Some(id),
+                    len: n,
+                    bytes: Bytes(chunk[..n].to_vec()),
+                    origin: None,
+                    format: None,
+                }),
             );
         }
         let eof = n == 0;
@@ -837,12 +829,6 @@ async fn serve(shared: Arc<Shared>, id: u64, stream: TcpStream, peer: String) {
         stats.rx_bytes.load(Ordering::Relaxed),
         stats.tx_bytes.load(Ordering::Relaxed),
     );
-    let mut text = format!("closed ({reason}): rx {rx} B, tx {tx} B");
-    if refused_sets > 1 {
-        text.push_str(&format!(
-            ", {refused_sets} SETs refused (variable table full)"
-        ));
-    }
     let kind = if reason.contains("not reading")
         || reason.contains("error")
         || reason.contains("failed")
@@ -853,9 +839,14 @@ async fn serve(shared: Arc<Shared>, id: u64, stream: TcpStream, peer: String) {
     };
     shared.out.emit(
         kind,
-        Some(id),
-        &text,
-        json!({"event": "close", "reason": reason, "rx": rx, "tx": tx}),
+        Event::Close(report::Close {
+            t: now(),
+            conn: id,
+            reason,
+            rx,
+            tx,
+            refused_sets,
+        }),
     );
     let closed = shared.closed.fetch_add(1, Ordering::Relaxed) + 1;
     if shared.exit_after.is_some_and(|n| closed >= n as u64) {
@@ -879,9 +870,12 @@ fn handle_chunk(
         if !raw_mode {
             shared.out.emit(
                 Kind::Traffic,
-                Some(conn.id),
-                &format!("   ! {e}"),
-                json!({"event": "decode-error", "error": e}),
+                Event::DecodeError(report::DecodeError {
+                    t: now(),
+                    conn: conn.id,
+                    text: e,
+                    message: None,
+                }),
             );
         }
     }
@@ -891,24 +885,39 @@ fn handle_chunk(
             continue;
         }
         if shared.decode == Some(DecodeFormat::Var) {
-            shared.out.emit(Kind::Traffic, Some(conn.id),
-                &format!("   ! not a variable message: {} (expected `SET name int` or `GET name`)", d.shown),
-                json!({"event": "decode-error", "error": "not a variable message", "message": d.json}));
+            shared.out.emit(
+                Kind::Traffic,
+                Event::DecodeError(report::DecodeError {
+                    t: now(),
+                    conn: conn.id,
+                    text: format!(
+                        "not a variable message: {} (expected `SET name int` or `GET name`)",
+                        d.shown
+                    ),
+                    message: Some(d.typed.clone()),
+                }),
+            );
         } else if !raw_mode {
             shared.out.emit(
                 Kind::Traffic,
-                Some(conn.id),
-                &format!("   = {}", d.shown),
-                json!({"event": "decoded", "kind": d.kind, "message": d.json}),
+                Event::Decoded(report::Decoded {
+                    t: now(),
+                    conn: conn.id,
+                    message: d.typed.clone(),
+                    text: d.shown.clone(),
+                }),
             );
         }
         other_content = true;
         if let Some(rule) = rules::find(&shared.rules, &d.raw) {
             shared.out.emit(
                 Kind::Traffic,
-                Some(conn.id),
-                &format!("   rule {} ({}) matched", rule.line, rule.pattern),
-                json!({"event": "rule", "line": rule.line, "pattern": rule.pattern}),
+                Event::Rule(report::Rule {
+                    t: now(),
+                    conn: conn.id,
+                    line: rule.line,
+                    pattern: rule.pattern.clone(),
+                }),
             );
             send(shared, conn, &rule.reply, "rule");
             replied = true;
@@ -933,8 +942,18 @@ fn handle_var(shared: &Shared, conn: &Conn, d: &Decoded) -> bool {
     let id = conn.id;
     match parse_var_message(&d.raw) {
         Ok(VarMessage::Set { name, value }) => {
-            shared.out.emit(Kind::Traffic, Some(id), &format!("   = SET {name} {value}"),
-                json!({"event": "decoded", "kind": "set", "message": {"type": "set", "name": name, "value": value}}));
+            shared.out.emit(
+                Kind::Traffic,
+                Event::Decoded(report::Decoded {
+                    t: now(),
+                    conn: id,
+                    message: TypedMessage::Set {
+                        name: name.to_string(),
+                        value,
+                    },
+                    text: format!("SET {name} {value}"),
+                }),
+            );
             // SET expects no reply: the robot is not waiting in a read for one.
             *conn.waiting_since.lock().unwrap_or_else(|p| p.into_inner()) = None;
             let outcome = shared
@@ -946,24 +965,39 @@ fn handle_var(shared: &Shared, conn: &Conn, d: &Decoded) -> bool {
                 SetOutcome::Stored => {}
                 SetOutcome::Full(max) => {
                     if conn.refused_sets.fetch_add(1, Ordering::Relaxed) == 0 {
-                        shared.out.emit(Kind::Warn, Some(id),
-                            &format!("SET {name} refused: the variable table is full ({max} names, --max-vars); further refusals on this connection are counted"),
-                            json!({"event": "var-refused", "name": name, "max_vars": max}));
+                        shared.out.emit(Kind::Warn, Event::VarRefused(report::VarRefused {
+                            t: now(),
+                            conn: id,
+                            name: name.to_string(),
+                            text: format!("SET {name} refused: the variable table is full ({max} names, --max-vars); further refusals on this connection are counted"),
+                        }));
                     }
                 }
                 SetOutcome::NameTooLong(len) => {
                     if conn.refused_sets.fetch_add(1, Ordering::Relaxed) == 0 {
-                        shared.out.emit(Kind::Warn, Some(id),
-                            &format!("SET refused: a {len}-byte name (at most {}); further refusals on this connection are counted", vars::MAX_NAME_LEN),
-                            json!({"event": "var-refused", "name_len": len}));
+                        shared.out.emit(Kind::Warn, Event::VarRefused(report::VarRefused {
+                            t: now(),
+                            conn: id,
+                            name: name.to_string(),
+                            text: format!("SET refused: a {len}-byte name (at most {}); further refusals on this connection are counted", vars::MAX_NAME_LEN),
+                        }));
                     }
                 }
             }
             true
         }
         Ok(VarMessage::Get { name }) => {
-            shared.out.emit(Kind::Traffic, Some(id), &format!("   = GET {name}"),
-                json!({"event": "decoded", "kind": "get", "message": {"type": "get", "name": name}}));
+            shared.out.emit(
+                Kind::Traffic,
+                Event::Decoded(report::Decoded {
+                    t: now(),
+                    conn: id,
+                    message: TypedMessage::Get {
+                        name: name.to_string(),
+                    },
+                    text: format!("GET {name}"),
+                }),
+            );
             let value = shared
                 .vars
                 .lock()
@@ -974,9 +1008,12 @@ fn handle_var(shared: &Shared, conn: &Conn, d: &Decoded) -> bool {
                 // flood a --quiet listener).
                 shared.out.emit(
                     Kind::Traffic,
-                    Some(id),
-                    &format!("unknown variable {name} (never SET), answered 0"),
-                    json!({"event": "unknown-variable", "name": name, "answered": 0}),
+                    Event::UnknownVariable(report::UnknownVariable {
+                        t: now(),
+                        conn: id,
+                        name: name.to_string(),
+                        answered: 0,
+                    }),
                 );
             }
             let mut bytes = Vec::new();
@@ -996,15 +1033,21 @@ fn handle_var(shared: &Shared, conn: &Conn, d: &Decoded) -> bool {
         Err(_) => {
             let starts = d.raw.starts_with(b"GET ") || d.raw.starts_with(b"SET ");
             if starts && !d.raw.is_ascii() {
-                shared.out.emit(Kind::Warn, Some(id),
-                    &format!("{}: a variable name with non-ASCII bytes; the controller's names are ASCII identifiers, so this is not answered (the robot's socket_get_var returns 0 after 2 s)", d.shown),
-                    json!({"event": "var-invalid", "message": d.json}));
+                shared.out.emit(Kind::Warn, Event::VarInvalid(report::VarInvalid {
+                    t: now(),
+                    conn: id,
+                    message: d.typed.clone(),
+                    text: format!("{}: a variable name with non-ASCII bytes; the controller's names are ASCII identifiers, so this is not answered (the robot's socket_get_var returns 0 after 2 s)", d.shown),
+                }));
                 return true;
             }
             if starts {
-                shared.out.emit(Kind::Warn, Some(id),
-                    &format!("{}: malformed variable message (expected `SET name int` or `GET name`); not answered", d.shown),
-                    json!({"event": "var-invalid", "message": d.json}));
+                shared.out.emit(Kind::Warn, Event::VarInvalid(report::VarInvalid {
+                    t: now(),
+                    conn: id,
+                    message: d.typed.clone(),
+                    text: format!("{}: malformed variable message (expected `SET name int` or `GET name`); not answered", d.shown),
+                }));
                 return true;
             }
             false

@@ -8,9 +8,9 @@ use std::collections::{BTreeMap, VecDeque};
 use std::fs::File;
 use std::io::{BufWriter, ErrorKind, Write};
 use std::sync::Mutex;
-use std::time::{Instant, SystemTime, UNIX_EPOCH};
+use std::time::{SystemTime, UNIX_EPOCH};
 
-use serde_json::{json, Map, Value};
+use crate::report::Event;
 
 /// How a line is routed.
 #[derive(Clone, Copy, PartialEq, Eq)]
@@ -68,39 +68,31 @@ pub struct Out {
     pub screen: Option<Mutex<Screen>>,
     json: bool,
     quiet: bool,
+    /// Bytes of one chunk shown in its hex dump (`--show-max`).
+    show_max: usize,
     has_log: bool,
-    start: Instant,
     log: Mutex<Option<BufWriter<File>>>,
     /// Serialises stdout writes so lines from several connections never interleave.
     stdout: Mutex<()>,
 }
 
 impl Out {
-    pub fn new(json: bool, quiet: bool, log: Option<File>, tui: bool) -> Self {
+    pub fn new(json: bool, quiet: bool, log: Option<File>, tui: bool, show_max: usize) -> Self {
         Out {
+            show_max,
             screen: tui.then(|| Mutex::new(Screen::default())),
             json,
             quiet,
             has_log: log.is_some(),
-            start: Instant::now(),
             log: Mutex::new(log.map(BufWriter::new)),
             stdout: Mutex::new(()),
         }
-    }
-
-    pub fn is_json(&self) -> bool {
-        self.json
     }
 
     /// Whether traffic lines go anywhere (`--quiet` without `--log` drops them): callers
     /// skip formatting hex dumps nobody will see.
     pub fn traffic_wanted(&self) -> bool {
         !self.quiet || self.screen.is_some() || self.has_log
-    }
-
-    /// Seconds since the listener started.
-    pub fn rel(&self) -> f64 {
-        self.start.elapsed().as_secs_f64()
     }
 
     /// Writes one line to stdout. A closed pipe ends the program quietly.
@@ -144,54 +136,148 @@ impl Out {
         }
     }
 
-    /// One event: `text` for people, `event` (an object) for `--json`. Both carry the
-    /// connection number and the relative and wall-clock time.
-    pub fn emit(&self, kind: Kind, conn: Option<u64>, text: &str, event: Value) {
+    /// The event's JSON line: the event, then the wall-clock `time`.
+    pub fn json_line(&self, event: &Event, now: std::time::Duration) -> String {
+        #[derive(serde::Serialize)]
+        struct Stamped<'a> {
+            #[serde(flatten)]
+            event: &'a Event,
+            time: String,
+        }
+        serde_json::to_string(&Stamped {
+            event,
+            time: iso_time(now),
+        })
+        .unwrap_or_default()
+    }
+
+    /// One event: the JSON line with `--json`, else its human lines ([`human`]), each
+    /// prefixed by the connection, the event's `t` and the wall-clock time.
+    pub fn emit(&self, kind: Kind, event: Event) {
         if kind == Kind::Traffic && !self.traffic_wanted() {
             return;
         }
-        let rel = self.rel();
+        let rel = event.t();
+        let conn = event.conn();
         let now = SystemTime::now()
             .duration_since(UNIX_EPOCH)
             .unwrap_or_default();
-        let human = match conn {
-            Some(id) => format!("[#{id}] +{rel:.3}s {} {text}", wall_clock(now)),
-            None => format!("+{rel:.3}s {} {text}", wall_clock(now)),
+        let lines = human(&event, self.show_max);
+        let stamp = format!("+{rel:.3}s {}", wall_clock(now));
+        let stamped: Vec<String> = lines.iter().map(|l| format!("{stamp} {l}")).collect();
+        let with_conn = |l: &String| match conn {
+            Some(id) => format!("[#{id}] {l}"),
+            None => l.clone(),
         };
-        let mut obj = match event {
-            Value::Object(m) => m,
-            other => {
-                let mut m = Map::new();
-                m.insert("value".into(), other);
-                m
+        let json_line = self.json.then(|| self.json_line(&event, now));
+        match &json_line {
+            Some(j) => self.log_line(j),
+            None => {
+                for l in &stamped {
+                    self.log_line(&with_conn(l));
+                }
             }
-        };
-        obj.insert("t".into(), json!((rel * 1e6).round() / 1e6));
-        obj.insert("time".into(), json!(iso_time(now)));
-        if let Some(id) = conn {
-            obj.insert("conn".into(), json!(id));
         }
-        if kind == Kind::Warn && !obj.contains_key("message") {
-            obj.insert("message".into(), json!(text));
-        }
-        let json_line = Value::Object(obj).to_string();
-        self.log_line(if self.json { &json_line } else { &human });
         if let Some(screen) = &self.screen {
-            let short = format!("+{rel:.3}s {} {text}", wall_clock(now));
             let mut sc = screen.lock().unwrap_or_else(|p| p.into_inner());
-            sc.push(conn, short, kind != Kind::Traffic);
+            for l in stamped {
+                sc.push(conn, l, kind != Kind::Traffic);
+            }
             return;
         }
         if kind == Kind::Warn {
-            self.stderr_line(&format!("ursock: {human}"));
+            for l in &stamped {
+                self.stderr_line(&format!("ursock: {}", with_conn(l)));
+            }
         }
-        if self.json {
+        if let Some(j) = json_line {
             if kind != Kind::Traffic || !self.quiet {
-                self.stdout_line(&json_line);
+                self.stdout_line(&j);
             }
         } else if kind == Kind::Note || (kind == Kind::Traffic && !self.quiet) {
-            self.stdout_line(&human);
+            for l in &stamped {
+                self.stdout_line(&with_conn(l));
+            }
         }
+    }
+}
+
+/// An event for people: its lines (each gets the time stamp), without the time.
+pub fn human(event: &Event, show_max: usize) -> Vec<String> {
+    let one = |s: String| vec![s];
+    match event {
+        Event::Listening(e) => one(format!("listening on {}", e.addr)),
+        Event::Connect(e) => one(format!("connected from {}", e.peer)),
+        Event::Close(e) => {
+            let mut text = format!("closed ({}): rx {} B, tx {} B", e.reason, e.rx, e.tx);
+            if e.refused_sets > 1 {
+                text.push_str(&format!(
+                    ", {} SETs refused (variable table full)",
+                    e.refused_sets
+                ));
+            }
+            one(text)
+        }
+        Event::Rx(e) => one(format!(
+            "<- {:<4} {}",
+            e.len,
+            super::dump::chunk(&e.bytes.0, "      ", show_max)
+        )),
+        Event::Tx(e) => one(format!(
+            "-> {:<4} {}",
+            e.len,
+            super::dump::chunk(&e.bytes.0, "      ", show_max)
+        )),
+        Event::Decoded(e) => one(format!("   = {}", e.text)),
+        Event::DecodeError(e) => one(format!("   ! {}", e.text)),
+        Event::Rule(e) => one(format!("   rule {} ({}) matched", e.line, e.pattern)),
+        Event::Diagnosis(e) => one(match &e.source {
+            Some(source) => format!("{source}: warning: {}", e.text),
+            None => format!("warning: {}", e.text),
+        }),
+        Event::Refused(e) => one(format!(
+            "refused connection from {}: {} connections open (--max-connections {}); further refusals are counted",
+            e.peer, e.open, e.max_connections
+        )),
+        Event::RefusalsEnded(e) => one(format!(
+            "accepting again: {} connections were refused while {} were open",
+            e.refused, e.max_connections
+        )),
+        Event::AcceptRecovered(e) => one(format!(
+            "accepting again: recovered after {} failed accepts in {:.1} s",
+            e.failures, e.seconds
+        )),
+        Event::AcceptError(e) => one(e.text.clone()),
+        Event::List(e) => {
+            if e.connections.is_empty() {
+                return one(format!("no robot connected; {} variables", e.variables));
+            }
+            let mut lines = vec![format!(
+                "{} connected; {} variables",
+                e.connections.len(),
+                e.variables
+            )];
+            for c in &e.connections {
+                lines.push(format!(
+                    "#{} {}  rx {} B  tx {} B  connected {:.1} s",
+                    c.conn, c.peer, c.rx, c.tx, c.seconds
+                ));
+            }
+            lines
+        }
+        Event::UnknownVariable(e) => one(format!(
+            "unknown variable {} (never SET), answered {}",
+            e.name, e.answered
+        )),
+        Event::VarRefused(e) => one(e.text.clone()),
+        Event::VarInvalid(e) => one(e.text.clone()),
+        Event::Help(e) | Event::Note(e) => one(e.text.clone()),
+        Event::Error(e) => one(e.text.clone()),
+        Event::Call(e) => one(format!("{} -> {}", e.call, serde_json::to_string(&e.result).unwrap_or_default())),
+        Event::Message(e) => one(e.text.clone()),
+        Event::PeerClosed(e) => one(format!("{} closed by the server", e.socket)),
+        Event::End(e) => one(format!("end ({:?})", e.outcome)),
+        Event::Read(e) => one(serde_json::to_string(&e.result).unwrap_or_default()),
     }
 }
 
@@ -222,12 +308,4 @@ pub fn iso_time(since_epoch: std::time::Duration) -> String {
     let m = if mp < 10 { mp + 3 } else { mp - 9 };
     let y = yoe + era * 400 + i64::from(m <= 2);
     format!("{y:04}-{m:02}-{d:02}T{}Z", wall_clock(since_epoch))
-}
-
-/// Raw bytes for JSON: the text when valid UTF-8, otherwise hex; `encoding` says which.
-pub fn bytes_json(bytes: &[u8]) -> (Value, &'static str) {
-    match std::str::from_utf8(bytes) {
-        Ok(s) => (json!(s), "utf8"),
-        Err(_) => (json!(crate::show::hex(bytes)), "hex"),
-    }
 }

@@ -1,0 +1,676 @@
+//! The one report stream of `ursock`: every JSON line any subcommand prints is one
+//! [`Event`], serialised by serde with an `"event"` key naming the variant.
+//!
+//! One time field everywhere (`t`: seconds since the command started, rounded to the
+//! microsecond, see [`now`]), one byte representation ([`Bytes`], serialised as
+//! [`JsonBytes`]) and one representation of URScript values ([`Value`]). The schema is
+//! documented in `docs/json-events.md` and written as data in
+//! `docs/json-events.schema.json`, which `tests/json_schema.rs` checks every line against.
+//!
+//! The human views (`listen`'s lines and TUI, `read`'s lines) are rendered from the same
+//! event values.
+
+use serde::ser::{SerializeMap, SerializeSeq};
+use serde::{Serialize, Serializer};
+use urscript_socket::format::Message;
+use urscript_socket::robot::ReadResult;
+use urscript_socket::to_str::{Scalar, Value as UrValue};
+use urscript_socket::var::VarMessage;
+
+use crate::show::JsonBytes;
+
+/// Seconds since the command started ([`crate::out::start_clock`]), rounded to the
+/// microsecond: the `t` of every event.
+pub fn now() -> f64 {
+    crate::out::elapsed_secs()
+}
+
+/// Raw bytes, serialised as [`JsonBytes`]: `{"encoding":"utf-8","text":"café"}` when
+/// valid UTF-8, else `{"encoding":"hex","hex":"636166e9"}`.
+#[derive(Debug, Clone, PartialEq, Eq, Default)]
+pub struct Bytes(pub Vec<u8>);
+
+impl Serialize for Bytes {
+    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        JsonBytes::new(&self.0).serialize(s)
+    }
+}
+
+impl From<&[u8]> for Bytes {
+    fn from(b: &[u8]) -> Self {
+        Bytes(b.to_vec())
+    }
+}
+
+impl From<Vec<u8>> for Bytes {
+    fn from(b: Vec<u8>) -> Self {
+        Bytes(b)
+    }
+}
+
+/// A URScript value in JSON: int/float as a number (non-finite as `null`), bool as a
+/// bool, string as [`Bytes`], list as an array, pose as `{"pose":[6 numbers]}`, a read
+/// result `[n, v1, ...]` as `{"count":n,"values":[...]}`, nothing as `null`.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Value {
+    Int(i64),
+    Float(f64),
+    Bool(bool),
+    String(Vec<u8>),
+    List(Vec<Value>),
+    Pose([f64; 6]),
+    /// A read result `[count, values...]`.
+    Read {
+        count: usize,
+        values: Vec<Value>,
+    },
+    /// No value (a call that returns nothing).
+    None,
+}
+
+fn float<S: Serializer>(v: f64, s: S) -> Result<S::Ok, S::Error> {
+    if v.is_finite() {
+        s.serialize_f64(v)
+    } else {
+        s.serialize_none()
+    }
+}
+
+struct Floats<'a>(&'a [f64]);
+
+impl Serialize for Floats<'_> {
+    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        let mut seq = s.serialize_seq(Some(self.0.len()))?;
+        for v in self.0 {
+            seq.serialize_element(&Value::Float(*v))?;
+        }
+        seq.end()
+    }
+}
+
+impl Serialize for Value {
+    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        match self {
+            Value::Int(v) => s.serialize_i64(*v),
+            Value::Float(v) => float(*v, s),
+            Value::Bool(b) => s.serialize_bool(*b),
+            Value::String(b) => JsonBytes::new(b).serialize(s),
+            Value::List(l) => l.serialize(s),
+            Value::Pose(p) => {
+                let mut m = s.serialize_map(Some(1))?;
+                m.serialize_entry("pose", &Floats(p))?;
+                m.end()
+            }
+            Value::Read { count, values } => {
+                let mut m = s.serialize_map(Some(2))?;
+                m.serialize_entry("count", count)?;
+                m.serialize_entry("values", values)?;
+                m.end()
+            }
+            Value::None => s.serialize_none(),
+        }
+    }
+}
+
+impl From<Scalar> for Value {
+    fn from(v: Scalar) -> Self {
+        match v {
+            Scalar::Int(i) => Value::Int(i.into()),
+            Scalar::Float(f) => Value::Float(f),
+            Scalar::Bool(b) => Value::Bool(b),
+        }
+    }
+}
+
+impl From<&ReadResult> for Value {
+    fn from(r: &ReadResult) -> Self {
+        match r {
+            ReadResult::Floats(t) => Value::Read {
+                count: t.count(),
+                values: t.values().iter().map(|&v| Value::Float(v)).collect(),
+            },
+            ReadResult::Ints(l) => Value::Read {
+                count: l.count(),
+                values: l.values().iter().map(|&v| Value::Int(v.into())).collect(),
+            },
+            ReadResult::Text(t) => Value::String(t.clone()),
+            ReadResult::Int(v) => Value::Int((*v).into()),
+        }
+    }
+}
+
+/// A decoded message, typed (`{"type":"set","name":"A","value":-3}`): the shape
+/// `decode --json` prints and `listen --json`'s `decoded` events carry. Non-finite
+/// floats are `null`.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+#[serde(tag = "type", rename_all = "lowercase")]
+pub enum TypedMessage {
+    Int32 {
+        value: i32,
+    },
+    Byte {
+        value: u8,
+    },
+    Line {
+        value: Bytes,
+    },
+    Frame {
+        value: Bytes,
+    },
+    String {
+        value: Bytes,
+    },
+    Set {
+        name: String,
+        value: i32,
+    },
+    Get {
+        name: String,
+    },
+    Int {
+        value: i32,
+    },
+    Float {
+        value: Value,
+    },
+    Bool {
+        value: bool,
+    },
+    Pose {
+        #[serde(serialize_with = "pose_array")]
+        value: [f64; 6],
+    },
+    List {
+        value: Vec<Value>,
+    },
+    /// Messages of formats without a typed form here (float tuples, var replies, lists
+    /// of several ints): their URScript text.
+    Text {
+        text: String,
+    },
+}
+
+fn pose_array<S: Serializer>(p: &[f64; 6], s: S) -> Result<S::Ok, S::Error> {
+    Floats(p).serialize(s)
+}
+
+impl TypedMessage {
+    /// `text_kind` names a text message (`line`, `frame`, `string`).
+    pub fn new(m: &Message<'_>, text_kind: &str) -> Self {
+        match m {
+            Message::Int32(v) if v.len() == 1 => TypedMessage::Int32 {
+                value: v.get(0).unwrap_or(0),
+            },
+            Message::Bytes([b]) => TypedMessage::Byte { value: *b },
+            Message::Text(t) => {
+                let value = Bytes(t.to_vec());
+                match text_kind {
+                    "frame" => TypedMessage::Frame { value },
+                    "string" => TypedMessage::String { value },
+                    _ => TypedMessage::Line { value },
+                }
+            }
+            Message::Var(VarMessage::Set { name, value }) => TypedMessage::Set {
+                name: (*name).to_string(),
+                value: *value,
+            },
+            Message::Var(VarMessage::Get { name }) => TypedMessage::Get {
+                name: (*name).to_string(),
+            },
+            Message::Value(UrValue::Scalar(Scalar::Int(v))) => TypedMessage::Int { value: *v },
+            Message::Value(UrValue::Scalar(Scalar::Float(v))) => TypedMessage::Float {
+                value: Value::Float(*v),
+            },
+            Message::Value(UrValue::Scalar(Scalar::Bool(v))) => TypedMessage::Bool { value: *v },
+            Message::Value(UrValue::Pose(p)) => TypedMessage::Pose { value: *p },
+            Message::Value(UrValue::List(l)) => TypedMessage::List {
+                value: l.iter().map(Value::from).collect(),
+            },
+            other => TypedMessage::Text {
+                text: other.to_string(),
+            },
+        }
+    }
+
+    /// The message's `type`.
+    pub fn kind(&self) -> &'static str {
+        match self {
+            TypedMessage::Int32 { .. } => "int32",
+            TypedMessage::Byte { .. } => "byte",
+            TypedMessage::Line { .. } => "line",
+            TypedMessage::Frame { .. } => "frame",
+            TypedMessage::String { .. } => "string",
+            TypedMessage::Set { .. } => "set",
+            TypedMessage::Get { .. } => "get",
+            TypedMessage::Int { .. } => "int",
+            TypedMessage::Float { .. } => "float",
+            TypedMessage::Bool { .. } => "bool",
+            TypedMessage::Pose { .. } => "pose",
+            TypedMessage::List { .. } => "list",
+            TypedMessage::Text { .. } => "text",
+        }
+    }
+
+    /// The message as one JSON line (what `decode --json` prints).
+    pub fn to_json(&self) -> String {
+        serde_json::to_string(self).unwrap_or_default()
+    }
+}
+
+fn is_none<T>(o: &Option<T>) -> bool {
+    o.is_none()
+}
+
+// ---- robot events ----
+
+/// How a robot call ended.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum CallOutcome {
+    Returned,
+    TimedOut,
+    Stubbed,
+}
+
+/// `robot`: one socket (or stubbed) call and what it returned.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Call {
+    pub t: f64,
+    /// The script line of the call.
+    pub line: u32,
+    /// The function name (`socket_read_ascii_float`).
+    pub call: String,
+    /// The socket name, when the call has one.
+    pub socket: Option<String>,
+    pub args: Vec<Value>,
+    pub result: Value,
+    pub outcome: CallOutcome,
+    /// Whether the result is the call's failure sentinel (`[0, nan...]`, `""`, `0`).
+    pub sentinel: bool,
+    /// Why the call failed or returned its sentinel, when known.
+    pub why: Option<String>,
+}
+
+/// What kind of text a robot program showed.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum MessageKind {
+    Textmsg,
+    Popup,
+    Varmsg,
+}
+
+/// `robot`: `textmsg`, `popup` or `varmsg` text.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ProgramMessage {
+    pub t: f64,
+    pub line: u32,
+    pub kind: MessageKind,
+    pub text: String,
+}
+
+/// Bytes sent (`tx`) or received (`rx`). `robot` names the socket; `listen` gives the
+/// connection number (and for `tx`, the reply's origin and format).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Traffic {
+    pub t: f64,
+    #[serde(skip_serializing_if = "is_none")]
+    pub socket: Option<String>,
+    #[serde(skip_serializing_if = "is_none")]
+    pub conn: Option<u64>,
+    pub len: usize,
+    pub bytes: Bytes,
+    /// `listen` `tx`: what sent it (`reply`, `rule`, `var`, `operator`).
+    #[serde(skip_serializing_if = "is_none")]
+    pub origin: Option<String>,
+    /// `listen` `tx`: the reply spec's format (`line`, `floats`...).
+    #[serde(skip_serializing_if = "is_none")]
+    pub format: Option<String>,
+}
+
+impl Traffic {
+    /// Bytes on a robot socket.
+    pub fn socket(t: f64, socket: &str, bytes: &[u8]) -> Self {
+        Traffic {
+            t,
+            socket: Some(socket.to_string()),
+            conn: None,
+            len: bytes.len(),
+            bytes: Bytes(bytes.to_vec()),
+            origin: None,
+            format: None,
+        }
+    }
+}
+
+/// `robot`: the server closed a socket.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct PeerClosed {
+    pub t: f64,
+    pub socket: String,
+}
+
+/// A remark that is not an error.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Note {
+    pub t: f64,
+    pub text: String,
+}
+
+/// An error: a script's (with its line and column when known) or an operator's.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Error {
+    pub t: f64,
+    pub line: Option<u32>,
+    pub column: Option<u32>,
+    pub text: String,
+}
+
+/// How a robot program ended.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum EndOutcome {
+    Finished,
+    Halted,
+    MaxTime,
+    Error,
+}
+
+/// `robot`: the program ended.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct End {
+    pub t: f64,
+    pub outcome: EndOutcome,
+}
+
+// ---- read ----
+
+/// `read`: one read's result.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Read {
+    pub t: f64,
+    pub call: String,
+    pub result: Value,
+    pub sentinel: bool,
+    pub why: Option<String>,
+}
+
+// ---- listen ----
+
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Listening {
+    pub t: f64,
+    pub addr: String,
+}
+
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Connect {
+    pub t: f64,
+    pub conn: u64,
+    pub peer: String,
+}
+
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Close {
+    pub t: f64,
+    pub conn: u64,
+    pub reason: String,
+    /// Bytes received and sent on the connection.
+    pub rx: u64,
+    pub tx: u64,
+    /// SETs refused because the variable table was full.
+    pub refused_sets: u64,
+}
+
+/// A message decoded from what a robot sent.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Decoded {
+    pub t: f64,
+    pub conn: u64,
+    pub message: TypedMessage,
+    /// The message as `listen` shows it (URScript notation, text quoted).
+    pub text: String,
+}
+
+/// Input that did not decode (or a message that is not what `--decode` expects).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct DecodeError {
+    pub t: f64,
+    pub conn: u64,
+    pub text: String,
+    pub message: Option<TypedMessage>,
+}
+
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Rule {
+    pub t: f64,
+    pub conn: u64,
+    /// The rule's line in the `--rules` file.
+    pub line: usize,
+    pub pattern: String,
+}
+
+/// A warning about a reply: what the robot's read will make of it.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Diagnosis {
+    pub t: f64,
+    pub conn: Option<u64>,
+    /// Where the reply came from when not a connection (`--reply`, `--rules line 3`).
+    pub source: Option<String>,
+    pub text: String,
+    /// For a late reply: seconds since the robot's last message.
+    pub late_seconds: Option<f64>,
+}
+
+/// A connection refused over `--max-connections` (said once per episode).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Refused {
+    pub t: f64,
+    pub peer: String,
+    pub open: usize,
+    pub max_connections: usize,
+}
+
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct RefusalsEnded {
+    pub t: f64,
+    pub refused: u64,
+    pub max_connections: usize,
+}
+
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct AcceptError {
+    pub t: f64,
+    pub text: String,
+}
+
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct AcceptRecovered {
+    pub t: f64,
+    pub failures: u64,
+    pub seconds: f64,
+}
+
+/// One connection in a `list`.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ConnInfo {
+    pub conn: u64,
+    pub peer: String,
+    pub rx: u64,
+    pub tx: u64,
+    pub seconds: f64,
+}
+
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct List {
+    pub t: f64,
+    pub connections: Vec<ConnInfo>,
+    pub variables: usize,
+}
+
+/// A SET the variable table refused.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct VarRefused {
+    pub t: f64,
+    pub conn: u64,
+    pub name: String,
+    pub text: String,
+}
+
+/// A GET of a variable never SET (answered 0).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct UnknownVariable {
+    pub t: f64,
+    pub conn: u64,
+    pub name: String,
+    pub answered: i32,
+}
+
+/// A `SET`/`GET` line that is not a valid variable message.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct VarInvalid {
+    pub t: f64,
+    pub conn: u64,
+    pub message: TypedMessage,
+    pub text: String,
+}
+
+/// Every event `ursock` reports. Serialised with `"event"` naming the variant in
+/// snake_case, then the variant's fields.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+#[serde(tag = "event", rename_all = "snake_case")]
+pub enum Event {
+    // robot
+    Call(Call),
+    Message(ProgramMessage),
+    Tx(Traffic),
+    Rx(Traffic),
+    PeerClosed(PeerClosed),
+    Note(Note),
+    Error(Error),
+    End(End),
+    // read
+    Read(Read),
+    // listen
+    Listening(Listening),
+    Connect(Connect),
+    Close(Close),
+    Decoded(Decoded),
+    DecodeError(DecodeError),
+    Rule(Rule),
+    Diagnosis(Diagnosis),
+    Refused(Refused),
+    RefusalsEnded(RefusalsEnded),
+    AcceptError(AcceptError),
+    AcceptRecovered(AcceptRecovered),
+    Help(Note),
+    List(List),
+    VarRefused(VarRefused),
+    UnknownVariable(UnknownVariable),
+    VarInvalid(VarInvalid),
+}
+
+impl Event {
+    /// The event as one JSON line.
+    pub fn to_json(&self) -> String {
+        serde_json::to_string(self).unwrap_or_default()
+    }
+
+    /// The event's time.
+    pub fn t(&self) -> f64 {
+        match self {
+            Event::Call(e) => e.t,
+            Event::Message(e) => e.t,
+            Event::Tx(e) | Event::Rx(e) => e.t,
+            Event::PeerClosed(e) => e.t,
+            Event::Note(e) | Event::Help(e) => e.t,
+            Event::Error(e) => e.t,
+            Event::End(e) => e.t,
+            Event::Read(e) => e.t,
+            Event::Listening(e) => e.t,
+            Event::Connect(e) => e.t,
+            Event::Close(e) => e.t,
+            Event::Decoded(e) => e.t,
+            Event::DecodeError(e) => e.t,
+            Event::Rule(e) => e.t,
+            Event::Diagnosis(e) => e.t,
+            Event::Refused(e) => e.t,
+            Event::RefusalsEnded(e) => e.t,
+            Event::AcceptError(e) => e.t,
+            Event::AcceptRecovered(e) => e.t,
+            Event::List(e) => e.t,
+            Event::VarRefused(e) => e.t,
+            Event::UnknownVariable(e) => e.t,
+            Event::VarInvalid(e) => e.t,
+        }
+    }
+
+    /// The `listen` connection the event belongs to, if any.
+    pub fn conn(&self) -> Option<u64> {
+        match self {
+            Event::Tx(e) | Event::Rx(e) => e.conn,
+            Event::Connect(e) => Some(e.conn),
+            Event::Close(e) => Some(e.conn),
+            Event::Decoded(e) => Some(e.conn),
+            Event::DecodeError(e) => Some(e.conn),
+            Event::Rule(e) => Some(e.conn),
+            Event::Diagnosis(e) => e.conn,
+            Event::VarRefused(e) => Some(e.conn),
+            Event::UnknownVariable(e) => Some(e.conn),
+            Event::VarInvalid(e) => Some(e.conn),
+            _ => None,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn values_take_the_documented_shapes() {
+        let v = Value::List(vec![
+            Value::Int(1),
+            Value::Float(f64::NAN),
+            Value::Bool(true),
+            Value::String(b"caf\xE9".to_vec()),
+            Value::Pose([1.0, 2.0, 3.0, 0.0, 0.0, f64::INFINITY]),
+            Value::Read {
+                count: 0,
+                values: vec![Value::Float(f64::NAN)],
+            },
+            Value::None,
+        ]);
+        assert_eq!(
+            serde_json::to_string(&v).unwrap(),
+            r#"[1,null,true,{"encoding":"hex","hex":"636166e9"},{"pose":[1.0,2.0,3.0,0.0,0.0,null]},{"count":0,"values":[null]},null]"#
+        );
+    }
+
+    #[test]
+    fn events_carry_their_name_first() {
+        let e = Event::Call(Call {
+            t: 0.5,
+            line: 2,
+            call: "socket_read_line".into(),
+            socket: Some("socket_0".into()),
+            args: vec![Value::String(b"socket_0".to_vec())],
+            result: Value::String(b"ok".to_vec()),
+            outcome: CallOutcome::Returned,
+            sentinel: false,
+            why: None,
+        });
+        assert_eq!(
+            e.to_json(),
+            r#"{"event":"call","t":0.5,"line":2,"call":"socket_read_line","socket":"socket_0","args":[{"encoding":"utf-8","text":"socket_0"}],"result":{"encoding":"utf-8","text":"ok"},"outcome":"returned","sentinel":false,"why":null}"#
+        );
+        let e = Event::End(End {
+            t: 1.0,
+            outcome: EndOutcome::MaxTime,
+        });
+        assert_eq!(
+            e.to_json(),
+            r#"{"event":"end","t":1.0,"outcome":"max_time"}"#
+        );
+    }
+}
