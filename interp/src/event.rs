@@ -47,6 +47,7 @@ pub enum Event {
 
 /// Which function showed a [`Message`].
 #[derive(Debug, Clone, PartialEq)]
+#[non_exhaustive]
 pub enum MessageKind {
     /// `textmsg(s1, s2="")`: the log line.
     Textmsg,
@@ -81,6 +82,7 @@ pub struct Message {
 
 /// How a recorded call ended.
 #[derive(Debug, Clone, PartialEq)]
+#[non_exhaustive]
 pub enum Outcome {
     /// It returned normally (a read whose bytes arrived, a send that was queued).
     Returned,

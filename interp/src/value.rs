@@ -123,6 +123,7 @@ impl Value {
     /// ```
     /// # use urscript_interp::Value;
     /// assert_eq!(Value::Str(b"hi".to_vec()).to_source(), "\"hi\"");
+    /// assert_eq!(Value::Str(b"a\"b".to_vec()).to_source(), "'a\"b'");
     /// ```
     pub fn to_source(&self) -> String {
         let mut out = Vec::new();
@@ -151,9 +152,22 @@ impl Value {
         {
             match self {
                 Value::Str(s) if quote => {
-                    out.push(b'"');
-                    out.extend_from_slice(s);
-                    out.push(b'"');
+                    // A literal that reads back: double quotes, or single quotes when
+                    // the text holds a double quote (URScript has both), escaped only
+                    // when it holds both.
+                    let q = if s.contains(&b'"') && !s.contains(&b'\'') {
+                        b'\''
+                    } else {
+                        b'"'
+                    };
+                    out.push(q);
+                    for &b in s.iter() {
+                        if b == q || (b == b'\\' && s.contains(&b'"') && s.contains(&b'\'')) {
+                            out.push(b'\\');
+                        }
+                        out.push(b);
+                    }
+                    out.push(q);
                 }
                 Value::Str(s) => out.extend_from_slice(s),
                 Value::List(items) => {

@@ -31,22 +31,6 @@ pub fn encode(
 /// The most bytes of a read's input kept for its diagnosis.
 const DIAGNOSIS_WINDOW: usize = 4096;
 
-/// One `robot` call's result as a JSON line (the `robot` subcommand's; `read` reports
-/// through [`crate::report::Event::Read`]).
-#[derive(serde::Serialize)]
-pub struct ReadJson {
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub t: Option<f64>,
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub line: Option<usize>,
-    pub call: String,
-    pub result: serde_json::Value,
-    /// The call's timeout/failure sentinel (`[0, nan...]`, `""`, `0`).
-    pub sentinel: bool,
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub why: Option<String>,
-}
-
 /// Whether a result deserves a diagnosis: the sentinel, or fewer floats than asked.
 pub fn failed(call: &ReadCall, r: &ReadResult) -> bool {
     r.is_sentinel()

@@ -112,6 +112,23 @@ impl Serialize for Value {
     }
 }
 
+impl Value {
+    /// An interpreter value.
+    pub fn from_interp(v: &urscript_interp::Value) -> Self {
+        use urscript_interp::Value as V;
+        match v {
+            V::Int(i) => Value::Int((*i).into()),
+            V::Float(f) => Value::Float(*f),
+            V::Bool(b) => Value::Bool(*b),
+            V::Str(s) => Value::String(s.clone()),
+            V::List(items) => Value::List(items.iter().map(Value::from_interp).collect()),
+            V::Pose(p) => Value::Pose(*p),
+            V::Thread(id) => Value::Int((*id).into()),
+            V::None => Value::None,
+        }
+    }
+}
+
 impl From<Scalar> for Value {
     fn from(v: Scalar) -> Self {
         match v {
@@ -270,6 +287,8 @@ pub enum CallOutcome {
     Returned,
     TimedOut,
     Stubbed,
+    /// It returned its failure value (`False`); `why` says why.
+    Failed,
 }
 
 /// `robot`: one socket (or stubbed) call and what it returned.
@@ -278,8 +297,13 @@ pub struct Call {
     pub t: f64,
     /// The script line of the call.
     pub line: u32,
+    /// The column of the call's name.
+    pub column: u32,
     /// The function name (`socket_read_ascii_float`).
     pub call: String,
+    /// The call as URScript with its evaluated arguments, with `x = ` in front when the
+    /// statement assigns it (`x = socket_read_ascii_float(2, "socket_0")`).
+    pub source: String,
     /// The socket name, when the call has one.
     pub socket: Option<String>,
     pub args: Vec<Value>,
@@ -289,6 +313,13 @@ pub struct Call {
     pub sentinel: bool,
     /// Why the call failed or returned its sentinel, when known.
     pub why: Option<String>,
+    /// For people: the result as URScript with ` (timeout)`/` (stub)` after it; `None`
+    /// when the call returns nothing.
+    #[serde(skip)]
+    pub shown_result: Option<String>,
+    /// For people: the note said on stderr about this call (`why: ...`).
+    #[serde(skip)]
+    pub note: Option<String>,
 }
 
 /// What kind of text a robot program showed.
@@ -307,6 +338,8 @@ pub struct ProgramMessage {
     pub line: u32,
     pub kind: MessageKind,
     pub text: String,
+    /// The call that showed it, as URScript with its evaluated arguments.
+    pub source: String,
 }
 
 /// Bytes sent (`tx`) or received (`rx`). `robot` names the socket; `listen` gives the
@@ -652,17 +685,21 @@ mod tests {
         let e = Event::Call(Call {
             t: 0.5,
             line: 2,
+            column: 5,
             call: "socket_read_line".into(),
+            source: "x = socket_read_line(\"socket_0\")".into(),
             socket: Some("socket_0".into()),
             args: vec![Value::String(b"socket_0".to_vec())],
             result: Value::String(b"ok".to_vec()),
             outcome: CallOutcome::Returned,
             sentinel: false,
             why: None,
+            shown_result: Some("\"ok\"".into()),
+            note: None,
         });
         assert_eq!(
             e.to_json(),
-            r#"{"event":"call","t":0.5,"line":2,"call":"socket_read_line","socket":"socket_0","args":[{"encoding":"utf-8","text":"socket_0"}],"result":{"encoding":"utf-8","text":"ok"},"outcome":"returned","sentinel":false,"why":null}"#
+            r#"{"event":"call","t":0.5,"line":2,"column":5,"call":"socket_read_line","source":"x = socket_read_line(\"socket_0\")","socket":"socket_0","args":[{"encoding":"utf-8","text":"socket_0"}],"result":{"encoding":"utf-8","text":"ok"},"outcome":"returned","sentinel":false,"why":null}"#
         );
         let e = Event::End(End {
             t: 1.0,

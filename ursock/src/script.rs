@@ -114,7 +114,7 @@ impl Printer {
                 }
                 // A loop polling with a timeout would repeat the same note at every turn:
                 // a note is said again only when it changes.
-                match &c.why {
+                match &c.note {
                     Some(w) if self.last_why.get(&c.line) == Some(w) => {}
                     Some(w) => {
                         self.last_why.insert(c.line, w.clone());
@@ -144,8 +144,9 @@ impl Printer {
 }
 
 /// A call record as a report event: the call as URScript (with `x = ` when the
-/// statement assigns it), the typed result, and the reason it failed if it did.
-fn call_event(c: &CallRecord, why: Option<String>) -> report::Call {
+/// statement assigns it), the typed result, and why it failed (`diagnosis`: what the
+/// read's bytes show; else the machine's reason for a `False`).
+fn call_event(c: &CallRecord, diagnosis: Option<String>) -> report::Call {
     let source = match &c.assigned_to {
         Some(target) => format!("{target} = {}", c.source()),
         None => c.source(),
@@ -154,13 +155,25 @@ fn call_event(c: &CallRecord, why: Option<String>) -> report::Call {
         Some(r) => report::Value::from(&r.result),
         None => report::Value::from_interp(&c.result),
     };
-    let sentinel = c.read.as_ref().is_some_and(|r| failed_read(&r.call, &r.result));
+    let sentinel = c
+        .read
+        .as_ref()
+        .is_some_and(|r| failed_read(&r.call, &r.result));
     let (outcome, suffix) = match &c.outcome {
         Outcome::Returned => (report::CallOutcome::Returned, ""),
         Outcome::TimedOut => (report::CallOutcome::TimedOut, " (timeout)"),
         Outcome::Stubbed => (report::CallOutcome::Stubbed, " (stub)"),
         Outcome::Failed(_) => (report::CallOutcome::Failed, ""),
         _ => (report::CallOutcome::Returned, ""),
+    };
+    let failure = match &c.outcome {
+        Outcome::Failed(w) if w.starts_with(&c.name) => Some(w.clone()),
+        Outcome::Failed(w) => Some(format!("{}: {w}", c.name)),
+        _ => None,
+    };
+    let note = match &diagnosis {
+        Some(d) => Some(format!("why: {d}")),
+        None => failure.clone(),
     };
     let shown_result = match &c.result {
         urscript_interp::Value::None if c.outcome != Outcome::Stubbed => None,
@@ -182,10 +195,8 @@ fn call_event(c: &CallRecord, why: Option<String>) -> report::Call {
         result,
         outcome,
         sentinel,
-        why: why.or_else(|| match &c.outcome {
-            Outcome::Failed(w) => Some(format!("{}: {w}", c.name)),
-            _ => None,
-        }),
+        note: note.clone(),
+        why: diagnosis.or(failure),
         shown_result,
     }
 }
@@ -233,6 +244,10 @@ fn diagnose_read(c: &CallRecord, seen: &mut Seen) -> Option<String> {
     }
     let bytes = std::mem::take(&mut seen.bytes);
     let first_at = seen.first_at.take();
+    if matches!(c.outcome, Outcome::Failed(_)) {
+        // The machine knows why (the socket is not open): the bytes tell nothing.
+        return None;
+    }
     let failed = failed_read(&read.call, &read.result);
     let binary = matches!(
         read.call,
@@ -259,7 +274,7 @@ fn diagnose_read(c: &CallRecord, seen: &mut Seen) -> Option<String> {
         seen.first_at = Some(Instant::now());
         seen.bytes = rest.to_vec();
     }
-    why.map(|w| format!("why: {w}"))
+    why
 }
 
 /// A message as a report event, with the call that showed it.
@@ -326,7 +341,8 @@ pub fn run(script: &str, connect_to: Option<&str>, opts: Options) -> Result<(), 
                 report::CallOutcome::Failed
             },
             sentinel: false,
-            why: opened.as_ref().err().filter(|_| opts.json).cloned(),
+            why: opened.as_ref().err().cloned(),
+            note: None,
             shown_result: Some(if opened.is_ok() { "True" } else { "False" }.into()),
         }));
         opened?;
@@ -345,10 +361,7 @@ pub fn run(script: &str, connect_to: Option<&str>, opts: Options) -> Result<(), 
             printer.emit(report::Event::Message(message_event(m)));
         }
         Activity::Event(Event::Transmit { socket_name, bytes }) => {
-            if let Some(t) = seen
-                .get_mut(socket_name)
-                .and_then(|s| s.timed_out.as_mut())
-            {
+            if let Some(t) = seen.get_mut(socket_name).and_then(|s| s.timed_out.as_mut()) {
                 t.2 = true;
             }
             if trace {

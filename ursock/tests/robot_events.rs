@@ -1,0 +1,116 @@
+//! Issue 17: `ursock robot` prints what the interpreter's typed events say, never text it
+//! parsed back: quotes inside strings, `socket_close`, JSON lines with an `event` key.
+
+use std::process::{Command, Stdio};
+
+fn robot(args: &[&str]) -> (i32, String, String) {
+    let out = Command::new(env!("CARGO_BIN_EXE_ursock"))
+        .arg("robot")
+        .args(args)
+        .stdin(Stdio::null())
+        .output()
+        .expect("spawn ursock");
+    (
+        out.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+#[test]
+fn a_quote_inside_a_message_shifts_nothing() {
+    let (code, out, err) = robot(&[
+        "-e",
+        "textmsg('a\"b')",
+        "-e",
+        "textmsg(\"second\")",
+        "-e",
+        "textmsg(\"third\")",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let lines: Vec<&str> = out.lines().collect();
+    assert_eq!(
+        lines,
+        [
+            "textmsg('a\"b') -> a\"b",
+            "textmsg(\"second\") -> second",
+            "textmsg(\"third\") -> third"
+        ]
+    );
+    // The same with --json and a stub whose value holds a quote.
+    let (code, out, err) = robot(&[
+        "--json",
+        "--stub",
+        "rq_name='q\"q'",
+        "-e",
+        "x = rq_name()",
+        "-e",
+        "textmsg(x)",
+        "-e",
+        "textmsg(\"last\")",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let events: Vec<serde_json::Value> = out
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap_or_else(|e| panic!("{e}: {l}")))
+        .collect();
+    let texts: Vec<&str> = events
+        .iter()
+        .filter(|e| e["event"] == "message")
+        .map(|e| e["text"].as_str().unwrap())
+        .collect();
+    assert_eq!(texts, ["q\"q", "last"]);
+    let stub = events.iter().find(|e| e["call"] == "rq_name").unwrap();
+    assert_eq!(stub["outcome"], "stubbed");
+    assert_eq!(stub["result"]["text"], "q\"q");
+}
+
+#[test]
+fn socket_close_is_shown_and_every_json_line_names_its_event() {
+    let script = "socket_close()\nx = socket_read_line(timeout=0.01)\nsocket_send_line(\"a\")";
+    let (code, out, err) = robot(&["-e", script]);
+    assert_eq!(code, 0, "{err}");
+    assert!(out.lines().any(|l| l == "socket_close()"), "{out}");
+    assert!(
+        err.contains("socket_read_line: the socket \"socket_0\" is not open"),
+        "{err}"
+    );
+    let (code, out, err) = robot(&["--json", "-e", script]);
+    assert_eq!(code, 0, "{err}");
+    let events: Vec<serde_json::Value> = out
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap_or_else(|e| panic!("{e}: {l}")))
+        .collect();
+    assert!(events.iter().all(|e| e["event"].is_string()), "{out}");
+    let calls: Vec<&str> = events
+        .iter()
+        .filter(|e| e["event"] == "call")
+        .map(|e| e["call"].as_str().unwrap())
+        .collect();
+    assert_eq!(
+        calls,
+        ["socket_close", "socket_read_line", "socket_send_line"]
+    );
+    let send = &events[2];
+    assert_eq!(send["outcome"], "failed");
+    assert_eq!(send["result"], false);
+    assert_eq!(send["column"], 1);
+    assert_eq!(events.last().unwrap()["event"], "end");
+    assert_eq!(events.last().unwrap()["outcome"], "finished");
+}
+
+#[test]
+fn a_call_with_wrong_arguments_is_refused_before_anything_runs() {
+    let (code, out, err) = robot(&[
+        "-e",
+        "textmsg(\"never\")",
+        "-e",
+        "x = socket_read_ascii_float(6, \"cam\", timeuot=1)",
+    ]);
+    assert_ne!(code, 0);
+    assert!(out.is_empty(), "{out}");
+    assert!(
+        err.contains("line 2, column 5: `socket_read_ascii_float` has no parameter `timeuot`"),
+        "{err}"
+    );
+}
