@@ -11,7 +11,9 @@
 
 use std::time::Duration;
 
-use urscript_socket::robot::{Policy, ReadCall, SocketConnection, Timeout};
+use urscript_socket::format::{Format, Message};
+use urscript_socket::robot::{Policy, ReadCall, ReadResult, SocketConnection, Timeout};
+use urscript_socket::{Decode, ErrorKind};
 
 /// How many bytes of a reply a message quotes.
 const SHOWN: usize = 40;
@@ -166,28 +168,54 @@ fn floats(number: usize, bytes: &[u8]) -> Option<String> {
             shown(&body[open..=close])
         ));
     }
-    let values = inner.split(',').filter(|v| !v.trim().is_empty()).count();
-    if values > number {
-        return Some(format!(
-            "{values} values arrived where the read asked for {number}: the robot fails the \
-             whole read; send {number} values or read {values}"
-        ));
+    // What the robot's read makes of the tuple: the core's decoder, not a parse here.
+    let mut decoder = Format::FloatTuple { number }.decoder().ok()?;
+    match decoder.decode(&body[open..=close]) {
+        Ok(status) => match status.item() {
+            Some(Message::FloatTuple(t)) if t.count() < number => {
+                let values = t.count();
+                Some(format!(
+                    "{values} of the {number} values arrived: count is {values}, the other slots nan"
+                ))
+            }
+            _ => None,
+        },
+        Err(e) => match e.kind() {
+            ErrorKind::TooManyValues { .. } => {
+                // The decoder stops at the first value too many; the fields say how many.
+                let values = inner.split(',').filter(|v| !v.trim().is_empty()).count();
+                Some(format!(
+                    "{values} values arrived where the read asked for {number}: the robot fails the \
+                     whole read; send {number} values or read {values}"
+                ))
+            }
+            ErrorKind::InvalidNumber | ErrorKind::Empty => {
+                // The field holding the byte the decoder stopped at (offsets count from `(`).
+                let raw = &body[open + 1..close];
+                let at = usize::try_from(e.offset())
+                    .unwrap_or(usize::MAX)
+                    .saturating_sub(1)
+                    .min(raw.len());
+                let start = raw[..at]
+                    .iter()
+                    .rposition(|&b| b == b',')
+                    .map_or(0, |i| i + 1);
+                let end = raw[at..]
+                    .iter()
+                    .position(|&b| b == b',')
+                    .map_or(raw.len(), |i| at + i);
+                let field = String::from_utf8_lossy(raw.get(start..end).unwrap_or_default());
+                let bad = field.trim();
+                Some(format!(
+                    "{bad:?} is not a number the robot reads (plain decimal, optional exponent)"
+                ))
+            }
+            _ => Some(format!(
+                "the robot's read fails: {}",
+                crate::messages::value_error(&e)
+            )),
+        },
     }
-    if let Some(bad) = inner
-        .split(',')
-        .map(str::trim)
-        .find(|v| v.parse::<f64>().is_err())
-    {
-        return Some(format!(
-            "{bad:?} is not a number the robot reads (plain decimal, optional exponent)"
-        ));
-    }
-    if values < number {
-        return Some(format!(
-            "{values} of the {number} values arrived: count is {values}, the other slots nan"
-        ));
-    }
-    None
 }
 
 /// `(0,15, 0,5)`: every field, split on ", ", is two digit groups joined by ','.
@@ -348,10 +376,10 @@ pub fn reply(sent: &Sent<'_>, expect: Option<&ReadCall>, after_tuple_lf: bool) -
         .collect();
     if let ReadCall::AsciiFloat { number } = call {
         if let Some(result) = simulate(&call, sent.bytes) {
-            let failed = result.starts_with("[0,") || result == "[0]";
-            if failed || !w.is_empty() {
+            if result.is_sentinel() || !w.is_empty() {
                 w.push(format!(
-                    "the robot's socket_read_ascii_float({number}) would return {result}"
+                    "the robot's socket_read_ascii_float({number}) would return {}",
+                    result.to_urscript()
                 ));
             }
         }
@@ -379,13 +407,12 @@ pub fn leftover_lf(
 }
 
 /// What the robot's `call` returns when `bytes` is all it receives before its timeout.
-pub fn simulate(call: &ReadCall, bytes: &[u8]) -> Option<String> {
+pub fn simulate(call: &ReadCall, bytes: &[u8]) -> Option<ReadResult> {
     let mut s = SocketConnection::new("socket_0", Policy::default());
     s.receive(bytes);
     s.start_read(call.clone(), Timeout::Forever, Duration::ZERO)
         .ok()?;
-    let r = s.poll_read().or_else(|| s.give_up())?;
-    Some(r.to_urscript())
+    s.poll_read().or_else(|| s.give_up())
 }
 
 /// A float tuple followed by a line end: the robot's float read stops at `)` and leaves
@@ -461,6 +488,17 @@ mod tests {
             diagnose(&ReadCall::AsciiFloat { number: 2 }, b"(1, 2)\n"),
             None
         );
+    }
+
+    /// The core's decoder finds the bad value; the message names its field, also next
+    /// to bytes that are not UTF-8 or are several bytes long.
+    #[test]
+    fn a_bad_value_is_named_by_the_field_the_decoder_stopped_in() {
+        assert!(f(3, b"(1, 2x, 3)").contains("\"2x\" is not a number"));
+        assert!(f(2, b"(1,,2)").contains("\"\" is not a number"));
+        assert!(f(2, "(é,1)".as_bytes()).contains("\"é\" is not a number"));
+        assert!(f(2, b"(1,\xE9\xE9)").contains("is not a number"));
+        assert!(f(2, b"(\xE9,1)").contains("is not a number"));
     }
 
     #[test]

@@ -1,0 +1,412 @@
+//! Every JSON line `ursock` prints matches the documented schema: `docs/json-events.schema.json`
+//! (the schema written once, as data), checked here by a small hand-written validator of
+//! the JSON Schema keywords it uses. `listen --json` runs with a real TCP client on
+//! 127.0.0.1; `read --json` and `decode --json` run on stdin. The examples in
+//! `docs/json-events.md` are checked too, and every event of the schema has one.
+
+mod listen_common;
+mod run_common;
+
+use std::io::Write;
+
+use serde_json::Value;
+
+use listen_common::{read_line, robot, Listener};
+use run_common::run;
+
+fn schema() -> Value {
+    let path = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../docs/json-events.schema.json"
+    );
+    let text = std::fs::read_to_string(path).expect("docs/json-events.schema.json");
+    serde_json::from_str(&text).expect("the schema is JSON")
+}
+
+/// `#/$defs/NAME` of the schema.
+fn resolve<'a>(root: &'a Value, reference: &str) -> Result<&'a Value, String> {
+    let name = reference
+        .strip_prefix("#/$defs/")
+        .ok_or_else(|| format!("unsupported $ref {reference}"))?;
+    root["$defs"]
+        .get(name)
+        .ok_or_else(|| format!("no definition {name}"))
+}
+
+fn type_matches(v: &Value, ty: &str) -> bool {
+    match ty {
+        "null" => v.is_null(),
+        "boolean" => v.is_boolean(),
+        "integer" => v.is_i64() || v.is_u64(),
+        "number" => v.is_number(),
+        "string" => v.is_string(),
+        "array" => v.is_array(),
+        "object" => v.is_object(),
+        _ => false,
+    }
+}
+
+/// The keywords the schema uses: `$ref`, `type`, `const`, `enum`, `oneOf`, `properties`,
+/// `required`, `additionalProperties: false`, `items`, `minItems`, `maxItems`, `minimum`,
+/// `maximum`, `pattern` (only `^([0-9a-f]{2})+$`). Any other keyword is an error, so the
+/// schema cannot say more than is checked.
+fn validate(root: &Value, schema: &Value, v: &Value, at: &str) -> Result<(), String> {
+    let obj = schema
+        .as_object()
+        .ok_or_else(|| format!("{at}: schema is not an object"))?;
+    for (key, rule) in obj {
+        match key.as_str() {
+            "description" | "title" | "$schema" | "$defs" => {}
+            "$ref" => validate(root, resolve(root, rule.as_str().unwrap_or(""))?, v, at)?,
+            "type" => {
+                let ok = match rule {
+                    Value::String(t) => type_matches(v, t),
+                    Value::Array(ts) => {
+                        ts.iter().any(|t| type_matches(v, t.as_str().unwrap_or("")))
+                    }
+                    _ => false,
+                };
+                if !ok {
+                    return Err(format!("{at}: {v} is not of type {rule}"));
+                }
+            }
+            "const" => {
+                if v != rule {
+                    return Err(format!("{at}: {v} is not {rule}"));
+                }
+            }
+            "enum" => {
+                if !rule.as_array().is_some_and(|a| a.contains(v)) {
+                    return Err(format!("{at}: {v} is not one of {rule}"));
+                }
+            }
+            "oneOf" => {
+                let options = rule.as_array().ok_or("oneOf is not an array")?;
+                let mut errors = Vec::new();
+                let mut matched = 0;
+                for o in options {
+                    match validate(root, o, v, at) {
+                        Ok(()) => matched += 1,
+                        Err(e) => errors.push(e),
+                    }
+                }
+                if matched != 1 {
+                    return Err(format!(
+                        "{at}: {v} matches {matched} of oneOf (want 1): {errors:?}"
+                    ));
+                }
+            }
+            "properties" => {
+                let Some(fields) = v.as_object() else {
+                    continue;
+                };
+                let props = rule.as_object().ok_or("properties is not an object")?;
+                for (name, value) in fields {
+                    if let Some(s) = props.get(name) {
+                        validate(root, s, value, &format!("{at}.{name}"))?;
+                    } else if obj.get("additionalProperties") == Some(&Value::Bool(false)) {
+                        return Err(format!("{at}: undocumented field {name:?} in {v}"));
+                    }
+                }
+            }
+            "additionalProperties" => {
+                if rule != &Value::Bool(false) {
+                    return Err(format!(
+                        "{at}: only additionalProperties: false is supported"
+                    ));
+                }
+            }
+            "required" => {
+                for name in rule.as_array().ok_or("required is not an array")? {
+                    let name = name.as_str().unwrap_or("");
+                    if v.is_object() && v.get(name).is_none() {
+                        return Err(format!("{at}: required field {name:?} missing in {v}"));
+                    }
+                }
+            }
+            "items" => {
+                if let Some(items) = v.as_array() {
+                    for (i, item) in items.iter().enumerate() {
+                        validate(root, rule, item, &format!("{at}[{i}]"))?;
+                    }
+                }
+            }
+            "minItems" | "maxItems" => {
+                if let Some(items) = v.as_array() {
+                    let n = rule.as_u64().unwrap_or(0) as usize;
+                    let ok = if key == "minItems" {
+                        items.len() >= n
+                    } else {
+                        items.len() <= n
+                    };
+                    if !ok {
+                        return Err(format!("{at}: {} items breaks {key} {n}", items.len()));
+                    }
+                }
+            }
+            "minimum" | "maximum" => {
+                if let (Some(x), Some(bound)) = (v.as_f64(), rule.as_f64()) {
+                    let ok = if key == "minimum" {
+                        x >= bound
+                    } else {
+                        x <= bound
+                    };
+                    if !ok {
+                        return Err(format!("{at}: {x} breaks {key} {bound}"));
+                    }
+                }
+            }
+            "pattern" => {
+                if rule != "^([0-9a-f]{2})+$" {
+                    return Err(format!("{at}: unsupported pattern {rule}"));
+                }
+                if let Some(s) = v.as_str() {
+                    let ok = !s.is_empty()
+                        && s.len() % 2 == 0
+                        && s.bytes()
+                            .all(|b| b.is_ascii_digit() || (b'a'..=b'f').contains(&b));
+                    if !ok {
+                        return Err(format!("{at}: {s:?} is not lower-case hex bytes"));
+                    }
+                }
+            }
+            other => return Err(format!("{at}: unsupported schema keyword {other}")),
+        }
+    }
+    Ok(())
+}
+
+/// Checks one line of an event stream: JSON, an object with an `event` the schema
+/// documents, matching that event's definition and the schema as a whole.
+fn check_event(root: &Value, line: &str) -> Value {
+    let v: Value = serde_json::from_str(line).unwrap_or_else(|e| panic!("{e}: {line}"));
+    let name = v["event"]
+        .as_str()
+        .unwrap_or_else(|| panic!("no \"event\" key: {line}"));
+    let def = root["$defs"]
+        .get(name)
+        .unwrap_or_else(|| panic!("event {name:?} is not in the schema: {line}"));
+    validate(root, def, &v, name).unwrap_or_else(|e| panic!("{e}\nline: {line}"));
+    validate(root, root, &v, "line").unwrap_or_else(|e| panic!("{e}\nline: {line}"));
+    v
+}
+
+fn check_message(root: &Value, line: &str) -> Value {
+    let v: Value = serde_json::from_str(line).unwrap_or_else(|e| panic!("{e}: {line}"));
+    let def = resolve(root, "#/$defs/typed_message").unwrap();
+    validate(root, def, &v, "message").unwrap_or_else(|e| panic!("{e}\nline: {line}"));
+    v
+}
+
+fn event_names(root: &Value) -> Vec<String> {
+    root["oneOf"]
+        .as_array()
+        .expect("the schema's top-level oneOf lists the events")
+        .iter()
+        .map(|r| {
+            r["$ref"]
+                .as_str()
+                .and_then(|s| s.strip_prefix("#/$defs/"))
+                .expect("a $ref")
+                .to_string()
+        })
+        .collect()
+}
+
+#[test]
+fn the_validator_rejects_what_the_schema_does_not_say() {
+    let root = schema();
+    let bad = [
+        r#"{"event":"rx","t":0.1,"len":1}"#,
+        r#"{"event":"rx","t":0.1,"conn":1,"len":1,"bytes":{"encoding":"hex","hex":"E9"}}"#,
+        r#"{"event":"rx","t":0.1,"conn":1,"len":1,"bytes":{"encoding":"utf-8","text":"a"},"data":"a"}"#,
+        r#"{"event":"read","t":0.1,"call":"x","result":{"pose":[1,2]},"sentinel":false,"why":null}"#,
+        r#"{"event":"end","t":0.1,"outcome":"crashed"}"#,
+        r#"{"event":"tx","t":"now","len":1,"bytes":{"encoding":"utf-8","text":"a"}}"#,
+    ];
+    for line in bad {
+        let v: Value = serde_json::from_str(line).unwrap();
+        let def = &root["$defs"][v["event"].as_str().unwrap()];
+        assert!(validate(&root, def, &v, "x").is_err(), "accepted {line}");
+        assert!(validate(&root, &root, &v, "x").is_err(), "accepted {line}");
+    }
+    let good = r#"{"event":"rx","t":0.1,"conn":1,"len":1,"bytes":{"encoding":"hex","hex":"e9"}}"#;
+    check_event(&root, good);
+}
+
+#[test]
+fn every_event_is_documented_with_an_example_that_matches() {
+    let root = schema();
+    let doc = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../docs/json-events.md"
+    ))
+    .expect("docs/json-events.md");
+    let mut in_json = false;
+    let mut examples = Vec::new();
+    let mut messages = 0;
+    for line in doc.lines() {
+        match line.trim() {
+            "```json" => in_json = true,
+            "```" => in_json = false,
+            l if in_json && l.starts_with('{') => {
+                if l.contains("\"event\"") {
+                    examples.push(check_event(&root, l)["event"].as_str().unwrap().to_string());
+                } else {
+                    check_message(&root, l);
+                    messages += 1;
+                }
+            }
+            _ => {}
+        }
+    }
+    for name in event_names(&root) {
+        assert!(
+            examples.contains(&name),
+            "no example of {name} in docs/json-events.md"
+        );
+        assert!(
+            doc.contains(&format!("### `{name}`")),
+            "no section for {name} in docs/json-events.md"
+        );
+    }
+    assert!(messages >= 5, "examples of decode --json lines");
+}
+
+#[test]
+fn listen_json_lines_match_the_schema() {
+    let root = schema();
+    let mut l = Listener::start(&[
+        "--json",
+        "--decode",
+        "line",
+        "--reply",
+        "line ok",
+        "--robot-reads",
+        "ascii-float:3",
+    ]);
+    let mut s = robot(&l.addr);
+    s.write_all("café\n".as_bytes()).unwrap();
+    assert_eq!(read_line(&mut s), "ok\n");
+    s.write_all(&[0xE9, b'\n']).unwrap();
+    assert_eq!(read_line(&mut s), "ok\n");
+    s.write_all(b"SET A 5\nGET A\n").unwrap();
+    assert_eq!(read_line(&mut s), "A 5\n");
+    s.write_all(b"GET NEVER\n").unwrap();
+    assert_eq!(read_line(&mut s), "NEVER 0\n");
+    s.write_all(b"SET A\n").unwrap();
+    l.wait_for("\"var_invalid\"", false);
+    let long = format!("{}\n", "x".repeat(5000));
+    s.write_all(long.as_bytes()).unwrap();
+    l.wait_for("\"decode_error\"", false);
+    l.type_line("help");
+    l.type_line("list");
+    l.wait_for("\"list\"", false);
+    l.type_line("@9 line hi");
+    l.wait_for("\"error\"", false);
+    l.type_line("floats 1 2 3");
+    l.wait_for("\"operator\"", false);
+    drop(s);
+    let out = l.wait_for("\"close\"", false);
+    let mut seen = Vec::new();
+    for line in out.lines() {
+        let v = check_event(&root, line);
+        assert!(
+            v["time"].is_string(),
+            "listen events carry the wall clock: {line}"
+        );
+        seen.push(v["event"].as_str().unwrap().to_string());
+    }
+    for name in [
+        "listening",
+        "diagnosis",
+        "connect",
+        "rx",
+        "decoded",
+        "tx",
+        "unknown_variable",
+        "var_invalid",
+        "decode_error",
+        "help",
+        "list",
+        "error",
+        "close",
+    ] {
+        assert!(
+            seen.iter().any(|s| s == name),
+            "no {name} event in {seen:?}"
+        );
+    }
+}
+
+#[test]
+fn read_json_lines_match_the_schema() {
+    let root = schema();
+    let cases: [(&[&str], &[u8]); 6] = [
+        (&["ascii-float", "2", "--repeat", "3"], b"(1,2)(3)(1e999,x)"),
+        (
+            &["binary-integer", "2", "--repeat", "2"],
+            &[0, 0, 0, 7, 0xFF, 0xFF, 0xFF, 0xFF],
+        ),
+        (&["byte-list", "3"], &[1, 2]),
+        (&["line", "--repeat", "2"], b"caf\xE9\r\nok"),
+        (
+            &["string", "--prefix", "<", "--suffix", ">"],
+            "<café>".as_bytes(),
+        ),
+        (&["ascii-float", "6", "--timestamps"], b"p[1,2,3,0,0,0]"),
+    ];
+    let mut sentinels = 0;
+    for (args, input) in cases {
+        let mut all = vec!["read"];
+        all.extend_from_slice(args);
+        all.push("--json");
+        let (code, out, err) = run(&all, input);
+        assert_eq!(code, 0, "{all:?}: {err}");
+        assert!(!out.is_empty(), "{all:?}");
+        for line in out.lines() {
+            let v = check_event(&root, line);
+            assert_eq!(v["event"], "read", "{line}");
+            if v["sentinel"] == true {
+                sentinels += 1;
+            }
+        }
+    }
+    assert!(sentinels >= 2, "failed reads were among the cases");
+}
+
+#[test]
+fn decode_json_lines_match_the_schema() {
+    let root = schema();
+    let cases: [(&[&str], &[u8]); 8] = [
+        (&["line"], b"caf\xC3\xA9\ncaf\xE9\n"),
+        (&["int32"], &[0, 0, 0, 100, 0xFF, 0xFF, 0xFF, 0xFE]),
+        (&["byte"], &[0, 255]),
+        (&["stx-etx"], b"\x02hi\x03\x02\xE9\x03"),
+        (&["delimiter", "--delimiter", ";"], b"a;b;"),
+        (&["var"], b"SET A -3\nGET B\n"),
+        (
+            &["value"],
+            b"p[1, 2, 3, 4, 5, 6]\n[True, 2, 1.5]\n7\n2.5\nFalse\n",
+        ),
+        (&["value", "--allow-unterminated"], b"[]"),
+    ];
+    let mut types = Vec::new();
+    for (args, input) in cases {
+        let mut all = vec!["decode"];
+        all.extend_from_slice(args);
+        all.push("--json");
+        let (code, out, err) = run(&all, input);
+        assert_eq!(code, 0, "{all:?}: {err}");
+        for line in out.lines() {
+            let v = check_message(&root, line);
+            types.push(v["type"].as_str().unwrap().to_string());
+        }
+    }
+    for t in [
+        "line", "int32", "byte", "frame", "string", "set", "get", "pose", "list", "int", "float",
+        "bool",
+    ] {
+        assert!(types.iter().any(|x| x == t), "no {t} message in {types:?}");
+    }
+}
