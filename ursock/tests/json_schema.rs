@@ -410,3 +410,65 @@ fn decode_json_lines_match_the_schema() {
         assert!(types.iter().any(|x| x == t), "no {t} message in {types:?}");
     }
 }
+
+#[test]
+fn robot_json_lines_match_the_schema() {
+    use std::io::{Read, Write};
+    let root = schema();
+    let server = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
+    let port = server.local_addr().unwrap().port();
+    let peer = std::thread::spawn(move || {
+        let (mut s, _) = server.accept().unwrap();
+        let mut b = [0u8; 64];
+        let _ = s.read(&mut b);
+        s.write_all(b"(1.5, 2)\nTRG\r\n").unwrap();
+        std::thread::sleep(std::time::Duration::from_millis(300));
+    });
+    let script = format!(
+        "ok = socket_open(\"127.0.0.1\", {port}, \"cam\")\n\
+         socket_send_line(\"go\", \"cam\")\n\
+         x = socket_read_ascii_float(2, \"cam\")\n\
+         y = socket_read_line(\"cam\", timeout=0.1)\n\
+         z = socket_read_byte_list(4, \"cam\", timeout=0.05)\n\
+         textmsg(\"x = \", x)\n\
+         popup(\"done\", \"Vision\", warning=True)\n\
+         v = rq_pos()\n\
+         socket_close(\"cam\")\n\
+         socket_send_int(1, \"cam\")\n"
+    );
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_ursock"))
+        .args([
+            "robot", "--json", "--trace", "--stub", "rq_pos=3", "-e", &script,
+        ])
+        .stdin(std::process::Stdio::null())
+        .output()
+        .unwrap();
+    peer.join().unwrap();
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success(), "{text}");
+    let mut kinds = Vec::new();
+    for line in text.lines() {
+        let v = check_event(&root, line);
+        kinds.push(v["event"].as_str().unwrap().to_string());
+    }
+    for k in ["call", "message", "tx", "rx", "end"] {
+        assert!(kinds.iter().any(|x| x == k), "{k} missing: {kinds:?}");
+    }
+    // A program error is an `error` event with its line and column, then `end`.
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_ursock"))
+        .args(["robot", "--json", "-e", "x = [1]\ny = x[2]"])
+        .stdin(std::process::Stdio::null())
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&out.stdout);
+    let events: Vec<Value> = text.lines().map(|l| check_event(&root, l)).collect();
+    let err = events
+        .iter()
+        .find(|e| e["event"] == "error")
+        .expect("error");
+    assert_eq!(
+        (err["line"].as_u64(), err["column"].as_u64()),
+        (Some(2), Some(1))
+    );
+    assert_eq!(events.last().unwrap()["outcome"], "error");
+}
