@@ -389,13 +389,11 @@ pub fn run(script: &str, connect_to: Option<&str>, opts: Options) -> Result<(), 
             let room = WINDOW.saturating_sub(s.bytes.len());
             s.bytes.extend_from_slice(&bytes[..bytes.len().min(room)]);
         }
-        Activity::PeerClosed { socket_name } => {
-            if opts.json {
-                printer.emit(report::Event::PeerClosed(report::PeerClosed {
-                    t: report::now(),
-                    socket: socket_name.to_string(),
-                }));
-            }
+        Activity::PeerClosed { socket_name } if opts.json => {
+            printer.emit(report::Event::PeerClosed(report::PeerClosed {
+                t: report::now(),
+                socket: socket_name.to_string(),
+            }));
         }
         _ => {}
     });
