@@ -459,7 +459,7 @@ fn operator(shared: &Shared, line: &str) {
                 t: now(),
                 text: format!(
                     "type a reply spec ({}), `@N SPEC` for connection N, `list`, `close N`",
-                    spec::FORMATS
+                    spec::formats()
                 ),
             }),
         );
