@@ -606,6 +606,60 @@ pub enum Event {
     VarInvalid(VarInvalid),
 }
 
+/// Constructors stamped with [`now`], for the common events.
+impl Event {
+    /// `note`.
+    pub fn note(text: impl Into<String>) -> Self {
+        Event::Note(Note {
+            t: now(),
+            text: text.into(),
+        })
+    }
+
+    /// `error`, with the program line and column when known.
+    pub fn error(line: Option<u32>, column: Option<u32>, text: impl Into<String>) -> Self {
+        Event::Error(Error {
+            t: now(),
+            line,
+            column,
+            text: text.into(),
+        })
+    }
+
+    /// `message` (textmsg, popup, varmsg).
+    pub fn message(line: u32, kind: MessageKind, text: impl Into<String>) -> Self {
+        Event::Message(ProgramMessage {
+            t: now(),
+            line,
+            kind,
+            text: text.into(),
+        })
+    }
+
+    /// `tx` on a robot socket.
+    pub fn tx(socket: &str, bytes: &[u8]) -> Self {
+        Event::Tx(Traffic::socket(now(), socket, bytes))
+    }
+
+    /// `rx` on a robot socket.
+    pub fn rx(socket: &str, bytes: &[u8]) -> Self {
+        Event::Rx(Traffic::socket(now(), socket, bytes))
+    }
+
+    /// `peer_closed`.
+    pub fn peer_closed(socket: &str) -> Self {
+        Event::PeerClosed(PeerClosed {
+            t: now(),
+            socket: socket.to_string(),
+        })
+    }
+
+    /// `end`.
+    pub fn end(outcome: EndOutcome) -> Self {
+        Event::End(End { t: now(), outcome })
+    }
+}
+
 impl Event {
     /// The event as one JSON line.
     pub fn to_json(&self) -> String {
