@@ -173,7 +173,20 @@ impl ValueEnum for DecodeFormat {
     fn to_possible_value(&self) -> Option<clap::builder::PossibleValue> {
         let core = self.format(b"\n").name();
         let n = names::DECODE.iter().find(|n| n.core == Some(core))?;
-        Some(clap::builder::PossibleValue::new(n.name).aliases(n.aliases.iter().copied()))
+        let help = match self {
+            DecodeFormat::Int32 => "Big-endian int32 (`socket_send_int`)",
+            DecodeFormat::Byte => "Single bytes (`socket_send_byte`)",
+            DecodeFormat::Line => "LF-terminated lines (`socket_send_line`)",
+            DecodeFormat::StxEtx => "`02 <payload> 03` frames",
+            DecodeFormat::Delimiter => "Strings split on `--delimiter`",
+            DecodeFormat::Var => "`SET name v` / `GET name` lines",
+            DecodeFormat::Value => "Lines holding the text of a number, bool, list or pose",
+        };
+        Some(
+            clap::builder::PossibleValue::new(n.name)
+                .aliases(n.aliases.iter().copied())
+                .help(help),
+        )
     }
 }
 
