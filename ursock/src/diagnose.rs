@@ -308,17 +308,19 @@ pub fn parse_robot_reads(s: &str) -> Result<ReadCall, String> {
         }
         Ok(n)
     };
-    Ok(match kind {
-        "ascii-float" => ReadCall::AsciiFloat { number: number()? },
-        "binary-integer" => ReadCall::BinaryInteger { number: number()? },
-        "byte-list" => ReadCall::ByteList { number: number()? },
-        "line" => ReadCall::Line,
-        _ => {
-            return Err(format!(
-                "--robot-reads {s}: expected ascii-float:N, binary-integer:N, byte-list:N or line"
-            ))
-        }
-    })
+    let bad = || {
+        format!("--robot-reads {s}: expected ascii-float:N, binary-integer:N, byte-list:N or line")
+    };
+    // The names of `read`'s subcommands; `string` needs a prefix and suffix, not given here.
+    let name = crate::formats::lookup(crate::formats::names::READS, kind)
+        .filter(|n| n.core != Some("string"))
+        .ok_or_else(bad)?;
+    let number = if name.core == Some("line") {
+        None
+    } else {
+        Some(number()?)
+    };
+    crate::formats::read_call(name, number)
 }
 
 /// What a server sends, as far as the rules care: its bytes and the kind of reply.

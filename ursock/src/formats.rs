@@ -6,15 +6,146 @@ use urscript_socket::byte_list::{encode_byte, encode_byte_list};
 use urscript_socket::format::{AnyDecoder, Format, Message};
 use urscript_socket::int32::{encode_int32, encode_int32_list};
 use urscript_socket::line::encode_line;
+use urscript_socket::robot::ReadCall;
 use urscript_socket::string::{encode_framed_string, encode_string};
 use urscript_socket::stx_etx::encode_stx_etx;
 use urscript_socket::to_str::{encode_value, parse_value};
 use urscript_socket::var::{encode_get_var, encode_set_var, encode_var_reply};
 use urscript_socket::{ascii_float::encode_float_tuple, DecodeError, RecvBuffer};
 
-/// What the robot sends, as a server decodes it: the command line's names for the
-/// core's [`Format`]s (one value per message for the counted ones).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+/// One name the command line gives a format: the name, its aliases, and the core
+/// registry's name for the format it stands for ([`FORMAT_NAMES`]; `None` for raw bytes
+/// that no format frames: `hex`, `text`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Name {
+    pub name: &'static str,
+    pub aliases: &'static [&'static str],
+    pub core: Option<&'static str>,
+}
+
+const fn name(name: &'static str, core: &'static str) -> Name {
+    Name {
+        name,
+        aliases: &[],
+        core: Some(core),
+    }
+}
+
+/// The command line's format names, each table in the order `--help` and messages list
+/// them. Every `core` is one of the core registry's [`FORMAT_NAMES`] (a unit test checks).
+pub mod names {
+    use super::{name, Name};
+
+    /// What the robot sends, as `decode` and `listen --decode` name it.
+    pub const DECODE: &[Name] = &[
+        Name {
+            aliases: &["int"],
+            ..name("int32", "int32")
+        },
+        Name {
+            aliases: &["bytes"],
+            ..name("byte", "bytes")
+        },
+        name("line", "line"),
+        name("stx-etx", "stx-etx"),
+        Name {
+            aliases: &["delimited"],
+            ..name("delimiter", "delimited")
+        },
+        name("var", "var"),
+        name("value", "value"),
+    ];
+
+    /// What a server sends: `encode`, and `listen`'s reply specs (which add `text`).
+    pub const SERVER: &[Name] = &[
+        name("floats", "float-tuple"),
+        name("floats-lf", "float-tuple"),
+        name("int32", "int32"),
+        name("bytes", "bytes"),
+        name("string", "string"),
+        name("line", "line"),
+        name("framed", "string"),
+        name("var-reply", "var-reply"),
+        Name {
+            name: "hex",
+            aliases: &[],
+            core: None,
+        },
+    ];
+
+    /// `listen`'s reply specs: the server's formats and `text` (escapes interpreted).
+    pub const TEXT: Name = Name {
+        name: "text",
+        aliases: &[],
+        core: None,
+    };
+
+    /// What the robot sends: `encode --robot`.
+    pub const ROBOT: &[Name] = &[
+        name("line", "line"),
+        name("string", "delimited"),
+        Name {
+            aliases: &["bytes"],
+            ..name("byte", "bytes")
+        },
+        Name {
+            aliases: &["int32"],
+            ..name("int", "int32")
+        },
+        name("set-var", "var"),
+        name("get-var", "var"),
+        name("stx-etx", "stx-etx"),
+        name("value", "value"),
+        Name {
+            name: "hex",
+            aliases: &[],
+            core: None,
+        },
+    ];
+
+    /// The robot's reads: `read`'s subcommands and `listen --robot-reads`.
+    pub const READS: &[Name] = &[
+        name("ascii-float", "float-tuple"),
+        name("binary-integer", "int32"),
+        name("byte-list", "bytes"),
+        name("line", "line"),
+        name("string", "string"),
+    ];
+}
+
+/// The entry of `table` that `word` names (its name or an alias).
+pub fn lookup(table: &'static [Name], word: &str) -> Option<&'static Name> {
+    table
+        .iter()
+        .find(|n| n.name == word || n.aliases.contains(&word))
+}
+
+/// The names of `table`, for messages: `floats, floats-lf, int32`.
+pub fn list(table: &[Name]) -> String {
+    table.iter().map(|n| n.name).collect::<Vec<_>>().join(", ")
+}
+
+/// The robot read a [`names::READS`] name stands for, with its number of values (the
+/// counted reads) or its prefix and suffix (`string`).
+pub fn read_call(name: &Name, number: Option<usize>) -> Result<ReadCall, String> {
+    let need = || number.ok_or_else(|| format!("{} needs the number of values", name.name));
+    Ok(match name.core {
+        Some("float-tuple") => ReadCall::AsciiFloat { number: need()? },
+        Some("int32") => ReadCall::BinaryInteger { number: need()? },
+        Some("bytes") => ReadCall::ByteList { number: need()? },
+        Some("line") => ReadCall::Line,
+        Some("string") => ReadCall::String {
+            prefix: Vec::new(),
+            suffix: Vec::new(),
+            interpret_escape: false,
+        },
+        _ => return Err(format!("{}: not a read", name.name)),
+    })
+}
+
+/// What the robot sends, as a server decodes it: the core's [`Format`]s named by
+/// [`names::DECODE`] (one value per message for the counted ones).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum DecodeFormat {
     /// Big-endian int32 (`socket_send_int`).
     Int32,
@@ -30,6 +161,33 @@ pub enum DecodeFormat {
     Var,
     /// Lines holding the text of a number, bool, list or pose.
     Value,
+}
+
+impl ValueEnum for DecodeFormat {
+    fn value_variants<'a>() -> &'a [Self] {
+        use DecodeFormat::*;
+        &[Int32, Byte, Line, StxEtx, Delimiter, Var, Value]
+    }
+
+    /// The name and aliases of [`names::DECODE`] for this variant's core format.
+    fn to_possible_value(&self) -> Option<clap::builder::PossibleValue> {
+        let core = self.format(b"\n").name();
+        let n = names::DECODE.iter().find(|n| n.core == Some(core))?;
+        let help = match self {
+            DecodeFormat::Int32 => "Big-endian int32 (`socket_send_int`)",
+            DecodeFormat::Byte => "Single bytes (`socket_send_byte`)",
+            DecodeFormat::Line => "LF-terminated lines (`socket_send_line`)",
+            DecodeFormat::StxEtx => "`02 <payload> 03` frames",
+            DecodeFormat::Delimiter => "Strings split on `--delimiter`",
+            DecodeFormat::Var => "`SET name v` / `GET name` lines",
+            DecodeFormat::Value => "Lines holding the text of a number, bool, list or pose",
+        };
+        Some(
+            clap::builder::PossibleValue::new(n.name)
+                .aliases(n.aliases.iter().copied())
+                .help(help),
+        )
+    }
 }
 
 impl DecodeFormat {
@@ -171,13 +329,20 @@ pub fn encode(
     values: &[String],
     escapes: bool,
 ) -> Result<Vec<u8>, String> {
+    let (table, what) = match side {
+        Side::Server => (names::SERVER, "format"),
+        Side::Robot => (names::ROBOT, "robot format"),
+    };
+    let Some(entry) = lookup(table, format) else {
+        return Err(format!("unknown {what} {format:?} ({})", list(table)));
+    };
     let mut out = Vec::new();
-    let r = match (side, format) {
+    let r = match (side, entry.name) {
         (_, "hex") => return crate::typed::hex(values.iter().map(String::as_str)),
         (_, "line") => encode_line(&text(values, escapes)?, &mut out),
         (_, "string") => encode_string(&text(values, escapes)?, &mut out),
-        (Side::Server, "floats" | "floats-lf") => {
-            encode_float_tuple(&nums(values, "float")?, format == "floats-lf", &mut out)
+        (Side::Server, name @ ("floats" | "floats-lf")) => {
+            encode_float_tuple(&nums(values, "float")?, name == "floats-lf", &mut out)
         }
         (Side::Server, "int32") => encode_int32_list(&counted(values, format, "int32")?, &mut out),
         (Side::Server, "bytes") => {
@@ -196,16 +361,12 @@ pub fn encode(
             need(values, 2, "var-reply NAME INT")?;
             encode_var_reply(&values[0], num(&values[1], "int32")?, &mut out)
         }
-        (Side::Server, other) => {
-            return Err(format!(
-                "unknown format {other:?} (floats, floats-lf, int32, bytes, string, line, framed, var-reply, hex)"
-            ))
-        }
+
         // One socket_send_byte / socket_send_int per value.
-        (Side::Robot, "byte" | "bytes") => counted(values, format, "byte (0-255)")?
+        (Side::Robot, "byte") => counted(values, format, "byte (0-255)")?
             .into_iter()
             .try_fold(0, |n, v| Ok(n + encode_byte(v, &mut out)?)),
-        (Side::Robot, "int" | "int32") => counted(values, format, "int32")?
+        (Side::Robot, "int") => counted(values, format, "int32")?
             .into_iter()
             .try_fold(0, |n, v| Ok(n + encode_int32(v, &mut out)?)),
         (Side::Robot, "set-var") => {
@@ -223,12 +384,81 @@ pub fn encode(
                 .map_err(|e| format!("value {text:?}: {}", crate::messages::value_error(&e)))?;
             encode_value(&value, &mut out)
         }
-        (Side::Robot, other) => {
-            return Err(format!(
-                "unknown robot format {other:?} (line, string, byte, int, set-var, get-var, stx-etx, value, hex)"
-            ))
-        }
+        // A name in the table without an encoder here (a unit test checks there is none).
+        (_, other) => return Err(format!("{other}: no encoder for this name")),
     };
     r.map_err(crate::messages::encode_error)?;
     Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use urscript_socket::format::FORMAT_NAMES;
+
+    #[test]
+    fn every_name_maps_onto_the_core_registry() {
+        for table in [
+            names::DECODE,
+            names::SERVER,
+            names::ROBOT,
+            names::READS,
+            &[names::TEXT],
+        ] {
+            for n in table {
+                if let Some(core) = n.core {
+                    assert!(FORMAT_NAMES.contains(&core), "{}: {core}", n.name);
+                    assert_eq!(core.parse::<Format>().map(|f| f.name()), Ok(core));
+                }
+            }
+        }
+        for f in DecodeFormat::value_variants() {
+            let v = f
+                .to_possible_value()
+                .expect("every decode format has a name");
+            let n = lookup(names::DECODE, v.get_name()).unwrap();
+            assert_eq!(n.core, Some(f.format(b"\n").name()));
+        }
+        assert_eq!(DecodeFormat::value_variants().len(), names::DECODE.len());
+    }
+
+    #[test]
+    fn every_encode_name_has_an_encoder() {
+        for (side, table) in [(Side::Server, names::SERVER), (Side::Robot, names::ROBOT)] {
+            for n in table {
+                for word in std::iter::once(&n.name).chain(n.aliases) {
+                    let values: Vec<String> = ["1", "2", "3"].map(String::from).to_vec();
+                    let r = encode(side, word, &values, false);
+                    assert!(
+                        !r.as_ref()
+                            .is_err_and(|e| e.contains("no encoder") || e.contains("unknown")),
+                        "{word}: {r:?}"
+                    );
+                }
+            }
+        }
+        assert!(encode(Side::Server, "nope", &[], false)
+            .unwrap_err()
+            .contains("(floats, floats-lf, int32, bytes, string, line, framed, var-reply, hex)"));
+    }
+
+    #[test]
+    fn reads_are_named_once() {
+        let call = |w: &str, n| read_call(lookup(names::READS, w).unwrap(), n);
+        assert_eq!(
+            call("ascii-float", Some(3)),
+            Ok(ReadCall::AsciiFloat { number: 3 })
+        );
+        assert_eq!(
+            call("byte-list", Some(2)),
+            Ok(ReadCall::ByteList { number: 2 })
+        );
+        assert!(call("binary-integer", None).is_err());
+        assert_eq!(call("line", None), Ok(ReadCall::Line));
+        for n in names::READS {
+            let number = Some(1);
+            let c = read_call(n, number).unwrap();
+            assert_eq!(Some(c.format().name()), n.core, "{}", n.name);
+        }
+    }
 }

@@ -103,16 +103,33 @@ enum Command {
     /// Run a robot read function on the bytes of stdin (end of input = timeout) and print
     /// what URScript gets, one line per read.
     Read {
-        #[command(subcommand)]
-        call: ReadCmd,
+        /// The read: ascii-float N (socket_read_ascii_float), binary-integer N
+        /// (socket_read_binary_integer), byte-list N (socket_read_byte_list), line
+        /// (socket_read_line), string (socket_read_string, with --prefix, --suffix,
+        /// --interpret-escape).
+        #[arg(value_parser = clap::builder::PossibleValuesParser::new(
+            formats::names::READS.iter().map(|n| n.name)
+        ))]
+        call: String,
+        /// The number of values, for ascii-float, binary-integer and byte-list (1-30).
+        number: Option<usize>,
+        /// `read string`: the prefix argument.
+        #[arg(long, allow_hyphen_values = true)]
+        prefix: Option<String>,
+        /// `read string`: the suffix argument.
+        #[arg(long, allow_hyphen_values = true)]
+        suffix: Option<String>,
+        /// `read string`: interpret `\n`, `\t`, `\r` written in prefix and suffix.
+        #[arg(long)]
+        interpret_escape: bool,
         /// Repeat the read K times (1 or more).
-        #[arg(long, global = true, default_value_t = 1)]
+        #[arg(long, default_value_t = 1)]
         repeat: usize,
         /// Print each result as one JSON object per line.
-        #[arg(long, global = true)]
+        #[arg(long)]
         json: bool,
         /// Prefix each result with the time since the start (`+0.003s`).
-        #[arg(long, global = true)]
+        #[arg(long)]
         timestamps: bool,
     },
     /// Decode what a robot sent (stdin), one message per line.
@@ -132,27 +149,6 @@ enum Command {
         /// for every format alike.
         #[arg(long)]
         allow_unterminated: bool,
-    },
-}
-
-#[derive(Subcommand)]
-enum ReadCmd {
-    /// socket_read_ascii_float(N)
-    AsciiFloat { number: usize },
-    /// socket_read_binary_integer(N)
-    BinaryInteger { number: usize },
-    /// socket_read_byte_list(N)
-    ByteList { number: usize },
-    /// socket_read_line()
-    Line,
-    /// socket_read_string(prefix, suffix, interpret_escape)
-    String {
-        #[arg(long, default_value = "", allow_hyphen_values = true)]
-        prefix: String,
-        #[arg(long, default_value = "", allow_hyphen_values = true)]
-        suffix: String,
-        #[arg(long)]
-        interpret_escape: bool,
     },
 }
 
@@ -222,6 +218,10 @@ fn run(cli: Cli) -> Result<(), String> {
         } => offline::encode(&format, &values, hex, escapes, robot),
         Command::Read {
             call,
+            number,
+            prefix,
+            suffix,
+            interpret_escape,
             repeat,
             json,
             timestamps,
@@ -229,22 +229,30 @@ fn run(cli: Cli) -> Result<(), String> {
             if repeat == 0 {
                 return Err("--repeat 0: give the number of reads, 1 or more".into());
             }
-            let call = match call {
-                ReadCmd::AsciiFloat { number } => ReadCall::AsciiFloat { number },
-                ReadCmd::BinaryInteger { number } => ReadCall::BinaryInteger { number },
-                ReadCmd::ByteList { number } => ReadCall::ByteList { number },
-                ReadCmd::Line => ReadCall::Line,
-                ReadCmd::String {
-                    prefix,
-                    suffix,
-                    interpret_escape,
-                } => ReadCall::String {
-                    prefix: prefix.into_bytes(),
-                    suffix: suffix.into_bytes(),
-                    interpret_escape,
-                },
-            };
-            offline::read(call, repeat, json, timestamps)
+            let name = formats::lookup(formats::names::READS, &call)
+                .ok_or_else(|| format!("unknown read {call:?}"))?;
+            let counted = !matches!(name.core, Some("line" | "string"));
+            if !counted && number.is_some() {
+                return Err(format!("read {call} takes no number of values"));
+            }
+            let string_args = prefix.is_some() || suffix.is_some() || interpret_escape;
+            if name.core != Some("string") && string_args {
+                return Err(
+                    "--prefix, --suffix and --interpret-escape are for `read string`".into(),
+                );
+            }
+            let mut read = formats::read_call(name, number).map_err(|e| format!("read {e}"))?;
+            if let ReadCall::String {
+                prefix: p,
+                suffix: s,
+                interpret_escape: i,
+            } = &mut read
+            {
+                *p = prefix.unwrap_or_default().into_bytes();
+                *s = suffix.unwrap_or_default().into_bytes();
+                *i = interpret_escape;
+            }
+            offline::read(read, repeat, json, timestamps)
         }
         Command::Decode {
             format,

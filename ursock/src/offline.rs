@@ -121,14 +121,14 @@ pub fn read(call: ReadCall, repeat: usize, json: bool, timestamps: bool) -> Resu
             sentinel: result.is_sentinel(),
             why,
         };
-        show_read(&event, &result, json, timestamps);
+        show_read(&event, json, timestamps);
     }
     Ok(())
 }
 
 /// One read's event: the JSON line, or for people the result in URScript notation
 /// (prefixed by `+0.003s` with `timestamps`) and the reason on stderr.
-fn show_read(event: &crate::report::Read, result: &ReadResult, json: bool, timestamps: bool) {
+fn show_read(event: &crate::report::Read, json: bool, timestamps: bool) {
     if json {
         outln!("{}", crate::report::Event::Read(event.clone()).to_json());
         return;
@@ -138,7 +138,7 @@ fn show_read(event: &crate::report::Read, result: &ReadResult, json: bool, times
     } else {
         String::new()
     };
-    outln!("{stamp}{}", crate::show::read_result(result));
+    outln!("{stamp}{}", event.result);
     if let Some(w) = &event.why {
         out::note(&format!("why: {w}"));
     }

@@ -14,7 +14,7 @@ use serde::ser::{SerializeMap, SerializeSeq};
 use serde::{Serialize, Serializer};
 use urscript_socket::format::Message;
 use urscript_socket::robot::ReadResult;
-use urscript_socket::to_str::{Scalar, Value as UrValue};
+use urscript_socket::to_str::{write_list, write_scalar, Scalar, Value as UrValue};
 use urscript_socket::var::VarMessage;
 
 use crate::show::JsonBytes;
@@ -125,6 +125,42 @@ impl Value {
             V::Pose(p) => Value::Pose(*p),
             V::Thread(id) => Value::Int((*id).into()),
             V::None => Value::None,
+        }
+    }
+}
+
+/// URScript notation (`[2, 1.5, nan]`, `p[0, 0, 0.1, 0, 0, 0]`, `"text"`, `True`), floats
+/// by the robot's `to_str` rules; a read result as `[count, values...]`, no value as `None`.
+impl std::fmt::Display for Value {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        fn list<'v>(
+            f: &mut std::fmt::Formatter<'_>,
+            items: impl Iterator<Item = &'v Value>,
+        ) -> std::fmt::Result {
+            f.write_str("[")?;
+            for (i, v) in items.enumerate() {
+                if i > 0 {
+                    f.write_str(", ")?;
+                }
+                write!(f, "{v}")?;
+            }
+            f.write_str("]")
+        }
+        match self {
+            Value::Int(i) => write!(f, "{i}"),
+            Value::Float(v) => write_scalar(Scalar::Float(*v), f),
+            Value::Bool(b) => write_scalar(Scalar::Bool(*b), f),
+            Value::String(b) => f.write_str(&crate::show::quoted(b)),
+            Value::List(l) => list(f, l.iter()),
+            Value::Pose(p) => {
+                f.write_str("p")?;
+                write_list(p.iter().map(|&v| Scalar::Float(v)), f)
+            }
+            Value::Read { count, values } => {
+                let count = Value::Int(i64::try_from(*count).unwrap_or(i64::MAX));
+                list(f, std::iter::once(&count).chain(values))
+            }
+            Value::None => f.write_str("None"),
         }
     }
 }
@@ -603,6 +639,61 @@ pub enum Event {
     VarInvalid(VarInvalid),
 }
 
+/// Constructors stamped with [`now`], for the common events.
+impl Event {
+    /// `note`.
+    pub fn note(text: impl Into<String>) -> Self {
+        Event::Note(Note {
+            t: now(),
+            text: text.into(),
+        })
+    }
+
+    /// `error`, with the program line and column when known.
+    pub fn error(line: Option<u32>, column: Option<u32>, text: impl Into<String>) -> Self {
+        Event::Error(Error {
+            t: now(),
+            line,
+            column,
+            text: text.into(),
+        })
+    }
+
+    /// `message` (textmsg, popup, varmsg) and the call that showed it.
+    pub fn message(line: u32, kind: MessageKind, text: String, source: String) -> Self {
+        Event::Message(ProgramMessage {
+            t: now(),
+            line,
+            kind,
+            text,
+            source,
+        })
+    }
+
+    /// `tx` on a robot socket.
+    pub fn tx(socket: &str, bytes: &[u8]) -> Self {
+        Event::Tx(Traffic::socket(now(), socket, bytes))
+    }
+
+    /// `rx` on a robot socket.
+    pub fn rx(socket: &str, bytes: &[u8]) -> Self {
+        Event::Rx(Traffic::socket(now(), socket, bytes))
+    }
+
+    /// `peer_closed`.
+    pub fn peer_closed(socket: &str) -> Self {
+        Event::PeerClosed(PeerClosed {
+            t: now(),
+            socket: socket.to_string(),
+        })
+    }
+
+    /// `end`.
+    pub fn end(outcome: EndOutcome) -> Self {
+        Event::End(End { t: now(), outcome })
+    }
+}
+
 impl Event {
     /// The event as one JSON line.
     pub fn to_json(&self) -> String {
@@ -677,6 +768,26 @@ mod tests {
         assert_eq!(
             serde_json::to_string(&v).unwrap(),
             r#"[1,null,true,{"encoding":"hex","hex":"636166e9"},{"pose":[1.0,2.0,3.0,0.0,0.0,null]},{"count":0,"values":[null]},null]"#
+        );
+    }
+
+    #[test]
+    fn values_print_in_urscript_notation() {
+        let v = Value::List(vec![
+            Value::Int(-2),
+            Value::Float(1.5),
+            Value::Float(f64::NAN),
+            Value::Bool(true),
+            Value::String(b"a\n".to_vec()),
+            Value::Pose([0.0, 0.0, 0.1, 0.0, 0.0, 0.0]),
+            Value::Read {
+                count: 1,
+                values: vec![Value::Float(2.0)],
+            },
+        ]);
+        assert_eq!(
+            v.to_string(),
+            r#"[-2, 1.5, nan, True, "a\n", p[0, 0, 0.1, 0, 0, 0], [1, 2]]"#
         );
     }
 

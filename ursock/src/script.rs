@@ -278,20 +278,19 @@ fn diagnose_read(c: &CallRecord, seen: &mut Seen) -> Option<String> {
 }
 
 /// A message as a report event, with the call that showed it.
-fn message_event(m: &Message) -> report::ProgramMessage {
+fn message_event(m: &Message) -> report::Event {
     let (kind, name) = match m.kind {
         MessageKind::Textmsg => (report::MessageKind::Textmsg, "textmsg"),
         MessageKind::Varmsg => (report::MessageKind::Varmsg, "varmsg"),
         _ => (report::MessageKind::Popup, "popup"),
     };
     let args: Vec<String> = m.args.iter().map(|v| v.to_source()).collect();
-    report::ProgramMessage {
-        t: report::now(),
-        line: m.line,
+    report::Event::message(
+        m.line,
         kind,
-        text: m.text.clone(),
-        source: format!("{name}({})", args.join(", ")),
-    }
+        m.text.clone(),
+        format!("{name}({})", args.join(", ")),
+    )
 }
 
 /// Runs `script` (the text of a file or `-e` lines) as a URScript program against real
@@ -358,18 +357,14 @@ pub fn run(script: &str, connect_to: Option<&str>, opts: Options) -> Result<(), 
             printer.emit(report::Event::Call(call_event(c, why)));
         }
         Activity::Event(Event::Message(m)) => {
-            printer.emit(report::Event::Message(message_event(m)));
+            printer.emit(message_event(m));
         }
         Activity::Event(Event::Transmit { socket_name, bytes }) => {
             if let Some(t) = seen.get_mut(socket_name).and_then(|s| s.timed_out.as_mut()) {
                 t.2 = true;
             }
             if trace {
-                printer.emit(report::Event::Tx(report::Traffic::socket(
-                    report::now(),
-                    socket_name,
-                    bytes,
-                )));
+                printer.emit(report::Event::tx(socket_name, bytes));
             }
         }
         Activity::Event(Event::Connect { socket_name, .. }) => {
@@ -378,11 +373,7 @@ pub fn run(script: &str, connect_to: Option<&str>, opts: Options) -> Result<(), 
         }
         Activity::Received { socket_name, bytes } => {
             if trace {
-                printer.emit(report::Event::Rx(report::Traffic::socket(
-                    report::now(),
-                    socket_name,
-                    bytes,
-                )));
+                printer.emit(report::Event::rx(socket_name, bytes));
             }
             let s = seen.entry(socket_name.to_string()).or_default();
             s.first_at.get_or_insert_with(Instant::now);
@@ -390,28 +381,17 @@ pub fn run(script: &str, connect_to: Option<&str>, opts: Options) -> Result<(), 
             s.bytes.extend_from_slice(&bytes[..bytes.len().min(room)]);
         }
         Activity::PeerClosed { socket_name } if opts.json => {
-            printer.emit(report::Event::PeerClosed(report::PeerClosed {
-                t: report::now(),
-                socket: socket_name.to_string(),
-            }));
+            printer.emit(report::Event::peer_closed(socket_name));
         }
         _ => {}
     });
-    let end = |outcome| {
-        report::Event::End(report::End {
-            t: report::now(),
-            outcome,
-        })
-    };
+    let end = report::Event::end;
     match result {
         Ok(drive::Outcome::MaxTime) => {
-            printer.emit(report::Event::Note(report::Note {
-                t: report::now(),
-                text: format!(
-                    "--max-time {}s reached: the program was ended",
-                    opts.max_time.unwrap_or_default().as_secs_f64()
-                ),
-            }));
+            printer.emit(report::Event::note(format!(
+                "--max-time {}s reached: the program was ended",
+                opts.max_time.unwrap_or_default().as_secs_f64()
+            )));
             if opts.json {
                 printer.emit(end(report::EndOutcome::MaxTime));
             }
@@ -429,12 +409,11 @@ pub fn run(script: &str, connect_to: Option<&str>, opts: Options) -> Result<(), 
         }
         Err(e) => {
             if opts.json {
-                printer.emit(report::Event::Error(report::Error {
-                    t: report::now(),
-                    line: Some(e.line()),
-                    column: Some(e.column()),
-                    text: e.message().to_string(),
-                }));
+                printer.emit(report::Event::error(
+                    Some(e.line()),
+                    Some(e.column()),
+                    e.message(),
+                ));
                 printer.emit(end(report::EndOutcome::Error));
             }
             Err(e.to_string())

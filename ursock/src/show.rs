@@ -54,15 +54,6 @@ fn escaped(s: &mut String, bytes: &[u8]) {
     s.remove(start);
 }
 
-/// A read's result in URScript notation, strings as [`quoted`] (valid UTF-8 shown as
-/// text, where the library's notation escapes every non-ASCII byte).
-pub fn read_result(r: &urscript_socket::robot::ReadResult) -> String {
-    match r {
-        urscript_socket::robot::ReadResult::Text(t) => quoted(t),
-        other => other.to_urscript(),
-    }
-}
-
 /// A hex dump, 16 bytes per row, each row with its offset and the printable ASCII:
 ///
 /// ```text

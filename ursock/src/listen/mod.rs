@@ -111,7 +111,8 @@ pub struct ListenOptions {
     #[arg(long)]
     pub log: Option<PathBuf>,
     /// One JSON event per line on stdout (listening, connect, rx, decoded, tx, close,
-    /// diagnosis, errors); raw bytes as text when valid UTF-8, else hex (`encoding`).
+    /// diagnosis, error...; every field in docs/json-events.md); bytes as
+    /// {"encoding":"utf-8","text":...} when valid UTF-8, else {"encoding":"hex","hex":...}.
     #[arg(long)]
     pub json: bool,
     /// Only connects, closes and problems; no traffic lines.
@@ -459,7 +460,7 @@ fn operator(shared: &Shared, line: &str) {
                 t: now(),
                 text: format!(
                     "type a reply spec ({}), `@N SPEC` for connection N, `list`, `close N`",
-                    spec::FORMATS
+                    spec::formats()
                 ),
             }),
         );

@@ -10,7 +10,7 @@ use std::io::{BufWriter, ErrorKind, Write};
 use std::sync::Mutex;
 use std::time::{SystemTime, UNIX_EPOCH};
 
-use crate::report::Event;
+use crate::report::{EndOutcome, Event};
 
 /// How a line is routed.
 #[derive(Clone, Copy, PartialEq, Eq)]
@@ -273,11 +273,32 @@ pub fn human(event: &Event, show_max: usize) -> Vec<String> {
         Event::VarInvalid(e) => one(e.text.clone()),
         Event::Help(e) | Event::Note(e) => one(e.text.clone()),
         Event::Error(e) => one(e.text.clone()),
-        Event::Call(e) => one(format!("{} -> {}", e.call, serde_json::to_string(&e.result).unwrap_or_default())),
+        Event::Call(e) => {
+            let args: Vec<String> = e.args.iter().map(ToString::to_string).collect();
+            let mut text = format!(
+                "line {}: {}({}) -> {}",
+                e.line,
+                e.call,
+                args.join(", "),
+                e.result
+            );
+            if let Some(why) = &e.why {
+                text.push_str(&format!("  (why: {why})"));
+            }
+            one(text)
+        }
         Event::Message(e) => one(e.text.clone()),
-        Event::PeerClosed(e) => one(format!("{} closed by the server", e.socket)),
-        Event::End(e) => one(format!("end ({:?})", e.outcome)),
-        Event::Read(e) => one(serde_json::to_string(&e.result).unwrap_or_default()),
+        Event::PeerClosed(e) => one(format!("{}: the server closed the connection", e.socket)),
+        Event::End(e) => one(format!(
+            "program ended: {}",
+            match e.outcome {
+                EndOutcome::Finished => "finished",
+                EndOutcome::Halted => "halted",
+                EndOutcome::MaxTime => "--max-time passed",
+                EndOutcome::Error => "error",
+            }
+        )),
+        Event::Read(e) => one(e.result.to_string()),
     }
 }
 

@@ -7,29 +7,33 @@
 //! * `hex 02 41 03` (or `024103`, `0x02 0x41`): raw bytes.
 
 use crate::diagnose::Sent;
-use crate::formats::encode_server;
+use crate::formats::{encode_server, list, lookup, names};
 
-/// A checked reply: its bytes and what kind of read it is meant for.
+/// A checked reply: its bytes and the format it was written in.
 #[derive(Clone, Debug)]
 pub struct Reply {
+    /// The name in [`names::SERVER`] (or `text`).
     pub format: String,
     pub bytes: Vec<u8>,
 }
 
 impl Reply {
-    /// The reply as the diagnosis rules see it: a float tuple from `floats`/`floats-lf`,
-    /// bytes meant for a binary read from `int32`/`bytes`.
+    /// The reply as the diagnosis rules see it, by the core format its name stands for:
+    /// a float tuple, or bytes meant for a binary read (int32, bytes).
     pub fn sent(&self) -> Sent<'_> {
+        let core = lookup(names::SERVER, &self.format).and_then(|n| n.core);
         Sent {
             bytes: &self.bytes,
-            float_tuple: self.format == "floats" || self.format == "floats-lf",
-            binary: self.format == "int32" || self.format == "bytes",
+            float_tuple: core == Some("float-tuple"),
+            binary: matches!(core, Some("int32" | "bytes")),
         }
     }
 }
 
-pub const FORMATS: &str =
-    "floats, floats-lf, int32, bytes, string, line, text, hex, framed, var-reply";
+/// The reply formats, for messages: the server's ([`names::SERVER`]) and `text`.
+pub fn formats() -> String {
+    format!("{}, {}", list(names::SERVER), names::TEXT.name)
+}
 
 pub fn parse(spec: &str) -> Result<Reply, String> {
     let spec = spec.trim_start();
@@ -37,9 +41,15 @@ pub fn parse(spec: &str) -> Result<Reply, String> {
     // typed, so `line a  b` sends two spaces.
     let (format, rest) = spec.split_once(char::is_whitespace).unwrap_or((spec, ""));
     if format.is_empty() {
-        return Err(format!("empty reply spec (formats: {FORMATS})"));
+        return Err(format!("empty reply spec (formats: {})", formats()));
     }
-    let bytes = match format {
+    let name = if format == names::TEXT.name {
+        &names::TEXT
+    } else {
+        lookup(names::SERVER, format)
+            .ok_or_else(|| format!("unknown reply format {format:?} (formats: {})", formats()))?
+    };
+    let bytes = match name.name {
         "hex" => crate::typed::hex([rest]).map_err(|e| format!("hex: {e}"))?,
         "text" => crate::typed::unescape(rest).map_err(|e| format!("text: {e}"))?,
         "string" => rest.as_bytes().to_vec(),
@@ -48,18 +58,13 @@ pub fn parse(spec: &str) -> Result<Reply, String> {
             v.push(b'\n');
             v
         }
-        "floats" | "floats-lf" | "int32" | "bytes" | "framed" | "var-reply" => {
-            let values: Vec<String> = rest.split_whitespace().map(String::from).collect();
-            encode_server(format, &values).map_err(|e| format!("{format}: {e}"))?
-        }
         other => {
-            return Err(format!(
-                "unknown reply format {other:?} (formats: {FORMATS})"
-            ))
+            let values: Vec<String> = rest.split_whitespace().map(String::from).collect();
+            encode_server(other, &values).map_err(|e| format!("{other}: {e}"))?
         }
     };
     Ok(Reply {
-        format: format.to_string(),
+        format: name.name.to_string(),
         bytes,
     })
 }
