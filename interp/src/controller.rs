@@ -9,6 +9,7 @@ use std::time::Duration;
 use urscript_socket::robot::ReadCall;
 
 use crate::builtins::{Args, Out};
+use crate::error::Fault;
 use crate::event::{Event, ReadRecord};
 use crate::sockets::Sockets;
 
@@ -103,7 +104,7 @@ impl Controller {
         call: ReadCall,
         timeout: f64,
         args: &mut Args,
-    ) -> Result<Out, String> {
+    ) -> Result<Out, Fault> {
         let now = self.now();
         let done = self.sockets.start_read(&socket, &call, timeout, now)?;
         self.flush(&socket);

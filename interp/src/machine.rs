@@ -37,7 +37,7 @@ use urscript_socket::robot::ReadCall;
 use crate::builtins::{Args, Out};
 use crate::compile::{CallSite, Op, Program, Sym};
 use crate::controller::{Arm, Controller};
-use crate::error::RuntimeError;
+use crate::error::{Fault, RuntimeError, RuntimeErrorKind as K};
 pub use crate::event::Event;
 use crate::event::{CallRecord, Outcome, ReadRecord};
 use crate::parser::{BinOp, Scope};
@@ -627,19 +627,19 @@ impl Machine {
             let func = &prog.funcs[frame.func as usize];
             let pc = frame.pc as usize;
             let (Some(&op), Some(&at)) = (func.ops.get(pc), func.lines.get(pc)) else {
-                return Err(RuntimeError::new(line, "internal error: code ended"));
+                return Err(RuntimeError::internal(line, "internal error: code ended"));
             };
             (line, col) = (at.line, at.col);
             frame.pc += 1;
-            let fail = |m: String| RuntimeError::at(line, col, m);
+            let fail = |f: Fault| RuntimeError::at(line, col, f);
             match op {
                 Op::Stmt => {
                     self.budget += 1;
                     if self.budget > self.config.max_statements_per_step {
-                        return Err(fail(format!(
+                        return Err(fail(Fault::new(K::TooMuchTime, format!(
                             "thread `{}` used too much time: {} statements in one step without consuming time (a loop needs `sync()`, `sleep()` or another call that takes time)",
                             th.name, self.config.max_statements_per_step
-                        )));
+                        ))));
                     }
                 }
                 Op::Const(c) => th.stack.push(prog.consts[c as usize].clone()),
@@ -654,9 +654,9 @@ impl Machine {
                     match v {
                         Some(v) => th.stack.push(v.clone()),
                         None => {
-                            return Err(fail(format!(
-                                "unknown variable `{}`",
-                                prog.names[s as usize]
+                            return Err(fail(Fault::new(
+                                K::UnknownVariable,
+                                format!("unknown variable `{}`", prog.names[s as usize]),
                             )))
                         }
                     }
@@ -678,7 +678,10 @@ impl Machine {
                     let slot = self.slot(frame, s, scope, program_scope, false, prog, line)?;
                     let name = &prog.names[s as usize];
                     let Some(target) = slot.as_mut() else {
-                        return Err(fail(format!("unknown variable `{name}`")));
+                        return Err(fail(Fault::new(
+                            K::UnknownVariable,
+                            format!("unknown variable `{name}`"),
+                        )));
                     };
                     match j {
                         None => store_index(target, &i, v).map_err(fail)?,
@@ -700,9 +703,9 @@ impl Machine {
                     match base {
                         Some(b) => th.stack.push(index(b, &i).map_err(fail)?),
                         None => {
-                            return Err(fail(format!(
-                                "unknown variable `{}`",
-                                prog.names[s as usize]
+                            return Err(fail(Fault::new(
+                                K::UnknownVariable,
+                                format!("unknown variable `{}`", prog.names[s as usize]),
                             )))
                         }
                     }
@@ -723,9 +726,12 @@ impl Machine {
                     let mut p = [0.0; 6];
                     for (k, (slot, v)) in p.iter_mut().zip(&items).enumerate() {
                         *slot = v.as_f64().ok_or_else(|| {
-                            fail(format!(
-                                "type error: pose element {k} must be a number, got {}",
-                                v.type_name()
+                            fail(Fault::new(
+                                K::Type,
+                                format!(
+                                    "type error: pose element {k} must be a number, got {}",
+                                    v.type_name()
+                                ),
                             ))
                         })?;
                     }
@@ -738,9 +744,9 @@ impl Machine {
                         Value::Float(f) => Value::Float(-f),
                         Value::Pose(p) => Value::Pose(p.map(|x| -x)),
                         other => {
-                            return Err(fail(format!(
-                                "type error: cannot negate a {}",
-                                other.type_name()
+                            return Err(fail(Fault::new(
+                                K::Type,
+                                format!("type error: cannot negate a {}", other.type_name()),
                             )))
                         }
                     });
@@ -784,9 +790,9 @@ impl Machine {
                     let callee = &prog.funcs[fid as usize];
                     let locals = bind_user(callee, site, args);
                     if th.frames.len() >= 256 {
-                        return Err(fail(format!(
-                            "calls nested too deeply (256) calling `{}`",
-                            callee.name
+                        return Err(fail(Fault::new(
+                            K::Limit,
+                            format!("calls nested too deeply (256) calling `{}`", callee.name),
                         )));
                     }
                     let base = th.stack.len();
@@ -833,9 +839,12 @@ impl Machine {
                 Op::Run(fid) => {
                     let live = self.threads.iter().filter(|t| !t.done).count();
                     if live >= MAX_THREADS {
-                        return Err(fail(format!(
-                            "`run {}()`: more than {MAX_THREADS} threads running",
-                            prog.funcs[fid as usize].name
+                        return Err(fail(Fault::new(
+                            K::Limit,
+                            format!(
+                                "`run {}()`: more than {MAX_THREADS} threads running",
+                                prog.funcs[fid as usize].name
+                            ),
                         )));
                     }
                     // Finished threads keep their slot: handles stay unique.
@@ -859,7 +868,7 @@ impl Machine {
                     let v = pop(&mut th.stack, line)?;
                     if let Value::Thread(id) = v {
                         if id as usize == self.current {
-                            return Err(fail("a thread cannot join itself".into()));
+                            return Err(fail(Fault::from("a thread cannot join itself")));
                         }
                         if self.threads.get(id as usize).is_some_and(|t| !t.done) {
                             th.wait = Wait::Join(id);
@@ -923,9 +932,13 @@ impl Machine {
                 frame.locals.len() - 1
             }
             None => {
-                return Err(RuntimeError::new(
+                return Err(RuntimeError::at(
                     line,
-                    format!("unknown variable `{}`", prog.names[s as usize]),
+                    1,
+                    Fault::new(
+                        K::UnknownVariable,
+                        format!("unknown variable `{}`", prog.names[s as usize]),
+                    ),
                 ))
             }
         };
@@ -936,60 +949,77 @@ impl Machine {
 fn pop(stack: &mut Vec<Value>, line: u32) -> Result<Value, RuntimeError> {
     stack
         .pop()
-        .ok_or_else(|| RuntimeError::new(line, "internal error: stack empty"))
+        .ok_or_else(|| RuntimeError::internal(line, "internal error: stack empty"))
 }
 
 /// A condition's truth: a bool, or a number (non-zero is true: UR's own External Control
 /// script tests a float, `if has_qnear:`). Anything else is a type error.
-fn as_bool(v: &Value, what: &str) -> Result<bool, String> {
+fn as_bool(v: &Value, what: &str) -> Result<bool, Fault> {
     match v {
         Value::Bool(b) => Ok(*b),
         Value::Int(i) => Ok(*i != 0),
         Value::Float(f) => Ok(*f != 0.0),
-        other => Err(format!(
-            "type error: `{what}` needs a bool, got {} {}",
-            other.type_name(),
-            other.to_source()
+        other => Err(Fault::new(
+            K::Type,
+            format!(
+                "type error: `{what}` needs a bool, got {} {}",
+                other.type_name(),
+                other.to_source()
+            ),
         )),
     }
 }
 
-fn index_of(i: &Value, len: usize) -> Result<usize, String> {
+fn index_of(i: &Value, len: usize) -> Result<usize, Fault> {
     let Value::Int(k) = i else {
-        return Err(format!(
-            "type error: an index must be an int, got {} {}",
-            i.type_name(),
-            i.to_source()
+        return Err(Fault::new(
+            K::Type,
+            format!(
+                "type error: an index must be an int, got {} {}",
+                i.type_name(),
+                i.to_source()
+            ),
         ));
     };
     usize::try_from(*k)
         .ok()
         .filter(|k| *k < len)
-        .ok_or_else(|| format!("index out of range: index {k}, length {len}"))
+        .ok_or_else(|| {
+            Fault::new(
+                K::Index,
+                format!("index out of range: index {k}, length {len}"),
+            )
+        })
 }
 
-fn index(b: &Value, i: &Value) -> Result<Value, String> {
+fn index(b: &Value, i: &Value) -> Result<Value, Fault> {
     match b {
         Value::List(items) => Ok(items[index_of(i, items.len())?].clone()),
         Value::Pose(p) => Ok(Value::Float(p[index_of(i, 6)?])),
-        other => Err(format!("type error: cannot index a {}", other.type_name())),
+        other => Err(Fault::new(
+            K::Type,
+            format!("type error: cannot index a {}", other.type_name()),
+        )),
     }
 }
 
-fn index_mut<'a>(b: &'a mut Value, i: &Value) -> Result<&'a mut Value, String> {
+fn index_mut<'a>(b: &'a mut Value, i: &Value) -> Result<&'a mut Value, Fault> {
     match b {
         Value::List(items) => {
             let k = index_of(i, items.len())?;
             Ok(&mut items[k])
         }
-        other => Err(format!(
-            "type error: cannot assign into an element of a {}",
-            other.type_name()
+        other => Err(Fault::new(
+            K::Type,
+            format!(
+                "type error: cannot assign into an element of a {}",
+                other.type_name()
+            ),
         )),
     }
 }
 
-fn store_index(b: &mut Value, i: &Value, v: Value) -> Result<(), String> {
+fn store_index(b: &mut Value, i: &Value, v: Value) -> Result<(), Fault> {
     match b {
         Value::List(items) => {
             let k = index_of(i, items.len())?;
@@ -999,16 +1029,19 @@ fn store_index(b: &mut Value, i: &Value, v: Value) -> Result<(), String> {
         Value::Pose(p) => {
             let k = index_of(i, 6)?;
             p[k] = v.as_f64().ok_or_else(|| {
-                format!(
+                Fault::type_error(format!(
                     "type error: a pose element must be a number, got {}",
                     v.type_name()
-                )
+                ))
             })?;
             Ok(())
         }
-        other => Err(format!(
-            "type error: cannot assign into an element of a {}",
-            other.type_name()
+        other => Err(Fault::new(
+            K::Type,
+            format!(
+                "type error: cannot assign into an element of a {}",
+                other.type_name()
+            ),
         )),
     }
 }
@@ -1018,15 +1051,18 @@ fn store_index(b: &mut Value, i: &Value, v: Value) -> Result<(), String> {
 /// either side makes the result a float. Poses add and subtract element-wise; lists of
 /// numbers add, subtract, multiply and divide element-wise with a list of the same length
 /// or a number (`q + qd * steptime`, `[...] / MULT`, as UR's driver scripts do).
-pub(crate) fn binary(op: BinOp, l: Value, r: Value) -> Result<Value, String> {
+pub(crate) fn binary(op: BinOp, l: Value, r: Value) -> Result<Value, Fault> {
     use Value::{Bool, Float, Int, List, Pose};
     let type_err = |l: &Value, r: &Value, sym: &str| {
-        Err(format!(
-            "type error: {} {sym} {} ({} {sym} {})",
-            l.type_name(),
-            r.type_name(),
-            l.to_source(),
-            r.to_source()
+        Err(Fault::new(
+            K::Type,
+            format!(
+                "type error: {} {sym} {} ({} {sym} {})",
+                l.type_name(),
+                r.type_name(),
+                l.to_source(),
+                r.to_source()
+            ),
         ))
     };
     let sym = match op {
@@ -1077,7 +1113,10 @@ pub(crate) fn binary(op: BinOp, l: Value, r: Value) -> Result<Value, String> {
             BinOp::Sub => a.wrapping_sub(*b),
             BinOp::Mul => a.wrapping_mul(*b),
             BinOp::Div | BinOp::Rem if *b == 0 => {
-                return Err(format!("division by zero ({a} {sym} 0)"))
+                return Err(Fault::new(
+                    K::DivisionByZero,
+                    format!("division by zero ({a} {sym} 0)"),
+                ))
             }
             // As UR's own driver scripts rely on (`params[1] / MULT_jointstate`, two
             // ints): `/` of two ints is a float.
@@ -1086,13 +1125,16 @@ pub(crate) fn binary(op: BinOp, l: Value, r: Value) -> Result<Value, String> {
         })),
         (List(a), List(b)) if matches!(op, BinOp::Add | BinOp::Sub | BinOp::Mul | BinOp::Div) => {
             if a.len() != b.len() {
-                return Err(format!(
-                    "lists of different lengths: {} {sym} {}",
-                    l.to_source(),
-                    r.to_source()
+                return Err(Fault::new(
+                    K::Type,
+                    format!(
+                        "lists of different lengths: {} {sym} {}",
+                        l.to_source(),
+                        r.to_source()
+                    ),
                 ));
             }
-            let items: Result<Vec<Value>, String> = a
+            let items: Result<Vec<Value>, Fault> = a
                 .iter()
                 .zip(b)
                 .map(|(x, y)| binary(op, x.clone(), y.clone()))
@@ -1103,14 +1145,14 @@ pub(crate) fn binary(op: BinOp, l: Value, r: Value) -> Result<Value, String> {
             if s.as_f64().is_some()
                 && matches!(op, BinOp::Add | BinOp::Sub | BinOp::Mul | BinOp::Div) =>
         {
-            let items: Result<Vec<Value>, String> =
+            let items: Result<Vec<Value>, Fault> =
                 a.iter().map(|x| binary(op, x.clone(), s.clone())).collect();
             Ok(List(items?))
         }
         (s, List(b))
             if s.as_f64().is_some() && matches!(op, BinOp::Add | BinOp::Sub | BinOp::Mul) =>
         {
-            let items: Result<Vec<Value>, String> =
+            let items: Result<Vec<Value>, Fault> =
                 b.iter().map(|x| binary(op, s.clone(), x.clone())).collect();
             Ok(List(items?))
         }
@@ -1164,7 +1206,7 @@ impl Machine {
         site: &CallSite,
         stub: Option<u32>,
         args: Vec<Value>,
-    ) -> Result<Called, String> {
+    ) -> Result<Called, Fault> {
         let name = &prog.names[site.name as usize];
         let traced = match site.builtin {
             _ if stub.is_some() => true,
@@ -1207,8 +1249,11 @@ impl Machine {
             return Ok(Called::Value(v));
         }
         let Some(builtin) = site.builtin else {
-            return Err(format!(
-                "`{name}` is not a built-in this interpreter supports (stub it to run past it)"
+            return Err(Fault::new(
+                K::UnknownFunction,
+                format!(
+                    "`{name}` is not a built-in this interpreter supports (stub it to run past it)"
+                ),
             ));
         };
         let mut v: Vec<Value> = builtin

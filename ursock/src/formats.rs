@@ -14,7 +14,7 @@ use urscript_socket::var::{encode_get_var, encode_set_var, encode_var_reply};
 use urscript_socket::{ascii_float::encode_float_tuple, DecodeError, RecvBuffer};
 
 /// One name the command line gives a format: the name, its aliases, and the core
-/// registry's name for the format it stands for ([`FORMAT_NAMES`]; `None` for raw bytes
+/// registry's name for the format it stands for ([`FORMAT_NAMES`](urscript_socket::format::FORMAT_NAMES); `None` for raw bytes
 /// that no format frames: `hex`, `text`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Name {
@@ -32,7 +32,7 @@ const fn name(name: &'static str, core: &'static str) -> Name {
 }
 
 /// The command line's format names, each table in the order `--help` and messages list
-/// them. Every `core` is one of the core registry's [`FORMAT_NAMES`] (a unit test checks).
+/// them. Every `core` is one of the core registry's [`FORMAT_NAMES`](urscript_socket::format::FORMAT_NAMES) (a unit test checks).
 pub mod names {
     use super::{name, Name};
 

@@ -4,6 +4,7 @@
 
 use super::{accept, req, Args, Builtin, Domain, Out};
 use crate::controller::Controller;
+use crate::error::Fault;
 use crate::value::Value;
 
 const D: Domain = Domain::Io;
@@ -271,7 +272,7 @@ pub(super) const TABLE: &[Builtin] = &[
 ];
 
 /// The output slot a digital function names.
-fn digital_slot<'a>(c: &'a mut Controller, a: &Args) -> Result<&'a mut bool, String> {
+fn digital_slot<'a>(c: &'a mut Controller, a: &Args) -> Result<&'a mut bool, Fault> {
     let n = a.int(0)?;
     let (slots, offset): (&mut [bool], usize) = if a.name.contains("tool") {
         (&mut c.arm.tool_out, 0)
@@ -283,25 +284,25 @@ fn digital_slot<'a>(c: &'a mut Controller, a: &Args) -> Result<&'a mut bool, Str
     usize::try_from(n)
         .ok()
         .and_then(|k| slots.get_mut(k + offset))
-        .ok_or_else(|| format!("`{}`: no output {n}", a.name))
+        .ok_or_else(|| Fault::from(format!("`{}`: no output {n}", a.name)))
 }
 
-fn set_digital(c: &mut Controller, a: &mut Args) -> Result<Out, String> {
+fn set_digital(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
     let on = a.boolean(1)?;
     *digital_slot(c, a)? = on;
     Ok(Out::Value(Value::None))
 }
 
-fn get_digital_out(c: &mut Controller, a: &mut Args) -> Result<Out, String> {
+fn get_digital_out(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
     Ok(Out::Value(Value::Bool(*digital_slot(c, a)?)))
 }
 
-fn get_digital_in(_: &mut Controller, a: &mut Args) -> Result<Out, String> {
+fn get_digital_in(_: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
     a.int(0)?;
     Ok(Out::Value(Value::Bool(false)))
 }
 
-fn set_analog_out(c: &mut Controller, a: &mut Args) -> Result<Out, String> {
+fn set_analog_out(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
     let n = a.int(0)?;
     let x = a.num(1)?;
     let slot = usize::try_from(n)
@@ -312,12 +313,12 @@ fn set_analog_out(c: &mut Controller, a: &mut Args) -> Result<Out, String> {
     Ok(Out::Value(Value::None))
 }
 
-fn get_analog_in(_: &mut Controller, a: &mut Args) -> Result<Out, String> {
+fn get_analog_in(_: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
     a.int(0)?;
     Ok(Out::Value(Value::Float(0.0)))
 }
 
-fn read_input(_: &mut Controller, a: &mut Args) -> Result<Out, String> {
+fn read_input(_: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
     a.int(0)?;
     Ok(Out::Value(match a.name {
         "read_input_integer_register" => Value::Int(0),
@@ -326,7 +327,7 @@ fn read_input(_: &mut Controller, a: &mut Args) -> Result<Out, String> {
     }))
 }
 
-fn register(c: &mut Controller, a: &mut Args) -> Result<Out, String> {
+fn register(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
     let write = a.name.starts_with("write");
     let addr = a.int(0)?;
     let bools = a.name.contains("boolean");

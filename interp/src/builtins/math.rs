@@ -2,6 +2,7 @@
 
 use super::{req, Args, Builtin, Domain, Out};
 use crate::controller::Controller;
+use crate::error::Fault;
 use crate::value::Value;
 
 const D: Domain = Domain::Math;
@@ -70,7 +71,7 @@ pub(super) const TABLE: &[Builtin] = &[
     ),
 ];
 
-fn unary(_: &mut Controller, a: &mut Args) -> Result<Out, String> {
+fn unary(_: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
     let x = a.num(0)?;
     let r = match a.name {
         "sin" => x.sin(),
@@ -84,28 +85,31 @@ fn unary(_: &mut Controller, a: &mut Args) -> Result<Out, String> {
         _ => x.sqrt(),
     };
     if r.is_nan() && !x.is_nan() {
-        return Err(format!("`{}`: {x} is outside its domain", a.name));
+        return Err(Fault::from(format!(
+            "`{}`: {x} is outside its domain",
+            a.name
+        )));
     }
     Ok(Out::Value(Value::Float(r)))
 }
 
-fn atan2(_: &mut Controller, a: &mut Args) -> Result<Out, String> {
+fn atan2(_: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
     Ok(Out::Value(Value::Float(a.num(0)?.atan2(a.num(1)?))))
 }
 
-fn pow(_: &mut Controller, a: &mut Args) -> Result<Out, String> {
+fn pow(_: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
     Ok(Out::Value(Value::Float(a.num(0)?.powf(a.num(1)?))))
 }
 
-fn log(_: &mut Controller, a: &mut Args) -> Result<Out, String> {
+fn log(_: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
     let (base, x) = (a.num(0)?, a.num(1)?);
     if base <= 0.0 || base == 1.0 || x <= 0.0 {
-        return Err(format!("`log`: log({base}, {x}) is undefined"));
+        return Err(Fault::from(format!("`log`: log({base}, {x}) is undefined")));
     }
     Ok(Out::Value(Value::Float(x.ln() / base.ln())))
 }
 
-fn round(_: &mut Controller, a: &mut Args) -> Result<Out, String> {
+fn round(_: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
     let x = a.num(0)?;
     let r = if a.name == "floor" {
         x.floor()
@@ -113,12 +117,15 @@ fn round(_: &mut Controller, a: &mut Args) -> Result<Out, String> {
         x.ceil()
     };
     if !(f64::from(i32::MIN)..=f64::from(i32::MAX)).contains(&r) {
-        return Err(format!("`{}`: {x} does not fit an int", a.name));
+        return Err(Fault::from(format!(
+            "`{}`: {x} does not fit an int",
+            a.name
+        )));
     }
     Ok(Out::Value(Value::Int(r as i32)))
 }
 
-fn norm(_: &mut Controller, a: &mut Args) -> Result<Out, String> {
+fn norm(_: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
     let n = match &a.v[0] {
         Value::Int(x) => f64::from(*x).abs(),
         Value::Float(x) => x.abs(),
@@ -133,20 +140,27 @@ fn norm(_: &mut Controller, a: &mut Args) -> Result<Out, String> {
             }
             sum.sqrt()
         }
-        other => return Err(format!("type error: `norm` of a {}", other.type_name())),
+        other => {
+            return Err(Fault::type_error(format!(
+                "type error: `norm` of a {}",
+                other.type_name()
+            )))
+        }
     };
     Ok(Out::Value(Value::Float(n)))
 }
 
-fn binary_list_to_integer(_: &mut Controller, a: &mut Args) -> Result<Out, String> {
+fn binary_list_to_integer(_: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
     let Value::List(items) = &a.v[0] else {
-        return Err("type error: `binary_list_to_integer` needs a list of bools".into());
+        return Err(Fault::type_error(
+            "type error: `binary_list_to_integer` needs a list of bools",
+        ));
     };
     if items.len() > 32 {
-        return Err(format!(
+        return Err(Fault::from(format!(
             "`binary_list_to_integer`: at most 32 bits, got {}",
             items.len()
-        ));
+        )));
     }
     let mut out: u32 = 0;
     for (k, x) in items.iter().enumerate() {
@@ -154,10 +168,10 @@ fn binary_list_to_integer(_: &mut Controller, a: &mut Args) -> Result<Out, Strin
             Value::Bool(b) => *b,
             Value::Int(i) => *i != 0,
             other => {
-                return Err(format!(
+                return Err(Fault::type_error(format!(
                     "type error: `binary_list_to_integer` needs bools, got {}",
                     other.type_name()
-                ))
+                )))
             }
         };
         if bit {
@@ -167,14 +181,14 @@ fn binary_list_to_integer(_: &mut Controller, a: &mut Args) -> Result<Out, Strin
     Ok(Out::Value(Value::Int(out as i32)))
 }
 
-fn integer_to_binary_list(_: &mut Controller, a: &mut Args) -> Result<Out, String> {
+fn integer_to_binary_list(_: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
     let x = a.int(0)? as u32;
     Ok(Out::Value(Value::List(
         (0..32).map(|k| Value::Bool(x >> k & 1 == 1)).collect(),
     )))
 }
 
-fn random(c: &mut Controller, _: &mut Args) -> Result<Out, String> {
+fn random(c: &mut Controller, _: &mut Args) -> Result<Out, Fault> {
     // A fixed-seed xorshift: runs are reproducible.
     let mut x = c.arm.random_state;
     x ^= x << 13;

@@ -25,6 +25,7 @@ use std::sync::OnceLock;
 use std::time::Duration;
 
 use crate::controller::Controller;
+use crate::error::Fault;
 use crate::value::Value;
 
 pub mod io;
@@ -141,7 +142,7 @@ pub(crate) enum Out {
 }
 
 /// The code of a built-in.
-pub(crate) type Handler = fn(&mut Controller, &mut Args) -> Result<Out, String>;
+pub(crate) type Handler = fn(&mut Controller, &mut Args) -> Result<Out, Fault>;
 
 /// A built-in function: one entry of the table.
 #[derive(Clone, Copy)]
@@ -341,24 +342,24 @@ pub(crate) struct Args {
 }
 
 impl Args {
-    fn bad(&self, i: usize, what: &str) -> String {
+    fn bad(&self, i: usize, what: &str) -> Fault {
         let v = &self.v[i];
-        format!(
+        Fault::type_error(format!(
             "type error: `{}` argument `{}` needs {what}, got {} {}",
             self.name,
             self.params.get(i).map_or("?", |p| p.name),
             v.type_name(),
             v.to_source()
-        )
+        ))
     }
 
     /// Argument `i` as a number (an int or a float).
-    pub fn num(&self, i: usize) -> Result<f64, String> {
+    pub fn num(&self, i: usize) -> Result<f64, Fault> {
         self.v[i].as_f64().ok_or_else(|| self.bad(i, "a number"))
     }
 
     /// Argument `i` as an int (a float with no fraction is accepted).
-    pub fn int(&self, i: usize) -> Result<i32, String> {
+    pub fn int(&self, i: usize) -> Result<i32, Fault> {
         match &self.v[i] {
             Value::Int(x) => Ok(*x),
             Value::Float(x) if x.fract() == 0.0 && x.abs() <= f64::from(i32::MAX) => Ok(*x as i32),
@@ -367,7 +368,7 @@ impl Args {
     }
 
     /// Argument `i` as a string's bytes.
-    pub fn bytes(&self, i: usize) -> Result<&[u8], String> {
+    pub fn bytes(&self, i: usize) -> Result<&[u8], Fault> {
         match &self.v[i] {
             Value::Str(s) => Ok(s),
             _ => Err(self.bad(i, "a string")),
@@ -375,12 +376,12 @@ impl Args {
     }
 
     /// Argument `i` as text (a socket or variable name).
-    pub fn text(&self, i: usize) -> Result<String, String> {
+    pub fn text(&self, i: usize) -> Result<String, Fault> {
         Ok(String::from_utf8_lossy(self.bytes(i)?).into_owned())
     }
 
     /// Argument `i` as a bool (an int: non-zero is true).
-    pub fn boolean(&self, i: usize) -> Result<bool, String> {
+    pub fn boolean(&self, i: usize) -> Result<bool, Fault> {
         match &self.v[i] {
             Value::Bool(b) => Ok(*b),
             Value::Int(x) => Ok(*x != 0),
@@ -389,7 +390,7 @@ impl Args {
     }
 
     /// Argument `i` as six numbers (a pose or a list of 6 numbers).
-    pub fn six(&self, i: usize) -> Result<[f64; 6], String> {
+    pub fn six(&self, i: usize) -> Result<[f64; 6], Fault> {
         match &self.v[i] {
             Value::Pose(p) => Ok(*p),
             Value::List(items) if items.len() == 6 => {
@@ -420,7 +421,7 @@ pub(crate) fn secs(x: f64) -> Duration {
 }
 
 /// Does nothing and returns nothing: settings the virtual arm has no use for.
-pub(crate) fn accept(_: &mut Controller, _: &mut Args) -> Result<Out, String> {
+pub(crate) fn accept(_: &mut Controller, _: &mut Args) -> Result<Out, Fault> {
     Ok(Out::Value(Value::None))
 }
 

@@ -23,6 +23,7 @@
 
 use super::{accept, floats, opt, req, secs, Args, Builtin, Default, Domain, Out};
 use crate::controller::Controller;
+use crate::error::Fault;
 use crate::value::Value;
 
 const D: Domain = Domain::Motion;
@@ -428,7 +429,7 @@ fn go_to(c: &mut Controller, target: &Value, six: [f64; 6]) -> f64 {
     }
 }
 
-fn movej(c: &mut Controller, a: &mut Args) -> Result<Out, String> {
+fn movej(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
     let target = a.six(0)?;
     let speed = a.num(2)?;
     // movep and optimove* have no `t`.
@@ -444,7 +445,7 @@ fn movej(c: &mut Controller, a: &mut Args) -> Result<Out, String> {
     Ok(Out::Wait(secs(dur), Value::None))
 }
 
-fn movec(c: &mut Controller, a: &mut Args) -> Result<Out, String> {
+fn movec(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
     let target = a.six(1)?;
     let speed = a.num(3)?;
     let dist = go_to(c, &a.v[1], target);
@@ -452,7 +453,7 @@ fn movec(c: &mut Controller, a: &mut Args) -> Result<Out, String> {
     Ok(Out::Wait(secs(dur), Value::None))
 }
 
-fn servoj(c: &mut Controller, a: &mut Args) -> Result<Out, String> {
+fn servoj(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
     let q = a.six(0)?;
     let t = a.num(3)?;
     if t > 0.0 {
@@ -464,7 +465,7 @@ fn servoj(c: &mut Controller, a: &mut Args) -> Result<Out, String> {
     Ok(Out::Wait(secs(t), Value::None))
 }
 
-fn speed(c: &mut Controller, a: &mut Args) -> Result<Out, String> {
+fn speed(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
     let qd = a.six(0)?;
     a.num(1)?;
     let t = if a.is_absent(2) {
@@ -486,51 +487,51 @@ fn speed(c: &mut Controller, a: &mut Args) -> Result<Out, String> {
     Ok(Out::Wait(secs(t), Value::None))
 }
 
-fn stop(c: &mut Controller, a: &mut Args) -> Result<Out, String> {
+fn stop(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
     a.num(0)?;
     c.arm.qd = [0.0; 6];
     c.arm.tcp_speed = [0.0; 6];
     Ok(Out::Wait(c.step_time, Value::None))
 }
 
-fn direct_torque(c: &mut Controller, a: &mut Args) -> Result<Out, String> {
+fn direct_torque(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
     a.six(0)?;
     Ok(Out::Wait(c.step_time, Value::None))
 }
 
-fn joints(c: &mut Controller, _: &mut Args) -> Result<Out, String> {
+fn joints(c: &mut Controller, _: &mut Args) -> Result<Out, Fault> {
     Ok(Out::Value(floats(c.arm.q)))
 }
 
-fn joint_speeds(c: &mut Controller, _: &mut Args) -> Result<Out, String> {
+fn joint_speeds(c: &mut Controller, _: &mut Args) -> Result<Out, Fault> {
     Ok(Out::Value(floats(c.arm.qd)))
 }
 
-fn tcp_pose(c: &mut Controller, _: &mut Args) -> Result<Out, String> {
+fn tcp_pose(c: &mut Controller, _: &mut Args) -> Result<Out, Fault> {
     Ok(Out::Value(Value::Pose(c.arm.pose)))
 }
 
-fn tcp_speed(c: &mut Controller, _: &mut Args) -> Result<Out, String> {
+fn tcp_speed(c: &mut Controller, _: &mut Args) -> Result<Out, Fault> {
     Ok(Out::Value(floats(c.arm.tcp_speed)))
 }
 
-fn tcp_force(_: &mut Controller, _: &mut Args) -> Result<Out, String> {
+fn tcp_force(_: &mut Controller, _: &mut Args) -> Result<Out, Fault> {
     Ok(Out::Value(Value::Pose([0.0; 6])))
 }
 
-fn tcp_offset(c: &mut Controller, _: &mut Args) -> Result<Out, String> {
+fn tcp_offset(c: &mut Controller, _: &mut Args) -> Result<Out, Fault> {
     Ok(Out::Value(Value::Pose(c.arm.tcp)))
 }
 
-fn set_tcp(c: &mut Controller, a: &mut Args) -> Result<Out, String> {
+fn set_tcp(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
     c.arm.tcp = a.six(0)?;
     Ok(Out::Value(Value::None))
 }
 
-fn tool_contact(_: &mut Controller, _: &mut Args) -> Result<Out, String> {
+fn tool_contact(_: &mut Controller, _: &mut Args) -> Result<Out, Fault> {
     Ok(Out::Value(Value::Int(0)))
 }
 
-fn is_steady(_: &mut Controller, _: &mut Args) -> Result<Out, String> {
+fn is_steady(_: &mut Controller, _: &mut Args) -> Result<Out, Fault> {
     Ok(Out::Value(Value::Bool(true)))
 }

@@ -6,6 +6,7 @@
 
 use super::{floats, opt, req, Args, Builtin, Default, Domain, Out};
 use crate::controller::Controller;
+use crate::error::Fault;
 use crate::value::Value;
 
 const D: Domain = Domain::Poses;
@@ -83,13 +84,13 @@ pub(super) const TABLE: &[Builtin] = &[
     ),
 ];
 
-fn dist(_: &mut Controller, a: &mut Args) -> Result<Out, String> {
+fn dist(_: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
     let (p, q) = (a.six(0)?, a.six(1)?);
     let d = (0..3).map(|k| (p[k] - q[k]).powi(2)).sum::<f64>().sqrt();
     Ok(Out::Value(Value::Float(d)))
 }
 
-fn compose(_: &mut Controller, a: &mut Args) -> Result<Out, String> {
+fn compose(_: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
     let (p, q) = (a.six(0)?, a.six(1)?);
     Ok(Out::Value(Value::Pose(match a.name {
         "pose_trans" => crate::pose::trans(p, q),
@@ -98,11 +99,11 @@ fn compose(_: &mut Controller, a: &mut Args) -> Result<Out, String> {
     })))
 }
 
-fn pose_inv(_: &mut Controller, a: &mut Args) -> Result<Out, String> {
+fn pose_inv(_: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
     Ok(Out::Value(Value::Pose(crate::pose::inv(a.six(0)?))))
 }
 
-fn interpolate_pose(_: &mut Controller, a: &mut Args) -> Result<Out, String> {
+fn interpolate_pose(_: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
     let (p, q) = (a.six(0)?, a.six(1)?);
     let t = a.num(2)?;
     let mut out = [0.0; 6];
@@ -112,7 +113,7 @@ fn interpolate_pose(_: &mut Controller, a: &mut Args) -> Result<Out, String> {
     Ok(Out::Value(Value::Pose(out)))
 }
 
-fn get_inverse_kin(c: &mut Controller, a: &mut Args) -> Result<Out, String> {
+fn get_inverse_kin(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
     a.six(0)?;
     Ok(Out::Value(if a.is_absent(1) {
         floats(c.arm.q)
@@ -121,6 +122,6 @@ fn get_inverse_kin(c: &mut Controller, a: &mut Args) -> Result<Out, String> {
     }))
 }
 
-fn get_forward_kin(c: &mut Controller, _: &mut Args) -> Result<Out, String> {
+fn get_forward_kin(c: &mut Controller, _: &mut Args) -> Result<Out, Fault> {
     Ok(Out::Value(Value::Pose(c.arm.pose)))
 }

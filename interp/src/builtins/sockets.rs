@@ -6,6 +6,7 @@ use urscript_socket::robot::ReadCall;
 
 use super::{opt, req, Args, Builtin, Default, Domain, Out, SOCKET_NAME};
 use crate::controller::Controller;
+use crate::error::Fault;
 use crate::value::Value;
 
 const D: Domain = Domain::Sockets;
@@ -111,7 +112,7 @@ pub(super) const TABLE: &[Builtin] = &[
     ),
 ];
 
-fn open(c: &mut Controller, a: &mut Args) -> Result<Out, String> {
+fn open(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
     let host = a.text(0)?;
     let port = a.int(1)?;
     let port =
@@ -127,14 +128,14 @@ fn open(c: &mut Controller, a: &mut Args) -> Result<Out, String> {
     Ok(Out::Connect { socket })
 }
 
-fn close(c: &mut Controller, a: &mut Args) -> Result<Out, String> {
+fn close(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
     let socket = a.text(0)?;
     c.close(&socket);
     Ok(Out::Value(Value::None))
 }
 
 /// The value a send returns, with the reason when it is `False`.
-fn sent(c: &mut Controller, a: &mut Args, socket: &str, ok: bool) -> Result<Out, String> {
+fn sent(c: &mut Controller, a: &mut Args, socket: &str, ok: bool) -> Result<Out, Fault> {
     c.flush(socket);
     if !ok {
         a.failure = Some(if !c.sockets.is_open(socket) {
@@ -148,7 +149,7 @@ fn sent(c: &mut Controller, a: &mut Args, socket: &str, ok: bool) -> Result<Out,
     Ok(Out::Value(Value::Bool(ok)))
 }
 
-fn send_string(c: &mut Controller, a: &mut Args) -> Result<Out, String> {
+fn send_string(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
     let socket = a.text(1)?;
     let bytes = a.v[0].to_str_bytes();
     let ok = if a.name == "socket_send_line" {
@@ -159,7 +160,7 @@ fn send_string(c: &mut Controller, a: &mut Args) -> Result<Out, String> {
     sent(c, a, &socket, ok)
 }
 
-fn send_byte(c: &mut Controller, a: &mut Args) -> Result<Out, String> {
+fn send_byte(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
     let v = a.int(0)?;
     let v = u8::try_from(v)
         .map_err(|_| format!("`socket_send_byte`: value must be 0..255, got {v}"))?;
@@ -168,14 +169,14 @@ fn send_byte(c: &mut Controller, a: &mut Args) -> Result<Out, String> {
     sent(c, a, &socket, ok)
 }
 
-fn send_int(c: &mut Controller, a: &mut Args) -> Result<Out, String> {
+fn send_int(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
     let v = a.int(0)?;
     let socket = a.text(1)?;
     let ok = c.sockets.send_int(&socket, v);
     sent(c, a, &socket, ok)
 }
 
-fn set_var(c: &mut Controller, a: &mut Args) -> Result<Out, String> {
+fn set_var(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
     let var = a.text(0)?;
     let v = a.int(1)?;
     let socket = a.text(2)?;
@@ -183,13 +184,13 @@ fn set_var(c: &mut Controller, a: &mut Args) -> Result<Out, String> {
     sent(c, a, &socket, ok)
 }
 
-fn get_var(c: &mut Controller, a: &mut Args) -> Result<Out, String> {
+fn get_var(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
     let name = a.text(0)?;
     let socket = a.text(1)?;
     c.start_read(socket, ReadCall::GetVar { name }, 2.0, a)
 }
 
-fn read_counted(c: &mut Controller, a: &mut Args) -> Result<Out, String> {
+fn read_counted(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
     let n = a.int(0)?;
     let number = usize::try_from(n)
         .ok()
@@ -205,13 +206,13 @@ fn read_counted(c: &mut Controller, a: &mut Args) -> Result<Out, String> {
     c.start_read(socket, call, timeout, a)
 }
 
-fn read_line(c: &mut Controller, a: &mut Args) -> Result<Out, String> {
+fn read_line(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
     let socket = a.text(0)?;
     let timeout = a.num(1)?;
     c.start_read(socket, ReadCall::Line, timeout, a)
 }
 
-fn read_string(c: &mut Controller, a: &mut Args) -> Result<Out, String> {
+fn read_string(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
     let socket = a.text(0)?;
     let call = ReadCall::String {
         prefix: a.bytes(1)?.to_vec(),

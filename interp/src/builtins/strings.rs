@@ -4,6 +4,7 @@ use urscript_socket::to_str::{parse_value, Scalar, Value as WireValue};
 
 use super::{opt, req, Args, Builtin, Default, Domain, Out};
 use crate::controller::Controller;
+use crate::error::Fault;
 use crate::value::Value;
 
 /// The longest string `str_cat` makes, as on the controller.
@@ -88,20 +89,20 @@ pub(super) const TABLE: &[Builtin] = &[
     ),
 ];
 
-fn str_cat(_: &mut Controller, a: &mut Args) -> Result<Out, String> {
+fn str_cat(_: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
     let mut out = a.v[0].to_str_bytes();
     out.extend(a.v[1].to_str_bytes());
     // The controller's strings hold at most 1023 characters.
     if out.len() > MAX_STRING_LEN {
-        return Err(format!(
+        return Err(Fault::from(format!(
             "`str_cat`: the result would be {} characters, more than {MAX_STRING_LEN}",
             out.len()
-        ));
+        )));
     }
     Ok(Out::Value(Value::Str(out)))
 }
 
-fn str_len(_: &mut Controller, a: &mut Args) -> Result<Out, String> {
+fn str_len(_: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
     let st = a.bytes(0)?;
     Ok(Out::Value(if a.name == "str_len" {
         Value::Int(i32::try_from(st.len()).unwrap_or(i32::MAX))
@@ -110,7 +111,7 @@ fn str_len(_: &mut Controller, a: &mut Args) -> Result<Out, String> {
     }))
 }
 
-fn str_sub(_: &mut Controller, a: &mut Args) -> Result<Out, String> {
+fn str_sub(_: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
     let start = usize::try_from(a.int(1)?).unwrap_or(usize::MAX);
     let len = a.int(2)?;
     let src = a.bytes(0)?;
@@ -122,7 +123,7 @@ fn str_sub(_: &mut Controller, a: &mut Args) -> Result<Out, String> {
     Ok(Out::Value(Value::Str(src[start..end].to_vec())))
 }
 
-fn str_find(_: &mut Controller, a: &mut Args) -> Result<Out, String> {
+fn str_find(_: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
     let from = usize::try_from(a.int(2)?).unwrap_or(0);
     let (src, target) = (a.bytes(0)?, a.bytes(1)?);
     let from = from.min(src.len());
@@ -139,7 +140,7 @@ fn str_find(_: &mut Controller, a: &mut Args) -> Result<Out, String> {
     )))
 }
 
-fn str_at(_: &mut Controller, a: &mut Args) -> Result<Out, String> {
+fn str_at(_: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
     let k = a.int(1)?;
     let src = a.bytes(0)?;
     let at = usize::try_from(k).ok().and_then(|k| src.get(k));
@@ -148,33 +149,33 @@ fn str_at(_: &mut Controller, a: &mut Args) -> Result<Out, String> {
     )))
 }
 
-fn to_str(_: &mut Controller, a: &mut Args) -> Result<Out, String> {
+fn to_str(_: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
     Ok(Out::Value(Value::Str(a.v[0].to_str_bytes())))
 }
 
-fn to_num(_: &mut Controller, a: &mut Args) -> Result<Out, String> {
+fn to_num(_: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
     let st = a.bytes(0)?;
     match parse_value(st) {
         Ok(WireValue::Scalar(Scalar::Int(x))) => Ok(Out::Value(Value::Int(x))),
         Ok(WireValue::Scalar(Scalar::Float(x))) => Ok(Out::Value(Value::Float(x))),
-        _ => Err(format!(
+        _ => Err(Fault::from(format!(
             "`to_num`: \"{}\" is not a number",
             String::from_utf8_lossy(st)
-        )),
+        ))),
     }
 }
 
-fn length(_: &mut Controller, a: &mut Args) -> Result<Out, String> {
+fn length(_: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
     let n = match &a.v[0] {
         Value::List(items) => items.len(),
         Value::Str(st) => st.len(),
         Value::Pose(_) => 6,
         other => {
-            return Err(format!(
+            return Err(Fault::type_error(format!(
                 "type error: `{}` of a {}",
                 a.name,
                 other.type_name()
-            ))
+            )))
         }
     };
     Ok(Out::Value(Value::Int(i32::try_from(n).unwrap_or(i32::MAX))))

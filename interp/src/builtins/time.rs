@@ -3,6 +3,7 @@
 
 use super::{req, secs, Args, Builtin, Domain, Out};
 use crate::controller::Controller;
+use crate::error::Fault;
 use crate::value::Value;
 
 const D: Domain = Domain::Time;
@@ -31,14 +32,14 @@ pub(super) const TABLE: &[Builtin] = &[
     ),
 ];
 
-fn sync(c: &mut Controller, _: &mut Args) -> Result<Out, String> {
+fn sync(c: &mut Controller, _: &mut Args) -> Result<Out, Fault> {
     Ok(Out::Wait(c.step_time, Value::None))
 }
 
-fn sleep(_: &mut Controller, a: &mut Args) -> Result<Out, String> {
+fn sleep(_: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
     Ok(Out::Wait(secs(a.num(0)?), Value::None))
 }
 
-fn get_steptime(c: &mut Controller, _: &mut Args) -> Result<Out, String> {
+fn get_steptime(c: &mut Controller, _: &mut Args) -> Result<Out, Fault> {
     Ok(Out::Value(Value::Float(c.step_time.as_secs_f64())))
 }
