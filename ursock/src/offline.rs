@@ -161,12 +161,17 @@ pub fn decode(
     let mut errors = 0usize;
     let mut on = |m: Result<Message<'_>, urscript_socket::DecodeError>| match m {
         Ok(m) => {
+            // One `decoded` event: the JSON line, or its text for people.
+            let event = crate::report::Decoded {
+                t: crate::report::now(),
+                conn: None,
+                message: crate::report::TypedMessage::new(&m, kind),
+                text: crate::show::message_text(&m),
+            };
             if json {
-                // The typed message alone: `decode --json`'s line format predates the
-                // event stream and is kept (see docs/json-events.md).
-                outln!("{}", crate::report::TypedMessage::new(&m, kind).to_json());
+                outln!("{}", crate::report::Event::Decoded(event).to_json());
             } else {
-                outln!("{}", crate::show::message_text(&m));
+                outln!("{}", event.text);
             }
         }
         Err(e) => {

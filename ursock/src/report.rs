@@ -495,7 +495,9 @@ pub struct Close {
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Decoded {
     pub t: f64,
-    pub conn: u64,
+    /// `listen`: the connection; `decode` (standard input) has none.
+    #[serde(skip_serializing_if = "is_none")]
+    pub conn: Option<u64>,
     pub message: TypedMessage,
     /// The message as `listen` shows it (URScript notation, text quoted).
     pub text: String,
@@ -735,7 +737,7 @@ impl Event {
             Event::Tx(e) | Event::Rx(e) => e.conn,
             Event::Connect(e) => Some(e.conn),
             Event::Close(e) => Some(e.conn),
-            Event::Decoded(e) => Some(e.conn),
+            Event::Decoded(e) => e.conn,
             Event::DecodeError(e) => Some(e.conn),
             Event::Rule(e) => Some(e.conn),
             Event::Diagnosis(e) => e.conn,

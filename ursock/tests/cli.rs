@@ -176,16 +176,34 @@ fn decode_formats() {
         "SET POS_Y 2200\nGET POS_X\n"
     );
     assert_eq!(
-        ok(&["decode", "var", "--json"], b"SET A -3\n"),
-        "{\"type\":\"set\",\"name\":\"A\",\"value\":-3}\n"
+        decoded_messages(&ok(&["decode", "var", "--json"], b"SET A -3\n")),
+        json_lines("{\"type\":\"set\",\"name\":\"A\",\"value\":-3}\n")
     );
     assert_eq!(
-        ok(
+        decoded_messages(&ok(
             &["decode", "value", "--json"],
             b"p[1, 2, 3, 4, 5, 6]\n[True, 2]\n"
-        ),
-        "{\"type\":\"pose\",\"value\":[1.0,2.0,3.0,4.0,5.0,6.0]}\n{\"type\":\"list\",\"value\":[true,2]}\n"
+        )),
+        json_lines("{\"type\":\"pose\",\"value\":[1.0,2.0,3.0,4.0,5.0,6.0]}\n{\"type\":\"list\",\"value\":[true,2]}\n")
     );
+}
+
+/// Each line parsed as JSON.
+fn json_lines(out: &str) -> Vec<serde_json::Value> {
+    out.lines()
+        .map(|l| serde_json::from_str(l).unwrap_or_else(|e| panic!("{e}: {l}")))
+        .collect()
+}
+
+/// The typed messages of `decode --json`'s `decoded` events.
+fn decoded_messages(out: &str) -> Vec<serde_json::Value> {
+    json_lines(out)
+        .into_iter()
+        .map(|e| {
+            assert_eq!(e["event"], "decoded", "{e}");
+            e["message"].clone()
+        })
+        .collect()
 }
 
 #[test]

@@ -83,22 +83,27 @@ fn a_closed_stdout_ends_every_subcommand_quietly() {
 
 #[test]
 fn decode_json_keeps_utf8_as_text_and_marks_raw_bytes_as_hex() {
+    let message = |out: &str| -> String {
+        let e: serde_json::Value = serde_json::from_str(out.lines().next().unwrap()).unwrap();
+        assert_eq!(e["event"], "decoded");
+        e["message"].to_string()
+    };
     let (code, out, _) = run(&["decode", "line", "--json"], "café\n\u{7f}ok\n".as_bytes());
     assert_eq!(code, 0);
     assert_eq!(
-        out.lines().next().unwrap(),
+        message(&out),
         r#"{"type":"line","value":{"encoding":"utf-8","text":"café"}}"#
     );
     let (code, out, _) = run(&["decode", "line", "--json"], b"caf\xE9\n");
     assert_eq!(code, 0);
     assert_eq!(
-        out.trim(),
+        message(&out),
         r#"{"type":"line","value":{"encoding":"hex","hex":"636166e9"}}"#
     );
     // Every line is valid JSON (serde_json reads it back).
     let (_, out, _) = run(&["decode", "stx-etx", "--json"], b"\x02\"q\\\x03");
     let v: serde_json::Value = serde_json::from_str(out.trim()).unwrap();
-    assert_eq!(v["value"]["text"], "\"q\\");
+    assert_eq!(v["message"]["value"]["text"], "\"q\\");
 }
 
 #[test]

@@ -270,7 +270,7 @@ fn every_event_is_documented_with_an_example_that_matches() {
             "no section for {name} in docs/json-events.md"
         );
     }
-    assert!(messages >= 5, "examples of decode --json lines");
+    assert!(messages >= 5, "examples of typed messages");
 }
 
 #[test]
@@ -399,8 +399,10 @@ fn decode_json_lines_match_the_schema() {
         let (code, out, err) = run(&all, input);
         assert_eq!(code, 0, "{all:?}: {err}");
         for line in out.lines() {
-            let v = check_message(&root, line);
-            types.push(v["type"].as_str().unwrap().to_string());
+            let v = check_event(&root, line);
+            assert_eq!(v["event"], "decoded", "{line}");
+            assert!(v.get("conn").is_none(), "{line}");
+            types.push(v["message"]["type"].as_str().unwrap().to_string());
         }
     }
     for t in [

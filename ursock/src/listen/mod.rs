@@ -903,7 +903,7 @@ fn handle_chunk(
                 Kind::Traffic,
                 Event::Decoded(report::Decoded {
                     t: now(),
-                    conn: conn.id,
+                    conn: Some(conn.id),
                     message: d.typed.clone(),
                     text: d.shown.clone(),
                 }),
@@ -947,7 +947,7 @@ fn handle_var(shared: &Shared, conn: &Conn, d: &Decoded) -> bool {
                 Kind::Traffic,
                 Event::Decoded(report::Decoded {
                     t: now(),
-                    conn: id,
+                    conn: Some(id),
                     message: TypedMessage::Set {
                         name: name.to_string(),
                         value,
@@ -992,7 +992,7 @@ fn handle_var(shared: &Shared, conn: &Conn, d: &Decoded) -> bool {
                 Kind::Traffic,
                 Event::Decoded(report::Decoded {
                     t: now(),
-                    conn: id,
+                    conn: Some(id),
                     message: TypedMessage::Get {
                         name: name.to_string(),
                     },
