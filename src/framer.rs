@@ -449,6 +449,30 @@ impl Framer {
         Some((&buf[..n], n))
     }
 
+    /// `socket_read_string`'s resync, for a window still looking for its prefix over a full
+    /// buffer (`buf` is all of it) that holds no occurrence of it: the controller discards
+    /// everything before the prefix, so the bytes that cannot begin it (all but the last
+    /// `prefix.len() - 1`) are dropped and the scan starts afresh on the rest. Without this
+    /// a flood of junk would wedge the read and every later one on the socket. Returns how
+    /// many bytes of `buf` to drop: 0 for other shapes, an empty prefix, or a prefix found.
+    #[cfg(feature = "alloc")]
+    pub fn drop_before_prefix(&mut self, buf: &[u8]) -> usize {
+        let Shape::Window { prefix, .. } = &self.shape else {
+            return 0;
+        };
+        let prefix = prefix.as_bytes();
+        if prefix.is_empty() || find(prefix, buf).is_some() {
+            return 0;
+        }
+        let drop = buf.len() - (prefix.len() - 1).min(buf.len());
+        if drop > 0 {
+            // The scan state referred to the dropped bytes.
+            self.scan.reset();
+            self.scan.pos += drop as u64;
+        }
+        drop
+    }
+
     /// The caller's buffer is full (`buf` is all of it) and the frame in it cannot
     /// complete: a buffer smaller than the bound. Treats the frame as over-long at the
     /// buffer's size: a `TooLong` error, the bytes dropped, and the rest of the frame

@@ -284,7 +284,7 @@ impl SocketConnection {
                 self.last_failure = Some(e);
                 pending.call.sentinel()
             }
-            Outcome::Waiting if self.rx.is_full() && drop_before_prefix(&mut self.rx, pending) => {
+            Outcome::Waiting if self.rx.is_full() && resync(&mut self.rx, &mut pending.reader) => {
                 // Room was made: wait for more bytes.
                 return None;
             }
@@ -514,36 +514,11 @@ enum Outcome {
     Waiting,
 }
 
-/// A `socket_read_string` with a prefix, over a full receive buffer that holds no
-/// occurrence of the prefix: the controller discards everything before the prefix, so the
-/// bytes that cannot begin it are dropped (all but the last `prefix.len() - 1`) and the
-/// read goes on waiting. Without this a flood of junk would wedge this read and every
-/// later one on the socket. True if bytes were dropped.
-fn drop_before_prefix(rx: &mut RecvBuffer<Box<[u8]>>, pending: &mut Pending) -> bool {
-    let ReadCall::String {
-        prefix,
-        interpret_escape,
-        ..
-    } = &pending.call
-    else {
-        return false;
-    };
-    let mut tmp = [0u8; crate::string::MAX_PATTERN_LEN];
-    let Ok(n) = crate::string::controller_pattern(prefix, *interpret_escape, &mut tmp) else {
-        return false;
-    };
-    let prefix = &tmp[..n];
-    if prefix.is_empty() || memchr::memmem::find(rx.data(), prefix).is_some() {
-        return false;
-    }
-    let drop = rx.len() - (prefix.len() - 1).min(rx.len());
-    if drop == 0 {
-        return false;
-    }
+/// A full receive buffer that holds no complete message: the decoder says how many
+/// leading bytes it can never use (a `socket_read_string` drops what cannot begin its
+/// prefix; the framer owns that scan) and they are consumed. True if room was made.
+fn resync(rx: &mut RecvBuffer<Box<[u8]>>, reader: &mut AnyDecoder) -> bool {
+    let drop = reader.drop_before_prefix(rx.data());
     rx.consume(drop);
-    // The decoder's scan state referred to the dropped bytes: start it afresh.
-    if let Ok(fresh) = pending.call.format().decoder() {
-        pending.reader = fresh;
-    }
-    true
+    drop > 0
 }
