@@ -365,11 +365,16 @@ impl Framer {
                 Ok(scan.window(buf, limits, prefix, suffix))
             }
             // A kind that is not the shape's (no parse step is built so): the shape decides.
-            (_, shape) => {
-                let kind = shape.kind();
-                self.next(kind, buf)
-            }
+            _ => self.next_by_shape(buf),
         }
+    }
+
+    /// [`next`](Self::next) with the kind read from the shape, out of line: the cold arm
+    /// above, kept from bloating the decode loops it is inlined into.
+    #[cold]
+    #[inline(never)]
+    fn next_by_shape<'a>(&mut self, buf: &'a [u8]) -> Result<Status<Frame<'a>>, DecodeError> {
+        self.next(self.shape.kind(), buf)
     }
 
     /// The input ended: the frame in `buf` if there is one, else the shape's end-of-input
