@@ -463,23 +463,50 @@ pub fn write_quoted(s: &mut impl fmt::Write, bytes: &[u8]) -> fmt::Result {
 #[derive(Debug, Clone)]
 pub struct AnyDecoder(Inner);
 
-#[allow(clippy::large_enum_variant)]
-#[derive(Debug, Clone)]
-enum Inner {
-    FloatTuple(FloatTupleDecoder),
-    Int32(Int32Decoder),
-    Bytes(ByteListDecoder),
-    Line(LineDecoder),
-    String(ReadStringDecoder),
-    Delimited(DelimitedDecoder),
-    StxEtx(StxEtxDecoder),
-    Var(VarMessageDecoder),
-    VarReply(VarReplyDecoder),
-    Value(ValueLineDecoder),
+/// The registry's one table of run-time decoders: each line names a variant of `Inner`,
+/// the concrete decoder it holds and the [`Message`] its items become. The enum and the
+/// whole [`Decode`] dispatch of [`AnyDecoder`] are generated from it, so a format is one
+/// line here and every method matches over the same list (no allocation, no trait object).
+macro_rules! any_decoder {
+    ($($variant:ident($decoder:ty) => $message:path,)*) => {
+        #[allow(clippy::large_enum_variant)]
+        #[derive(Debug, Clone)]
+        enum Inner {
+            $($variant($decoder),)*
+        }
+
+        /// Runs `$body` with `$d` bound to the concrete decoder inside `$inner` and `$m`
+        /// to the constructor of its [`Message`] variant.
+        macro_rules! each {
+            ($inner:expr, |$d:ident, $m:ident| $body:expr) => {
+                match $inner {
+                    $(Inner::$variant($d) => {
+                        let $m = $message;
+                        $body
+                    })*
+                }
+            };
+        }
+    };
+}
+
+any_decoder! {
+    FloatTuple(FloatTupleDecoder) => Message::FloatTuple,
+    Int32(Int32Decoder) => Message::Int32,
+    Bytes(ByteListDecoder) => Message::Bytes,
+    Line(LineDecoder) => Message::Text,
+    String(ReadStringDecoder) => Message::Text,
+    Delimited(DelimitedDecoder) => Message::Text,
+    StxEtx(StxEtxDecoder) => Message::Text,
+    Var(VarMessageDecoder) => Message::Var,
+    VarReply(VarReplyDecoder) => Message::VarReply,
+    Value(ValueLineDecoder) => Message::Value,
 }
 
 impl AnyDecoder {
-    /// The float tuple decoder inside, for robot policies that need its partial state.
+    /// The counted decoder inside (int32 or bytes), for the robot's short-read policy,
+    /// which needs its partial state.
+    #[cfg(feature = "alloc")]
     pub(crate) fn as_counted(&mut self) -> Counted<'_> {
         match &mut self.0 {
             Inner::Int32(d) => Counted::Int32(d),
@@ -487,9 +514,21 @@ impl AnyDecoder {
             _ => Counted::Other,
         }
     }
+
+    /// A full receive buffer `buf` that holds no complete message: how many of its bytes a
+    /// `socket_read_string` drops because they cannot begin its prefix (0 for every other
+    /// format). The framer decides; see `Framer::drop_before_prefix`.
+    #[cfg(feature = "alloc")]
+    pub(crate) fn drop_before_prefix(&mut self, buf: &[u8]) -> usize {
+        match &mut self.0 {
+            Inner::String(d) => d.drop_before_prefix(buf),
+            _ => 0,
+        }
+    }
 }
 
 /// The counted decoders, for the robot's short-read policy.
+#[cfg(feature = "alloc")]
 pub(crate) enum Counted<'d> {
     Int32(&'d mut Int32Decoder),
     Bytes(&'d mut ByteListDecoder),
@@ -500,78 +539,26 @@ impl Decode for AnyDecoder {
     type Item<'buf> = Message<'buf>;
 
     fn decode<'buf>(&mut self, buf: &'buf [u8]) -> Result<Status<Message<'buf>>, DecodeError> {
-        fn map<'b, T>(
-            s: Result<Status<T>, DecodeError>,
-            f: impl FnOnce(T) -> Message<'b>,
-        ) -> Result<Status<Message<'b>>, DecodeError> {
-            s.map(|s| s.map(f))
-        }
-        match &mut self.0 {
-            Inner::FloatTuple(d) => map(d.decode(buf), Message::FloatTuple),
-            Inner::Int32(d) => map(d.decode(buf), Message::Int32),
-            Inner::Bytes(d) => map(d.decode(buf), Message::Bytes),
-            Inner::Line(d) => map(d.decode(buf), Message::Text),
-            Inner::String(d) => map(d.decode(buf), Message::Text),
-            Inner::Delimited(d) => map(d.decode(buf), Message::Text),
-            Inner::StxEtx(d) => map(d.decode(buf), Message::Text),
-            Inner::Var(d) => map(d.decode(buf), Message::Var),
-            Inner::VarReply(d) => map(d.decode(buf), Message::VarReply),
-            Inner::Value(d) => map(d.decode(buf), Message::Value),
-        }
+        each!(&mut self.0, |d, message| d
+            .decode(buf)
+            .map(|s| s.map(message)))
     }
 
     fn decode_eof<'buf>(
         &mut self,
         buf: &'buf [u8],
     ) -> Result<Option<(Message<'buf>, usize)>, DecodeError> {
-        fn map<'b, T>(
-            s: Result<Option<(T, usize)>, DecodeError>,
-            f: impl FnOnce(T) -> Message<'b>,
-        ) -> Result<Option<(Message<'b>, usize)>, DecodeError> {
-            s.map(|o| o.map(|(item, n)| (f(item), n)))
-        }
-        match &mut self.0 {
-            Inner::FloatTuple(d) => map(d.decode_eof(buf), Message::FloatTuple),
-            Inner::Int32(d) => map(d.decode_eof(buf), Message::Int32),
-            Inner::Bytes(d) => map(d.decode_eof(buf), Message::Bytes),
-            Inner::Line(d) => map(d.decode_eof(buf), Message::Text),
-            Inner::String(d) => map(d.decode_eof(buf), Message::Text),
-            Inner::Delimited(d) => map(d.decode_eof(buf), Message::Text),
-            Inner::StxEtx(d) => map(d.decode_eof(buf), Message::Text),
-            Inner::Var(d) => map(d.decode_eof(buf), Message::Var),
-            Inner::VarReply(d) => map(d.decode_eof(buf), Message::VarReply),
-            Inner::Value(d) => map(d.decode_eof(buf), Message::Value),
-        }
+        each!(&mut self.0, |d, message| d
+            .decode_eof(buf)
+            .map(|o| o.map(|(item, n)| (message(item), n))))
     }
 
     fn overflow(&mut self, buf: &[u8]) -> Option<DecodeError> {
-        match &mut self.0 {
-            Inner::FloatTuple(d) => d.overflow(buf),
-            Inner::Int32(d) => d.overflow(buf),
-            Inner::Bytes(d) => d.overflow(buf),
-            Inner::Line(d) => d.overflow(buf),
-            Inner::Value(d) => d.overflow(buf),
-            Inner::String(d) => d.overflow(buf),
-            Inner::Delimited(d) => d.overflow(buf),
-            Inner::StxEtx(d) => d.overflow(buf),
-            Inner::Var(d) => d.overflow(buf),
-            Inner::VarReply(d) => d.overflow(buf),
-        }
+        each!(&mut self.0, |d, _message| d.overflow(buf))
     }
 
     fn position(&self) -> u64 {
-        match &self.0 {
-            Inner::FloatTuple(d) => d.position(),
-            Inner::Int32(d) => d.position(),
-            Inner::Bytes(d) => d.position(),
-            Inner::Line(d) => d.position(),
-            Inner::Value(d) => d.position(),
-            Inner::String(d) => d.position(),
-            Inner::Delimited(d) => d.position(),
-            Inner::StxEtx(d) => d.position(),
-            Inner::Var(d) => d.position(),
-            Inner::VarReply(d) => d.position(),
-        }
+        each!(&self.0, |d, _message| d.position())
     }
 }
 

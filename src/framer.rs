@@ -72,17 +72,6 @@ impl Pattern {
     pub fn len(&self) -> usize {
         usize::from(self.len)
     }
-
-    /// First occurrence in `hay`. memchr for one byte; memchr's `memmem` (a SIMD
-    /// prefilter + Two-Way) for longer patterns, so the cost is linear in `hay`.
-    #[inline(always)]
-    pub fn find(&self, hay: &[u8]) -> Option<usize> {
-        match self.as_bytes() {
-            [] => Some(0),
-            [b] => memchr::memchr(*b, hay),
-            p => memchr::memmem::find(hay, p),
-        }
-    }
 }
 
 /// What to do with bytes before a bracketed frame's open byte.
@@ -138,6 +127,18 @@ pub enum Shape {
     /// `suffix` (consumed, not returned), all within [`WINDOW`] bytes counted from the
     /// prefix. Nothing is consumed until the frame is complete.
     Window { prefix: Pattern, suffix: Pattern },
+}
+
+impl Shape {
+    /// Which of the four shapes this is.
+    pub fn kind(&self) -> ShapeKind {
+        match self {
+            Shape::Delimited { .. } => ShapeKind::Delimited,
+            Shape::Bracketed { .. } => ShapeKind::Bracketed,
+            Shape::Counted { .. } => ShapeKind::Counted,
+            Shape::Window { .. } => ShapeKind::Window,
+        }
+    }
 }
 
 /// `socket_read_string`'s limit: at most 1024 bytes, prefix and suffix included.
@@ -213,11 +214,13 @@ pub struct Framer {
     scan: Scan,
 }
 
-/// First occurrence of `close` in `hay`: memchr for one byte; memchr's `memmem` (a SIMD
-/// prefilter + Two-Way) for longer delimiters, so the cost is linear in `hay`.
+/// First occurrence of `pattern` (a close, delimiter, prefix or suffix) in `hay`: the
+/// framer's one search. memchr for one byte; memchr's `memmem` (a SIMD prefilter +
+/// Two-Way) for longer patterns, so the cost is linear in `hay`. An empty pattern is found
+/// at 0 (`memmem`'s rule).
 #[inline(always)]
-fn find(close: &[u8], hay: &[u8]) -> Option<usize> {
-    match close {
+fn find(pattern: &[u8], hay: &[u8]) -> Option<usize> {
+    match pattern {
         [b] => memchr::memchr(*b, hay),
         p => memchr::memmem::find(hay, p),
     }
@@ -313,11 +316,15 @@ impl Framer {
         self.scan.reset();
     }
 
-    /// [`next`](Self::next) for a framer whose shape is known to be `kind` at compile time
-    /// (each parse step names its shape): the match below then folds to the one arm, so a
-    /// counted read costs a length check and a line a memchr, with no dispatch and no call.
+    /// The next frame in `buf` (the caller's unconsumed bytes): the one scan-and-discard
+    /// machine of the crate. Every return accounts for the bytes it tells the caller to drop.
+    ///
+    /// `kind` is the shape's kind. A parse step passes its own ([`Parse::SHAPE`]), known at
+    /// compile time, so the match below folds to the one arm: a counted read costs a length
+    /// check and a line a memchr, with no dispatch and no call. Other callers pass
+    /// [`Shape::kind`].
     #[inline(always)]
-    pub fn next_as<'a>(
+    pub fn next<'a>(
         &mut self,
         kind: ShapeKind,
         buf: &'a [u8],
@@ -354,45 +361,20 @@ impl Framer {
                 };
                 scan.delimited(buf, limits, ends)
             }
-            // A parse step paired with another shape (never built): the general path.
-            _ => self.next(buf),
+            (ShapeKind::Window, Shape::Window { prefix, suffix }) => {
+                Ok(scan.window(buf, limits, prefix, suffix))
+            }
+            // A kind that is not the shape's (no parse step is built so): the shape decides.
+            _ => self.next_by_shape(buf),
         }
     }
 
-    /// The next frame in `buf` (the caller's unconsumed bytes): the one scan-and-discard
-    /// machine of the crate. Every return accounts for the bytes it tells the caller to drop.
+    /// [`next`](Self::next) with the kind read from the shape, out of line: the cold arm
+    /// above, kept from bloating the decode loops it is inlined into.
+    #[cold]
     #[inline(never)]
-    pub fn next<'a>(&mut self, buf: &'a [u8]) -> Result<Status<Frame<'a>>, DecodeError> {
-        let Framer {
-            shape,
-            limits,
-            scan,
-        } = self;
-        match shape {
-            Shape::Bracketed {
-                open,
-                close,
-                noise,
-                reopen,
-            } => {
-                let ends = Ends {
-                    open: Some((*open, *noise)),
-                    close: core::slice::from_ref(close),
-                    reopen: *reopen,
-                };
-                scan.delimited(buf, limits, ends)
-            }
-            Shape::Delimited { close } => {
-                let ends = Ends {
-                    open: None,
-                    close: close.as_bytes(),
-                    reopen: None,
-                };
-                scan.delimited(buf, limits, ends)
-            }
-            Shape::Counted { len, .. } => Ok(scan.counted(buf, *len)),
-            Shape::Window { prefix, suffix } => Ok(scan.window(buf, limits, prefix, suffix)),
-        }
+    fn next_by_shape<'a>(&mut self, buf: &'a [u8]) -> Result<Status<Frame<'a>>, DecodeError> {
+        self.next(self.shape.kind(), buf)
     }
 
     /// The input ended: the frame in `buf` if there is one, else the shape's end-of-input
@@ -401,7 +383,7 @@ impl Framer {
     /// every byte of `buf` is accounted for (except [`AtEof::Keep`], which consumes
     /// nothing) and the scan is reset.
     pub fn finish<'a>(&mut self, buf: &'a [u8]) -> Result<Option<Frame<'a>>, DecodeError> {
-        let consumed = match self.next(buf)? {
+        let consumed = match self.next(self.shape.kind(), buf)? {
             Status::Complete { item, .. } => return Ok(Some(item)),
             Status::Partial { consumed } => consumed,
         };
@@ -470,6 +452,30 @@ impl Framer {
         }
         self.scan.pos += n as u64;
         Some((&buf[..n], n))
+    }
+
+    /// `socket_read_string`'s resync, for a window still looking for its prefix over a full
+    /// buffer (`buf` is all of it) that holds no occurrence of it: the controller discards
+    /// everything before the prefix, so the bytes that cannot begin it (all but the last
+    /// `prefix.len() - 1`) are dropped and the scan starts afresh on the rest. Without this
+    /// a flood of junk would wedge the read and every later one on the socket. Returns how
+    /// many bytes of `buf` to drop: 0 for other shapes, an empty prefix, or a prefix found.
+    #[cfg(feature = "alloc")]
+    pub fn drop_before_prefix(&mut self, buf: &[u8]) -> usize {
+        let Shape::Window { prefix, .. } = &self.shape else {
+            return 0;
+        };
+        let prefix = prefix.as_bytes();
+        if prefix.is_empty() || find(prefix, buf).is_some() {
+            return 0;
+        }
+        let drop = buf.len() - (prefix.len() - 1).min(buf.len());
+        if drop > 0 {
+            // The scan state referred to the dropped bytes.
+            self.scan.reset();
+            self.scan.pos += drop as u64;
+        }
+        drop
     }
 
     /// The caller's buffer is full (`buf` is all of it) and the frame in it cannot
@@ -788,7 +794,7 @@ impl Scan {
             _ if plen == 0 => 0,
             _ => {
                 let from = self.scanned.saturating_sub(plen - 1).min(buf.len());
-                match prefix.find(&buf[from..]) {
+                match find(prefix.as_bytes(), &buf[from..]) {
                     Some(i) => {
                         let c = from + i + plen;
                         self.state = State::InFrame { content: c };
@@ -815,7 +821,7 @@ impl Scan {
         }
         let window = content.len().min(max_content + slen);
         let from = self.scanned.saturating_sub(slen - 1).min(window);
-        match suffix.find(&content[from..window]) {
+        match find(suffix.as_bytes(), &content[from..window]) {
             Some(i) => {
                 let end = content_start + from + i;
                 self.complete(buf, content_start, end, end + slen)
@@ -910,7 +916,7 @@ impl<P: Parse> Framed<P> {
         };
         let frame = match whole {
             Some(frame) => frame,
-            None => match self.framer.next_as(P::SHAPE, buf)? {
+            None => match self.framer.next(P::SHAPE, buf)? {
                 Status::Complete { item, .. } => item,
                 Status::Partial { consumed } => return Ok(Status::Partial { consumed }),
             },

@@ -199,6 +199,14 @@ impl ReadStringDecoder {
     pub fn reset(&mut self) {
         self.framer.reset();
     }
+
+    /// Drops what can never begin the prefix from a full buffer `buf` that holds none, as
+    /// the controller does; how many bytes of `buf` to drop (see the framer's
+    /// `drop_before_prefix`).
+    #[cfg(feature = "alloc")]
+    pub(crate) fn drop_before_prefix(&mut self, buf: &[u8]) -> usize {
+        self.framer.drop_before_prefix(buf)
+    }
 }
 
 /// Server-side decoder that splits a byte stream on a delimiter of the user's choice

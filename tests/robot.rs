@@ -718,3 +718,29 @@ fn junk_before_a_prefix_does_not_wedge_the_socket() {
     assert_eq!(result.unwrap().to_urscript(), "\"ok\"");
     assert!(s.buffered().len() <= Policy::default().receive_capacity);
 }
+
+/// `next(now)`: a full buffer without a complete message leaves only the deadline, so the
+/// step says sleep until it, and at the deadline the read ends with its sentinel.
+#[test]
+fn next_sleeps_on_a_full_buffer_until_the_deadline() {
+    use urscript_socket::robot::Step;
+    let policy = Policy {
+        receive_capacity: 4,
+        ..Policy::default()
+    };
+    let mut s = SocketConnection::new("s", policy);
+    s.start_read(ReadCall::Line, Timeout::from_secs_f64(0.5), Duration::ZERO)
+        .unwrap();
+    let until = Duration::from_millis(500);
+    assert_eq!(
+        s.next(Duration::ZERO),
+        Step::NeedBytes { until: Some(until) }
+    );
+    assert_eq!(s.receive(b"abcdef"), 4);
+    assert_eq!(s.next(Duration::from_millis(1)), Step::Sleep { until });
+    match s.next(until) {
+        Step::Done(r) => assert_eq!(r.to_urscript(), "\"\""),
+        other => panic!("{other:?}"),
+    }
+    assert_eq!(s.next(until), Step::Idle);
+}

@@ -37,6 +37,8 @@ pub mod blocking;
 pub mod embedded;
 #[cfg(feature = "tokio")]
 pub mod tokio_codec;
+#[cfg(feature = "tokio")]
+mod tokio_robot;
 #[cfg(feature = "std")]
 pub(crate) mod virtual_robot;
 

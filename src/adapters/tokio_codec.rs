@@ -39,8 +39,6 @@
 
 use std::vec::Vec;
 
-use ::tokio::io::{AsyncReadExt, AsyncWriteExt};
-use ::tokio::net::{TcpStream, ToSocketAddrs};
 use bytes::{Buf, Bytes, BytesMut};
 use tokio_util::codec;
 
@@ -49,11 +47,12 @@ use crate::ascii_float::{encode_float_tuple, FloatTuple, FloatTupleDecoder};
 use crate::byte_list::{encode_byte, encode_byte_list};
 use crate::int32::{encode_int32, encode_int32_list};
 use crate::line::{encode_line, LineDecoder};
-use crate::robot::{Policy, ReadCall, ReadResult, RobotError, SocketConnection, Timeout};
 use crate::string::{encode_string, DelimitedDecoder};
 use crate::stx_etx::{encode_stx_etx, StxEtxDecoder};
 use crate::var::{encode_var_reply, VarMessageDecoder};
 use crate::{ArgumentError, Decode, DecodeError, Status};
+
+pub use super::tokio_robot::AsyncRobotSocket;
 
 /// The error of every codec here: the adapters' [`Error`](crate::adapters::Error) over
 /// `std::io::Error` (the transport, bad bytes with what and where, a value the encoder
@@ -865,133 +864,6 @@ impl<T, C: codec::Encoder<T>> codec::Encoder<T> for Tolerant<C> {
     type Error = C::Error;
     fn encode(&mut self, item: T, dst: &mut BytesMut) -> Result<(), C::Error> {
         self.inner.encode(item, dst)
-    }
-}
-
-/// One robot socket over a tokio `TcpStream`: the sans-IO robot model with real time.
-/// Queue sends on [`socket`](Self::socket), then [`flush`](Self::flush); reads wait with
-/// `tokio::time` and resolve to the URScript sentinel on timeout.
-///
-/// ```no_run
-/// # async fn demo() -> Result<(), urscript_socket::robot::RobotError> {
-/// use urscript_socket::adapters::tokio_codec::AsyncRobotSocket;
-/// use urscript_socket::robot::{Policy, ReadCall, Timeout};
-/// let mut robot = AsyncRobotSocket::connect("127.0.0.1:30000", "socket_0", Policy::default()).await?;
-/// robot.socket().send_line(b"shoot");
-/// let pose = robot.read(ReadCall::AsciiFloat { number: 6 }, Timeout::default()).await?;
-/// println!("{}", pose.to_urscript());
-/// # Ok(()) }
-/// ```
-#[derive(Debug)]
-pub struct AsyncRobotSocket {
-    conn: SocketConnection,
-    stream: TcpStream,
-    /// Time zero of the machine's clock.
-    epoch: ::tokio::time::Instant,
-}
-
-impl AsyncRobotSocket {
-    /// `socket_open(address, port, socket_name)`.
-    ///
-    /// ```no_run
-    /// # async fn demo() {
-    /// # use urscript_socket::{adapters::tokio_codec::AsyncRobotSocket, robot::Policy};
-    /// let s = AsyncRobotSocket::connect("127.0.0.1:30000", "socket_0", Policy::default()).await;
-    /// # }
-    /// ```
-    pub async fn connect(
-        addr: impl ToSocketAddrs,
-        socket_name: &str,
-        policy: Policy,
-    ) -> Result<Self, RobotError> {
-        let stream = TcpStream::connect(addr).await.map_err(RobotError::Io)?;
-        stream.set_nodelay(true).map_err(RobotError::Io)?;
-        Ok(AsyncRobotSocket {
-            conn: SocketConnection::new(socket_name, policy),
-            stream,
-            epoch: ::tokio::time::Instant::now(),
-        })
-    }
-
-    /// The sans-IO socket: queue sends here (`send_line`, `send_int`, `set_var`...).
-    ///
-    /// ```no_run
-    /// # async fn demo(robot: &mut urscript_socket::adapters::tokio_codec::AsyncRobotSocket) {
-    /// robot.socket().send_int(7);
-    /// # }
-    /// ```
-    pub fn socket(&mut self) -> &mut SocketConnection {
-        &mut self.conn
-    }
-
-    /// Writes everything queued. `Ok(false)` if the peer has gone: the socket is then
-    /// broken for writing and later sends return false, as `socket_send_*` returns False
-    /// on the controller.
-    ///
-    /// ```no_run
-    /// # async fn demo(robot: &mut urscript_socket::adapters::tokio_codec::AsyncRobotSocket) {
-    /// robot.socket().send_line(b"go");
-    /// assert!(robot.flush().await.unwrap());
-    /// # }
-    /// ```
-    pub async fn flush(&mut self) -> Result<bool, RobotError> {
-        let out: Vec<u8> = self.conn.take_outgoing();
-        if !out.is_empty() && self.stream.write_all(&out).await.is_err() {
-            self.conn.send_failed();
-        }
-        Ok(!self.conn.is_send_broken())
-    }
-
-    /// Runs a read call: sends what is queued (a `GET` for `GetVar`), then waits until the
-    /// read completes, fails, the peer closes, or the timeout passes (the sentinel).
-    ///
-    /// ```no_run
-    /// # async fn demo(robot: &mut urscript_socket::adapters::tokio_codec::AsyncRobotSocket) {
-    /// use urscript_socket::robot::{ReadCall, Timeout};
-    /// let r = robot.read(ReadCall::Line, Timeout::from_secs_f64(0.5)).await.unwrap();
-    /// # }
-    /// ```
-    pub async fn read(
-        &mut self,
-        call: ReadCall,
-        timeout: Timeout,
-    ) -> Result<ReadResult, RobotError> {
-        self.conn.start_read(call, timeout, self.epoch.elapsed())?;
-        self.flush().await?;
-        loop {
-            if let Some(r) = self.conn.poll_read() {
-                return Ok(r);
-            }
-            if let Some(r) = self.conn.handle_timeout(self.epoch.elapsed()) {
-                return Ok(r);
-            }
-            // A deadline past what the clock can represent is no deadline.
-            let deadline = self
-                .conn
-                .poll_timeout()
-                .and_then(|d| self.epoch.checked_add(d));
-            let space = self.conn.receive_space();
-            if space.is_empty() {
-                // Full buffer, incomplete read: only the deadline ends it (a read with no
-                // deadline already ended in poll_read).
-                if let Some(d) = deadline {
-                    ::tokio::time::sleep_until(d).await;
-                }
-                continue;
-            }
-            let read = self.stream.read(space);
-            let n = match deadline {
-                Some(d) => match ::tokio::time::timeout_at(d, read).await {
-                    Ok(r) => r,
-                    Err(_elapsed) => continue,
-                },
-                None => read.await,
-            };
-            match n {
-                Ok(0) | Err(_) => self.conn.peer_closed(),
-                Ok(n) => self.conn.commit_received(n),
-            }
-        }
     }
 }
 

@@ -9,7 +9,7 @@ use std::vec::Vec;
 
 use crate::ascii_float::FloatTuple;
 use crate::robot::{
-    IntList, Policy, ReadCall, ReadResult, Robot, RobotError, SocketConnection, Timeout,
+    IntList, Policy, ReadCall, ReadResult, Robot, RobotError, SocketConnection, Step, Timeout,
 };
 use crate::to_str::Value;
 
@@ -298,22 +298,17 @@ impl VirtualRobot {
         socket.start_read(call, timeout, now)?;
         flush(socket, stream, &mut self.observer);
         loop {
-            if let Some(result) = socket.poll_read() {
-                return Ok(result);
-            }
             let now = epoch.elapsed();
-            if let Some(result) = socket.handle_timeout(now) {
-                return Ok(result);
+            match socket.next(now) {
+                Step::Done(result) => return Ok(result),
+                // Wait for bytes at most until the deadline (None: forever).
+                Step::NeedBytes { until } => {
+                    let wait = until.map(|d| d.saturating_sub(now));
+                    receive(socket, stream, wait, &mut self.observer);
+                }
+                Step::Sleep { until } => std::thread::sleep(until.saturating_sub(now)),
+                Step::Idle => return Err(RobotError::NoReadPending),
             }
-            // Not yet due: wait for bytes at most until the deadline (None: forever).
-            let wait = socket.poll_timeout().map(|d| d.saturating_sub(now));
-            if socket.receive_space().is_empty() {
-                // Buffer full, read incomplete: only the deadline can end it (a read with
-                // no deadline already ended in poll_read).
-                std::thread::sleep(wait.unwrap_or(Duration::from_millis(10)));
-                continue;
-            }
-            receive(socket, stream, wait, &mut self.observer);
         }
     }
 

@@ -25,6 +25,8 @@ pub enum RobotError {
     Encode(EncodeError),
     /// A read was started while another one is pending on the same socket.
     ReadPending,
+    /// A read loop stepped a socket with no read pending ([`Step::Idle`](super::Step::Idle)).
+    NoReadPending,
     /// No socket of that name is open.
     NotOpen(String),
     /// The transport failed (virtual robot only).
@@ -38,6 +40,7 @@ impl fmt::Display for RobotError {
             RobotError::Argument(e) => write!(f, "invalid argument: {e}"),
             RobotError::Encode(e) => write!(f, "cannot send: {e}"),
             RobotError::ReadPending => f.write_str("a read is already pending on this socket"),
+            RobotError::NoReadPending => f.write_str("no read is pending on this socket"),
             RobotError::NotOpen(name) => write!(f, "no open socket named \"{name}\""),
             #[cfg(feature = "std")]
             RobotError::Io(e) => write!(f, "socket error: {e}"),

@@ -9,8 +9,10 @@
 //! completed ([`SocketConnection::poll_read`]), asks when the machine next needs waking
 //! ([`SocketConnection::poll_timeout`]) and reports that the moment came
 //! ([`SocketConnection::handle_timeout`]`(now)`), which resolves the read to its URScript
-//! sentinel. Tests therefore control time completely; every I/O driver (the blocking
-//! [`VirtualRobot`], the async robot of the tokio adapter) is a short loop over these calls.
+//! sentinel. Tests therefore control time completely. [`SocketConnection::next`]`(now)`
+//! makes those calls in order and answers with a [`Step`], what the driver must do (receive
+//! bytes until a deadline, sleep until it, or take the result), so every I/O driver (the
+//! blocking [`VirtualRobot`], the async robot of the tokio adapter) is a short loop over it.
 //!
 //! Files: `call.rs` (what a program asks and gets: [`ReadCall`], [`Timeout`], [`Policy`],
 //! [`ReadResult`]), `socket.rs` (the one-socket machine, [`SocketConnection`]), `table.rs`
@@ -89,7 +91,7 @@ mod table;
 
 pub use call::{IntList, Policy, ReadCall, ReadResult, ShortRead, Timeout};
 pub use error::RobotError;
-pub use socket::SocketConnection;
+pub use socket::{SocketConnection, Step};
 pub use table::Robot;
 
 #[cfg(feature = "std")]

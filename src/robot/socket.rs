@@ -284,7 +284,7 @@ impl SocketConnection {
                 self.last_failure = Some(e);
                 pending.call.sentinel()
             }
-            Outcome::Waiting if self.rx.is_full() && drop_before_prefix(&mut self.rx, pending) => {
+            Outcome::Waiting if self.rx.is_full() && resync(&mut self.rx, &mut pending.reader) => {
                 // Room was made: wait for more bytes.
                 return None;
             }
@@ -319,6 +319,50 @@ impl SocketConnection {
         match self.pending.as_ref()?.deadline {
             Some(deadline) if deadline <= now => self.give_up(),
             _ => None,
+        }
+    }
+
+    /// One step of the pending read at time `now`: what the driver must do next. This is
+    /// the whole read loop of every I/O driver, written once: the driver calls it, does
+    /// what the [`Step`] says, and calls it again until [`Step::Done`]. It is
+    /// [`poll_read`](Self::poll_read), then [`handle_timeout`](Self::handle_timeout)`(now)`,
+    /// then [`poll_timeout`](Self::poll_timeout) turned into an instruction.
+    ///
+    /// ```
+    /// # use std::time::Duration;
+    /// # use urscript_socket::robot::{Policy, ReadCall, SocketConnection, Step, Timeout};
+    /// let mut s = SocketConnection::new("s", Policy::default());
+    /// assert_eq!(s.next(Duration::ZERO), Step::Idle);
+    /// s.start_read(ReadCall::Line, Timeout::from_secs_f64(0.5), Duration::ZERO).unwrap();
+    /// let until = Some(Duration::from_millis(500));
+    /// assert_eq!(s.next(Duration::ZERO), Step::NeedBytes { until });
+    /// s.receive(b"ok\n");
+    /// let Step::Done(line) = s.next(Duration::from_millis(1)) else { panic!() };
+    /// assert_eq!(line.to_urscript(), "\"ok\"");
+    /// s.start_read(ReadCall::Line, Timeout::from_secs_f64(0.5), Duration::ZERO).unwrap();
+    /// let Step::Done(timed_out) = s.next(Duration::from_millis(500)) else { panic!() };
+    /// assert_eq!(timed_out.to_urscript(), "\"\"");
+    /// ```
+    pub fn next(&mut self, now: Duration) -> Step {
+        if self.pending.is_none() {
+            return Step::Idle;
+        }
+        if let Some(result) = self.poll_read() {
+            return Step::Done(result);
+        }
+        if let Some(result) = self.handle_timeout(now) {
+            return Step::Done(result);
+        }
+        let until = self.poll_timeout();
+        if !self.rx.spare().is_empty() {
+            return Step::NeedBytes { until };
+        }
+        match until {
+            // Full buffer, incomplete read: only the deadline can end it.
+            Some(until) => Step::Sleep { until },
+            // A read with no deadline over a full buffer already ended in `poll_read`;
+            // should one get here, it ends the same way.
+            None => self.give_up().map_or(Step::Idle, Step::Done),
         }
     }
 
@@ -507,6 +551,35 @@ impl SocketConnection {
     }
 }
 
+/// What a driver must do for the pending read: [`SocketConnection::next`]'s answer.
+///
+/// Times are on the driver's clock, as everywhere in the model (a
+/// [`Duration`](core::time::Duration) since the driver's epoch).
+#[allow(clippy::large_enum_variant)]
+#[must_use]
+#[derive(Debug, Clone, PartialEq)]
+pub enum Step {
+    /// The read ended: its value, its sentinel, or the whole values that arrived.
+    Done(ReadResult),
+    /// Receive bytes from the transport into
+    /// [`receive_space`](SocketConnection::receive_space) and
+    /// [`commit_received`](SocketConnection::commit_received) them (or report
+    /// [`peer_closed`](SocketConnection::peer_closed)), waiting at most until `until`
+    /// (`None`: no deadline); then step again.
+    NeedBytes {
+        /// The read's deadline.
+        until: Option<Duration>,
+    },
+    /// The receive buffer is full and holds no complete message: only the deadline can
+    /// end the read. Wait until `until` without receiving, then step again.
+    Sleep {
+        /// The read's deadline.
+        until: Duration,
+    },
+    /// No read is pending: nothing to wait for.
+    Idle,
+}
+
 #[allow(clippy::large_enum_variant)]
 enum Outcome {
     Done(ReadResult),
@@ -514,36 +587,11 @@ enum Outcome {
     Waiting,
 }
 
-/// A `socket_read_string` with a prefix, over a full receive buffer that holds no
-/// occurrence of the prefix: the controller discards everything before the prefix, so the
-/// bytes that cannot begin it are dropped (all but the last `prefix.len() - 1`) and the
-/// read goes on waiting. Without this a flood of junk would wedge this read and every
-/// later one on the socket. True if bytes were dropped.
-fn drop_before_prefix(rx: &mut RecvBuffer<Box<[u8]>>, pending: &mut Pending) -> bool {
-    let ReadCall::String {
-        prefix,
-        interpret_escape,
-        ..
-    } = &pending.call
-    else {
-        return false;
-    };
-    let mut tmp = [0u8; crate::string::MAX_PATTERN_LEN];
-    let Ok(n) = crate::string::controller_pattern(prefix, *interpret_escape, &mut tmp) else {
-        return false;
-    };
-    let prefix = &tmp[..n];
-    if prefix.is_empty() || memchr::memmem::find(rx.data(), prefix).is_some() {
-        return false;
-    }
-    let drop = rx.len() - (prefix.len() - 1).min(rx.len());
-    if drop == 0 {
-        return false;
-    }
+/// A full receive buffer that holds no complete message: the decoder says how many
+/// leading bytes it can never use (a `socket_read_string` drops what cannot begin its
+/// prefix; the framer owns that scan) and they are consumed. True if room was made.
+fn resync(rx: &mut RecvBuffer<Box<[u8]>>, reader: &mut AnyDecoder) -> bool {
+    let drop = reader.drop_before_prefix(rx.data());
     rx.consume(drop);
-    // The decoder's scan state referred to the dropped bytes: start it afresh.
-    if let Ok(fresh) = pending.call.format().decoder() {
-        pending.reader = fresh;
-    }
-    true
+    drop > 0
 }
