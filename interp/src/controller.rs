@@ -10,7 +10,7 @@ use urscript_socket::robot::ReadCall;
 
 use crate::builtins::{Args, Out};
 use crate::error::Fault;
-use crate::event::{Event, ReadRecord};
+use crate::event::{Event, ReadRecord, MAX_READ_INPUT};
 use crate::sockets::Sockets;
 
 /// The virtual arm: commanded state, not dynamics (see [`crate::builtins::motion`]).
@@ -106,6 +106,13 @@ impl Controller {
         args: &mut Args,
     ) -> Result<Out, Fault> {
         let now = self.now();
+        // What the read sees first: the bytes already buffered (kept for the record).
+        let (input, buffered_at_start) = if args.traced {
+            let n = self.sockets.buffered_len(&socket);
+            (self.sockets.buffered(&socket, MAX_READ_INPUT), n)
+        } else {
+            (Vec::new(), 0)
+        };
         let done = self.sockets.start_read(&socket, &call, timeout, now)?;
         self.flush(&socket);
         Ok(match done {
@@ -114,10 +121,20 @@ impl Controller {
                 if !self.sockets.is_open(&socket) {
                     args.failure = Some(format!("the socket \"{socket}\" is not open"));
                 }
-                args.read = Some(ReadRecord { call, result });
+                args.read = Some(ReadRecord {
+                    call,
+                    result,
+                    input,
+                    buffered_at_start,
+                });
                 Out::Value(v)
             }
-            None => Out::Read { socket, call },
+            None => Out::Read {
+                socket,
+                call,
+                input,
+                buffered_at_start,
+            },
         })
     }
 }

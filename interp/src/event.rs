@@ -96,6 +96,9 @@ pub enum Outcome {
     Failed(String),
 }
 
+/// The most bytes of a read's input a [`ReadRecord`] keeps.
+pub const MAX_READ_INPUT: usize = 4096;
+
 /// A socket read a call made, and the robot model's typed result.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ReadRecord {
@@ -103,6 +106,13 @@ pub struct ReadRecord {
     pub call: ReadCall,
     /// What the robot model returned, before it became a URScript value.
     pub result: ReadResult,
+    /// What the read saw: the bytes buffered on its socket when it started, then those
+    /// that arrived while it waited (the first [`MAX_READ_INPUT`]). A diagnosis of a
+    /// failed read starts here.
+    pub input: Vec<u8>,
+    /// How many bytes of `input` were already buffered when the read started (data that
+    /// was waiting: a late reply to an earlier read, or what an earlier read left).
+    pub buffered_at_start: usize,
 }
 
 /// One call of a built-in or a stub, as the machine ran it.

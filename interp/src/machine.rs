@@ -39,7 +39,7 @@ use crate::compile::{CallSite, Op, Program, Sym};
 use crate::controller::{Arm, Controller};
 use crate::error::{Fault, RuntimeError, RuntimeErrorKind as K};
 pub use crate::event::Event;
-use crate::event::{CallRecord, Outcome, ReadRecord};
+use crate::event::{CallRecord, Outcome, ReadRecord, MAX_READ_INPUT};
 use crate::parser::{BinOp, Scope};
 use crate::sockets::{Policy, Sockets};
 use crate::value::Value;
@@ -163,11 +163,14 @@ pub(crate) enum Wait {
     Steps { until: u64, result: Value },
     /// Resumes at the next step with this value (a read completed by received bytes).
     Resume(Value),
-    /// A socket read waiting for bytes, with its call's record (when traced).
+    /// A socket read waiting for bytes, with its call's record and what the read has
+    /// seen so far (when traced).
     Read {
         socket: String,
         call: ReadCall,
         record: Option<Box<CallRecord>>,
+        input: Vec<u8>,
+        buffered_at_start: usize,
     },
     /// `socket_open` waiting for the driver.
     Connect {
@@ -461,6 +464,21 @@ impl Machine {
     /// buffer accepted (the rest must be offered again later, as a full TCP window would).
     pub fn handle_received(&mut self, socket_name: &str, bytes: &[u8]) -> usize {
         let n = self.ctl.sockets.receive(socket_name, bytes);
+        // A recorded read waiting on the socket sees what arrived.
+        for t in &mut self.threads {
+            if let Wait::Read {
+                socket,
+                record: Some(_),
+                input,
+                ..
+            } = &mut t.wait
+            {
+                if socket == socket_name {
+                    let room = MAX_READ_INPUT.saturating_sub(input.len());
+                    input.extend_from_slice(&bytes[..n.min(room)]);
+                }
+            }
+        }
         self.poll_reads(socket_name);
         n
     }
@@ -485,6 +503,8 @@ impl Machine {
                 socket,
                 call,
                 record,
+                input,
+                buffered_at_start,
             } = &mut t.wait
             else {
                 continue;
@@ -499,6 +519,8 @@ impl Machine {
                     rec.read = Some(ReadRecord {
                         call: call.clone(),
                         result: r,
+                        input: std::mem::take(input),
+                        buffered_at_start: *buffered_at_start,
                     });
                     self.ctl.events.push_back(Event::Call(rec));
                 }
@@ -556,13 +578,20 @@ impl Machine {
                     socket,
                     call,
                     record,
+                    input,
+                    buffered_at_start,
                 } => match self.ctl.sockets.handle_timeout(&socket, &call, self.now()) {
                     Some(r) => {
                         let v = crate::sockets::to_value(&r);
                         if let Some(mut rec) = record {
                             rec.result = v.clone();
                             rec.outcome = Outcome::TimedOut;
-                            rec.read = Some(ReadRecord { call, result: r });
+                            rec.read = Some(ReadRecord {
+                                call,
+                                result: r,
+                                input,
+                                buffered_at_start,
+                            });
                             self.ctl.events.push_back(Event::Call(rec));
                         }
                         self.threads[i].stack.push(v);
@@ -574,6 +603,8 @@ impl Machine {
                             socket,
                             call,
                             record,
+                            input,
+                            buffered_at_start,
                         },
                     ),
                 },
@@ -1274,6 +1305,7 @@ impl Machine {
             line: site.at.line,
             read: None,
             failure: None,
+            traced: record.is_some(),
         };
         if let Some(r) = record.as_mut() {
             if let Some(k) = builtin.param("socket_name") {
@@ -1290,11 +1322,18 @@ impl Machine {
         let (value, wait) = match out {
             Out::Value(v) => (v, None),
             Out::Wait(d, v) => (v, Some(d)),
-            Out::Read { socket, call } => {
+            Out::Read {
+                socket,
+                call,
+                input,
+                buffered_at_start,
+            } => {
                 return Ok(Called::Block(Wait::Read {
                     socket,
                     call,
                     record,
+                    input,
+                    buffered_at_start,
                 }))
             }
             Out::Connect { socket } => return Ok(Called::Block(Wait::Connect { socket, record })),

@@ -91,6 +91,20 @@ impl Sockets {
         self.with(name, |s| s.is_send_broken()).unwrap_or(false)
     }
 
+    /// The first `max` bytes buffered on `name` (not yet read by the program).
+    pub fn buffered(&mut self, name: &str, max: usize) -> Vec<u8> {
+        self.with(name, |s| {
+            let b = s.buffered();
+            b[..b.len().min(max)].to_vec()
+        })
+        .unwrap_or_default()
+    }
+
+    /// How many bytes are buffered on `name`.
+    pub fn buffered_len(&mut self, name: &str) -> usize {
+        self.with(name, |s| s.buffered().len()).unwrap_or(0)
+    }
+
     /// The transport could not write: later sends on `name` return false.
     pub fn send_failed(&mut self, name: &str) {
         self.with(name, |s| s.send_failed());

@@ -11,7 +11,7 @@
 //! The old one-call-per-line scripts are URScript statements and run unchanged.
 
 use std::collections::HashMap;
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
 use urscript_interp::drive::{self, Activity, Driver};
 use urscript_interp::{
@@ -36,14 +36,6 @@ pub struct Options {
     pub stubs: Vec<(String, Stub)>,
 }
 
-/// Data that a read finds this long before it ends, with no send since the previous read
-/// on that socket timed out, was waiting: that read's late reply (a pending read ends as
-/// soon as its bytes arrive, so bytes older than this were there before it started).
-const LATE_WINDOW: Duration = Duration::from_millis(50);
-
-/// Keeps the first bytes of a read's input for [`crate::diagnose::diagnose`].
-const WINDOW: usize = 4096;
-
 /// How long a `socket_open` may take to connect before it returns False.
 const CONNECT_TIMEOUT: Duration = Duration::from_secs(2);
 
@@ -62,14 +54,10 @@ fn split_host_port(addr: &str) -> Result<(String, u16), String> {
     Ok((host, port))
 }
 
-/// What the CLI remembers of one socket, for the diagnosis of its reads.
+/// What the CLI remembers of one socket, for the diagnosis of its reads: the previous
+/// read on it timed out (its call, its line, and whether the program sent since).
 #[derive(Default)]
 struct Seen {
-    /// What the server sent since the last read on this socket ended.
-    bytes: Vec<u8>,
-    /// When the first of `bytes` arrived.
-    first_at: Option<Instant>,
-    /// The previous read on this socket timed out: (its call, its line, a send since).
     timed_out: Option<(ReadCall, u32, bool)>,
 }
 
@@ -210,42 +198,13 @@ fn failed_read(call: &ReadCall, result: &ReadResult) -> bool {
     }
 }
 
-/// The bytes a successful read left buffered, from what it saw: the read consumes
-/// through `)` (floats), through LF (lines) or exactly its bytes (binary). `None` where
-/// the CLI cannot tell (strings).
-fn leftover<'a>(read: &ReadCall, seen: &'a [u8]) -> Option<&'a [u8]> {
-    let end = match read {
-        ReadCall::AsciiFloat { .. } => {
-            let open = seen.iter().position(|&b| b == b'(')?;
-            open + seen[open..].iter().position(|&b| b == b')')? + 1
-        }
-        ReadCall::Line => seen.iter().position(|&b| b == b'\n')? + 1,
-        ReadCall::BinaryInteger { number } => number * 4,
-        ReadCall::ByteList { number } => *number,
-        _ => return None,
-    };
-    seen.get(end..).filter(|rest| !rest.is_empty())
-}
-
-/// The diagnosis of a read that ended: why it failed (from what its socket received),
-/// and whether it found the late reply of the previous read.
+/// The diagnosis of a read that ended, from what it saw (its record's input): why it
+/// failed, and whether it found the late reply of the previous read on its socket.
 fn diagnose_read(c: &CallRecord, seen: &mut Seen) -> Option<String> {
     let read = c.read.as_ref()?;
-    if matches!(read.call, ReadCall::GetVar { .. }) {
-        // Its reply line is not the next read's input.
-        match seen.bytes.iter().position(|&b| b == b'\n') {
-            Some(i) => drop(seen.bytes.drain(..=i)),
-            None => seen.bytes.clear(),
-        }
-        if seen.bytes.is_empty() {
-            seen.first_at = None;
-        }
-        return None;
-    }
-    let bytes = std::mem::take(&mut seen.bytes);
-    let first_at = seen.first_at.take();
-    if matches!(c.outcome, Outcome::Failed(_)) {
-        // The machine knows why (the socket is not open): the bytes tell nothing.
+    if matches!(read.call, ReadCall::GetVar { .. }) || matches!(c.outcome, Outcome::Failed(_)) {
+        // A variable's reply is not a read's input; a socket that is not open has its
+        // reason already.
         return None;
     }
     let failed = failed_read(&read.call, &read.result);
@@ -254,13 +213,14 @@ fn diagnose_read(c: &CallRecord, seen: &mut Seen) -> Option<String> {
         ReadCall::BinaryInteger { .. } | ReadCall::ByteList { .. }
     );
     let mut why = if binary || failed {
-        crate::diagnose::diagnose(&read.call, &bytes)
+        crate::diagnose::diagnose(&read.call, &read.input)
     } else {
         None
     };
+    // Data already waiting when this read started, with nothing sent since the previous
+    // read timed out: the previous read's late reply.
     if let Some((prev, prev_line, sent_since)) = seen.timed_out.take() {
-        let waiting = first_at.is_some_and(|at| at.elapsed() >= LATE_WINDOW);
-        if waiting && !sent_since {
+        if read.buffered_at_start > 0 && !sent_since {
             let late = crate::diagnose::late_reply(&prev, prev_line as usize);
             why = Some(match why {
                 Some(w) => format!("{late}; {w}"),
@@ -270,9 +230,6 @@ fn diagnose_read(c: &CallRecord, seen: &mut Seen) -> Option<String> {
     }
     if c.outcome == Outcome::TimedOut || failed {
         seen.timed_out = Some((read.call.clone(), c.line, false));
-    } else if let Some(rest) = leftover(&read.call, &bytes) {
-        seen.first_at = Some(Instant::now());
-        seen.bytes = rest.to_vec();
     }
     why
 }
@@ -371,14 +328,8 @@ pub fn run(script: &str, connect_to: Option<&str>, opts: Options) -> Result<(), 
             // A new connection: nothing seen on it yet.
             seen.remove(socket_name);
         }
-        Activity::Received { socket_name, bytes } => {
-            if trace {
-                printer.emit(report::Event::rx(socket_name, bytes));
-            }
-            let s = seen.entry(socket_name.to_string()).or_default();
-            s.first_at.get_or_insert_with(Instant::now);
-            let room = WINDOW.saturating_sub(s.bytes.len());
-            s.bytes.extend_from_slice(&bytes[..bytes.len().min(room)]);
+        Activity::Received { socket_name, bytes } if trace => {
+            printer.emit(report::Event::rx(socket_name, bytes));
         }
         Activity::PeerClosed { socket_name } if opts.json => {
             printer.emit(report::Event::peer_closed(socket_name));

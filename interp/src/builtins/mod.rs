@@ -136,6 +136,9 @@ pub(crate) enum Out {
     Read {
         socket: String,
         call: urscript_socket::robot::ReadCall,
+        /// What the read saw so far (the bytes buffered when it started).
+        input: Vec<u8>,
+        buffered_at_start: usize,
     },
     /// `socket_open`, waiting for the driver's answer.
     Connect { socket: String },
@@ -339,6 +342,8 @@ pub(crate) struct Args {
     pub read: Option<crate::event::ReadRecord>,
     /// Why the call returned its failure value.
     pub failure: Option<String>,
+    /// The call is recorded: keep what a read sees.
+    pub traced: bool,
 }
 
 impl Args {
