@@ -183,7 +183,8 @@ pub enum EncodeError {
         /// The limit (30).
         limit: usize,
     },
-    /// A variable name that is empty or holds a space, a control byte or a non-ASCII byte.
+    /// A variable name that is empty, longer than a robot's string (1023 bytes), or holds
+    /// a space, a control byte or a non-ASCII byte.
     InvalidName,
     /// A byte that would break the framing (an STX/ETX inside a framed payload, a LF in a
     /// variable name...).
@@ -215,7 +216,7 @@ impl fmt::Display for EncodeError {
             EncodeError::NoValues => f.write_str("at least one value is required"),
             EncodeError::TooManyValues { limit } => write!(f, "more than {limit} values"),
             EncodeError::InvalidName => f.write_str(
-                "variable name must be 1 or more printable ASCII characters without spaces",
+                "variable name must be 1 to 1023 printable ASCII characters without spaces",
             ),
             EncodeError::ForbiddenByte { byte, index } => {
                 write!(

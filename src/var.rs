@@ -15,16 +15,22 @@ use crate::line::{lf_framer, strip_cr};
 use crate::number::{parse_i32, write_i32};
 use crate::{ArgumentError, ByteSink, EncodeError, ErrorKind};
 
-/// Default bound on one variable line, in bytes (a 64-byte name and an int fit easily).
-pub const DEFAULT_MAX_VAR_LINE_LEN: usize = 256;
+/// The longest variable name a robot can send: a URScript string holds at most 1023
+/// characters.
+pub const MAX_VAR_NAME_LEN: usize = 1023;
 
-/// A variable name the robot can send: 1 or more printable ASCII bytes, no space.
+/// Default bound on one variable line, in bytes: the longest line a robot can send,
+/// `SET` + a [`MAX_VAR_NAME_LEN`]-byte name + the longest int + LF (1,040 bytes), so a
+/// server with the default bound accepts everything a robot can say.
+pub const DEFAULT_MAX_VAR_LINE_LEN: usize = 4 + MAX_VAR_NAME_LEN + 12 + 1;
+
+/// A variable name the robot can send: 1 to 1023 printable ASCII bytes, no space.
 fn is_name_byte(b: u8) -> bool {
     b.is_ascii_graphic()
 }
 
 fn check_name(name: &str) -> Result<(), EncodeError> {
-    if name.is_empty() || !name.bytes().all(is_name_byte) {
+    if name.is_empty() || name.len() > MAX_VAR_NAME_LEN || !name.bytes().all(is_name_byte) {
         return Err(EncodeError::InvalidName);
     }
     Ok(())

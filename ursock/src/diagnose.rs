@@ -101,8 +101,15 @@ pub fn diagnose(expected: &ReadCall, bytes: &[u8]) -> Option<String> {
 
 fn floats(number: usize, bytes: &[u8]) -> Option<String> {
     let body = trim(bytes);
-    if body.is_empty() {
+    if bytes.is_empty() {
         return Some("nothing arrived before the timeout".into());
+    }
+    if body.is_empty() {
+        return Some(format!(
+            "only blank bytes arrived ({}: line ends, spaces or NULs), no tuple; \
+             send the values as (1,2,3)",
+            shown(bytes)
+        ));
     }
     let text = String::from_utf8_lossy(body);
     let fix = "send \"(\" + \",\".join(str(v) for v in values) + \")\"";
@@ -450,6 +457,14 @@ mod tests {
 
     fn f(n: usize, b: &[u8]) -> String {
         diagnose(&ReadCall::AsciiFloat { number: n }, b).unwrap_or_default()
+    }
+
+    #[test]
+    fn blank_bytes_are_not_nothing() {
+        assert_eq!(f(2, b""), "nothing arrived before the timeout");
+        let w = f(2, b"\r\n");
+        assert!(w.starts_with("only blank bytes arrived (\"\\r\\n\""), "{w}");
+        assert!(f(2, b"\0\0").contains("only blank bytes"));
     }
 
     #[test]

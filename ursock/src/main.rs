@@ -172,14 +172,11 @@ fn run(cli: Cli) -> Result<(), String> {
             }
             let max_time = match max_time {
                 None => None,
-                Some(s) => Some(
-                    std::time::Duration::try_from_secs_f64(s)
-                        .ok()
-                        .filter(|_| s > 0.0)
-                        .ok_or_else(|| {
-                            format!("--max-time {s}: give a number of seconds above 0")
-                        })?,
+                // Any positive time; one too long for the clock is no limit at all.
+                Some(s) if s > 0.0 => Some(
+                    std::time::Duration::try_from_secs_f64(s).unwrap_or(std::time::Duration::MAX),
                 ),
+                Some(s) => return Err(format!("--max-time {s}: give a number of seconds above 0")),
             };
             let step_time = std::time::Duration::try_from_secs_f64(step_time)
                 .ok()

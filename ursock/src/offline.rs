@@ -55,7 +55,15 @@ pub fn read(call: ReadCall, repeat: usize, json: bool, timestamps: bool) -> Resu
     // Bytes read from stdin that the socket has not taken yet: at most one chunk.
     let mut pending: Vec<u8> = Vec::new();
     let mut eof = false;
-    for _ in 0..repeat {
+    for done in 0..repeat {
+        if eof && pending.is_empty() && socket.buffered().is_empty() && done > 0 {
+            // The input has ended and nothing is left: every further read would time out.
+            out::note(&format!(
+                "end of input: the {} remaining read(s) would all time out; stopped",
+                repeat - done
+            ));
+            break;
+        }
         // What this read sees: what was buffered before it, then what arrives.
         let mut seen: Vec<u8> =
             socket.buffered()[..socket.buffered().len().min(DIAGNOSIS_WINDOW)].to_vec();

@@ -85,10 +85,10 @@ pub fn open_log(path: &std::path::Path) -> Result<(), String> {
 fn log(text: &str) {
     let mut guard = LOG.lock().unwrap_or_else(|p| p.into_inner());
     if let Some(f) = guard.as_mut() {
-        if writeln!(f, "{text}").is_err() {
+        if let Err(e) = writeln!(f, "{text}") {
             // A full disk must not stop the session: stop logging, say so once.
             *guard = None;
-            let _ = writeln!(std::io::stderr(), "ursock: --log: write failed, log closed");
+            let _ = writeln!(std::io::stderr(), "ursock: --log: write failed ({e}), log closed");
         }
     }
 }
