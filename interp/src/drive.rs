@@ -3,13 +3,21 @@
 //! show (bytes per socket, connect failures, peers that close) reaches it through an
 //! observer ([`Activity`]); the front end keeps no loop of its own.
 //!
-//! [`Driver`] is a small poll loop. Program time is the real time since the start
-//! (`Instant`). Each round it runs the machine up to its next step that is due (one step
-//! at a time when the program has fallen behind real time, so the sockets are serviced
-//! between any two steps), acts on the machine's events, writes what is queued and reads
-//! what the servers sent. `socket_open` connects with a blocking
-//! `TcpStream::connect_timeout` (the program does not advance meanwhile). Between rounds
-//! it sleeps until the machine's next timeout, at most [`Options::poll_interval`].
+//! [`Driver`] is a small poll loop. Each round it runs the machine up to program time,
+//! acts on the machine's events, writes what is queued and reads what the servers sent;
+//! between rounds it sleeps until the machine's next timeout, at most
+//! [`Options::poll_interval`]. `socket_open` connects with a blocking
+//! `TcpStream::connect_timeout`.
+//!
+//! ## Time
+//! Program time is the real time since the start (`Instant`), less the time the
+//! interpreter overran: a round whose step (its statements, a blocking connect) takes
+//! longer than one step of real time holds program time at that step instead of leaving
+//! the program behind real time. So a program on a slow host, or with a tiny step time,
+//! runs its steps one round at a time with the sockets serviced between any two; every
+//! wait (a read's timeout, a `sleep`) lasts its real length; and a reply a server sent at
+//! once reaches the read that waits for it. A step that keeps up is not delayed: program
+//! time then is real time.
 //!
 //! ## Bounds
 //! - Bytes the program sends are written without blocking; what a server does not read
@@ -173,17 +181,36 @@ impl Driver {
         mut on_activity: impl FnMut(Activity<'_>),
     ) -> Result<Outcome, RuntimeError> {
         let start = Instant::now();
+        // Program time is real time minus `lag`: the time the interpreter overran its
+        // steps. A step that takes longer than a step (a slow host, a tiny step time)
+        // delays program time instead of leaving the program behind it, so every wait
+        // (a read's timeout, a sleep) lasts its real duration and the sockets are serviced
+        // between any two steps, however slow the steps are.
+        let mut lag = Duration::ZERO;
         loop {
             let elapsed = start.elapsed();
             if self.options.max_time.is_some_and(|m| elapsed >= m) {
                 return Ok(Outcome::MaxTime);
             }
-            // Run up to the first step with something to do, never past real time: a
-            // program that has fallen behind runs one busy step per round, and the
-            // sockets are serviced between any two of them.
-            let due = machine.poll_timeout().map_or(elapsed, |t| t.min(elapsed));
+            let now = elapsed.saturating_sub(lag);
+            // Behind by more than a step (the last step overran, a connection took long
+            // to open): program time resumes at the step that is due, not past it.
+            let slack = machine.step_time();
+            let due = match machine.poll_timeout() {
+                Some(wake) if now > wake + slack => {
+                    lag += now - wake;
+                    wake
+                }
+                _ => now,
+            };
             machine.run_until(due);
             self.act_on_events(machine, &mut on_activity);
+            // What the step did (its statements, a blocking connect) happened at `due`:
+            // time it overran by more than a step is not program time.
+            let overrun = start.elapsed().saturating_sub(lag).saturating_sub(due);
+            if overrun > slack {
+                lag += overrun;
+            }
             match machine.state() {
                 State::Running => {}
                 State::Finished => return Ok(Outcome::Finished),
@@ -191,15 +218,14 @@ impl Driver {
                 State::Error(e) => return Err(e.clone()),
             }
             let busy = self.service_sockets(machine, &mut on_activity);
-            let behind = machine.poll_timeout().is_some_and(|t| t <= start.elapsed());
-            if !busy && !behind {
-                let now = start.elapsed();
+            if !busy {
+                let now = start.elapsed().saturating_sub(lag);
                 let mut wait = self.options.poll_interval;
-                if let Some(t) = machine.poll_timeout() {
-                    wait = wait.min(t.saturating_sub(now));
+                if let Some(wake) = machine.poll_timeout() {
+                    wait = wait.min(wake.saturating_sub(now));
                 }
                 if let Some(m) = self.options.max_time {
-                    wait = wait.min(m.saturating_sub(now));
+                    wait = wait.min(m.saturating_sub(start.elapsed()));
                 }
                 if !wait.is_zero() {
                     std::thread::sleep(wait);

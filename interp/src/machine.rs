@@ -322,6 +322,11 @@ impl Machine {
         &self.state
     }
 
+    /// The length of one step ([`Config::step_time`], at least 100 µs).
+    pub fn step_time(&self) -> Duration {
+        self.config.step_time
+    }
+
     /// The virtual time of the next step to run.
     pub fn now(&self) -> Duration {
         self.step_time_at(self.ctl.step)

@@ -88,7 +88,10 @@ fn log(text: &str) {
         if let Err(e) = writeln!(f, "{text}") {
             // A full disk must not stop the session: stop logging, say so once.
             *guard = None;
-            let _ = writeln!(std::io::stderr(), "ursock: --log: write failed ({e}), log closed");
+            let _ = writeln!(
+                std::io::stderr(),
+                "ursock: --log: write failed ({e}), log closed"
+            );
         }
     }
 }

@@ -52,7 +52,10 @@ fn blank_bytes_are_not_called_nothing() {
 
 #[test]
 fn a_huge_repeat_on_an_ended_input_stops() {
-    let (code, out, err) = run(&["read", "line", "--repeat", "18446744073709551615"], b"a\n");
+    let (code, out, err) = run(
+        &["read", "line", "--repeat", "18446744073709551615"],
+        b"a\n",
+    );
     assert_eq!(code, 0);
     assert_eq!(out, "\"a\"\n\"\"\n");
     assert!(err.contains("end of input"), "{err}");
@@ -94,7 +97,15 @@ fn a_log_that_cannot_be_written_is_said_once_and_the_run_goes_on() {
         return;
     }
     let (code, out, err) = run(
-        &["robot", "--log", "/dev/full", "-e", "textmsg(1)", "-e", "textmsg(2)"],
+        &[
+            "robot",
+            "--log",
+            "/dev/full",
+            "-e",
+            "textmsg(1)",
+            "-e",
+            "textmsg(2)",
+        ],
         b"",
     );
     assert_eq!(code, 0, "{err}");
