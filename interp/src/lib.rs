@@ -62,6 +62,7 @@ mod controller;
 pub mod drive;
 mod error;
 pub mod event;
+pub mod kinematics;
 mod lexer;
 pub mod machine;
 mod parser;

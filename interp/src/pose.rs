@@ -3,7 +3,7 @@
 
 type M = [[f64; 3]; 3];
 
-fn to_matrix(r: [f64; 3]) -> M {
+pub(crate) fn to_matrix(r: [f64; 3]) -> M {
     let th = (r[0] * r[0] + r[1] * r[1] + r[2] * r[2]).sqrt();
     if th < 1e-12 {
         return [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
@@ -18,7 +18,7 @@ fn to_matrix(r: [f64; 3]) -> M {
     ]
 }
 
-fn to_rotvec(m: M) -> [f64; 3] {
+pub(crate) fn to_rotvec(m: M) -> [f64; 3] {
     let cos = ((m[0][0] + m[1][1] + m[2][2] - 1.0) / 2.0).clamp(-1.0, 1.0);
     let th = cos.acos();
     if th < 1e-12 {
