@@ -10,7 +10,8 @@
 //! | --- | --- |
 //! | [`sockets`] | every `socket_*` function of the e-Series 5.x manual |
 //! | [`motion`] | moves, servo/speed control, the arm's state, settings of the arm |
-//! | [`io`] | digital/analog I/O, tool I/O, the RTDE registers |
+//! | [`conveyor`] | conveyor tracking and its encoders (the motion chapter; no conveyor) |
+//! | [`io`] | digital/analog I/O, tool I/O, flags, the RTDE registers, Modbus, I/O configuration |
 //! | [`math`] | numbers, lists of numbers, bits, `random` |
 //! | [`strings`] | strings, `to_str`/`to_num`, list length |
 //! | [`poses`] | pose arithmetic and kinematics |
@@ -28,6 +29,7 @@ use crate::controller::Controller;
 use crate::error::Fault;
 use crate::value::Value;
 
+pub mod conveyor;
 pub mod io;
 pub mod math;
 pub mod messages;
@@ -235,6 +237,7 @@ pub fn all() -> &'static [Builtin] {
         let mut v: Vec<Builtin> = [
             sockets::TABLE,
             motion::TABLE,
+            conveyor::TABLE,
             io::TABLE,
             math::TABLE,
             strings::TABLE,
@@ -409,6 +412,30 @@ impl Args {
         }
     }
 
+    /// Argument `i` as a list of numbers of length `n` (a pose when `n` is 6).
+    pub fn nums<const N: usize>(&self, i: usize) -> Result<[f64; N], Fault> {
+        let what = format!("{N} numbers");
+        let items: Vec<f64> = match &self.v[i] {
+            Value::Pose(p) => p.to_vec(),
+            Value::List(items) => items
+                .iter()
+                .map(Value::as_f64)
+                .collect::<Option<Vec<f64>>>()
+                .ok_or_else(|| self.bad(i, &what))?,
+            _ => return Err(self.bad(i, &what)),
+        };
+        items.try_into().map_err(|_| self.bad(i, &what))
+    }
+
+    /// Argument `i` as an index into `0..n` (`what` names the thing indexed).
+    pub fn index(&self, i: usize, n: usize, what: &str) -> Result<usize, Fault> {
+        let k = self.int(i)?;
+        usize::try_from(k)
+            .ok()
+            .filter(|k| *k < n)
+            .ok_or_else(|| Fault::from(format!("`{}`: no {what} {k} (0-{})", self.name, n - 1)))
+    }
+
     /// Argument `i` was left out (its default is [`Default::Absent`]).
     pub fn is_absent(&self, i: usize) -> bool {
         matches!(self.v[i], Value::None)
@@ -417,6 +444,11 @@ impl Args {
 
 /// Six floats as a URScript list.
 pub(crate) fn floats(v: [f64; 6]) -> Value {
+    Value::List(v.iter().map(|&x| Value::Float(x)).collect())
+}
+
+/// Floats as a URScript list.
+pub(crate) fn float_list(v: &[f64]) -> Value {
     Value::List(v.iter().map(|&x| Value::Float(x)).collect())
 }
 
