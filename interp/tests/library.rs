@@ -658,6 +658,7 @@ fn every_added_function_is_in_the_table_with_the_manuals_parameters() {
         "get_inverse_kin_has_solution(pose, qnear=None, maxPositionError=1e-10, maxOrientationError=1e-10, tcp=None)"
     );
     assert_eq!(sig("set_tcp"), r#"set_tcp(pose, tcp_name="")"#);
+    assert_eq!(sig("optimovej"), "optimovej(goal, a=0.3, v=0.3, r=0.0)");
     assert_eq!(
         lookup("reset_revolution_counter").unwrap().params[0].default,
         Default::Floats(&[0.0; 6])

@@ -59,8 +59,10 @@ const MOVEP: [super::Param; 4] = [
     opt("v", Default::Float(0.25)),
     opt("r", Default::Float(0.0)),
 ];
+/// `optimovej(goal, a=0.3, v=0.3, r=0)`, `optimovel(goal, ...)`: the manual names the
+/// target `goal` (joints or a pose here).
 const OPTIMOVE: [super::Param; 4] = [
-    req("q"),
+    req("goal"),
     opt("a", Default::Float(0.3)),
     opt("v", Default::Float(0.3)),
     opt("r", Default::Float(0.0)),
