@@ -12,9 +12,9 @@
 //! | [`motion`] | moves, servo/speed control, the arm's state, settings of the arm |
 //! | [`conveyor`] | conveyor tracking and its encoders (the motion chapter; no conveyor) |
 //! | [`io`] | digital/analog I/O, tool I/O, flags, the RTDE registers, Modbus, I/O configuration |
-//! | [`math`] | numbers, lists of numbers, bits, `random` |
-//! | [`strings`] | strings, `to_str`/`to_num`, list length |
-//! | [`poses`] | pose arithmetic and kinematics |
+//! | [`math`] | numbers, lists of numbers, matrices (`inv`, `transpose`), bits, `random` |
+//! | [`strings`] | strings, `to_str`/`to_num`, list length, `size`, `make_list` |
+//! | [`poses`] | pose arithmetic, rotation vectors and RPY, wrenches, kinematics |
 //! | [`messages`] | `textmsg`, `varmsg`, `popup` |
 //! | [`time`] | `sync`, `sleep`, `get_steptime` |
 //!

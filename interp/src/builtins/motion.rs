@@ -862,19 +862,10 @@ fn scalar(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
     })))
 }
 
-/// `v` rotated by the rotation vector `r`.
-fn rotate(r: [f64; 3], v: [f64; 3]) -> [f64; 3] {
-    let p = crate::pose::trans(
-        [0.0, 0.0, 0.0, r[0], r[1], r[2]],
-        [v[0], v[1], v[2], 0.0, 0.0, 0.0],
-    );
-    [p[0], p[1], p[2]]
-}
-
 fn accelerometer(c: &mut Controller, _: &mut Args) -> Result<Out, Fault> {
     // What the flange's axes see of gravity: the inverse rotation applied to it.
     let f = flange(c);
-    Ok(Out::Value(float_list(&rotate(
+    Ok(Out::Value(float_list(&super::poses::rotate(
         [-f[3], -f[4], -f[5]],
         c.arm.gravity,
     ))))

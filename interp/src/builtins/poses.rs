@@ -113,7 +113,7 @@ fn dist(_: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
 }
 
 /// `v` rotated by the rotation vector `r`.
-fn rotate(r: [f64; 3], v: [f64; 3]) -> [f64; 3] {
+pub(super) fn rotate(r: [f64; 3], v: [f64; 3]) -> [f64; 3] {
     let p = crate::pose::trans(
         [0.0, 0.0, 0.0, r[0], r[1], r[2]],
         [v[0], v[1], v[2], 0.0, 0.0, 0.0],
