@@ -2,7 +2,7 @@
 //! program time, and the events for the driver. The scheduler ([`crate::machine`]) owns
 //! one and lends it to each built-in call; built-ins see nothing of threads.
 
-use std::collections::VecDeque;
+use std::collections::{BTreeMap, VecDeque};
 use std::f64::consts::FRAC_PI_2;
 use std::time::Duration;
 
@@ -14,6 +14,11 @@ use crate::event::{Event, ReadRecord, MAX_READ_INPUT};
 use crate::sockets::Sockets;
 
 /// The virtual arm: commanded state, not dynamics (see [`crate::builtins::motion`]).
+///
+/// The fields after `random_state` are what the robot would measure or be told by the
+/// world around it (inputs, temperatures, forces, the RTDE client, the operator): each
+/// starts at the fixed value documented beside it, the value the built-ins return, and a
+/// test may set it.
 #[derive(Debug, Clone)]
 pub(crate) struct Arm {
     pub q: [f64; 6],
@@ -26,8 +31,106 @@ pub(crate) struct Arm {
     pub analog_out: [f64; 2],
     pub int_regs: [i32; 48],
     pub float_regs: [f64; 48],
-    pub bool_regs: [bool; 64],
+    /// Output bool registers 0-127 (64-127 are the RTDE clients' range).
+    pub bool_regs: [bool; 128],
     pub random_state: u64,
+    /// Payload mass (kg), CoG (m, from the flange) and inertia `[Ixx, Iyy, Izz, Ixy,
+    /// Ixz, Iyz]` (kg·m², at the CoG), as last set. Default: none.
+    pub payload_mass: f64,
+    pub payload_cog: [f64; 3],
+    pub payload_inertia: [f64; 6],
+    /// Gravity as `set_gravity` gave it (m/s²). Default `[0, 0, 9.82]`.
+    pub gravity: [f64; 3],
+    /// Base acceleration as `set_base_acceleration` gave it (m/s²). Default 0.
+    pub base_acceleration: [f64; 3],
+    /// The analog outputs' domains (0: 4-20 mA, 1: 0-10 V). Default 1.
+    pub analog_out_domain: [i32; 2],
+    /// Flags 0-31 (`set_flag`).
+    pub flags: [bool; 32],
+    /// The Modbus server's ports as last written (`write_port_bit`/`_register`); a port
+    /// never written reads False / 0.
+    pub port_bits: BTreeMap<i32, bool>,
+    pub port_registers: BTreeMap<i32, i16>,
+    /// The virtual Modbus client's signals, by name (no device behind them).
+    pub modbus: BTreeMap<String, ModbusSignal>,
+    /// The two conveyor encoders.
+    pub encoders: [Encoder; 2],
+    /// The encoder a conveyor is tracked with, if one is.
+    pub conveyor: Option<usize>,
+    /// Path offsetting.
+    pub path_offset: PathOffset,
+    // --- The world's side: fixed values a test may change. ---
+    /// Digital inputs: standard 0-7, configurable 8-15, tool 16-17. Default all False.
+    pub digital_in: [bool; 18],
+    /// Analog inputs: standard 0-1, tool 2-3 (A or V). Default 0.
+    pub analog_in: [f64; 4],
+    /// RTDE input registers (an RTDE client writes them). Default 0 / False.
+    pub input_int_regs: [i32; 48],
+    pub input_float_regs: [f64; 48],
+    pub input_bool_regs: [bool; 128],
+    /// Force/torque at the flange (N, Nm). Default 0 (nothing pushes the virtual arm).
+    pub tcp_force: [f64; 6],
+    /// Joint torques beyond what moving the arm itself takes (Nm). Default 0.
+    pub joint_torques: [f64; 6],
+    /// Joint temperatures (°C). Default 35.0 each.
+    pub joint_temp: [f64; 6],
+    /// Control box temperature (°C). Default 30.0.
+    pub controller_temp: f64,
+    /// Tool temperature (°C). Default 32.0.
+    pub tool_temp: f64,
+    /// Tool current (A). Default 0.0 (nothing draws power from the tool connector).
+    pub tool_current: f64,
+    /// What the virtual operator answers `request_*_from_primary_client`: False, 0, 0.0,
+    /// "" by default (answered at once).
+    pub operator_bool: bool,
+    pub operator_int: i32,
+    pub operator_float: f64,
+    pub operator_string: Vec<u8>,
+}
+
+/// A conveyor encoder (`encoder_*`): how it is fed and its tick count.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub(crate) struct Encoder {
+    /// 0: not enabled; 1: pulse decoding on digital inputs; 2: fed by `encoder_set_tick_count`.
+    pub mode: u8,
+    /// The tick range's id (`range_id`, 0-4); pulse decoding counts as 0 (32-bit signed).
+    pub range_id: i32,
+    pub ticks: i64,
+}
+
+/// Path offsetting (`path_offset_*`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct PathOffset {
+    pub enabled: bool,
+    pub offset: [f64; 6],
+    pub kind: i32,
+    /// Largest translation (m) and rotation (rad) per axis: 0.1 and 0.52 by default.
+    pub max_trans: f64,
+    pub max_rot: f64,
+    pub alpha: f64,
+}
+
+impl Default for PathOffset {
+    fn default() -> Self {
+        PathOffset {
+            enabled: false,
+            offset: [0.0; 6],
+            kind: 1,
+            max_trans: 0.1,
+            max_rot: 0.52,
+            alpha: 1.0,
+        }
+    }
+}
+
+/// A Modbus signal of the virtual client.
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct ModbusSignal {
+    /// 0 digital input, 1 digital output, 2 register input, 3 register output, 15
+    /// multiple digital outputs, 16 multiple register outputs, 23 read-write registers.
+    pub signal_type: i32,
+    /// Its value(s): one per register or coil.
+    pub values: Vec<i32>,
 }
 
 impl Default for Arm {
@@ -43,8 +146,36 @@ impl Default for Arm {
             analog_out: [0.0; 2],
             int_regs: [0; 48],
             float_regs: [0.0; 48],
-            bool_regs: [false; 64],
+            bool_regs: [false; 128],
             random_state: 0x2545_F491_4F6C_DD1D,
+            payload_mass: 0.0,
+            payload_cog: [0.0; 3],
+            payload_inertia: [0.0; 6],
+            gravity: [0.0, 0.0, 9.82],
+            base_acceleration: [0.0; 3],
+            analog_out_domain: [1; 2],
+            flags: [false; 32],
+            port_bits: BTreeMap::new(),
+            port_registers: BTreeMap::new(),
+            modbus: BTreeMap::new(),
+            encoders: [Encoder::default(); 2],
+            conveyor: None,
+            path_offset: PathOffset::default(),
+            digital_in: [false; 18],
+            analog_in: [0.0; 4],
+            input_int_regs: [0; 48],
+            input_float_regs: [0.0; 48],
+            input_bool_regs: [false; 128],
+            tcp_force: [0.0; 6],
+            joint_torques: [0.0; 6],
+            joint_temp: [35.0; 6],
+            controller_temp: 30.0,
+            tool_temp: 32.0,
+            tool_current: 0.0,
+            operator_bool: false,
+            operator_int: 0,
+            operator_float: 0.0,
+            operator_string: Vec::new(),
         }
     }
 }

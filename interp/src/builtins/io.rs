@@ -1,9 +1,16 @@
-//! I/O and registers on the virtual arm: digital and analog outputs, tool outputs and
-//! the RTDE output registers store what is written and read back; inputs read
-//! `False`/0 (nothing is wired to them); I/O settings are accepted and change nothing.
+//! I/O and registers on the virtual arm (the manual's interfaces and I/O configuration
+//! chapters, sockets aside): digital and analog outputs, tool outputs, flags, the RTDE
+//! output registers and the Modbus server's ports store what is written and read back.
+//! Inputs and the RTDE input registers read their field of the virtual arm
+//! (`crate::controller::Arm`: `False`/0 unless a test sets them; nothing is wired).
+//! Modbus signals live in a virtual client with no device behind it: an output signal
+//! reads back what was set, an input signal reads 0/False. The virtual operator answers
+//! `request_*_from_primary_client` at once with fixed values (False, 0, 0.0, "").
+//! Other I/O settings are accepted with their manual signatures and change nothing.
 
-use super::{accept, req, Args, Builtin, Domain, Out};
+use super::{accept, opt, req, Args, Builtin, Default, Domain, Out};
 use crate::controller::Controller;
+use crate::controller::ModbusSignal;
 use crate::error::Fault;
 use crate::value::Value;
 
@@ -25,7 +32,7 @@ pub(super) const TABLE: &[Builtin] = &[
         "set_digital_out",
         D,
         N_B,
-        "Sets digital output n (0-7 standard, 8-15 configurable).",
+        "Deprecated: sets digital output n (0-7 standard, 8-9 tool).",
         set_digital,
     ),
     Builtin::new(
@@ -53,7 +60,7 @@ pub(super) const TABLE: &[Builtin] = &[
         "get_digital_out",
         D,
         N,
-        "Digital output n as last set.",
+        "Deprecated: digital output n as last set (0-7 standard, 8-9 tool).",
         get_digital_out,
     ),
     Builtin::new(
@@ -74,84 +81,128 @@ pub(super) const TABLE: &[Builtin] = &[
         "get_standard_digital_in",
         D,
         N,
-        "False: nothing is wired to the inputs.",
+        "Standard digital input n (0-7): False (nothing is wired).",
         get_digital_in,
     ),
     Builtin::new(
         "get_digital_in",
         D,
         N,
-        "False: nothing is wired to the inputs.",
+        "Deprecated: digital input n (0-7 standard, 8-9 tool): False (nothing is wired).",
         get_digital_in,
     ),
     Builtin::new(
         "get_configurable_digital_in",
         D,
         N,
-        "False: nothing is wired to the inputs.",
+        "Configurable digital input n (0-7): False (nothing is wired).",
         get_digital_in,
     ),
     Builtin::new(
         "get_tool_digital_in",
         D,
         N,
-        "False: nothing is wired to the inputs.",
+        "Tool digital input n (0-1): False (nothing is wired).",
         get_digital_in,
     ),
     Builtin::new(
         "set_standard_analog_out",
         D,
         &[req("n"), req("f")],
-        "Sets analog output n (0-1).",
+        "Sets analog output n (0-1) to the fraction f of its range.",
         set_analog_out,
     ),
     Builtin::new(
         "set_analog_out",
         D,
         &[req("n"), req("f")],
-        "Sets analog output n (0-1).",
+        "Deprecated: sets analog output n (0-1).",
         set_analog_out,
+    ),
+    Builtin::new(
+        "get_standard_analog_out",
+        D,
+        N,
+        "Analog output n (0-1) as last set.",
+        get_analog_out,
+    ),
+    Builtin::new(
+        "get_analog_out",
+        D,
+        N,
+        "Deprecated: analog output n (0-1) as last set.",
+        get_analog_out,
+    ),
+    Builtin::new("set_flag", D, N_B, "Sets flag n (0-31).", flag),
+    Builtin::new("get_flag", D, N, "Flag n (0-31) as last set.", flag),
+    Builtin::new(
+        "read_port_bit",
+        D,
+        ADDRESS,
+        "The Modbus server's bit port as last written (False if never).",
+        port,
+    ),
+    Builtin::new(
+        "read_port_register",
+        D,
+        ADDRESS,
+        "The Modbus server's register port as last written, signed 16-bit (0 if never).",
+        port,
+    ),
+    Builtin::new(
+        "write_port_bit",
+        D,
+        ADDRESS_VALUE,
+        "Writes a bit port of the Modbus server.",
+        port,
+    ),
+    Builtin::new(
+        "write_port_register",
+        D,
+        ADDRESS_VALUE,
+        "Writes a register port of the Modbus server (-32768 to 65535, kept as 16 bits).",
+        port,
     ),
     Builtin::new(
         "get_standard_analog_in",
         D,
         N,
-        "0: nothing is wired to the inputs.",
+        "Standard analog input n (0-1): 0.0 (nothing is wired).",
         get_analog_in,
     ),
     Builtin::new(
         "get_analog_in",
         D,
         N,
-        "0: nothing is wired to the inputs.",
+        "Deprecated: analog input n (0-1 standard, 2-3 tool): 0.0 (nothing is wired).",
         get_analog_in,
     ),
     Builtin::new(
         "get_tool_analog_in",
         D,
         N,
-        "0: nothing is wired to the inputs.",
+        "Tool analog input n (0-1): 0.0 (nothing is wired).",
         get_analog_in,
     ),
     Builtin::new(
         "read_input_integer_register",
         D,
         ADDRESS,
-        "0: no RTDE client writes the inputs.",
+        "Input int register (0-47): 0 (no RTDE client writes it).",
         read_input,
     ),
     Builtin::new(
         "read_input_float_register",
         D,
         ADDRESS,
-        "0.0: no RTDE client writes the inputs.",
+        "Input float register (0-47): 0.0 (no RTDE client writes it).",
         read_input,
     ),
     Builtin::new(
         "read_input_boolean_register",
         D,
         ADDRESS,
-        "False: no RTDE client writes the inputs.",
+        "Input bool register (0-127): False (no RTDE client writes it).",
         read_input,
     ),
     Builtin::new(
@@ -172,7 +223,7 @@ pub(super) const TABLE: &[Builtin] = &[
         "read_output_boolean_register",
         D,
         ADDRESS,
-        "Output bool register (0-63) as last written.",
+        "Output bool register (0-127) as last written.",
         register,
     ),
     Builtin::new(
@@ -193,7 +244,7 @@ pub(super) const TABLE: &[Builtin] = &[
         "write_output_boolean_register",
         D,
         ADDRESS_VALUE,
-        "Writes output bool register (0-63).",
+        "Writes output bool register (0-127).",
         register,
     ),
     // Settings accepted with their manual signatures; they change nothing here.
@@ -268,23 +319,263 @@ pub(super) const TABLE: &[Builtin] = &[
         "Accepted.",
         accept,
     ),
-    Builtin::new("set_flag", D, N_B, "Accepted.", accept),
+    Builtin::new(
+        "set_analog_outputdomain",
+        D,
+        &[req("port"), req("domain")],
+        "Sets analog output port's (0-1) domain (0: 4-20 mA, 1: 0-10 V).",
+        set_analog_outputdomain,
+    ),
+    Builtin::new(
+        "set_configurable_digital_input_action",
+        D,
+        &[req("port"), req("action")],
+        "Sets the input's action, \"default\" or \"freedrive\" (accepted; nothing presses it).",
+        input_action,
+    ),
+    Builtin::new(
+        "set_tool_digital_input_action",
+        D,
+        &[req("port"), req("action")],
+        "Sets the input's action, \"default\" or \"freedrive\" (accepted; nothing presses it).",
+        input_action,
+    ),
+    Builtin::new(
+        "set_gp_boolean_input_action",
+        D,
+        &[req("port"), req("action")],
+        "Sets the bool input register's action, \"default\" or \"freedrive\" (accepted).",
+        input_action,
+    ),
+    Builtin::new(
+        "set_runstate_configurable_digital_output_to_value",
+        D,
+        &[req("outputId"), req("state")],
+        "Accepted (the program's run state drives no output here).",
+        accept,
+    ),
+    Builtin::new(
+        "set_runstate_tool_digital_output_to_value",
+        D,
+        &[req("outputId"), req("state")],
+        "Accepted (the program's run state drives no output here).",
+        accept,
+    ),
+    Builtin::new(
+        "set_runstate_standard_analog_output_to_value",
+        D,
+        &[req("outputId"), req("state")],
+        "Accepted (the program's run state drives no output here).",
+        accept,
+    ),
+    Builtin::new(
+        "set_runstate_gp_boolean_output_to_value",
+        D,
+        &[req("outputId"), req("state")],
+        "Accepted (the program's run state drives no output here).",
+        accept,
+    ),
+    Builtin::new(
+        "modbus_set_runstate_dependent_choice",
+        D,
+        &[req("signal_name"), req("runstate_choice")],
+        "Accepted for a signal that exists (the run state drives no output here).",
+        modbus,
+    ),
+    Builtin::new(
+        "rtde_set_watchdog",
+        D,
+        &[
+            req("variable_name"),
+            req("min_frequency"),
+            opt("action", Default::Str("pause")),
+        ],
+        "Accepted, not enforced: no RTDE client is modelled.",
+        accept,
+    ),
+    Builtin::new(
+        "modbus_add_signal",
+        D,
+        &[
+            req("IP"),
+            req("slave_number"),
+            req("signal_address"),
+            req("signal_type"),
+            req("signal_name"),
+            opt("sequential_mode", Default::Bool(false)),
+            opt("register_count", Default::Int(1)),
+        ],
+        "Adds a signal (type 0, 1, 2, 3, 15, 16) to the virtual Modbus client (no device).",
+        modbus,
+    ),
+    Builtin::new(
+        "modbus_add_rw_signal",
+        D,
+        &[
+            req("IP"),
+            req("slave_number"),
+            req("read_address"),
+            req("read_register_count"),
+            req("write_address"),
+            req("write_register_count"),
+            req("signal_name"),
+            opt("sequential_mode", Default::Bool(false)),
+        ],
+        "Adds a read-write register signal to the virtual Modbus client (no device).",
+        modbus,
+    ),
+    Builtin::new(
+        "modbus_delete_signal",
+        D,
+        &[req("signal_name")],
+        "Deletes a signal.",
+        modbus,
+    ),
+    Builtin::new(
+        "modbus_get_signal_status",
+        D,
+        &[
+            req("signal_name"),
+            opt("is_secondary_program", Default::Bool(false)),
+        ],
+        "An output signal's value(s) as last set; an input's 0/False (a list if several).",
+        modbus,
+    ),
+    Builtin::new(
+        "modbus_set_output_register",
+        D,
+        &[
+            req("signal_name"),
+            req("register_value"),
+            opt("is_secondary_program", Default::Bool(false)),
+        ],
+        "Sets a register output signal (0-65535, or a list).",
+        modbus,
+    ),
+    Builtin::new(
+        "modbus_set_output_signal",
+        D,
+        &[
+            req("signal_name"),
+            req("digital_value"),
+            opt("is_secondary_program", Default::Bool(false)),
+        ],
+        "Sets a digital output signal (a bool, or a list).",
+        modbus,
+    ),
+    Builtin::new(
+        "modbus_send_custom_command",
+        D,
+        &[
+            req("IP"),
+            req("slave_number"),
+            req("function_code"),
+            req("data"),
+        ],
+        "Accepted (no Modbus device; nothing is sent).",
+        accept,
+    ),
+    Builtin::new(
+        "modbus_set_digital_input_action",
+        D,
+        &[req("signal_name"), req("action")],
+        "Sets a signal's action, \"default\" or \"freedrive\" (accepted).",
+        modbus,
+    ),
+    Builtin::new(
+        "modbus_set_signal_update_frequency",
+        D,
+        &[req("signal_name"), req("update_frequency")],
+        "Accepted for a signal that exists (no device is polled).",
+        modbus,
+    ),
+    Builtin::new(
+        "modbus_get_error",
+        D,
+        &[req("signal_name"), opt("error_source", Default::Int(0))],
+        "0: the virtual device never errs.",
+        modbus,
+    ),
+    Builtin::new(
+        "modbus_get_time_since_signal_invalid",
+        D,
+        &[req("signal_name")],
+        "0.0: the virtual signals are never invalid.",
+        modbus,
+    ),
+    Builtin::new(
+        "modbus_request_update_signal_value",
+        D,
+        &[req("signal_name")],
+        "Accepted for a signal that exists.",
+        modbus,
+    ),
+    Builtin::new(
+        "modbus_reset_connection",
+        D,
+        &[
+            req("connection_id"),
+            opt("is_blocking", Default::Bool(true)),
+        ],
+        "Accepted (the virtual device is always connected).",
+        accept,
+    ),
+    Builtin::new(
+        "modbus_set_signal_watchdog",
+        D,
+        &[req("signal_name"), req("new_timeout_in_sec")],
+        "Accepted for a signal that exists.",
+        modbus,
+    ),
+    Builtin::new(
+        "request_boolean_from_primary_client",
+        D,
+        &[req("message")],
+        "The virtual operator's answer at once: False.",
+        request,
+    ),
+    Builtin::new(
+        "request_integer_from_primary_client",
+        D,
+        &[req("message")],
+        "The virtual operator's answer at once: 0.",
+        request,
+    ),
+    Builtin::new(
+        "request_float_from_primary_client",
+        D,
+        &[req("message")],
+        "The virtual operator's answer at once: 0.0.",
+        request,
+    ),
+    Builtin::new(
+        "request_string_from_primary_client",
+        D,
+        &[req("message")],
+        "The virtual operator's answer at once: \"\".",
+        request,
+    ),
 ];
 
 /// The output slot a digital function names.
 fn digital_slot<'a>(c: &'a mut Controller, a: &Args) -> Result<&'a mut bool, Fault> {
     let n = a.int(0)?;
-    let (slots, offset): (&mut [bool], usize) = if a.name.contains("tool") {
-        (&mut c.arm.tool_out, 0)
-    } else if a.name.contains("configurable") {
-        (&mut c.arm.digital_out, 8)
-    } else {
-        (&mut c.arm.digital_out, 0)
-    };
-    usize::try_from(n)
-        .ok()
-        .and_then(|k| slots.get_mut(k + offset))
-        .ok_or_else(|| Fault::from(format!("`{}`: no output {n}", a.name)))
+    let arm = &mut c.arm;
+    let slot = usize::try_from(n).ok().and_then(|k| {
+        if a.name.contains("tool") {
+            arm.tool_out.get_mut(k)
+        } else if a.name.contains("configurable") {
+            arm.digital_out[8..16].get_mut(k)
+        } else if a.name.contains("standard") {
+            arm.digital_out[..8].get_mut(k)
+        } else if k >= 8 {
+            // The deprecated set/get_digital_out: 8-9 are the tool outputs.
+            arm.tool_out.get_mut(k - 8)
+        } else {
+            arm.digital_out.get_mut(k)
+        }
+    });
+    slot.ok_or_else(|| Fault::from(format!("`{}`: no output {n}", a.name)))
 }
 
 fn set_digital(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
@@ -297,9 +588,18 @@ fn get_digital_out(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
     Ok(Out::Value(Value::Bool(*digital_slot(c, a)?)))
 }
 
-fn get_digital_in(_: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
-    a.int(0)?;
-    Ok(Out::Value(Value::Bool(false)))
+fn get_digital_in(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+    // digital_in: standard 0-7, configurable 8-15, tool 16-17.
+    let k = match a.name {
+        "get_standard_digital_in" => a.index(0, 8, "input")?,
+        "get_configurable_digital_in" => 8 + a.index(0, 8, "input")?,
+        "get_tool_digital_in" => 16 + a.index(0, 2, "input")?,
+        _ => match a.index(0, 10, "input")? {
+            k @ 8.. => k + 8,
+            k => k,
+        },
+    };
+    Ok(Out::Value(Value::Bool(c.arm.digital_in[k])))
 }
 
 fn set_analog_out(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
@@ -313,17 +613,250 @@ fn set_analog_out(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
     Ok(Out::Value(Value::None))
 }
 
-fn get_analog_in(_: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
-    a.int(0)?;
-    Ok(Out::Value(Value::Float(0.0)))
+fn get_analog_out(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+    let n = a.index(0, 2, "analog output")?;
+    Ok(Out::Value(Value::Float(c.arm.analog_out[n])))
 }
 
-fn read_input(_: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
-    a.int(0)?;
+fn get_analog_in(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+    // analog_in: standard 0-1, tool 2-3.
+    let k = match a.name {
+        "get_standard_analog_in" => a.index(0, 2, "analog input")?,
+        "get_tool_analog_in" => 2 + a.index(0, 2, "analog input")?,
+        _ => a.index(0, 4, "analog input")?,
+    };
+    Ok(Out::Value(Value::Float(c.arm.analog_in[k])))
+}
+
+fn read_input(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+    let arm = &c.arm;
     Ok(Out::Value(match a.name {
-        "read_input_integer_register" => Value::Int(0),
-        "read_input_float_register" => Value::Float(0.0),
-        _ => Value::Bool(false),
+        "read_input_integer_register" => {
+            Value::Int(arm.input_int_regs[a.index(0, 48, "register")?])
+        }
+        "read_input_float_register" => {
+            Value::Float(arm.input_float_regs[a.index(0, 48, "register")?])
+        }
+        _ => Value::Bool(arm.input_bool_regs[a.index(0, 128, "register")?]),
+    }))
+}
+
+fn flag(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+    let n = a.index(0, 32, "flag")?;
+    if a.name == "set_flag" {
+        c.arm.flags[n] = a.boolean(1)?;
+        return Ok(Out::Value(Value::None));
+    }
+    Ok(Out::Value(Value::Bool(c.arm.flags[n])))
+}
+
+fn port(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+    let addr = a.int(0)?;
+    if addr < 0 {
+        return Err(Fault::from(format!("`{}`: no port {addr}", a.name)));
+    }
+    let arm = &mut c.arm;
+    Ok(Out::Value(match a.name {
+        "read_port_bit" => Value::Bool(arm.port_bits.get(&addr).copied().unwrap_or(false)),
+        "read_port_register" => Value::Int(i32::from(
+            arm.port_registers.get(&addr).copied().unwrap_or(0),
+        )),
+        "write_port_bit" => {
+            arm.port_bits.insert(addr, a.boolean(1)?);
+            Value::None
+        }
+        _ => {
+            let v = a.int(1)?;
+            if !(-32768..=65535).contains(&v) {
+                return Err(Fault::from(format!(
+                    "`write_port_register`: {v} does not fit a register (-32768 to 65535)"
+                )));
+            }
+            arm.port_registers.insert(addr, v as u16 as i16);
+            Value::None
+        }
+    }))
+}
+
+fn set_analog_outputdomain(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+    let port = a.index(0, 2, "analog output")?;
+    let domain = a.int(1)?;
+    if !(0..=1).contains(&domain) {
+        return Err(Fault::from(format!(
+            "`set_analog_outputdomain`: domain {domain} is not 0 (4-20 mA) or 1 (0-10 V)"
+        )));
+    }
+    c.arm.analog_out_domain[port] = domain;
+    Ok(Out::Value(Value::None))
+}
+
+/// Checks an input action: "default" or "freedrive".
+fn check_action(a: &Args, i: usize) -> Result<(), Fault> {
+    let action = a.bytes(i)?;
+    if action == b"default" || action == b"freedrive" {
+        Ok(())
+    } else {
+        Err(Fault::from(format!(
+            "`{}`: action \"{}\" is not \"default\" or \"freedrive\"",
+            a.name,
+            String::from_utf8_lossy(action)
+        )))
+    }
+}
+
+fn input_action(_: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+    let n = match a.name {
+        "set_configurable_digital_input_action" => 8,
+        "set_tool_digital_input_action" => 2,
+        _ => 128,
+    };
+    a.index(0, n, "input")?;
+    check_action(a, 1)?;
+    Ok(Out::Value(Value::None))
+}
+
+/// The Modbus signal named by argument `i`.
+fn signal<'a>(c: &'a mut Controller, a: &Args, i: usize) -> Result<&'a mut ModbusSignal, Fault> {
+    let name = a.text(i)?;
+    c.arm
+        .modbus
+        .get_mut(&name)
+        .ok_or_else(|| Fault::from(format!("`{}`: no Modbus signal \"{name}\"", a.name)))
+}
+
+fn modbus(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+    match a.name {
+        "modbus_add_signal" | "modbus_add_rw_signal" => {
+            let rw = a.name == "modbus_add_rw_signal";
+            a.text(0)?;
+            let slave = a.int(1)?;
+            if !(0..=255).contains(&slave) {
+                return Err(Fault::from(format!(
+                    "`{}`: slave number {slave} is not 0-255",
+                    a.name
+                )));
+            }
+            let (signal_type, count, name_at) = if rw {
+                (23, a.int(3)?, 6)
+            } else {
+                let t = a.int(3)?;
+                if ![0, 1, 2, 3, 15, 16].contains(&t) {
+                    return Err(Fault::from(format!(
+                        "`modbus_add_signal`: signal type {t} is not 0, 1, 2, 3, 15 or 16"
+                    )));
+                }
+                (t, a.int(6)?, 4)
+            };
+            if a.int(2)? < 0 || !(1..=123).contains(&count) {
+                return Err(Fault::from(format!(
+                    "`{}`: address below 0 or register count {count} not 1-123",
+                    a.name
+                )));
+            }
+            let name = a.text(name_at)?;
+            if name.is_empty() || name.len() > 20 {
+                return Err(Fault::from(format!(
+                    "`{}`: signal name \"{name}\" must be 1-20 characters",
+                    a.name
+                )));
+            }
+            c.arm.modbus.insert(
+                name,
+                ModbusSignal {
+                    signal_type,
+                    values: vec![0; count as usize],
+                },
+            );
+        }
+        "modbus_delete_signal" => {
+            let name = a.text(0)?;
+            c.arm.modbus.remove(&name);
+        }
+        "modbus_get_signal_status" => {
+            let s = signal(c, a, 0)?;
+            let digital = matches!(s.signal_type, 0 | 1 | 15);
+            let one = |v: i32| {
+                if digital {
+                    Value::Bool(v != 0)
+                } else {
+                    Value::Int(v)
+                }
+            };
+            return Ok(Out::Value(if s.values.len() == 1 {
+                one(s.values[0])
+            } else {
+                Value::List(s.values.iter().map(|v| one(*v)).collect())
+            }));
+        }
+        "modbus_set_output_register" | "modbus_set_output_signal" => {
+            let digital = a.name == "modbus_set_output_signal";
+            let given: Vec<Value> = match &a.v[1] {
+                Value::List(items) => items.clone(),
+                v => vec![v.clone()],
+            };
+            let name = a.name;
+            let s = signal(c, a, 0)?;
+            let fits = if digital {
+                matches!(s.signal_type, 1 | 15)
+            } else {
+                matches!(s.signal_type, 3 | 16 | 23)
+            };
+            if !fits || given.is_empty() || given.len() > s.values.len() {
+                return Err(Fault::from(format!(
+                    "`{name}`: the signal (type {}, {} value(s)) cannot take {} value(s)",
+                    s.signal_type,
+                    s.values.len(),
+                    given.len()
+                )));
+            }
+            for (slot, v) in s.values.iter_mut().zip(&given) {
+                *slot = match v {
+                    Value::Bool(b) if digital => i32::from(*b),
+                    Value::Int(x) if digital => i32::from(*x != 0),
+                    Value::Int(x) if (0..=65535).contains(x) => *x,
+                    other => {
+                        return Err(Fault::from(format!(
+                            "`{name}`: {} is not a {}",
+                            other.to_source(),
+                            if digital {
+                                "bool"
+                            } else {
+                                "register value (0-65535)"
+                            }
+                        )))
+                    }
+                };
+            }
+        }
+        "modbus_set_digital_input_action" => {
+            check_action(a, 1)?;
+            signal(c, a, 0)?;
+        }
+        "modbus_get_error" => {
+            signal(c, a, 0)?;
+            return Ok(Out::Value(Value::Int(0)));
+        }
+        "modbus_get_time_since_signal_invalid" => {
+            signal(c, a, 0)?;
+            return Ok(Out::Value(Value::Float(0.0)));
+        }
+        _ => {
+            signal(c, a, 0)?;
+        }
+    }
+    Ok(Out::Value(Value::None))
+}
+
+fn request(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+    if a.bytes(0)?.is_empty() {
+        return Err(Fault::from(format!("`{}`: the message is empty", a.name)));
+    }
+    let arm = &c.arm;
+    Ok(Out::Value(match a.name {
+        "request_boolean_from_primary_client" => Value::Bool(arm.operator_bool),
+        "request_integer_from_primary_client" => Value::Int(arm.operator_int),
+        "request_float_from_primary_client" => Value::Float(arm.operator_float),
+        _ => Value::Str(arm.operator_string.clone()),
     }))
 }
 
@@ -333,7 +866,7 @@ fn register(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
     let bools = a.name.contains("boolean");
     let k = usize::try_from(addr)
         .ok()
-        .filter(|k| *k < if bools { 64 } else { 48 })
+        .filter(|k| *k < if bools { 128 } else { 48 })
         .ok_or_else(|| format!("`{}`: no register {addr}", a.name))?;
     let arm = &mut c.arm;
     let v = if a.name.contains("integer") {

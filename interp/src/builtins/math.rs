@@ -1,6 +1,7 @@
-//! Math: trigonometry, powers, rounding, norms, bit lists, `random`.
+//! Math: trigonometry, powers, rounding, norms, bit lists, `random`, and the matrix
+//! functions on lists of lists (`inv`, `transpose`; `inv` of a pose is `pose_inv`).
 
-use super::{req, Args, Builtin, Domain, Out};
+use super::{float_list, req, Args, Builtin, Domain, Out};
 use crate::controller::Controller;
 use crate::error::Fault;
 use crate::value::Value;
@@ -47,6 +48,27 @@ pub(super) const TABLE: &[Builtin] = &[
         &[req("a")],
         "The absolute value of a number, the Euclidean norm of a list or pose.",
         norm,
+    ),
+    Builtin::new(
+        "normalize",
+        D,
+        &[req("v")],
+        "The unit vector in the direction of a list of numbers (not all zero).",
+        normalize,
+    ),
+    Builtin::new(
+        "inv",
+        D,
+        &[req("m")],
+        "The inverse of a square non-singular matrix (a list of lists), or of a pose.",
+        inv,
+    ),
+    Builtin::new(
+        "transpose",
+        D,
+        &[req("m")],
+        "The transpose of a matrix (a list of lists; a list is a 1-row matrix).",
+        transpose,
     ),
     Builtin::new(
         "binary_list_to_integer",
@@ -198,4 +220,112 @@ fn random(c: &mut Controller, _: &mut Args) -> Result<Out, Fault> {
     Ok(Out::Value(Value::Float(
         (x >> 11) as f64 / (1u64 << 53) as f64,
     )))
+}
+
+fn normalize(_: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+    let v = numbers(a, &a.v[0])?;
+    let n = v.iter().map(|x| x * x).sum::<f64>().sqrt();
+    if n == 0.0 {
+        return Err(Fault::from("`normalize`: the vector is zero"));
+    }
+    Ok(Out::Value(float_list(
+        &v.iter().map(|x| x / n).collect::<Vec<f64>>(),
+    )))
+}
+
+/// A list of numbers.
+fn numbers(a: &Args, v: &Value) -> Result<Vec<f64>, Fault> {
+    let Value::List(items) = v else {
+        return Err(Fault::type_error(format!(
+            "type error: `{}` needs a list of numbers, got {}",
+            a.name,
+            v.type_name()
+        )));
+    };
+    items
+        .iter()
+        .map(|x| {
+            x.as_f64().ok_or_else(|| {
+                Fault::type_error(format!(
+                    "type error: `{}` needs numbers, got {}",
+                    a.name,
+                    x.type_name()
+                ))
+            })
+        })
+        .collect()
+}
+
+/// A matrix: a list of equally long lists of numbers (a flat list is one row).
+fn matrix(a: &Args) -> Result<Vec<Vec<f64>>, Fault> {
+    let Value::List(rows) = &a.v[0] else {
+        return Err(Fault::type_error(format!(
+            "type error: `{}` needs a matrix, got {}",
+            a.name,
+            a.v[0].type_name()
+        )));
+    };
+    let m: Vec<Vec<f64>> = if rows.iter().all(|r| matches!(r, Value::List(_))) {
+        rows.iter()
+            .map(|r| numbers(a, r))
+            .collect::<Result<_, _>>()?
+    } else {
+        vec![numbers(a, &a.v[0])?]
+    };
+    if m.is_empty() || m.iter().any(|r| r.len() != m[0].len() || r.is_empty()) {
+        return Err(Fault::from(format!("`{}`: not a matrix", a.name)));
+    }
+    Ok(m)
+}
+
+fn to_value(m: Vec<Vec<f64>>) -> Value {
+    Value::List(m.iter().map(|r| float_list(r)).collect())
+}
+
+fn inv(_: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+    if let Value::Pose(p) = a.v[0] {
+        return Ok(Out::Value(Value::Pose(crate::pose::inv(p))));
+    }
+    let mut m = matrix(a)?;
+    let n = m.len();
+    if m[0].len() != n {
+        return Err(Fault::from("`inv`: the matrix is not square"));
+    }
+    // Gauss-Jordan with partial pivoting.
+    let mut out: Vec<Vec<f64>> = (0..n)
+        .map(|i| (0..n).map(|j| if i == j { 1.0 } else { 0.0 }).collect())
+        .collect();
+    for col in 0..n {
+        let pivot = (col..n)
+            .max_by(|&i, &j| m[i][col].abs().total_cmp(&m[j][col].abs()))
+            .unwrap_or(col);
+        if m[pivot][col].abs() < 1e-12 {
+            return Err(Fault::from("`inv`: the matrix is singular"));
+        }
+        m.swap(col, pivot);
+        out.swap(col, pivot);
+        let d = m[col][col];
+        for j in 0..n {
+            m[col][j] /= d;
+            out[col][j] /= d;
+        }
+        for i in 0..n {
+            if i != col {
+                let f = m[i][col];
+                for j in 0..n {
+                    m[i][j] -= f * m[col][j];
+                    out[i][j] -= f * out[col][j];
+                }
+            }
+        }
+    }
+    Ok(Out::Value(to_value(out)))
+}
+
+fn transpose(_: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+    let m = matrix(a)?;
+    let t = (0..m[0].len())
+        .map(|j| m.iter().map(|r| r[j]).collect())
+        .collect();
+    Ok(Out::Value(to_value(t)))
 }

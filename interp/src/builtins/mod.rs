@@ -10,10 +10,11 @@
 //! | --- | --- |
 //! | [`sockets`] | every `socket_*` function of the e-Series 5.x manual |
 //! | [`motion`] | moves, servo/speed control, the arm's state, settings of the arm |
-//! | [`io`] | digital/analog I/O, tool I/O, the RTDE registers |
-//! | [`math`] | numbers, lists of numbers, bits, `random` |
-//! | [`strings`] | strings, `to_str`/`to_num`, list length |
-//! | [`poses`] | pose arithmetic and kinematics |
+//! | [`conveyor`] | conveyor tracking and its encoders (the motion chapter; no conveyor) |
+//! | [`io`] | digital/analog I/O, tool I/O, flags, the RTDE registers, Modbus, I/O configuration |
+//! | [`math`] | numbers, lists of numbers, matrices (`inv`, `transpose`), bits, `random` |
+//! | [`strings`] | strings, `to_str`/`to_num`, list length, `size`, `make_list` |
+//! | [`poses`] | pose arithmetic, rotation vectors and RPY, wrenches, kinematics |
 //! | [`messages`] | `textmsg`, `varmsg`, `popup` |
 //! | [`time`] | `sync`, `sleep`, `get_steptime` |
 //!
@@ -28,6 +29,7 @@ use crate::controller::Controller;
 use crate::error::Fault;
 use crate::value::Value;
 
+pub mod conveyor;
 pub mod io;
 pub mod math;
 pub mod messages;
@@ -196,9 +198,8 @@ impl Builtin {
             .map(|p| match p.default.value() {
                 None => p.name.to_string(),
                 Some(Value::None) => format!("{}=None", p.name),
-                Some(Value::Float(f)) if f.fract() == 0.0 && f.abs() < 1e15 => {
-                    format!("{}={f:.1}", p.name)
-                }
+                // As Rust writes it shortest: 20.0, 0.8, 1e-10.
+                Some(Value::Float(f)) => format!("{}={f:?}", p.name),
                 Some(v) => format!("{}={}", p.name, v.to_source()),
             })
             .collect();
@@ -235,6 +236,7 @@ pub fn all() -> &'static [Builtin] {
         let mut v: Vec<Builtin> = [
             sockets::TABLE,
             motion::TABLE,
+            conveyor::TABLE,
             io::TABLE,
             math::TABLE,
             strings::TABLE,
@@ -409,6 +411,30 @@ impl Args {
         }
     }
 
+    /// Argument `i` as a list of numbers of length `n` (a pose when `n` is 6).
+    pub fn nums<const N: usize>(&self, i: usize) -> Result<[f64; N], Fault> {
+        let what = format!("{N} numbers");
+        let items: Vec<f64> = match &self.v[i] {
+            Value::Pose(p) => p.to_vec(),
+            Value::List(items) => items
+                .iter()
+                .map(Value::as_f64)
+                .collect::<Option<Vec<f64>>>()
+                .ok_or_else(|| self.bad(i, &what))?,
+            _ => return Err(self.bad(i, &what)),
+        };
+        items.try_into().map_err(|_| self.bad(i, &what))
+    }
+
+    /// Argument `i` as an index into `0..n` (`what` names the thing indexed).
+    pub fn index(&self, i: usize, n: usize, what: &str) -> Result<usize, Fault> {
+        let k = self.int(i)?;
+        usize::try_from(k)
+            .ok()
+            .filter(|k| *k < n)
+            .ok_or_else(|| Fault::from(format!("`{}`: no {what} {k} (0-{})", self.name, n - 1)))
+    }
+
     /// Argument `i` was left out (its default is [`Default::Absent`]).
     pub fn is_absent(&self, i: usize) -> bool {
         matches!(self.v[i], Value::None)
@@ -417,6 +443,11 @@ impl Args {
 
 /// Six floats as a URScript list.
 pub(crate) fn floats(v: [f64; 6]) -> Value {
+    Value::List(v.iter().map(|&x| Value::Float(x)).collect())
+}
+
+/// Floats as a URScript list.
+pub(crate) fn float_list(v: &[f64]) -> Value {
     Value::List(v.iter().map(|&x| Value::Float(x)).collect())
 }
 
@@ -455,6 +486,138 @@ mod tests {
             assert!(!b.summary.is_empty(), "{} has no summary", b.name);
             assert!(b.params.len() < 256);
         }
+    }
+
+    /// Calls built-in `name` on `c` with these positional arguments (defaults after).
+    fn call(c: &mut Controller, name: &str, args: Vec<Value>) -> Value {
+        let b = lookup(name).unwrap();
+        let positional = args.len();
+        let mut v: Vec<Value> = b
+            .params
+            .iter()
+            .map(|p| p.default.value().unwrap_or(Value::None))
+            .collect();
+        for (slot, x) in v.iter_mut().zip(args) {
+            *slot = x;
+        }
+        let mut a = Args {
+            name: b.name,
+            params: b.params,
+            v,
+            positional,
+            line: 1,
+            read: None,
+            failure: None,
+            traced: false,
+        };
+        match (b.run)(c, &mut a) {
+            Ok(Out::Value(v) | Out::Wait(_, v)) => v,
+            Ok(_) => panic!("{name} waits for a socket"),
+            Err(e) => panic!("{name}: {e:?}"),
+        }
+    }
+
+    /// What the robot measures of the world is a field of the virtual arm: the built-ins
+    /// read what a test sets there.
+    #[test]
+    fn the_worlds_values_are_fields_a_test_sets() {
+        let mut c = Controller {
+            step_time: Duration::from_millis(2),
+            step: 0,
+            arm: crate::controller::Arm::default(),
+            sockets: crate::sockets::Sockets::new(crate::sockets::Policy::default()),
+            events: std::collections::VecDeque::new(),
+        };
+        // The documented defaults.
+        assert_eq!(
+            call(&mut c, "get_joint_temp", vec![Value::Int(2)]),
+            Value::Float(35.0)
+        );
+        assert_eq!(
+            call(&mut c, "get_controller_temp", vec![]),
+            Value::Float(30.0)
+        );
+        assert_eq!(call(&mut c, "get_tool_temp", vec![]), Value::Float(32.0));
+        assert_eq!(call(&mut c, "get_tool_current", vec![]), Value::Float(0.0));
+        let arm = &mut c.arm;
+        arm.joint_temp[2] = 61.5;
+        arm.controller_temp = 41.0;
+        arm.tool_temp = 45.0;
+        arm.tool_current = 0.6;
+        arm.joint_torques = [1.0, 2.0, 3.0, 4.0, 5.0, 6.0];
+        arm.tcp_force = [3.0, 0.0, 4.0, 0.0, 0.0, 0.5];
+        arm.digital_in[16 + 1] = true; // tool input 1
+        arm.digital_in[8 + 2] = true; // configurable input 2
+        arm.analog_in[1] = 4.5;
+        arm.input_int_regs[24] = 7;
+        arm.input_float_regs[47] = 2.5;
+        arm.input_bool_regs[127] = true;
+        arm.operator_int = 12;
+        arm.operator_string = b"part A".to_vec();
+        assert_eq!(
+            call(&mut c, "get_joint_temp", vec![Value::Int(2)]),
+            Value::Float(61.5)
+        );
+        assert_eq!(
+            call(&mut c, "get_controller_temp", vec![]),
+            Value::Float(41.0)
+        );
+        assert_eq!(call(&mut c, "get_tool_temp", vec![]), Value::Float(45.0));
+        assert_eq!(call(&mut c, "get_tool_current", vec![]), Value::Float(0.6));
+        assert_eq!(
+            call(&mut c, "get_joint_torques", vec![]),
+            floats([1.0, 2.0, 3.0, 4.0, 5.0, 6.0])
+        );
+        assert_eq!(
+            call(&mut c, "get_tcp_force", vec![]),
+            Value::Pose([3.0, 0.0, 4.0, 0.0, 0.0, 0.5])
+        );
+        assert_eq!(call(&mut c, "force", vec![]), Value::Float(5.0));
+        assert_eq!(
+            call(&mut c, "get_tool_digital_in", vec![Value::Int(1)]),
+            Value::Bool(true)
+        );
+        assert_eq!(
+            call(&mut c, "get_digital_in", vec![Value::Int(9)]),
+            Value::Bool(true)
+        );
+        assert_eq!(
+            call(&mut c, "get_configurable_digital_in", vec![Value::Int(2)]),
+            Value::Bool(true)
+        );
+        assert_eq!(
+            call(&mut c, "get_standard_digital_in", vec![Value::Int(2)]),
+            Value::Bool(false)
+        );
+        assert_eq!(
+            call(&mut c, "get_standard_analog_in", vec![Value::Int(1)]),
+            Value::Float(4.5)
+        );
+        assert_eq!(
+            call(&mut c, "read_input_integer_register", vec![Value::Int(24)]),
+            Value::Int(7)
+        );
+        assert_eq!(
+            call(&mut c, "read_input_float_register", vec![Value::Int(47)]),
+            Value::Float(2.5)
+        );
+        assert_eq!(
+            call(&mut c, "read_input_boolean_register", vec![Value::Int(127)]),
+            Value::Bool(true)
+        );
+        let msg = Value::Str(b"?".to_vec());
+        assert_eq!(
+            call(
+                &mut c,
+                "request_integer_from_primary_client",
+                vec![msg.clone()]
+            ),
+            Value::Int(12)
+        );
+        assert_eq!(
+            call(&mut c, "request_string_from_primary_client", vec![msg]),
+            Value::Str(b"part A".to_vec())
+        );
     }
 
     #[test]

@@ -14,14 +14,20 @@
 //! - `speedj(qd, a, t)`, `speedl(xd, a, t, aRot)`: set the speed and integrate it over `t`
 //!   (one step if `t` is not given); `stopj(a)`, `stopl(a)`: zero speed, one step.
 //! - `get_actual_joint_positions()`, `get_target_joint_positions()`: the commanded `q`;
-//!   `get_actual_tcp_pose()`, `get_target_tcp_pose()`: the commanded pose; speeds the
-//!   commanded speeds; `get_tcp_force()`: zero (no forces are modelled);
-//!   `tool_contact()`: 0; `is_steady()`: True.
-//! - Settings the virtual arm has no use for (`set_payload`, `set_tcp`, `set_gravity`,
-//!   `force_mode`, `zero_ftsensor`, ...) are accepted with their manual signatures and do
-//!   nothing.
+//!   `get_actual_tcp_pose()`, `get_target_tcp_pose()`, `get_target_waypoint()`: the
+//!   commanded pose; speeds the commanded speeds; `tool_contact()`: 0; `is_steady()`: True.
+//! - Settings read back by their getters: payload (`set_target_payload`, `set_payload*`
+//!   -> `get_target_payload*`), TCP (`set_tcp` -> `get_tcp_offset`), gravity, base
+//!   acceleration, path offset (`path_offset_*`), `set_pos` (the joints).
+//! - What the robot measures of the world returns the documented fixed value of its
+//!   field of the virtual arm (`crate::controller::Arm`): `get_tcp_force()` and `force()`
+//!   0, `get_joint_torques()` 0, `get_joint_temp(j)` 35.0 °C, `get_controller_temp()`
+//!   30.0 °C, `get_tool_temp()` 32.0 °C, `get_tool_current()` 0.0 A;
+//!   `get_tool_accelerometer_reading()` is the gravity vector seen from the flange.
+//! - Settings the virtual arm has no use for (`force_mode`, `zero_ftsensor`,
+//!   `screw_driving`, ...) are accepted with their manual signatures and do nothing.
 
-use super::{accept, floats, opt, req, secs, Args, Builtin, Default, Domain, Out};
+use super::{accept, float_list, floats, opt, req, secs, Args, Builtin, Default, Domain, Out};
 use crate::controller::Controller;
 use crate::error::Fault;
 use crate::value::Value;
@@ -53,8 +59,10 @@ const MOVEP: [super::Param; 4] = [
     opt("v", Default::Float(0.25)),
     opt("r", Default::Float(0.0)),
 ];
+/// `optimovej(goal, a=0.3, v=0.3, r=0)`, `optimovel(goal, ...)`: the manual names the
+/// target `goal` (joints or a pose here).
 const OPTIMOVE: [super::Param; 4] = [
-    req("q"),
+    req("goal"),
     opt("a", Default::Float(0.3)),
     opt("v", Default::Float(0.3)),
     opt("r", Default::Float(0.0)),
@@ -237,8 +245,189 @@ pub(super) const TABLE: &[Builtin] = &[
         "get_tcp_force",
         D,
         NONE,
-        "Zero: no forces are modelled.",
+        "The force/torque at the flange: fixed, p[0, 0, 0, 0, 0, 0] (nothing pushes the virtual arm).",
         tcp_force,
+    ),
+    Builtin::new(
+        "force",
+        D,
+        NONE,
+        "The norm of get_tcp_force()'s force part: fixed, 0.0.",
+        force,
+    ),
+    Builtin::new(
+        "get_actual_tool_flange_pose",
+        D,
+        NONE,
+        "The commanded tool pose without the TCP offset.",
+        flange_pose,
+    ),
+    Builtin::new(
+        "get_target_waypoint",
+        D,
+        NONE,
+        "The target of the last move: the commanded tool pose.",
+        tcp_pose,
+    ),
+    Builtin::new(
+        "get_target_tcp_pose_along_path",
+        D,
+        NONE,
+        "The commanded tool pose (no conveyor or path offset is added to it here).",
+        tcp_pose,
+    ),
+    Builtin::new(
+        "get_target_tcp_speed_along_path",
+        D,
+        NONE,
+        "The commanded tool speed.",
+        tcp_speed,
+    ),
+    Builtin::new(
+        "get_target_payload",
+        D,
+        NONE,
+        "The payload mass last set (kg; 0.0 at start).",
+        payload,
+    ),
+    Builtin::new(
+        "get_target_payload_cog",
+        D,
+        NONE,
+        "The payload CoG last set ([x, y, z] m from the flange).",
+        payload,
+    ),
+    Builtin::new(
+        "get_target_payload_inertia",
+        D,
+        NONE,
+        "The payload inertia last set ([Ixx, Iyy, Izz, Ixy, Ixz, Iyz] kg*m^2).",
+        payload,
+    ),
+    Builtin::new(
+        "get_joint_torques",
+        D,
+        NONE,
+        "The joints' torques beyond moving the arm itself: fixed, [0, 0, 0, 0, 0, 0] Nm.",
+        joint_torques,
+    ),
+    Builtin::new(
+        "get_joint_temp",
+        D,
+        &[req("j")],
+        "The temperature of joint j (0-5): fixed, 35.0 degrees C.",
+        joint_temp,
+    ),
+    Builtin::new(
+        "get_controller_temp",
+        D,
+        NONE,
+        "The control box temperature: fixed, 30.0 degrees C.",
+        scalar,
+    ),
+    Builtin::new(
+        "get_tool_temp",
+        D,
+        NONE,
+        "The tool temperature: fixed, 32.0 degrees C.",
+        scalar,
+    ),
+    Builtin::new(
+        "get_tool_current",
+        D,
+        NONE,
+        "The tool current: fixed, 0.0 A (nothing draws from the tool connector).",
+        scalar,
+    ),
+    Builtin::new(
+        "get_tool_accelerometer_reading",
+        D,
+        NONE,
+        "The gravity vector (set_gravity) in the flange's axes, m/s^2: [0, 0, 9.82] with the flange up.",
+        accelerometer,
+    ),
+    Builtin::new(
+        "get_gravity",
+        D,
+        NONE,
+        "The gravity vector last set by set_gravity ([0, 0, 9.82] at start).",
+        get3,
+    ),
+    Builtin::new(
+        "get_base_acceleration",
+        D,
+        NONE,
+        "The base acceleration last set by set_base_acceleration ([0, 0, 0] at start).",
+        get3,
+    ),
+    Builtin::new(
+        "get_freedrive_status",
+        D,
+        NONE,
+        "0: normal operation (no singularity is modelled).",
+        zero_int,
+    ),
+    Builtin::new(
+        "get_inverse_kin_has_solution",
+        D,
+        &[
+            req("pose"),
+            opt("qnear", Default::Absent),
+            opt("maxPositionError", Default::Float(1e-10)),
+            opt("maxOrientationError", Default::Float(1e-10)),
+            opt("tcp", Default::Absent),
+        ],
+        "True: no kinematics yet, every pose is taken as reachable.",
+        has_solution,
+    ),
+    Builtin::new(
+        "set_pos",
+        D,
+        &[req("q")],
+        "Sets the joints of the simulated robot at once.",
+        set_pos,
+    ),
+    Builtin::new(
+        "path_offset_enable",
+        D,
+        NONE,
+        "Enables path offsetting.",
+        path_offset,
+    ),
+    Builtin::new(
+        "path_offset_disable",
+        D,
+        &[opt("a", Default::Float(20.0))],
+        "Disables path offsetting: the applied offset is zero again.",
+        path_offset,
+    ),
+    Builtin::new(
+        "path_offset_set",
+        D,
+        &[req("offset"), req("type")],
+        "Sets the offset (type 1-4), clamped to the maximum offset; applied while enabled.",
+        path_offset,
+    ),
+    Builtin::new(
+        "path_offset_get",
+        D,
+        &[req("type")],
+        "The offset applied now (as set; zero while disabled).",
+        path_offset,
+    ),
+    Builtin::new(
+        "path_offset_set_alpha_filter",
+        D,
+        &[req("alpha")],
+        "Sets the offset filter coefficient (0-1; the offset is applied unfiltered here).",
+        path_offset,
+    ),
+    Builtin::new(
+        "path_offset_set_max_offset",
+        D,
+        &[req("transLimit"), req("rotLimit")],
+        "Sets the largest offset per axis (m, rad; 0.1 and 0.52 at start).",
+        path_offset,
     ),
     Builtin::new(
         "get_tcp_offset",
@@ -273,22 +462,22 @@ pub(super) const TABLE: &[Builtin] = &[
         "set_payload",
         D,
         &[req("m"), opt("cog", Default::Absent)],
-        "Accepted (no dynamics).",
-        accept,
+        "Sets the payload mass and CoG (the TCP's position if cog is left out); zero inertia.",
+        set_payload,
     ),
     Builtin::new(
         "set_payload_mass",
         D,
         &[req("m")],
-        "Accepted (no dynamics).",
-        accept,
+        "Sets the payload mass; zero inertia.",
+        set_payload,
     ),
     Builtin::new(
         "set_payload_cog",
         D,
         &[req("CoG")],
-        "Accepted (no dynamics).",
-        accept,
+        "Sets the payload CoG; zero inertia.",
+        set_payload,
     ),
     Builtin::new(
         "set_target_payload",
@@ -299,13 +488,13 @@ pub(super) const TABLE: &[Builtin] = &[
             opt("inertia", Default::Floats(&[0.0; 6])),
             opt("transition_time", Default::Float(0.0)),
         ],
-        "Accepted (no dynamics).",
-        accept,
+        "Sets the payload mass, CoG and inertia (|I| <= 133, Ixx, Iyy, Izz >= 0).",
+        set_payload,
     ),
     Builtin::new(
         "set_tcp",
         D,
-        &[req("pose")],
+        &[req("pose"), opt("tcp_name", Default::Str(""))],
         "Sets the active TCP offset (get_tcp_offset).",
         set_tcp,
     ),
@@ -313,8 +502,15 @@ pub(super) const TABLE: &[Builtin] = &[
         "set_gravity",
         D,
         &[req("d")],
-        "Accepted (no dynamics).",
-        accept,
+        "Sets the gravity vector (get_gravity, the accelerometer).",
+        set3,
+    ),
+    Builtin::new(
+        "set_base_acceleration",
+        D,
+        &[req("a")],
+        "Sets the base acceleration (get_base_acceleration).",
+        set3,
     ),
     Builtin::new(
         "zero_ftsensor",
@@ -372,13 +568,6 @@ pub(super) const TABLE: &[Builtin] = &[
         accept,
     ),
     Builtin::new(
-        "stop_conveyor_tracking",
-        D,
-        &[opt("a", Default::Float(20.0))],
-        "Accepted (no conveyor).",
-        accept,
-    ),
-    Builtin::new(
         "enable_external_ft_sensor",
         D,
         &SENSOR,
@@ -400,6 +589,86 @@ pub(super) const TABLE: &[Builtin] = &[
         accept,
     ),
     Builtin::new("end_screw_driving", D, NONE, "Accepted.", accept),
+    Builtin::new(
+        "screw_driving",
+        D,
+        &[req("f"), req("v_limit")],
+        "Accepted (no forces are modelled).",
+        accept,
+    ),
+    Builtin::new(
+        "freedrive_mode_no_incorrect_payload_check",
+        D,
+        NONE,
+        "Accepted (nobody pushes the virtual arm).",
+        accept,
+    ),
+    Builtin::new(
+        "high_holding_torque_disable",
+        D,
+        NONE,
+        "Accepted.",
+        accept,
+    ),
+    Builtin::new("high_holding_torque_enable", D, NONE, "Accepted.", accept),
+    Builtin::new(
+        "pause_on_error_code",
+        D,
+        &[req("code"), opt("argument", Default::Absent)],
+        "Accepted (the virtual arm raises no error codes).",
+        accept,
+    ),
+    Builtin::new(
+        "position_deviation_warning",
+        D,
+        &[req("enabled"), opt("threshold", Default::Float(0.8))],
+        "Accepted (the virtual arm follows its target exactly).",
+        accept,
+    ),
+    Builtin::new(
+        "reset_revolution_counter",
+        D,
+        &[opt("qNear", Default::Floats(&[0.0; 6]))],
+        "Accepted.",
+        accept,
+    ),
+    Builtin::new(
+        "tool_wrench_limit_set",
+        D,
+        &[
+            req("frame_offset"),
+            opt("Fx", Default::Absent),
+            opt("Fy", Default::Absent),
+            opt("Fz", Default::Absent),
+            opt("Mx", Default::Absent),
+            opt("My", Default::Absent),
+            opt("Mz", Default::Absent),
+        ],
+        "Accepted (no dynamics).",
+        accept,
+    ),
+    Builtin::new("tool_wrench_limit_disable", D, NONE, "Accepted.", accept),
+    Builtin::new(
+        "set_baselight_off",
+        D,
+        NONE,
+        "Accepted (UR20/UR30 base light).",
+        accept,
+    ),
+    Builtin::new(
+        "set_baselight_iec",
+        D,
+        NONE,
+        "Accepted (UR20/UR30 base light).",
+        accept,
+    ),
+    Builtin::new(
+        "set_baselight_solid",
+        D,
+        &[req("r"), req("g"), req("b")],
+        "Accepted (UR20/UR30 base light).",
+        accept,
+    ),
 ];
 
 /// The largest joint distance from `from` to `to`.
@@ -515,8 +784,172 @@ fn tcp_speed(c: &mut Controller, _: &mut Args) -> Result<Out, Fault> {
     Ok(Out::Value(floats(c.arm.tcp_speed)))
 }
 
-fn tcp_force(_: &mut Controller, _: &mut Args) -> Result<Out, Fault> {
-    Ok(Out::Value(Value::Pose([0.0; 6])))
+fn tcp_force(c: &mut Controller, _: &mut Args) -> Result<Out, Fault> {
+    Ok(Out::Value(Value::Pose(c.arm.tcp_force)))
+}
+
+fn force(c: &mut Controller, _: &mut Args) -> Result<Out, Fault> {
+    let f = &c.arm.tcp_force;
+    Ok(Out::Value(Value::Float(
+        (f[0] * f[0] + f[1] * f[1] + f[2] * f[2]).sqrt(),
+    )))
+}
+
+/// The flange's pose: the tool pose without the TCP offset.
+fn flange(c: &Controller) -> [f64; 6] {
+    crate::pose::trans(c.arm.pose, crate::pose::inv(c.arm.tcp))
+}
+
+fn flange_pose(c: &mut Controller, _: &mut Args) -> Result<Out, Fault> {
+    Ok(Out::Value(Value::Pose(flange(c))))
+}
+
+fn payload(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+    Ok(Out::Value(match a.name {
+        "get_target_payload" => Value::Float(c.arm.payload_mass),
+        "get_target_payload_cog" => float_list(&c.arm.payload_cog),
+        _ => float_list(&c.arm.payload_inertia),
+    }))
+}
+
+fn set_payload(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+    let arm = &mut c.arm;
+    match a.name {
+        "set_payload_mass" => arm.payload_mass = a.num(0)?,
+        "set_payload_cog" => arm.payload_cog = a.nums(0)?,
+        "set_payload" => {
+            arm.payload_mass = a.num(0)?;
+            // Without a CoG the controller takes the TCP's position.
+            arm.payload_cog = if a.is_absent(1) {
+                [arm.tcp[0], arm.tcp[1], arm.tcp[2]]
+            } else {
+                a.nums(1)?
+            };
+        }
+        _ => {
+            let (m, cog, inertia): (f64, [f64; 3], [f64; 6]) = (a.num(0)?, a.nums(1)?, a.nums(2)?);
+            a.num(3)?;
+            if inertia.iter().any(|x| x.abs() > 133.0) || inertia[..3].iter().any(|x| *x < 0.0) {
+                return Err(Fault::from(format!(
+                    "`set_target_payload`: inertia {inertia:?} out of range (each at most 133 kg*m^2, Ixx, Iyy, Izz not negative)"
+                )));
+            }
+            arm.payload_mass = m;
+            arm.payload_cog = cog;
+            arm.payload_inertia = inertia;
+            return Ok(Out::Value(Value::None));
+        }
+    }
+    // The deprecated setters reset the inertia.
+    arm.payload_inertia = [0.0; 6];
+    Ok(Out::Value(Value::None))
+}
+
+fn joint_torques(c: &mut Controller, _: &mut Args) -> Result<Out, Fault> {
+    Ok(Out::Value(floats(c.arm.joint_torques)))
+}
+
+fn joint_temp(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+    let j = a.index(0, 6, "joint")?;
+    Ok(Out::Value(Value::Float(c.arm.joint_temp[j])))
+}
+
+fn scalar(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+    Ok(Out::Value(Value::Float(match a.name {
+        "get_controller_temp" => c.arm.controller_temp,
+        "get_tool_temp" => c.arm.tool_temp,
+        _ => c.arm.tool_current,
+    })))
+}
+
+fn accelerometer(c: &mut Controller, _: &mut Args) -> Result<Out, Fault> {
+    // What the flange's axes see of gravity: the inverse rotation applied to it.
+    let f = flange(c);
+    Ok(Out::Value(float_list(&super::poses::rotate(
+        [-f[3], -f[4], -f[5]],
+        c.arm.gravity,
+    ))))
+}
+
+fn get3(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+    Ok(Out::Value(float_list(if a.name == "get_gravity" {
+        &c.arm.gravity
+    } else {
+        &c.arm.base_acceleration
+    })))
+}
+
+fn set3(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+    let v = a.nums(0)?;
+    if a.name == "set_gravity" {
+        c.arm.gravity = v;
+    } else {
+        c.arm.base_acceleration = v;
+    }
+    Ok(Out::Value(Value::None))
+}
+
+fn zero_int(_: &mut Controller, _: &mut Args) -> Result<Out, Fault> {
+    Ok(Out::Value(Value::Int(0)))
+}
+
+fn has_solution(_: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+    a.six(0)?;
+    Ok(Out::Value(Value::Bool(true)))
+}
+
+fn set_pos(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+    c.arm.q = a.six(0)?;
+    c.arm.qd = [0.0; 6];
+    Ok(Out::Value(Value::None))
+}
+
+fn path_offset(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+    let po = &mut c.arm.path_offset;
+    let kind = |a: &Args, i: usize| -> Result<i32, Fault> {
+        let t = a.int(i)?;
+        if (1..=4).contains(&t) {
+            Ok(t)
+        } else {
+            Err(Fault::from(format!("`{}`: type {t} is not 1-4", a.name)))
+        }
+    };
+    match a.name {
+        "path_offset_enable" => po.enabled = true,
+        "path_offset_disable" => {
+            a.num(0)?;
+            po.enabled = false;
+            po.offset = [0.0; 6];
+        }
+        "path_offset_set" => {
+            let mut o = a.six(0)?;
+            po.kind = kind(a, 1)?;
+            for (k, x) in o.iter_mut().enumerate() {
+                let lim = if k < 3 { po.max_trans } else { po.max_rot };
+                *x = x.clamp(-lim, lim);
+            }
+            po.offset = o;
+        }
+        "path_offset_get" => {
+            kind(a, 0)?;
+            let o = if po.enabled { po.offset } else { [0.0; 6] };
+            return Ok(Out::Value(Value::Pose(o)));
+        }
+        "path_offset_set_alpha_filter" => {
+            let alpha = a.num(0)?;
+            if !(0.0..=1.0).contains(&alpha) {
+                return Err(Fault::from(format!(
+                    "`path_offset_set_alpha_filter`: alpha {alpha} is not in 0-1"
+                )));
+            }
+            po.alpha = alpha;
+        }
+        _ => {
+            po.max_trans = a.num(0)?.abs();
+            po.max_rot = a.num(1)?.abs();
+        }
+    }
+    Ok(Out::Value(Value::None))
 }
 
 fn tcp_offset(c: &mut Controller, _: &mut Args) -> Result<Out, Fault> {

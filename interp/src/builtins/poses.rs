@@ -1,10 +1,11 @@
 //! Poses and kinematics: pose arithmetic composes rigid transforms with rotation vectors
-//! as the manual defines them; `interpolate_pose` interpolates each element linearly
+//! as the manual defines them; `rotvec2rpy`/`rpy2rotvec` convert to and from
+//! roll-pitch-yaw; `wrench_trans` moves a wrench's point of view; `interpolate_pose` interpolates each element linearly
 //! (exact for translation, approximate for rotation). The kinematics functions have no
 //! model of the arm yet: `get_inverse_kin(x, qnear)` returns `qnear` (or the commanded
 //! joints), `get_forward_kin()` the commanded pose.
 
-use super::{floats, opt, req, Args, Builtin, Default, Domain, Out};
+use super::{float_list, floats, opt, req, Args, Builtin, Default, Domain, Out};
 use crate::controller::Controller;
 use crate::error::Fault;
 use crate::value::Value;
@@ -26,6 +27,27 @@ pub(super) const TABLE: &[Builtin] = &[
         TWO,
         "The distance between the two poses' positions.",
         dist,
+    ),
+    Builtin::new(
+        "rotvec2rpy",
+        D,
+        &[req("rotation_vector")],
+        "The roll-pitch-yaw angles [r, p, y] of a rotation vector (R = Rz(y)Ry(p)Rx(r)).",
+        rotvec2rpy,
+    ),
+    Builtin::new(
+        "rpy2rotvec",
+        D,
+        &[req("rpy_vector")],
+        "The rotation vector of roll-pitch-yaw angles [r, p, y] (R = Rz(y)Ry(p)Rx(r)).",
+        rpy2rotvec,
+    ),
+    Builtin::new(
+        "wrench_trans",
+        D,
+        &[req("T_from_to"), req("w_from")],
+        "The wrench [F, M] seen from the frame T_from_to: torque moved to its origin, both in its axes.",
+        wrench_trans,
     ),
     Builtin::new(
         "pose_trans",
@@ -88,6 +110,53 @@ fn dist(_: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
     let (p, q) = (a.six(0)?, a.six(1)?);
     let d = (0..3).map(|k| (p[k] - q[k]).powi(2)).sum::<f64>().sqrt();
     Ok(Out::Value(Value::Float(d)))
+}
+
+/// `v` rotated by the rotation vector `r`.
+pub(super) fn rotate(r: [f64; 3], v: [f64; 3]) -> [f64; 3] {
+    let p = crate::pose::trans(
+        [0.0, 0.0, 0.0, r[0], r[1], r[2]],
+        [v[0], v[1], v[2], 0.0, 0.0, 0.0],
+    );
+    [p[0], p[1], p[2]]
+}
+
+fn rotvec2rpy(_: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+    let r: [f64; 3] = a.nums(0)?;
+    // The rotation matrix's columns: the rotated axes.
+    let [c0, c1, c2] = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]].map(|e| rotate(r, e));
+    let pitch = (-c0[2]).atan2(c0[0].hypot(c0[1]));
+    let yaw = c0[1].atan2(c0[0]);
+    let roll = c1[2].atan2(c2[2]);
+    Ok(Out::Value(float_list(&[roll, pitch, yaw])))
+}
+
+fn rpy2rotvec(_: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+    let [roll, pitch, yaw]: [f64; 3] = a.nums(0)?;
+    let rot = |x: f64, y: f64, z: f64| [0.0, 0.0, 0.0, x, y, z];
+    let p = crate::pose::trans(
+        crate::pose::trans(rot(0.0, 0.0, yaw), rot(0.0, pitch, 0.0)),
+        rot(roll, 0.0, 0.0),
+    );
+    Ok(Out::Value(float_list(&p[3..])))
+}
+
+fn wrench_trans(_: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+    let t = a.six(0)?;
+    let w = a.six(1)?;
+    let (p, f, m) = ([t[0], t[1], t[2]], [w[0], w[1], w[2]], [w[3], w[4], w[5]]);
+    // The torque about the new origin: M - p x F; then both in the new frame's axes.
+    let pxf = [
+        p[1] * f[2] - p[2] * f[1],
+        p[2] * f[0] - p[0] * f[2],
+        p[0] * f[1] - p[1] * f[0],
+    ];
+    let back = [-t[3], -t[4], -t[5]];
+    let f_to = rotate(back, f);
+    let m_to = rotate(back, [m[0] - pxf[0], m[1] - pxf[1], m[2] - pxf[2]]);
+    Ok(Out::Value(float_list(&[
+        f_to[0], f_to[1], f_to[2], m_to[0], m_to[1], m_to[2],
+    ])))
 }
 
 fn compose(_: &mut Controller, a: &mut Args) -> Result<Out, Fault> {

@@ -1,4 +1,4 @@
-//! Strings and lists: `str_*`, `to_str`, `to_num`, `length`.
+//! Strings and lists: `str_*`, `to_str`, `to_num`, `length`, `size`, `make_list`.
 
 use urscript_socket::to_str::{parse_value, Scalar, Value as WireValue};
 
@@ -79,6 +79,24 @@ pub(super) const TABLE: &[Builtin] = &[
         &[req("v")],
         "The length of a list or string (6 for a pose).",
         length,
+    ),
+    Builtin::new(
+        "size",
+        D,
+        &[req("v")],
+        "The length of a list or string; [rows, columns] of a matrix (a list of lists).",
+        size,
+    ),
+    Builtin::new(
+        "make_list",
+        D,
+        &[
+            req("length"),
+            req("initial_value"),
+            opt("capacity", Default::Absent),
+        ],
+        "A list of length copies of initial_value (capacity, if given, at least length).",
+        make_list,
     ),
     Builtin::new(
         "get_list_length",
@@ -179,4 +197,35 @@ fn length(_: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
         }
     };
     Ok(Out::Value(Value::Int(i32::try_from(n).unwrap_or(i32::MAX))))
+}
+
+fn size(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+    if let Value::List(rows) = &a.v[0] {
+        if let Some(Value::List(first)) = rows.first() {
+            if rows.iter().all(|r| matches!(r, Value::List(_))) {
+                let n = |x: usize| Value::Int(i32::try_from(x).unwrap_or(i32::MAX));
+                return Ok(Out::Value(Value::List(vec![n(rows.len()), n(first.len())])));
+            }
+        }
+    }
+    length(c, a)
+}
+
+/// The longest list `make_list` makes (a guard, not the controller's limit).
+const MAX_LIST_LEN: i32 = 1 << 20;
+
+fn make_list(_: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+    let n = a.int(0)?;
+    let cap = if a.is_absent(2) { n } else { a.int(2)? };
+    if !(0..=MAX_LIST_LEN).contains(&n) || cap < n {
+        return Err(Fault::from(format!(
+            "`make_list`: length {n} must be 0-{MAX_LIST_LEN} and capacity {cap} at least it"
+        )));
+    }
+    if matches!(a.v[1], Value::List(_)) {
+        return Err(Fault::from(
+            "`make_list`: a list of lists is a matrix, not made by make_list",
+        ));
+    }
+    Ok(Out::Value(Value::List(vec![a.v[1].clone(); n as usize])))
 }

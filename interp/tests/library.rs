@@ -1,0 +1,671 @@
+//! The library's breadth (#19): the e-Series 5.x built-ins added to the table, each
+//! called through a real program, setters read back by their getters.
+mod common;
+
+use common::{messages, runtime_error};
+use urscript_interp::builtins::{all, lookup, Default};
+
+/// The numbers in a message such as `[1, 2.5, 3]` or `p[0.1, 0, 0, 0, 0, 0]`.
+fn nums(msg: &str) -> Vec<f64> {
+    msg.trim_start_matches('p')
+        .trim_matches(|c| c == '[' || c == ']')
+        .split(',')
+        .map(|x| x.trim().parse().unwrap_or_else(|_| panic!("{msg:?}")))
+        .collect()
+}
+
+fn close(msg: &str, want: &[f64], eps: f64) {
+    let got = nums(msg);
+    assert_eq!(got.len(), want.len(), "{msg}");
+    for (g, w) in got.iter().zip(want) {
+        assert!((g - w).abs() <= eps, "{msg} is not {want:?}");
+    }
+}
+
+#[test]
+fn payload_setters_are_read_back() {
+    let m = messages(
+        "textmsg(get_target_payload())
+set_target_payload(2.5, [0, 0, 0.1], [0.01, 0.02, 0.03, 0, 0, 0.001])
+textmsg(get_target_payload())
+textmsg(get_target_payload_cog())
+textmsg(get_target_payload_inertia())
+set_payload_mass(3)
+textmsg(get_target_payload(), get_target_payload_cog())
+textmsg(get_target_payload_inertia())
+set_target_payload(1, [0, 0, 0], inertia=[1, 1, 1, 0, 0, 0], transition_time=0.5)
+set_payload_cog([0.01, 0.02, 0.03])
+textmsg(get_target_payload_cog(), get_target_payload_inertia())
+set_tcp(p[0, 0, 0.2, 0, 0, 0], \"gripper\")
+set_payload(1.5)
+textmsg(get_target_payload(), get_target_payload_cog())
+set_payload(2, [0, 0.1, 0])
+textmsg(get_target_payload_cog())
+",
+    );
+    assert_eq!(
+        m,
+        [
+            "0",
+            "2.5",
+            "[0, 0, 0.1]",
+            "[0.01, 0.02, 0.03, 0, 0, 0.001]",
+            "3[0, 0, 0.1]",
+            "[0, 0, 0, 0, 0, 0]",
+            "[0.01, 0.02, 0.03][0, 0, 0, 0, 0, 0]",
+            // Without a CoG, set_payload takes the TCP's position.
+            "1.5[0, 0, 0.2]",
+            "[0, 0.1, 0]",
+        ]
+    );
+    assert!(
+        runtime_error("set_target_payload(1, [0, 0, 0], [-1, 0, 0, 0, 0, 0])\n")
+            .contains("out of range")
+    );
+    assert!(
+        runtime_error("set_target_payload(1, [0, 0, 0], [0, 0, 0, 200, 0, 0])\n")
+            .contains("out of range")
+    );
+}
+
+#[test]
+fn the_physical_world_reads_its_documented_fixed_values() {
+    let m = messages(
+        "textmsg(get_joint_temp(0), get_joint_temp(5))
+textmsg(get_controller_temp(), get_tool_temp())
+textmsg(get_tool_current())
+textmsg(get_joint_torques())
+textmsg(get_tcp_force(), force())
+textmsg(get_freedrive_status())
+",
+    );
+    assert_eq!(
+        m,
+        [
+            "3535",
+            "3032",
+            "0",
+            "[0, 0, 0, 0, 0, 0]",
+            "p[0, 0, 0, 0, 0, 0]0",
+            "0"
+        ]
+    );
+    assert!(runtime_error("get_joint_temp(6)\n").contains("no joint 6"));
+}
+
+#[test]
+fn gravity_base_acceleration_and_the_accelerometer() {
+    let m = messages(
+        "textmsg(get_gravity(), get_base_acceleration())
+textmsg(get_tool_accelerometer_reading())
+set_gravity([0, 9.82, 0])
+textmsg(get_gravity())
+textmsg(get_tool_accelerometer_reading())
+set_gravity([0, 0, 9.82])
+movel(p[0.3, 0, 0.5, 3.14159265358979, 0, 0])
+textmsg(get_tool_accelerometer_reading())
+set_base_acceleration([0.1, 0, 0])
+textmsg(get_base_acceleration())
+",
+    );
+    assert_eq!(m[0], "[0, 0, 9.82][0, 0, 0]");
+    // The flange's z axis points up at the start: a positive z reading.
+    close(&m[1], &[0.0, 0.0, 9.82], 1e-9);
+    assert_eq!(m[2], "[0, 9.82, 0]");
+    close(&m[3], &[0.0, 9.82, 0.0], 1e-9);
+    // Turned over about x: z reads -g.
+    close(&m[4], &[0.0, 0.0, -9.82], 1e-6);
+    assert_eq!(m[5], "[0.1, 0, 0]");
+}
+
+#[test]
+fn flange_pose_and_target_waypoint() {
+    let m = messages(
+        "set_tcp(p[0, 0, 0.1, 0, 0, 0])
+movel(p[0.3, 0, 0.5, 0, 0, 0])
+textmsg(get_actual_tool_flange_pose())
+textmsg(get_target_waypoint())
+textmsg(get_target_tcp_pose_along_path(), get_target_tcp_speed_along_path())
+textmsg(get_tcp_offset())
+",
+    );
+    close(&m[0], &[0.3, 0.0, 0.4, 0.0, 0.0, 0.0], 1e-9);
+    assert_eq!(m[1], "p[0.3, 0, 0.5, 0, 0, 0]");
+    assert_eq!(m[2], "p[0.3, 0, 0.5, 0, 0, 0][0, 0, 0, 0, 0, 0]");
+    assert_eq!(m[3], "p[0, 0, 0.1, 0, 0, 0]");
+}
+
+#[test]
+fn set_pos_sets_the_joints() {
+    let m = messages(
+        "set_pos([0.1, -1.2, 1.3, 0, 1.57, 0])
+textmsg(get_actual_joint_positions())
+",
+    );
+    assert_eq!(m, ["[0.1, -1.2, 1.3, 0, 1.57, 0]"]);
+}
+
+#[test]
+fn path_offset_is_set_clamped_and_cleared() {
+    let m = messages(
+        "textmsg(path_offset_get(1))
+path_offset_enable()
+path_offset_set([0.2, 0, 0.01, 0, 0, 1], 1)
+textmsg(path_offset_get(1))
+path_offset_set_max_offset(0.5, 1.5)
+path_offset_set_alpha_filter(0.1)
+path_offset_set(p[0.2, 0, 0.01, 0, 0, 1], 2)
+textmsg(path_offset_get(2))
+path_offset_disable()
+textmsg(path_offset_get(1))
+path_offset_disable(a=10)
+",
+    );
+    assert_eq!(
+        m,
+        [
+            "p[0, 0, 0, 0, 0, 0]",
+            "p[0.1, 0, 0.01, 0, 0, 0.52]",
+            "p[0.2, 0, 0.01, 0, 0, 1]",
+            "p[0, 0, 0, 0, 0, 0]"
+        ]
+    );
+    assert!(runtime_error("path_offset_set([0, 0, 0, 0, 0, 0], 5)\n").contains("not 1-4"));
+    assert!(runtime_error("path_offset_set_alpha_filter(2)\n").contains("not in 0-1"));
+}
+
+#[test]
+fn conveyor_encoders_count_what_they_are_told() {
+    let m = messages(
+        "encoder_enable_set_tick_count(0, 2)
+encoder_set_tick_count(0, 1234)
+textmsg(encoder_get_tick_count(0), encoder_get_tick_count(0, opt=\"raw\"))
+textmsg(encoder_unwind_delta_tick_count(0, 65000))
+textmsg(encoder_unwind_delta_tick_count(0, -65000))
+textmsg(encoder_unwind_delta_tick_count(0, 100))
+textmsg(encoder_unwind_delta_tick_count(1, 100))
+encoder_enable_pulse_decode(1, 1, 8, 9)
+textmsg(encoder_get_tick_count(1))
+track_conveyor_linear(p[1, 0, 0, 0, 0, 0], 1000.0)
+track_conveyor_circular(p[0.5, 0.5, 0, 0, 0, 0], 500.0, False, encoder_index=1)
+stop_conveyor_tracking()
+stop_conveyor_tracking(a=15)
+conveyor_pulse_decode(1, 0, 1)
+conveyor_pulse_decode(2, 3)
+set_conveyor_tick_count(24543)
+textmsg(get_conveyor_tick_count())
+set_conveyor_tick_count(200, absolute_encoder_resolution=1)
+textmsg(encoder_unwind_delta_tick_count(0, 250))
+",
+    );
+    assert_eq!(
+        m,
+        ["12341234", "-536", "536", "100", "None", "0", "24543", "-6"]
+    );
+    assert!(runtime_error(
+        "encoder_enable_pulse_decode(0, 1, 8, 9)\nencoder_set_tick_count(0, 5)\n"
+    )
+    .contains("not enabled by encoder_enable_set_tick_count"));
+    assert!(
+        runtime_error("encoder_enable_set_tick_count(0, 1)\nencoder_set_tick_count(0, 256)\n")
+            .contains("outside")
+    );
+    assert!(
+        runtime_error("track_conveyor_linear(p[1, 0, 0, 0, 0, 0], 1000, 2)\n")
+            .contains("no encoder 2")
+    );
+}
+
+#[test]
+fn outputs_flags_and_ports_are_read_back() {
+    let m = messages(
+        "set_standard_analog_out(1, 0.7)
+set_analog_out(0, 0.25)
+textmsg(get_standard_analog_out(1), get_analog_out(0))
+textmsg(get_flag(3))
+set_flag(3, True)
+textmsg(get_flag(3), get_flag(31))
+write_port_bit(3, True)
+write_port_register(130, 100)
+write_port_register(131, 65535)
+textmsg(read_port_bit(3), read_port_bit(4))
+textmsg(read_port_register(130), read_port_register(131))
+textmsg(read_port_register(132))
+write_output_boolean_register(127, True)
+textmsg(read_output_boolean_register(127))
+textmsg(read_input_boolean_register(127), read_input_integer_register(47))
+textmsg(read_input_float_register(0))
+set_digital_out(8, True)
+textmsg(get_tool_digital_out(0), get_digital_out(8))
+textmsg(get_digital_in(9), get_configurable_digital_in(7))
+textmsg(get_tool_digital_in(1), get_standard_digital_in(7))
+textmsg(get_analog_in(3), get_tool_analog_in(1))
+",
+    );
+    assert_eq!(
+        m,
+        [
+            "0.70.25",
+            "False",
+            "TrueFalse",
+            "TrueFalse",
+            "100-1",
+            "0",
+            "True",
+            "False0",
+            "0",
+            "TrueTrue",
+            "FalseFalse",
+            "FalseFalse",
+            "00"
+        ]
+    );
+    assert!(runtime_error("set_flag(32, True)\n").contains("no flag 32"));
+    assert!(runtime_error("read_input_integer_register(48)\n").contains("no register 48"));
+    assert!(runtime_error("read_input_boolean_register(128)\n").contains("no register 128"));
+    assert!(runtime_error("write_port_register(1, 70000)\n").contains("does not fit"));
+    assert!(runtime_error("get_standard_analog_out(2)\n").contains("no analog output 2"));
+}
+
+#[test]
+fn io_configuration() {
+    let m = messages(
+        "set_analog_outputdomain(1, 1)
+set_analog_outputdomain(0, 0)
+set_configurable_digital_input_action(0, \"freedrive\")
+set_tool_digital_input_action(1, \"default\")
+set_gp_boolean_input_action(64, \"freedrive\")
+set_runstate_configurable_digital_output_to_value(5, 2)
+set_runstate_tool_digital_output_to_value(1, 2)
+set_runstate_standard_analog_output_to_value(1, 2)
+set_runstate_gp_boolean_output_to_value(64, 2)
+rtde_set_watchdog(\"input_int_register_0\", 10, \"stop\")
+rtde_set_watchdog(\"input_int_register_1\", 10)
+textmsg(\"ok\")
+",
+    );
+    assert_eq!(m, ["ok"]);
+    assert!(runtime_error("set_analog_outputdomain(1, 2)\n").contains("domain 2"));
+    assert!(runtime_error("set_analog_outputdomain(2, 1)\n").contains("no analog output 2"));
+    assert!(
+        runtime_error("set_configurable_digital_input_action(0, \"jump\")\n")
+            .contains("is not \"default\" or \"freedrive\"")
+    );
+}
+
+#[test]
+fn the_virtual_modbus_client_keeps_its_signals() {
+    let m = messages(
+        "modbus_add_signal(\"172.140.17.11\", 255, 5, 3, \"reg_out\")
+modbus_add_signal(\"172.140.17.11\", 255, 6, 1, \"coil_out\")
+modbus_add_signal(\"172.140.17.11\", 255, 7, 0, \"coil_in\")
+modbus_add_signal(\"172.140.17.11\", 255, 0, 16, \"regs\", False, 3)
+modbus_add_rw_signal(\"172.140.17.11\", 255, 5, 2, 15, 2, \"rw\")
+modbus_set_output_register(\"reg_out\", 300, False)
+modbus_set_output_signal(\"coil_out\", True)
+modbus_set_output_register(\"regs\", [10, 9])
+textmsg(modbus_get_signal_status(\"reg_out\"), modbus_get_signal_status(\"coil_out\"))
+textmsg(modbus_get_signal_status(\"coil_in\", False), modbus_get_signal_status(\"regs\"))
+textmsg(modbus_get_signal_status(\"rw\"))
+textmsg(modbus_get_error(\"reg_out\"), modbus_get_time_since_signal_invalid(\"reg_out\"))
+modbus_set_signal_update_frequency(\"reg_out\", 20)
+modbus_set_signal_watchdog(\"reg_out\", 10.5)
+modbus_request_update_signal_value(\"reg_out\")
+modbus_set_digital_input_action(\"coil_in\", \"freedrive\")
+modbus_set_runstate_dependent_choice(\"coil_out\", 3)
+modbus_send_custom_command(\"172.140.17.11\", 103, 6, [17, 32, 2, 88])
+modbus_reset_connection(\"172.140.17.11\")
+modbus_delete_signal(\"reg_out\")
+textmsg(\"done\")
+",
+    );
+    assert_eq!(m, ["300True", "False[10, 9, 0]", "[0, 0]", "00", "done"]);
+    assert!(runtime_error("modbus_get_signal_status(\"nope\")\n").contains("no Modbus signal"));
+    assert!(runtime_error(
+        "modbus_add_signal(\"1.2.3.4\", 255, 7, 0, \"in\")\nmodbus_set_output_signal(\"in\", True)\n"
+    )
+    .contains("cannot take"));
+    assert!(
+        runtime_error("modbus_add_signal(\"1.2.3.4\", 255, 7, 4, \"x\")\n")
+            .contains("signal type 4")
+    );
+}
+
+#[test]
+fn the_virtual_operator_answers_at_once() {
+    let m = messages(
+        "textmsg(request_boolean_from_primary_client(\"Mark?\"))
+textmsg(request_integer_from_primary_client(\"How many?\"))
+textmsg(request_float_from_primary_client(\"Offset?\"))
+textmsg(str_len(request_string_from_primary_client(\"Name?\")))
+",
+    );
+    assert_eq!(m, ["False", "0", "0", "0"]);
+}
+
+#[test]
+fn urmath_additions_match_the_manual_examples() {
+    let m = messages(
+        "textmsg(normalize([0, 5, 0]))
+textmsg(normalize([0, 1, 1]))
+textmsg(inv([[0, 1, 0], [0, 0, 1], [1, 0, 0]]))
+textmsg(inv(p[.2, .5, .1, 1.57, 0, 3.14]))
+textmsg(transpose([[1, 2], [3, 4], [5, 6]]))
+textmsg(size(\"here I am\"), size([1, 2, 3, 4, 5]))
+textmsg(size([[1, 2], [3, 4], [5, 6]]))
+textmsg(make_list(5, \"a\"))
+textmsg(make_list(0, 0, 100), make_list(2, 1.5, capacity=4))
+textmsg(rotvec2rpy([3.14, 1.57, 0]))
+textmsg(rpy2rotvec([3.14, 1.57, 0]))
+textmsg(rotvec2rpy(rpy2rotvec([0.1, -0.2, 0.3])))
+textmsg(wrench_trans(p[0, 0, 0.1, 0, 0, 0], [1, 0, 0, 0, 0, 0]))
+textmsg(wrench_trans(p[0, 0, 0, 0, 0, 1.5707963267949], [1, 0, 0, 0, 0, 2]))
+",
+    );
+    assert_eq!(m[0], "[0, 1, 0]");
+    let h = std::f64::consts::FRAC_1_SQRT_2;
+    close(&m[1], &[0.0, h, h], 1e-6);
+    assert_eq!(m[2], "[[0, 0, 1], [1, 0, 0], [0, 1, 0]]");
+    close(
+        &m[3],
+        &[0.19324, 0.41794, -0.29662, 1.23993, 0.0, 2.47985],
+        1e-5,
+    );
+    assert_eq!(m[4], "[[1, 3, 5], [2, 4, 6]]");
+    assert_eq!(m[5], "95");
+    assert_eq!(m[6], "[3, 2]");
+    assert_eq!(m[7], "[a, a, a, a, a]");
+    assert_eq!(m[8], "[][1.5, 1.5]");
+    close(&m[9], &[-2.80856, -0.16202, 0.9], 1e-4);
+    close(&m[10], &[2.22153, 0.00177, -2.21976], 1e-5);
+    close(&m[11], &[0.1, -0.2, 0.3], 1e-9);
+    // A force along x at the origin, seen from 0.1 m above: a torque about -y.
+    close(&m[12], &[1.0, 0.0, 0.0, 0.0, -0.1, 0.0], 1e-9);
+    // Seen from a frame turned 90 degrees about z: x becomes -y.
+    close(&m[13], &[0.0, -1.0, 0.0, 0.0, 0.0, 2.0], 1e-9);
+    assert!(runtime_error("normalize([0, 0, 0])\n").contains("zero"));
+    assert!(runtime_error("inv([[1, 2], [2, 4]])\n").contains("singular"));
+    assert!(runtime_error("inv([[1, 2, 3], [2, 4, 5]])\n").contains("not square"));
+    assert!(runtime_error("make_list(3, 0, 2)\n").contains("capacity"));
+}
+
+#[test]
+fn settings_without_a_model_are_accepted_with_their_manual_signatures() {
+    let m = messages(
+        "screw_driving(5.0, 0.1)
+end_screw_driving()
+freedrive_mode_no_incorrect_payload_check()
+end_freedrive_mode()
+high_holding_torque_disable()
+high_holding_torque_enable()
+pause_on_error_code(173, 3)
+pause_on_error_code(173)
+position_deviation_warning(True, 0.8)
+position_deviation_warning(False)
+reset_revolution_counter()
+reset_revolution_counter(qNear=[0.0, 0.0, 0.0, 0.0, 0.0, 0.0])
+tool_wrench_limit_set(p[0, 0, 0.1, 0, 0, 1.57], Mx=10, My=15)
+tool_wrench_limit_set(get_tcp_offset(), Fz=50)
+tool_wrench_limit_disable()
+set_baselight_off()
+set_baselight_iec()
+set_baselight_solid(255, 0, 0)
+textmsg(get_inverse_kin_has_solution(p[.1, .2, .2, 0, 3.14, 0], [0., 3.14, 1.57, .785, 0, 0]))
+textmsg(get_inverse_kin_has_solution(p[.1, .2, .2, 0, 3.14, 0], maxPositionError=1e-6))
+",
+    );
+    assert_eq!(m, ["True", "True"]);
+}
+
+/// Every function this issue added, with the parameters the e-Series 5.x manual gives.
+const ADDED: &[(&str, &[&str])] = &[
+    // Module internals / motion.
+    ("force", &[]),
+    ("get_actual_tool_flange_pose", &[]),
+    ("get_target_waypoint", &[]),
+    ("get_target_tcp_pose_along_path", &[]),
+    ("get_target_tcp_speed_along_path", &[]),
+    ("get_target_payload", &[]),
+    ("get_target_payload_cog", &[]),
+    ("get_target_payload_inertia", &[]),
+    ("get_joint_torques", &[]),
+    ("get_joint_temp", &["j"]),
+    ("get_controller_temp", &[]),
+    ("get_tool_temp", &[]),
+    ("get_tool_current", &[]),
+    ("get_tool_accelerometer_reading", &[]),
+    ("get_gravity", &[]),
+    ("get_base_acceleration", &[]),
+    ("set_base_acceleration", &["a"]),
+    ("get_freedrive_status", &[]),
+    (
+        "get_inverse_kin_has_solution",
+        &[
+            "pose",
+            "qnear",
+            "maxPositionError",
+            "maxOrientationError",
+            "tcp",
+        ],
+    ),
+    ("set_pos", &["q"]),
+    ("path_offset_enable", &[]),
+    ("path_offset_disable", &["a"]),
+    ("path_offset_set", &["offset", "type"]),
+    ("path_offset_get", &["type"]),
+    ("path_offset_set_alpha_filter", &["alpha"]),
+    ("path_offset_set_max_offset", &["transLimit", "rotLimit"]),
+    ("screw_driving", &["f", "v_limit"]),
+    ("freedrive_mode_no_incorrect_payload_check", &[]),
+    ("high_holding_torque_disable", &[]),
+    ("high_holding_torque_enable", &[]),
+    ("pause_on_error_code", &["code", "argument"]),
+    ("position_deviation_warning", &["enabled", "threshold"]),
+    ("reset_revolution_counter", &["qNear"]),
+    (
+        "tool_wrench_limit_set",
+        &["frame_offset", "Fx", "Fy", "Fz", "Mx", "My", "Mz"],
+    ),
+    ("tool_wrench_limit_disable", &[]),
+    ("set_baselight_off", &[]),
+    ("set_baselight_iec", &[]),
+    ("set_baselight_solid", &["r", "g", "b"]),
+    // Conveyor tracking (motion).
+    (
+        "encoder_enable_pulse_decode",
+        &["encoder_index", "decoder_type", "A", "B"],
+    ),
+    (
+        "encoder_enable_set_tick_count",
+        &["encoder_index", "range_id"],
+    ),
+    ("conveyor_pulse_decode", &["type", "A", "B"]),
+    ("encoder_get_tick_count", &["encoder_index", "opt"]),
+    ("get_conveyor_tick_count", &[]),
+    ("encoder_set_tick_count", &["encoder_index", "count"]),
+    (
+        "set_conveyor_tick_count",
+        &["tick_count", "absolute_encoder_resolution"],
+    ),
+    (
+        "encoder_unwind_delta_tick_count",
+        &["encoder_index", "delta_tick_count"],
+    ),
+    (
+        "track_conveyor_linear",
+        &["direction", "ticks_per_meter", "encoder_index"],
+    ),
+    (
+        "track_conveyor_circular",
+        &[
+            "center",
+            "ticks_per_revolution",
+            "rotate_tool",
+            "encoder_index",
+        ],
+    ),
+    // Module interfaces.
+    ("get_standard_analog_out", &["n"]),
+    ("get_analog_out", &["n"]),
+    ("get_flag", &["n"]),
+    ("read_port_bit", &["address"]),
+    ("read_port_register", &["address"]),
+    ("write_port_bit", &["address", "value"]),
+    ("write_port_register", &["address", "value"]),
+    (
+        "rtde_set_watchdog",
+        &["variable_name", "min_frequency", "action"],
+    ),
+    (
+        "modbus_add_signal",
+        &[
+            "IP",
+            "slave_number",
+            "signal_address",
+            "signal_type",
+            "signal_name",
+            "sequential_mode",
+            "register_count",
+        ],
+    ),
+    (
+        "modbus_add_rw_signal",
+        &[
+            "IP",
+            "slave_number",
+            "read_address",
+            "read_register_count",
+            "write_address",
+            "write_register_count",
+            "signal_name",
+            "sequential_mode",
+        ],
+    ),
+    ("modbus_delete_signal", &["signal_name"]),
+    (
+        "modbus_get_signal_status",
+        &["signal_name", "is_secondary_program"],
+    ),
+    (
+        "modbus_set_output_register",
+        &["signal_name", "register_value", "is_secondary_program"],
+    ),
+    (
+        "modbus_set_output_signal",
+        &["signal_name", "digital_value", "is_secondary_program"],
+    ),
+    (
+        "modbus_send_custom_command",
+        &["IP", "slave_number", "function_code", "data"],
+    ),
+    (
+        "modbus_set_digital_input_action",
+        &["signal_name", "action"],
+    ),
+    (
+        "modbus_set_signal_update_frequency",
+        &["signal_name", "update_frequency"],
+    ),
+    ("modbus_get_error", &["signal_name", "error_source"]),
+    ("modbus_get_time_since_signal_invalid", &["signal_name"]),
+    ("modbus_request_update_signal_value", &["signal_name"]),
+    ("modbus_reset_connection", &["connection_id", "is_blocking"]),
+    (
+        "modbus_set_signal_watchdog",
+        &["signal_name", "new_timeout_in_sec"],
+    ),
+    ("request_boolean_from_primary_client", &["message"]),
+    ("request_integer_from_primary_client", &["message"]),
+    ("request_float_from_primary_client", &["message"]),
+    ("request_string_from_primary_client", &["message"]),
+    // Module ioconfiguration.
+    ("set_analog_outputdomain", &["port", "domain"]),
+    ("set_configurable_digital_input_action", &["port", "action"]),
+    ("set_tool_digital_input_action", &["port", "action"]),
+    ("set_gp_boolean_input_action", &["port", "action"]),
+    (
+        "set_runstate_configurable_digital_output_to_value",
+        &["outputId", "state"],
+    ),
+    (
+        "set_runstate_tool_digital_output_to_value",
+        &["outputId", "state"],
+    ),
+    (
+        "set_runstate_standard_analog_output_to_value",
+        &["outputId", "state"],
+    ),
+    (
+        "set_runstate_gp_boolean_output_to_value",
+        &["outputId", "state"],
+    ),
+    (
+        "modbus_set_runstate_dependent_choice",
+        &["signal_name", "runstate_choice"],
+    ),
+    // Module urmath.
+    ("normalize", &["v"]),
+    ("inv", &["m"]),
+    ("transpose", &["m"]),
+    ("size", &["v"]),
+    ("make_list", &["length", "initial_value", "capacity"]),
+    ("rotvec2rpy", &["rotation_vector"]),
+    ("rpy2rotvec", &["rpy_vector"]),
+    ("wrench_trans", &["T_from_to", "w_from"]),
+];
+
+#[test]
+fn every_added_function_is_in_the_table_with_the_manuals_parameters() {
+    for (name, params) in ADDED {
+        let b = lookup(name).unwrap_or_else(|| panic!("{name} is not a built-in"));
+        let got: Vec<&str> = b.params.iter().map(|p| p.name).collect();
+        assert_eq!(&got, params, "{name}");
+        assert!(all().iter().any(|x| x.name == *name));
+    }
+    // The defaults the manual gives.
+    let sig = |n: &str| lookup(n).unwrap().signature();
+    assert_eq!(
+        sig("track_conveyor_circular"),
+        "track_conveyor_circular(center, ticks_per_revolution, rotate_tool=False, encoder_index=0)"
+    );
+    assert_eq!(
+        sig("track_conveyor_linear"),
+        "track_conveyor_linear(direction, ticks_per_meter, encoder_index=0)"
+    );
+    assert_eq!(
+        sig("encoder_get_tick_count"),
+        r#"encoder_get_tick_count(encoder_index, opt="")"#
+    );
+    assert_eq!(
+        sig("set_conveyor_tick_count"),
+        "set_conveyor_tick_count(tick_count, absolute_encoder_resolution=0)"
+    );
+    assert_eq!(sig("path_offset_disable"), "path_offset_disable(a=20.0)");
+    assert_eq!(
+        sig("position_deviation_warning"),
+        "position_deviation_warning(enabled, threshold=0.8)"
+    );
+    assert_eq!(
+        sig("rtde_set_watchdog"),
+        r#"rtde_set_watchdog(variable_name, min_frequency, action="pause")"#
+    );
+    assert_eq!(
+        sig("modbus_add_signal"),
+        r#"modbus_add_signal(IP, slave_number, signal_address, signal_type, signal_name, sequential_mode=False, register_count=1)"#
+    );
+    assert_eq!(
+        sig("get_inverse_kin_has_solution"),
+        "get_inverse_kin_has_solution(pose, qnear=None, maxPositionError=1e-10, maxOrientationError=1e-10, tcp=None)"
+    );
+    assert_eq!(sig("set_tcp"), r#"set_tcp(pose, tcp_name="")"#);
+    assert_eq!(sig("optimovej"), "optimovej(goal, a=0.3, v=0.3, r=0.0)");
+    assert_eq!(
+        lookup("reset_revolution_counter").unwrap().params[0].default,
+        Default::Floats(&[0.0; 6])
+    );
+    // URCap functions are never built-ins; nor is what needs a network or a GUI the
+    // virtual controller does not have.
+    for name in ["rq_activate", "rpc_factory", "time", "estimate_payload"] {
+        assert!(lookup(name).is_none(), "{name}");
+    }
+}
