@@ -11,6 +11,7 @@ use urscript_socket::robot::ReadCall;
 use crate::builtins::{Args, Out};
 use crate::error::Fault;
 use crate::event::{Event, ReadRecord, MAX_READ_INPUT};
+use crate::kinematics::{self, Dh};
 use crate::sockets::Sockets;
 
 /// The virtual arm: commanded state, not dynamics (see [`crate::builtins::motion`]).
@@ -23,7 +24,6 @@ use crate::sockets::Sockets;
 pub(crate) struct Arm {
     pub q: [f64; 6],
     pub qd: [f64; 6],
-    pub pose: [f64; 6],
     pub tcp_speed: [f64; 6],
     pub tcp: [f64; 6],
     pub digital_out: [bool; 18],
@@ -138,7 +138,6 @@ impl Default for Arm {
         Arm {
             q: [0.0, -FRAC_PI_2, 0.0, -FRAC_PI_2, 0.0, 0.0],
             qd: [0.0; 6],
-            pose: [0.0; 6],
             tcp_speed: [0.0; 6],
             tcp: [0.0; 6],
             digital_out: [false; 18],
@@ -183,6 +182,8 @@ impl Default for Arm {
 /// The controller's state.
 #[derive(Debug)]
 pub(crate) struct Controller {
+    /// The arm's kinematics (its model's DH parameters).
+    pub dh: Dh,
     /// Length of one step.
     pub step_time: Duration,
     /// The step running now (or next).
@@ -194,6 +195,38 @@ pub(crate) struct Controller {
 }
 
 impl Controller {
+    /// The tool pose of the joints `q` through the active TCP offset.
+    pub fn tool_pose(&self, q: [f64; 6]) -> [f64; 6] {
+        kinematics::forward(&self.dh, q, self.arm.tcp)
+    }
+
+    /// The commanded tool pose (the TCP, base frame).
+    pub fn tcp_pose(&self) -> [f64; 6] {
+        self.tool_pose(self.arm.q)
+    }
+
+    /// The commanded flange pose (no TCP offset).
+    pub fn flange_pose(&self) -> [f64; 6] {
+        kinematics::forward(&self.dh, self.arm.q, [0.0; 6])
+    }
+
+    /// The joints that put the tool at `pose` through `tcp`, nearest `qnear`; what went
+    /// wrong, in the controller's terms, if the pose is out of reach.
+    pub fn inverse(
+        &self,
+        pose: [f64; 6],
+        qnear: [f64; 6],
+        tcp: [f64; 6],
+    ) -> Result<[f64; 6], String> {
+        let solutions = kinematics::inverse(&self.dh, pose, tcp, qnear);
+        kinematics::nearest(&solutions, qnear).ok_or_else(|| {
+            format!(
+                "no inverse kinematics solution: {} is out of reach",
+                crate::value::Value::Pose(pose).to_str()
+            )
+        })
+    }
+
     /// The program time of the step running now.
     pub fn now(&self) -> Duration {
         self.time_of(self.step)

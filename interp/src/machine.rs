@@ -69,6 +69,8 @@ pub enum Stub {
 pub struct Config {
     /// Length of one program step: 2 ms (e-Series, the default), 8 ms (CB3).
     pub step_time: Duration,
+    /// The arm: its kinematics place the tool (UR5e by default; [`Config::cb3`]: UR5).
+    pub model: crate::kinematics::Model,
     /// The socket reads' choices where UR's manuals are silent.
     pub policy: Policy,
     /// Functions replaced by stubs, by name. A stub wins over a built-in of that name,
@@ -87,6 +89,7 @@ impl Default for Config {
     fn default() -> Self {
         Config {
             step_time: Duration::from_millis(2),
+            model: crate::kinematics::Model::Ur5e,
             policy: Policy::default(),
             stubs: Vec::new(),
             max_statements_per_step: 100_000,
@@ -130,6 +133,7 @@ impl Config {
     pub fn cb3() -> Self {
         Config {
             step_time: Duration::from_millis(8),
+            model: crate::kinematics::Model::Ur5,
             ..Config::default()
         }
     }
@@ -276,6 +280,7 @@ impl Machine {
             .collect();
         Machine {
             ctl: Controller {
+                dh: config.model.dh(),
                 step_time: config.step_time,
                 step: 0,
                 arm: Arm::default(),
@@ -372,7 +377,7 @@ impl Machine {
 
     /// The arm's commanded tool pose.
     pub fn tcp_pose(&self) -> [f64; 6] {
-        self.ctl.arm.pose
+        self.ctl.tcp_pose()
     }
 
     /// When the machine next has something to do: the time of the next step if a thread

@@ -18,32 +18,46 @@ pub(crate) fn to_matrix(r: [f64; 3]) -> M {
     ]
 }
 
+/// The rotation vector of a rotation matrix. θ comes from atan2(sin θ, cos θ), both read
+/// off the matrix, so it keeps full precision near 0 and near π (acos alone loses half
+/// the digits there); the axis from the antisymmetric part, or near π from the
+/// symmetric part.
 pub(crate) fn to_rotvec(m: M) -> [f64; 3] {
-    let cos = ((m[0][0] + m[1][1] + m[2][2] - 1.0) / 2.0).clamp(-1.0, 1.0);
-    let th = cos.acos();
+    let anti = [m[2][1] - m[1][2], m[0][2] - m[2][0], m[1][0] - m[0][1]];
+    let two_sin = anti.iter().map(|a| a * a).sum::<f64>().sqrt();
+    let cos = (m[0][0] + m[1][1] + m[2][2] - 1.0) / 2.0;
+    let th = (two_sin / 2.0).atan2(cos);
     if th < 1e-12 {
         return [0.0; 3];
     }
-    let s = th.sin();
-    if s.abs() > 1e-6 {
-        let k = th / (2.0 * s);
-        return [
-            (m[2][1] - m[1][2]) * k,
-            (m[0][2] - m[2][0]) * k,
-            (m[1][0] - m[0][1]) * k,
-        ];
+    if two_sin > 1e-6 {
+        return anti.map(|a| a / two_sin * th);
     }
-    // θ near π: the axis from the diagonal.
-    let x = ((m[0][0] + 1.0) / 2.0).max(0.0).sqrt();
-    let y = ((m[1][1] + 1.0) / 2.0)
-        .max(0.0)
-        .sqrt()
-        .copysign(m[0][1] + m[1][0]);
-    let z = ((m[2][2] + 1.0) / 2.0)
-        .max(0.0)
-        .sqrt()
-        .copysign(m[0][2] + m[2][0]);
-    [x * th, y * th, z * th]
+    // θ near π: the axis from the symmetric part, pivoting on the largest diagonal
+    // element (the others follow from the off-diagonal sums, which keep their relative
+    // signs), then turned to agree with the antisymmetric part (sin θ · axis).
+    let d = [m[0][0], m[1][1], m[2][2]];
+    let k = if d[0] >= d[1] && d[0] >= d[2] {
+        0
+    } else if d[1] >= d[2] {
+        1
+    } else {
+        2
+    };
+    let pivot = ((d[k] + 1.0) / 2.0).max(0.0).sqrt().max(1e-12);
+    let mut axis = [0.0; 3];
+    for (i, a) in axis.iter_mut().enumerate() {
+        *a = if i == k {
+            pivot
+        } else {
+            (m[i][k] + m[k][i]) / (4.0 * pivot)
+        };
+    }
+    if axis.iter().zip(anti).map(|(a, b)| a * b).sum::<f64>() < 0.0 {
+        axis = axis.map(|a| -a);
+    }
+    let n = axis.iter().map(|a| a * a).sum::<f64>().sqrt().max(1e-12);
+    axis.map(|a| a / n * th)
 }
 
 fn mul(a: M, b: M) -> M {

@@ -268,27 +268,67 @@ fn time_builtins() {
     assert_eq!(h.now, Duration::from_millis(8 * 15));
 }
 
+/// Steps (2 ms) a wait of `secs` takes: rounded up, at least one.
+fn steps(secs: f64) -> u64 {
+    ((secs * 500.0) - 1e-9).ceil().max(1.0) as u64
+}
+
 #[test]
 fn virtual_arm_motion_takes_time() {
-    let src = "movej([1, 0, 0, 0, 0, 0], v=0.5)\ntextmsg(get_actual_joint_positions())\nmovel(p[0.1, 0, 0, 0, 0, 0], v=0.1)\ntextmsg(get_actual_tcp_pose())\nmovej([0, 0, 0, 0, 0, 0], t=0.5)\nservoj([0.1, 0, 0, 0, 0, 0], t=0.008)\ntextmsg(get_target_joint_speeds()[0])\nspeedj([1, 0, 0, 0, 0, 0], 2, 0.1)\nstopj(2)\ntextmsg(get_actual_joint_speeds())\ntextmsg(get_inverse_kin(p[0, 0, 0, 0, 0, 0]))\n";
+    use urscript_interp::kinematics::move_time;
+    let src = "qa = [1, -1.5707963267948966, 1.5707963267948966, -1.5707963267948966, -1.5707963267948966, 0]
+movej(qa, v=0.5)
+p = get_actual_tcp_pose()
+movel(pose_trans(p, p[0, 0, 0.1, 0, 0, 0]), v=0.1)
+textmsg(point_dist(p, get_actual_tcp_pose()))
+q = get_actual_joint_positions()
+textmsg(norm(get_inverse_kin(get_forward_kin(q), q) - q) < 0.000001)
+movej(qa, t=0.5)
+servoj([0.1, -1.5, 1.5, -1.5, -1.5, 0], t=0.008)
+textmsg(get_target_joint_speeds()[0])
+speedj([0.2, 0, 0, 0, 0, 0], 2, 0.1)
+stopj(2)
+textmsg(get_actual_joint_speeds())
+";
     let mut h = Harness::new(src, Config::default());
     h.run_silent(Duration::from_secs(10));
     assert_eq!(h.m.state(), &State::Finished);
-    assert_eq!(
-        h.messages,
-        [
-            "[1, 0, 0, 0, 0, 0]",
-            "p[0.1, 0, 0, 0, 0, 0]",
-            "12.5",
-            "[0, 0, 0, 0, 0, 0]",
-            "[0.2, 0, 0, 0, 0, 0]"
-        ]
-    );
-    // From the start position [0, -pi/2, 0, -pi/2, 0, 0] the first movej's longest
-    // joint moves pi/2 at 0.5 rad/s: 3.142 s; then 1 s + 0.5 s + 8 ms + 0.1 s + one step.
+    assert_eq!(h.messages, ["0.1", "True", "-112.5", "[0, 0, 0, 0, 0, 0]"]);
+    // From the start position [0, -pi/2, 0, -pi/2, 0, 0] the first movej's longest joint
+    // moves pi/2 at 0.5 rad/s with 1.4 rad/s² ramps; the movel 0.1 m at 0.1 m/s with
+    // 1.2 m/s² ramps; then 0.5 s, 8 ms, 0.1 s and one step.
+    let t1 = steps(move_time(std::f64::consts::FRAC_PI_2, 0.5, 1.4));
+    let t2 = steps(move_time(0.1, 0.1, 1.2));
+    assert_eq!((t1, t2), (1750, 542));
     assert_eq!(
         h.now,
-        Duration::from_millis(3142 + 1000 + 500 + 8 + 100 + 2)
+        Duration::from_millis(2 * (t1 + t2 + 250 + 4 + 50 + 1))
+    );
+    // The joints moved by speedj for 0.1 s at 0.2 rad/s; the pose follows the joints.
+    let q = h.m.joint_positions();
+    assert!((q[0] - 0.12).abs() < 1e-12, "{q:?}");
+    let pose = urscript_interp::kinematics::forward(
+        &urscript_interp::kinematics::Model::Ur5e.dh(),
+        q,
+        [0.0; 6],
+    );
+    assert_eq!(h.m.tcp_pose(), pose);
+}
+
+#[test]
+fn a_pose_out_of_reach_stops_the_program_as_on_the_controller() {
+    let h = common::run("movel(p[2, 0, 0.5, 0, 3.14, 0])\ntextmsg(\"never\")\n");
+    let State::Error(e) = h.m.state() else {
+        panic!("{:?}", h.m.state())
+    };
+    assert_eq!(e.line(), 1);
+    assert!(e.message().contains("out of reach"), "{e}");
+    assert!(h.messages.is_empty());
+    assert_eq!(
+        common::messages(
+            "textmsg(get_inverse_kin_has_solution(p[2, 0, 0.5, 0, 3.14, 0]), get_inverse_kin_has_solution(get_forward_kin()))\n"
+        ),
+        ["FalseTrue"]
     );
 }
 
@@ -387,10 +427,10 @@ fn binary_int_stream_drained_until_empty() {
 
 #[test]
 fn optimove_and_movec_and_direct_torque() {
-    let mut h = Harness::new("optimovej([0, -1.5707963267948966, 0.3, -1.5707963267948966, 0, 0], a=0.5, v=0.3)\nmovec(p[0, 0, 0, 0, 0, 0], p[0.1, 0, 0, 0, 0, 0], v=0.1)\ndirect_torque([0, 0, 0, 0, 0, 0])\ntextmsg(get_joint_positions()[2])\n", Config::default());
+    let mut h = Harness::new("optimovej([0, -1.5707963267948966, 0.3, -1.5707963267948966, 0, 0], a=0, v=0.3)\np = get_actual_tcp_pose()\nmovec(p, pose_add(p, p[0, 0, -0.1, 0, 0, 0]), a=0, v=0.1)\ndirect_torque([0, 0, 0, 0, 0, 0])\ntextmsg(point_dist(p, get_actual_tcp_pose()))\n", Config::default());
     h.run_silent(Duration::from_secs(10));
     assert_eq!(h.m.state(), &State::Finished);
-    assert_eq!(h.messages, ["0.3"]);
-    // 0.3 rad at 0.3 rad/s, 0.1 m at 0.1 m/s, one step.
+    assert_eq!(h.messages, ["0.1"]);
+    // 0.3 rad at 0.3 rad/s, 0.1 m at 0.1 m/s (no ramps: a=0), one step.
     assert_eq!(h.now, Duration::from_millis(1000 + 1000 + 2));
 }

@@ -108,6 +108,35 @@ fn a_pose_out_of_reach_has_no_solution() {
 }
 
 #[test]
+fn tool_down_poses_near_a_half_turn_keep_every_solution() {
+    // Rotations by nearly π (a tool pointing down, as vision programs compute them) are
+    // where a rotation vector is least precise; all 8 solutions must survive.
+    let dh = Model::Ur5e.dh();
+    let h = std::f64::consts::FRAC_PI_2;
+    let qnear = [0.0, -h, h, -h, -h, 0.0];
+    for angle in [
+        std::f64::consts::PI,
+        std::f64::consts::PI - 1.8e-6,
+        3.1416,
+        3.0,
+    ] {
+        for axis in [[0.0f64, 1.0, 0.0], [-1.0, -1.0, 0.0], [1.0, 0.0, 0.01]] {
+            let n: f64 = (axis[0] * axis[0] + axis[1] * axis[1] + axis[2] * axis[2]).sqrt();
+            let r = axis.map(|a| a / n * angle);
+            let pose = [0.2875, -0.23, 0.25, r[0], r[1], r[2]];
+            let solutions = inverse(&dh, pose, [0.0; 6], qnear);
+            assert_eq!(solutions.len(), 8, "{pose:?}");
+            for s in solutions {
+                assert!(
+                    pose_error(forward(&dh, s, [0.0; 6]), pose) < 1e-9,
+                    "{pose:?}"
+                );
+            }
+        }
+    }
+}
+
+#[test]
 fn move_times_follow_a_trapezoid() {
     assert_eq!(move_time(0.0, 1.0, 1.0), 0.0);
     assert_eq!(move_time(1.0, 0.0, 1.0), 0.0);

@@ -368,7 +368,7 @@ fn float_division_by_zero_is_infinite() {
 #[test]
 fn a_variable_named_p_can_be_indexed_and_assigned() {
     assert_eq!(
-        msgs("p = get_actual_tcp_pose()\np[2] = 0.5\nl = [p[2], 1]\ntextmsg(p, l)\n"),
+        msgs("p = get_tcp_offset()\np[2] = 0.5\nl = [p[2], 1]\ntextmsg(p, l)\n"),
         ["p[0, 0, 0.5, 0, 0, 0][0.5, 1]"]
     );
 }

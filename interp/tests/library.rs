@@ -97,24 +97,24 @@ textmsg(get_freedrive_status())
 fn gravity_base_acceleration_and_the_accelerometer() {
     let m = messages(
         "textmsg(get_gravity(), get_base_acceleration())
+movej([0, -1.5707963267948966, 1.5707963267948966, -1.5707963267948966, -1.5707963267948966, 0])
 textmsg(get_tool_accelerometer_reading())
 set_gravity([0, 9.82, 0])
 textmsg(get_gravity())
 textmsg(get_tool_accelerometer_reading())
-set_gravity([0, 0, 9.82])
-movel(p[0.3, 0, 0.5, 3.14159265358979, 0, 0])
-textmsg(get_tool_accelerometer_reading())
+textmsg(get_actual_tool_flange_pose())
 set_base_acceleration([0.1, 0, 0])
 textmsg(get_base_acceleration())
 ",
     );
     assert_eq!(m[0], "[0, 0, 9.82][0, 0, 0]");
-    // The flange's z axis points up at the start: a positive z reading.
-    close(&m[1], &[0.0, 0.0, 9.82], 1e-9);
+    // The usual ready pose points the flange down (its rotation: pi about (1, 1, 0)):
+    // the flange's z axis reads -g; a gravity along base y reads along the flange's x.
+    close(&m[1], &[0.0, 0.0, -9.82], 1e-9);
     assert_eq!(m[2], "[0, 9.82, 0]");
-    close(&m[3], &[0.0, 9.82, 0.0], 1e-9);
-    // Turned over about x: z reads -g.
-    close(&m[4], &[0.0, 0.0, -9.82], 1e-6);
+    close(&m[3], &[9.82, 0.0, 0.0], 1e-9);
+    let r = std::f64::consts::PI / 2f64.sqrt();
+    close(&m[4], &[-0.4919, -0.1333, 0.4879, r, r, 0.0], 1e-6);
     assert_eq!(m[5], "[0.1, 0, 0]");
 }
 
@@ -125,14 +125,17 @@ fn flange_pose_and_target_waypoint() {
 movel(p[0.3, 0, 0.5, 0, 0, 0])
 textmsg(get_actual_tool_flange_pose())
 textmsg(get_target_waypoint())
-textmsg(get_target_tcp_pose_along_path(), get_target_tcp_speed_along_path())
+textmsg(get_target_tcp_pose_along_path())
+textmsg(get_target_tcp_speed_along_path())
 textmsg(get_tcp_offset())
 ",
     );
+    // The tool points up at (0.3, 0, 0.5): the flange is 0.1 m below it.
     close(&m[0], &[0.3, 0.0, 0.4, 0.0, 0.0, 0.0], 1e-9);
-    assert_eq!(m[1], "p[0.3, 0, 0.5, 0, 0, 0]");
-    assert_eq!(m[2], "p[0.3, 0, 0.5, 0, 0, 0][0, 0, 0, 0, 0, 0]");
-    assert_eq!(m[3], "p[0, 0, 0.1, 0, 0, 0]");
+    close(&m[1], &[0.3, 0.0, 0.5, 0.0, 0.0, 0.0], 1e-9);
+    close(&m[2], &[0.3, 0.0, 0.5, 0.0, 0.0, 0.0], 1e-9);
+    assert_eq!(m[3], "[0, 0, 0, 0, 0, 0]");
+    assert_eq!(m[4], "p[0, 0, 0.1, 0, 0, 0]");
 }
 
 #[test]

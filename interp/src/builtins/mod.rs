@@ -522,6 +522,7 @@ mod tests {
     #[test]
     fn the_worlds_values_are_fields_a_test_sets() {
         let mut c = Controller {
+            dh: crate::kinematics::Model::Ur5e.dh(),
             step_time: Duration::from_millis(2),
             step: 0,
             arm: crate::controller::Arm::default(),

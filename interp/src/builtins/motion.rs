@@ -30,6 +30,7 @@
 use super::{accept, float_list, floats, opt, req, secs, Args, Builtin, Default, Domain, Out};
 use crate::controller::Controller;
 use crate::error::Fault;
+use crate::kinematics;
 use crate::value::Value;
 
 const D: Domain = Domain::Motion;
@@ -377,7 +378,7 @@ pub(super) const TABLE: &[Builtin] = &[
             opt("maxOrientationError", Default::Float(1e-10)),
             opt("tcp", Default::Absent),
         ],
-        "True: no kinematics yet, every pose is taken as reachable.",
+        "True if some joint position puts the tool at the pose (the arm's inverse kinematics).",
         has_solution,
     ),
     Builtin::new(
@@ -684,42 +685,64 @@ fn line_distance(from: [f64; 6], to: [f64; 6]) -> f64 {
         .sqrt()
 }
 
-/// Sets the commanded joints (a list target) or pose (a pose target); the distance.
-fn go_to(c: &mut Controller, target: &Value, six: [f64; 6]) -> f64 {
-    c.arm.qd = [0.0; 6];
-    if matches!(target, Value::Pose(_)) {
-        let d = line_distance(c.arm.pose, six);
-        c.arm.pose = six;
-        d
-    } else {
-        let d = joint_distance(c.arm.q, six);
-        c.arm.q = six;
-        d
-    }
+/// How a move is timed: in joint space (the joint that moves furthest, at the joint
+/// speed) or along a line (the tool's path, at the tool speed).
+#[derive(Clone, Copy, PartialEq)]
+enum Path {
+    Joint,
+    Line,
 }
 
+/// Moves the arm to `target` (joints, or a pose reached through inverse kinematics nearest
+/// the current joints); the distance along `path`.
+fn go_to(c: &mut Controller, target: &Value, six: [f64; 6], path: Path) -> Result<f64, Fault> {
+    let from_q = c.arm.q;
+    let from_pose = c.tcp_pose();
+    let q = if matches!(target, Value::Pose(_)) {
+        c.inverse(six, from_q, c.arm.tcp)?
+    } else {
+        six
+    };
+    c.arm.qd = [0.0; 6];
+    c.arm.q = q;
+    Ok(match path {
+        Path::Joint => joint_distance(from_q, q),
+        Path::Line => line_distance(from_pose, c.tcp_pose()),
+    })
+}
+
+/// `movej`, `movel`, `movep`, `optimovej`, `optimovel`: the arm is at the target when the
+/// move ends; the move takes `t` if given, else a trapezoidal profile (accelerate at `a`
+/// to `v`, cruise, decelerate) over the distance.
 fn movej(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
     let target = a.six(0)?;
-    let speed = a.num(2)?;
+    let (accel, speed) = (a.num(1)?, a.num(2)?);
     // movep and optimove* have no `t`.
     let t = if a.params.len() == 5 { a.num(3)? } else { 0.0 };
-    let dist = go_to(c, &a.v[0], target);
+    let path = if matches!(a.name, "movej" | "optimovej") {
+        Path::Joint
+    } else {
+        Path::Line
+    };
+    let dist = go_to(c, &a.v[0], target, path)?;
     let dur = if t > 0.0 {
         t
-    } else if speed > 0.0 {
-        dist / speed
     } else {
-        0.0
+        kinematics::move_time(dist, speed, accel)
     };
     Ok(Out::Wait(secs(dur), Value::None))
 }
 
+/// `movec`: timed as a straight line to `pose_to` (the arc through `pose_via` is not
+/// modelled).
 fn movec(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
     let target = a.six(1)?;
-    let speed = a.num(3)?;
-    let dist = go_to(c, &a.v[1], target);
-    let dur = if speed > 0.0 { dist / speed } else { 0.0 };
-    Ok(Out::Wait(secs(dur), Value::None))
+    let (accel, speed) = (a.num(2)?, a.num(3)?);
+    let dist = go_to(c, &a.v[1], target, Path::Line)?;
+    Ok(Out::Wait(
+        secs(kinematics::move_time(dist, speed, accel)),
+        Value::None,
+    ))
 }
 
 fn servoj(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
@@ -748,10 +771,14 @@ fn speed(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
             *q += v * t;
         }
     } else {
+        // The tool moves at `xd` for `t`; the joints follow it (inverse kinematics nearest
+        // the current joints).
         c.arm.tcp_speed = qd;
-        for (x, v) in c.arm.pose.iter_mut().zip(qd) {
+        let mut pose = c.tcp_pose();
+        for (x, v) in pose.iter_mut().zip(qd) {
             *x += v * t;
         }
+        c.arm.q = c.inverse(pose, c.arm.q, c.arm.tcp)?;
     }
     Ok(Out::Wait(secs(t), Value::None))
 }
@@ -777,7 +804,7 @@ fn joint_speeds(c: &mut Controller, _: &mut Args) -> Result<Out, Fault> {
 }
 
 fn tcp_pose(c: &mut Controller, _: &mut Args) -> Result<Out, Fault> {
-    Ok(Out::Value(Value::Pose(c.arm.pose)))
+    Ok(Out::Value(Value::Pose(c.tcp_pose())))
 }
 
 fn tcp_speed(c: &mut Controller, _: &mut Args) -> Result<Out, Fault> {
@@ -795,13 +822,8 @@ fn force(c: &mut Controller, _: &mut Args) -> Result<Out, Fault> {
     )))
 }
 
-/// The flange's pose: the tool pose without the TCP offset.
-fn flange(c: &Controller) -> [f64; 6] {
-    crate::pose::trans(c.arm.pose, crate::pose::inv(c.arm.tcp))
-}
-
 fn flange_pose(c: &mut Controller, _: &mut Args) -> Result<Out, Fault> {
-    Ok(Out::Value(Value::Pose(flange(c))))
+    Ok(Out::Value(Value::Pose(c.flange_pose())))
 }
 
 fn payload(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
@@ -864,7 +886,7 @@ fn scalar(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
 
 fn accelerometer(c: &mut Controller, _: &mut Args) -> Result<Out, Fault> {
     // What the flange's axes see of gravity: the inverse rotation applied to it.
-    let f = flange(c);
+    let f = c.flange_pose();
     Ok(Out::Value(float_list(&super::poses::rotate(
         [-f[3], -f[4], -f[5]],
         c.arm.gravity,
@@ -893,9 +915,11 @@ fn zero_int(_: &mut Controller, _: &mut Args) -> Result<Out, Fault> {
     Ok(Out::Value(Value::Int(0)))
 }
 
-fn has_solution(_: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
-    a.six(0)?;
-    Ok(Out::Value(Value::Bool(true)))
+fn has_solution(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+    let pose = a.six(0)?;
+    let qnear = if a.is_absent(1) { c.arm.q } else { a.six(1)? };
+    let tcp = if a.is_absent(4) { c.arm.tcp } else { a.six(4)? };
+    Ok(Out::Value(Value::Bool(c.inverse(pose, qnear, tcp).is_ok())))
 }
 
 fn set_pos(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {

@@ -94,14 +94,14 @@ pub(super) const TABLE: &[Builtin] = &[
             opt("maxOrientationError", Default::Float(1e-10)),
             opt("tcp", Default::Absent),
         ],
-        "No kinematics yet: qnear if given, else the commanded joints.",
+        "The joints that put the tool at x, nearest qnear (default: the current joints), by the arm model's inverse kinematics; an error if x is out of reach.",
         get_inverse_kin,
     ),
     Builtin::new(
         "get_forward_kin",
         D,
         &[opt("q", Default::Absent), opt("tcp", Default::Absent)],
-        "No kinematics yet: the commanded pose.",
+        "The tool pose of q (default: the current joints) through tcp (default: the active TCP), by the arm model's forward kinematics.",
         get_forward_kin,
     ),
 ];
@@ -183,14 +183,20 @@ fn interpolate_pose(_: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
 }
 
 fn get_inverse_kin(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
-    a.six(0)?;
-    Ok(Out::Value(if a.is_absent(1) {
-        floats(c.arm.q)
-    } else {
-        floats(a.six(1)?)
-    }))
+    let pose = a.six(0)?;
+    let qnear = if a.is_absent(1) { c.arm.q } else { a.six(1)? };
+    let tcp = if a.is_absent(4) { c.arm.tcp } else { a.six(4)? };
+    let q = c
+        .inverse(pose, qnear, tcp)
+        .map_err(|e| Fault::from(format!("`get_inverse_kin`: {e}")))?;
+    Ok(Out::Value(floats(q)))
 }
 
-fn get_forward_kin(c: &mut Controller, _: &mut Args) -> Result<Out, Fault> {
-    Ok(Out::Value(Value::Pose(c.arm.pose)))
+fn get_forward_kin(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+    let q = if a.is_absent(0) { c.arm.q } else { a.six(0)? };
+    Ok(Out::Value(Value::Pose(if a.is_absent(1) {
+        c.tool_pose(q)
+    } else {
+        crate::kinematics::forward(&c.dh, q, a.six(1)?)
+    })))
 }
