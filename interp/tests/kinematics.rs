@@ -117,7 +117,8 @@ fn tool_down_poses_near_a_half_turn_keep_every_solution() {
     for angle in [
         std::f64::consts::PI,
         std::f64::consts::PI - 1.8e-6,
-        3.1416,
+        // A half turn written with 4 decimals, as programs do: a bit more than π.
+        std::f64::consts::PI + 7.3e-6,
         3.0,
     ] {
         for axis in [[0.0f64, 1.0, 0.0], [-1.0, -1.0, 0.0], [1.0, 0.0, 0.01]] {

@@ -62,7 +62,7 @@ pub fn hex<'a>(words: impl IntoIterator<Item = &'a str>) -> Result<Vec<u8>, Stri
             .bytes()
             .filter(|b| !matches!(b, b':' | b'-'))
             .collect();
-        if digits.len() % 2 != 0 {
+        if !digits.len().is_multiple_of(2) {
             return Err(format!("{word:?} is not whole bytes (two hex digits each)"));
         }
         for pair in digits.chunks(2) {
