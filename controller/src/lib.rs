@@ -31,7 +31,12 @@
 //! - A protective stop ([`Controller::protective_stop`]) pauses a playing program and
 //!   holds 5 s: `unlock protective stop` before that gets the controller's refusal text.
 //! - `play` needs a loaded program, RUNNING and a safety that allows motion; `pause` only
-//!   from PLAYING; `stop` only from PLAYING or PAUSED; otherwise `Failed to execute: ...`.
+//!   from PLAYING; `stop` needs a loaded program (stopping a stopped one answers
+//!   `Stopped`, undocumented: chosen so that clients that stop defensively go on);
+//!   otherwise `Failed to execute: ...`.
+//! - `load` and `load installation` are refused (`Error while loading program: NAME`,
+//!   `Failed to load installation: NAME`) while a program plays or is paused and in
+//!   AUTOMATIC operational mode, where UR documents that only playing is allowed.
 //! - `restart safety`: BOOTING for 0.5 s, then POWER_OFF with the safety NORMAL.
 //! - In local control ([`Config::remote_control`] false) every command that acts (load,
 //!   play, stop, pause, shutdown, power, brakes, unlock, restart safety, operational

@@ -718,11 +718,14 @@ impl Controller {
     }
 
     /// `load NAME`: the program becomes the loaded one, STOPPED. Refused while a program
-    /// plays or is paused, and when no such file exists.
+    /// plays or is paused, in AUTOMATIC operational mode (only playing is allowed
+    /// there), and when no such file exists.
     pub fn load(&mut self, name: &str) -> Result<(), Refused> {
         self.remote()?;
         let path = self.programs.find(name).ok_or(Refused::NotFound)?;
-        if self.program_state != ProgramState::Stopped {
+        if self.program_state != ProgramState::Stopped
+            || self.operational_mode == Some(OperationalMode::Automatic)
+        {
             return Err(Refused::NotNow);
         }
         self.loaded = Some((name.to_string(), path));
@@ -733,7 +736,9 @@ impl Controller {
     pub fn load_installation(&mut self, name: &str) -> Result<(), Refused> {
         self.remote()?;
         self.programs.find(name).ok_or(Refused::NotFound)?;
-        if self.program_state != ProgramState::Stopped {
+        if self.program_state != ProgramState::Stopped
+            || self.operational_mode == Some(OperationalMode::Automatic)
+        {
             return Err(Refused::NotNow);
         }
         self.installation = name.to_string();
@@ -767,11 +772,12 @@ impl Controller {
         Ok(())
     }
 
-    /// `stop`: PLAYING or PAUSED -> STOPPED.
+    /// `stop`: PLAYING or PAUSED -> STOPPED; a stopped program stays stopped (Ok).
+    /// Refused with no program loaded.
     pub fn stop(&mut self, now: Duration) -> Result<(), Refused> {
         self.remote()?;
         self.handle_timeout(now);
-        if self.program_state == ProgramState::Stopped {
+        if self.loaded.is_none() {
             return Err(Refused::NotNow);
         }
         self.program_state = ProgramState::Stopped;

@@ -97,6 +97,8 @@ fn programs_load_play_pause_stop() {
     assert_eq!(s.ask("programState", ms(0)), "STOPPED <unnamed>");
     assert_eq!(s.ask("isProgramSaved", ms(0)), "false <unnamed>");
     assert_eq!(s.ask("play", ms(0)), "Failed to execute: play");
+    assert_eq!(s.ask("stop", ms(0)), "Failed to execute: stop");
+    assert_eq!(s.ask("pause", ms(0)), "Failed to execute: pause");
     assert_eq!(
         s.ask("load missing.urp", ms(0)),
         "File not found: missing.urp"
@@ -113,7 +115,8 @@ fn programs_load_play_pause_stop() {
     let t = running(&mut s);
     assert_eq!(s.ask("running", t), "Program running: false");
     assert_eq!(s.ask("pause", t), "Failed to execute: pause");
-    assert_eq!(s.ask("stop", t), "Failed to execute: stop");
+    assert_eq!(s.ask("stop", t), "Stopped");
+    assert_eq!(s.ask("programState", t), "STOPPED pick.urp");
     assert_eq!(s.ask("play", t), "Starting program");
     assert_eq!(s.ask("running", t), "Program running: true");
     assert_eq!(s.ask("programState", t), "PLAYING pick.urp");
@@ -234,6 +237,19 @@ fn operational_mode_remote_control_and_identity() {
         "No longer controlling the operational mode. Current operational mode: 'NONE'."
     );
     assert_eq!(s.ask("get operational mode", t), "NONE");
+    // AUTOMATIC: only playing, no loading
+    s.ask("set operational mode automatic", t);
+    assert_eq!(
+        s.ask("load pick.urp", t),
+        "Error while loading program: pick.urp"
+    );
+    assert_eq!(
+        s.ask("load installation default.installation", t),
+        "Failed to load installation: default.installation"
+    );
+    s.ask("set operational mode manual", t);
+    assert_eq!(s.ask("load pick.urp", t), "Loading program: pick.urp");
+    s.ask("clear operational mode", t);
     assert_eq!(s.ask("is in remote control", t), "true");
     assert_eq!(s.ask("get serial number", t), "20235500001");
     assert_eq!(s.ask("get robot model", t), "UR5");

@@ -4,14 +4,16 @@
 //! reply written in one piece ending in `"\n"`. The controller's state is shared by every
 //! connection; its clock is the time since the start.
 
-use std::io::{ErrorKind, Read, Write};
+use std::io::{BufRead, ErrorKind, Read, Write};
 use std::net::{TcpListener, TcpStream};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicU64, AtomicUsize, Ordering};
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
-use urscript_controller::{Config, Controller, Dashboard, Model, Programs, Reply, MAX_LINE};
+use urscript_controller::{
+    Config, Controller, Dashboard, Model, Programs, Reply, SafetyStatus, MAX_LINE,
+};
 
 use crate::report::{self, Event};
 
@@ -46,7 +48,8 @@ pub struct ControllerOptions {
     #[arg(long, value_name = "DIR")]
     pub programs: Option<PathBuf>,
     /// Start in local control: every command that acts is refused, as on a pendant not
-    /// switched to remote control.
+    /// switched to remote control. (Standard input takes operator commands: `protective
+    /// stop`, `emergency stop`, `release`, `local`, `remote`, `state`, `help`, ...)
     #[arg(long)]
     pub local: bool,
     /// Print only the `listening` event (docs/json-events.md), as JSON: a ready signal for
@@ -162,6 +165,12 @@ pub fn run(opts: ControllerOptions) -> Result<(), String> {
         crate::out::line(&event.to_json());
     } else {
         crate::out::line(&format!("listening on {addr} (dashboard server)"));
+    }
+    {
+        let shared = Arc::clone(&shared);
+        let _ = std::thread::Builder::new()
+            .name("operator".into())
+            .spawn(move || operator(&shared));
     }
     let next = AtomicU64::new(1);
     loop {
@@ -338,5 +347,105 @@ fn session(
                 }
             }
         }
+    }
+}
+
+/// The operator's commands on standard input: what happens at the robot that no
+/// dashboard command causes (a collision, the emergency stop button, the pendant's
+/// remote/local switch).
+pub const OPERATOR_HELP: &str = "operator commands: protective stop, emergency stop, \
+system emergency stop, safeguard stop, fault, violation, release, local, remote, state, help";
+
+/// Reads operator commands from standard input until its end (lines bounded at
+/// `MAX_LINE` bytes).
+fn operator(shared: &Shared) {
+    let stdin = std::io::stdin();
+    let mut input = stdin.lock();
+    let mut line = Vec::new();
+    loop {
+        line.clear();
+        match input
+            .by_ref()
+            .take(MAX_LINE as u64 + 1)
+            .read_until(b'\n', &mut line)
+        {
+            Ok(0) | Err(_) => return,
+            Ok(_) => {}
+        }
+        if line.len() > MAX_LINE && line.last() != Some(&b'\n') {
+            // Skip the rest of an overlong line.
+            let mut sink = Vec::new();
+            while input
+                .by_ref()
+                .take(MAX_LINE as u64)
+                .read_until(b'\n', &mut sink)
+                .map(|n| n > 0 && sink.last() != Some(&b'\n'))
+                .unwrap_or(false)
+            {
+                sink.clear();
+            }
+            crate::out::note("operator: line too long, ignored");
+            continue;
+        }
+        let text = String::from_utf8_lossy(&line);
+        let cmd = text.trim().to_ascii_lowercase();
+        if cmd.is_empty() {
+            continue;
+        }
+        let now = shared.now();
+        let mut c = shared.controller.lock().unwrap_or_else(|p| p.into_inner());
+        let status = match cmd.as_str() {
+            "protective stop" => {
+                c.protective_stop(now);
+                None
+            }
+            "emergency stop" => Some(SafetyStatus::RobotEmergencyStop),
+            "system emergency stop" => Some(SafetyStatus::SystemEmergencyStop),
+            "safeguard stop" => Some(SafetyStatus::SafeguardStop),
+            "fault" => Some(SafetyStatus::Fault),
+            "violation" => Some(SafetyStatus::Violation),
+            "release" => {
+                c.release_stop(now);
+                None
+            }
+            "local" => {
+                c.set_remote_control(false);
+                None
+            }
+            "remote" => {
+                c.set_remote_control(true);
+                None
+            }
+            "state" => None,
+            "help" => {
+                drop(c);
+                shared.say(|| OPERATOR_HELP.into());
+                continue;
+            }
+            _ => {
+                drop(c);
+                crate::out::note(&format!(
+                    "operator: unknown command {cmd:?}; {OPERATOR_HELP}"
+                ));
+                continue;
+            }
+        };
+        if let Some(status) = status {
+            c.safety_event(now, status);
+        }
+        let mode = c.robot_mode(now);
+        let safety = c.safety_status(now);
+        let program = c.program_state();
+        let remote = if c.remote_control() {
+            "remote"
+        } else {
+            "local"
+        };
+        drop(c);
+        shared.say(|| {
+            format!(
+                "operator: {cmd}: robot mode {mode}, safety {safety}, program {program}, {remote} control"
+            )
+        });
     }
 }

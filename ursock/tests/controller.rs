@@ -17,11 +17,15 @@ struct Server {
 
 impl Server {
     fn start(args: &[&str]) -> Server {
+        Self::spawn(args, Stdio::null())
+    }
+
+    fn spawn(args: &[&str], stdin: Stdio) -> Server {
         let started = Instant::now();
         let mut child = Command::new(env!("CARGO_BIN_EXE_ursock"))
             .args(["controller", "--dashboard-port", "0"])
             .args(args)
-            .stdin(Stdio::null())
+            .stdin(stdin)
             .stdout(Stdio::piped())
             .stderr(Stdio::null())
             .spawn()
@@ -292,4 +296,30 @@ fn bad_options_are_one_line_errors() {
         assert_eq!(err.lines().count(), 1, "{args:?}: {err}");
         assert!(err.starts_with("ursock: "), "{err}");
     }
+}
+
+#[test]
+fn the_operator_stops_the_robot_from_standard_input() {
+    let mut server = Server::spawn(&[], Stdio::piped());
+    let mut stdin = server.child.stdin.take().unwrap();
+    let mut c = server.client();
+    c.ask("brake release");
+    c.wait_for("robotmode", "Robotmode: RUNNING");
+    stdin.write_all(b"protective stop\n").unwrap();
+    c.wait_for("safetystatus", "Safetystatus: PROTECTIVE_STOP");
+    assert_eq!(
+        c.ask("unlock protective stop"),
+        "Cannot unlock protective stop until 5s after occurrence. Always inspect cause of protective stop before unlocking"
+    );
+    stdin.write_all(b"emergency stop\n").unwrap();
+    c.wait_for("safetystatus", "Safetystatus: ROBOT_EMERGENCY_STOP");
+    assert_eq!(c.ask("robotmode"), "Robotmode: POWER_OFF");
+    // junk and an overlong line are ignored
+    stdin.write_all(&vec![b'x'; 10_000]).unwrap();
+    stdin.write_all(b"\nnonsense\nrelease\nlocal\n").unwrap();
+    c.wait_for("is in remote control", "false");
+    assert_eq!(c.ask("safetystatus"), "Safetystatus: NORMAL");
+    assert!(c
+        .ask("power on")
+        .starts_with("Command is not allowed due to safety reasons"));
 }
