@@ -35,8 +35,10 @@
 //!   `Stopped`, undocumented: chosen so that clients that stop defensively go on);
 //!   otherwise `Failed to execute: ...`.
 //! - `load` and `load installation` are refused (`Error while loading program: NAME`,
-//!   `Failed to load installation: NAME`) while a program plays or is paused and in
-//!   AUTOMATIC operational mode, where UR documents that only playing is allowed.
+//!   `Failed to load installation: NAME`) while a program plays or is paused, in
+//!   AUTOMATIC operational mode, where UR documents that only playing is allowed, and for
+//!   a file that exists but is not a `.urp` (`.installation`); a missing file is
+//!   `File not found: NAME`.
 //! - `restart safety`: BOOTING for 0.5 s, then POWER_OFF with the safety NORMAL.
 //! - In local control ([`Config::remote_control`] false) every command that acts (load,
 //!   play, stop, pause, shutdown, power, brakes, unlock, restart safety, operational

@@ -363,6 +363,15 @@ pub enum Refused {
     NotFound,
 }
 
+/// Whether `name` ends in `ext` (any case): only `.urp` files load as programs and
+/// `.installation` files as installations.
+fn has_extension(name: &str, ext: &str) -> bool {
+    name.len() > ext.len()
+        && name
+            .get(name.len() - ext.len()..)
+            .is_some_and(|e| e.eq_ignore_ascii_case(ext))
+}
+
 /// The most `addToLog` messages kept (the oldest go first).
 pub const MAX_LOG: usize = 256;
 
@@ -719,12 +728,13 @@ impl Controller {
 
     /// `load NAME`: the program becomes the loaded one, STOPPED. Refused while a program
     /// plays or is paused, in AUTOMATIC operational mode (only playing is allowed
-    /// there), and when no such file exists.
+    /// there), for a file that is not a `.urp`, and when no such file exists.
     pub fn load(&mut self, name: &str) -> Result<(), Refused> {
         self.remote()?;
         let path = self.programs.find(name).ok_or(Refused::NotFound)?;
         if self.program_state != ProgramState::Stopped
             || self.operational_mode == Some(OperationalMode::Automatic)
+            || !has_extension(name, ".urp")
         {
             return Err(Refused::NotNow);
         }
@@ -738,6 +748,7 @@ impl Controller {
         self.programs.find(name).ok_or(Refused::NotFound)?;
         if self.program_state != ProgramState::Stopped
             || self.operational_mode == Some(OperationalMode::Automatic)
+            || !has_extension(name, ".installation")
         {
             return Err(Refused::NotNow);
         }

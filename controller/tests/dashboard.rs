@@ -21,7 +21,12 @@ struct Session {
 
 impl Session {
     fn new(config: Config) -> Self {
-        let programs = ProgramList::new(["pick.urp", "sub/place.urp", "default.installation"]);
+        let programs = ProgramList::new([
+            "pick.urp",
+            "sub/place.urp",
+            "default.installation",
+            "notes.txt",
+        ]);
         Session {
             c: Controller::new(config).with_programs(Box::new(programs)),
             d: Dashboard::new(),
@@ -102,6 +107,18 @@ fn programs_load_play_pause_stop() {
     assert_eq!(
         s.ask("load missing.urp", ms(0)),
         "File not found: missing.urp"
+    );
+    assert_eq!(
+        s.ask("load notes.txt", ms(0)),
+        "Error while loading program: notes.txt"
+    );
+    assert_eq!(
+        s.ask("load default.installation", ms(0)),
+        "Error while loading program: default.installation"
+    );
+    assert_eq!(
+        s.ask("load installation pick.urp", ms(0)),
+        "Failed to load installation: pick.urp"
     );
     assert_eq!(s.ask("load pick.urp", ms(0)), "Loading program: pick.urp");
     assert_eq!(
