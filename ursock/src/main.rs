@@ -2,6 +2,7 @@
 //! functions. See `ursock --help`.
 #![forbid(unsafe_code)]
 
+mod controller;
 mod demo;
 pub mod diagnose;
 mod formats;
@@ -80,6 +81,9 @@ enum Command {
         #[arg(long, value_name = "NAME[=VALUE]")]
         stub: Vec<String>,
     },
+    /// A virtual UR controller that unmodified clients drive: the dashboard server
+    /// (port 29999) with its state machine (power, brakes, safety, programs).
+    Controller(controller::ControllerOptions),
     /// Write the bytes a server (or with --robot, the robot) sends.
     /// Formats: floats, floats-lf, int32, bytes, string, line, framed PREFIX TEXT SUFFIX,
     /// var-reply NAME INT, hex HH...; robot: line, string, byte, int, set-var, get-var,
@@ -156,6 +160,7 @@ fn run(cli: Cli) -> Result<(), String> {
     match cli.command {
         Command::Demo => demo::run(),
         Command::Listen(opts) => listen::listen(opts),
+        Command::Controller(opts) => controller::run(opts),
         Command::Robot {
             connect,
             script,

@@ -1,0 +1,98 @@
+//! A virtual Universal Robots controller that unmodified clients drive, sans-IO like the
+//! rest of the workspace: time is an input, there are no sockets and no files in here.
+//! `ursock controller` serves it over TCP.
+//!
+//! This first step is the **dashboard server** (port 29999) and the state machine behind
+//! it ([`Controller`]): robot mode, safety status, the loaded program and its state,
+//! operational mode, remote control, and what the controller says about itself (PolyScope
+//! version, serial number, model from [`urscript_interp::kinematics::Model`]).
+//!
+//! ```
+//! use std::time::Duration;
+//! use urscript_controller::{Config, Controller, Dashboard};
+//!
+//! let mut controller = Controller::new(Config::default());
+//! let mut dashboard = Dashboard::new();
+//! let t = Duration::from_secs(0);
+//! assert_eq!(Dashboard::greeting().lines, ["Connected: Universal Robots Dashboard Server"]);
+//! assert_eq!(dashboard.handle_line(&mut controller, "power on", t).lines, ["Powering on"]);
+//! let later = t + Duration::from_secs(2);
+//! assert_eq!(dashboard.handle_line(&mut controller, "robotmode", later).lines, ["Robotmode: IDLE"]);
+//! ```
+//!
+//! # Transitions and their timing ([`Timing`])
+//!
+//! - `power on`: POWER_OFF -> BOOTING -> POWER_ON -> IDLE (0.3 s + 0.3 s by default).
+//!   Under an emergency stop, a violation or a fault the command is answered but power
+//!   stays off.
+//! - `brake release`: IDLE -> RUNNING after 0.5 s; from POWER_OFF it powers on first
+//!   (as UR's ROS driver documents: "if the robot is currently powered off, it will get
+//!   powered on on the fly").
+//! - A protective stop ([`Controller::protective_stop`]) pauses a playing program and
+//!   holds 5 s: `unlock protective stop` before that gets the controller's refusal text.
+//! - `play` needs a loaded program, RUNNING and a safety that allows motion; `pause` only
+//!   from PLAYING; `stop` needs a loaded program (stopping a stopped one answers
+//!   `Stopped`, undocumented: chosen so that clients that stop defensively go on);
+//!   otherwise `Failed to execute: ...`.
+//! - `load` and `load installation` are refused (`Error while loading program: NAME`,
+//!   `Failed to load installation: NAME`) while a program plays or is paused, in
+//!   AUTOMATIC operational mode, where UR documents that only playing is allowed, and for
+//!   a file that exists but is not a `.urp` (`.installation`); a missing file is
+//!   `File not found: NAME`.
+//! - `restart safety`: BOOTING for 0.5 s, then POWER_OFF with the safety NORMAL.
+//! - In local control ([`Config::remote_control`] false) every command that acts (load,
+//!   play, stop, pause, shutdown, power, brakes, unlock, restart safety, operational
+//!   mode, load installation) gets the controller's refusal; queries still answer.
+//!
+//! Playing a program keeps only the state (PLAYING until stop or pause): executing the
+//! `.urp`'s program is the next step.
+//!
+//! # Where the reply texts come from, and the choices where sources disagree
+//!
+//! Sources: UR's dashboard server pages (the CB3 page "Dashboard Server, port 29999",
+//! and the e-Series 5.x command table as quoted by several clients), and the clients that
+//! parse the replies: UR's `Universal_Robots_Client_Library` (`dashboard_client_
+//! implementation_g5.cpp`, whose tests run against URSim), UR's ROS 2 driver
+//! (`dashboard_client_ros.cpp`) and `ur_rtde` (`dashboard_client.cpp`).
+//!
+//! - `set operational mode M`: UR's page documents `Setting operational mode: M`; UR's
+//!   client library (tested against URSim) and UR's drivers expect
+//!   `Operational mode 'M' is set`. The controller's observed text is used, with `M`
+//!   as the client sent it.
+//! - `clear operational mode`: the page's summary reads "operational mode is no longer
+//!   controlled by Dashboard Server"; the controller says `No longer controlling the
+//!   operational mode. Current operational mode: 'NONE'.` (URSim, and the client
+//!   library's pattern), which is used. UR's ROS driver's pattern accepts only MANUAL or
+//!   AUTOMATIC there; this controller reports the cleared mode as NONE, as
+//!   `get operational mode` does afterwards on URSim.
+//! - `generate flight report`: documented as returning the report id; UR's client
+//!   library expects `Flight Report generated with id: ID`, which is used. Nothing is
+//!   generated, and `generate support file DIR` names a file it does not write.
+//! - `isProgramSaved`: `true NAME.urp` / `false NAME`, lowercase as documented (ur_rtde
+//!   looks for `True` and so always reads false). With no program: `false <unnamed>`.
+//! - `programState`: `STATE NAME` with the file name of the loaded program, or
+//!   `STOPPED <unnamed>` with none (as URSim and real controllers answer).
+//! - `running`: `Program running: true|false` (e-Series; the CB3 page's `Robot running:
+//!   True` is older).
+//! - `get robot model`: `UR5` for a UR5e (the e-Series documents UR3, UR5, UR10, UR16).
+//! - `setUserRole` / `getUserRole`: CB3 only; a 5.x controller answers them as unknown
+//!   commands (UR's client library refuses them on e-Series), a 3.x one (`--polyscope
+//!   3.15.0`) with the CB3 texts.
+//! - `unlock protective stop` with no protective stop: answered `Protective stop
+//!   releasing`, nothing changes (undocumented).
+//! - Unknown commands: `could not understand: 'LINE'`. Lines longer than [`MAX_LINE`]
+//!   bytes get the same shape with the first 40 bytes and a note.
+//! - Command words match in any case (`polyscopeVersion`, `PolyscopeVersion`); their
+//!   arguments keep theirs.
+#![forbid(unsafe_code)]
+#![warn(missing_docs)]
+
+mod dashboard;
+mod state;
+
+pub use dashboard::{Dashboard, Reply, GREETING, LOCAL_CONTROL, MAX_LINE, UNLOCK_TOO_EARLY};
+pub use state::{
+    Config, Controller, OperationalMode, ProgramList, ProgramState, Programs, Refused, RobotMode,
+    SafetyStatus, Timing, MAX_LOG,
+};
+pub use urscript_interp::kinematics::Model;
