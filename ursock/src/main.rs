@@ -75,6 +75,10 @@ enum Command {
         /// The controller's step in seconds: 0.002 (e-Series, the default), 0.008 (CB3).
         #[arg(long, value_name = "SECONDS", default_value_t = 0.002)]
         step_time: f64,
+        /// The arm whose kinematics place the tool: ur3, ur5, ur10 (CB3), ur3e, ur5e, ur10e,
+        /// ur16e, ur20, ur30.
+        #[arg(long, value_name = "MODEL", default_value = "ur5e")]
+        model: urscript_interp::kinematics::Model,
         /// Replace a function the program calls (a built-in not supported, or a helper of
         /// a URCap): `NAME` does nothing, `NAME=VALUE` returns the URScript constant VALUE
         /// (`0`, `True`, `"ok"`, `[1, 2]`, `p[0,0,0,0,0,0]`). Repeatable.
@@ -170,6 +174,7 @@ fn run(cli: Cli) -> Result<(), String> {
             log,
             max_time,
             step_time,
+            model,
             stub,
         } => {
             if let Some(path) = &log {
@@ -207,6 +212,7 @@ fn run(cli: Cli) -> Result<(), String> {
                     json,
                     max_time,
                     step_time,
+                    model,
                     stubs,
                 },
             )

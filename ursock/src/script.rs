@@ -32,6 +32,8 @@ pub struct Options {
     pub max_time: Option<Duration>,
     /// The controller's step: 2 ms (e-Series), 8 ms (CB3).
     pub step_time: Duration,
+    /// The arm (its kinematics).
+    pub model: urscript_interp::kinematics::Model,
     /// Functions replaced by a no-op or a value.
     pub stubs: Vec<(String, Stub)>,
 }
@@ -260,6 +262,7 @@ pub fn run(script: &str, connect_to: Option<&str>, opts: Options) -> Result<(), 
     let program = Program::parse(script).map_err(|e| e.to_string())?;
     let config = Config {
         step_time: opts.step_time,
+        model: opts.model,
         stubs: opts.stubs.clone(),
         trace_socket_calls: true,
         trace_all_calls: false,

@@ -114,3 +114,19 @@ fn a_call_with_wrong_arguments_is_refused_before_anything_runs() {
         "{err}"
     );
 }
+
+#[test]
+fn the_arm_model_sets_the_kinematics() {
+    // All joints at 0: the flange lies at (a2 + a3, -(d4 + d6), d1 - d5) of the model.
+    let (code, out, err) = robot(&[
+        "--model",
+        "ur10e",
+        "-e",
+        "textmsg(get_forward_kin([0, 0, 0, 0, 0, 0])[0])",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    assert!(out.ends_with("-> -1.18425\n"), "{out}");
+    let (code, _, err) = robot(&["--model", "ur99", "-e", "textmsg(1)"]);
+    assert_ne!(code, 0);
+    assert!(err.contains("unknown model `ur99`"), "{err}");
+}
