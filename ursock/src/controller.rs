@@ -52,8 +52,8 @@ pub struct ControllerOptions {
     /// stop`, `emergency stop`, `release`, `local`, `remote`, `state`, `help`, ...)
     #[arg(long)]
     pub local: bool,
-    /// Print only the `listening` event (docs/json-events.md), as JSON: a ready signal for
-    /// scripts. Per-command events are for a later step.
+    /// One JSON event per line (docs/json-events.md): `listening`, then `connect`,
+    /// `dashboard` (each command and its reply) and `close` for every client.
     #[arg(long)]
     pub json: bool,
 }
@@ -104,6 +104,18 @@ impl Shared {
     fn say(&self, human: impl FnOnce() -> String) {
         if !self.json {
             crate::out::line(&human());
+        }
+    }
+
+    /// An event: its JSON line, or its lines for people (`[#conn]` in front).
+    fn emit(&self, event: Event) {
+        if self.json {
+            crate::out::line(&event.to_json());
+            return;
+        }
+        let prefix = event.conn().map(|c| format!("[#{c}] ")).unwrap_or_default();
+        for l in crate::listen::human(&event, usize::MAX) {
+            crate::out::line(&format!("{prefix}{l}"));
         }
     }
 }
@@ -230,15 +242,21 @@ fn send(stream: &mut TcpStream, reply: &Reply, counts: &mut Counts) -> bool {
 fn serve(mut stream: TcpStream, conn: u64, peer: String, shared: &Shared) {
     let _ = stream.set_nodelay(true);
     let _ = stream.set_write_timeout(Some(WRITE_TIMEOUT));
-    shared.say(|| format!("[#{conn}] connected from {peer}"));
+    shared.emit(Event::Connect(report::Connect {
+        t: report::now(),
+        conn,
+        peer,
+    }));
     let mut counts = Counts { rx: 0, tx: 0 };
     let reason = session(&mut stream, conn, shared, &mut counts);
-    shared.say(|| {
-        format!(
-            "[#{conn}] closed ({reason}): rx {} B, tx {} B",
-            counts.rx, counts.tx
-        )
-    });
+    shared.emit(Event::Close(report::Close {
+        t: report::now(),
+        conn,
+        reason: reason.to_string(),
+        rx: counts.rx,
+        tx: counts.tx,
+        refused_sets: 0,
+    }));
 }
 
 /// Answer one command line; `Err(reason)` when the connection ends.
@@ -267,13 +285,12 @@ fn answer(
     } else {
         text.to_string()
     };
-    shared.say(|| {
-        let mut s = format!("[#{conn}] <- {shown:?}");
-        for l in &reply.lines {
-            s.push_str(&format!("\n[#{conn}] -> {l:?}"));
-        }
-        s
-    });
+    shared.emit(Event::Dashboard(report::Dashboard {
+        t: report::now(),
+        conn,
+        command: shown,
+        reply: reply.lines.clone(),
+    }));
     if !send(stream, &reply, counts) {
         return Err("write failed: the client is not reading");
     }

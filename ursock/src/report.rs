@@ -472,6 +472,17 @@ pub struct Listening {
     pub addr: String,
 }
 
+/// `controller`: one dashboard command and the reply lines it got.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Dashboard {
+    pub t: f64,
+    pub conn: u64,
+    /// The command line as received (a too-long one cut, with `...`).
+    pub command: String,
+    /// The reply, one string per line sent (without the newline).
+    pub reply: Vec<String>,
+}
+
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Connect {
     pub t: f64,
@@ -639,6 +650,8 @@ pub enum Event {
     VarRefused(VarRefused),
     UnknownVariable(UnknownVariable),
     VarInvalid(VarInvalid),
+    // controller
+    Dashboard(Dashboard),
 }
 
 /// Constructors stamped with [`now`], for the common events.
@@ -728,6 +741,7 @@ impl Event {
             Event::VarRefused(e) => e.t,
             Event::UnknownVariable(e) => e.t,
             Event::VarInvalid(e) => e.t,
+            Event::Dashboard(e) => e.t,
         }
     }
 
@@ -744,6 +758,7 @@ impl Event {
             Event::VarRefused(e) => Some(e.conn),
             Event::UnknownVariable(e) => Some(e.conn),
             Event::VarInvalid(e) => Some(e.conn),
+            Event::Dashboard(e) => Some(e.conn),
             _ => None,
         }
     }

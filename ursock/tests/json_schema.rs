@@ -474,3 +474,61 @@ fn robot_json_lines_match_the_schema() {
     );
     assert_eq!(events.last().unwrap()["outcome"], "error");
 }
+
+#[test]
+fn controller_json_lines_match_the_schema() {
+    use std::io::{BufRead, BufReader, Write};
+    let root = schema();
+    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_ursock"))
+        .args(["controller", "--dashboard-port", "0", "--json"])
+        .stdin(std::process::Stdio::null())
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .unwrap();
+    let mut out = BufReader::new(child.stdout.take().unwrap());
+    let mut first = String::new();
+    out.read_line(&mut first).unwrap();
+    let listening = check_event(&root, first.trim_end());
+    let addr = listening["addr"].as_str().unwrap().to_string();
+    {
+        let s = std::net::TcpStream::connect(&addr).unwrap();
+        s.set_read_timeout(Some(std::time::Duration::from_secs(20)))
+            .unwrap();
+        let mut r = BufReader::new(s.try_clone().unwrap());
+        let mut w = s;
+        let mut line = String::new();
+        r.read_line(&mut line).unwrap(); // the greeting
+        for cmd in ["robotmode", "power on", "no such command", "quit"] {
+            w.write_all(format!("{cmd}\n").as_bytes()).unwrap();
+            line.clear();
+            r.read_line(&mut line).unwrap();
+        }
+    }
+    // connect, 4 dashboard events, close: read them as they come (bounded).
+    let mut kinds = Vec::new();
+    while kinds.len() < 6 {
+        let mut l = String::new();
+        if out.read_line(&mut l).unwrap() == 0 {
+            break;
+        }
+        let v = check_event(&root, l.trim_end());
+        if v["event"] == "dashboard" {
+            assert!(v["reply"].as_array().is_some_and(|r| !r.is_empty()), "{l}");
+        }
+        kinds.push(v["event"].as_str().unwrap().to_string());
+    }
+    let _ = child.kill();
+    let _ = child.wait();
+    assert_eq!(
+        kinds,
+        [
+            "connect",
+            "dashboard",
+            "dashboard",
+            "dashboard",
+            "dashboard",
+            "close"
+        ]
+    );
+}

@@ -9,6 +9,9 @@
 
 mod dump;
 mod out;
+
+/// The human view of any report event (shared with `controller`).
+pub(crate) use out::human;
 mod rules;
 mod spec;
 mod tui;

@@ -271,6 +271,9 @@ pub fn human(event: &Event, show_max: usize) -> Vec<String> {
         )),
         Event::VarRefused(e) => one(e.text.clone()),
         Event::VarInvalid(e) => one(e.text.clone()),
+        Event::Dashboard(e) => std::iter::once(format!("<- {:?}", e.command))
+            .chain(e.reply.iter().map(|l| format!("-> {l:?}")))
+            .collect(),
         Event::Help(e) | Event::Note(e) => one(e.text.clone()),
         Event::Error(e) => one(e.text.clone()),
         Event::Call(e) => {
