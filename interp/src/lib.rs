@@ -74,7 +74,7 @@ pub use error::{ParseError, ParseErrorKind, RuntimeError, RuntimeErrorKind};
 pub use event::{CallRecord, Event, Message, MessageKind, Outcome, ReadRecord};
 pub use machine::{Config, Machine, State, Stub};
 pub use sockets::{Policy, Timeout};
-pub use value::Value;
+pub use value::{Value, MAX_VALUE_DEPTH};
 
 /// Reads a URScript constant: a number, `True`/`False`, a string, a list or a pose of
 /// constants (as a stub's value on a command line).
