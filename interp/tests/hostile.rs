@@ -285,3 +285,69 @@ fn many_distinct_names_compile() {
     assert_eq!(p.called_builtins().len(), 20_000);
     assert_eq!(p.called_builtins()[19_999], "f19999");
 }
+
+// ---------------------------------------------------------------------------------------
+// The fuzz target's seeds (fuzz/seeds/interp, and every input it ever found) replay here,
+// driven as fuzz/fuzz_targets/interp.rs drives them, so `cargo test` covers them.
+
+#[test]
+fn fuzz_seeds_replay() {
+    let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/../fuzz/seeds/interp");
+    let Ok(entries) = std::fs::read_dir(dir) else {
+        return; // a packaged crate has no fuzz/
+    };
+    for entry in entries {
+        let path = entry.expect("entry").path();
+        let data = std::fs::read(&path).expect("seed");
+        let (text, mut feed) = match data.iter().position(|&b| b == 0) {
+            Some(i) => (&data[..i], &data[i + 1..]),
+            None => (&data[..], &[][..]),
+        };
+        let Ok(program) = Program::parse_bytes(text) else {
+            continue;
+        };
+        let config = Config {
+            max_statements_per_step: 1_000,
+            max_value_size: 1_000,
+            trace_all_calls: true,
+            ..Config::default()
+        };
+        let step = config.step_time;
+        let mut m = Machine::new(program, config);
+        let mut chunk = || {
+            let Some((&n, rest)) = feed.split_first() else {
+                return Vec::new();
+            };
+            let n = usize::from(n % 32).min(rest.len());
+            feed = &rest[n..];
+            rest[..n].to_vec()
+        };
+        for k in 0..100u32 {
+            for name in m.open_sockets() {
+                m.handle_received(&name, &chunk());
+            }
+            m.run_until(step * k);
+            while let Some(e) = m.poll_event() {
+                match e {
+                    urscript_interp::Event::Connect {
+                        socket_name, port, ..
+                    } => {
+                        let r = if port % 10 == 7 {
+                            Err("refused".to_string())
+                        } else {
+                            Ok(())
+                        };
+                        m.handle_connected(&socket_name, r);
+                    }
+                    urscript_interp::Event::Transmit { socket_name, .. } => {
+                        m.handle_received(&socket_name, &chunk());
+                    }
+                    _ => {}
+                }
+            }
+            if m.state() != &State::Running {
+                break;
+            }
+        }
+    }
+}
