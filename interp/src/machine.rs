@@ -98,7 +98,7 @@ impl Default for Config {
             max_statements_per_step: 100_000,
             trace_socket_calls: true,
             trace_all_calls: false,
-            max_value_size: 1_000_000,
+            max_value_size: crate::value::DEFAULT_MAX_VALUE_SIZE,
         }
     }
 }

@@ -4,7 +4,7 @@
 
 use crate::error::ParseError;
 use crate::lexer::{Tok, Token};
-use crate::value::Value;
+use crate::value::{Value, DEFAULT_MAX_VALUE_SIZE, MAX_VALUE_DEPTH};
 
 /// Nesting bound of blocks, brackets and unary operators (the parser's own recursion), so
 /// hostile input cannot overflow the stack.
@@ -493,13 +493,26 @@ impl Parser {
                     seen_default = true;
                     let t = self.peek().clone();
                     let e = self.expr()?;
-                    Some(const_value(&e).ok_or_else(|| {
+                    let v = const_value(&e).ok_or_else(|| {
                         ParseError::new(
                             t.line,
                             t.col,
                             format!("the default of parameter `{p}` must be a constant"),
                         )
-                    })?)
+                    })?;
+                    // The value bounds hold for defaults too (no list literal in the
+                    // program escapes them).
+                    let (depth, size) = v.measure(DEFAULT_MAX_VALUE_SIZE);
+                    if depth > MAX_VALUE_DEPTH || size > DEFAULT_MAX_VALUE_SIZE {
+                        return Err(ParseError::new(
+                            t.line,
+                            t.col,
+                            format!(
+                                "the default of parameter `{p}` is over the value bounds ({MAX_VALUE_DEPTH} levels of lists, {DEFAULT_MAX_VALUE_SIZE} elements)"
+                            ),
+                        ));
+                    }
+                    Some(v)
                 } else {
                     if seen_default {
                         return Err(self.err_here(format!(

@@ -56,6 +56,9 @@ impl PartialEq for Value {
 /// (copying, comparing, writing, dropping it) can exhaust the stack.
 pub const MAX_VALUE_DEPTH: usize = 32;
 
+/// The default of [`Config::max_value_size`](crate::Config::max_value_size).
+pub(crate) const DEFAULT_MAX_VALUE_SIZE: usize = 1_000_000;
+
 impl Value {
     /// The depth (levels of lists) and the size of the value: every list element counts
     /// one, at any depth, and a string its bytes. Counting stops, without recursion,

@@ -163,6 +163,10 @@ fn a_value_nested_past_the_bound_is_a_limit_error() {
             "]".repeat(MAX_VALUE_DEPTH)
         );
         assert_eq!(common::messages(&src), [expected]);
+        // A parameter's default is held to the same bound.
+        let deep = format!("{}0{}", "[".repeat(40), "]".repeat(40));
+        let e = parse_error(&format!("def f(a={deep}):\n  return a\nend\nx = f()\n"));
+        assert!(e.message().contains("over the value bounds"), "{e}");
     });
 }
 
