@@ -120,6 +120,10 @@ impl Program {
     /// drivers send to the controller) runs that function as the program; otherwise the
     /// top-level statements run, with the `def`s and `thread`s available to them.
     ///
+    /// A program over 16 MiB is refused before it is read, and an expression nested more
+    /// than 128 levels deep (operators, indices, calls; see the crate docs' "Bounds") is
+    /// a syntax error. A lone `\r` ends a line, as `\n` and `\r\n` do.
+    ///
     /// ```
     /// use urscript_interp::Program;
     /// let e = Program::parse("x = 1\nfor i in y:\n").unwrap_err();
