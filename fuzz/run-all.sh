@@ -26,9 +26,12 @@ for t in "${targets[@]}"; do
   mkdir -p "corpus/$t"
   seeds=()
   [ -d "seeds/$t" ] && seeds=("seeds/$t")
+  # A target's own dictionary (TARGET.dict) if it has one, else the text formats' tokens.
+  dict=text.dict
+  [ -f "$t.dict" ] && dict="$t.dict"
   log=$(mktemp)
   cargo "${tc[@]}" fuzz run "${san[@]}" "$t" "corpus/$t" "${seeds[@]}" -- \
-    -max_total_time="$secs" -dict=text.dict -print_final_stats=1 -rss_limit_mb=2048 >"$log" 2>&1
+    -max_total_time="$secs" -dict="$dict" -print_final_stats=1 -rss_limit_mb=2048 >"$log" 2>&1
   rc=$?
   execs=$(grep -oE 'stat::number_of_executed_units: *[0-9]+' "$log" | grep -oE '[0-9]+$' | tail -1)
   cov=$(grep -oE 'cov: [0-9]+' "$log" | tail -1 | grep -oE '[0-9]+')

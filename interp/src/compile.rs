@@ -2,7 +2,7 @@
 //! keeps its own value stack and call frames, so any thread can stop at a call that
 //! consumes time (`sync()`, a blocking read) and resume later where it was.
 
-use std::collections::HashMap;
+use std::collections::{HashMap, HashSet};
 
 use crate::builtins::{self, Builtin};
 use crate::error::{ParseError, ParseErrorKind};
@@ -120,6 +120,10 @@ impl Program {
     /// drivers send to the controller) runs that function as the program; otherwise the
     /// top-level statements run, with the `def`s and `thread`s available to them.
     ///
+    /// A program over 16 MiB is refused before it is read, and an expression nested more
+    /// than 128 levels deep (operators, indices, calls; see the crate docs' "Bounds") is
+    /// a syntax error. A lone `\r` ends a line, as `\n` and `\r\n` do.
+    ///
     /// ```
     /// use urscript_interp::Program;
     /// let e = Program::parse("x = 1\nfor i in y:\n").unwrap_err();
@@ -129,6 +133,33 @@ impl Program {
         let toks = crate::lexer::lex(src)?;
         let stmts = crate::parser::Parser::new(toks).program()?;
         Compiler::default().program(stmts)
+    }
+
+    /// [`parse`](Self::parse) of a program read as bytes: text that is not UTF-8 is a
+    /// syntax error at the line and column of the first invalid byte.
+    ///
+    /// ```
+    /// use urscript_interp::Program;
+    /// let e = Program::parse_bytes(b"x = 1\ny = \"caf\xe9\"\n").unwrap_err();
+    /// assert_eq!(e.to_string(), "line 2, column 9: invalid UTF-8 (byte 0xe9): a program is UTF-8 text");
+    /// assert!(Program::parse_bytes(b"x = 1\r").is_ok());
+    /// ```
+    pub fn parse_bytes(src: &[u8]) -> Result<Program, ParseError> {
+        crate::lexer::check_size(src.len())?;
+        match std::str::from_utf8(src) {
+            Ok(text) => Self::parse(text),
+            Err(e) => {
+                let at = e.valid_up_to();
+                let valid = std::str::from_utf8(&src[..at]).unwrap_or_default();
+                let (line, col) = crate::lexer::position_of(valid, at);
+                let byte = src.get(at).copied().unwrap_or(0);
+                Err(ParseError::new(
+                    line,
+                    col,
+                    format!("invalid UTF-8 (byte {byte:#04x}): a program is UTF-8 text"),
+                ))
+            }
+        }
     }
 
     /// The name of the top-level `def` that is the program, if the file is one.
@@ -163,6 +194,8 @@ struct Compiler {
     func_ids: HashMap<String, u32>,
     sites: Vec<CallSite>,
     natives: Vec<(Sym, u32)>,
+    /// The names in `natives`, to find them in constant time.
+    native_set: HashSet<Sym>,
     // Current function being compiled.
     ops: Vec<Op>,
     lines: Vec<Pos>,
@@ -213,23 +246,34 @@ impl Compiler {
     }
 
     /// Gives every `def`/`thread`, at any depth, its id (ids from 1; 0 is the program).
-    fn collect(&mut self, stmts: &[Stmt], out: &mut Vec<FuncDef>) -> Result<(), ParseError> {
+    /// Each is moved out of the tree (its `Def` statement keeps an empty body), so nested
+    /// definitions are never copied once per level.
+    fn collect(&mut self, stmts: &mut [Stmt], out: &mut Vec<FuncDef>) -> Result<(), ParseError> {
         for s in stmts {
-            match &s.kind {
+            let at = pos_of(s);
+            match &mut s.kind {
                 StmtKind::Def(f) => {
                     if self.func_ids.contains_key(&f.name) {
-                        let at = pos_of(s);
                         return Err(err(at, format!("`{}` is defined twice", f.name)));
                     }
                     self.func_ids.insert(f.name.clone(), out.len() as u32 + 1);
-                    out.push(f.clone());
-                    self.collect(&f.body, out)?;
+                    let mut body = std::mem::take(&mut f.body);
+                    let i = out.len();
+                    out.push(FuncDef {
+                        name: f.name.clone(),
+                        params: f.params.clone(),
+                        body: Vec::new(),
+                        is_thread: f.is_thread,
+                        line: f.line,
+                    });
+                    self.collect(&mut body, out)?;
+                    out[i].body = body;
                 }
                 StmtKind::If {
                     branches,
                     otherwise,
                 } => {
-                    for (_, b) in branches {
+                    for (_, b) in branches.iter_mut() {
                         self.collect(b, out)?;
                     }
                     self.collect(otherwise, out)?;
@@ -241,7 +285,7 @@ impl Compiler {
         Ok(())
     }
 
-    fn program(mut self, stmts: Vec<Stmt>) -> Result<Program, ParseError> {
+    fn program(mut self, mut stmts: Vec<Stmt>) -> Result<Program, ParseError> {
         // The form drivers send: one `def` (and perhaps threads/defs), perhaps followed
         // by a call of it.
         let defs: Vec<&FuncDef> = stmts
@@ -271,7 +315,7 @@ impl Compiler {
             _ => None,
         };
         let mut defs = Vec::new();
-        self.collect(&stmts, &mut defs)?;
+        self.collect(&mut stmts, &mut defs)?;
         let main_body: Vec<Stmt> = match &entry {
             Some(name) => defs
                 .iter()
@@ -637,7 +681,7 @@ impl Compiler {
                 self.emit(Op::Call(id, site));
             }
             None => {
-                if !self.natives.iter().any(|(n, _)| *n == sym) {
+                if self.native_set.insert(sym) {
                     self.natives.push((sym, at.line));
                 }
                 self.emit(Op::Native(site));

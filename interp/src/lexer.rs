@@ -103,20 +103,80 @@ fn ident(input: &str) -> IResult<&str, &str> {
     take_while1(|c: char| c.is_ascii_alphanumeric() || c == '_')(input)
 }
 
-/// Splits `src` into tokens.
+/// The largest program [`lex`] accepts, in bytes (16 MiB): a bound on the memory parsing
+/// takes (tokens, then the syntax tree, are a small multiple of the text).
+pub(crate) const MAX_PROGRAM_BYTES: usize = 16 * 1024 * 1024;
+
+/// The length of the line end `rest` starts with: `\r\n`, `\n`, or a `\r` alone (old Mac
+/// files).
+fn line_end(rest: &str) -> Option<usize> {
+    if rest.starts_with("\r\n") {
+        Some(2)
+    } else if rest.starts_with(['\n', '\r']) {
+        Some(1)
+    } else {
+        None
+    }
+}
+
+/// The error for a program over [`MAX_PROGRAM_BYTES`].
+pub(crate) fn check_size(len: usize) -> Result<(), ParseError> {
+    if len > MAX_PROGRAM_BYTES {
+        return Err(ParseError::new(
+            1,
+            1,
+            format!("program too large: {len} bytes (at most {MAX_PROGRAM_BYTES} bytes, 16 MiB)"),
+        ));
+    }
+    Ok(())
+}
+
+/// The 1-based line and column (in characters) of byte `offset` of `src`, with the line
+/// ends [`lex`] knows (`\n`, `\r\n`, `\r`).
+pub(crate) fn position_of(src: &str, offset: usize) -> (u32, u32) {
+    let mut line = 1u32;
+    let mut line_start = 0usize;
+    let bytes = src.as_bytes();
+    let mut i = 0usize;
+    while i < offset.min(bytes.len()) {
+        match bytes[i] {
+            b'\n' => {
+                line = line.saturating_add(1);
+                line_start = i + 1;
+            }
+            b'\r' if bytes.get(i + 1) != Some(&b'\n') => {
+                line = line.saturating_add(1);
+                line_start = i + 1;
+            }
+            _ => {}
+        }
+        i += 1;
+    }
+    let end = offset.min(src.len());
+    let col = src.get(line_start..end).map_or(0, |s| s.chars().count());
+    (line, u32::try_from(col + 1).unwrap_or(u32::MAX))
+}
+
+/// Splits `src` into tokens, in time linear in its length.
 pub(crate) fn lex(src: &str) -> Result<Vec<Token>, ParseError> {
+    check_size(src.len())?;
     let mut out = Vec::new();
     let mut rest = src;
     let mut line = 1u32;
-    let mut line_start = 0usize; // byte offset of the current line in src
     let mut depth = 0usize; // open ( and [
     let mut at_line_start = true;
+    // The column is counted incrementally (characters since the last token), never from
+    // the line's start again: a long line stays linear.
+    let mut col_at = 0usize; // byte offset where `col` was counted
+    let mut col = 1u32;
     while !rest.is_empty() {
         let offset = src.len() - rest.len();
-        let col = u32::try_from(src[line_start..offset].chars().count() + 1).unwrap_or(u32::MAX);
+        let step = src.get(col_at..offset).map_or(0, |s| s.chars().count());
+        col = col.saturating_add(u32::try_from(step).unwrap_or(u32::MAX));
+        col_at = offset;
         let c = rest.chars().next().unwrap_or(' ');
         let err = |what: String| ParseError::new(line, col, what);
-        if c == '\n' {
+        if let Some(n) = line_end(rest) {
             if depth == 0
                 && !matches!(
                     out.last(),
@@ -132,32 +192,30 @@ pub(crate) fn lex(src: &str) -> Result<Vec<Token>, ParseError> {
                     col,
                 });
             }
-            rest = &rest[1..];
-            line += 1;
-            line_start = offset + 1;
+            rest = &rest[n..];
+            line = line.saturating_add(1);
+            (col_at, col) = (offset + n, 1);
             at_line_start = true;
             continue;
         }
-        if c == ' ' || c == '\t' || c == '\r' || c == '\u{feff}' {
+        if c == ' ' || c == '\t' || c == '\u{feff}' {
             rest = &rest[c.len_utf8()..];
             continue;
         }
         if c == '#' || (c == '$' && at_line_start) {
-            let end = rest.find('\n').unwrap_or(rest.len());
+            let end = rest.find(['\n', '\r']).unwrap_or(rest.len());
             rest = &rest[end..];
             continue;
         }
-        if c == '\\'
-            && rest[1..]
-                .trim_start_matches([' ', '\t', '\r'])
-                .starts_with('\n')
-        {
-            // Explicit line continuation.
-            let nl = rest.find('\n').unwrap_or(rest.len());
-            rest = &rest[nl.saturating_add(1).min(rest.len())..];
-            line += 1;
-            line_start = src.len() - rest.len();
-            continue;
+        if c == '\\' {
+            let after = rest[1..].trim_start_matches([' ', '\t']);
+            if let Some(n) = line_end(after) {
+                // Explicit line continuation.
+                rest = &after[n..];
+                line = line.saturating_add(1);
+                (col_at, col) = (src.len() - rest.len(), 1);
+                continue;
+            }
         }
         at_line_start = false;
         let mut push = |kind: Tok, len: usize, rest: &mut &str| {
@@ -203,10 +261,10 @@ pub(crate) fn lex(src: &str) -> Result<Vec<Token>, ParseError> {
         }
         if c == '"' || c == '\'' {
             let body = &rest[1..];
-            let Some(end) = body.find([c, '\n']) else {
+            let Some(end) = body.find([c, '\n', '\r']) else {
                 return Err(err("string literal not closed".into()));
             };
-            if body[end..].starts_with('\n') {
+            if body[end..].starts_with(['\n', '\r']) {
                 return Err(err("string literal not closed on its line".into()));
             }
             let text = body[..end].to_string();
@@ -250,8 +308,8 @@ pub(crate) fn lex(src: &str) -> Result<Vec<Token>, ParseError> {
         }
         push(kind, len, &mut rest);
     }
-    let offset = src.len();
-    let col = u32::try_from(src[line_start..offset].chars().count() + 1).unwrap_or(u32::MAX);
+    let step = src.get(col_at..).map_or(0, |s| s.chars().count());
+    let col = col.saturating_add(u32::try_from(step).unwrap_or(u32::MAX));
     if depth == 0
         && !matches!(
             out.last(),

@@ -20,6 +20,32 @@
 //! See [`machine`] for the time model (steps, thread order) and [`builtins`] for the
 //! built-ins and the virtual arm.
 //!
+//! ## Bounds: any program text is safe to run
+//!
+//! A program is input: whatever it says, the interpreter neither crashes (no stack
+//! overflow, no allocator abort, no panic), nor stalls, nor grows without bound. The
+//! bounds, each an error naming a line and column:
+//!
+//! | what | bound | error |
+//! |---|---|---|
+//! | program text | 16 MiB ([`Program::parse`], [`Program::parse_bytes`]), checked before lexing; lexing and parsing are linear in the text | syntax, line 1 |
+//! | nesting of blocks, brackets and unary operators (the parser's recursion) | 64 | syntax |
+//! | depth of an expression's tree: every operator, index, call, list and unary operator is a level, and a left-associative chain counts each link (`1+1+...+1` with 128 `+` is too deep) | 128 | syntax |
+//! | depth of a value (levels of nested lists) | [`MAX_VALUE_DEPTH`] (32) | runtime, [`RuntimeErrorKind::Limit`] |
+//! | size of one value (list elements at every depth, plus string bytes) | [`Config::max_value_size`] (1 000 000) | runtime, `Limit` |
+//! | nested calls per thread | 256 | runtime, `Limit` |
+//! | threads running at once | [`MAX_THREADS`](machine::MAX_THREADS) (64) | runtime, `Limit` |
+//! | statements per thread per step without consuming time | [`Config::max_statements_per_step`] (100 000) | runtime, [`RuntimeErrorKind::TooMuchTime`] |
+//!
+//! Everything recursive (parsing, compiling, cloning, comparing, writing and dropping
+//! trees and values) is bounded by the depth bounds. Together they bound a running
+//! program's memory: each value is at most `max_value_size` elements; the variables are
+//! bounded by the program's names (globals, and the locals of each frame), the frames by
+//! the call-depth bound, each frame's value stack by the program's expressions, and the
+//! threads by [`MAX_THREADS`](machine::MAX_THREADS) (a finished thread's slot is freed:
+//! handles are never reused, so `join`/`kill` of an old handle does nothing). A step
+//! visits the live threads only.
+//!
 //! ```
 //! use std::time::Duration;
 //! use urscript_interp::{Config, Event, Machine, Program, State};
@@ -75,7 +101,7 @@ pub use error::{ParseError, ParseErrorKind, RuntimeError, RuntimeErrorKind};
 pub use event::{CallRecord, Event, Message, MessageKind, Outcome, ReadRecord};
 pub use machine::{Config, Machine, State, Stub};
 pub use sockets::{Policy, Timeout};
-pub use value::Value;
+pub use value::{Value, MAX_VALUE_DEPTH};
 
 /// Reads a URScript constant: a number, `True`/`False`, a string, a list or a pose of
 /// constants (as a stub's value on a command line).

@@ -42,7 +42,7 @@ pub use crate::event::Event;
 use crate::event::{CallRecord, Outcome, ReadRecord, MAX_READ_INPUT};
 use crate::parser::{BinOp, Scope};
 use crate::sockets::{Policy, Sockets};
-use crate::value::Value;
+use crate::value::{Value, MAX_VALUE_DEPTH};
 
 /// The most threads that may run at once (the program's own included).
 pub const MAX_THREADS: usize = 64;
@@ -83,6 +83,12 @@ pub struct Config {
     pub trace_socket_calls: bool,
     /// Emit an [`Event::Call`] for every built-in call, not only socket calls.
     pub trace_all_calls: bool,
+    /// The largest value the program may build (default 1 000 000): list elements at
+    /// every depth, plus string bytes. A list made (`[...]`, list arithmetic, an element
+    /// assigned, a built-in's or stub's result) over it stops the program with a
+    /// [`Limit`](crate::RuntimeErrorKind::Limit) error, so a program that doubles a list
+    /// in a loop fails instead of taking all memory.
+    pub max_value_size: usize,
 }
 
 impl Default for Config {
@@ -95,6 +101,7 @@ impl Default for Config {
             max_statements_per_step: 100_000,
             trace_socket_calls: true,
             trace_all_calls: false,
+            max_value_size: crate::value::DEFAULT_MAX_VALUE_SIZE,
         }
     }
 }
@@ -195,6 +202,9 @@ pub(crate) struct Frame {
 
 #[derive(Debug, Clone)]
 pub(crate) struct Thread {
+    /// The handle `run` gave (0: the program itself): unique for the machine's life,
+    /// never reused, though the thread's slot is once it has finished.
+    id: u32,
     name: String,
     frames: Vec<Frame>,
     stack: Vec<Value>,
@@ -243,6 +253,8 @@ pub struct Machine {
     budget: u32,
     /// The thread running now.
     pub(crate) current: usize,
+    /// The handle the next `run` gives.
+    next_thread_id: u32,
 }
 
 impl Machine {
@@ -253,6 +265,7 @@ impl Machine {
         config.step_time = config.step_time.max(Duration::from_micros(100));
         let globals = vec![None; program.names.len()];
         let main = Thread {
+            id: 0,
             name: program.funcs[0].name.clone(),
             frames: vec![Frame {
                 func: 0,
@@ -295,6 +308,7 @@ impl Machine {
             state: State::Running,
             budget: 0,
             current: 0,
+            next_thread_id: 1,
         }
     }
 
@@ -408,9 +422,9 @@ impl Machine {
                 Wait::Steps { until, .. } => Some((*until).max(self.ctl.step)),
                 Wait::Read { .. } => None,
                 Wait::Connect { .. } => None,
-                Wait::Join(id) => match self.threads.get(*id as usize) {
-                    Some(j) if !j.done => None,
-                    _ => Some(self.ctl.step),
+                Wait::Join(id) => match self.thread(*id) {
+                    Some(_) => None,
+                    None => Some(self.ctl.step),
                 },
             };
             if let Some(at) = at {
@@ -562,7 +576,22 @@ impl Machine {
         }
     }
 
+    /// The live thread with handle `id`.
+    fn thread(&self, id: u32) -> Option<&Thread> {
+        self.threads.iter().find(|t| t.id == id && !t.done)
+    }
+
+    /// Runs one step: every live thread, in the order they started. Finished threads
+    /// leave the list at the end of the step, so a step visits at most the live threads
+    /// and those started during it.
     fn run_step(&mut self) {
+        self.run_threads();
+        if self.state == State::Running {
+            self.threads.retain(|t| !t.done);
+        }
+    }
+
+    fn run_threads(&mut self) {
         let mut i = 0;
         while i < self.threads.len() {
             if self.state != State::Running {
@@ -618,9 +647,7 @@ impl Machine {
                         },
                     ),
                 },
-                Wait::Join(id) if self.threads.get(id as usize).is_none_or(|t| t.done) => {
-                    (true, Wait::None)
-                }
+                Wait::Join(id) if self.thread(id).is_none() => (true, Wait::None),
                 other => (false, other),
             };
             self.threads[i].wait = wait;
@@ -628,6 +655,7 @@ impl Machine {
                 self.current = i;
                 self.budget = 0;
                 let placeholder = Thread {
+                    id: u32::MAX,
                     name: String::new(),
                     frames: Vec::new(),
                     stack: Vec::new(),
@@ -716,6 +744,7 @@ impl Machine {
                     };
                     let i = pop(&mut th.stack, line)?;
                     let program_scope = func.program_scope;
+                    let max_size = self.config.max_value_size;
                     let slot = self.slot(frame, s, scope, program_scope, false, prog, line)?;
                     let name = &prog.names[s as usize];
                     let Some(target) = slot.as_mut() else {
@@ -724,11 +753,20 @@ impl Machine {
                             format!("unknown variable `{name}`"),
                         )));
                     };
+                    // A list or string stored into a list may make it deeper or larger.
+                    let grows = matches!(v, Value::List(_) | Value::Str(_));
                     match j {
                         None => store_index(target, &i, v).map_err(fail)?,
                         Some(j) => {
                             let inner = index_mut(target, &i).map_err(fail)?;
                             store_index(inner, &j, v).map_err(fail)?;
+                        }
+                    }
+                    if grows {
+                        if let Err(f) = check_value(target, max_size) {
+                            // The variable keeps no value over the bounds.
+                            *slot = None;
+                            return Err(fail(f));
                         }
                     }
                 }
@@ -759,7 +797,9 @@ impl Machine {
                 Op::MakeList(n) => {
                     let at = th.stack.len().saturating_sub(n as usize);
                     let items = th.stack.split_off(at);
-                    th.stack.push(Value::List(items));
+                    let list = Value::List(items);
+                    check_value(&list, self.config.max_value_size).map_err(fail)?;
+                    th.stack.push(list);
                 }
                 Op::MakePose(n) => {
                     let at = th.stack.len().saturating_sub(n as usize);
@@ -800,7 +840,9 @@ impl Machine {
                 Op::Bin(op) => {
                     let r = pop(&mut th.stack, line)?;
                     let l = pop(&mut th.stack, line)?;
-                    th.stack.push(binary(op, l, r).map_err(fail)?);
+                    let v = binary(op, l, r).map_err(fail)?;
+                    check_value(&v, self.config.max_value_size).map_err(fail)?;
+                    th.stack.push(v);
                 }
                 Op::Jump(t) => frame.pc = t,
                 Op::JumpIfFalse(t) => {
@@ -852,7 +894,10 @@ impl Machine {
                         .split_off(th.stack.len().saturating_sub(usize::from(site.argc)));
                     let stub = self.site_stubs.get(id).copied().flatten();
                     match self.call_native(prog, site, stub, args).map_err(fail)? {
-                        Called::Value(v) => th.stack.push(v),
+                        Called::Value(v) => {
+                            check_value(&v, self.config.max_value_size).map_err(fail)?;
+                            th.stack.push(v)
+                        }
                         Called::Block(w) => {
                             th.wait = w;
                             return Ok(Flow::Blocked);
@@ -888,9 +933,13 @@ impl Machine {
                             ),
                         )));
                     }
-                    // Finished threads keep their slot: handles stay unique.
-                    let id = self.threads.len() as u32;
+                    // Handles are never reused: one of a finished thread names no other.
+                    let id = self.next_thread_id;
+                    self.next_thread_id = id.checked_add(1).ok_or_else(|| {
+                        fail(Fault::new(K::Limit, "more than 4294967295 threads started"))
+                    })?;
                     self.threads.push(Thread {
+                        id,
                         name: prog.funcs[fid as usize].name.clone(),
                         frames: vec![Frame {
                             func: fid,
@@ -908,10 +957,10 @@ impl Machine {
                 Op::Join => {
                     let v = pop(&mut th.stack, line)?;
                     if let Value::Thread(id) = v {
-                        if id as usize == self.current {
+                        if id == th.id {
                             return Err(fail(Fault::from("a thread cannot join itself")));
                         }
-                        if self.threads.get(id as usize).is_some_and(|t| !t.done) {
+                        if self.thread(id).is_some() {
                             th.wait = Wait::Join(id);
                             // Resume without a value: `join` is a statement.
                             return Ok(Flow::Blocked);
@@ -921,10 +970,10 @@ impl Machine {
                 Op::Kill => {
                     let v = pop(&mut th.stack, line)?;
                     if let Value::Thread(id) = v {
-                        if id as usize == self.current {
+                        if id == th.id {
                             return Ok(Flow::Finished);
                         }
-                        if let Some(t) = self.threads.get_mut(id as usize) {
+                        if let Some(t) = self.threads.iter_mut().find(|t| t.id == id && !t.done) {
                             t.done = true;
                             t.frames = Vec::new();
                             t.stack = Vec::new();
@@ -985,6 +1034,30 @@ impl Machine {
         };
         Ok(&mut frame.locals[at].1)
     }
+}
+
+/// A list or string the program built, checked against [`MAX_VALUE_DEPTH`] and
+/// [`Config::max_value_size`] (numbers and poses need no check).
+fn check_value(v: &Value, max_size: usize) -> Result<(), Fault> {
+    if !matches!(v, Value::List(_) | Value::Str(_)) {
+        return Ok(());
+    }
+    let (depth, size) = v.measure(max_size);
+    if depth > MAX_VALUE_DEPTH {
+        return Err(Fault::new(
+            K::Limit,
+            format!("a list nested more than {MAX_VALUE_DEPTH} levels deep"),
+        ));
+    }
+    if size > max_size {
+        return Err(Fault::new(
+            K::Limit,
+            format!(
+                "a value of more than {max_size} elements (list elements at every depth, string bytes)"
+            ),
+        ));
+    }
+    Ok(())
 }
 
 fn pop(stack: &mut Vec<Value>, line: u32) -> Result<Value, RuntimeError> {
@@ -1356,5 +1429,27 @@ impl Machine {
             Some(d) => Called::Block(self.wait_for(d, value)),
             None => Called::Value(value),
         })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Short-lived threads (issue 18): finished threads leave the scheduler's list, so a
+    /// step visits the live threads only, and a handle of a finished thread names no
+    /// new one.
+    #[test]
+    fn finished_threads_leave_the_schedule() {
+        let src = "thread t():\n  y = 1\nend\nwhile True:\n  k = 0\n  while k < 20:\n    h = run t()\n    k = k + 1\n  end\n  sync()\nend\n";
+        let mut m = Machine::new(Program::parse(src).unwrap(), Config::default());
+        for k in 0..500u32 {
+            m.run_until(Duration::from_millis(2) * k);
+            assert_eq!(m.state(), &State::Running);
+            // The program, and no finished thread.
+            assert_eq!(m.threads.len(), 1, "step {k}");
+        }
+        assert_eq!(m.next_thread_id, 500 * 20 + 1);
+        assert!(m.threads.iter().all(|t| !t.done));
     }
 }

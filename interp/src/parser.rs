@@ -4,10 +4,17 @@
 
 use crate::error::ParseError;
 use crate::lexer::{Tok, Token};
-use crate::value::Value;
+use crate::value::{Value, DEFAULT_MAX_VALUE_SIZE, MAX_VALUE_DEPTH};
 
-/// Nesting bound of blocks and expressions, so hostile input cannot overflow the stack.
-const MAX_DEPTH: usize = 64;
+/// Nesting bound of blocks, brackets and unary operators (the parser's own recursion), so
+/// hostile input cannot overflow the stack.
+pub(crate) const MAX_DEPTH: usize = 64;
+
+/// The deepest expression tree the parser builds: every operator, index, call, list and
+/// unary operator is one level over its operands, and a left-associative chain counts
+/// each link (`1 + 1 + 1` is 3 levels). Everything recursive over a tree (compiling,
+/// cloning, dropping it) stays within this bound.
+pub(crate) const MAX_EXPR_DEPTH: u32 = 128;
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub(crate) enum BinOp {
@@ -486,13 +493,26 @@ impl Parser {
                     seen_default = true;
                     let t = self.peek().clone();
                     let e = self.expr()?;
-                    Some(const_value(&e).ok_or_else(|| {
+                    let v = const_value(&e).ok_or_else(|| {
                         ParseError::new(
                             t.line,
                             t.col,
                             format!("the default of parameter `{p}` must be a constant"),
                         )
-                    })?)
+                    })?;
+                    // The value bounds hold for defaults too (no list literal in the
+                    // program escapes them).
+                    let (depth, size) = v.measure(DEFAULT_MAX_VALUE_SIZE);
+                    if depth > MAX_VALUE_DEPTH || size > DEFAULT_MAX_VALUE_SIZE {
+                        return Err(ParseError::new(
+                            t.line,
+                            t.col,
+                            format!(
+                                "the default of parameter `{p}` is over the value bounds ({MAX_VALUE_DEPTH} levels of lists, {DEFAULT_MAX_VALUE_SIZE} elements)"
+                            ),
+                        ));
+                    }
+                    Some(v)
                 } else {
                     if seen_default {
                         return Err(self.err_here(format!(
@@ -535,143 +555,181 @@ impl Parser {
     }
 
     pub fn expr(&mut self) -> Result<Expr, ParseError> {
+        self.expr_h().map(|(e, _)| e)
+    }
+
+    /// An expression and the depth of its tree.
+    fn expr_h(&mut self) -> Result<(Expr, u32), ParseError> {
         self.enter()?;
         let e = self.binary(0)?;
         self.depth -= 1;
         Ok(e)
     }
 
-    /// Levels: 0 or, 1 xor, 2 and, 3 not (unary), 4 comparisons, 5 + -, 6 * / %.
-    fn binary(&mut self, level: u8) -> Result<Expr, ParseError> {
-        if level == 3 {
-            if self.eat_word("not") {
-                self.enter()?;
-                let e = self.binary(3)?;
-                self.depth -= 1;
-                return Ok(Expr::Unary(UnOp::Not, Box::new(e)));
-            }
-            return self.binary(4);
+    /// One level over operands of depth `h`, at `(line, col)`: an error past
+    /// [`MAX_EXPR_DEPTH`].
+    fn over(&self, h: u32, line: u32, col: u32) -> Result<u32, ParseError> {
+        let h = h.saturating_add(1);
+        if h > MAX_EXPR_DEPTH {
+            return Err(ParseError::new(
+                line,
+                col,
+                format!(
+                    "expression nested too deeply (more than {MAX_EXPR_DEPTH} levels of operators, indices and calls)"
+                ),
+            ));
         }
-        if level == 7 {
-            return self.unary();
-        }
-        let mut lhs = self.binary(level + 1)?;
+        Ok(h)
+    }
+
+    /// Precedence climbing over the levels: 0 or, 1 xor, 2 and, 3 not (unary),
+    /// 4 comparisons, 5 + -, 6 * / %; operators of level `min` and above.
+    fn binary(&mut self, min: u8) -> Result<(Expr, u32), ParseError> {
+        let (mut lhs, mut h) = if min <= 3 && self.is_word("not") {
+            let t = self.bump();
+            self.enter()?;
+            let (e, he) = self.binary(3)?;
+            self.depth -= 1;
+            let h = self.over(he, t.line, t.col)?;
+            (Expr::Unary(UnOp::Not, Box::new(e)), h)
+        } else {
+            self.unary()?
+        };
         loop {
-            let op = match (level, &self.peek().kind) {
-                (0, Tok::Ident(w)) if w == "or" => BinOp::Or,
-                (1, Tok::Ident(w)) if w == "xor" => BinOp::Xor,
-                (2, Tok::Ident(w)) if w == "and" => BinOp::And,
-                (4, Tok::Eq) => BinOp::Eq,
-                (4, Tok::Ne) => BinOp::Ne,
-                (4, Tok::Lt) => BinOp::Lt,
-                (4, Tok::Le) => BinOp::Le,
-                (4, Tok::Gt) => BinOp::Gt,
-                (4, Tok::Ge) => BinOp::Ge,
-                (5, Tok::Plus) => BinOp::Add,
-                (5, Tok::Minus) => BinOp::Sub,
-                (6, Tok::Star) => BinOp::Mul,
-                (6, Tok::Slash) => BinOp::Div,
-                (6, Tok::Percent) => BinOp::Rem,
-                _ => return Ok(lhs),
+            let (level, op) = match &self.peek().kind {
+                Tok::Ident(w) if w == "or" => (0, BinOp::Or),
+                Tok::Ident(w) if w == "xor" => (1, BinOp::Xor),
+                Tok::Ident(w) if w == "and" => (2, BinOp::And),
+                Tok::Eq => (4, BinOp::Eq),
+                Tok::Ne => (4, BinOp::Ne),
+                Tok::Lt => (4, BinOp::Lt),
+                Tok::Le => (4, BinOp::Le),
+                Tok::Gt => (4, BinOp::Gt),
+                Tok::Ge => (4, BinOp::Ge),
+                Tok::Plus => (5, BinOp::Add),
+                Tok::Minus => (5, BinOp::Sub),
+                Tok::Star => (6, BinOp::Mul),
+                Tok::Slash => (6, BinOp::Div),
+                Tok::Percent => (6, BinOp::Rem),
+                _ => return Ok((lhs, h)),
             };
-            self.bump();
+            if level < min {
+                return Ok((lhs, h));
+            }
+            let t = self.bump();
             // A line ending in an operator continues on the next one (UR's own
             // External Control script splits `elif a or` / `b:` that way).
             self.skip_newlines();
-            let rhs = self.binary(level + 1)?;
+            let (rhs, hr) = self.binary(level + 1)?;
+            h = self.over(h.max(hr), t.line, t.col)?;
             lhs = Expr::Binary(op, Box::new(lhs), Box::new(rhs));
         }
     }
 
-    fn unary(&mut self) -> Result<Expr, ParseError> {
-        if self.eat(&Tok::Minus) {
+    fn unary(&mut self) -> Result<(Expr, u32), ParseError> {
+        if self.peek().kind == Tok::Minus {
+            let t = self.bump();
             self.enter()?;
-            let e = self.unary()?;
+            let (e, he) = self.unary()?;
             self.depth -= 1;
             return Ok(match e {
-                Expr::Lit(Value::Int(v)) => Expr::Lit(Value::Int(v.wrapping_neg())),
-                Expr::Lit(Value::Float(v)) => Expr::Lit(Value::Float(-v)),
-                e => Expr::Unary(UnOp::Neg, Box::new(e)),
+                Expr::Lit(Value::Int(v)) => (Expr::Lit(Value::Int(v.wrapping_neg())), he),
+                Expr::Lit(Value::Float(v)) => (Expr::Lit(Value::Float(-v)), he),
+                e => (
+                    Expr::Unary(UnOp::Neg, Box::new(e)),
+                    self.over(he, t.line, t.col)?,
+                ),
             });
         }
         if self.eat(&Tok::Plus) {
-            return self.unary();
+            self.enter()?;
+            let e = self.unary()?;
+            self.depth -= 1;
+            return Ok(e);
         }
         self.postfix()
     }
 
-    fn postfix(&mut self) -> Result<Expr, ParseError> {
-        let mut e = self.primary()?;
+    fn postfix(&mut self) -> Result<(Expr, u32), ParseError> {
+        let (mut e, mut h) = self.primary()?;
         loop {
             match self.peek().kind {
                 Tok::LBracket => {
-                    self.bump();
-                    let i = self.expr()?;
+                    let t = self.bump();
+                    let (i, hi) = self.expr_h()?;
                     self.expect(&Tok::RBracket, "`]` after the index")?;
+                    h = self.over(h.max(hi), t.line, t.col)?;
                     e = Expr::Index(Box::new(e), Box::new(i));
                 }
                 Tok::Dot => {
                     return Err(self.err_here("member access `.` (structs) is not supported"))
                 }
-                _ => return Ok(e),
+                _ => return Ok((e, h)),
             }
         }
     }
 
-    fn items(&mut self, close: &Tok, what: &str) -> Result<Vec<Expr>, ParseError> {
+    /// Items up to `close`, and the depth of the deepest.
+    fn items(&mut self, close: &Tok, what: &str) -> Result<(Vec<Expr>, u32), ParseError> {
         let mut items = Vec::new();
+        let mut h = 0;
         if self.eat(close) {
-            return Ok(items);
+            return Ok((items, h));
         }
         loop {
-            items.push(self.expr()?);
+            let (e, he) = self.expr_h()?;
+            items.push(e);
+            h = h.max(he);
             if self.eat(close) {
-                return Ok(items);
+                return Ok((items, h));
             }
             self.expect(&Tok::Comma, what)?;
             if self.eat(close) {
-                return Ok(items);
+                return Ok((items, h));
             }
         }
     }
 
-    fn primary(&mut self) -> Result<Expr, ParseError> {
+    fn primary(&mut self) -> Result<(Expr, u32), ParseError> {
         let t = self.peek().clone();
         match t.kind {
             Tok::Int(v) => {
                 self.bump();
-                Ok(Expr::Lit(Value::Int(v)))
+                Ok((Expr::Lit(Value::Int(v)), 1))
             }
             Tok::Float(v) => {
                 self.bump();
-                Ok(Expr::Lit(Value::Float(v)))
+                Ok((Expr::Lit(Value::Float(v)), 1))
             }
             Tok::Str(s) => {
                 self.bump();
-                Ok(Expr::Lit(Value::Str(s.into_bytes())))
+                Ok((Expr::Lit(Value::Str(s.into_bytes())), 1))
             }
             Tok::LParen => {
                 self.bump();
-                let e = self.expr()?;
+                let e = self.expr_h()?;
                 self.expect(&Tok::RParen, "`)`")?;
                 Ok(e)
             }
             Tok::LBracket => {
                 self.bump();
-                Ok(Expr::List(
-                    self.items(&Tok::RBracket, "`,` or `]` in the list")?,
-                ))
+                let (items, h) = self.items(&Tok::RBracket, "`,` or `]` in the list")?;
+                Ok((Expr::List(items), self.over(h, t.line, t.col)?))
             }
             Tok::PoseOpen => {
                 self.bump();
-                let items = self.items(&Tok::RBracket, "`,` or `]` in the pose")?;
+                let (items, h) = self.items(&Tok::RBracket, "`,` or `]` in the pose")?;
+                let h = self.over(h.max(1), t.line, t.col)?;
                 match items.len() {
-                    6 => Ok(Expr::Pose(items)),
+                    6 => Ok((Expr::Pose(items), h)),
                     // `p[i]`: a variable named `p`, indexed.
                     1 => {
                         let mut it = items.into_iter();
                         let i = it.next().unwrap_or(Expr::Lit(Value::Int(0)));
-                        Ok(Expr::Index(Box::new(Expr::Name("p".into())), Box::new(i)))
+                        Ok((
+                            Expr::Index(Box::new(Expr::Name("p".into())), Box::new(i)),
+                            h,
+                        ))
                     }
                     n => Err(ParseError::new(
                         t.line,
@@ -684,11 +742,11 @@ impl Parser {
                 match w.as_str() {
                     "True" => {
                         self.bump();
-                        return Ok(Expr::Lit(Value::Bool(true)));
+                        return Ok((Expr::Lit(Value::Bool(true)), 1));
                     }
                     "False" => {
                         self.bump();
-                        return Ok(Expr::Lit(Value::Bool(false)));
+                        return Ok((Expr::Lit(Value::Bool(false)), 1));
                     }
                     "run" => {
                         self.bump();
@@ -696,7 +754,7 @@ impl Parser {
                         let name = self.name("a thread name after `run`")?;
                         self.expect(&Tok::LParen, "`(` after the thread name")?;
                         self.expect(&Tok::RParen, "`)`: a thread takes no arguments")?;
-                        return Ok(Expr::Run(name, at));
+                        return Ok((Expr::Run(name, at), 1));
                     }
                     _ => {}
                 }
@@ -705,11 +763,12 @@ impl Parser {
                 }
                 let name = self.name("an expression")?;
                 if self.peek().kind != Tok::LParen {
-                    return Ok(Expr::Name(name));
+                    return Ok((Expr::Name(name), 1));
                 }
                 self.bump();
                 let mut args = Vec::new();
                 let mut kwargs: Vec<(String, Expr)> = Vec::new();
+                let mut h = 0;
                 if !self.eat(&Tok::RParen) {
                     loop {
                         let is_kw = matches!(self.peek().kind, Tok::Ident(_))
@@ -717,7 +776,8 @@ impl Parser {
                         if is_kw {
                             let k = self.name("an argument name")?;
                             self.bump();
-                            let v = self.expr()?;
+                            let (v, hv) = self.expr_h()?;
+                            h = h.max(hv);
                             if kwargs.iter().any(|(n, _)| *n == k) {
                                 return Err(self.err_here(format!("argument `{k}` given twice")));
                             }
@@ -727,7 +787,9 @@ impl Parser {
                                 return Err(self
                                     .err_here("a positional argument cannot follow a named one"));
                             }
-                            args.push(self.expr()?);
+                            let (a, ha) = self.expr_h()?;
+                            h = h.max(ha);
+                            args.push(a);
                         }
                         if self.eat(&Tok::RParen) {
                             break;
@@ -735,12 +797,16 @@ impl Parser {
                         self.expect(&Tok::Comma, "`,` or `)` in the argument list")?;
                     }
                 }
-                Ok(Expr::Call {
-                    name,
-                    args,
-                    kwargs,
-                    at: (t.line, t.col),
-                })
+                let h = self.over(h, t.line, t.col)?;
+                Ok((
+                    Expr::Call {
+                        name,
+                        args,
+                        kwargs,
+                        at: (t.line, t.col),
+                    },
+                    h,
+                ))
             }
             _ => Err(self.expected("an expression")),
         }

@@ -50,7 +50,52 @@ impl PartialEq for Value {
     }
 }
 
+/// The deepest nesting of lists a value may have (`[[1]]` is 2 levels; a number, string
+/// or pose is 0). A running program that builds a deeper one stops with a
+/// [`Limit`](crate::RuntimeErrorKind::Limit) error, so nothing recursive over a value
+/// (copying, comparing, writing, dropping it) can exhaust the stack.
+pub const MAX_VALUE_DEPTH: usize = 32;
+
+/// The default of [`Config::max_value_size`](crate::Config::max_value_size).
+pub(crate) const DEFAULT_MAX_VALUE_SIZE: usize = 1_000_000;
+
 impl Value {
+    /// The depth (levels of lists) and the size of the value: every list element counts
+    /// one, at any depth, and a string its bytes. Counting stops, without recursion,
+    /// once the depth passes [`MAX_VALUE_DEPTH`] or the size passes `max_size`, so the
+    /// cost is bounded by the part of the value within the bounds.
+    pub(crate) fn measure(&self, max_size: usize) -> (usize, usize) {
+        let mut depth = 0;
+        let mut size = 0usize;
+        let mut todo: Vec<(&Value, usize)> = vec![(self, 0)];
+        while let Some((v, d)) = todo.pop() {
+            match v {
+                Value::List(items) => {
+                    let d = d + 1;
+                    depth = depth.max(d);
+                    size = size.saturating_add(items.len());
+                    if depth > MAX_VALUE_DEPTH || size > max_size {
+                        break;
+                    }
+                    todo.extend(
+                        items
+                            .iter()
+                            .filter(|i| matches!(i, Value::List(_) | Value::Str(_)))
+                            .map(|i| (i, d)),
+                    );
+                }
+                Value::Str(s) => {
+                    size = size.saturating_add(s.len());
+                    if size > max_size {
+                        break;
+                    }
+                }
+                _ => {}
+            }
+        }
+        (depth, size)
+    }
+
     /// The value as a float if it is a number.
     ///
     /// ```
