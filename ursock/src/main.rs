@@ -199,8 +199,17 @@ fn run(cli: Cli) -> Result<(), String> {
                 .map(|s| urscript_interp::Stub::from_arg(s).map_err(|e| format!("--stub {s}: {e}")))
                 .collect::<Result<Vec<_>, _>>()?;
             let text = match script {
-                Some(path) => std::fs::read_to_string(&path)
-                    .map_err(|e| format!("{}: {e}", path.display()))?,
+                Some(path) => {
+                    let bytes =
+                        std::fs::read(&path).map_err(|e| format!("{}: {e}", path.display()))?;
+                    // Not UTF-8: the interpreter names the line and column of the bad byte.
+                    String::from_utf8(bytes).map_err(|e| {
+                        match urscript_interp::Program::parse_bytes(e.as_bytes()) {
+                            Err(pe) => format!("{}: {pe}", path.display()),
+                            Ok(_) => format!("{}: not UTF-8 text", path.display()),
+                        }
+                    })?
+                }
                 None if !eval.is_empty() => eval.join("\n"),
                 None => return Err("give --script FILE or -e 'CALL'".into()),
             };

@@ -112,3 +112,24 @@ fn a_log_that_cannot_be_written_is_said_once_and_the_run_goes_on() {
     assert_eq!(out, "textmsg(1) -> 1\ntextmsg(2) -> 2\n");
     assert_eq!(err.matches("--log: write failed").count(), 1, "{err}");
 }
+
+#[test]
+fn a_script_that_is_not_utf8_or_ends_lines_with_cr_is_read_right() {
+    let dir = std::env::temp_dir();
+    let bad = dir.join(format!("ursock-bad-{}.script", std::process::id()));
+    std::fs::write(&bad, b"textmsg(\"ok\")\nx = \"caf\xE9\"\n").unwrap();
+    let (code, out, err) = run(&["robot", "--script", bad.to_str().unwrap()], b"");
+    let _ = std::fs::remove_file(&bad);
+    assert_ne!(code, 0);
+    assert!(out.is_empty(), "nothing runs: {out}");
+    assert!(
+        err.contains("line 2, column 9: invalid UTF-8 (byte 0xe9)"),
+        "{err}"
+    );
+    let cr = dir.join(format!("ursock-cr-{}.script", std::process::id()));
+    std::fs::write(&cr, b"textmsg(\"a\")\rtextmsg(\"b\")\r").unwrap();
+    let (code, out, err) = run(&["robot", "--script", cr.to_str().unwrap()], b"");
+    let _ = std::fs::remove_file(&cr);
+    assert_eq!(code, 0, "{err}");
+    assert_eq!(out, "textmsg(\"a\") -> a\ntextmsg(\"b\") -> b\n");
+}
