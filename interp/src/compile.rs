@@ -39,6 +39,8 @@ pub(crate) struct CallSite {
     pub assigned: Option<Sym>,
     /// Where the call is.
     pub at: Pos,
+    /// A function the program defines.
+    pub user: bool,
 }
 
 #[derive(Debug, Clone, Copy)]
@@ -673,6 +675,7 @@ impl Compiler {
             slots,
             assigned,
             at,
+            user: user.is_some(),
         });
         let site = (self.sites.len() - 1) as u32;
         let saved = std::mem::replace(&mut self.pos, at);

@@ -279,7 +279,7 @@ impl Machine {
             critical: 0,
         };
         // A stub wins over a built-in, not over a function the program defines.
-        let site_stubs = program
+        let site_stubs: Vec<Option<u32>> = program
             .sites
             .iter()
             .map(|site| {
@@ -291,6 +291,26 @@ impl Machine {
                     .map(|i| i as u32)
             })
             .collect();
+        // As on the controller, a name that is neither defined, built in nor stubbed is a
+        // compile error: the program does not start.
+        let unknown = program
+            .sites
+            .iter()
+            .zip(&site_stubs)
+            .find(|(site, stub)| !site.user && site.builtin.is_none() && stub.is_none())
+            .map(|(site, _)| {
+                let name = &program.names[site.name as usize];
+                RuntimeError::at(
+                    site.at.line,
+                    site.at.col,
+                    Fault::new(
+                        K::UnknownFunction,
+                        format!(
+                            "compile_error_name_not_found:{name}: `{name}` is neither defined in the program nor a built-in of the controller (a URCap's function? stub it)"
+                        ),
+                    ),
+                )
+            });
         Machine {
             ctl: Controller {
                 dh: config.model.dh(),
@@ -305,7 +325,10 @@ impl Machine {
             config,
             globals,
             threads: vec![main],
-            state: State::Running,
+            state: match unknown {
+                Some(e) => State::Error(e),
+                None => State::Running,
+            },
             budget: 0,
             current: 0,
             next_thread_id: 1,
@@ -1221,6 +1244,33 @@ pub(crate) fn binary(op: BinOp, l: Value, r: Value) -> Result<Value, Fault> {
         }
         _ => {}
     }
+    // Strings join with `+`, as on the controller (`"x = " + to_str(x)`), within the
+    // controller's 1023-character strings.
+    if let (Value::Str(a), Value::Str(b), BinOp::Add) = (&l, &r, op) {
+        let len = a.len() + b.len();
+        if len > crate::builtins::MAX_STRING_LEN {
+            return Err(Fault::from(format!(
+                "string + string: the result would be {len} characters, more than {}",
+                crate::builtins::MAX_STRING_LEN
+            )));
+        }
+        let mut out = Vec::with_capacity(len);
+        out.extend_from_slice(a);
+        out.extend_from_slice(b);
+        return Ok(Value::Str(out));
+    }
+    // In arithmetic a bool is the number 0 or 1, as on the controller
+    // (`1 * get_digital_in(0)`, `3 * True + False`).
+    let as_number = |v: Value| match v {
+        Bool(b) => Int(i32::from(b)),
+        other => other,
+    };
+    let (l, r) = match (&l, &r) {
+        (Bool(_), Int(_) | Float(_) | Bool(_)) | (Int(_) | Float(_), Bool(_)) => {
+            (as_number(l), as_number(r))
+        }
+        _ => (l, r),
+    };
     match (&l, &r) {
         (Int(a), Int(b)) => Ok(Int(match op {
             BinOp::Add => a.wrapping_add(*b),

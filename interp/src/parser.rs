@@ -241,6 +241,12 @@ impl Parser {
         if ["end", "elif", "else"].iter().any(|w| self.is_word(w)) {
             return Ok(());
         }
+        // Statements side by side on one line, as the controller accepts them
+        // (`socket_send_line("x") textmsg("y")`, `w = -0.2 f(w)`): a name (or a variable
+        // named `p`, indexed) that cannot continue the expression starts the next one.
+        if matches!(self.peek().kind, Tok::Ident(_) | Tok::PoseOpen) {
+            return Ok(());
+        }
         Err(self.expected("end of line"))
     }
 

@@ -250,7 +250,7 @@ fn runtime_errors_say_the_line() {
         runtime_error("l = [1]\nl[1.5] = 2\n"),
         "line 2: type error: an index must be an int, got float 1.5"
     );
-    assert_eq!(runtime_error("rq_activate()\n"), "line 1: `rq_activate` is not a built-in this interpreter supports (stub it to run past it)");
+    assert_eq!(runtime_error("rq_activate()\n"), "line 1: compile_error_name_not_found:rq_activate: `rq_activate` is neither defined in the program nor a built-in of the controller (a URCap's function? stub it)");
     assert!(runtime_error("while True:\n  x = 1\nend\n").starts_with("line 1: thread `<program>` used too much time: 100000 statements in one step without consuming time"));
 }
 
@@ -320,6 +320,44 @@ fn runtime_errors_are_typed_with_line_and_column() {
             "{src}: {e}"
         );
     }
+}
+
+#[test]
+fn the_controllers_language_rules() {
+    // Statements side by side on one line, separated by spaces or tabs.
+    assert_eq!(
+        msgs("textmsg(\"a\") textmsg(\"b\")\nw = -0.2\ttextmsg(w)\nx = 1 p = [x] textmsg(p[0])\n"),
+        ["a", "b", "-0.2", "1"]
+    );
+    // string + string joins them (up to the controller's 1023 characters).
+    assert_eq!(one("\"x = \" + to_str(1.5) + \"!\""), "x = 1.5!");
+    assert!(
+        runtime_error(&format!("s = \"{}\"\nt = s + s\n", "a".repeat(600)))
+            .contains("more than 1023")
+    );
+    assert!(runtime_error("x = \"a\" + 1\n").contains("type error: string + int"));
+    // A bool in arithmetic is 0 or 1.
+    assert_eq!(one("3 * True + False"), "3");
+    assert_eq!(one("1 * get_standard_digital_in(0)"), "0");
+    assert_eq!(one("True / 2"), "0.5");
+    // Still an error: an expression that does not end where a statement may begin.
+    assert!(Program::parse("x = 1 )\n").is_err());
+}
+
+#[test]
+fn an_unknown_name_stops_the_program_before_it_starts() {
+    // As the controller's compile error: not even the first statement runs.
+    let h = common::run("textmsg(\"never\")\nif False:\n  rq_activate()\nend\n");
+    assert!(h.messages.is_empty(), "{:?}", h.messages);
+    let State::Error(e) = h.m.state() else {
+        panic!("{:?}", h.m.state())
+    };
+    assert_eq!((e.line(), e.column()), (3, 3));
+    assert!(
+        e.message()
+            .starts_with("compile_error_name_not_found:rq_activate:"),
+        "{e}"
+    );
 }
 
 #[test]
