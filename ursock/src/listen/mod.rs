@@ -312,7 +312,7 @@ pub fn listen(opts: ListenOptions) -> Result<(), String> {
         open: AtomicUsize::new(0),
         exit: Notify::new(),
     });
-    let (cmd_tx, cmd_rx) = mpsc::channel::<String>(16);
+    let (cmd_tx, cmd_rx) = mpsc::channel::<Result<String, String>>(16);
     let rt = tokio::runtime::Builder::new_current_thread()
         .enable_all()
         .build()
@@ -336,33 +336,107 @@ pub fn listen(opts: ListenOptions) -> Result<(), String> {
     r
 }
 
-/// Lines typed on stdin, handed to the runtime. Ends at end of input.
-fn spawn_stdin(tx: mpsc::Sender<String>) {
+/// The longest line typed on stdin that is read as a command: a longer one is reported
+/// and skipped to its newline (an endless line cannot grow the process).
+pub const MAX_STDIN_LINE: usize = 1024 * 1024;
+
+/// Lines typed on stdin, handed to the runtime: `Ok(line)`, or `Err(why)` for a line that
+/// is not a command (not UTF-8, longer than [`MAX_STDIN_LINE`]); later lines go on
+/// working. Ends at end of input.
+fn spawn_stdin(tx: mpsc::Sender<Result<String, String>>) {
     std::thread::spawn(move || {
-        use std::io::BufRead;
         let stdin = std::io::stdin();
-        let mut line = String::new();
+        let mut lines = StdinLines::default();
+        let mut lock = stdin.lock();
         loop {
-            line.clear();
-            match stdin.lock().read_line(&mut line) {
-                Ok(0) | Err(_) => return,
-                Ok(_) => {
-                    if tx
-                        .blocking_send(line.trim_end_matches(['\n', '\r']).to_string())
-                        .is_err()
-                    {
-                        return;
+            use std::io::BufRead;
+            let chunk = match lock.fill_buf() {
+                Ok([]) | Err(_) => {
+                    if let Some(last) = lines.finish() {
+                        let _ = tx.blocking_send(last);
                     }
+                    return;
+                }
+                Ok(c) => c,
+            };
+            let n = chunk.len();
+            let ready = lines.push(chunk);
+            lock.consume(n);
+            for item in ready {
+                if tx.blocking_send(item).is_err() {
+                    return;
                 }
             }
         }
     });
 }
 
+/// Splits typed bytes into command lines, bounded by [`MAX_STDIN_LINE`].
+#[derive(Default)]
+struct StdinLines {
+    line: Vec<u8>,
+    /// The line in progress went over the bound: skip to its newline.
+    skipping: bool,
+    number: u64,
+}
+
+impl StdinLines {
+    fn push(&mut self, mut bytes: &[u8]) -> Vec<Result<String, String>> {
+        let mut out = Vec::new();
+        while !bytes.is_empty() {
+            let end = bytes.iter().position(|&b| b == b'\n');
+            let part = &bytes[..end.unwrap_or(bytes.len())];
+            bytes = end.map_or(&[][..], |i| &bytes[i + 1..]);
+            if !self.skipping {
+                if self.line.len() + part.len() > MAX_STDIN_LINE {
+                    self.number += 1;
+                    out.push(Err(format!(
+                        "typed line {}: longer than {MAX_STDIN_LINE} bytes, skipped",
+                        self.number
+                    )));
+                    self.line.clear();
+                    self.skipping = true;
+                } else {
+                    self.line.extend_from_slice(part);
+                }
+            }
+            if end.is_some() {
+                if self.skipping {
+                    self.skipping = false;
+                } else {
+                    out.push(self.take());
+                }
+            }
+        }
+        out
+    }
+
+    /// The end of input: the unfinished last line, if any.
+    fn finish(&mut self) -> Option<Result<String, String>> {
+        (!self.line.is_empty() && !self.skipping).then(|| self.take())
+    }
+
+    fn take(&mut self) -> Result<String, String> {
+        self.number += 1;
+        let bytes = std::mem::take(&mut self.line);
+        String::from_utf8(bytes)
+            .map(|l| l.trim_end_matches('\r').to_string())
+            .map_err(|e| {
+                let at = e.utf8_error().valid_up_to();
+                format!(
+                    "typed line {}: not UTF-8 text (byte 0x{:02X} at column {}), ignored; type \\xHH for a raw byte",
+                    self.number,
+                    e.as_bytes()[at],
+                    at + 1
+                )
+            })
+    }
+}
+
 async fn run(
     shared: Arc<Shared>,
     std_listener: std::net::TcpListener,
-    mut cmds: mpsc::Receiver<String>,
+    mut cmds: mpsc::Receiver<Result<String, String>>,
 ) -> Result<(), String> {
     let listener = TcpListener::from_std(std_listener).map_err(|e| e.to_string())?;
     let mut next_id = 0u64;
@@ -423,7 +497,11 @@ async fn run(
                 }
             },
             cmd = cmds.recv(), if stdin_open => match cmd {
-                Some(line) => operator(&shared, &line),
+                Some(Ok(line)) => operator(&shared, &line),
+                Some(Err(why)) => shared.out.emit(
+                    Kind::Warn,
+                    Event::Error(report::Error { t: now(), line: None, column: None, text: why }),
+                ),
                 None => stdin_open = false,
             },
             _ = shared.exit.notified() => break,
@@ -1056,5 +1134,38 @@ fn handle_var(shared: &Shared, conn: &Conn, d: &Decoded) -> bool {
             }
             false
         }
+    }
+}
+
+#[cfg(test)]
+mod stdin_tests {
+    use super::*;
+
+    #[test]
+    fn typed_lines_are_bounded_and_a_bad_one_stops_nothing() {
+        let mut l = StdinLines::default();
+        let mut got = l.push(b"a\r\nb\xE9c\n");
+        got.extend(l.push(b"par"));
+        got.extend(l.push(b"tial\n"));
+        assert_eq!(got[0], Ok("a".to_string()));
+        assert!(got[1]
+            .as_ref()
+            .unwrap_err()
+            .contains("byte 0xE9 at column 2"));
+        assert_eq!(got[2], Ok("partial".to_string()));
+        // An endless line: reported once, its bytes dropped, the next line read.
+        let big = vec![b'x'; MAX_STDIN_LINE / 2];
+        let mut got = Vec::new();
+        for _ in 0..5 {
+            got.extend(l.push(&big));
+        }
+        assert!(l.line.len() <= MAX_STDIN_LINE);
+        got.extend(l.push(b"more\nnext\n"));
+        assert_eq!(got.len(), 2, "{got:?}");
+        assert!(got[0].as_ref().unwrap_err().contains("longer than"));
+        assert_eq!(got[1], Ok("next".to_string()));
+        // The last line without a newline still counts at the end of input.
+        l.push(b"last");
+        assert_eq!(l.finish(), Some(Ok("last".to_string())));
     }
 }

@@ -19,7 +19,11 @@ struct Row {
     live: bool,
 }
 
-pub fn run(shared: &Shared, cmds: &mpsc::Sender<String>, done: &AtomicBool) -> Result<(), String> {
+pub fn run(
+    shared: &Shared,
+    cmds: &mpsc::Sender<Result<String, String>>,
+    done: &AtomicBool,
+) -> Result<(), String> {
     let mut terminal = ratatui::try_init().map_err(|e| format!("--tui needs a terminal: {e}"))?;
     let r = ui_loop(&mut terminal, shared, cmds, done);
     ratatui::restore();
@@ -60,7 +64,7 @@ fn rows(shared: &Shared) -> Vec<Row> {
 fn ui_loop(
     terminal: &mut ratatui::DefaultTerminal,
     shared: &Shared,
-    cmds: &mpsc::Sender<String>,
+    cmds: &mpsc::Sender<Result<String, String>>,
     done: &AtomicBool,
 ) -> Result<(), String> {
     let mut input = String::new();
@@ -181,7 +185,7 @@ fn ui_loop(
                     Some(id) if !is_command => format!("@{id} {line}"),
                     _ => line.to_string(),
                 };
-                let _ = cmds.blocking_send(cmd);
+                let _ = cmds.blocking_send(Ok(cmd));
             }
             KeyCode::Backspace => {
                 input.pop();
