@@ -553,6 +553,26 @@ pub struct Refused {
     pub max_connections: usize,
 }
 
+/// `listen`: a connection refused because its address already has
+/// `--max-per-address` connections open.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct RefusedAddress {
+    pub t: f64,
+    pub peer: String,
+    pub open_from_address: usize,
+    pub max_per_address: usize,
+}
+
+/// `listen`: every slot was taken; this connection, idle longest, was closed for a new one.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Evicted {
+    pub t: f64,
+    pub conn: u64,
+    pub peer: String,
+    /// Seconds since it last sent a byte.
+    pub idle: f64,
+}
+
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct RefusalsEnded {
     pub t: f64,
@@ -650,6 +670,8 @@ pub enum Event {
     VarRefused(VarRefused),
     UnknownVariable(UnknownVariable),
     VarInvalid(VarInvalid),
+    RefusedAddress(RefusedAddress),
+    Evicted(Evicted),
     // controller
     Dashboard(Dashboard),
 }
@@ -742,6 +764,8 @@ impl Event {
             Event::UnknownVariable(e) => e.t,
             Event::VarInvalid(e) => e.t,
             Event::Dashboard(e) => e.t,
+            Event::RefusedAddress(e) => e.t,
+            Event::Evicted(e) => e.t,
         }
     }
 
@@ -759,6 +783,7 @@ impl Event {
             Event::UnknownVariable(e) => Some(e.conn),
             Event::VarInvalid(e) => Some(e.conn),
             Event::Dashboard(e) => Some(e.conn),
+            Event::Evicted(e) => Some(e.conn),
             _ => None,
         }
     }

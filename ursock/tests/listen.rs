@@ -369,7 +369,8 @@ fn says_why_the_robots_float_read_fails() {
 
 #[test]
 fn max_connections_refuses_beyond_and_says_it_once() {
-    let l = Listener::start(&["--max-connections", "2", "-q"]);
+    // With eviction off (--evict-idle 0), a full table refuses new connections.
+    let l = Listener::start(&["--max-connections", "2", "--evict-idle", "0", "-q"]);
     let _a = robot(&l.addr);
     let _b = robot(&l.addr);
     l.wait_for("[#2]", false);
@@ -529,4 +530,45 @@ fn listen_checks_replies_with_the_read_rules() {
     assert!(run("line OK", "line").is_empty());
     let err = run("bytes 1 2", "binary-integer:1");
     assert!(err.contains("only 2 of the 4 bytes"), "{err}");
+}
+
+#[test]
+fn a_full_table_evicts_the_longest_idle_for_a_new_robot() {
+    // Two connections that never send hold every slot (as a careless or hostile host
+    // would); a robot that comes later is served, and the idlest is closed.
+    let l = Listener::start(&["--max-connections", "2", "--evict-idle", "0.2", "-q"]);
+    let mut idle_a = robot(&l.addr);
+    l.wait_for("[#1]", false);
+    let mut idle_b = robot(&l.addr);
+    l.wait_for("[#2]", false);
+    std::thread::sleep(Duration::from_millis(400));
+    assert_eq!(ask(&l.addr, "GET GOOD\n"), "GOOD 0\n");
+    let err = l.wait_for("evicted", true);
+    assert!(
+        err.contains("[#1]") && err.contains("idle longest"),
+        "{err}"
+    );
+    // The evicted one (the first, idle longest) sees its end; the other stays.
+    let mut buf = [0u8; 4];
+    assert!(matches!(idle_a.read(&mut buf), Ok(0) | Err(_)));
+    idle_b
+        .set_read_timeout(Some(Duration::from_millis(100)))
+        .unwrap();
+    assert!(idle_b.read(&mut buf).is_err(), "still open");
+}
+
+#[test]
+fn one_address_cannot_take_every_slot() {
+    let l = Listener::start(&["--max-per-address", "2", "-q"]);
+    let _a = robot(&l.addr);
+    let _b = robot(&l.addr);
+    l.wait_for("[#2]", false);
+    let mut c = robot(&l.addr);
+    let mut buf = [0u8; 4];
+    assert!(matches!(c.read(&mut buf), Ok(0) | Err(_)));
+    let err = l.wait_for("already open from that address", true);
+    assert!(err.contains("--max-per-address 2"), "{err}");
+    drop(_a);
+    l.wait_for("closed (", false);
+    assert_eq!(ask(&l.addr, "GET Z\n"), "Z 0\n");
 }

@@ -118,8 +118,18 @@ fn a_robot_that_never_reads_does_not_block_a_good_one() {
 
 #[test]
 fn descriptor_exhaustion_is_said_once_and_recovered_from() {
-    let l =
-        Listener::start_with_fd_limit(32, &["--decode", "var", "--max-connections", "1000", "-q"]);
+    let l = Listener::start_with_fd_limit(
+        32,
+        &[
+            "--decode",
+            "var",
+            "--max-connections",
+            "1000",
+            "--max-per-address",
+            "0",
+            "-q",
+        ],
+    );
     let mut held = Vec::new();
     for _ in 0..60 {
         held.push(robot(&l.addr)); // the kernel's backlog takes them; accept runs out

@@ -40,6 +40,10 @@ use out::{Kind, Out};
 use spec::Reply;
 
 pub const DEFAULT_MAX_CONNECTIONS: usize = 64;
+/// Seconds without a byte after which a connection may be evicted when the table is full.
+pub const DEFAULT_EVICT_IDLE_SECS: f64 = 5.0;
+/// Connections from one address at once.
+pub const DEFAULT_MAX_PER_ADDRESS: usize = 16;
 pub const DEFAULT_MAX_VARS: usize = 1024;
 pub const DEFAULT_MAX_QUEUE: usize = 1024 * 1024;
 pub const DEFAULT_WRITE_TIMEOUT_SECS: f64 = 30.0;
@@ -90,10 +94,20 @@ pub struct ListenOptions {
     /// binding, which checks the options and the port).
     #[arg(long)]
     pub exit_after: Option<usize>,
-    /// Connections served at once; more are accepted and closed at once (said once
-    /// per episode).
+    /// Connections served at once. When they are all taken, a new connection evicts the
+    /// one idle longest (nothing received for the longest time), if it has been idle at
+    /// least --evict-idle seconds; otherwise the new one is accepted and closed at once
+    /// (said once per episode).
     #[arg(long, default_value_t = DEFAULT_MAX_CONNECTIONS)]
     pub max_connections: usize,
+    /// Seconds without a byte after which a connection may be evicted for a new one when
+    /// every slot is taken (0: never evict; refuse the new one instead).
+    #[arg(long, value_name = "SECONDS", default_value_t = DEFAULT_EVICT_IDLE_SECS)]
+    pub evict_idle: f64,
+    /// Connections from one address at once (0: no limit): more from it are accepted and
+    /// closed at once, so one host cannot take every slot.
+    #[arg(long, default_value_t = DEFAULT_MAX_PER_ADDRESS)]
+    pub max_per_address: usize,
     /// Variables the server keeps (names at most 128 bytes); SET of a new name beyond
     /// it is refused and said.
     #[arg(long, default_value_t = DEFAULT_MAX_VARS)]
@@ -136,6 +150,11 @@ struct Shared {
     rules: Vec<rules::Rule>,
     robot_reads: Option<ReadCall>,
     max_connections: usize,
+    /// Idle time after which a connection may be evicted (`None`: never).
+    evict_idle: Option<Duration>,
+    max_per_address: usize,
+    /// Open connections per peer address.
+    per_address: Mutex<std::collections::HashMap<std::net::IpAddr, usize>>,
     max_queue: usize,
     write_timeout: Duration,
     exit_after: Option<usize>,
@@ -153,6 +172,8 @@ struct Stats {
     queued: AtomicUsize,
     rx_bytes: AtomicU64,
     tx_bytes: AtomicU64,
+    /// When the last byte came from the robot (or it connected).
+    last_rx: Mutex<Instant>,
     close: Notify,
     reason: Mutex<Option<String>>,
 }
@@ -299,6 +320,10 @@ pub fn listen(opts: ListenOptions) -> Result<(), String> {
         rules,
         robot_reads,
         max_connections: opts.max_connections,
+        evict_idle: (opts.evict_idle > 0.0)
+            .then(|| Duration::try_from_secs_f64(opts.evict_idle).unwrap_or(Duration::MAX)),
+        max_per_address: opts.max_per_address,
+        per_address: Mutex::new(std::collections::HashMap::new()),
         max_queue: opts.max_queue.max(1),
         write_timeout: if opts.write_timeout > 0.0 && opts.write_timeout.is_finite() {
             Duration::try_from_secs_f64(opts.write_timeout).unwrap_or(Duration::MAX)
@@ -456,8 +481,27 @@ async fn run(
                             seconds: since.elapsed().as_secs_f64(),
                         }));
                     }
+                    // One host may not take every slot.
+                    let ip = peer.ip();
+                    let from_ip = shared
+                        .per_address
+                        .lock()
+                        .unwrap_or_else(|p| p.into_inner())
+                        .get(&ip)
+                        .copied()
+                        .unwrap_or(0);
+                    if shared.max_per_address > 0 && from_ip >= shared.max_per_address {
+                        shared.out.emit(Kind::Warn, Event::RefusedAddress(report::RefusedAddress {
+                            t: now(),
+                            peer: peer.to_string(),
+                            open_from_address: from_ip,
+                            max_per_address: shared.max_per_address,
+                        }));
+                        drop(stream);
+                        continue;
+                    }
                     let open = shared.open.load(Ordering::Relaxed);
-                    if open >= shared.max_connections {
+                    if open >= shared.max_connections && !evict_idlest(&shared) {
                         if refused == 0 {
                             shared.out.emit(Kind::Warn, Event::Refused(report::Refused {
                                 t: now(),
@@ -480,6 +524,12 @@ async fn run(
                     }
                     next_id += 1;
                     shared.open.fetch_add(1, Ordering::Relaxed);
+                    *shared
+                        .per_address
+                        .lock()
+                        .unwrap_or_else(|p| p.into_inner())
+                        .entry(ip)
+                        .or_insert(0) += 1;
                     let s = Arc::clone(&shared);
                     tokio::spawn(serve(s, next_id, stream, peer.to_string()));
                 }
@@ -508,6 +558,44 @@ async fn run(
         }
     }
     Ok(())
+}
+
+/// Every slot is taken: evicts the connection idle longest, if it has been idle at least
+/// `evict_idle`, and says so; false if none may go (the new connection is refused).
+fn evict_idlest(shared: &Shared) -> bool {
+    let Some(min_idle) = shared.evict_idle else {
+        return false;
+    };
+    let victim = shared
+        .conns
+        .lock()
+        .unwrap_or_else(|p| p.into_inner())
+        .values()
+        .filter(|c| c.stats.reason().is_none())
+        .map(|c| {
+            let last = *c.stats.last_rx.lock().unwrap_or_else(|p| p.into_inner());
+            (last.elapsed(), Arc::clone(c))
+        })
+        .max_by_key(|(idle, _)| *idle);
+    match victim {
+        Some((idle, c)) if idle >= min_idle => {
+            c.stats.kill(format!(
+                "evicted: every slot was taken and it was the longest idle ({:.1} s without a byte)",
+                idle.as_secs_f64()
+            ));
+            shared.out.emit(
+                Kind::Warn,
+                Event::Evicted(report::Evicted {
+                    t: now(),
+                    conn: c.id,
+                    peer: c.peer.clone(),
+                    idle: (idle.as_secs_f64() * 1e3).round() / 1e3,
+                }),
+            );
+            true
+        }
+        _ => false,
+    }
 }
 
 /// One typed line: `list`, `close N`, `help`, `[@N] REPLY-SPEC`.
@@ -775,6 +863,7 @@ async fn serve(shared: Arc<Shared>, id: u64, stream: TcpStream, peer: String) {
         queued: AtomicUsize::new(0),
         rx_bytes: AtomicU64::new(0),
         tx_bytes: AtomicU64::new(0),
+        last_rx: Mutex::new(Instant::now()),
         close: Notify::new(),
         reason: Mutex::new(None),
     });
@@ -833,6 +922,7 @@ async fn serve(shared: Arc<Shared>, id: u64, stream: TcpStream, peer: String) {
         };
         if n > 0 {
             stats.rx_bytes.fetch_add(n as u64, Ordering::Relaxed);
+            *stats.last_rx.lock().unwrap_or_else(|p| p.into_inner()) = Instant::now();
             *conn.waiting_since.lock().unwrap_or_else(|p| p.into_inner()) = Some(Instant::now());
         }
         if n > 0 && shared.out.traffic_wanted() {
@@ -889,6 +979,15 @@ async fn serve(shared: Arc<Shared>, id: u64, stream: TcpStream, peer: String) {
         .unwrap_or_else(|p| p.into_inner())
         .remove(&id);
     shared.open.fetch_sub(1, Ordering::Relaxed);
+    if let Ok(addr) = peer.parse::<std::net::SocketAddr>() {
+        let mut per = shared.per_address.lock().unwrap_or_else(|p| p.into_inner());
+        if let Some(n) = per.get_mut(&addr.ip()) {
+            *n = n.saturating_sub(1);
+            if *n == 0 {
+                per.remove(&addr.ip());
+            }
+        }
+    }
     let killed = stats.reason();
     let refused_sets = conn.refused_sets.load(Ordering::Relaxed);
     drop(conn);

@@ -271,6 +271,14 @@ pub fn human(event: &Event, show_max: usize) -> Vec<String> {
         )),
         Event::VarRefused(e) => one(e.text.clone()),
         Event::VarInvalid(e) => one(e.text.clone()),
+        Event::RefusedAddress(e) => one(format!(
+            "refused connection from {}: {} already open from that address (--max-per-address {})",
+            e.peer, e.open_from_address, e.max_per_address
+        )),
+        Event::Evicted(e) => one(format!(
+            "evicted (every slot taken, idle longest: {:.1} s without a byte) to make room",
+            e.idle
+        )),
         Event::Dashboard(e) => std::iter::once(format!("<- {:?}", e.command))
             .chain(e.reply.iter().map(|l| format!("-> {l:?}")))
             .collect(),
