@@ -88,6 +88,8 @@ fn server(listener: TcpListener, events: mpsc::Sender<String>) -> Result<(), Str
     stream.set_nodelay(true).map_err(|e| e.to_string())?;
     let mut rx = RecvBuffer::with_capacity(4096);
     let mut vars = Vars::new(crate::listen::DEFAULT_MAX_VARS);
+    // The demo's one robot creates its few names.
+    let mut created = 0;
     for step in SERVER_SCRIPT {
         let mut dec = step.format.decoder(b"")?;
         let (text, reply) = loop {
@@ -97,7 +99,7 @@ fn server(listener: TcpListener, events: mpsc::Sender<String>) -> Result<(), Str
                     let mut reply = None;
                     match msg {
                         Message::Var(VarMessage::Set { name, value }) => {
-                            let _ = vars.set(name, value);
+                            let _ = vars.set(name, value, &mut created);
                         }
                         Message::Var(VarMessage::Get { name }) => {
                             let mut out = Vec::new();

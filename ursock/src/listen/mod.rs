@@ -109,7 +109,8 @@ pub struct ListenOptions {
     #[arg(long, default_value_t = DEFAULT_MAX_PER_ADDRESS)]
     pub max_per_address: usize,
     /// Variables the server keeps (names at most 128 bytes); SET of a new name beyond
-    /// it is refused and said.
+    /// it is refused and said. One connection may create at most half of them, so a
+    /// flood of new names from one robot leaves room for the others.
     #[arg(long, default_value_t = DEFAULT_MAX_VARS)]
     pub max_vars: usize,
     /// Bytes of replies queued for one robot; a robot that lets more pile up is not
@@ -206,6 +207,8 @@ struct Conn {
     /// The last reply was a float tuple followed by LF (left in the robot's buffer).
     after_tuple_lf: AtomicBool,
     refused_sets: AtomicU64,
+    /// Variable names this connection created (bounded by `Vars::quota`).
+    created_vars: Mutex<usize>,
     /// When the robot's last message came, if no reply has been sent since: a reply more
     /// than [`ROBOT_READ_TIMEOUT`] later finds the robot's read already timed out.
     waiting_since: Mutex<Option<Instant>>,
@@ -875,6 +878,7 @@ async fn serve(shared: Arc<Shared>, id: u64, stream: TcpStream, peer: String) {
         stats: Arc::clone(&stats),
         after_tuple_lf: AtomicBool::new(false),
         refused_sets: AtomicU64::new(0),
+        created_vars: Mutex::new(0),
         waiting_since: Mutex::new(None),
     });
     shared
@@ -1137,11 +1141,11 @@ fn handle_var(shared: &Shared, conn: &Conn, d: &Decoded) -> bool {
             );
             // SET expects no reply: the robot is not waiting in a read for one.
             *conn.waiting_since.lock().unwrap_or_else(|p| p.into_inner()) = None;
-            let outcome = shared
-                .vars
-                .lock()
-                .unwrap_or_else(|p| p.into_inner())
-                .set(name, value);
+            let outcome = shared.vars.lock().unwrap_or_else(|p| p.into_inner()).set(
+                name,
+                value,
+                &mut conn.created_vars.lock().unwrap_or_else(|p| p.into_inner()),
+            );
             match outcome {
                 SetOutcome::Stored => {}
                 SetOutcome::Full(max) => {
@@ -1151,6 +1155,16 @@ fn handle_var(shared: &Shared, conn: &Conn, d: &Decoded) -> bool {
                             conn: id,
                             name: name.to_string(),
                             text: format!("SET {name} refused: the variable table is full ({max} names, --max-vars); further refusals on this connection are counted"),
+                        }));
+                    }
+                }
+                SetOutcome::Quota(quota) => {
+                    if conn.refused_sets.fetch_add(1, Ordering::Relaxed) == 0 {
+                        shared.out.emit(Kind::Warn, Event::VarRefused(report::VarRefused {
+                            t: now(),
+                            conn: id,
+                            name: name.to_string(),
+                            text: format!("SET {name} refused: this connection has created {quota} names, its share (half of --max-vars); a GET of it is answered 0; further refusals on this connection are counted"),
                         }));
                     }
                 }
