@@ -63,8 +63,16 @@ fn decoder_seeds_are_split_invariant() {
         66,
     );
     replay("stx_etx", || StxEtxDecoder::with_max_len(64), 66);
-    replay("var_message", VarMessageDecoder::new, 257);
-    replay("var_reply", || VarReplyDecoder::new("POS_X").unwrap(), 257);
+    replay(
+        "var_message",
+        VarMessageDecoder::new,
+        urscript_socket::var::DEFAULT_MAX_VAR_LINE_LEN + 1,
+    );
+    replay(
+        "var_reply",
+        || VarReplyDecoder::new("POS_X").unwrap(),
+        urscript_socket::var::DEFAULT_MAX_VAR_LINE_LEN + 1,
+    );
     replay(
         "read_string",
         || ReadStringDecoder::new(b">", b"<", false).unwrap(),

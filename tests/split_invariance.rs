@@ -106,12 +106,12 @@ proptest! {
 
     #[test]
     fn var_messages(input in stream(&[b"SET ", b"GET ", b"A", b"POS_X", b" ", b"12", b"-3", b"x", b"\n", b"\r\n"], 60), cuts in cuts()) {
-        check(VarMessageDecoder::new, &input, &cuts, 257);
+        check(VarMessageDecoder::new, &input, &cuts, urscript_socket::var::DEFAULT_MAX_VAR_LINE_LEN + 1);
     }
 
     #[test]
     fn var_replies(input in stream(&[b"POS ", b"PRE ", b"077", b"-1", b"\n", b"x"], 60), cuts in cuts()) {
-        check(|| VarReplyDecoder::new("PRE").unwrap(), &input, &cuts, 257);
+        check(|| VarReplyDecoder::new("PRE").unwrap(), &input, &cuts, urscript_socket::var::DEFAULT_MAX_VAR_LINE_LEN + 1);
     }
 
     #[test]
@@ -228,7 +228,7 @@ proptest! {
     #[test]
     fn var_replies_any_name(name in "[ -~]{0,70}", input in stream(&[b"A ", b"AB ", b"1", b"-2", b"\n", b"x"], 40), cuts in cuts()) {
         if VarReplyDecoder::new(&name).is_ok() {
-            check(|| VarReplyDecoder::new(&name).unwrap(), &input, &cuts, 257);
+            check(|| VarReplyDecoder::new(&name).unwrap(), &input, &cuts, urscript_socket::var::DEFAULT_MAX_VAR_LINE_LEN + 1);
         }
     }
 

@@ -30,8 +30,8 @@ fuzz_target!(|data: &[u8]| {
         4 => check_split(|| LineDecoder::with_max_len(n * 3), data, n * 3 + 1),
         5 => check_split(|| DelimitedDecoder::with_max_len(&b"<>!"[..n.min(3)], n * 4).unwrap(), data, n * 4 + 3),
         6 => check_split(|| StxEtxDecoder::with_max_len(n * 3), data, n * 3 + 2),
-        7 => check_split(VarMessageDecoder::new, data, 257),
-        8 => check_split(|| VarReplyDecoder::new("A").unwrap(), data, 257),
+        7 => check_split(VarMessageDecoder::new, data, urscript_socket::var::DEFAULT_MAX_VAR_LINE_LEN + 1),
+        8 => check_split(|| VarReplyDecoder::new("A").unwrap(), data, urscript_socket::var::DEFAULT_MAX_VAR_LINE_LEN + 1),
         9 => check_split(|| ReadStringDecoder::new(b"<<", br"\r", true).unwrap(), data, usize::MAX),
         _ => check_split(|| ValueLineDecoder::with_max_len(n * 3), data, n * 3 + 1),
     }
