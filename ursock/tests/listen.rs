@@ -572,3 +572,16 @@ fn one_address_cannot_take_every_slot() {
     l.wait_for("closed (", false);
     assert_eq!(ask(&l.addr, "GET Z\n"), "Z 0\n");
 }
+
+#[test]
+fn a_log_that_cannot_be_written_is_said_once_and_the_session_goes_on() {
+    if !std::path::Path::new("/dev/full").exists() {
+        eprintln!("no /dev/full here: skipped");
+        return;
+    }
+    let l = Listener::start(&["--log", "/dev/full", "--decode", "var"]);
+    assert_eq!(ask(&l.addr, "SET A 1\nGET A\n"), "A 1\n");
+    let err = l.wait_for("--log: write failed", true);
+    assert_eq!(err.matches("--log: write failed").count(), 1, "{err}");
+    assert_eq!(ask(&l.addr, "GET A\n"), "A 1\n");
+}

@@ -124,8 +124,14 @@ impl Out {
     fn log_line(&self, line: &str) {
         let mut log = self.log.lock().unwrap_or_else(|p| p.into_inner());
         if let Some(w) = log.as_mut() {
-            let _ = writeln!(w, "{line}");
-            let _ = w.flush();
+            if let Err(e) = writeln!(w, "{line}").and_then(|()| w.flush()) {
+                // A full disk must not stop the session: stop logging, say so once.
+                *log = None;
+                let _ = writeln!(
+                    std::io::stderr(),
+                    "ursock: --log: write failed ({e}), log closed; the session goes on"
+                );
+            }
         }
     }
 
