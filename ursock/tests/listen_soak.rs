@@ -181,3 +181,43 @@ fn set_flood_against_max_vars_is_refused_and_bounded() {
     println!("RSS after 100,000 SETs against --max-vars 100: {rss} kB");
     assert!(rss < 64 * 1024, "{rss} kB");
 }
+
+#[test]
+fn a_reply_larger_than_the_queue_is_refused_and_the_robot_stays() {
+    let mut l = Listener::start(&["--max-queue", "100"]);
+    let mut s = robot(&l.addr);
+    l.wait_for("[#1]", false);
+    l.type_line(&format!("line {}", "x".repeat(300)));
+    let err = l.wait_for("not sent: larger than --max-queue 100", true);
+    assert!(err.contains("reply of 301 bytes"), "{err}");
+    // The robot is still served.
+    l.type_line("line ok");
+    assert_eq!(read_line(&mut s), "ok\n");
+}
+
+#[test]
+fn a_robot_that_asks_many_times_before_reading_is_answered_every_time() {
+    // 200,000 GETs written before the first read: the listener reads no faster than it
+    // can answer, and the robot, which does read, gets every answer.
+    let l = Listener::start(&["--decode", "var", "-q"]);
+    let s = robot(&l.addr);
+    let mut w = s.try_clone().unwrap();
+    let writer = std::thread::spawn(move || {
+        let batch = "GET X\n".repeat(10_000);
+        for _ in 0..20 {
+            w.write_all(batch.as_bytes()).unwrap();
+        }
+    });
+    let mut r = std::io::BufReader::new(s);
+    let mut line = String::new();
+    for i in 0..200_000 {
+        line.clear();
+        use std::io::BufRead;
+        assert!(
+            r.read_line(&mut line).unwrap() > 0,
+            "closed after {i} answers"
+        );
+        assert_eq!(line, "X 0\n");
+    }
+    writer.join().unwrap();
+}

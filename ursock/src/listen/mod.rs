@@ -781,6 +781,22 @@ fn send(shared: &Shared, conn: &Conn, reply: &Reply, origin: &str) {
         );
     }
     let len = reply.bytes.len();
+    if len > shared.max_queue {
+        // Too big for the queue whatever the robot does: refused up front, the robot stays.
+        shared.out.emit(
+            Kind::Warn,
+            Event::Error(report::Error {
+                t: now(),
+                line: None,
+                column: None,
+                text: format!(
+                    "[#{}] reply of {len} bytes not sent: larger than --max-queue {} (raise it to send it)",
+                    conn.id, shared.max_queue
+                ),
+            }),
+        );
+        return;
+    }
     let queued = conn.stats.queued.load(Ordering::Relaxed);
     if queued + len > shared.max_queue {
         conn.stats.kill(format!(
@@ -909,6 +925,15 @@ async fn serve(shared: Arc<Shared>, id: u64, stream: TcpStream, peer: String) {
     let mut chunk = vec![0u8; READ_CHUNK];
     let mut peer_closed = false;
     loop {
+        // Fairness: while half the reply queue is waiting, read no more requests and let
+        // the writer run, so a robot that sends many requests before reading (and does
+        // read) is answered, never dropped as "not reading". One that never reads is
+        // caught by --write-timeout.
+        while stats.queued.load(Ordering::Relaxed) > shared.max_queue / 2
+            && stats.reason().is_none()
+        {
+            tokio::time::sleep(Duration::from_millis(1)).await;
+        }
         let n = tokio::select! {
             _ = stats.close.notified() => break,
             r = rd.read(&mut chunk) => match r {
