@@ -22,14 +22,30 @@ pub struct Rule {
 }
 
 pub fn load(path: &std::path::Path) -> Result<Vec<Rule>, String> {
-    let text =
-        std::fs::read_to_string(path).map_err(|e| format!("--rules {}: {e}", path.display()))?;
-    parse(&text).map_err(|e| format!("--rules {}: {e}", path.display()))
+    let bytes = std::fs::read(path).map_err(|e| format!("--rules {}: {e}", path.display()))?;
+    let text = text_of(&bytes).map_err(|e| format!("--rules {}: {e}", path.display()))?;
+    parse(text).map_err(|e| format!("--rules {}: {e}", path.display()))
+}
+
+/// The file as text; if it is not UTF-8, where the first bad byte is (line, column).
+fn text_of(bytes: &[u8]) -> Result<&str, String> {
+    std::str::from_utf8(bytes).map_err(|e| {
+        let at = e.valid_up_to();
+        let before = &bytes[..at];
+        let line = before.iter().filter(|&&b| b == b'\n').count() + 1;
+        let col = at - before.iter().rposition(|&b| b == b'\n').map_or(0, |i| i + 1) + 1;
+        format!(
+            "line {line}, column {col}: not UTF-8 (byte 0x{:02X}); write the bytes of a reply as hex",
+            bytes[at]
+        )
+    })
 }
 
 pub fn parse(text: &str) -> Result<Vec<Rule>, String> {
     let mut rules = Vec::new();
-    for (i, line) in text.lines().enumerate() {
+    // Lines end with LF, CR LF or CR alone.
+    let text = text.replace("\r\n", "\n");
+    for (i, line) in text.split(['\n', '\r']).enumerate() {
         let t = line.trim();
         if t.is_empty() || t.starts_with('#') {
             continue;
@@ -80,7 +96,27 @@ pub fn glob(p: &[u8], s: &[u8]) -> bool {
 
 #[cfg(test)]
 mod tests {
-    use super::glob;
+    use super::{glob, parse, text_of};
+
+    #[test]
+    fn rules_files_name_their_lines_whatever_ends_them() {
+        let e = text_of(b"a => line x\nb => line \xE9\n")
+            .err()
+            .unwrap_or_default();
+        assert!(
+            e.starts_with("line 2, column 11: not UTF-8 (byte 0xE9)"),
+            "{e}"
+        );
+        for text in [
+            "a => line x\r\nbad\r\n",
+            "a => line x\rbad\r",
+            "a => line x\nbad\n",
+        ] {
+            let e = parse(text).err().unwrap_or_default();
+            assert!(e.starts_with("line 2:"), "{text:?}: {e}");
+        }
+        assert_eq!(parse("a => line x\r\nb => line y\r\n").unwrap().len(), 2);
+    }
 
     #[test]
     fn globs() {
