@@ -59,33 +59,8 @@ pub(crate) struct Arm {
     pub conveyor: Option<usize>,
     /// Path offsetting.
     pub path_offset: PathOffset,
-    // --- The world's side: fixed values a test may change. ---
-    /// Digital inputs: standard 0-7, configurable 8-15, tool 16-17. Default all False.
-    pub digital_in: [bool; 18],
-    /// Analog inputs: standard 0-1, tool 2-3 (A or V). Default 0.
-    pub analog_in: [f64; 4],
-    /// RTDE input registers (an RTDE client writes them). Default 0 / False.
-    pub input_int_regs: [i32; 48],
-    pub input_float_regs: [f64; 48],
-    pub input_bool_regs: [bool; 128],
-    /// Force/torque at the flange (N, Nm). Default 0 (nothing pushes the virtual arm).
-    pub tcp_force: [f64; 6],
-    /// Joint torques beyond what moving the arm itself takes (Nm). Default 0.
-    pub joint_torques: [f64; 6],
-    /// Joint temperatures (°C). Default 35.0 each.
-    pub joint_temp: [f64; 6],
-    /// Control box temperature (°C). Default 30.0.
-    pub controller_temp: f64,
-    /// Tool temperature (°C). Default 32.0.
-    pub tool_temp: f64,
-    /// Tool current (A). Default 0.0 (nothing draws power from the tool connector).
-    pub tool_current: f64,
-    /// What the virtual operator answers `request_*_from_primary_client`: False, 0, 0.0,
-    /// "" by default (answered at once).
-    pub operator_bool: bool,
-    pub operator_int: i32,
-    pub operator_float: f64,
-    pub operator_string: Vec<u8>,
+    /// What the robot senses of the world: fixed values a test may change.
+    pub world: World,
 }
 
 /// A conveyor encoder (`encoder_*`): how it is fed and its tick count.
@@ -160,6 +135,60 @@ impl Default for Arm {
             encoders: [Encoder::default(); 2],
             conveyor: None,
             path_offset: PathOffset::default(),
+            world: World::default(),
+        }
+    }
+}
+
+/// What the virtual robot senses of the world: inputs, measurements, the operator's
+/// answers. Each starts at the fixed value documented beside it; a test (or a driver that
+/// simulates a cell) sets them through [`Machine::world_mut`](crate::Machine::world_mut).
+///
+/// ```
+/// use std::time::Duration;
+/// use urscript_interp::{Config, Machine, Program};
+/// let p = Program::parse("textmsg(get_standard_digital_in(2), get_joint_temp(0))\n").unwrap();
+/// let mut m = Machine::new(p, Config::default());
+/// m.world_mut().digital_in[2] = true;
+/// m.world_mut().joint_temp[0] = 41.5;
+/// m.run_until(Duration::ZERO);
+/// # let mut text = String::new();
+/// # while let Some(urscript_interp::Event::Message(msg)) = m.poll_event() { text = msg.text; }
+/// assert_eq!(text, "True41.5");
+/// ```
+#[derive(Debug, Clone, PartialEq)]
+pub struct World {
+    /// Digital inputs: standard 0-7, configurable 8-15, tool 16-17. Default all False.
+    pub digital_in: [bool; 18],
+    /// Analog inputs: standard 0-1, tool 2-3 (A or V). Default 0.
+    pub analog_in: [f64; 4],
+    /// RTDE input registers (an RTDE client writes them). Default 0 / False.
+    pub input_int_regs: [i32; 48],
+    pub input_float_regs: [f64; 48],
+    pub input_bool_regs: [bool; 128],
+    /// Force/torque at the flange (N, Nm). Default 0 (nothing pushes the virtual arm).
+    pub tcp_force: [f64; 6],
+    /// Joint torques beyond what moving the arm itself takes (Nm). Default 0.
+    pub joint_torques: [f64; 6],
+    /// Joint temperatures (°C). Default 35.0 each.
+    pub joint_temp: [f64; 6],
+    /// Control box temperature (°C). Default 30.0.
+    pub controller_temp: f64,
+    /// Tool temperature (°C). Default 32.0.
+    pub tool_temp: f64,
+    /// Tool current (A). Default 0.0 (nothing draws power from the tool connector).
+    pub tool_current: f64,
+    /// What the virtual operator answers `request_*_from_primary_client`: False, 0, 0.0,
+    /// "" by default (answered at once).
+    pub operator_bool: bool,
+    pub operator_int: i32,
+    pub operator_float: f64,
+    pub operator_string: Vec<u8>,
+}
+
+impl Default for World {
+    fn default() -> Self {
+        World {
             digital_in: [false; 18],
             analog_in: [0.0; 4],
             input_int_regs: [0; 48],

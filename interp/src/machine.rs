@@ -412,6 +412,17 @@ impl Machine {
         self.ctl.arm.q
     }
 
+    /// What the robot senses of the world (inputs, measurements, the operator's answers).
+    pub fn world(&self) -> &crate::controller::World {
+        &self.ctl.arm.world
+    }
+
+    /// The world, to change what the program will sense: a digital input switching, a
+    /// temperature, an RTDE input register.
+    pub fn world_mut(&mut self) -> &mut crate::controller::World {
+        &mut self.ctl.arm.world
+    }
+
     /// The arm's commanded tool pose.
     pub fn tcp_pose(&self) -> [f64; 6] {
         self.ctl.tcp_pose()

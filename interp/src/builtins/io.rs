@@ -599,7 +599,7 @@ fn get_digital_in(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
             k => k,
         },
     };
-    Ok(Out::Value(Value::Bool(c.arm.digital_in[k])))
+    Ok(Out::Value(Value::Bool(c.arm.world.digital_in[k])))
 }
 
 fn set_analog_out(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
@@ -625,19 +625,19 @@ fn get_analog_in(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
         "get_tool_analog_in" => 2 + a.index(0, 2, "analog input")?,
         _ => a.index(0, 4, "analog input")?,
     };
-    Ok(Out::Value(Value::Float(c.arm.analog_in[k])))
+    Ok(Out::Value(Value::Float(c.arm.world.analog_in[k])))
 }
 
 fn read_input(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
     let arm = &c.arm;
     Ok(Out::Value(match a.name {
         "read_input_integer_register" => {
-            Value::Int(arm.input_int_regs[a.index(0, 48, "register")?])
+            Value::Int(arm.world.input_int_regs[a.index(0, 48, "register")?])
         }
         "read_input_float_register" => {
-            Value::Float(arm.input_float_regs[a.index(0, 48, "register")?])
+            Value::Float(arm.world.input_float_regs[a.index(0, 48, "register")?])
         }
-        _ => Value::Bool(arm.input_bool_regs[a.index(0, 128, "register")?]),
+        _ => Value::Bool(arm.world.input_bool_regs[a.index(0, 128, "register")?]),
     }))
 }
 
@@ -853,10 +853,10 @@ fn request(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
     }
     let arm = &c.arm;
     Ok(Out::Value(match a.name {
-        "request_boolean_from_primary_client" => Value::Bool(arm.operator_bool),
-        "request_integer_from_primary_client" => Value::Int(arm.operator_int),
-        "request_float_from_primary_client" => Value::Float(arm.operator_float),
-        _ => Value::Str(arm.operator_string.clone()),
+        "request_boolean_from_primary_client" => Value::Bool(arm.world.operator_bool),
+        "request_integer_from_primary_client" => Value::Int(arm.world.operator_int),
+        "request_float_from_primary_client" => Value::Float(arm.world.operator_float),
+        _ => Value::Str(arm.world.operator_string.clone()),
     }))
 }
 

@@ -541,20 +541,20 @@ mod tests {
         assert_eq!(call(&mut c, "get_tool_temp", vec![]), Value::Float(32.0));
         assert_eq!(call(&mut c, "get_tool_current", vec![]), Value::Float(0.0));
         let arm = &mut c.arm;
-        arm.joint_temp[2] = 61.5;
-        arm.controller_temp = 41.0;
-        arm.tool_temp = 45.0;
-        arm.tool_current = 0.6;
-        arm.joint_torques = [1.0, 2.0, 3.0, 4.0, 5.0, 6.0];
-        arm.tcp_force = [3.0, 0.0, 4.0, 0.0, 0.0, 0.5];
-        arm.digital_in[16 + 1] = true; // tool input 1
-        arm.digital_in[8 + 2] = true; // configurable input 2
-        arm.analog_in[1] = 4.5;
-        arm.input_int_regs[24] = 7;
-        arm.input_float_regs[47] = 2.5;
-        arm.input_bool_regs[127] = true;
-        arm.operator_int = 12;
-        arm.operator_string = b"part A".to_vec();
+        arm.world.joint_temp[2] = 61.5;
+        arm.world.controller_temp = 41.0;
+        arm.world.tool_temp = 45.0;
+        arm.world.tool_current = 0.6;
+        arm.world.joint_torques = [1.0, 2.0, 3.0, 4.0, 5.0, 6.0];
+        arm.world.tcp_force = [3.0, 0.0, 4.0, 0.0, 0.0, 0.5];
+        arm.world.digital_in[16 + 1] = true; // tool input 1
+        arm.world.digital_in[8 + 2] = true; // configurable input 2
+        arm.world.analog_in[1] = 4.5;
+        arm.world.input_int_regs[24] = 7;
+        arm.world.input_float_regs[47] = 2.5;
+        arm.world.input_bool_regs[127] = true;
+        arm.world.operator_int = 12;
+        arm.world.operator_string = b"part A".to_vec();
         assert_eq!(
             call(&mut c, "get_joint_temp", vec![Value::Int(2)]),
             Value::Float(61.5)

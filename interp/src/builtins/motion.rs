@@ -812,11 +812,11 @@ fn tcp_speed(c: &mut Controller, _: &mut Args) -> Result<Out, Fault> {
 }
 
 fn tcp_force(c: &mut Controller, _: &mut Args) -> Result<Out, Fault> {
-    Ok(Out::Value(Value::Pose(c.arm.tcp_force)))
+    Ok(Out::Value(Value::Pose(c.arm.world.tcp_force)))
 }
 
 fn force(c: &mut Controller, _: &mut Args) -> Result<Out, Fault> {
-    let f = &c.arm.tcp_force;
+    let f = &c.arm.world.tcp_force;
     Ok(Out::Value(Value::Float(
         (f[0] * f[0] + f[1] * f[1] + f[2] * f[2]).sqrt(),
     )))
@@ -868,19 +868,19 @@ fn set_payload(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
 }
 
 fn joint_torques(c: &mut Controller, _: &mut Args) -> Result<Out, Fault> {
-    Ok(Out::Value(floats(c.arm.joint_torques)))
+    Ok(Out::Value(floats(c.arm.world.joint_torques)))
 }
 
 fn joint_temp(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
     let j = a.index(0, 6, "joint")?;
-    Ok(Out::Value(Value::Float(c.arm.joint_temp[j])))
+    Ok(Out::Value(Value::Float(c.arm.world.joint_temp[j])))
 }
 
 fn scalar(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
     Ok(Out::Value(Value::Float(match a.name {
-        "get_controller_temp" => c.arm.controller_temp,
-        "get_tool_temp" => c.arm.tool_temp,
-        _ => c.arm.tool_current,
+        "get_controller_temp" => c.arm.world.controller_temp,
+        "get_tool_temp" => c.arm.world.tool_temp,
+        _ => c.arm.world.tool_current,
     })))
 }
 
