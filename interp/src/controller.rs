@@ -162,9 +162,11 @@ pub struct World {
     pub digital_in: [bool; 18],
     /// Analog inputs: standard 0-1, tool 2-3 (A or V). Default 0.
     pub analog_in: [f64; 4],
-    /// RTDE input registers (an RTDE client writes them). Default 0 / False.
+    /// RTDE input int registers 0-47 (an RTDE client writes them). Default 0.
     pub input_int_regs: [i32; 48],
+    /// RTDE input float registers 0-47. Default 0.0.
     pub input_float_regs: [f64; 48],
+    /// RTDE input bool registers 0-127. Default False.
     pub input_bool_regs: [bool; 128],
     /// Force/torque at the flange (N, Nm). Default 0 (nothing pushes the virtual arm).
     pub tcp_force: [f64; 6],
@@ -178,11 +180,14 @@ pub struct World {
     pub tool_temp: f64,
     /// Tool current (A). Default 0.0 (nothing draws power from the tool connector).
     pub tool_current: f64,
-    /// What the virtual operator answers `request_*_from_primary_client`: False, 0, 0.0,
-    /// "" by default (answered at once).
+    /// What the virtual operator answers `request_boolean_from_primary_client` (at once).
+    /// Default False.
     pub operator_bool: bool,
+    /// The answer to `request_integer_from_primary_client`. Default 0.
     pub operator_int: i32,
+    /// The answer to `request_float_from_primary_client`. Default 0.0.
     pub operator_float: f64,
+    /// The answer to `request_string_from_primary_client`. Default "".
     pub operator_string: Vec<u8>,
 }
 
