@@ -89,10 +89,12 @@
 
 mod dashboard;
 mod state;
+mod status;
 
 pub use dashboard::{Dashboard, Reply, GREETING, LOCAL_CONTROL, MAX_LINE, UNLOCK_TOO_EARLY};
 pub use state::{
     Config, Controller, OperationalMode, ProgramList, ProgramState, Programs, Refused, RobotMode,
     SafetyStatus, Timing, MAX_LOG,
 };
+pub use status::{Inputs, Status};
 pub use urscript_interp::kinematics::Model;
