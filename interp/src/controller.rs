@@ -14,51 +14,67 @@ use crate::event::{Event, ReadRecord, MAX_READ_INPUT};
 use crate::kinematics::{self, Dh};
 use crate::sockets::Sockets;
 
-/// The virtual arm: commanded state, not dynamics (see [`crate::builtins::motion`]).
+/// The virtual arm and the I/O around it: commanded state, not dynamics (see
+/// [`crate::builtins::motion`]). It outlives a program: a controller that runs program
+/// after program hands it from one [`Machine`](crate::Machine) to the next
+/// ([`Machine::with_arm`](crate::Machine::with_arm), [`Machine::into_arm`](crate::Machine::into_arm)),
+/// as the real arm keeps its joints, outputs and registers between programs.
 ///
-/// The fields after `random_state` are what the robot would measure or be told by the
-/// world around it (inputs, temperatures, forces, the RTDE client, the operator): each
-/// starts at the fixed value documented beside it, the value the built-ins return, and a
-/// test may set it.
+/// The public fields are what the controller's interfaces show (joints, outputs,
+/// registers, payload) and what their clients may set (an RTDE client writes outputs and
+/// input registers); the rest belongs to the built-ins. [`Arm::world`] is what the robot
+/// senses: each of its fields starts at the fixed value documented beside it, the value
+/// the built-ins return, and a test may set it.
 #[derive(Debug, Clone)]
-pub(crate) struct Arm {
+#[non_exhaustive]
+pub struct Arm {
+    /// Commanded joint positions (rad). Default: UR's home pose `[0, -π/2, 0, -π/2, 0, 0]`.
     pub q: [f64; 6],
+    /// Commanded joint speeds (rad/s).
     pub qd: [f64; 6],
+    /// Commanded TCP speed (m/s, rad/s).
     pub tcp_speed: [f64; 6],
+    /// The active TCP offset (`set_tcp`), from the flange.
     pub tcp: [f64; 6],
+    /// Digital outputs: standard 0-7, configurable 8-15, tool 16-17.
     pub digital_out: [bool; 18],
+    /// Tool digital outputs 0-1 (`set_tool_digital_out`).
     pub tool_out: [bool; 2],
+    /// Standard analog outputs 0-1 (fraction of the range, 0..1, as `set_standard_analog_out` takes it).
     pub analog_out: [f64; 2],
+    /// Output int registers 0-47 (`write_output_integer_register`).
     pub int_regs: [i32; 48],
+    /// Output float registers 0-47.
     pub float_regs: [f64; 48],
     /// Output bool registers 0-127 (64-127 are the RTDE clients' range).
     pub bool_regs: [bool; 128],
-    pub random_state: u64,
-    /// Payload mass (kg), CoG (m, from the flange) and inertia `[Ixx, Iyy, Izz, Ixy,
-    /// Ixz, Iyz]` (kg·m², at the CoG), as last set. Default: none.
+    pub(crate) random_state: u64,
+    /// Payload mass (kg), as last set. Default: none.
     pub payload_mass: f64,
+    /// Payload centre of gravity (m, from the flange).
     pub payload_cog: [f64; 3],
+    /// Payload inertia `[Ixx, Iyy, Izz, Ixy, Ixz, Iyz]` (kg·m², at the CoG).
     pub payload_inertia: [f64; 6],
     /// Gravity as `set_gravity` gave it (m/s²). Default `[0, 0, 9.82]`.
     pub gravity: [f64; 3],
     /// Base acceleration as `set_base_acceleration` gave it (m/s²). Default 0.
-    pub base_acceleration: [f64; 3],
+    pub(crate) base_acceleration: [f64; 3],
     /// The analog outputs' domains (0: 4-20 mA, 1: 0-10 V). Default 1.
     pub analog_out_domain: [i32; 2],
     /// Flags 0-31 (`set_flag`).
-    pub flags: [bool; 32],
+    pub(crate) flags: [bool; 32],
     /// The Modbus server's ports as last written (`write_port_bit`/`_register`); a port
     /// never written reads False / 0.
-    pub port_bits: BTreeMap<i32, bool>,
-    pub port_registers: BTreeMap<i32, i16>,
+    pub(crate) port_bits: BTreeMap<i32, bool>,
+    pub(crate) port_registers: BTreeMap<i32, i16>,
     /// The virtual Modbus client's signals, by name (no device behind them).
-    pub modbus: BTreeMap<String, ModbusSignal>,
+    pub(crate) modbus: BTreeMap<String, ModbusSignal>,
     /// The two conveyor encoders.
-    pub encoders: [Encoder; 2],
+    pub(crate) encoders: [Encoder; 2],
     /// The encoder a conveyor is tracked with, if one is.
-    pub conveyor: Option<usize>,
+    pub(crate) conveyor: Option<usize>,
     /// Path offsetting.
-    pub path_offset: PathOffset,
+    pub(crate) path_offset: PathOffset,
     /// What the robot senses of the world: fixed values a test may change.
     pub world: World,
 }

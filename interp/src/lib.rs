@@ -97,7 +97,7 @@ mod sockets;
 mod value;
 
 pub use compile::Program;
-pub use controller::World;
+pub use controller::{Arm, World};
 pub use error::{ParseError, ParseErrorKind, RuntimeError, RuntimeErrorKind};
 pub use event::{CallRecord, Event, Message, MessageKind, Outcome, ReadRecord};
 pub use machine::{Config, Machine, State, Stub};

@@ -261,7 +261,28 @@ impl Machine {
     /// A machine about to run `program`'s first step at time 0.
     ///
     /// A step time below 100 µs is raised to 100 µs.
-    pub fn new(program: Program, mut config: Config) -> Self {
+    pub fn new(program: Program, config: Config) -> Self {
+        Machine::with_arm(program, config, Arm::default())
+    }
+
+    /// A machine about to run `program` on an arm that already has a state: the joints,
+    /// outputs, registers, payload and world a previous program left
+    /// ([`Machine::into_arm`]), as a controller runs one program after another.
+    ///
+    /// ```
+    /// use std::time::Duration;
+    /// use urscript_interp::{Config, Machine, Program};
+    /// let first = Program::parse("write_output_integer_register(3, 42)\n").unwrap();
+    /// let mut m = Machine::new(first, Config::default());
+    /// m.run_until(Duration::ZERO);
+    /// let arm = m.into_arm();
+    /// assert_eq!(arm.int_regs[3], 42);
+    /// let second = Program::parse("x = read_output_integer_register(3)\n").unwrap();
+    /// let mut m = Machine::with_arm(second, Config::default(), arm);
+    /// m.run_until(Duration::ZERO);
+    /// assert_eq!(m.global("x"), Some(&urscript_interp::Value::Int(42)));
+    /// ```
+    pub fn with_arm(program: Program, mut config: Config, arm: Arm) -> Self {
         config.step_time = config.step_time.max(Duration::from_micros(100));
         let globals = vec![None; program.names.len()];
         let main = Thread {
@@ -316,7 +337,7 @@ impl Machine {
                 dh: config.model.dh(),
                 step_time: config.step_time,
                 step: 0,
-                arm: Arm::default(),
+                arm,
                 sockets: Sockets::new(config.policy),
                 events: VecDeque::new(),
             },
@@ -421,6 +442,22 @@ impl Machine {
     /// temperature, an RTDE input register.
     pub fn world_mut(&mut self) -> &mut crate::controller::World {
         &mut self.ctl.arm.world
+    }
+
+    /// The arm and the I/O around it, as the program has set them so far.
+    pub fn arm(&self) -> &Arm {
+        &self.ctl.arm
+    }
+
+    /// The arm, to change what a client of the controller sets between steps (an RTDE
+    /// client writing an output or an input register).
+    pub fn arm_mut(&mut self) -> &mut Arm {
+        &mut self.ctl.arm
+    }
+
+    /// The arm's state, for the next program ([`Machine::with_arm`]).
+    pub fn into_arm(self) -> Arm {
+        self.ctl.arm
     }
 
     /// The arm's commanded tool pose.
