@@ -87,10 +87,12 @@
 #![forbid(unsafe_code)]
 #![warn(missing_docs)]
 
+mod cell;
 mod dashboard;
 mod state;
 mod status;
 
+pub use cell::{Cell, CellEvent, Ended, Submitted, MAX_EVENTS};
 pub use dashboard::{Dashboard, Reply, GREETING, LOCAL_CONTROL, MAX_LINE, UNLOCK_TOO_EARLY};
 pub use state::{
     Config, Controller, OperationalMode, ProgramList, ProgramState, Programs, Refused, RobotMode,

@@ -419,6 +419,9 @@ pub struct Controller {
     popup: Option<String>,
     log: VecDeque<String>,
     shut_down: bool,
+    /// A program sent over the primary, secondary or realtime interface runs (or is
+    /// paused): it is the controller's current program, with no file loaded.
+    script: bool,
     /// Counts flight reports and support files, for their ids.
     reports: u32,
 }
@@ -455,6 +458,7 @@ impl Controller {
             popup: None,
             log: VecDeque::new(),
             shut_down: false,
+            script: false,
             reports: 0,
         }
     }
@@ -626,6 +630,7 @@ impl Controller {
             self.robot_mode = RobotMode::PowerOff;
         }
         self.program_state = ProgramState::Stopped;
+        self.script = false;
         Ok(())
     }
 
@@ -697,6 +702,7 @@ impl Controller {
             self.pending = None;
             self.robot_mode = RobotMode::PowerOff;
             self.program_state = ProgramState::Stopped;
+            self.script = false;
         } else if !status.allows_motion() && self.program_state == ProgramState::Playing {
             self.program_state = ProgramState::Paused;
         }
@@ -718,6 +724,7 @@ impl Controller {
         self.remote()?;
         self.handle_timeout(now);
         self.program_state = ProgramState::Stopped;
+        self.script = false;
         self.robot_mode = RobotMode::Booting;
         self.protective_since = None;
         self.pending = Some(Pending::SafetyRestarted {
@@ -762,7 +769,8 @@ impl Controller {
     pub fn play(&mut self, now: Duration) -> Result<(), Refused> {
         self.remote()?;
         self.handle_timeout(now);
-        if self.loaded.is_none()
+        let resumes_script = self.script && self.program_state == ProgramState::Paused;
+        if (self.loaded.is_none() && !resumes_script)
             || self.robot_mode != RobotMode::Running
             || !self.safety.allows_motion()
         {
@@ -788,10 +796,11 @@ impl Controller {
     pub fn stop(&mut self, now: Duration) -> Result<(), Refused> {
         self.remote()?;
         self.handle_timeout(now);
-        if self.loaded.is_none() {
+        if self.loaded.is_none() && !self.script {
             return Err(Refused::NotNow);
         }
         self.program_state = ProgramState::Stopped;
+        self.script = false;
         Ok(())
     }
 
@@ -815,9 +824,37 @@ impl Controller {
         self.handle_timeout(now);
         self.pending = None;
         self.program_state = ProgramState::Stopped;
+        self.script = false;
         self.robot_mode = RobotMode::PowerOff;
         self.shut_down = true;
         Ok(())
+    }
+
+    /// Whether a program can start moving the arm now: the arm is RUNNING (powered,
+    /// brakes released) and the safety allows motion.
+    pub fn ready_for_program(&mut self, now: Duration) -> bool {
+        self.handle_timeout(now);
+        self.robot_mode == RobotMode::Running && self.safety.allows_motion()
+    }
+
+    /// A program sent over the primary, secondary or realtime interface starts: it
+    /// replaces what ran, and the program state is PLAYING (`pause`, `play` and `stop`
+    /// act on it as on a loaded one).
+    pub fn script_started(&mut self) {
+        self.script = true;
+        self.program_state = ProgramState::Playing;
+    }
+
+    /// The running program ended (it finished, halted or failed): STOPPED.
+    pub fn program_ended(&mut self) {
+        self.script = false;
+        self.program_state = ProgramState::Stopped;
+    }
+
+    /// Whether the current program came over the primary, secondary or realtime
+    /// interface rather than from a loaded file.
+    pub fn runs_script(&self) -> bool {
+        self.script
     }
 
     /// A new id for a flight report or support file.

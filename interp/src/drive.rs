@@ -237,45 +237,77 @@ impl Driver {
     fn act_on_events(&mut self, machine: &mut Machine, on_activity: &mut impl FnMut(Activity<'_>)) {
         while let Some(event) = machine.poll_event() {
             on_activity(Activity::Event(&event));
-            match event {
-                Event::Connect {
-                    socket_name,
-                    host,
-                    port,
-                } => match connect_stream(&host, port, self.options.connect_timeout) {
-                    Ok(stream) => {
-                        if let Some(old) = self.conns.insert(socket_name.clone(), Conn::new(stream))
-                        {
-                            let _ = old.stream.shutdown(Shutdown::Both);
-                        }
-                        machine.handle_connected(&socket_name, Ok(()));
-                    }
-                    Err(e) => {
-                        let why = describe_connect_error(&host, port, &e);
-                        machine.handle_connected(&socket_name, Err(why));
-                    }
-                },
-                Event::Transmit { socket_name, bytes } => {
-                    if let Some(c) = self.conns.get_mut(&socket_name) {
-                        if !c.broken {
-                            c.unsent.extend_from_slice(&bytes);
-                            if let Err(reason) = flush(c) {
-                                fail_send(machine, c, &socket_name, &reason, on_activity);
-                            }
-                        }
-                    }
-                }
-                Event::Close { socket_name } => {
-                    if let Some(mut c) = self.conns.remove(&socket_name) {
-                        // What the program sent before closing still goes out, as far
-                        // as the server takes it now.
-                        let _ = flush(&mut c);
-                        let _ = c.stream.shutdown(Shutdown::Both);
-                    }
-                }
-                Event::Message(_) | Event::Call(_) => {}
-            }
+            self.handle_event(machine, event, on_activity);
         }
+    }
+
+    /// Acts on one event of `machine` that asks for the network (`Connect`, `Transmit`,
+    /// `Close`); other events need nothing of the driver. For a caller with a loop of
+    /// its own that takes the machine's events itself ([`Machine::poll_event`]), as a
+    /// virtual controller does, then gives the sockets' ones here and calls
+    /// [`poll_sockets`](Self::poll_sockets) each round.
+    pub fn handle_event(
+        &mut self,
+        machine: &mut Machine,
+        event: Event,
+        on_activity: &mut impl FnMut(Activity<'_>),
+    ) {
+        match event {
+            Event::Connect {
+                socket_name,
+                host,
+                port,
+            } => match connect_stream(&host, port, self.options.connect_timeout) {
+                Ok(stream) => {
+                    if let Some(old) = self.conns.insert(socket_name.clone(), Conn::new(stream)) {
+                        let _ = old.stream.shutdown(Shutdown::Both);
+                    }
+                    machine.handle_connected(&socket_name, Ok(()));
+                }
+                Err(e) => {
+                    let why = describe_connect_error(&host, port, &e);
+                    machine.handle_connected(&socket_name, Err(why));
+                }
+            },
+            Event::Transmit { socket_name, bytes } => {
+                if let Some(c) = self.conns.get_mut(&socket_name) {
+                    if !c.broken {
+                        c.unsent.extend_from_slice(&bytes);
+                        if let Err(reason) = flush(c) {
+                            fail_send(machine, c, &socket_name, &reason, on_activity);
+                        }
+                    }
+                }
+            }
+            Event::Close { socket_name } => {
+                if let Some(mut c) = self.conns.remove(&socket_name) {
+                    // What the program sent before closing still goes out, as far as
+                    // the server takes it now.
+                    let _ = flush(&mut c);
+                    let _ = c.stream.shutdown(Shutdown::Both);
+                }
+            }
+            Event::Message(_) | Event::Call(_) => {}
+        }
+    }
+
+    /// Closes every connection, sending what each still holds as far as its server
+    /// takes it now: the program that opened them has ended.
+    pub fn close_all(&mut self) {
+        for (_, mut c) in self.conns.drain() {
+            let _ = flush(&mut c);
+            let _ = c.stream.shutdown(Shutdown::Both);
+        }
+    }
+
+    /// Writes what is queued and reads what arrived on every connection; true if
+    /// anything moved. See [`handle_event`](Self::handle_event).
+    pub fn poll_sockets(
+        &mut self,
+        machine: &mut Machine,
+        on_activity: &mut impl FnMut(Activity<'_>),
+    ) -> bool {
+        self.service_sockets(machine, on_activity)
     }
 
     /// Writes what is queued, reads what arrived; true if anything moved.

@@ -1,0 +1,602 @@
+//! [`Cell`]: the controller's state machine, the arm and the program that runs on it, in
+//! time. Sans-IO like the rest of the crate: the caller feeds programs and client inputs,
+//! advances time ([`Cell::advance`]), takes the events ([`Cell::poll_event`]) and reads
+//! one [`Status`] per step for the streams. The network (the program's own sockets, the
+//! clients' connections) is the caller's.
+//!
+//! # Programs
+//! - A program sent over the primary, secondary or realtime interface ([`Cell::submit`])
+//!   replaces the one running (as on the controller, whose new program stops the old
+//!   one) and runs at once if the arm is RUNNING and the safety allows motion; otherwise
+//!   it is refused with the reason. A `sec` program ([`Submitted::Secondary`]) runs beside
+//!   the main program: it may not move the arm or wait, so it runs to its end in one step
+//!   on a copy of the arm whose outputs, registers and settings then become the arm's.
+//! - `play` of a loaded `.urp` asks the caller for its text ([`CellEvent::NeedProgram`]);
+//!   the caller reads and translates the file and gives the script back
+//!   ([`Cell::start_loaded`]).
+//! - `pause` freezes the program's time; `play` resumes it; `stop` (or power off, a
+//!   safety stop that cuts power) stops it: its sockets close, the arm keeps its state.
+//! - The arm keeps joints, outputs and registers from one program to the next
+//!   ([`urscript_interp::Machine::with_arm`]).
+
+use std::collections::VecDeque;
+use std::time::Duration;
+
+use urscript_interp::kinematics;
+use urscript_interp::{Arm, Event, Machine, Program, RuntimeError, State};
+
+use crate::state::{Controller, ProgramState};
+use crate::status::{Inputs, Status};
+
+/// The most events waiting for the caller; past it the oldest go first (a caller that
+/// never polls does not grow the cell).
+pub const MAX_EVENTS: usize = 4096;
+
+/// What came in over the primary, secondary or realtime interface.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum Submitted {
+    /// A program (`def ... end`, or bare lines): replaces the running one.
+    Program(String),
+    /// A secondary program (`sec ... end`): runs beside the main program.
+    Secondary(String),
+}
+
+/// How a program ended.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Ended {
+    /// It ran to its end.
+    Finished,
+    /// `halt` ran.
+    Halted,
+    /// A client stopped it (`stop`, power off, a safety stop) or a new program replaced it.
+    Stopped,
+    /// A runtime error stopped it (the controller's runtime exception).
+    Error(RuntimeError),
+}
+
+/// What the caller must do or show.
+#[derive(Debug, Clone, PartialEq)]
+pub enum CellEvent {
+    /// A program started.
+    ProgramStarted {
+        /// Its name (`def NAME()`, or the `.urp` file).
+        name: String,
+    },
+    /// The program ended.
+    ProgramEnded {
+        /// Its name.
+        name: String,
+        /// How.
+        how: Ended,
+    },
+    /// A program was not run: it does not compile, or the arm cannot move now. The
+    /// controller reports this as a runtime exception (syntax errors) or a message.
+    Refused {
+        /// The line and column of a syntax error, 0 when the reason is not in the text.
+        line: u32,
+        /// The column.
+        column: u32,
+        /// The controller's text (`syntax_error_on_line:3:...`) or the reason.
+        text: String,
+    },
+    /// `play` of the loaded `.urp` file at this path: read and translate it, then call
+    /// [`Cell::start_loaded`] (or [`Cell::refuse_loaded`]).
+    NeedProgram {
+        /// The loaded program's name, as given to `load`.
+        name: String,
+        /// Its path, as the [`Programs`](crate::Programs) gave it.
+        path: String,
+    },
+    /// An event of the running program: a message to show (`textmsg`, `popup`), a call
+    /// record, or a socket that needs the network (`Connect`, `Transmit`, `Close`: give
+    /// those to a driver, e.g. [`urscript_interp::drive::Driver::handle_event`]).
+    Program(Event),
+}
+
+/// The program running now.
+struct Running {
+    name: String,
+    machine: Machine,
+    /// Controller time at which program time 0 was.
+    origin: Duration,
+    /// When the current pause began.
+    paused_at: Option<Duration>,
+}
+
+/// The virtual controller in time. See the module docs.
+pub struct Cell {
+    controller: Controller,
+    interp: urscript_interp::Config,
+    /// The arm while no program runs (a running program holds it).
+    arm: Option<Arm>,
+    running: Option<Running>,
+    events: VecDeque<CellEvent>,
+    /// The speed slider (0..1), as an RTDE client set it.
+    speed_fraction: f64,
+    /// The time of the last `advance`.
+    now: Duration,
+    /// `NeedProgram` asked and not answered yet.
+    awaiting_load: bool,
+}
+
+impl std::fmt::Debug for Cell {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Cell")
+            .field("controller", &self.controller)
+            .field("program", &self.running.as_ref().map(|r| &r.name))
+            .field("now", &self.now)
+            .finish_non_exhaustive()
+    }
+}
+
+impl Cell {
+    /// A cell around `controller`; programs run with `interp` (its model and step time
+    /// should be the controller's: [`Cell::interp_config`] makes one).
+    pub fn new(controller: Controller, interp: urscript_interp::Config) -> Self {
+        Cell {
+            controller,
+            interp,
+            arm: Some(Arm::default()),
+            running: None,
+            events: VecDeque::new(),
+            speed_fraction: 1.0,
+            now: Duration::ZERO,
+            awaiting_load: false,
+        }
+    }
+
+    /// The interpreter configuration of a controller: its model, and the step of its
+    /// generation (2 ms for e-Series, PolyScope 5; 8 ms for CB3, PolyScope 3).
+    pub fn interp_config(controller: &Controller) -> urscript_interp::Config {
+        let mut c = if controller.config().major() >= 5 {
+            urscript_interp::Config::default()
+        } else {
+            urscript_interp::Config::cb3()
+        };
+        c.model = controller.config().model;
+        c
+    }
+
+    /// The controller's state machine (for the dashboard server).
+    pub fn controller(&mut self) -> &mut Controller {
+        &mut self.controller
+    }
+
+    /// The name of the program running (or paused), if one is.
+    pub fn program(&self) -> Option<&str> {
+        self.running.as_ref().map(|r| r.name.as_str())
+    }
+
+    /// The step length.
+    pub fn step_time(&self) -> Duration {
+        self.interp.step_time
+    }
+
+    fn arm(&self) -> &Arm {
+        match (&self.running, &self.arm) {
+            (Some(r), _) => r.machine.arm(),
+            (None, Some(a)) => a,
+            // One of the two always holds the arm; a default one is never shown.
+            (None, None) => unreachable_arm(),
+        }
+    }
+
+    fn arm_mut(&mut self) -> &mut Arm {
+        match (&mut self.running, &mut self.arm) {
+            (Some(r), _) => r.machine.arm_mut(),
+            (None, Some(a)) => a,
+            (None, arm @ None) => arm.insert(Arm::default()),
+        }
+    }
+
+    fn push(&mut self, e: CellEvent) {
+        if self.events.len() >= MAX_EVENTS {
+            self.events.pop_front();
+        }
+        self.events.push_back(e);
+    }
+
+    /// The next event, oldest first.
+    pub fn poll_event(&mut self) -> Option<CellEvent> {
+        self.events.pop_front()
+    }
+
+    /// A program (or secondary program) arrived at `now`.
+    pub fn submit(&mut self, submitted: Submitted, now: Duration) {
+        self.advance(now);
+        match submitted {
+            Submitted::Program(text) => self.start(text, None, now),
+            Submitted::Secondary(text) => self.run_secondary(&text),
+        }
+    }
+
+    /// The text of the loaded `.urp` program that [`CellEvent::NeedProgram`] asked for.
+    pub fn start_loaded(&mut self, script: String, now: Duration) {
+        self.awaiting_load = false;
+        if self.controller.program_state() != ProgramState::Playing || self.running.is_some() {
+            return; // stopped (or started otherwise) meanwhile
+        }
+        let name = self
+            .controller
+            .loaded_program()
+            .map(|(n, _)| n.to_string())
+            .unwrap_or_default();
+        self.start(script, Some(name), now);
+    }
+
+    /// The loaded program could not be read or translated: it does not play.
+    pub fn refuse_loaded(&mut self, why: String, now: Duration) {
+        self.awaiting_load = false;
+        self.advance(now);
+        if self.running.is_none() {
+            self.controller.program_ended();
+        }
+        self.push(CellEvent::Refused {
+            line: 0,
+            column: 0,
+            text: why,
+        });
+    }
+
+    fn start(&mut self, text: String, file: Option<String>, now: Duration) {
+        let program = match Program::parse(&text) {
+            Ok(p) => p,
+            Err(e) => {
+                if file.is_some() {
+                    self.controller.program_ended();
+                }
+                self.push(CellEvent::Refused {
+                    line: e.line(),
+                    column: e.column(),
+                    text: format!("syntax_error_on_line:{}:{}", e.line(), e.message()),
+                });
+                return;
+            }
+        };
+        if !self.controller.ready_for_program(now) {
+            if file.is_some() {
+                self.controller.program_ended();
+            }
+            let mode = self.controller.robot_mode(now);
+            let safety = self.controller.safety_status(now);
+            self.push(CellEvent::Refused {
+                line: 0,
+                column: 0,
+                text: format!(
+                    "the program was not started: the robot is {mode} with safety {safety} (power on and release the brakes first)"
+                ),
+            });
+            return;
+        }
+        self.end_running(Ended::Stopped);
+        let name = file.unwrap_or_else(|| program.entry_name().unwrap_or("<script>").to_string());
+        let arm = self.arm.take().unwrap_or_default();
+        let machine = Machine::with_arm(program, self.interp.clone(), arm);
+        if self.controller.loaded_program().is_none() || !self.awaiting_or_playing_file(&name) {
+            self.controller.script_started();
+        }
+        self.running = Some(Running {
+            name: name.clone(),
+            machine,
+            origin: now,
+            paused_at: None,
+        });
+        self.push(CellEvent::ProgramStarted { name });
+        // Its first statements run at once, as on the controller.
+        self.run_program(now);
+    }
+
+    fn awaiting_or_playing_file(&self, name: &str) -> bool {
+        self.controller
+            .loaded_program()
+            .is_some_and(|(n, _)| n == name)
+            && self.controller.program_state() == ProgramState::Playing
+            && !self.controller.runs_script()
+    }
+
+    /// Runs a `sec` program to its end on a copy of the arm; what it set becomes the
+    /// arm's (its joints cannot change: a secondary program may not move the arm).
+    fn run_secondary(&mut self, text: &str) {
+        let program = match Program::parse(text) {
+            Ok(p) => p,
+            Err(e) => {
+                self.push(CellEvent::Refused {
+                    line: e.line(),
+                    column: e.column(),
+                    text: format!("syntax_error_on_line:{}:{}", e.line(), e.message()),
+                });
+                return;
+            }
+        };
+        let copy = self.arm().clone();
+        let mut m = Machine::with_arm(program, self.interp.clone(), copy);
+        // A secondary program does not wait: one step (and the few a stray `sync()`
+        // might take) is all it gets.
+        m.run_until(self.interp.step_time * 4);
+        if let State::Error(e) = m.state() {
+            let e = e.clone();
+            self.push(CellEvent::Refused {
+                line: e.line(),
+                column: e.column(),
+                text: e.message().to_string(),
+            });
+        }
+        while let Some(e) = m.poll_event() {
+            if matches!(e, Event::Message(_)) {
+                self.push(CellEvent::Program(e));
+            }
+        }
+        let done = m.into_arm();
+        let arm = self.arm_mut();
+        let (q, qd, tcp_speed) = (arm.q, arm.qd, arm.tcp_speed);
+        *arm = done;
+        arm.q = q;
+        arm.qd = qd;
+        arm.tcp_speed = tcp_speed;
+    }
+
+    fn end_running(&mut self, how: Ended) {
+        if let Some(r) = self.running.take() {
+            let mut machine = r.machine;
+            while let Some(e) = machine.poll_event() {
+                self.push(CellEvent::Program(e));
+            }
+            // Its sockets close with it.
+            for socket_name in machine.open_sockets() {
+                self.push(CellEvent::Program(Event::Close { socket_name }));
+            }
+            let mut arm = machine.into_arm();
+            arm.qd = [0.0; 6];
+            arm.tcp_speed = [0.0; 6];
+            self.arm = Some(arm);
+            self.push(CellEvent::ProgramEnded { name: r.name, how });
+        }
+    }
+
+    /// Runs time forward to `now`: the state machine's transitions, then the program's
+    /// steps (not while paused), reacting to what clients did to the program state.
+    pub fn advance(&mut self, now: Duration) {
+        let now = now.max(self.now);
+        // A pause or a play happened after the last advance: program time stops (or
+        // goes on) from there, not from now.
+        let prev = self.now;
+        self.now = now;
+        self.controller.handle_timeout(now);
+        let state = self.controller.program_state();
+        match (&mut self.running, state) {
+            (Some(_), ProgramState::Stopped) => {
+                self.end_running(Ended::Stopped);
+            }
+            (Some(r), ProgramState::Paused) => {
+                r.paused_at.get_or_insert(prev);
+            }
+            (Some(r), ProgramState::Playing) => {
+                if let Some(at) = r.paused_at.take() {
+                    r.origin += prev.saturating_sub(at);
+                }
+                self.run_program(now);
+            }
+            (None, ProgramState::Playing) => {
+                if !self.awaiting_load && !self.controller.runs_script() {
+                    if let Some((name, path)) = self.controller.loaded_program() {
+                        let (name, path) = (name.to_string(), path.to_string());
+                        self.awaiting_load = true;
+                        self.push(CellEvent::NeedProgram { name, path });
+                    }
+                } else if self.controller.runs_script() {
+                    // A script program's state with no program behind it.
+                    self.controller.program_ended();
+                }
+            }
+            (None, _) => {}
+        }
+    }
+
+    fn run_program(&mut self, now: Duration) {
+        let Some(r) = &mut self.running else { return };
+        r.machine.run_until(now.saturating_sub(r.origin));
+        let mut out = Vec::new();
+        while let Some(e) = r.machine.poll_event() {
+            out.push(e);
+        }
+        let end = match r.machine.state() {
+            State::Running => None,
+            State::Finished => Some(Ended::Finished),
+            State::Halted => Some(Ended::Halted),
+            State::Error(e) => Some(Ended::Error(e.clone())),
+        };
+        for e in out {
+            self.push(CellEvent::Program(e));
+        }
+        if let Some(how) = end {
+            self.end_running(how);
+            self.controller.program_ended();
+        }
+    }
+
+    /// When the cell next has something to do by itself: the program's next step or
+    /// the state machine's next transition.
+    pub fn poll_timeout(&self) -> Option<Duration> {
+        let program = self.running.as_ref().and_then(|r| {
+            if r.paused_at.is_some() {
+                None
+            } else {
+                r.machine.poll_timeout().map(|t| t + r.origin)
+            }
+        });
+        match (program, self.controller.poll_timeout()) {
+            (Some(a), Some(b)) => Some(a.min(b)),
+            (a, b) => a.or(b),
+        }
+    }
+
+    /// The running program's machine, for a driver that gives it what its sockets did
+    /// ([`Machine::handle_connected`], [`Machine::handle_received`], ...).
+    pub fn machine_mut(&mut self) -> Option<&mut Machine> {
+        self.running.as_mut().map(|r| &mut r.machine)
+    }
+
+    /// Applies what a client wrote (RTDE inputs): outputs, input registers, the speed
+    /// slider, the payload.
+    pub fn apply(&mut self, inputs: &Inputs) {
+        if let Some(f) = inputs.speed_slider_fraction {
+            if f.is_finite() {
+                self.speed_fraction = f.clamp(0.0, 1.0);
+            }
+        }
+        let arm = self.arm_mut();
+        let masked = |out: &mut [bool], (mask, values): (u8, u8)| {
+            for (i, o) in out.iter_mut().enumerate().take(8) {
+                if mask & (1 << i) != 0 {
+                    *o = values & (1 << i) != 0;
+                }
+            }
+        };
+        if let Some(mv) = inputs.standard_digital_outputs {
+            masked(&mut arm.digital_out[0..8], mv);
+        }
+        if let Some(mv) = inputs.configurable_digital_outputs {
+            masked(&mut arm.digital_out[8..16], mv);
+        }
+        if let Some(mv) = inputs.tool_digital_outputs {
+            masked(&mut arm.digital_out[16..18], mv);
+            masked(&mut arm.tool_out, mv);
+        }
+        if let Some((mask, types, values)) = inputs.standard_analog_outputs {
+            for (i, value) in values.into_iter().enumerate() {
+                if mask & (1 << i) != 0 && value.is_finite() {
+                    let voltage = types & (1 << i) != 0;
+                    arm.analog_out_domain[i] = i32::from(voltage);
+                    // RTDE carries the output as a fraction of its range, as
+                    // `set_standard_analog_out` does.
+                    arm.analog_out[i] = value.clamp(0.0, 1.0);
+                }
+            }
+        }
+        for &(i, v) in &inputs.bool_registers {
+            if let Some(r) = arm.world.input_bool_regs.get_mut(i) {
+                *r = v;
+            }
+        }
+        for &(i, v) in &inputs.int_registers {
+            if let Some(r) = arm.world.input_int_regs.get_mut(i) {
+                *r = v;
+            }
+        }
+        for &(i, v) in &inputs.double_registers {
+            if let Some(r) = arm.world.input_float_regs.get_mut(i) {
+                *r = v;
+            }
+        }
+        if let Some((mass, cog, inertia)) = inputs.payload {
+            if mass.is_finite() && mass >= 0.0 {
+                arm.payload_mass = mass;
+                arm.payload_cog = cog;
+                if let Some(i) = inertia {
+                    arm.payload_inertia = i;
+                }
+            }
+        }
+    }
+
+    /// The controller now, for the streams.
+    pub fn status(&mut self) -> Status {
+        let now = self.now;
+        let robot_mode = self.controller.robot_mode(now);
+        let safety = self.controller.safety_status(now);
+        let program_state = self.controller.program_state();
+        let remote_control = self.controller.remote_control();
+        let model = self.controller.config().model;
+        let dh = model.dh();
+        let speed_fraction = self.speed_fraction;
+        let arm = self.arm();
+        let pose = kinematics::forward(&dh, arm.q, arm.tcp);
+        let bits = |b: &[bool]| {
+            b.iter()
+                .enumerate()
+                .fold(0u64, |acc, (i, &on)| acc | (u64::from(on) << i))
+        };
+        let mut outputs = bits(&arm.digital_out);
+        outputs |= bits(&arm.tool_out) << 16;
+        let w = &arm.world;
+        let powered = !matches!(
+            robot_mode,
+            crate::RobotMode::PowerOff
+                | crate::RobotMode::Disconnected
+                | crate::RobotMode::NoController
+        );
+        let analog_out = |i: usize| {
+            let f = arm.analog_out[i];
+            if arm.analog_out_domain[i] == 0 {
+                (4.0 + 16.0 * f) / 1000.0 // 4-20 mA, in A
+            } else {
+                10.0 * f // 0-10 V
+            }
+        };
+        let mut analog_io_types = 0b11; // inputs: voltage
+        for i in 0..2 {
+            if arm.analog_out_domain[i] != 0 {
+                analog_io_types |= 1 << (2 + i);
+            }
+        }
+        Status {
+            time: now.as_secs_f64(),
+            model,
+            robot_mode,
+            safety,
+            program_state,
+            remote_control,
+            script_line: 0,
+            target_q: arm.q,
+            target_qd: arm.qd,
+            target_qdd: [0.0; 6],
+            actual_q: arm.q,
+            actual_qd: arm.qd,
+            target_current: [0.0; 6],
+            actual_current: [0.0; 6],
+            target_moment: w.joint_torques,
+            joint_temperatures: w.joint_temp,
+            joint_voltage: if powered { [48.0; 6] } else { [0.0; 6] },
+            actual_tcp_pose: pose,
+            actual_tcp_speed: arm.tcp_speed,
+            actual_tcp_force: w.tcp_force,
+            target_tcp_pose: pose,
+            target_tcp_speed: arm.tcp_speed,
+            tcp_offset: arm.tcp,
+            tool_accelerometer: [0.0, 0.0, 9.82],
+            speed_fraction,
+            speed_scaling: speed_fraction,
+            digital_inputs: bits(&w.digital_in),
+            digital_outputs: outputs,
+            analog_inputs: [w.analog_in[0], w.analog_in[1]],
+            analog_outputs: [analog_out(0), analog_out(1)],
+            analog_io_types,
+            tool_analog_inputs: [w.analog_in[2], w.analog_in[3]],
+            tool_analog_input_types: 0b11,
+            tool_output_voltage: 0,
+            tool_current: w.tool_current,
+            tool_temperature: w.tool_temp,
+            io_current: 0.0,
+            output_bool_registers: arm.bool_regs,
+            output_int_registers: arm.int_regs,
+            output_double_registers: arm.float_regs,
+            input_bool_registers: w.input_bool_regs,
+            input_int_registers: w.input_int_regs,
+            input_double_registers: w.input_float_regs,
+            payload_mass: arm.payload_mass,
+            payload_cog: arm.payload_cog,
+            payload_inertia: arm.payload_inertia,
+            main_voltage: 48.0,
+            robot_voltage: if powered { 48.0 } else { 0.0 },
+            robot_current: if powered { 0.5 } else { 0.0 },
+            controller_temperature: w.controller_temp,
+        }
+    }
+}
+
+/// The arm is always held by the running program or by the cell; this is never reached,
+/// and returns a default arm rather than panicking.
+fn unreachable_arm() -> &'static Arm {
+    static DEFAULT: std::sync::OnceLock<Arm> = std::sync::OnceLock::new();
+    DEFAULT.get_or_init(Arm::default)
+}

@@ -1,0 +1,238 @@
+//! The cell: programs on the controller's arm, in time, driven by clients.
+
+use std::time::Duration;
+
+use urscript_controller::{
+    Cell, CellEvent, Config, Controller, Dashboard, Ended, Inputs, ProgramList, ProgramState,
+    Submitted,
+};
+use urscript_interp::{Event, MessageKind};
+
+fn ms(n: u64) -> Duration {
+    Duration::from_millis(n)
+}
+
+/// A cell whose arm is RUNNING at 2 s.
+fn ready_cell() -> (Cell, Dashboard) {
+    let controller =
+        Controller::new(Config::default()).with_programs(Box::new(ProgramList::new(["pick.urp"])));
+    let interp = Cell::interp_config(&controller);
+    let mut cell = Cell::new(controller, interp);
+    let mut dash = Dashboard::new();
+    dash.handle_line(cell.controller(), "brake release", ms(0));
+    cell.advance(ms(2000));
+    assert_eq!(
+        dash.handle_line(cell.controller(), "robotmode", ms(2000))
+            .lines,
+        ["Robotmode: RUNNING"]
+    );
+    (cell, dash)
+}
+
+fn events(cell: &mut Cell) -> Vec<CellEvent> {
+    std::iter::from_fn(|| cell.poll_event()).collect()
+}
+
+fn texts(events: &[CellEvent]) -> Vec<String> {
+    events
+        .iter()
+        .filter_map(|e| match e {
+            CellEvent::Program(Event::Message(m)) if m.kind == MessageKind::Textmsg => {
+                Some(m.text.clone())
+            }
+            _ => None,
+        })
+        .collect()
+}
+
+#[test]
+fn a_program_runs_to_its_end_and_leaves_its_outputs() {
+    let (mut cell, _) = ready_cell();
+    let prog = "def prog():\n  write_output_integer_register(5, 77)\n  set_standard_digital_out(3, True)\n  sleep(0.1)\n  textmsg(\"done\")\nend\n";
+    cell.submit(Submitted::Program(prog.into()), ms(2000));
+    assert_eq!(cell.program(), Some("prog"));
+    assert_eq!(cell.controller().program_state(), ProgramState::Playing);
+    cell.advance(ms(2050));
+    assert!(
+        texts(&events(&mut cell)).is_empty(),
+        "still sleeping at 50 ms"
+    );
+    cell.advance(ms(2200));
+    let ev = events(&mut cell);
+    assert_eq!(texts(&ev), ["done"]);
+    assert!(ev.iter().any(
+        |e| matches!(e, CellEvent::ProgramEnded { name, how: Ended::Finished } if name == "prog")
+    ));
+    assert_eq!(cell.program(), None);
+    assert_eq!(cell.controller().program_state(), ProgramState::Stopped);
+    let s = cell.status();
+    assert_eq!(s.output_int_registers[5], 77);
+    assert_eq!(s.digital_outputs & (1 << 3), 1 << 3);
+    // The next program sees the arm as the last one left it.
+    cell.submit(
+        Submitted::Program("textmsg(read_output_integer_register(5))\n".into()),
+        ms(2300),
+    );
+    assert_eq!(texts(&events(&mut cell)), ["77"]);
+}
+
+#[test]
+fn a_program_is_refused_while_the_arm_cannot_move_or_when_it_does_not_parse() {
+    let controller = Controller::new(Config::default());
+    let interp = Cell::interp_config(&controller);
+    let mut cell = Cell::new(controller, interp);
+    cell.submit(Submitted::Program("textmsg(\"x\")\n".into()), ms(0));
+    let ev = events(&mut cell);
+    assert!(
+        matches!(&ev[..], [CellEvent::Refused { text, .. }] if text.contains("POWER_OFF")),
+        "{ev:?}"
+    );
+    let (mut cell, _) = ready_cell();
+    cell.submit(Submitted::Program("x = )\n".into()), ms(2000));
+    let ev = events(&mut cell);
+    assert!(
+        matches!(&ev[..], [CellEvent::Refused { line: 1, text, .. }] if text.starts_with("syntax_error_on_line:1:")),
+        "{ev:?}"
+    );
+    assert_eq!(cell.controller().program_state(), ProgramState::Stopped);
+}
+
+#[test]
+fn pause_freezes_program_time_and_play_resumes_it() {
+    let (mut cell, mut dash) = ready_cell();
+    cell.submit(
+        Submitted::Program("sleep(1.0)\ntextmsg(\"woke\")\n".into()),
+        ms(2000),
+    );
+    cell.advance(ms(2500));
+    assert_eq!(
+        dash.handle_line(cell.controller(), "pause", ms(2500)).lines,
+        ["Pausing program"]
+    );
+    cell.advance(ms(5000));
+    assert!(texts(&events(&mut cell)).is_empty(), "paused for 2.5 s");
+    assert_eq!(
+        dash.handle_line(cell.controller(), "play", ms(5000)).lines,
+        ["Starting program"]
+    );
+    cell.advance(ms(5400));
+    assert!(
+        texts(&events(&mut cell)).is_empty(),
+        "0.9 s of program time so far"
+    );
+    cell.advance(ms(5600));
+    assert_eq!(texts(&events(&mut cell)), ["woke"]);
+}
+
+#[test]
+fn stop_ends_the_program_and_closes_its_sockets() {
+    let (mut cell, mut dash) = ready_cell();
+    cell.submit(
+        Submitted::Program(
+            "socket_open(\"127.0.0.1\", 1, \"cam\")\nwhile True:\n  sync()\nend\n".into(),
+        ),
+        ms(2000),
+    );
+    let ev = events(&mut cell);
+    assert!(ev.iter().any(|e| matches!(e, CellEvent::Program(Event::Connect { socket_name, .. }) if socket_name == "cam")));
+    cell.machine_mut().unwrap().handle_connected("cam", Ok(()));
+    cell.advance(ms(2100));
+    assert_eq!(
+        dash.handle_line(cell.controller(), "stop", ms(2100)).lines,
+        ["Stopped"]
+    );
+    cell.advance(ms(2102));
+    let ev = events(&mut cell);
+    assert!(ev.iter().any(|e| matches!(e, CellEvent::Program(Event::Close { socket_name }) if socket_name == "cam")), "{ev:?}");
+    assert!(ev.iter().any(|e| matches!(
+        e,
+        CellEvent::ProgramEnded {
+            how: Ended::Stopped,
+            ..
+        }
+    )));
+    assert_eq!(cell.program(), None);
+}
+
+#[test]
+fn a_new_program_replaces_the_running_one_and_a_secondary_runs_beside_it() {
+    let (mut cell, _) = ready_cell();
+    cell.submit(
+        Submitted::Program("def a():\n  while True:\n    sync()\n  end\nend\n".into()),
+        ms(2000),
+    );
+    cell.submit(
+        Submitted::Secondary("sec s():\n  set_standard_digital_out(1, True)\nend\n".into()),
+        ms(2010),
+    );
+    assert_eq!(
+        cell.program(),
+        Some("a"),
+        "a secondary program does not replace it"
+    );
+    assert_eq!(cell.status().digital_outputs & 0b10, 0b10);
+    cell.submit(
+        Submitted::Program("def b():\n  sleep(5)\nend\n".into()),
+        ms(2020),
+    );
+    let ev = events(&mut cell);
+    assert!(ev.iter().any(
+        |e| matches!(e, CellEvent::ProgramEnded { name, how: Ended::Stopped } if name == "a")
+    ));
+    assert!(ev
+        .iter()
+        .any(|e| matches!(e, CellEvent::ProgramStarted { name } if name == "b")));
+    assert_eq!(cell.program(), Some("b"));
+}
+
+#[test]
+fn client_inputs_reach_the_program_and_the_status() {
+    let (mut cell, _) = ready_cell();
+    cell.apply(&Inputs {
+        int_registers: vec![(2, -9)],
+        double_registers: vec![(47, 2.5)],
+        bool_registers: vec![(64, true), (500, true)],
+        standard_digital_outputs: Some((0b0000_0101, 0b0000_0100)),
+        speed_slider_fraction: Some(0.3),
+        ..Inputs::default()
+    });
+    let s = cell.status();
+    assert_eq!(s.input_int_registers[2], -9);
+    assert_eq!(s.input_double_registers[47], 2.5);
+    assert!(s.input_bool_registers[64]);
+    assert_eq!(s.digital_outputs & 0b101, 0b100);
+    assert_eq!(s.speed_fraction, 0.3);
+    cell.submit(
+        Submitted::Program(
+            "textmsg(read_input_integer_register(2), read_input_float_register(47))\n".into(),
+        ),
+        ms(2000),
+    );
+    assert_eq!(texts(&events(&mut cell)), ["-92.5"]);
+}
+
+#[test]
+fn play_of_a_loaded_program_asks_for_its_text() {
+    let (mut cell, mut dash) = ready_cell();
+    assert_eq!(
+        dash.handle_line(cell.controller(), "load pick.urp", ms(2000))
+            .lines,
+        ["Loading program: pick.urp"]
+    );
+    dash.handle_line(cell.controller(), "play", ms(2000));
+    cell.advance(ms(2002));
+    let ev = events(&mut cell);
+    assert!(
+        matches!(&ev[..], [CellEvent::NeedProgram { name, .. }] if name == "pick.urp"),
+        "{ev:?}"
+    );
+    cell.advance(ms(2004));
+    assert!(events(&mut cell).is_empty(), "asked once");
+    cell.start_loaded("def pick():\n  textmsg(\"picked\")\nend\n".into(), ms(2004));
+    let ev = events(&mut cell);
+    assert_eq!(texts(&ev), ["picked"]);
+    assert!(ev
+        .iter()
+        .any(|e| matches!(e, CellEvent::ProgramStarted { name } if name == "pick.urp")));
+    assert_eq!(cell.controller().program_state(), ProgramState::Stopped);
+}
