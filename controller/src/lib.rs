@@ -44,6 +44,15 @@
 //!   play, stop, pause, shutdown, power, brakes, unlock, restart safety, operational
 //!   mode, load installation) gets the controller's refusal; queries still answer.
 //!
+//! # Primary, secondary and realtime interfaces
+//!
+//! [`primary`] writes what ports 30001/30002 send (the version message, the 10 Hz robot
+//! state message with its sub-packages, robot messages such as `PROGRAM_XXX_STARTED`),
+//! [`realtime`] the port 30003 package, both from a [`Status`] and the [`Config`], in
+//! the e-Series (5.x) or CB3 (3.x) layout after [`Config::major`]. [`script_intake`]
+//! cuts what clients write on those ports into programs, secondary programs, bare lines
+//! and commands, within fixed bounds.
+//!
 //! Playing a program keeps only the state (PLAYING until stop or pause): executing the
 //! `.urp`'s program is the next step.
 //!
@@ -89,6 +98,9 @@
 
 mod cell;
 mod dashboard;
+pub mod primary;
+pub mod realtime;
+pub mod script_intake;
 mod state;
 mod status;
 
