@@ -470,6 +470,10 @@ pub struct Read {
 pub struct Listening {
     pub t: f64,
     pub addr: String,
+    /// `controller`: which of its servers listens there (`dashboard`, `primary`,
+    /// `secondary`, `realtime`, `rtde`).
+    #[serde(skip_serializing_if = "is_none")]
+    pub service: Option<&'static str>,
 }
 
 /// `controller`: one dashboard command and the reply lines it got.
@@ -488,6 +492,42 @@ pub struct Connect {
     pub t: f64,
     pub conn: u64,
     pub peer: String,
+    /// `controller`: the server the client connected to.
+    #[serde(skip_serializing_if = "is_none")]
+    pub service: Option<&'static str>,
+}
+
+/// `controller`: a program started, ended, or was refused.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Program {
+    pub t: f64,
+    /// `started`, `finished`, `halted`, `stopped`, `error` or `refused`.
+    pub what: &'static str,
+    /// The program's name (`def NAME()`, or the `.urp` file); empty when refused.
+    pub name: String,
+    /// Where the error is (runtime error or syntax error), when it is in the text.
+    #[serde(skip_serializing_if = "is_none")]
+    pub line: Option<u32>,
+    #[serde(skip_serializing_if = "is_none")]
+    pub column: Option<u32>,
+    /// The error or the reason.
+    #[serde(skip_serializing_if = "is_none")]
+    pub text: Option<String>,
+}
+
+/// `controller`: what a client of the primary, secondary or realtime interface sent
+/// (a program, a secondary program, a line, a command) or what an RTDE client did.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Client {
+    pub t: f64,
+    pub conn: u64,
+    /// `primary`, `secondary`, `realtime` or `rtde`.
+    pub service: &'static str,
+    /// `program`, `secondary`, `line`, `command`, `refused` (primary/secondary/realtime);
+    /// `protocol`, `outputs`, `inputs`, `start`, `pause`, `text`, `error` (RTDE).
+    pub what: &'static str,
+    /// Its text: the program's name, the line, the command, the recipe's fields.
+    pub text: String,
 }
 
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -674,6 +714,8 @@ pub enum Event {
     Evicted(Evicted),
     // controller
     Dashboard(Dashboard),
+    Program(Program),
+    Client(Client),
 }
 
 /// Constructors stamped with [`now`], for the common events.
@@ -764,6 +806,8 @@ impl Event {
             Event::UnknownVariable(e) => e.t,
             Event::VarInvalid(e) => e.t,
             Event::Dashboard(e) => e.t,
+            Event::Program(e) => e.t,
+            Event::Client(e) => e.t,
             Event::RefusedAddress(e) => e.t,
             Event::Evicted(e) => e.t,
         }
@@ -783,6 +827,7 @@ impl Event {
             Event::UnknownVariable(e) => Some(e.conn),
             Event::VarInvalid(e) => Some(e.conn),
             Event::Dashboard(e) => Some(e.conn),
+            Event::Client(e) => Some(e.conn),
             Event::Evicted(e) => Some(e.conn),
             _ => None,
         }

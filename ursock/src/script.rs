@@ -136,7 +136,7 @@ impl Printer {
 /// A call record as a report event: the call as URScript (with `x = ` when the
 /// statement assigns it), the typed result, and why it failed (`diagnosis`: what the
 /// read's bytes show; else the machine's reason for a `False`).
-fn call_event(c: &CallRecord, diagnosis: Option<String>) -> report::Call {
+pub(crate) fn call_event(c: &CallRecord, diagnosis: Option<String>) -> report::Call {
     let source = match &c.assigned_to {
         Some(target) => format!("{target} = {}", c.source()),
         None => c.source(),
@@ -237,7 +237,7 @@ fn diagnose_read(c: &CallRecord, seen: &mut Seen) -> Option<String> {
 }
 
 /// A message as a report event, with the call that showed it.
-fn message_event(m: &Message) -> report::Event {
+pub(crate) fn message_event(m: &Message) -> report::Event {
     let (kind, name) = match m.kind {
         MessageKind::Textmsg => (report::MessageKind::Textmsg, "textmsg"),
         MessageKind::Varmsg => (report::MessageKind::Varmsg, "varmsg"),

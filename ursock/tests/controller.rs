@@ -23,7 +23,7 @@ impl Server {
     fn spawn(args: &[&str], stdin: Stdio) -> Server {
         let started = Instant::now();
         let mut child = Command::new(env!("CARGO_BIN_EXE_ursock"))
-            .args(["controller", "--dashboard-port", "0"])
+            .args(["controller", "--dashboard-port", "0", "--no-streams"])
             .args(args)
             .stdin(stdin)
             .stdout(Stdio::piped())
@@ -287,7 +287,7 @@ fn bad_options_are_one_line_errors() {
         &["--serial", ""][..],
     ] {
         let out = Command::new(env!("CARGO_BIN_EXE_ursock"))
-            .args(["controller", "--dashboard-port", "0"])
+            .args(["controller", "--dashboard-port", "0", "--no-streams"])
             .args(args)
             .output()
             .unwrap();

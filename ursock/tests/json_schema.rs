@@ -480,7 +480,13 @@ fn controller_json_lines_match_the_schema() {
     use std::io::{BufRead, BufReader, Write};
     let root = schema();
     let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_ursock"))
-        .args(["controller", "--dashboard-port", "0", "--json"])
+        .args([
+            "controller",
+            "--dashboard-port",
+            "0",
+            "--no-streams",
+            "--json",
+        ])
         .stdin(std::process::Stdio::null())
         .stdout(std::process::Stdio::piped())
         .stderr(std::process::Stdio::null())

@@ -283,6 +283,7 @@ pub fn listen(opts: ListenOptions) -> Result<(), String> {
     let listening = Event::Listening(report::Listening {
         t: now(),
         addr: addr.to_string(),
+        service: None,
     });
     if opts.json {
         let since_epoch = std::time::SystemTime::now()
@@ -908,6 +909,7 @@ async fn serve(shared: Arc<Shared>, id: u64, stream: TcpStream, peer: String) {
             t: now(),
             conn: id,
             peer: peer.clone(),
+            service: None,
         }),
     );
     let mut writer_task = tokio::spawn(writer(wr, rx, Arc::clone(&stats), shared.write_timeout));

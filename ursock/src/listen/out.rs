@@ -212,8 +212,28 @@ impl Out {
 pub fn human(event: &Event, show_max: usize) -> Vec<String> {
     let one = |s: String| vec![s];
     match event {
-        Event::Listening(e) => one(format!("listening on {}", e.addr)),
-        Event::Connect(e) => one(format!("connected from {}", e.peer)),
+        Event::Listening(e) => match e.service {
+            Some(service) => one(format!("listening on {} ({service})", e.addr)),
+            None => one(format!("listening on {}", e.addr)),
+        },
+        Event::Connect(e) => match e.service {
+            Some(service) => one(format!("{service}: connected from {}", e.peer)),
+            None => one(format!("connected from {}", e.peer)),
+        },
+        Event::Program(e) => {
+            let mut text = format!("program {:?} {}", e.name, e.what);
+            if let Some(line) = e.line {
+                text.push_str(&format!(" at line {line}"));
+                if let Some(col) = e.column {
+                    text.push_str(&format!(", column {col}"));
+                }
+            }
+            if let Some(t) = &e.text {
+                text.push_str(&format!(": {t}"));
+            }
+            one(text)
+        }
+        Event::Client(e) => one(format!("{} {}: {}", e.service, e.what, e.text)),
         Event::Close(e) => {
             let mut text = format!("closed ({}): rx {} B, tx {} B", e.reason, e.rx, e.tx);
             if e.refused_sets > 1 {

@@ -1,8 +1,17 @@
-//! `ursock controller`: a virtual UR controller that unmodified clients drive. This step
-//! serves the dashboard server (port 29999) of `urscript-controller` over TCP: one
-//! thread per connection (at most [`MAX_CONNECTIONS`]), every line a command, every
-//! reply written in one piece ending in `"\n"`. The controller's state is shared by every
-//! connection; its clock is the time since the start.
+//! `ursock controller`: a virtual UR controller that unmodified clients drive.
+//!
+//! - The dashboard server (29999): one thread per connection (at most
+//!   [`MAX_CONNECTIONS`]), every line a command, every reply written in one piece ending
+//!   in `"\n"`.
+//! - The primary (30001), secondary (30002), realtime (30003) and RTDE (30004)
+//!   interfaces, and the program running on the virtual arm: one real-time thread
+//!   ([`streams`]).
+//!
+//! Every interface reads and changes one [`Cell`] (the controller's state machine, the
+//! arm and its program); its clock is the time since the start.
+
+mod streams;
+mod urp;
 
 use std::io::{BufRead, ErrorKind, Read, Write};
 use std::net::{TcpListener, TcpStream};
@@ -12,7 +21,7 @@ use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
 use urscript_controller::{
-    Config, Controller, Dashboard, Model, Programs, Reply, SafetyStatus, MAX_LINE,
+    Cell, Config, Controller, Dashboard, Model, Programs, Reply, SafetyStatus, MAX_LINE,
 };
 
 use crate::report::{self, Event};
@@ -33,6 +42,27 @@ pub struct ControllerOptions {
     /// The dashboard server's port (0 picks a free one).
     #[arg(long, default_value_t = 29999)]
     pub dashboard_port: u16,
+    /// The primary interface's port (state at 10 Hz, robot messages, programs in);
+    /// 0 picks a free one; `--no-streams` serves none of the four.
+    #[arg(long, default_value_t = 30001)]
+    pub primary_port: u16,
+    /// The secondary interface's port (state at 10 Hz, programs in).
+    #[arg(long, default_value_t = 30002)]
+    pub secondary_port: u16,
+    /// The realtime interface's port (one package per step, programs in).
+    #[arg(long, default_value_t = 30003)]
+    pub realtime_port: u16,
+    /// The RTDE interface's port.
+    #[arg(long, default_value_t = 30004)]
+    pub rtde_port: u16,
+    /// Serve only the dashboard server.
+    #[arg(long)]
+    pub no_streams: bool,
+    /// Where the External Control URCap's node of a `.urp` program fetches its script
+    /// when the program plays (`HOST` or `HOST:PORT`, port 50002 by default), as the
+    /// URCap does with `request_program`.
+    #[arg(long, value_name = "HOST[:PORT]")]
+    pub urcap_host: Option<String>,
     /// The arm model: ur3, ur5, ur10 (CB3), ur3e, ur5e, ur10e, ur16e, ur20, ur30.
     #[arg(long, default_value = "ur5e")]
     pub model: String,
@@ -89,15 +119,33 @@ fn valid_version(v: &str) -> bool {
 }
 
 struct Shared {
-    controller: Mutex<Controller>,
+    cell: Mutex<Cell>,
+    /// The controller's configuration (a copy: it never changes).
+    config: Config,
     start: Instant,
     json: bool,
     active: AtomicUsize,
+    next_conn: AtomicU64,
+    /// `--programs`: where `.urp` files are.
+    urcap_host: Option<(String, u16)>,
 }
 
 impl Shared {
     fn now(&self) -> Duration {
         self.start.elapsed()
+    }
+
+    fn config(&self) -> &Config {
+        &self.config
+    }
+
+    fn lock_cell(&self) -> std::sync::MutexGuard<'_, Cell> {
+        self.cell.lock().unwrap_or_else(|p| p.into_inner())
+    }
+
+    /// A new connection number, shared by every interface.
+    fn next_conn(&self) -> u64 {
+        self.next_conn.fetch_add(1, Ordering::SeqCst)
     }
 
     /// A line for people; nothing with `--json`.
@@ -153,30 +201,63 @@ pub fn run(opts: ControllerOptions) -> Result<(), String> {
         }
         controller = controller.with_programs(Box::new(DirPrograms { root }));
     }
-    let listener = TcpListener::bind((opts.bind.as_str(), opts.dashboard_port)).map_err(|e| {
-        format!(
-            "cannot listen on {}:{}: {e}",
-            opts.bind, opts.dashboard_port
-        )
-    })?;
-    let addr = listener
-        .local_addr()
-        .map(|a| a.to_string())
-        .unwrap_or_else(|_| format!("{}:{}", opts.bind, opts.dashboard_port));
+    let bind = |port: u16, service: &'static str| -> Result<(TcpListener, String), String> {
+        let l = TcpListener::bind((opts.bind.as_str(), port))
+            .map_err(|e| format!("cannot listen on {}:{port} ({service}): {e}", opts.bind))?;
+        let addr = l
+            .local_addr()
+            .map(|a| a.to_string())
+            .unwrap_or_else(|_| format!("{}:{port}", opts.bind));
+        Ok((l, addr))
+    };
+    let urcap_host = match &opts.urcap_host {
+        None => None,
+        Some(h) => Some(urp::parse_host(h).map_err(|e| format!("--urcap-host {h}: {e}"))?),
+    };
+    let (listener, addr) = bind(opts.dashboard_port, "dashboard")?;
+    let mut bound = vec![(addr, "dashboard")];
+    let listeners = if opts.no_streams {
+        None
+    } else {
+        let (primary, a1) = bind(opts.primary_port, "primary")?;
+        let (secondary, a2) = bind(opts.secondary_port, "secondary")?;
+        let (realtime, a3) = bind(opts.realtime_port, "realtime")?;
+        let (rtde, a4) = bind(opts.rtde_port, "rtde")?;
+        bound.extend([
+            (a1, "primary"),
+            (a2, "secondary"),
+            (a3, "realtime"),
+            (a4, "rtde"),
+        ]);
+        Some(streams::Listeners {
+            primary: Some(primary),
+            secondary: Some(secondary),
+            realtime: Some(realtime),
+            rtde: Some(rtde),
+        })
+    };
+    let config = controller.config().clone();
+    let interp = Cell::interp_config(&controller);
     let shared = Arc::new(Shared {
-        controller: Mutex::new(controller),
+        cell: Mutex::new(Cell::new(controller, interp)),
+        config,
         start: Instant::now(),
         json: opts.json,
         active: AtomicUsize::new(0),
+        next_conn: AtomicU64::new(1),
+        urcap_host,
     });
-    if opts.json {
-        let event = Event::Listening(report::Listening {
-            t: report::now(),
-            addr: addr.clone(),
-        });
-        crate::out::line(&event.to_json());
-    } else {
-        crate::out::line(&format!("listening on {addr} (dashboard server)"));
+    for (addr, service) in bound {
+        if opts.json {
+            let event = Event::Listening(report::Listening {
+                t: report::now(),
+                addr,
+                service: Some(service),
+            });
+            crate::out::line(&event.to_json());
+        } else {
+            crate::out::line(&format!("listening on {addr} ({service})"));
+        }
     }
     {
         let shared = Arc::clone(&shared);
@@ -184,7 +265,13 @@ pub fn run(opts: ControllerOptions) -> Result<(), String> {
             .name("operator".into())
             .spawn(move || operator(&shared));
     }
-    let next = AtomicU64::new(1);
+    if let Some(listeners) = listeners {
+        let shared = Arc::clone(&shared);
+        std::thread::Builder::new()
+            .name("controller".into())
+            .spawn(move || streams::run(&shared, listeners))
+            .map_err(|e| format!("cannot start the controller's thread: {e}"))?;
+    }
     loop {
         let (stream, peer) = match listener.accept() {
             Ok(s) => s,
@@ -204,7 +291,7 @@ pub fn run(opts: ControllerOptions) -> Result<(), String> {
             continue;
         }
         shared.active.fetch_add(1, Ordering::SeqCst);
-        let conn = next.fetch_add(1, Ordering::SeqCst);
+        let conn = shared.next_conn();
         let spawned = std::thread::Builder::new()
             .name(format!("dashboard-{conn}"))
             .spawn({
@@ -246,6 +333,7 @@ fn serve(mut stream: TcpStream, conn: u64, peer: String, shared: &Shared) {
         t: report::now(),
         conn,
         peer,
+        service: Some("dashboard"),
     }));
     let mut counts = Counts { rx: 0, tx: 0 };
     let reason = session(&mut stream, conn, shared, &mut counts);
@@ -272,11 +360,14 @@ fn answer(
     let text = String::from_utf8_lossy(line);
     let text = text.strip_suffix('\r').unwrap_or(&text);
     let (reply, shut_down) = {
-        let mut c = shared.controller.lock().unwrap_or_else(|p| p.into_inner());
+        let mut cell = shared.lock_cell();
+        let now = shared.now();
+        cell.advance(now);
+        let c = cell.controller();
         let reply = if too_long {
             dashboard.line_too_long(text)
         } else {
-            dashboard.handle_line(&mut c, text, shared.now())
+            dashboard.handle_line(c, text, now)
         };
         (reply, c.is_shut_down())
     };
@@ -410,7 +501,8 @@ fn operator(shared: &Shared) {
             continue;
         }
         let now = shared.now();
-        let mut c = shared.controller.lock().unwrap_or_else(|p| p.into_inner());
+        let mut cell = shared.lock_cell();
+        let c = cell.controller();
         let status = match cmd.as_str() {
             "protective stop" => {
                 c.protective_stop(now);
@@ -435,12 +527,12 @@ fn operator(shared: &Shared) {
             }
             "state" => None,
             "help" => {
-                drop(c);
+                drop(cell);
                 shared.say(|| OPERATOR_HELP.into());
                 continue;
             }
             _ => {
-                drop(c);
+                drop(cell);
                 crate::out::note(&format!(
                     "operator: unknown command {cmd:?}; {OPERATOR_HELP}"
                 ));
@@ -458,7 +550,7 @@ fn operator(shared: &Shared) {
         } else {
             "local"
         };
-        drop(c);
+        drop(cell);
         shared.say(|| {
             format!(
                 "operator: {cmd}: robot mode {mode}, safety {safety}, program {program}, {remote} control"

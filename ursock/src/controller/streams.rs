@@ -1,0 +1,515 @@
+//! The controller's real-time loop: one thread that runs the cell step by step (2 ms
+//! e-Series, 8 ms CB3), services the running program's own sockets through the
+//! interpreter's driver, and serves the streaming interfaces from one [`Status`] per
+//! step: primary (30001) and secondary (30002) at 10 Hz with the robot messages on the
+//! primary, realtime (30003) every step, RTDE (30004) at each client's frequency.
+//!
+//! Every client socket is non-blocking and owned by this thread. What a client does not
+//! read waits in its queue; past [`MAX_BACKLOG`] bytes new state packages are skipped
+//! for it (it sees a gap, as a client of a real controller that falls behind does) and
+//! past [`MAX_QUEUE`] it is disconnected: a client that never reads slows nothing down.
+
+use std::io::{ErrorKind, Read, Write};
+use std::net::{Shutdown, TcpListener, TcpStream};
+use std::time::Duration;
+
+use urscript_controller::primary::{self, RobotMessage};
+use urscript_controller::realtime;
+use urscript_controller::script_intake::{Command, Intake, ScriptIntake};
+use urscript_controller::{CellEvent, Ended, Status, Submitted};
+use urscript_interp::drive::{Activity, Driver, Options};
+use urscript_interp::{Event as ProgramEvent, MessageKind};
+
+use super::Shared;
+use crate::report::{self, Event};
+
+/// Clients of the streaming interfaces served at once (all four together).
+pub const MAX_CLIENTS: usize = 64;
+/// Queued bytes past which a client's state packages are skipped.
+pub const MAX_BACKLOG: usize = 256 * 1024;
+/// Queued bytes past which a client is disconnected.
+pub const MAX_QUEUE: usize = 4 * 1024 * 1024;
+
+/// Which interface a client is on.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Service {
+    Primary,
+    Secondary,
+    Realtime,
+    Rtde,
+}
+
+impl Service {
+    pub fn name(self) -> &'static str {
+        match self {
+            Service::Primary => "primary",
+            Service::Secondary => "secondary",
+            Service::Realtime => "realtime",
+            Service::Rtde => "rtde",
+        }
+    }
+}
+
+struct Client {
+    conn: u64,
+    service: Service,
+    stream: TcpStream,
+    intake: ScriptIntake,
+    queue: Vec<u8>,
+    rx: u64,
+    tx: u64,
+    gone: Option<&'static str>,
+}
+
+impl Client {
+    /// Queues a state package unless the client is behind.
+    fn offer(&mut self, bytes: &[u8]) {
+        if self.queue.len() <= MAX_BACKLOG {
+            self.queue.extend_from_slice(bytes);
+        }
+    }
+
+    /// Queues bytes the client must get (a message, a reply).
+    fn push(&mut self, bytes: &[u8]) {
+        self.queue.extend_from_slice(bytes);
+        if self.queue.len() > MAX_QUEUE {
+            self.gone = Some("the client stopped reading");
+        }
+    }
+
+    fn flush(&mut self) {
+        let mut written = 0;
+        while written < self.queue.len() {
+            match self.stream.write(&self.queue[written..]) {
+                Ok(0) => {
+                    self.gone = Some("write failed");
+                    break;
+                }
+                Ok(n) => written += n,
+                Err(e) if e.kind() == ErrorKind::WouldBlock => break,
+                Err(e) if e.kind() == ErrorKind::Interrupted => {}
+                Err(_) => {
+                    self.gone = Some("write failed");
+                    break;
+                }
+            }
+        }
+        self.tx += written as u64;
+        self.queue.drain(..written);
+    }
+}
+
+/// The listeners of the streaming interfaces (each may be absent).
+pub struct Listeners {
+    pub primary: Option<TcpListener>,
+    pub secondary: Option<TcpListener>,
+    pub realtime: Option<TcpListener>,
+    pub rtde: Option<TcpListener>,
+}
+
+/// Runs the loop forever.
+pub fn run(shared: &Shared, listeners: Listeners) {
+    let mut lp = Loop {
+        clients: Vec::new(),
+        driver: Driver::new(Options::default()),
+        next_state: Duration::ZERO,
+        buf: vec![0u8; 64 * 1024],
+        frame: Vec::new(),
+    };
+    let listeners = [
+        (listeners.primary, Service::Primary),
+        (listeners.secondary, Service::Secondary),
+        (listeners.realtime, Service::Realtime),
+        (listeners.rtde, Service::Rtde),
+    ];
+    for (l, _) in &listeners {
+        if let Some(l) = l {
+            let _ = l.set_nonblocking(true);
+        }
+    }
+    let step = {
+        let cell = shared.cell.lock().unwrap_or_else(|p| p.into_inner());
+        cell.step_time()
+    };
+    let mut next_step = shared.now();
+    loop {
+        for (l, service) in &listeners {
+            if let Some(l) = l {
+                lp.accept(shared, l, *service);
+            }
+        }
+        lp.read_clients(shared);
+        let now = shared.now();
+        lp.step(shared, now);
+        for c in &mut lp.clients {
+            c.flush();
+        }
+        lp.drop_gone(shared);
+        next_step += step;
+        let now = shared.now();
+        if next_step > now {
+            std::thread::sleep((next_step - now).min(step));
+        } else if now - next_step > step * 50 {
+            // Far behind (the host was suspended, a long connect): start again from now.
+            next_step = now;
+        }
+    }
+}
+
+struct Loop {
+    clients: Vec<Client>,
+    driver: Driver,
+    next_state: Duration,
+    buf: Vec<u8>,
+    frame: Vec<u8>,
+}
+
+impl Loop {
+    fn accept(&mut self, shared: &Shared, listener: &TcpListener, service: Service) {
+        loop {
+            let (stream, peer) = match listener.accept() {
+                Ok(s) => s,
+                Err(e) if e.kind() == ErrorKind::Interrupted => continue,
+                Err(_) => return, // WouldBlock, or out of descriptors: next round
+            };
+            if self.clients.len() >= MAX_CLIENTS {
+                crate::out::note(&format!(
+                    "{peer}: {} refused, {MAX_CLIENTS} stream clients are already connected",
+                    service.name()
+                ));
+                continue;
+            }
+            let _ = stream.set_nonblocking(true);
+            let _ = stream.set_nodelay(true);
+            let conn = shared.next_conn();
+            shared.emit(Event::Connect(report::Connect {
+                t: report::now(),
+                conn,
+                peer: peer.to_string(),
+                service: Some(service.name()),
+            }));
+            let mut client = Client {
+                conn,
+                service,
+                stream,
+                intake: ScriptIntake::new(),
+                queue: Vec::new(),
+                rx: 0,
+                tx: 0,
+                gone: None,
+            };
+            if matches!(service, Service::Primary | Service::Secondary) {
+                self.frame.clear();
+                primary::encode_version(&mut self.frame, shared.config());
+                client.push(&self.frame);
+            }
+            self.clients.push(client);
+        }
+    }
+
+    fn read_clients(&mut self, shared: &Shared) {
+        for i in 0..self.clients.len() {
+            loop {
+                let c = &mut self.clients[i];
+                if c.gone.is_some() {
+                    break;
+                }
+                let n = match c.stream.read(&mut self.buf) {
+                    Ok(0) => {
+                        c.gone = Some("client closed");
+                        break;
+                    }
+                    Ok(n) => n,
+                    Err(e) if e.kind() == ErrorKind::Interrupted => continue,
+                    Err(e) if e.kind() == ErrorKind::WouldBlock => break,
+                    Err(_) => {
+                        c.gone = Some("read failed");
+                        break;
+                    }
+                };
+                c.rx += n as u64;
+                let bytes = self.buf[..n].to_vec();
+                self.received(shared, i, &bytes);
+                if n < self.buf.len() {
+                    break;
+                }
+            }
+        }
+    }
+
+    /// Bytes from client `i`.
+    fn received(&mut self, shared: &Shared, i: usize, bytes: &[u8]) {
+        let now = shared.now();
+        let (conn, service) = (self.clients[i].conn, self.clients[i].service);
+        if service == Service::Rtde {
+            return; // RTDE_HOOK
+        }
+        let items = self.clients[i].intake.push(bytes);
+        for item in items {
+            match item {
+                Ok(Intake::Program { name, source }) => {
+                    shared.emit(client_event(conn, service, "program", name));
+                    shared.lock_cell().submit(Submitted::Program(source), now);
+                }
+                Ok(Intake::Secondary { name, source }) => {
+                    shared.emit(client_event(conn, service, "secondary", name));
+                    shared.lock_cell().submit(Submitted::Secondary(source), now);
+                }
+                Ok(Intake::Line(line)) => {
+                    shared.emit(client_event(conn, service, "line", line.clone()));
+                    shared
+                        .lock_cell()
+                        .submit(Submitted::Program(format!("{line}\n")), now);
+                }
+                Ok(Intake::Command(cmd)) => {
+                    shared.emit(client_event(conn, service, "command", format!("{cmd:?}")));
+                    let mut cell = shared.lock_cell();
+                    let c = cell.controller();
+                    let _ = match cmd {
+                        Command::PowerOn => c.power_on(now),
+                        Command::PowerOff => c.power_off(now),
+                        Command::BrakeRelease => c.brake_release(now),
+                        Command::UnlockProtectiveStop => c.unlock_protective_stop(now),
+                        Command::StopProgram => c.stop(now),
+                        Command::SetSpeed(f) => {
+                            cell.apply(&urscript_controller::Inputs {
+                                speed_slider_fraction: Some(f),
+                                ..Default::default()
+                            });
+                            Ok(())
+                        }
+                    };
+                }
+                Err(e) => shared.emit(client_event(conn, service, "refused", e.to_string())),
+            }
+        }
+    }
+
+    /// One step: the cell runs to `now`, the program's sockets are serviced, and every
+    /// stream gets what is due.
+    fn step(&mut self, shared: &Shared, now: Duration) {
+        let mut messages: Vec<RobotMessage> = Vec::new();
+        let status = {
+            let mut cell = shared.lock_cell();
+            cell.advance(now);
+            let emit = |e: Event| shared.emit(e);
+            while let Some(event) = cell.poll_event() {
+                match event {
+                    CellEvent::Program(e) => {
+                        match &e {
+                            ProgramEvent::Message(m) => {
+                                emit(crate::script::message_event(m));
+                                messages.push(robot_message(m));
+                            }
+                            ProgramEvent::Call(c) => {
+                                emit(Event::Call(crate::script::call_event(c, None)));
+                            }
+                            _ => {}
+                        }
+                        match cell.machine_mut() {
+                            Some(m) => self.driver.handle_event(m, e, &mut |a| show(&emit, a)),
+                            None => {
+                                if let ProgramEvent::Close { .. } = e {
+                                    self.driver.close_all();
+                                }
+                            }
+                        }
+                    }
+                    CellEvent::ProgramStarted { name } => {
+                        emit(program_event("started", &name, None, None, None));
+                        messages.push(RobotMessage::program_started(&name));
+                    }
+                    CellEvent::ProgramEnded { name, how } => {
+                        let (what, line, column, text) = match &how {
+                            Ended::Finished => ("finished", None, None, None),
+                            Ended::Halted => ("halted", None, None, None),
+                            Ended::Stopped => ("stopped", None, None, None),
+                            Ended::Error(e) => (
+                                "error",
+                                Some(e.line()),
+                                Some(e.column()),
+                                Some(e.message().to_string()),
+                            ),
+                        };
+                        emit(program_event(what, &name, line, column, text.clone()));
+                        if let Ended::Error(e) = &how {
+                            messages.push(RobotMessage::RuntimeException {
+                                line: i32::try_from(e.line()).unwrap_or(i32::MAX),
+                                column: i32::try_from(e.column()).unwrap_or(i32::MAX),
+                                text: e.message().to_string(),
+                            });
+                        }
+                        messages.push(RobotMessage::program_stopped(&name));
+                        self.driver.close_all();
+                    }
+                    CellEvent::Refused { line, column, text } => {
+                        let at = (line > 0).then_some(line);
+                        emit(program_event(
+                            "refused",
+                            "",
+                            at,
+                            at.map(|_| column),
+                            Some(text.clone()),
+                        ));
+                        messages.push(if line > 0 {
+                            RobotMessage::RuntimeException {
+                                line: i32::try_from(line).unwrap_or(i32::MAX),
+                                column: i32::try_from(column).unwrap_or(i32::MAX),
+                                text,
+                            }
+                        } else {
+                            RobotMessage::text(&text)
+                        });
+                    }
+                    CellEvent::NeedProgram { name, path } => {
+                        let result = super::urp::load(shared, &path);
+                        match result {
+                            Ok(script) => cell.start_loaded(script, now),
+                            Err(why) => cell.refuse_loaded(format!("{name}: {why}"), now),
+                        }
+                    }
+                }
+            }
+            if let Some(m) = cell.machine_mut() {
+                self.driver.poll_sockets(m, &mut |a| show(&emit, a));
+            }
+            cell.status()
+        };
+        self.stream(shared, &status, &messages, now);
+    }
+
+    fn stream(
+        &mut self,
+        shared: &Shared,
+        status: &Status,
+        messages: &[RobotMessage],
+        now: Duration,
+    ) {
+        let config = shared.config();
+        // Robot messages go to the primary clients at once.
+        if !messages.is_empty() {
+            self.frame.clear();
+            for m in messages {
+                primary::encode_robot_message(&mut self.frame, m, status.time);
+            }
+            for c in self
+                .clients
+                .iter_mut()
+                .filter(|c| c.service == Service::Primary)
+            {
+                c.push(&self.frame);
+            }
+        }
+        // Realtime: every step.
+        if self.clients.iter().any(|c| c.service == Service::Realtime) {
+            self.frame.clear();
+            realtime::encode_realtime(&mut self.frame, status, config);
+            for c in self
+                .clients
+                .iter_mut()
+                .filter(|c| c.service == Service::Realtime)
+            {
+                c.offer(&self.frame);
+            }
+        }
+        // Primary and secondary: 10 Hz.
+        if now >= self.next_state {
+            self.next_state = now + primary::STATE_PERIOD;
+            self.frame.clear();
+            primary::encode_robot_state(&mut self.frame, status, config);
+            for c in self
+                .clients
+                .iter_mut()
+                .filter(|c| matches!(c.service, Service::Primary | Service::Secondary))
+            {
+                c.offer(&self.frame);
+            }
+        }
+    }
+
+    fn drop_gone(&mut self, shared: &Shared) {
+        let mut i = 0;
+        while i < self.clients.len() {
+            if let Some(reason) = self.clients[i].gone {
+                let c = self.clients.swap_remove(i);
+                let _ = c.stream.shutdown(Shutdown::Both);
+                shared.emit(Event::Close(report::Close {
+                    t: report::now(),
+                    conn: c.conn,
+                    reason: reason.to_string(),
+                    rx: c.rx,
+                    tx: c.tx,
+                    refused_sets: 0,
+                }));
+            } else {
+                i += 1;
+            }
+        }
+    }
+}
+
+/// What the program's sockets did, as events.
+fn show(emit: &impl Fn(Event), a: Activity<'_>) {
+    match a {
+        Activity::Received { socket_name, bytes } => emit(Event::rx(socket_name, bytes)),
+        Activity::PeerClosed { socket_name } => emit(Event::note(format!(
+            "the server closed the connection of socket {socket_name:?}"
+        ))),
+        Activity::SendFailed {
+            socket_name,
+            reason,
+        } => emit(Event::note(format!("socket {socket_name:?}: {reason}"))),
+        Activity::Event(ProgramEvent::Transmit { socket_name, bytes }) => {
+            emit(Event::tx(socket_name, bytes))
+        }
+        _ => {}
+    }
+}
+
+fn robot_message(m: &urscript_interp::Message) -> RobotMessage {
+    match &m.kind {
+        MessageKind::Popup {
+            title,
+            warning,
+            error,
+            blocking,
+            ..
+        } => RobotMessage::Popup {
+            request_id: 0,
+            requested_type: 0,
+            warning: *warning,
+            error: *error,
+            blocking: *blocking,
+            title: title.clone(),
+            text: m.text.clone(),
+        },
+        _ => RobotMessage::text(&m.text),
+    }
+}
+
+fn program_event(
+    what: &'static str,
+    name: &str,
+    line: Option<u32>,
+    column: Option<u32>,
+    text: Option<String>,
+) -> Event {
+    Event::Program(report::Program {
+        t: report::now(),
+        what,
+        name: name.to_string(),
+        line,
+        column,
+        text,
+    })
+}
+
+fn client_event(conn: u64, service: Service, what: &'static str, text: String) -> Event {
+    Event::Client(report::Client {
+        t: report::now(),
+        conn,
+        service: service.name(),
+        what,
+        text,
+    })
+}

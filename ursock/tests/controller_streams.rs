@@ -1,0 +1,285 @@
+//! `ursock controller`'s streaming interfaces against real TCP clients on 127.0.0.1,
+//! written from UR's primary/secondary and realtime guides: the version message first,
+//! robot state packages, programs sent as a client would send them running on the
+//! virtual arm, robot messages for a program's start, end and runtime error, and a
+//! client that never reads slowing nobody. Every wait is bounded.
+
+use std::collections::HashMap;
+use std::io::{BufRead, BufReader, Read, Write};
+use std::net::TcpStream;
+use std::process::{Child, Command, Stdio};
+use std::sync::mpsc;
+use std::time::{Duration, Instant};
+
+const WAIT: Duration = Duration::from_secs(20);
+
+struct Controller {
+    child: Child,
+    ports: HashMap<String, u16>,
+    events: mpsc::Receiver<serde_json::Value>,
+}
+
+impl Drop for Controller {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
+impl Controller {
+    fn start() -> Controller {
+        let mut child = Command::new(env!("CARGO_BIN_EXE_ursock"))
+            .args(["controller", "--json"])
+            .args(["--dashboard-port", "0", "--primary-port", "0"])
+            .args([
+                "--secondary-port",
+                "0",
+                "--realtime-port",
+                "0",
+                "--rtde-port",
+                "0",
+            ])
+            .stdin(Stdio::null())
+            .stdout(Stdio::piped())
+            .stderr(Stdio::null())
+            .spawn()
+            .expect("start ursock controller");
+        let out = BufReader::new(child.stdout.take().unwrap());
+        let (tx, events) = mpsc::channel();
+        std::thread::spawn(move || {
+            for line in out.lines() {
+                let Ok(line) = line else { return };
+                let v: serde_json::Value = serde_json::from_str(&line).expect("a JSON line");
+                if tx.send(v).is_err() {
+                    return;
+                }
+            }
+        });
+        let mut ports = HashMap::new();
+        while ports.len() < 5 {
+            let v = events.recv_timeout(WAIT).expect("listening events");
+            assert_eq!(v["event"], "listening", "{v}");
+            let addr = v["addr"].as_str().unwrap();
+            let port = addr.rsplit_once(':').unwrap().1.parse().unwrap();
+            ports.insert(v["service"].as_str().unwrap().to_string(), port);
+        }
+        Controller {
+            child,
+            ports,
+            events,
+        }
+    }
+
+    fn connect(&self, service: &str) -> TcpStream {
+        let s = TcpStream::connect(("127.0.0.1", self.ports[service])).expect("connect");
+        s.set_read_timeout(Some(WAIT)).unwrap();
+        s
+    }
+
+    /// Powers the arm on and releases the brakes through the dashboard server.
+    fn ready(&self) {
+        let d = self.connect("dashboard");
+        let mut r = BufReader::new(d.try_clone().unwrap());
+        let mut w = d;
+        let mut line = String::new();
+        r.read_line(&mut line).unwrap();
+        w.write_all(b"brake release\n").unwrap();
+        line.clear();
+        r.read_line(&mut line).unwrap();
+        let start = Instant::now();
+        loop {
+            w.write_all(b"robotmode\n").unwrap();
+            line.clear();
+            r.read_line(&mut line).unwrap();
+            if line.trim() == "Robotmode: RUNNING" {
+                return;
+            }
+            assert!(start.elapsed() < WAIT, "never RUNNING: {line}");
+            std::thread::sleep(Duration::from_millis(50));
+        }
+    }
+
+    /// Waits for the first event for which `want` holds.
+    fn wait_event(
+        &self,
+        what: &str,
+        want: impl Fn(&serde_json::Value) -> bool,
+    ) -> serde_json::Value {
+        let start = Instant::now();
+        loop {
+            let left = WAIT.saturating_sub(start.elapsed());
+            let v = self
+                .events
+                .recv_timeout(left)
+                .unwrap_or_else(|_| panic!("no {what} event"));
+            if want(&v) {
+                return v;
+            }
+        }
+    }
+}
+
+/// One message of the primary/secondary stream: its type and its bytes after the
+/// 5-byte header.
+fn message(s: &mut TcpStream) -> (u8, Vec<u8>) {
+    let mut head = [0u8; 5];
+    s.read_exact(&mut head).expect("a message header");
+    let len = u32::from_be_bytes(head[..4].try_into().unwrap()) as usize;
+    assert!((5..1 << 20).contains(&len), "message length {len}");
+    let mut body = vec![0u8; len - 5];
+    s.read_exact(&mut body).expect("a message body");
+    (head[4], body)
+}
+
+/// One realtime package: its bytes after the 4-byte length.
+fn realtime_package(s: &mut TcpStream) -> Vec<u8> {
+    let mut head = [0u8; 4];
+    s.read_exact(&mut head).expect("a package length");
+    let len = u32::from_be_bytes(head) as usize;
+    assert_eq!(len, 1220, "the e-Series (5.x) realtime package size");
+    let mut body = vec![0u8; len - 4];
+    s.read_exact(&mut body).expect("a package");
+    body
+}
+
+fn f64_at(body: &[u8], offset_in_package: usize) -> f64 {
+    let i = offset_in_package - 4;
+    f64::from_be_bytes(body[i..i + 8].try_into().unwrap())
+}
+
+/// `q actual` starts at byte 252 of the realtime package (after Time, q/qd/qdd/I/M
+/// target).
+fn q_actual(body: &[u8]) -> [f64; 6] {
+    std::array::from_fn(|j| f64_at(body, 252 + 8 * j))
+}
+
+#[test]
+fn primary_and_secondary_send_the_version_then_robot_state() {
+    let c = Controller::start();
+    for service in ["primary", "secondary"] {
+        let mut s = c.connect(service);
+        let (ty, body) = message(&mut s);
+        assert_eq!(ty, 20, "{service}: a robot message first");
+        assert_eq!(body[9], 3, "{service}: the version message");
+        let name_len = body[10] as usize;
+        assert_eq!(&body[11..11 + name_len], b"URControl");
+        let (major, minor) = (body[11 + name_len], body[12 + name_len]);
+        assert_eq!((major, minor), (5, 21), "the version --polyscope gives");
+        let mut states = 0;
+        while states < 3 {
+            let (ty, body) = message(&mut s);
+            if ty == 16 {
+                states += 1;
+                // The first package is robot mode data (type 0) with the mode POWER_OFF.
+                let sub_len = u32::from_be_bytes(body[..4].try_into().unwrap()) as usize;
+                assert_eq!(body[4], 0, "robot mode data first");
+                assert!(sub_len > 30);
+            }
+        }
+    }
+}
+
+#[test]
+fn a_program_sent_on_the_secondary_moves_the_arm_the_realtime_stream_shows() {
+    let c = Controller::start();
+    c.ready();
+    let mut rt = c.connect("realtime");
+    let home = q_actual(&realtime_package(&mut rt));
+    assert!(
+        (home[1] + std::f64::consts::FRAC_PI_2).abs() < 1e-9,
+        "{home:?}"
+    );
+    let target = [0.3, -1.2, 0.9, -1.4, 0.5, 0.1];
+    let mut sec = c.connect("secondary");
+    let program = format!(
+        "def move_it():\n  movej({target:?})\n  write_output_integer_register(7, 42)\nend\n"
+    );
+    sec.write_all(program.as_bytes()).unwrap();
+    let started = c.wait_event("program started", |v| v["event"] == "program");
+    assert_eq!(started["what"], "started");
+    assert_eq!(started["name"], "move_it");
+    let start = Instant::now();
+    loop {
+        let q = q_actual(&realtime_package(&mut rt));
+        if q.iter().zip(target).all(|(a, b)| (a - b).abs() < 1e-6) {
+            break;
+        }
+        assert!(
+            start.elapsed() < WAIT,
+            "the arm never reached {target:?}: {q:?}"
+        );
+    }
+    let ended = c.wait_event("program finished", |v| v["event"] == "program");
+    assert_eq!(ended["what"], "finished");
+}
+
+#[test]
+fn primary_clients_get_the_program_messages_and_its_runtime_error() {
+    let c = Controller::start();
+    c.ready();
+    let mut p = c.connect("primary");
+    p.write_all(b"def failing():\n  textmsg(\"before\")\n  l = [1, 2]\n  x = l[5]\nend\n")
+        .unwrap();
+    let mut seen = Vec::new();
+    let start = Instant::now();
+    while !seen.iter().any(|(k, _)| *k == 10) {
+        assert!(start.elapsed() < WAIT, "no runtime exception: {seen:?}");
+        let (ty, body) = message(&mut p);
+        if ty == 20 && body.len() > 9 {
+            seen.push((body[9], body[10..].to_vec()));
+        }
+    }
+    let kinds: Vec<u8> = seen.iter().map(|(k, _)| *k).collect();
+    let version = kinds.iter().position(|&k| k == 3).expect("version");
+    let text = kinds.iter().position(|&k| k == 0).expect("the textmsg");
+    let exception = kinds.iter().position(|&k| k == 10).unwrap();
+    assert!(version < text && text < exception, "{kinds:?}");
+    let (_, body) = &seen[text];
+    assert_eq!(body.as_slice(), b"before");
+    let (_, body) = &seen[exception];
+    let line = i32::from_be_bytes(body[..4].try_into().unwrap());
+    assert_eq!(line, 4, "the line of l[5]");
+    let ended = c.wait_event("program error", |v| {
+        v["event"] == "program" && v["what"] != "started"
+    });
+    assert_eq!(ended["what"], "error");
+    assert_eq!(ended["line"], 4);
+}
+
+#[test]
+fn a_realtime_client_that_never_reads_slows_nobody() {
+    let c = Controller::start();
+    let _idle = c.connect("realtime"); // never read
+    let mut rt = c.connect("realtime");
+    // 3 s of packages at 500 Hz is 1500; the idle client's queue fills long before.
+    let start = Instant::now();
+    let mut n = 0;
+    let mut last_time = 0.0;
+    while start.elapsed() < Duration::from_secs(3) {
+        let body = realtime_package(&mut rt);
+        let t = f64_at(&body, 4);
+        assert!(t >= last_time, "time goes forward");
+        last_time = t;
+        n += 1;
+    }
+    assert!(n > 300, "only {n} packages in 3 s");
+    // The controller still answers.
+    let d = c.connect("dashboard");
+    let mut r = BufReader::new(d);
+    let mut greeting = String::new();
+    r.read_line(&mut greeting).unwrap();
+    assert_eq!(
+        greeting.trim(),
+        "Connected: Universal Robots Dashboard Server"
+    );
+}
+
+#[test]
+fn a_program_is_refused_while_the_arm_is_powered_off() {
+    let c = Controller::start();
+    let mut p = c.connect("primary");
+    p.write_all(b"textmsg(\"never\")\n").unwrap();
+    let v = c.wait_event("refused", |v| v["event"] == "program");
+    assert_eq!(v["what"], "refused");
+    assert!(v["text"].as_str().unwrap().contains("POWER_OFF"), "{v}");
+}
