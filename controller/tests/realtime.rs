@@ -170,10 +170,10 @@ fn busy() -> Status {
     s.actual_q = [-0.5, -1.0, 1.2, -0.3, 0.9, 0.1];
     s.actual_qd = [0.0; 6];
     s.actual_current = [0.7; 6];
-    s.actual_tcp_pose = [0.3, 0.2, 0.1, 0.0, 3.14, 0.0];
+    s.actual_tcp_pose = [0.3, 0.2, 0.1, 0.0, 3.0, 0.0];
     s.actual_tcp_speed = [0.01; 6];
     s.actual_tcp_force = [5.0; 6];
-    s.target_tcp_pose = [0.31, 0.21, 0.11, 0.0, 3.14, 0.0];
+    s.target_tcp_pose = [0.31, 0.21, 0.11, 0.0, 3.0, 0.0];
     s.target_tcp_speed = [0.02; 6];
     s.digital_inputs = 0x2_0081;
     s.digital_outputs = 0x1_0102;
