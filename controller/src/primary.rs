@@ -65,6 +65,60 @@ pub const PRIMARY_READ_ONLY_PORT: u16 = 30011;
 /// The read-only secondary interface: as 30002, scripts refused.
 pub const SECONDARY_READ_ONLY_PORT: u16 = 30012;
 
+/// One of the four ports this module's messages go out on, and what each does.
+///
+/// | port  | version on connect | robot state, 10 Hz | robot messages | scripts in |
+/// |-------|--------------------|--------------------|----------------|------------|
+/// | 30001 | yes                | yes                | yes            | yes        |
+/// | 30002 | yes                | yes                | no             | yes        |
+/// | 30011 | yes                | yes                | yes            | no         |
+/// | 30012 | yes                | yes                | no             | no         |
+///
+/// CB3 and e-Series alike (the read-only ports exist from CB3 3.13 and in every 5.x).
+/// The realtime port is in [`crate::realtime`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Port {
+    /// 30001.
+    Primary,
+    /// 30002.
+    Secondary,
+    /// 30011.
+    PrimaryReadOnly,
+    /// 30012.
+    SecondaryReadOnly,
+}
+
+impl Port {
+    /// Every port, in the order of the table.
+    pub const ALL: [Port; 4] = [
+        Port::Primary,
+        Port::Secondary,
+        Port::PrimaryReadOnly,
+        Port::SecondaryReadOnly,
+    ];
+
+    /// The TCP port number.
+    pub fn number(self) -> u16 {
+        match self {
+            Port::Primary => PRIMARY_PORT,
+            Port::Secondary => SECONDARY_PORT,
+            Port::PrimaryReadOnly => PRIMARY_READ_ONLY_PORT,
+            Port::SecondaryReadOnly => SECONDARY_READ_ONLY_PORT,
+        }
+    }
+
+    /// Whether robot messages (text, key, runtime exception...) go out on this port.
+    pub fn sends_robot_messages(self) -> bool {
+        matches!(self, Port::Primary | Port::PrimaryReadOnly)
+    }
+
+    /// Whether the controller runs what a client writes on this port
+    /// ([`crate::script_intake`]); the read-only ports ignore it.
+    pub fn accepts_scripts(self) -> bool {
+        matches!(self, Port::Primary | Port::Secondary)
+    }
+}
+
 /// Robot state messages go out at 10 Hz on the primary and secondary ports, CB3 and
 /// e-Series alike.
 pub const STATE_RATE_HZ: u32 = 10;

@@ -648,3 +648,16 @@ fn extreme_values_do_not_panic() {
         robot_message(&out);
     }
 }
+
+#[test]
+fn ports_and_what_they_carry() {
+    use urscript_controller::primary::{Port, STATE_PERIOD, STATE_RATE_HZ};
+    let numbers: Vec<u16> = Port::ALL.iter().map(|p| p.number()).collect();
+    assert_eq!(numbers, [30001, 30002, 30011, 30012]);
+    let messages: Vec<bool> = Port::ALL.iter().map(|p| p.sends_robot_messages()).collect();
+    assert_eq!(messages, [true, false, true, false]);
+    let scripts: Vec<bool> = Port::ALL.iter().map(|p| p.accepts_scripts()).collect();
+    assert_eq!(scripts, [true, true, false, false]);
+    assert_eq!(STATE_RATE_HZ, 10);
+    assert_eq!(STATE_PERIOD.as_millis(), 100);
+}
