@@ -74,7 +74,8 @@ pub const SECONDARY_READ_ONLY_PORT: u16 = 30012;
 /// | 30011 | yes                | yes                | yes            | no         |
 /// | 30012 | yes                | yes                | no             | no         |
 ///
-/// CB3 and e-Series alike (the read-only ports exist from CB3 3.13 and in every 5.x).
+/// CB3 and e-Series alike (the read-only ports are those of recent versions: every 5.x,
+/// the last 3.x).
 /// The realtime port is in [`crate::realtime`].
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum Port {
@@ -570,7 +571,7 @@ fn encode_package_body(w: &mut W<'_>, s: &Status, layout: Layout, package: Packa
             w.f32(s.robot_voltage);
             w.f32(s.robot_current);
             w.f32(s.io_current);
-            w.u8(safety_mode_code(s.safety));
+            w.u8(safety_mode_code(s.safety, layout));
             w.bool(s.safety == SafetyStatus::Reduced);
             w.bool(false); // Euromap67 interface installed
             w.u32(0); // used by UR software only

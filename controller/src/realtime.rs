@@ -203,7 +203,7 @@ pub fn encode_realtime_layout(out: &mut Vec<u8>, s: &Status, layout: Layout) {
     d(&[0.0]); // test value
     d(&[f64::from(s.robot_mode.code())]);
     d(&[f64::from(joint_mode(s)); 6]);
-    d(&[f64::from(safety_mode_code(s.safety))]);
+    d(&[f64::from(safety_mode_code(s.safety, layout))]);
     d(&[0.0; 6]); // used by UR software only
     d(&s.tool_accelerometer);
     d(&[0.0; 6]); // used by UR software only

@@ -424,7 +424,10 @@ fn modes_and_flags_follow_the_status() {
 
     s.safety = SafetyStatus::AutomaticModeSafeguardStop;
     let (_, _, mb) = mode(&s);
-    assert_eq!(mb[60], 5, "older safety mode code");
+    assert_eq!(mb[60], 12, "e-Series safety mode");
+    let cb3 = config("3.15.0", Model::Ur5);
+    let (p, _, _) = split_state(&state_bytes(&s, &cb3));
+    assert_eq!(p[&3][60], 5, "CB3 has no automatic-mode safeguard stop");
 
     s.safety = SafetyStatus::Reduced;
     let (_, _, mb) = mode(&s);
