@@ -360,13 +360,17 @@ pub fn joint_mode(status: &Status) -> u8 {
     }
 }
 
-/// The older safety *mode* code (masterboard data, realtime `Safety Mode`): the two
-/// e-Series stops it predates are SAFEGUARD_STOP (5), as RTDE's `safety_mode` does.
-pub fn safety_mode_code(safety: SafetyStatus) -> u8 {
-    match safety {
-        SafetyStatus::AutomaticModeSafeguardStop
-        | SafetyStatus::SystemThreePositionEnablingStop => 5,
-        s => u8::try_from(s.code()).unwrap_or(0),
+/// The safety mode code (masterboard data, realtime `Safety Mode`). The e-Series'
+/// safety modes include the automatic-mode safeguard stop (12) and the three-position
+/// enabling stop (13); CB3 has neither and reports them as SAFEGUARD_STOP (5).
+pub fn safety_mode_code(safety: SafetyStatus, layout: Layout) -> u8 {
+    match (safety, layout) {
+        (
+            SafetyStatus::AutomaticModeSafeguardStop
+            | SafetyStatus::SystemThreePositionEnablingStop,
+            Layout::Cb3,
+        ) => 5,
+        (s, _) => u8::try_from(s.code()).unwrap_or(0),
     }
 }
 
