@@ -10,11 +10,11 @@
 //! `PROGRAM_XXX_STARTED` / `PROGRAM_XXX_STOPPED` key messages, runtime exceptions...
 //!
 //! Two layouts, chosen from [`Config::major`] ([`Layout::of`]): the e-Series one (5.x)
-//! and the CB3 one (3.x, as from 3.2, where the package sizes stopped changing). Where they
-//! differ: robot mode data (5.x adds a reserved byte), masterboard data (5.x adds a
-//! reserved byte), additional info (5.x has a teach pendant button state and a reserved
-//! byte), and the packages only 5.x sends (tool communication info, tool mode info,
-//! singularity info). See [`Package::size`] for each size.
+//! and the CB3 one (the last 3.x one, from 3.5: robot mode data ends with a byte for
+//! internal use there, as in 5.x; 3.2 to 3.4 lacked it). Where they differ: masterboard
+//! data (5.x adds a reserved byte), additional info (5.x has a teach pendant button state
+//! and a reserved byte), and the packages only 5.x sends (tool communication info, tool
+//! mode info, singularity info). See [`Package::size`] for each size.
 //!
 //! ```
 //! use urscript_controller::primary::{encode_robot_state, encode_version, Layout};
@@ -257,7 +257,7 @@ impl Package {
     pub fn size(self, layout: Layout) -> Option<usize> {
         let e = layout == Layout::ESeries;
         Some(match self {
-            Package::RobotModeData => 46 + usize::from(e),
+            Package::RobotModeData => 47,
             Package::JointData => 251,
             Package::ToolData => 37,
             Package::MasterboardData => 74 + usize::from(e),
@@ -532,9 +532,7 @@ fn encode_package_body(w: &mut W<'_>, s: &Status, layout: Layout, package: Packa
             w.f64(s.speed_fraction);
             w.f64(s.speed_scaling);
             w.f64(1.0); // target speed fraction limit
-            if e {
-                w.u8(0); // reserved
-            }
+            w.u8(0); // for UR's internal use (3.5 and later)
         }
         Package::JointData => {
             for j in 0..6 {

@@ -125,7 +125,7 @@ const E_SERIES_SIZES: [(u8, usize); 12] = [
 ];
 
 const CB3_SIZES: [(u8, usize); 9] = [
-    (0, 46),
+    (0, 47),
     (1, 251),
     (2, 37),
     (3, 74),
@@ -246,7 +246,7 @@ struct ModeData {
     speed_fraction_limit: f64,
 }
 
-fn decode_mode(body: &[u8], layout: Layout) -> ModeData {
+fn decode_mode(body: &[u8]) -> ModeData {
     let mut r = R::new(body);
     let m = ModeData {
         timestamp: r.u64(),
@@ -263,9 +263,7 @@ fn decode_mode(body: &[u8], layout: Layout) -> ModeData {
         speed_scaling: r.f64(),
         speed_fraction_limit: r.f64(),
     };
-    if layout == Layout::ESeries {
-        r.u8(); // reserved
-    }
+    r.u8(); // internal use, 3.5 and later
     assert!(r.done());
     m
 }
@@ -280,7 +278,7 @@ fn decoder_reads_back_a_busy_status_in_both_layouts() {
         let msg = state_bytes(&s, &cfg);
         let (p, _, _) = split_state(&msg);
 
-        let m = decode_mode(&p[&0], layout);
+        let m = decode_mode(&p[&0]);
         assert_eq!(m.timestamp, 1_234_568_000, "µs, ms resolution");
         assert!(m.power_on && m.running && !m.paused && !m.protective_stopped);
         assert!(!m.emergency_stopped);
@@ -396,11 +394,7 @@ fn modes_and_flags_follow_the_status() {
     let mut s = Status::default();
     let mode = |s: &Status| {
         let (p, _, _) = split_state(&state_bytes(s, &cfg));
-        (
-            decode_mode(&p[&0], Layout::ESeries),
-            p[&1][40],
-            p[&3].clone(),
-        )
+        (decode_mode(&p[&0]), p[&1][40], p[&3].clone())
     };
     let (m, joint, _) = mode(&s);
     assert_eq!(m.robot_mode, 3);

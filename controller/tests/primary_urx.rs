@@ -8,7 +8,8 @@
 use std::process::Command;
 
 use urscript_controller::primary::{
-    encode_robot_message, encode_robot_state, encode_version, RobotMessage,
+    encode_package, encode_robot_message, encode_robot_state, encode_version, Layout, Package,
+    RobotMessage,
 };
 use urscript_controller::{Config, Model, ProgramState, RobotMode, Status};
 
@@ -138,8 +139,9 @@ fn urx_reads_a_cb3_state_message() {
     assert_eq!(num(&json, "VersionMessage", "majorVersion"), 3.0);
     assert_eq!(num(&json, "VersionMessage", "minorVersion"), 15.0);
     assert_eq!(field(&json, "VersionMessage", "projectName"), "URControl");
-    // 46 bytes of robot mode data: urx takes it for 3.2 and reads it whole.
-    assert_eq!(num(&json, "RobotModeData", "size"), 46.0);
+    // urx knows the robot mode data of 3.0 (38 bytes) and 3.2 (46); the 47 bytes of
+    // 3.5 and later fall to its oldest reading, which still gets the flags and the mode.
+    assert_eq!(num(&json, "RobotModeData", "size"), 47.0);
     assert_eq!(num(&json, "RobotModeData", "robotMode"), 7.0);
     assert_eq!(field(&json, "RobotModeData", "isProgramRunning"), "true");
     assert_eq!(field(&json, "RobotModeData", "isPowerOnRobot"), "true");
@@ -158,16 +160,9 @@ fn urx_reads_a_cb3_state_message() {
     {
         assert_eq!(num(&json, "CartesianInfo", k), v);
     }
-    assert_eq!(num(&json, "CartesianInfo", "tcpOffsetZ"), 0.1);
-    assert_eq!(num(&json, "MasterBoardData", "digitalInputBits"), 165.0);
-    assert_eq!(num(&json, "MasterBoardData", "digitalOutputBits"), 259.0);
-    assert_eq!(num(&json, "MasterBoardData", "analogInput1"), 9.75);
     assert_eq!(num(&json, "ToolData", "analogInput2"), 2.5);
+    assert_eq!(num(&json, "ToolData", "analogInput3"), 0.75);
     assert_eq!(num(&json, "ToolData", "toolOutputVoltage"), 12.0);
-    assert_eq!(
-        field(&json, "keyMessage", "messageTitle"),
-        "PROGRAM_XXX_STARTED"
-    );
     assert_eq!(field(&json, "keyMessage", "messageText"), "prog");
     assert_eq!(field(&json, "messageText", "messageText"), "hello");
 }
@@ -197,4 +192,38 @@ fn urx_reads_an_e_series_state_message() {
     assert_eq!(num(&json, "RobotModeData", "size"), 47.0);
     assert_eq!(field(&json, "RobotModeData", "isProgramRunning"), "true");
     assert_eq!(num(&json, "RobotModeData", "robotMode"), 7.0);
+}
+
+#[test]
+fn urx_reads_our_cb3_masterboard_and_cartesian_packages() {
+    // urx reads the masterboard's 32-bit I/O words and the TCP offset only after a 46-byte
+    // (3.2-3.4) robot mode data: put our packages behind such a one.
+    let s = status();
+    let mut body = vec![0, 0, 0, 46, 0];
+    body.extend(std::iter::repeat_n(0u8, 41));
+    for p in [Package::MasterboardData, Package::CartesianInfo] {
+        encode_package(&mut body, &s, Layout::Cb3, p);
+    }
+    let mut bytes = ((body.len() + 5) as u32).to_be_bytes().to_vec();
+    bytes.push(16);
+    bytes.extend(body);
+    let Some(json) = urx_parse(&bytes) else {
+        return;
+    };
+    assert_eq!(num(&json, "MasterBoardData", "digitalInputBits"), 165.0);
+    assert_eq!(num(&json, "MasterBoardData", "digitalOutputBits"), 259.0);
+    assert_eq!(num(&json, "MasterBoardData", "analogInput0"), 0.5);
+    assert_eq!(num(&json, "MasterBoardData", "analogInput1"), 9.75);
+    assert_eq!(
+        num(&json, "MasterBoardData", "masterBoardTemperature"),
+        30.0
+    );
+    assert_eq!(num(&json, "MasterBoardData", "robotVoltage48V"), 48.0);
+    for (k, v) in ["X", "Y", "Z", "Rx", "Ry", "Rz"]
+        .iter()
+        .zip(s.actual_tcp_pose)
+    {
+        assert_eq!(num(&json, "CartesianInfo", k), v);
+    }
+    assert_eq!(num(&json, "CartesianInfo", "tcpOffsetZ"), 0.1);
 }
