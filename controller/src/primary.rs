@@ -825,6 +825,26 @@ impl RobotMessage {
         }
     }
 
+    /// The runtime exception a syntax error gives: `syntax_error_on_line:LINE:TOKEN:`,
+    /// as URSim words it (`def silly()` without its colon, then `end`, gives line 2,
+    /// column 1, token `end`).
+    pub fn syntax_error(line: i32, column: i32, token: &str) -> Self {
+        RobotMessage::RuntimeException {
+            line,
+            column,
+            text: format!("syntax_error_on_line:{line}:{token}:"),
+        }
+    }
+
+    /// The runtime exception an unknown name gives: `compile_error_name_not_found:NAME:`.
+    pub fn name_not_found(line: i32, column: i32, name: &str) -> Self {
+        RobotMessage::RuntimeException {
+            line,
+            column,
+            text: format!("compile_error_name_not_found:{name}:"),
+        }
+    }
+
     /// A text message.
     pub fn text(text: &str) -> Self {
         RobotMessage::Text { text: text.into() }

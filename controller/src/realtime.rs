@@ -9,6 +9,9 @@
 //! - CB3, the last 3.x table (3.5 to 3.15): [`CB3_SIZE`] = 1108 bytes, ending with the
 //!   elbow position and velocity.
 //!
+//! Port 30003 takes scripts as 30001 does ([`crate::script_intake`]); 30013 ignores
+//! what it is sent.
+//!
 //! Field offsets are in [`offset`]. Fields the guide marks as used by Universal Robots
 //! software only are zeros. Fields the virtual controller has no source for: `I control`
 //! is the actual current, `Controller Timer`, `Test value` and `Linear momentum norm` are

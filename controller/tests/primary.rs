@@ -510,6 +510,23 @@ fn runtime_exception_as_ursim_sends_it() {
 }
 
 #[test]
+fn compile_errors_as_ursim_sends_them() {
+    let mut out = Vec::new();
+    encode_robot_message(&mut out, &RobotMessage::syntax_error(2, 1, "end"), 1.0);
+    assert_eq!(&out[..4], &[0, 0, 0, 0x32]);
+    assert_eq!(&out[13..23], &[0xfd, 0x0a, 0, 0, 0, 2, 0, 0, 0, 1]);
+    assert_eq!(&out[23..], b"syntax_error_on_line:2:end:");
+
+    let mut out = Vec::new();
+    encode_robot_message(&mut out, &RobotMessage::name_not_found(2, 2, "txtmsg"), 1.0);
+    let mut want = vec![0, 0, 0, 0x3b, 0x14];
+    want.extend([0xff; 8]);
+    want.extend([0xfd, 0x0a, 0, 0, 0, 2, 0, 0, 0, 2]);
+    want.extend(b"compile_error_name_not_found:txtmsg:");
+    assert_eq!(out, want);
+}
+
+#[test]
 fn text_popup_error_and_other_messages_decode() {
     let mut out = Vec::new();
     encode_robot_message(&mut out, &RobotMessage::text("hello é"), 1.5);
