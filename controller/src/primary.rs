@@ -45,8 +45,9 @@
 //! # Sources
 //!
 //! UR's "Client Interfaces" guide (primary/secondary, the 3.x and 5.x package tables), and
-//! what clients parse: UR's `Universal_Robots_Client_Library` (primary parser), python-urx
-//! (`ursecmon.py`) and a public capture of URSim 5.4's bytes (the version message's
+//! what clients parse: UR's `Universal_Robots_Client_Library` (primary parser), the
+//! ROS-Industrial `ur_modern_driver` (its 3.5 robot mode data of 42 bytes after the
+//! header), python-urx (`ursecmon.py`) and a public capture of URSim 5.4's bytes (the version message's
 //! timestamp of all ones and source −2, the key messages' code and argument 0 and source
 //! −3). Nothing was copied from them.
 
@@ -474,7 +475,9 @@ pub fn encode_version(out: &mut Vec<u8>, config: &Config) {
 }
 
 /// Writes one robot state message (type 16) with every package of the configuration's
-/// [`Layout`] ([`Layout::packages`]), in the guide's order.
+/// [`Layout`] ([`Layout::packages`]), in the guide's order. The kinematics info and
+/// configuration data, which do not change, go in every message too, so a client that
+/// connects late or reads one message has everything.
 pub fn encode_robot_state(out: &mut Vec<u8>, status: &Status, config: &Config) {
     let layout = Layout::of(config);
     encode_robot_state_with(out, status, layout, layout.packages());
