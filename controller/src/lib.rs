@@ -44,6 +44,9 @@
 //!   play, stop, pause, shutdown, power, brakes, unlock, restart safety, operational
 //!   mode, load installation) gets the controller's refusal; queries still answer.
 //!
+//! Playing a program keeps only the state (PLAYING until stop or pause): executing the
+//! `.urp`'s program is the next step.
+//!
 //! # Primary, secondary and realtime interfaces
 //!
 //! [`primary`] writes what ports 30001/30002 send (the version message, the 10 Hz robot
@@ -52,9 +55,6 @@
 //! the e-Series (5.x) or CB3 (3.x) layout after [`Config::major`]. [`script_intake`]
 //! cuts what clients write on those ports into programs, secondary programs, bare lines
 //! and commands, within fixed bounds.
-//!
-//! Playing a program keeps only the state (PLAYING until stop or pause): executing the
-//! `.urp`'s program is the next step.
 //!
 //! # Where the reply texts come from, and the choices where sources disagree
 //!

@@ -10,11 +10,11 @@
 //! `PROGRAM_XXX_STARTED` / `PROGRAM_XXX_STOPPED` key messages, runtime exceptions...
 //!
 //! Two layouts, chosen from [`Config::major`] ([`Layout::of`]): the e-Series one (5.x)
-//! and the CB3 one (3.x, as from 3.2, where the package sizes stopped changing). Where they
-//! differ: robot mode data (5.x adds a reserved byte), masterboard data (5.x adds a
-//! reserved byte), additional info (5.x has a teach pendant button state and a reserved
-//! byte), and the packages only 5.x sends (tool communication info, tool mode info,
-//! singularity info). See [`Package::size`] for each size.
+//! and the CB3 one (the last 3.x one, from 3.5: robot mode data ends with a byte for
+//! internal use there, as in 5.x; 3.2 to 3.4 lacked it). Where they differ: masterboard
+//! data (5.x adds a reserved byte), additional info (5.x has a teach pendant button state
+//! and a reserved byte), and the packages only 5.x sends (tool communication info, tool
+//! mode info, singularity info). See [`Package::size`] for each size.
 //!
 //! ```
 //! use urscript_controller::primary::{encode_robot_state, encode_version, Layout};
@@ -45,8 +45,9 @@
 //! # Sources
 //!
 //! UR's "Client Interfaces" guide (primary/secondary, the 3.x and 5.x package tables), and
-//! what clients parse: UR's `Universal_Robots_Client_Library` (primary parser), python-urx
-//! (`ursecmon.py`) and a public capture of URSim 5.4's bytes (the version message's
+//! what clients parse: UR's `Universal_Robots_Client_Library` (primary parser), the
+//! ROS-Industrial `ur_modern_driver` (its 3.5 robot mode data of 42 bytes after the
+//! header), python-urx (`ursecmon.py`) and a public capture of URSim 5.4's bytes (the version message's
 //! timestamp of all ones and source −2, the key messages' code and argument 0 and source
 //! −3). Nothing was copied from them.
 
@@ -64,6 +65,61 @@ pub const SECONDARY_PORT: u16 = 30002;
 pub const PRIMARY_READ_ONLY_PORT: u16 = 30011;
 /// The read-only secondary interface: as 30002, scripts refused.
 pub const SECONDARY_READ_ONLY_PORT: u16 = 30012;
+
+/// One of the four ports this module's messages go out on, and what each does.
+///
+/// | port  | version on connect | robot state, 10 Hz | robot messages | scripts in |
+/// |-------|--------------------|--------------------|----------------|------------|
+/// | 30001 | yes                | yes                | yes            | yes        |
+/// | 30002 | yes                | yes                | no             | yes        |
+/// | 30011 | yes                | yes                | yes            | no         |
+/// | 30012 | yes                | yes                | no             | no         |
+///
+/// CB3 and e-Series alike (the read-only ports are those of recent versions: every 5.x,
+/// the last 3.x).
+/// The realtime port is in [`crate::realtime`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Port {
+    /// 30001.
+    Primary,
+    /// 30002.
+    Secondary,
+    /// 30011.
+    PrimaryReadOnly,
+    /// 30012.
+    SecondaryReadOnly,
+}
+
+impl Port {
+    /// Every port, in the order of the table.
+    pub const ALL: [Port; 4] = [
+        Port::Primary,
+        Port::Secondary,
+        Port::PrimaryReadOnly,
+        Port::SecondaryReadOnly,
+    ];
+
+    /// The TCP port number.
+    pub fn number(self) -> u16 {
+        match self {
+            Port::Primary => PRIMARY_PORT,
+            Port::Secondary => SECONDARY_PORT,
+            Port::PrimaryReadOnly => PRIMARY_READ_ONLY_PORT,
+            Port::SecondaryReadOnly => SECONDARY_READ_ONLY_PORT,
+        }
+    }
+
+    /// Whether robot messages (text, key, runtime exception...) go out on this port.
+    pub fn sends_robot_messages(self) -> bool {
+        matches!(self, Port::Primary | Port::PrimaryReadOnly)
+    }
+
+    /// Whether the controller runs what a client writes on this port
+    /// ([`crate::script_intake`]); the read-only ports ignore it.
+    pub fn accepts_scripts(self) -> bool {
+        matches!(self, Port::Primary | Port::Secondary)
+    }
+}
 
 /// Robot state messages go out at 10 Hz on the primary and secondary ports, CB3 and
 /// e-Series alike.
@@ -202,7 +258,7 @@ impl Package {
     pub fn size(self, layout: Layout) -> Option<usize> {
         let e = layout == Layout::ESeries;
         Some(match self {
-            Package::RobotModeData => 46 + usize::from(e),
+            Package::RobotModeData => 47,
             Package::JointData => 251,
             Package::ToolData => 37,
             Package::MasterboardData => 74 + usize::from(e),
@@ -305,13 +361,17 @@ pub fn joint_mode(status: &Status) -> u8 {
     }
 }
 
-/// The older safety *mode* code (masterboard data, realtime `Safety Mode`): the two
-/// e-Series stops it predates are SAFEGUARD_STOP (5), as RTDE's `safety_mode` does.
-pub fn safety_mode_code(safety: SafetyStatus) -> u8 {
-    match safety {
-        SafetyStatus::AutomaticModeSafeguardStop
-        | SafetyStatus::SystemThreePositionEnablingStop => 5,
-        s => u8::try_from(s.code()).unwrap_or(0),
+/// The safety mode code (masterboard data, realtime `Safety Mode`). The e-Series'
+/// safety modes include the automatic-mode safeguard stop (12) and the three-position
+/// enabling stop (13); CB3 has neither and reports them as SAFEGUARD_STOP (5).
+pub fn safety_mode_code(safety: SafetyStatus, layout: Layout) -> u8 {
+    match (safety, layout) {
+        (
+            SafetyStatus::AutomaticModeSafeguardStop
+            | SafetyStatus::SystemThreePositionEnablingStop,
+            Layout::Cb3,
+        ) => 5,
+        (s, _) => u8::try_from(s.code()).unwrap_or(0),
     }
 }
 
@@ -415,7 +475,9 @@ pub fn encode_version(out: &mut Vec<u8>, config: &Config) {
 }
 
 /// Writes one robot state message (type 16) with every package of the configuration's
-/// [`Layout`] ([`Layout::packages`]), in the guide's order.
+/// [`Layout`] ([`Layout::packages`]), in the guide's order. The kinematics info and
+/// configuration data, which do not change, go in every message too, so a client that
+/// connects late or reads one message has everything.
 pub fn encode_robot_state(out: &mut Vec<u8>, status: &Status, config: &Config) {
     let layout = Layout::of(config);
     encode_robot_state_with(out, status, layout, layout.packages());
@@ -473,9 +535,7 @@ fn encode_package_body(w: &mut W<'_>, s: &Status, layout: Layout, package: Packa
             w.f64(s.speed_fraction);
             w.f64(s.speed_scaling);
             w.f64(1.0); // target speed fraction limit
-            if e {
-                w.u8(0); // reserved
-            }
+            w.u8(0); // for UR's internal use (3.5 and later)
         }
         Package::JointData => {
             for j in 0..6 {
@@ -516,7 +576,7 @@ fn encode_package_body(w: &mut W<'_>, s: &Status, layout: Layout, package: Packa
             w.f32(s.robot_voltage);
             w.f32(s.robot_current);
             w.f32(s.io_current);
-            w.u8(safety_mode_code(s.safety));
+            w.u8(safety_mode_code(s.safety, layout));
             w.bool(s.safety == SafetyStatus::Reduced);
             w.bool(false); // Euromap67 interface installed
             w.u32(0); // used by UR software only
@@ -765,6 +825,26 @@ impl RobotMessage {
             argument: 0,
             title: PROGRAM_STOPPED.into(),
             text: name.into(),
+        }
+    }
+
+    /// The runtime exception a syntax error gives: `syntax_error_on_line:LINE:TOKEN:`,
+    /// as URSim words it (`def silly()` without its colon, then `end`, gives line 2,
+    /// column 1, token `end`).
+    pub fn syntax_error(line: i32, column: i32, token: &str) -> Self {
+        RobotMessage::RuntimeException {
+            line,
+            column,
+            text: format!("syntax_error_on_line:{line}:{token}:"),
+        }
+    }
+
+    /// The runtime exception an unknown name gives: `compile_error_name_not_found:NAME:`.
+    pub fn name_not_found(line: i32, column: i32, name: &str) -> Self {
+        RobotMessage::RuntimeException {
+            line,
+            column,
+            text: format!("compile_error_name_not_found:{name}:"),
         }
     }
 

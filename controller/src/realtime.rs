@@ -9,6 +9,9 @@
 //! - CB3, the last 3.x table (3.5 to 3.15): [`CB3_SIZE`] = 1108 bytes, ending with the
 //!   elbow position and velocity.
 //!
+//! Port 30003 takes scripts as 30001 does ([`crate::script_intake`]); 30013 ignores
+//! what it is sent.
+//!
 //! Field offsets are in [`offset`]. Fields the guide marks as used by Universal Robots
 //! software only are zeros. Fields the virtual controller has no source for: `I control`
 //! is the actual current, `Controller Timer`, `Test value` and `Linear momentum norm` are
@@ -203,7 +206,7 @@ pub fn encode_realtime_layout(out: &mut Vec<u8>, s: &Status, layout: Layout) {
     d(&[0.0]); // test value
     d(&[f64::from(s.robot_mode.code())]);
     d(&[f64::from(joint_mode(s)); 6]);
-    d(&[f64::from(safety_mode_code(s.safety))]);
+    d(&[f64::from(safety_mode_code(s.safety, layout))]);
     d(&[0.0; 6]); // used by UR software only
     d(&s.tool_accelerometer);
     d(&[0.0; 6]); // used by UR software only
