@@ -90,13 +90,13 @@
 //! [`RtdeSession`] serves one Real-Time Data Exchange client: protocol versions 1 and
 //! 2, output recipes streamed from the step's [`Status`] at the frequency asked, input
 //! recipes decoded into [`Inputs`] for the cell to apply, input ownership shared
-//! between clients through an [`InputRegistry`]. The module `rtde`'s documentation
+//! between clients through an [`InputRegistry`]. The [`rtde`] module's documentation
 //! lists the fields, the choices and the bounds.
 #![forbid(unsafe_code)]
 #![warn(missing_docs)]
 
 mod dashboard;
-mod rtde;
+pub mod rtde;
 mod state;
 mod status;
 
