@@ -17,7 +17,8 @@
 //! | `P` 80 | CONTROL_PACKAGE_PAUSE | nothing | `u8` accepted (always 1) |
 //! | `U` 85 | DATA_PACKAGE | `u8` recipe id, the input values | the outputs, while started: v2 `u8` recipe id then values; v1 values only |
 //!
-//! Names are comma-separated, types likewise (`DOUBLE,VECTOR6D,NOT_FOUND`). Text
+//! Names are comma-separated (one trailing comma is allowed, as `ur_rtde` sends it),
+//! types likewise (`DOUBLE,VECTOR6D,NOT_FOUND`). Text
 //! levels: 0 exception, 1 error, 2 warning, 3 info ([`RtdeTextLevel`]). Until the client
 //! negotiates a version the session speaks protocol 1.
 //!
@@ -94,7 +95,8 @@
 //!   (an empty type list for a names list too long or a payload not UTF-8).
 //! - Setups are accepted while started as well. START answers 1 when the session has
 //!   at least one recipe (output or input), else 0; PAUSE always answers 1.
-//! - Input DATA_PACKAGEs are accepted whether started or not. Masks and values latch
+//! - Input DATA_PACKAGEs are accepted whether started or not (`ur_rtde`'s
+//!   `RTDEIOInterface` writes its inputs without ever sending START). Masks and values latch
 //!   per session: a recipe carrying `standard_digital_output` without its mask uses the
 //!   last mask this session sent (0 at first), and likewise for the speed slider, the
 //!   configurable and tool outputs, the analog outputs and the payload.
@@ -1661,6 +1663,9 @@ impl RtdeSession {
             packet_type: RTDE_SETUP_OUTPUTS,
             reason: "names are not UTF-8",
         })?;
+        // A trailing comma ends the list (ur_rtde sends `a,b,c,`); an empty list or an
+        // empty name elsewhere stays a name, NOT_FOUND.
+        let text = text.strip_suffix(',').unwrap_or(text);
         let names: Vec<String> = text.split(',').map(str::to_string).collect();
         if names.len() > RTDE_MAX_FIELDS {
             return Err(RtdeError::TooManyFields { count: names.len() });

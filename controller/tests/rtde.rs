@@ -253,6 +253,27 @@ fn output_setup_answers_types_and_not_found() {
 }
 
 #[test]
+fn a_trailing_comma_ends_the_names() {
+    // ur_rtde sends its names as `a,b,c,`.
+    let mut c = Client::v2(&Config::default());
+    assert_eq!(
+        c.outputs(500.0, "timestamp,actual_q,"),
+        (1, "DOUBLE,VECTOR6D".into())
+    );
+    assert_eq!(c.inputs("input_int_register_23,"), (1, "INT32".into()));
+    // Only one: an empty name inside or alone is a name, and unknown.
+    assert_eq!(
+        c.outputs(500.0, "timestamp,,actual_q"),
+        (0, "DOUBLE,NOT_FOUND,VECTOR6D".into())
+    );
+    assert_eq!(c.outputs(500.0, ""), (0, "NOT_FOUND".into()));
+    assert_eq!(
+        c.outputs(500.0, "timestamp,,"),
+        (0, "DOUBLE,NOT_FOUND".into())
+    );
+}
+
+#[test]
 fn fields_follow_the_controller_version() {
     let e = Config::default();
     assert_eq!(
