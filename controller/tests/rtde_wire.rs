@@ -94,7 +94,7 @@ names = [
     "actual_robot_current", "actual_joint_voltage", "actual_digital_output_bits",
 ]
 assert len(names) == 30
-r = rtde_receive.RTDEReceiveInterface(host, 500.0, names)
+r = rtde_receive.RTDEReceiveInterface(host, float(sys.argv[2]), names)
 time.sleep(0.3)
 t0 = r.getTimestamp()
 time.sleep(0.5)
@@ -134,23 +134,24 @@ fn python_has_ur_rtde() -> Result<(), String> {
     }
 }
 
-#[test]
-fn ur_rtde_receives_30_fields_and_writes_inputs() {
+/// Serve `config` on `127.x.y.octet:30004` to the client script run with output
+/// frequency `hz` (`-1`: ur_rtde picks from the controller version), and check what the
+/// client saw and wrote. `None` when skipped.
+fn run_ur_rtde(config: Config, octet: u32, hz: &str) -> Option<(String, Vec<RtdeEvent>)> {
     if let Err(why) = python_has_ur_rtde() {
         eprintln!("skipped: {why}");
-        return;
+        return None;
     }
     let pid = std::process::id();
-    let host = format!("127.{}.{}.1", 1 + (pid >> 8) % 250, pid % 250);
+    let host = format!("127.{}.{}.{octet}", 1 + (pid >> 8) % 250, pid % 250);
     let listener = match TcpListener::bind((host.as_str(), 30004)) {
         Ok(l) => l,
         Err(e) => {
             eprintln!("skipped: cannot listen on {host}:30004: {e}");
-            return;
+            return None;
         }
     };
     listener.set_nonblocking(true).unwrap();
-    let config = Config::default();
     let status = Status {
         robot_mode: RobotMode::Running,
         joint_temperatures: [30.0, 31.0, 32.0, 33.0, 34.0, 35.5],
@@ -185,7 +186,7 @@ fn ur_rtde_receives_30_fields_and_writes_inputs() {
     };
 
     let mut child = Command::new("python3")
-        .args(["-u", "-c", CLIENT, &host])
+        .args(["-u", "-c", CLIENT, &host, hz])
         .stdout(Stdio::piped())
         .stderr(Stdio::piped())
         .spawn()
@@ -207,7 +208,8 @@ fn ur_rtde_receives_30_fields_and_writes_inputs() {
         "client ({}) stdout:\n{stdout}\nclient stderr:\n{stderr}",
         out.status
     );
-    println!("events: {:?}", shared.lock().unwrap().events);
+    let g = shared.lock().unwrap();
+    println!("events: {:?}", g.events);
     assert!(out.status.success(), "the client failed");
     assert!(stdout.contains("DONE"));
 
@@ -240,10 +242,15 @@ fn ur_rtde_receives_30_fields_and_writes_inputs() {
     assert_eq!(line("SET_DO"), vec![1.0]);
     // The digital output written through rtde_io came back through rtde_receive.
     assert_eq!(line("DO_BITS"), vec![8.0]);
+    assert_eq!(g.status.input_int_registers[18], 42);
+    assert_eq!(g.status.input_double_registers[19], 3.5);
+    assert_eq!(g.registry.owned(), 0, "every session released its inputs");
+    Some((stdout, g.events.clone()))
+}
 
-    let g = shared.lock().unwrap();
-    let setup = g
-        .events
+/// The 30-field output setup the client made: recipe id, types, frequency.
+fn output_setup(events: &[RtdeEvent]) -> (u8, Vec<String>, f64) {
+    events
         .iter()
         .find_map(|e| match e {
             RtdeEvent::OutputSetup {
@@ -254,11 +261,33 @@ fn ur_rtde_receives_30_fields_and_writes_inputs() {
             } if fields.len() == 30 => Some((*recipe, types.clone(), *frequency)),
             _ => None,
         })
-        .expect("a 30-field output setup");
-    assert_ne!(setup.0, 0, "accepted: {:?}", setup.1);
-    assert_eq!(setup.2, 500.0);
-    assert!(!setup.1.iter().any(|t| t == "NOT_FOUND"));
-    assert_eq!(g.status.input_int_registers[18], 42);
-    assert_eq!(g.status.input_double_registers[19], 3.5);
-    assert_eq!(g.registry.owned(), 0, "every session released its inputs");
+        .expect("a 30-field output setup")
+}
+
+#[test]
+fn ur_rtde_receives_30_fields_at_500_hz_and_writes_inputs() {
+    let Some((_, events)) = run_ur_rtde(Config::default(), 1, "500") else {
+        return;
+    };
+    let (recipe, types, frequency) = output_setup(&events);
+    assert_ne!(recipe, 0, "accepted: {types:?}");
+    assert!(!types.iter().any(|t| t == "NOT_FOUND"));
+    assert_eq!(frequency, 500.0);
+}
+
+#[test]
+fn ur_rtde_on_a_cb3_controller_asks_125_hz() {
+    let cb3 = Config {
+        polyscope: "3.15.7".into(),
+        ..Config::default()
+    };
+    let Some((_, events)) = run_ur_rtde(cb3, 2, "-1") else {
+        return;
+    };
+    let (recipe, _, frequency) = output_setup(&events);
+    assert_ne!(recipe, 0);
+    assert_eq!(
+        frequency, 125.0,
+        "ur_rtde picks 125 Hz from the CB3 version"
+    );
 }
