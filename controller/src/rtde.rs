@@ -9,7 +9,7 @@
 //! | type | name | client sends | server answers |
 //! |---|---|---|---|
 //! | `V` 86 | REQUEST_PROTOCOL_VERSION | `u16` version | `u8` accepted (1 for versions 1 and 2, else 0) |
-//! | `v` 118 | GET_URCONTROL_VERSION | nothing | `u32` major, minor, bugfix, build ([`Config::polyscope`]) |
+//! | `v` 118 | GET_URCONTROL_VERSION | nothing (a payload is ignored) | `u32` major, minor, bugfix, build ([`Config::polyscope`]) |
 //! | `M` 77 | TEXT_MESSAGE | v1: `u8` level, text; v2: `u8` length, text, `u8` length, source, `u8` level | nothing ([`RtdeEvent::TextMessage`]) |
 //! | `O` 79 | CONTROL_PACKAGE_SETUP_OUTPUTS | v2: `f64` frequency, then names; v1: names | v2: `u8` recipe id, types; v1: types |
 //! | `I` 73 | CONTROL_PACKAGE_SETUP_INPUTS | names | `u8` recipe id, types |
@@ -412,8 +412,9 @@ pub enum RtdeError {
         /// Their length.
         len: usize,
     },
-    /// A setup listed more than [`RTDE_MAX_FIELDS`] fields, or its data package would be
-    /// larger than [`RTDE_MAX_PACKET_SIZE`].
+    /// A setup listed more than [`RTDE_MAX_FIELDS`] fields, or an input recipe's data
+    /// package would be larger than [`RTDE_MAX_PACKET_SIZE`] (a guard: within
+    /// [`RTDE_MAX_NAMES`] bytes of names the largest is 6 KiB).
     TooManyFields {
         /// How many.
         count: usize,
@@ -2017,7 +2018,9 @@ impl RtdeSession {
     }
 
     /// The connection ended: release every input field this session owns. Later calls
-    /// to [`RtdeSession::handle_received`] return [`RtdeError::Closed`].
+    /// to [`RtdeSession::handle_received`] return [`RtdeError::Closed`]. Call it for
+    /// every session, after a fatal error too: a session dropped without `close` keeps
+    /// its fields owned in the registry.
     pub fn close(&mut self, registry: &mut InputRegistry) {
         registry.release(self.id);
         self.started = false;

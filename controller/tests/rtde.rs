@@ -1175,3 +1175,90 @@ proptest! {
         prop_assert_eq!(s.take_outbox(), w.take_outbox());
     }
 }
+
+#[test]
+fn recipes_and_fields_are_bounded() {
+    use urscript_controller::{RTDE_MAX_FIELDS, RTDE_MAX_INPUT_RECIPES, RTDE_MAX_OUTPUT_RECIPES};
+    let mut c = Client::v2(&Config::default());
+    for i in 1..=RTDE_MAX_OUTPUT_RECIPES {
+        assert_eq!(c.outputs(125.0, "timestamp").0 as usize, i);
+    }
+    assert_eq!(c.outputs(125.0, "timestamp"), (0, "DOUBLE".into()));
+    assert_eq!(c.errors(), vec![RtdeError::TooManyRecipes]);
+    for i in 1..=RTDE_MAX_INPUT_RECIPES {
+        assert_eq!(c.inputs("input_int_register_24").0 as usize, i);
+    }
+    assert_eq!(c.inputs("input_int_register_24"), (0, "INT32".into()));
+    assert_eq!(c.errors(), vec![RtdeError::TooManyRecipes]);
+    // More fields than a recipe holds (short names, within the 2048 bytes).
+    let many = vec!["a"; RTDE_MAX_FIELDS + 1].join(",");
+    assert_eq!(c.outputs(125.0, &many), (0, String::new()));
+    assert_eq!(
+        c.errors(),
+        vec![RtdeError::TooManyFields {
+            count: RTDE_MAX_FIELDS + 1
+        }]
+    );
+    // Exactly the most fields is fine.
+    let mut c = Client::v2(&Config::default());
+    let most = vec!["payload"; RTDE_MAX_FIELDS].join(",");
+    assert!(most.len() <= RTDE_MAX_NAMES);
+    assert_eq!(c.outputs(125.0, &most).0, 1);
+    c.start();
+    let data = c.run(&Status::default(), 0, 2);
+    assert_eq!(data[0].len(), 1 + 8 * RTDE_MAX_FIELDS);
+}
+
+#[test]
+fn events_are_bounded() {
+    use urscript_controller::RTDE_MAX_EVENTS;
+    let mut c = Client::new(&Config::default());
+    let n = RTDE_MAX_EVENTS + 100;
+    for i in 0..n {
+        let text = format!("\x03m{i}");
+        c.s.handle_received(&mut c.reg, &packet(b'M', text.as_bytes()))
+            .unwrap();
+    }
+    assert_eq!(c.s.dropped_events(), 100);
+    let ev = c.events();
+    assert_eq!(ev.len(), RTDE_MAX_EVENTS);
+    assert_eq!(
+        ev[0],
+        RtdeEvent::TextMessage {
+            level: 3,
+            message: "m100".into(),
+            source: String::new()
+        },
+        "the oldest went first"
+    );
+}
+
+#[test]
+fn an_undrained_outbox_skips_data_and_then_fails() {
+    use urscript_controller::RTDE_MAX_OUTBOX;
+    let mut c = Client::v2(&Config::default());
+    c.outputs(500.0, "target_q,actual_q,target_qd,actual_qd");
+    c.start();
+    // Never drained: data packages stop at the bound and are counted.
+    let s = Status::default();
+    let mut t = 0;
+    while c.s.outbox().len() < RTDE_MAX_OUTBOX {
+        c.s.on_step(&s, ms(t));
+        t += 2;
+    }
+    let len = c.s.outbox().len();
+    for _ in 0..10 {
+        c.s.on_step(&s, ms(t));
+        t += 2;
+    }
+    assert_eq!(c.s.outbox().len(), len);
+    assert_eq!(c.s.skipped_packages(), 10);
+    // A request that needs a reply now is fatal.
+    assert_eq!(
+        c.s.handle_received(&mut c.reg, &packet(b'v', &[])),
+        Err(RtdeError::OutboxFull)
+    );
+    assert!(!c.s.is_started());
+    // Drained, the bytes are still whole packets.
+    assert!(packets(&c.s.take_outbox()).iter().all(|p| p.0 == b'U'));
+}
