@@ -945,37 +945,36 @@ fn text_messages_both_ways_in_each_layout() {
 
 #[test]
 fn framing_errors_are_fatal_and_typed() {
-    for (bytes, want) in [
-        (vec![0u8, 0, b'V'], RtdeError::SizeTooSmall { size: 0 }),
-        (vec![0u8, 2, b'V'], RtdeError::SizeTooSmall { size: 2 }),
-        (
-            vec![0xff, 0xff, b'U'],
-            RtdeError::SizeTooLarge { size: 65535 },
-        ),
-        (
-            ((RTDE_MAX_PACKET_SIZE + 1) as u16).to_be_bytes().to_vec(),
-            RtdeError::SizeTooLarge {
-                size: (RTDE_MAX_PACKET_SIZE + 1) as u16,
-            },
-        ),
+    let too_large = (RTDE_MAX_PACKET_SIZE + 1) as u16;
+    let [hi, lo] = too_large.to_be_bytes();
+    for (header, want) in [
+        ([0u8, 0, b'V'], RtdeError::SizeTooSmall { size: 0 }),
+        ([0, 2, b'V'], RtdeError::SizeTooSmall { size: 2 }),
+        ([0xff, 0xff, b'U'], RtdeError::SizeTooLarge { size: 65535 }),
+        ([hi, lo, b'U'], RtdeError::SizeTooLarge { size: too_large }),
     ] {
         let mut reg = InputRegistry::new();
         let mut s = RtdeSession::new(&Config::default(), &mut reg);
-        let mut input = bytes.clone();
+        // The bad header, then a good packet that is never read.
+        let mut input = header.to_vec();
         input.extend_from_slice(&packet(b'V', &[0, 2]));
-        let mut bytes_in = input.clone();
-        if bytes.len() == 2 {
-            bytes_in.insert(2, b'U');
-        }
-        assert_eq!(s.handle_received(&mut reg, &bytes_in), Err(want.clone()));
+        assert_eq!(s.handle_received(&mut reg, &input), Err(want.clone()));
         assert!(
             s.take_outbox().is_empty(),
             "nothing after the bad header is read"
         );
         assert_eq!(s.fatal_error(), Some(&want));
+        assert!(want.is_fatal());
         assert_eq!(s.handle_received(&mut reg, b"more"), Err(want.clone()));
-        assert!(std::iter::from_fn(|| s.poll_event()).any(|e| e == RtdeEvent::Error(want.clone())));
+        let events: Vec<_> = std::iter::from_fn(|| s.poll_event()).collect();
+        assert_eq!(events, vec![RtdeEvent::Error(want.clone())]);
     }
+    // The largest size allowed is read whole.
+    let mut c = Client::new(&Config::default());
+    let mut text = vec![3u8];
+    text.resize(RTDE_MAX_PACKET_SIZE - 3, b'x');
+    assert!(c.ask(&packet(b'M', &text)).is_empty());
+    assert!(matches!(c.events()[..], [RtdeEvent::TextMessage { .. }]));
 }
 
 #[test]
