@@ -115,6 +115,12 @@ while bits & 8 == 0 and time.time() < deadline:
 print("DO_BITS", bits)
 io.disconnect()
 r.disconnect()
+# ur_rtde's own default recipe, chosen from the controller version.
+d = rtde_receive.RTDEReceiveInterface(host)
+time.sleep(0.2)
+print("DEFAULT_Q", " ".join(repr(x) for x in d.getActualQ()))
+print("DEFAULT_SAFETY", d.getSafetyMode())
+d.disconnect()
 print("DONE")
 "#;
 
@@ -242,6 +248,8 @@ fn run_ur_rtde(config: Config, octet: u32, hz: &str) -> Option<(String, Vec<Rtde
     assert_eq!(line("SET_DO"), vec![1.0]);
     // The digital output written through rtde_io came back through rtde_receive.
     assert_eq!(line("DO_BITS"), vec![8.0]);
+    assert_eq!(line("DEFAULT_Q"), home.to_vec());
+    assert_eq!(line("DEFAULT_SAFETY"), vec![1.0]);
     assert_eq!(g.status.input_int_registers[18], 42);
     assert_eq!(g.status.input_double_registers[19], 3.5);
     assert_eq!(g.registry.owned(), 0, "every session released its inputs");
