@@ -93,6 +93,14 @@
 //!   bytes get the same shape with the first 40 bytes and a note.
 //! - Command words match in any case (`polyscopeVersion`, `PolyscopeVersion`); their
 //!   arguments keep theirs.
+//!
+//! # RTDE (port 30004)
+//!
+//! [`RtdeSession`] serves one Real-Time Data Exchange client: protocol versions 1 and
+//! 2, output recipes streamed from the step's [`Status`] at the frequency asked, input
+//! recipes decoded into [`Inputs`] for the cell to apply, input ownership shared
+//! between clients through an [`InputRegistry`]. The [`rtde`] module's documentation
+//! lists the fields, the choices and the bounds.
 #![forbid(unsafe_code)]
 #![warn(missing_docs)]
 
@@ -100,12 +108,21 @@ mod cell;
 mod dashboard;
 pub mod primary;
 pub mod realtime;
+pub mod rtde;
 pub mod script_intake;
 mod state;
 mod status;
 
 pub use cell::{Cell, CellEvent, Ended, Submitted, MAX_EVENTS};
 pub use dashboard::{Dashboard, Reply, GREETING, LOCAL_CONTROL, MAX_LINE, UNLOCK_TOO_EARLY};
+pub use rtde::{
+    rtde_controller_version, rtde_input_type, rtde_max_frequency, rtde_output_type, InputRegistry,
+    RtdeError, RtdeEvent, RtdeSession, RtdeTextLevel, RtdeType, RtdeValue, RTDE_DATA_PACKAGE,
+    RTDE_GET_URCONTROL_VERSION, RTDE_MAX_EVENTS, RTDE_MAX_FIELDS, RTDE_MAX_INPUT_RECIPES,
+    RTDE_MAX_NAMES, RTDE_MAX_OUTBOX, RTDE_MAX_OUTPUT_RECIPES, RTDE_MAX_PACKET_SIZE, RTDE_PAUSE,
+    RTDE_REQUEST_PROTOCOL_VERSION, RTDE_SETUP_INPUTS, RTDE_SETUP_OUTPUTS, RTDE_START,
+    RTDE_TEXT_MESSAGE,
+};
 pub use state::{
     Config, Controller, OperationalMode, ProgramList, ProgramState, Programs, Refused, RobotMode,
     SafetyStatus, Timing, MAX_LOG,

@@ -1,0 +1,2237 @@
+//! The RTDE server (Real-Time Data Exchange, port 30004), sans-IO: one [`RtdeSession`]
+//! per client connection, fed the bytes received, drained of the bytes to send, and
+//! stepped with the controller's [`Status`] and the time.
+//!
+//! Written from UR's "Real-Time Data Exchange (RTDE) Guide". Every packet is
+//! `u16 size` (big-endian, the 3-byte header included), `u8 type`, then the payload;
+//! every number is big-endian.
+//!
+//! | type | name | client sends | server answers |
+//! |---|---|---|---|
+//! | `V` 86 | REQUEST_PROTOCOL_VERSION | `u16` version | `u8` accepted (1 for versions 1 and 2, else 0) |
+//! | `v` 118 | GET_URCONTROL_VERSION | nothing (a payload is ignored) | `u32` major, minor, bugfix, build ([`Config::polyscope`]) |
+//! | `M` 77 | TEXT_MESSAGE | v1: `u8` level, text; v2: `u8` length, text, `u8` length, source, `u8` level | nothing ([`RtdeEvent::TextMessage`]) |
+//! | `O` 79 | CONTROL_PACKAGE_SETUP_OUTPUTS | v2: `f64` frequency, then names; v1: names | v2: `u8` recipe id, types; v1: types |
+//! | `I` 73 | CONTROL_PACKAGE_SETUP_INPUTS | names | `u8` recipe id, types |
+//! | `S` 83 | CONTROL_PACKAGE_START | nothing | `u8` accepted |
+//! | `P` 80 | CONTROL_PACKAGE_PAUSE | nothing | `u8` accepted (always 1) |
+//! | `U` 85 | DATA_PACKAGE | `u8` recipe id, the input values | the outputs, while started: v2 `u8` recipe id then values; v1 values only |
+//!
+//! Names are comma-separated (one trailing comma is allowed, as `ur_rtde` sends it),
+//! types likewise (`DOUBLE,VECTOR6D,NOT_FOUND`). Text
+//! levels: 0 exception, 1 error, 2 warning, 3 info ([`RtdeTextLevel`]). Until the client
+//! negotiates a version the session speaks protocol 1.
+//!
+//! # Fields
+//!
+//! [`rtde_output_type`] and [`rtde_input_type`] give the type of every name the guide lists, for a
+//! controller version. Each output is read from one [`Status`] field; where `Status`
+//! has nothing behind a field, the value is derived or a documented plausible constant:
+//!
+//! - `joint_control_output`: the target currents; `actual_current_window`: zeros;
+//!   `actual_execution_time`: 0.3 (ms); `actual_momentum`: 0; the euromap67 fields: 0
+//!   (no Euromap67 interface); `ft_raw_wrench`: the TCP force;
+//!   `joint_position_deviation_ratio`, `collision_detection_ratio`, `time_scale_source`:
+//!   0; `tool_output_mode` 0, `tool_digital_output0_mode`/`1_mode` 1 (sinking NPN).
+//! - `elbow_position` / `elbow_velocity`: the position (and its time derivative from
+//!   `actual_qd`) of the elbow joint, the end of the upper arm, from the model's DH
+//!   parameters and `actual_q`.
+//! - `joint_mode` and `tool_mode`: from the robot mode (239 power off, 247 booting, 246
+//!   motor initialisation (POWER_ON), 255 idle, 253 running, 238 backdrive, 249
+//!   bootloader (updating firmware)); 251 violation and 252 fault under those safety
+//!   statuses.
+//! - `safety_mode`: the safety status code, with the two e-Series stops (12, 13)
+//!   reported as 5 (safeguard stop), as the older field predates them.
+//! - `runtime_state`: 1 STOPPED, 2 PLAYING, 4 PAUSED (the guide's codes: 0 stopping,
+//!   1 stopped, 2 playing, 3 pausing, 4 paused, 5 resuming; the virtual controller has
+//!   no transition states).
+//! - `robot_status_bits`: bit 0 power on (POWER_ON, IDLE, RUNNING, BACKDRIVE), bit 1
+//!   program running; the teach and power buttons (bits 2, 3) are never pressed.
+//! - `safety_status_bits`: bit 0 normal, 1 reduced, 2 protective stopped, 3 recovery,
+//!   4 safeguard stopped, 5 system emergency stopped, 6 robot emergency stopped,
+//!   7 emergency stopped (either), 8 violation, 9 fault, 10 stopped due to safety
+//!   (any of 2 and 4-9, and the two e-Series stops, which also set bit 4).
+//! - `tcp_force_scalar`: the norm of the TCP force's xyz part.
+//!
+//! Index ranges as the guide gives them: `output_int_register_N`,
+//! `output_double_register_N`, `input_int_register_N`, `input_double_register_N` for N
+//! in 0-47; the bool registers one by one (`output_bit_register_N`,
+//! `input_bit_register_N`) for N in 64-127, and 0-63 as the two `UINT32`
+//! `*_bit_registers0_to_31` / `*_bit_registers32_to_63`. Names must be spelled exactly
+//! (no leading zeros in N).
+//!
+//! Fields that later controller versions added are `NOT_FOUND` on an older
+//! [`Config::polyscope`]. The versions come from the guide's notes as far as they were
+//! available; where a version was not certain, the choice is marked (approximate):
+//!
+//! | fields | CB3 | e-Series |
+//! |---|---|---|
+//! | registers 24-47 (int, double) and bool registers 64-127 | 3.9 | 5.3 |
+//! | `elbow_position`, `elbow_velocity` | 3.5 | 5.0 |
+//! | `safety_status` | 3.10 | 5.4 |
+//! | `payload`, `payload_cog`, `payload_inertia` (outputs and inputs) | 3.11 | 5.5 |
+//! | `script_control_line` | 3.14 (approximate) | 5.6 (approximate) |
+//! | `tool_output_mode`, `tool_digital_output0_mode`, `tool_digital_output1_mode` | - | 5.2 (approximate) |
+//! | `ft_raw_wrench`, inputs `external_force_torque`, `ft_rtde_input_enable` | - | 5.9 |
+//! | `joint_position_deviation_ratio`, `collision_detection_ratio`, `time_scale_source` | - | 5.14 (approximate) |
+//! | `actual_current_window`, `tcp_offset` | - | 5.20 (approximate) |
+//!
+//! Everything else is available from RTDE's first version (CB3 3.4, e-Series 5.0).
+//!
+//! # Setup, ownership and recipes
+//!
+//! - An output setup with a name the controller does not know answers the type list
+//!   with `NOT_FOUND` at that place and recipe id 0: no recipe is made. The same for a
+//!   v2 frequency outside `(0, max]` (500 Hz on e-Series, `Config::major() >= 5`, 125 Hz
+//!   on CB3), reported as [`RtdeError::Frequency`].
+//! - An input setup answers `IN_USE` for a field another session owns (the shared
+//!   [`InputRegistry`]), `NOT_FOUND` for unknown names; either makes recipe id 0 and
+//!   claims nothing. A successful input setup claims its fields for the session until
+//!   [`RtdeSession::close`]. A session may set the same field up in several recipes.
+//! - Output and input recipe ids count separately from 1 in each session (v2). In v1
+//!   there is one output recipe: a new setup replaces it. At most
+//!   [`RTDE_MAX_OUTPUT_RECIPES`] output and [`RTDE_MAX_INPUT_RECIPES`] input recipes per session,
+//!   [`RTDE_MAX_FIELDS`] fields per recipe, [`RTDE_MAX_NAMES`] bytes of names: beyond, recipe id 0
+//!   (an empty type list for a names list too long or a payload not UTF-8).
+//! - Setups are accepted while started as well. START answers 1 when the session has
+//!   at least one recipe (output or input), else 0; PAUSE always answers 1.
+//! - Input DATA_PACKAGEs are accepted whether started or not (`ur_rtde`'s
+//!   `RTDEIOInterface` writes its inputs without ever sending START). Masks and values latch
+//!   per session: a recipe carrying `standard_digital_output` without its mask uses the
+//!   last mask this session sent (0 at first), and likewise for the speed slider, the
+//!   configurable and tool outputs, the analog outputs and the payload.
+//!
+//! # Timing
+//!
+//! [`RtdeSession::on_step`] emits, while started, one DATA_PACKAGE per output recipe
+//! whose time has come: the first at the first step after START, then every
+//! `1/frequency` seconds, computed in whole nanoseconds from `now` so that calling it
+//! every 2 ms gives exactly 500 packages a second at 500 Hz and 125 at 125 Hz. When the
+//! caller falls behind, one package is sent and the missed ones are skipped, as the
+//! controller does when it lacks time. Protocol 1 recipes run at the controller's full
+//! rate.
+//!
+//! # Errors and bounds
+//!
+//! A packet whose size is below 3 or above [`RTDE_MAX_PACKET_SIZE`] cannot be framed past:
+//! [`RtdeSession::handle_received`] returns the error and the caller should close the
+//! connection (every later call returns the same error). Other faults (an unknown type,
+//! a payload of the wrong length, a data package for no recipe) skip that one packet,
+//! queue [`RtdeEvent::Error`] and send the client an error text message. The input
+//! buffer holds at most one incomplete packet ([`RTDE_MAX_PACKET_SIZE`] bytes); events are
+//! kept up to [`RTDE_MAX_EVENTS`] (the oldest dropped first). Data packages are not queued
+//! while the outbox holds [`RTDE_MAX_OUTBOX`] bytes or more (counted by
+//! [`RtdeSession::skipped_packages`]); a reply that finds it that full is
+//! [`RtdeError::OutboxFull`], fatal.
+
+use std::collections::{BTreeMap, VecDeque};
+use std::fmt;
+use std::time::Duration;
+
+use crate::state::{Config, ProgramState, RobotMode, SafetyStatus};
+use crate::status::{Inputs, Status};
+
+/// The largest packet a client may send, in bytes, the header included. The guide
+/// bounds the names of a setup to 2048 bytes; input data packages are bounded by
+/// refusing input recipes whose package would be larger.
+pub const RTDE_MAX_PACKET_SIZE: usize = 8192;
+/// The most bytes of names in one setup (the guide's limit).
+pub const RTDE_MAX_NAMES: usize = 2048;
+/// The most fields in one recipe.
+pub const RTDE_MAX_FIELDS: usize = 256;
+/// The most output recipes one session may set up.
+pub const RTDE_MAX_OUTPUT_RECIPES: usize = 16;
+/// The most input recipes one session may set up.
+pub const RTDE_MAX_INPUT_RECIPES: usize = 64;
+/// The most events kept for [`RtdeSession::poll_event`]; older ones are dropped.
+pub const RTDE_MAX_EVENTS: usize = 1024;
+/// While the outbox holds this many bytes, no data package is added.
+pub const RTDE_MAX_OUTBOX: usize = 1 << 20;
+
+/// REQUEST_PROTOCOL_VERSION, `V`.
+pub const RTDE_REQUEST_PROTOCOL_VERSION: u8 = b'V';
+/// GET_URCONTROL_VERSION, `v`.
+pub const RTDE_GET_URCONTROL_VERSION: u8 = b'v';
+/// TEXT_MESSAGE, `M`.
+pub const RTDE_TEXT_MESSAGE: u8 = b'M';
+/// DATA_PACKAGE, `U`.
+pub const RTDE_DATA_PACKAGE: u8 = b'U';
+/// CONTROL_PACKAGE_SETUP_OUTPUTS, `O`.
+pub const RTDE_SETUP_OUTPUTS: u8 = b'O';
+/// CONTROL_PACKAGE_SETUP_INPUTS, `I`.
+pub const RTDE_SETUP_INPUTS: u8 = b'I';
+/// CONTROL_PACKAGE_START, `S`.
+pub const RTDE_START: u8 = b'S';
+/// CONTROL_PACKAGE_PAUSE, `P`.
+pub const RTDE_PAUSE: u8 = b'P';
+
+/// An RTDE data type, as the setup replies name it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum RtdeType {
+    /// `BOOL`, one byte 0 or 1.
+    Bool,
+    /// `UINT8`.
+    Uint8,
+    /// `UINT32`.
+    Uint32,
+    /// `UINT64`.
+    Uint64,
+    /// `INT32`.
+    Int32,
+    /// `DOUBLE`, IEEE 754 binary64.
+    Double,
+    /// `VECTOR3D`, three doubles.
+    Vector3d,
+    /// `VECTOR6D`, six doubles.
+    Vector6d,
+    /// `VECTOR6INT32`, six `INT32`.
+    Vector6Int32,
+    /// `VECTOR6UINT32`, six `UINT32`.
+    Vector6Uint32,
+}
+
+impl RtdeType {
+    /// The name in setup replies (`VECTOR6D`).
+    pub fn name(self) -> &'static str {
+        match self {
+            RtdeType::Bool => "BOOL",
+            RtdeType::Uint8 => "UINT8",
+            RtdeType::Uint32 => "UINT32",
+            RtdeType::Uint64 => "UINT64",
+            RtdeType::Int32 => "INT32",
+            RtdeType::Double => "DOUBLE",
+            RtdeType::Vector3d => "VECTOR3D",
+            RtdeType::Vector6d => "VECTOR6D",
+            RtdeType::Vector6Int32 => "VECTOR6INT32",
+            RtdeType::Vector6Uint32 => "VECTOR6UINT32",
+        }
+    }
+
+    /// Its size on the wire, in bytes.
+    pub fn size(self) -> usize {
+        match self {
+            RtdeType::Bool | RtdeType::Uint8 => 1,
+            RtdeType::Uint32 | RtdeType::Int32 => 4,
+            RtdeType::Uint64 | RtdeType::Double => 8,
+            RtdeType::Vector3d => 24,
+            RtdeType::Vector6d => 48,
+            RtdeType::Vector6Int32 | RtdeType::Vector6Uint32 => 24,
+        }
+    }
+}
+
+impl fmt::Display for RtdeType {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+/// One value of an RTDE field.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum RtdeValue {
+    /// `BOOL`.
+    Bool(bool),
+    /// `UINT8`.
+    Uint8(u8),
+    /// `UINT32`.
+    Uint32(u32),
+    /// `UINT64`.
+    Uint64(u64),
+    /// `INT32`.
+    Int32(i32),
+    /// `DOUBLE`.
+    Double(f64),
+    /// `VECTOR3D`.
+    Vector3d([f64; 3]),
+    /// `VECTOR6D`.
+    Vector6d([f64; 6]),
+    /// `VECTOR6INT32`.
+    Vector6Int32([i32; 6]),
+    /// `VECTOR6UINT32`.
+    Vector6Uint32([u32; 6]),
+}
+
+impl RtdeValue {
+    /// Its type.
+    pub fn rtde_type(&self) -> RtdeType {
+        match self {
+            RtdeValue::Bool(_) => RtdeType::Bool,
+            RtdeValue::Uint8(_) => RtdeType::Uint8,
+            RtdeValue::Uint32(_) => RtdeType::Uint32,
+            RtdeValue::Uint64(_) => RtdeType::Uint64,
+            RtdeValue::Int32(_) => RtdeType::Int32,
+            RtdeValue::Double(_) => RtdeType::Double,
+            RtdeValue::Vector3d(_) => RtdeType::Vector3d,
+            RtdeValue::Vector6d(_) => RtdeType::Vector6d,
+            RtdeValue::Vector6Int32(_) => RtdeType::Vector6Int32,
+            RtdeValue::Vector6Uint32(_) => RtdeType::Vector6Uint32,
+        }
+    }
+
+    /// Append its big-endian bytes to `out`.
+    pub fn encode(&self, out: &mut Vec<u8>) {
+        match *self {
+            RtdeValue::Bool(b) => out.push(u8::from(b)),
+            RtdeValue::Uint8(v) => out.push(v),
+            RtdeValue::Uint32(v) => out.extend_from_slice(&v.to_be_bytes()),
+            RtdeValue::Uint64(v) => out.extend_from_slice(&v.to_be_bytes()),
+            RtdeValue::Int32(v) => out.extend_from_slice(&v.to_be_bytes()),
+            RtdeValue::Double(v) => out.extend_from_slice(&v.to_be_bytes()),
+            RtdeValue::Vector3d(v) => v
+                .iter()
+                .for_each(|x| out.extend_from_slice(&x.to_be_bytes())),
+            RtdeValue::Vector6d(v) => v
+                .iter()
+                .for_each(|x| out.extend_from_slice(&x.to_be_bytes())),
+            RtdeValue::Vector6Int32(v) => v
+                .iter()
+                .for_each(|x| out.extend_from_slice(&x.to_be_bytes())),
+            RtdeValue::Vector6Uint32(v) => v
+                .iter()
+                .for_each(|x| out.extend_from_slice(&x.to_be_bytes())),
+        }
+    }
+
+    /// Read a value of type `ty` from the start of `bytes`: the value and the rest, or
+    /// `None` when `bytes` is too short.
+    pub fn decode(ty: RtdeType, bytes: &[u8]) -> Option<(RtdeValue, &[u8])> {
+        let mut r = Reader(bytes);
+        let v = match ty {
+            RtdeType::Bool => RtdeValue::Bool(r.u8()? != 0),
+            RtdeType::Uint8 => RtdeValue::Uint8(r.u8()?),
+            RtdeType::Uint32 => RtdeValue::Uint32(r.u32()?),
+            RtdeType::Uint64 => RtdeValue::Uint64(u64::from_be_bytes(r.array()?)),
+            RtdeType::Int32 => RtdeValue::Int32(r.u32()? as i32),
+            RtdeType::Double => RtdeValue::Double(r.f64()?),
+            RtdeType::Vector3d => RtdeValue::Vector3d([r.f64()?, r.f64()?, r.f64()?]),
+            RtdeType::Vector6d => {
+                RtdeValue::Vector6d([r.f64()?, r.f64()?, r.f64()?, r.f64()?, r.f64()?, r.f64()?])
+            }
+            RtdeType::Vector6Int32 => {
+                let mut a = [0i32; 6];
+                for x in &mut a {
+                    *x = r.u32()? as i32;
+                }
+                RtdeValue::Vector6Int32(a)
+            }
+            RtdeType::Vector6Uint32 => {
+                let mut a = [0u32; 6];
+                for x in &mut a {
+                    *x = r.u32()?;
+                }
+                RtdeValue::Vector6Uint32(a)
+            }
+        };
+        Some((v, r.0))
+    }
+}
+
+/// A big-endian reader that never panics: every read is `None` past the end.
+struct Reader<'a>(&'a [u8]);
+
+impl<'a> Reader<'a> {
+    fn array<const N: usize>(&mut self) -> Option<[u8; N]> {
+        let (head, rest) = self.0.split_first_chunk::<N>()?;
+        self.0 = rest;
+        Some(*head)
+    }
+    fn u8(&mut self) -> Option<u8> {
+        self.array::<1>().map(|[b]| b)
+    }
+    fn u32(&mut self) -> Option<u32> {
+        self.array().map(u32::from_be_bytes)
+    }
+    fn f64(&mut self) -> Option<f64> {
+        self.array().map(f64::from_be_bytes)
+    }
+    fn bytes(&mut self, n: usize) -> Option<&'a [u8]> {
+        if n > self.0.len() {
+            return None;
+        }
+        let (head, rest) = self.0.split_at(n);
+        self.0 = rest;
+        Some(head)
+    }
+}
+
+/// The level of a text message.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum RtdeTextLevel {
+    /// 0.
+    Exception,
+    /// 1.
+    Error,
+    /// 2.
+    Warning,
+    /// 3.
+    Info,
+}
+
+impl RtdeTextLevel {
+    /// Its code on the wire.
+    pub fn code(self) -> u8 {
+        match self {
+            RtdeTextLevel::Exception => 0,
+            RtdeTextLevel::Error => 1,
+            RtdeTextLevel::Warning => 2,
+            RtdeTextLevel::Info => 3,
+        }
+    }
+}
+
+/// A fault in what the client sent. The framing errors ([`RtdeError::SizeTooSmall`],
+/// [`RtdeError::SizeTooLarge`]) and [`RtdeError::OutboxFull`] and [`RtdeError::Closed`]
+/// are fatal: [`RtdeSession::handle_received`] returns them. The others skip one packet
+/// and are reported as [`RtdeEvent::Error`].
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum RtdeError {
+    /// A packet header gave a size below 3 (the header's own size).
+    SizeTooSmall {
+        /// The size given.
+        size: u16,
+    },
+    /// A packet header gave a size above [`RTDE_MAX_PACKET_SIZE`].
+    SizeTooLarge {
+        /// The size given.
+        size: u16,
+    },
+    /// A packet type the server does not know.
+    UnknownType {
+        /// The type byte.
+        packet_type: u8,
+    },
+    /// A payload of the wrong length or shape for its type.
+    BadPayload {
+        /// The packet type.
+        packet_type: u8,
+        /// What was wrong.
+        reason: &'static str,
+    },
+    /// A setup's names were more than [`RTDE_MAX_NAMES`] bytes.
+    NamesTooLong {
+        /// Their length.
+        len: usize,
+    },
+    /// A setup listed more than [`RTDE_MAX_FIELDS`] fields, or an input recipe's data
+    /// package would be larger than [`RTDE_MAX_PACKET_SIZE`] (a guard: within
+    /// [`RTDE_MAX_NAMES`] bytes of names the largest is 6 KiB).
+    TooManyFields {
+        /// How many.
+        count: usize,
+    },
+    /// The session already has its most recipes of that kind.
+    TooManyRecipes,
+    /// A v2 output frequency outside `(0, max]`.
+    Frequency {
+        /// The frequency asked, in Hz (its bits, to keep `Eq`: `f64::from_bits`).
+        bits: u64,
+        /// The controller's maximum, in Hz.
+        max: u32,
+    },
+    /// An input data package arrived before any input recipe was set up.
+    NoInputRecipe,
+    /// An input data package named a recipe id that does not exist.
+    NoSuchRecipe {
+        /// The id.
+        recipe: u8,
+    },
+    /// An input data package's length did not match its recipe.
+    DataLength {
+        /// The recipe id.
+        recipe: u8,
+        /// The payload length the recipe needs (with the id byte).
+        expected: usize,
+        /// The payload length received.
+        got: usize,
+    },
+    /// The outbox held [`RTDE_MAX_OUTBOX`] bytes or more when a reply was due: the caller
+    /// does not drain it (or the client does not read).
+    OutboxFull,
+    /// The session was closed.
+    Closed,
+}
+
+impl RtdeError {
+    /// Whether the connection cannot go on.
+    pub fn is_fatal(&self) -> bool {
+        matches!(
+            self,
+            RtdeError::SizeTooSmall { .. }
+                | RtdeError::SizeTooLarge { .. }
+                | RtdeError::OutboxFull
+                | RtdeError::Closed
+        )
+    }
+}
+
+impl fmt::Display for RtdeError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            RtdeError::SizeTooSmall { size } => {
+                write!(f, "packet size {size} is below the 3-byte header")
+            }
+            RtdeError::SizeTooLarge { size } => {
+                write!(f, "packet size {size} is above {RTDE_MAX_PACKET_SIZE}")
+            }
+            RtdeError::UnknownType { packet_type } => {
+                write!(f, "unknown package type {packet_type}")
+            }
+            RtdeError::BadPayload {
+                packet_type,
+                reason,
+            } => write!(f, "bad payload for package type {packet_type}: {reason}"),
+            RtdeError::NamesTooLong { len } => {
+                write!(f, "setup names are {len} bytes, at most {RTDE_MAX_NAMES}")
+            }
+            RtdeError::TooManyFields { count } => {
+                write!(f, "a recipe of {count} fields is too large")
+            }
+            RtdeError::TooManyRecipes => f.write_str("too many recipes"),
+            RtdeError::Frequency { bits, max } => write!(
+                f,
+                "output frequency {} Hz is not within (0, {max}]",
+                f64::from_bits(*bits)
+            ),
+            RtdeError::NoInputRecipe => f.write_str("data package before any input setup"),
+            RtdeError::NoSuchRecipe { recipe } => write!(f, "no input recipe {recipe}"),
+            RtdeError::DataLength {
+                recipe,
+                expected,
+                got,
+            } => write!(
+                f,
+                "data package for recipe {recipe} has {got} bytes, {expected} expected"
+            ),
+            RtdeError::OutboxFull => f.write_str("the outbox is full"),
+            RtdeError::Closed => f.write_str("the session is closed"),
+        }
+    }
+}
+
+impl std::error::Error for RtdeError {}
+
+/// Something a session did or received, for the caller to log or act on.
+#[derive(Debug, Clone, PartialEq)]
+pub enum RtdeEvent {
+    /// The client asked for a protocol version.
+    ProtocolVersion {
+        /// The version asked.
+        requested: u16,
+        /// Whether it was accepted.
+        accepted: bool,
+    },
+    /// The client set up an output recipe (`recipe` 0: refused).
+    OutputSetup {
+        /// The recipe id answered, 0 when refused.
+        recipe: u8,
+        /// The frequency in Hz (protocol 1: the controller's full rate).
+        frequency: f64,
+        /// The names asked.
+        fields: Vec<String>,
+        /// The types answered (`NOT_FOUND` included).
+        types: Vec<String>,
+    },
+    /// The client set up an input recipe (`recipe` 0: refused).
+    InputSetup {
+        /// The recipe id answered, 0 when refused.
+        recipe: u8,
+        /// The names asked.
+        fields: Vec<String>,
+        /// The types answered (`NOT_FOUND`, `IN_USE` included).
+        types: Vec<String>,
+    },
+    /// The client asked to start.
+    Started {
+        /// Whether it was accepted (it needs a recipe).
+        accepted: bool,
+    },
+    /// The client paused.
+    Paused,
+    /// The client sent an input data package: apply `inputs` at the next step.
+    Inputs {
+        /// The recipe id.
+        recipe: u8,
+        /// What to apply.
+        inputs: Inputs,
+        /// Fields accepted that [`Inputs`] has no place for (`external_force_torque`,
+        /// `ft_rtde_input_enable`), with their values.
+        unapplied: Vec<(String, RtdeValue)>,
+    },
+    /// The client sent a text message.
+    TextMessage {
+        /// The level (0 exception, 1 error, 2 warning, 3 info; any byte as sent).
+        level: u8,
+        /// The text (lossy UTF-8).
+        message: String,
+        /// The source (protocol 2; empty in 1).
+        source: String,
+    },
+    /// A fault in what the client sent (the packet was skipped, or the connection must
+    /// close when [`RtdeError::is_fatal`]).
+    Error(RtdeError),
+}
+
+/// Since which controller versions a field exists: (major, minor) on CB3 (`None`: not
+/// on CB3) and on e-Series.
+#[derive(Clone, Copy)]
+struct Since {
+    cb3: Option<(u32, u32)>,
+    e: (u32, u32),
+}
+
+const ALWAYS: Since = Since {
+    cb3: Some((3, 4)),
+    e: (5, 0),
+};
+const UPPER_REGISTERS: Since = Since {
+    cb3: Some((3, 9)),
+    e: (5, 3),
+};
+const ELBOW: Since = Since {
+    cb3: Some((3, 5)),
+    e: (5, 0),
+};
+const SAFETY_STATUS: Since = Since {
+    cb3: Some((3, 10)),
+    e: (5, 4),
+};
+const PAYLOAD: Since = Since {
+    cb3: Some((3, 11)),
+    e: (5, 5),
+};
+const SCRIPT_LINE: Since = Since {
+    cb3: Some((3, 14)),
+    e: (5, 6),
+};
+const TOOL_MODES: Since = Since {
+    cb3: None,
+    e: (5, 2),
+};
+const FT_RAW: Since = Since {
+    cb3: None,
+    e: (5, 9),
+};
+const RATIOS: Since = Since {
+    cb3: None,
+    e: (5, 14),
+};
+const NEWEST: Since = Since {
+    cb3: None,
+    e: (5, 20),
+};
+
+impl Since {
+    fn allows(self, version: [u32; 4]) -> bool {
+        let [major, minor, ..] = version;
+        let min = if major >= 5 { Some(self.e) } else { self.cb3 };
+        min.is_some_and(|m| (major, minor) >= m)
+    }
+}
+
+/// An output field.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Out {
+    Timestamp,
+    TargetQ,
+    TargetQd,
+    TargetQdd,
+    TargetCurrent,
+    TargetMoment,
+    ActualQ,
+    ActualQd,
+    ActualCurrent,
+    ActualCurrentWindow,
+    JointControlOutput,
+    ActualTcpPose,
+    ActualTcpSpeed,
+    ActualTcpForce,
+    TargetTcpPose,
+    TargetTcpSpeed,
+    ActualDigitalInputBits,
+    JointTemperatures,
+    ActualExecutionTime,
+    RobotMode,
+    JointMode,
+    SafetyMode,
+    SafetyStatus,
+    ActualToolAccelerometer,
+    SpeedScaling,
+    TargetSpeedFraction,
+    ActualMomentum,
+    ActualMainVoltage,
+    ActualRobotVoltage,
+    ActualRobotCurrent,
+    ActualJointVoltage,
+    ActualDigitalOutputBits,
+    RuntimeState,
+    ElbowPosition,
+    ElbowVelocity,
+    RobotStatusBits,
+    SafetyStatusBits,
+    AnalogIoTypes,
+    StandardAnalogInput0,
+    StandardAnalogInput1,
+    StandardAnalogOutput0,
+    StandardAnalogOutput1,
+    IoCurrent,
+    Euromap67InputBits,
+    Euromap67OutputBits,
+    Euromap6724vVoltage,
+    Euromap6724vCurrent,
+    ToolMode,
+    ToolAnalogInputTypes,
+    ToolAnalogInput0,
+    ToolAnalogInput1,
+    ToolOutputVoltage,
+    ToolOutputCurrent,
+    ToolTemperature,
+    TcpForceScalar,
+    OutputBitRegisters0To31,
+    OutputBitRegisters32To63,
+    OutputBitRegister(u8),
+    OutputIntRegister(u8),
+    OutputDoubleRegister(u8),
+    InputBitRegisters0To31,
+    InputBitRegisters32To63,
+    InputBitRegister(u8),
+    InputIntRegister(u8),
+    InputDoubleRegister(u8),
+    ToolOutputMode,
+    ToolDigitalOutput0Mode,
+    ToolDigitalOutput1Mode,
+    Payload,
+    PayloadCog,
+    PayloadInertia,
+    ScriptControlLine,
+    FtRawWrench,
+    JointPositionDeviationRatio,
+    CollisionDetectionRatio,
+    TimeScaleSource,
+    TcpOffset,
+}
+
+use RtdeType as T;
+
+/// The output fields with a fixed name.
+const OUTPUTS: &[(&str, Out, RtdeType, Since)] = &[
+    ("timestamp", Out::Timestamp, T::Double, ALWAYS),
+    ("target_q", Out::TargetQ, T::Vector6d, ALWAYS),
+    ("target_qd", Out::TargetQd, T::Vector6d, ALWAYS),
+    ("target_qdd", Out::TargetQdd, T::Vector6d, ALWAYS),
+    ("target_current", Out::TargetCurrent, T::Vector6d, ALWAYS),
+    ("target_moment", Out::TargetMoment, T::Vector6d, ALWAYS),
+    ("actual_q", Out::ActualQ, T::Vector6d, ALWAYS),
+    ("actual_qd", Out::ActualQd, T::Vector6d, ALWAYS),
+    ("actual_current", Out::ActualCurrent, T::Vector6d, ALWAYS),
+    (
+        "actual_current_window",
+        Out::ActualCurrentWindow,
+        T::Vector6d,
+        NEWEST,
+    ),
+    (
+        "joint_control_output",
+        Out::JointControlOutput,
+        T::Vector6d,
+        ALWAYS,
+    ),
+    ("actual_TCP_pose", Out::ActualTcpPose, T::Vector6d, ALWAYS),
+    ("actual_TCP_speed", Out::ActualTcpSpeed, T::Vector6d, ALWAYS),
+    ("actual_TCP_force", Out::ActualTcpForce, T::Vector6d, ALWAYS),
+    ("target_TCP_pose", Out::TargetTcpPose, T::Vector6d, ALWAYS),
+    ("target_TCP_speed", Out::TargetTcpSpeed, T::Vector6d, ALWAYS),
+    (
+        "actual_digital_input_bits",
+        Out::ActualDigitalInputBits,
+        T::Uint64,
+        ALWAYS,
+    ),
+    (
+        "joint_temperatures",
+        Out::JointTemperatures,
+        T::Vector6d,
+        ALWAYS,
+    ),
+    (
+        "actual_execution_time",
+        Out::ActualExecutionTime,
+        T::Double,
+        ALWAYS,
+    ),
+    ("robot_mode", Out::RobotMode, T::Int32, ALWAYS),
+    ("joint_mode", Out::JointMode, T::Vector6Int32, ALWAYS),
+    ("safety_mode", Out::SafetyMode, T::Int32, ALWAYS),
+    ("safety_status", Out::SafetyStatus, T::Int32, SAFETY_STATUS),
+    (
+        "actual_tool_accelerometer",
+        Out::ActualToolAccelerometer,
+        T::Vector3d,
+        ALWAYS,
+    ),
+    ("speed_scaling", Out::SpeedScaling, T::Double, ALWAYS),
+    (
+        "target_speed_fraction",
+        Out::TargetSpeedFraction,
+        T::Double,
+        ALWAYS,
+    ),
+    ("actual_momentum", Out::ActualMomentum, T::Double, ALWAYS),
+    (
+        "actual_main_voltage",
+        Out::ActualMainVoltage,
+        T::Double,
+        ALWAYS,
+    ),
+    (
+        "actual_robot_voltage",
+        Out::ActualRobotVoltage,
+        T::Double,
+        ALWAYS,
+    ),
+    (
+        "actual_robot_current",
+        Out::ActualRobotCurrent,
+        T::Double,
+        ALWAYS,
+    ),
+    (
+        "actual_joint_voltage",
+        Out::ActualJointVoltage,
+        T::Vector6d,
+        ALWAYS,
+    ),
+    (
+        "actual_digital_output_bits",
+        Out::ActualDigitalOutputBits,
+        T::Uint64,
+        ALWAYS,
+    ),
+    ("runtime_state", Out::RuntimeState, T::Uint32, ALWAYS),
+    ("elbow_position", Out::ElbowPosition, T::Vector3d, ELBOW),
+    ("elbow_velocity", Out::ElbowVelocity, T::Vector3d, ELBOW),
+    ("robot_status_bits", Out::RobotStatusBits, T::Uint32, ALWAYS),
+    (
+        "safety_status_bits",
+        Out::SafetyStatusBits,
+        T::Uint32,
+        ALWAYS,
+    ),
+    ("analog_io_types", Out::AnalogIoTypes, T::Uint32, ALWAYS),
+    (
+        "standard_analog_input0",
+        Out::StandardAnalogInput0,
+        T::Double,
+        ALWAYS,
+    ),
+    (
+        "standard_analog_input1",
+        Out::StandardAnalogInput1,
+        T::Double,
+        ALWAYS,
+    ),
+    (
+        "standard_analog_output0",
+        Out::StandardAnalogOutput0,
+        T::Double,
+        ALWAYS,
+    ),
+    (
+        "standard_analog_output1",
+        Out::StandardAnalogOutput1,
+        T::Double,
+        ALWAYS,
+    ),
+    ("io_current", Out::IoCurrent, T::Double, ALWAYS),
+    (
+        "euromap67_input_bits",
+        Out::Euromap67InputBits,
+        T::Uint32,
+        ALWAYS,
+    ),
+    (
+        "euromap67_output_bits",
+        Out::Euromap67OutputBits,
+        T::Uint32,
+        ALWAYS,
+    ),
+    (
+        "euromap67_24V_voltage",
+        Out::Euromap6724vVoltage,
+        T::Double,
+        ALWAYS,
+    ),
+    (
+        "euromap67_24V_current",
+        Out::Euromap6724vCurrent,
+        T::Double,
+        ALWAYS,
+    ),
+    ("tool_mode", Out::ToolMode, T::Uint32, ALWAYS),
+    (
+        "tool_analog_input_types",
+        Out::ToolAnalogInputTypes,
+        T::Uint32,
+        ALWAYS,
+    ),
+    (
+        "tool_analog_input0",
+        Out::ToolAnalogInput0,
+        T::Double,
+        ALWAYS,
+    ),
+    (
+        "tool_analog_input1",
+        Out::ToolAnalogInput1,
+        T::Double,
+        ALWAYS,
+    ),
+    (
+        "tool_output_voltage",
+        Out::ToolOutputVoltage,
+        T::Int32,
+        ALWAYS,
+    ),
+    (
+        "tool_output_current",
+        Out::ToolOutputCurrent,
+        T::Double,
+        ALWAYS,
+    ),
+    ("tool_temperature", Out::ToolTemperature, T::Double, ALWAYS),
+    ("tcp_force_scalar", Out::TcpForceScalar, T::Double, ALWAYS),
+    (
+        "output_bit_registers0_to_31",
+        Out::OutputBitRegisters0To31,
+        T::Uint32,
+        ALWAYS,
+    ),
+    (
+        "output_bit_registers32_to_63",
+        Out::OutputBitRegisters32To63,
+        T::Uint32,
+        ALWAYS,
+    ),
+    (
+        "input_bit_registers0_to_31",
+        Out::InputBitRegisters0To31,
+        T::Uint32,
+        ALWAYS,
+    ),
+    (
+        "input_bit_registers32_to_63",
+        Out::InputBitRegisters32To63,
+        T::Uint32,
+        ALWAYS,
+    ),
+    (
+        "tool_output_mode",
+        Out::ToolOutputMode,
+        T::Uint8,
+        TOOL_MODES,
+    ),
+    (
+        "tool_digital_output0_mode",
+        Out::ToolDigitalOutput0Mode,
+        T::Uint8,
+        TOOL_MODES,
+    ),
+    (
+        "tool_digital_output1_mode",
+        Out::ToolDigitalOutput1Mode,
+        T::Uint8,
+        TOOL_MODES,
+    ),
+    ("payload", Out::Payload, T::Double, PAYLOAD),
+    ("payload_cog", Out::PayloadCog, T::Vector3d, PAYLOAD),
+    ("payload_inertia", Out::PayloadInertia, T::Vector6d, PAYLOAD),
+    (
+        "script_control_line",
+        Out::ScriptControlLine,
+        T::Uint32,
+        SCRIPT_LINE,
+    ),
+    ("ft_raw_wrench", Out::FtRawWrench, T::Vector6d, FT_RAW),
+    (
+        "joint_position_deviation_ratio",
+        Out::JointPositionDeviationRatio,
+        T::Double,
+        RATIOS,
+    ),
+    (
+        "collision_detection_ratio",
+        Out::CollisionDetectionRatio,
+        T::Double,
+        RATIOS,
+    ),
+    ("time_scale_source", Out::TimeScaleSource, T::Int32, RATIOS),
+    ("tcp_offset", Out::TcpOffset, T::Vector6d, NEWEST),
+];
+
+/// `prefix` followed by a number in `range`, spelled without leading zeros.
+fn indexed(name: &str, prefix: &str, range: std::ops::RangeInclusive<u8>) -> Option<u8> {
+    let digits = name.strip_prefix(prefix)?;
+    if digits.is_empty()
+        || digits.len() > 3
+        || !digits.bytes().all(|b| b.is_ascii_digit())
+        || (digits.len() > 1 && digits.starts_with('0'))
+    {
+        return None;
+    }
+    let n: u8 = digits.parse().ok()?;
+    range.contains(&n).then_some(n)
+}
+
+/// The register fields' availability: 24-47 and bool 64-127 are the upper ranges.
+fn register_since(n: u8) -> Since {
+    if n >= 24 {
+        UPPER_REGISTERS
+    } else {
+        ALWAYS
+    }
+}
+
+fn lookup_output(name: &str) -> Option<(Out, RtdeType, Since)> {
+    if let Some(&(_, out, ty, since)) = OUTPUTS.iter().find(|(n, ..)| *n == name) {
+        return Some((out, ty, since));
+    }
+    if let Some(n) = indexed(name, "output_bit_register_", 64..=127) {
+        return Some((Out::OutputBitRegister(n), T::Bool, UPPER_REGISTERS));
+    }
+    if let Some(n) = indexed(name, "input_bit_register_", 64..=127) {
+        return Some((Out::InputBitRegister(n), T::Bool, UPPER_REGISTERS));
+    }
+    if let Some(n) = indexed(name, "output_int_register_", 0..=47) {
+        return Some((Out::OutputIntRegister(n), T::Int32, register_since(n)));
+    }
+    if let Some(n) = indexed(name, "input_int_register_", 0..=47) {
+        return Some((Out::InputIntRegister(n), T::Int32, register_since(n)));
+    }
+    if let Some(n) = indexed(name, "output_double_register_", 0..=47) {
+        return Some((Out::OutputDoubleRegister(n), T::Double, register_since(n)));
+    }
+    if let Some(n) = indexed(name, "input_double_register_", 0..=47) {
+        return Some((Out::InputDoubleRegister(n), T::Double, register_since(n)));
+    }
+    None
+}
+
+/// An input field; also the key of its ownership in [`InputRegistry`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash)]
+enum In {
+    SpeedSliderMask,
+    SpeedSliderFraction,
+    StandardDigitalOutputMask,
+    StandardDigitalOutput,
+    ConfigurableDigitalOutputMask,
+    ConfigurableDigitalOutput,
+    ToolDigitalOutputMask,
+    ToolDigitalOutput,
+    StandardAnalogOutputMask,
+    StandardAnalogOutputType,
+    StandardAnalogOutput0,
+    StandardAnalogOutput1,
+    InputBitRegisters0To31,
+    InputBitRegisters32To63,
+    InputBitRegister(u8),
+    InputIntRegister(u8),
+    InputDoubleRegister(u8),
+    ExternalForceTorque,
+    FtRtdeInputEnable,
+    Payload,
+    PayloadCog,
+    PayloadInertia,
+}
+
+const INPUTS: &[(&str, In, RtdeType, Since)] = &[
+    ("speed_slider_mask", In::SpeedSliderMask, T::Uint32, ALWAYS),
+    (
+        "speed_slider_fraction",
+        In::SpeedSliderFraction,
+        T::Double,
+        ALWAYS,
+    ),
+    (
+        "standard_digital_output_mask",
+        In::StandardDigitalOutputMask,
+        T::Uint8,
+        ALWAYS,
+    ),
+    (
+        "standard_digital_output",
+        In::StandardDigitalOutput,
+        T::Uint8,
+        ALWAYS,
+    ),
+    (
+        "configurable_digital_output_mask",
+        In::ConfigurableDigitalOutputMask,
+        T::Uint8,
+        ALWAYS,
+    ),
+    (
+        "configurable_digital_output",
+        In::ConfigurableDigitalOutput,
+        T::Uint8,
+        ALWAYS,
+    ),
+    (
+        "tool_digital_output_mask",
+        In::ToolDigitalOutputMask,
+        T::Uint8,
+        ALWAYS,
+    ),
+    (
+        "tool_digital_output",
+        In::ToolDigitalOutput,
+        T::Uint8,
+        ALWAYS,
+    ),
+    (
+        "standard_analog_output_mask",
+        In::StandardAnalogOutputMask,
+        T::Uint8,
+        ALWAYS,
+    ),
+    (
+        "standard_analog_output_type",
+        In::StandardAnalogOutputType,
+        T::Uint8,
+        ALWAYS,
+    ),
+    (
+        "standard_analog_output_0",
+        In::StandardAnalogOutput0,
+        T::Double,
+        ALWAYS,
+    ),
+    (
+        "standard_analog_output_1",
+        In::StandardAnalogOutput1,
+        T::Double,
+        ALWAYS,
+    ),
+    (
+        "input_bit_registers0_to_31",
+        In::InputBitRegisters0To31,
+        T::Uint32,
+        ALWAYS,
+    ),
+    (
+        "input_bit_registers32_to_63",
+        In::InputBitRegisters32To63,
+        T::Uint32,
+        ALWAYS,
+    ),
+    (
+        "external_force_torque",
+        In::ExternalForceTorque,
+        T::Vector6d,
+        FT_RAW,
+    ),
+    (
+        "ft_rtde_input_enable",
+        In::FtRtdeInputEnable,
+        T::Bool,
+        FT_RAW,
+    ),
+    ("payload", In::Payload, T::Double, PAYLOAD),
+    ("payload_cog", In::PayloadCog, T::Vector3d, PAYLOAD),
+    ("payload_inertia", In::PayloadInertia, T::Vector6d, PAYLOAD),
+];
+
+fn lookup_input(name: &str) -> Option<(In, RtdeType, Since)> {
+    if let Some(&(_, f, ty, since)) = INPUTS.iter().find(|(n, ..)| *n == name) {
+        return Some((f, ty, since));
+    }
+    if let Some(n) = indexed(name, "input_bit_register_", 64..=127) {
+        return Some((In::InputBitRegister(n), T::Bool, UPPER_REGISTERS));
+    }
+    if let Some(n) = indexed(name, "input_int_register_", 0..=47) {
+        return Some((In::InputIntRegister(n), T::Int32, register_since(n)));
+    }
+    if let Some(n) = indexed(name, "input_double_register_", 0..=47) {
+        return Some((In::InputDoubleRegister(n), T::Double, register_since(n)));
+    }
+    None
+}
+
+/// The controller version `[major, minor, bugfix, build]` of [`Config::polyscope`]
+/// (`5.21.0` -> `[5, 21, 0, 0]`; a part that is not a number reads 0).
+pub fn rtde_controller_version(config: &Config) -> [u32; 4] {
+    let mut v = [0u32; 4];
+    for (slot, part) in v.iter_mut().zip(config.polyscope.split('.')) {
+        *slot = part.trim().parse().unwrap_or(0);
+    }
+    if v[0] == 0 {
+        v[0] = config.major();
+    }
+    v
+}
+
+/// The type of output field `name` on the controller `config` describes, or `None`
+/// when it does not know it (the setup answers `NOT_FOUND`).
+pub fn rtde_output_type(name: &str, config: &Config) -> Option<RtdeType> {
+    let version = rtde_controller_version(config);
+    lookup_output(name)
+        .filter(|(_, _, since)| since.allows(version))
+        .map(|(_, ty, _)| ty)
+}
+
+/// The type of input field `name` on the controller `config` describes, or `None`.
+pub fn rtde_input_type(name: &str, config: &Config) -> Option<RtdeType> {
+    let version = rtde_controller_version(config);
+    lookup_input(name)
+        .filter(|(_, _, since)| since.allows(version))
+        .map(|(_, ty, _)| ty)
+}
+
+/// The highest output frequency of the controller: 500 Hz on e-Series (major 5 and
+/// later), 125 Hz on CB3.
+pub fn rtde_max_frequency(config: &Config) -> u32 {
+    if config.major() >= 5 {
+        500
+    } else {
+        125
+    }
+}
+
+/// Which session owns each input field, shared by every session of one controller: a
+/// field set up by one client answers `IN_USE` to the others until the owner's
+/// [`RtdeSession::close`]. Plain data: the caller keeps it where its sessions are
+/// (behind its own lock if they run on several threads).
+#[derive(Debug, Default, Clone)]
+pub struct InputRegistry {
+    owners: BTreeMap<In, u64>,
+    next_session: u64,
+}
+
+impl InputRegistry {
+    /// An empty registry.
+    pub fn new() -> Self {
+        InputRegistry::default()
+    }
+
+    /// How many input fields are owned.
+    pub fn owned(&self) -> usize {
+        self.owners.len()
+    }
+
+    /// The id of the session that owns input field `name`, if any.
+    pub fn owner(&self, name: &str) -> Option<u64> {
+        let (f, _, _) = lookup_input(name)?;
+        self.owners.get(&f).copied()
+    }
+
+    fn release(&mut self, session: u64) {
+        self.owners.retain(|_, owner| *owner != session);
+    }
+}
+
+struct OutputRecipe {
+    id: u8,
+    fields: Vec<Out>,
+    /// Nanoseconds between packages.
+    period: u128,
+    /// When the next package is due (nanoseconds); `None` until the first step after
+    /// RTDE_START.
+    due: Option<u128>,
+}
+
+struct InputRecipe {
+    id: u8,
+    fields: Vec<(In, RtdeType, String)>,
+    /// The payload length of its data packages, the id byte included.
+    len: usize,
+}
+
+/// The values that latch per session between input packages (masks and the parts of
+/// grouped outputs).
+#[derive(Debug, Clone, Default)]
+struct Latched {
+    speed_mask: u32,
+    speed_fraction: f64,
+    standard_do: (u8, u8),
+    configurable_do: (u8, u8),
+    tool_do: (u8, u8),
+    analog_mask: u8,
+    analog_types: u8,
+    analog: [f64; 2],
+    payload_mass: f64,
+    payload_cog: [f64; 3],
+    payload_inertia: Option<[f64; 6]>,
+}
+
+/// One RTDE client connection, sans-IO.
+///
+/// Feed it what the client sent ([`RtdeSession::handle_received`]), call
+/// [`RtdeSession::on_step`] every controller step, write out what
+/// [`RtdeSession::take_outbox`] returns, and poll its events; [`RtdeSession::close`]
+/// when the connection ends.
+///
+/// ```
+/// use std::time::Duration;
+/// use urscript_controller::{Config, InputRegistry, RtdeEvent, RtdeSession, Status};
+///
+/// let config = Config::default(); // PolyScope 5.21: e-Series, 500 Hz
+/// let mut registry = InputRegistry::new();
+/// let mut session = RtdeSession::new(&config, &mut registry);
+///
+/// fn packet(ty: u8, payload: &[u8]) -> Vec<u8> {
+///     let mut p = ((payload.len() + 3) as u16).to_be_bytes().to_vec();
+///     p.push(ty);
+///     p.extend_from_slice(payload);
+///     p
+/// }
+/// // Protocol 2, then an output recipe of `timestamp` at 125 Hz, then start.
+/// session.handle_received(&mut registry, &packet(b'V', &2u16.to_be_bytes()))?;
+/// let mut setup = 125.0f64.to_be_bytes().to_vec();
+/// setup.extend_from_slice(b"timestamp");
+/// session.handle_received(&mut registry, &packet(b'O', &setup))?;
+/// session.handle_received(&mut registry, &packet(b'S', &[]))?;
+/// let replies = session.take_outbox();
+/// assert_eq!(replies, [
+///     packet(b'V', &[1]),
+///     packet(b'O', b"\x01DOUBLE"),
+///     packet(b'S', &[1]),
+/// ].concat());
+///
+/// // One data package every 8 ms.
+/// let status = Status { time: 1.5, ..Status::default() };
+/// for step in 0..8 {
+///     session.on_step(&status, Duration::from_millis(2 * step));
+/// }
+/// let mut data = vec![1u8];
+/// data.extend_from_slice(&1.5f64.to_be_bytes());
+/// assert_eq!(session.take_outbox(), [packet(b'U', &data), packet(b'U', &data)].concat());
+///
+/// assert!(matches!(session.poll_event(), Some(RtdeEvent::ProtocolVersion { accepted: true, .. })));
+/// session.close(&mut registry);
+/// # Ok::<(), urscript_controller::RtdeError>(())
+/// ```
+pub struct RtdeSession {
+    id: u64,
+    version: [u32; 4],
+    max_hz: u32,
+    protocol: u16,
+    inbuf: Vec<u8>,
+    outbox: Vec<u8>,
+    events: VecDeque<RtdeEvent>,
+    outputs: Vec<OutputRecipe>,
+    inputs: Vec<InputRecipe>,
+    next_output: u8,
+    next_input: u8,
+    started: bool,
+    fatal: Option<RtdeError>,
+    latched: Latched,
+    skipped: u64,
+    dropped_events: u64,
+}
+
+impl fmt::Debug for RtdeSession {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.debug_struct("RtdeSession")
+            .field("id", &self.id)
+            .field("protocol", &self.protocol)
+            .field("started", &self.started)
+            .field("output_recipes", &self.outputs.len())
+            .field("input_recipes", &self.inputs.len())
+            .field("fatal", &self.fatal)
+            .finish_non_exhaustive()
+    }
+}
+
+/// The bytes of one packet.
+#[cfg(test)]
+fn packet(ty: u8, payload: &[u8]) -> Vec<u8> {
+    let mut p = Vec::with_capacity(payload.len() + 3);
+    push_packet(&mut p, ty, payload);
+    p
+}
+
+fn push_packet(out: &mut Vec<u8>, ty: u8, payload: &[u8]) {
+    let size = u16::try_from(payload.len() + 3).unwrap_or(u16::MAX);
+    out.extend_from_slice(&size.to_be_bytes());
+    out.push(ty);
+    out.extend_from_slice(payload);
+}
+
+/// `text` cut to at most `max` bytes on a character boundary.
+fn cut(text: &str, max: usize) -> &str {
+    if text.len() <= max {
+        return text;
+    }
+    let mut end = max;
+    while end > 0 && !text.is_char_boundary(end) {
+        end -= 1;
+    }
+    text.get(..end).unwrap_or("")
+}
+
+impl RtdeSession {
+    /// A new session for a client of the controller `config` describes (its version
+    /// answers GET_URCONTROL_VERSION and decides the fields and the maximum
+    /// frequency), with an id from `registry`.
+    pub fn new(config: &Config, registry: &mut InputRegistry) -> Self {
+        registry.next_session = registry.next_session.wrapping_add(1);
+        RtdeSession {
+            id: registry.next_session,
+            version: rtde_controller_version(config),
+            max_hz: rtde_max_frequency(config),
+            protocol: 1,
+            inbuf: Vec::new(),
+            outbox: Vec::new(),
+            events: VecDeque::new(),
+            outputs: Vec::new(),
+            inputs: Vec::new(),
+            next_output: 1,
+            next_input: 1,
+            started: false,
+            fatal: None,
+            latched: Latched::default(),
+            skipped: 0,
+            dropped_events: 0,
+        }
+    }
+
+    /// The session's id (the owner [`InputRegistry::owner`] names).
+    pub fn id(&self) -> u64 {
+        self.id
+    }
+
+    /// The protocol version in use (1 until the client negotiates 2).
+    pub fn protocol_version(&self) -> u16 {
+        self.protocol
+    }
+
+    /// Whether data synchronisation is started.
+    pub fn is_started(&self) -> bool {
+        self.started
+    }
+
+    /// How many output recipes are set up.
+    pub fn output_recipes(&self) -> usize {
+        self.outputs.len()
+    }
+
+    /// How many input recipes are set up.
+    pub fn input_recipes(&self) -> usize {
+        self.inputs.len()
+    }
+
+    /// The fatal error that ended the session, if any.
+    pub fn fatal_error(&self) -> Option<&RtdeError> {
+        self.fatal.as_ref()
+    }
+
+    /// How many data packages were not queued because the outbox was full.
+    pub fn skipped_packages(&self) -> u64 {
+        self.skipped
+    }
+
+    /// How many events were dropped because nobody polled them.
+    pub fn dropped_events(&self) -> u64 {
+        self.dropped_events
+    }
+
+    /// The bytes waiting to be sent.
+    pub fn outbox(&self) -> &[u8] {
+        &self.outbox
+    }
+
+    /// Take the bytes to send, emptying the outbox.
+    pub fn take_outbox(&mut self) -> Vec<u8> {
+        std::mem::take(&mut self.outbox)
+    }
+
+    /// The next event, oldest first.
+    pub fn poll_event(&mut self) -> Option<RtdeEvent> {
+        self.events.pop_front()
+    }
+
+    fn event(&mut self, e: RtdeEvent) {
+        if self.events.len() >= RTDE_MAX_EVENTS {
+            self.events.pop_front();
+            self.dropped_events += 1;
+        }
+        self.events.push_back(e);
+    }
+
+    /// Queue a reply packet; fatal when the outbox is over its bound.
+    fn reply(&mut self, ty: u8, payload: &[u8]) -> Result<(), RtdeError> {
+        if self.outbox.len() >= RTDE_MAX_OUTBOX {
+            return Err(RtdeError::OutboxFull);
+        }
+        push_packet(&mut self.outbox, ty, payload);
+        Ok(())
+    }
+
+    /// Send the client a text message in its protocol version's layout: v1 the level
+    /// then the text (at most [`RTDE_MAX_PACKET_SIZE`] bytes); v2 the text's length, the
+    /// text, the source's length, the source and the level (each cut to 255 bytes on a
+    /// character boundary). Not queued while the outbox holds [`RTDE_MAX_OUTBOX`] bytes.
+    pub fn send_text(&mut self, level: RtdeTextLevel, message: &str, source: &str) {
+        if self.outbox.len() >= RTDE_MAX_OUTBOX {
+            return;
+        }
+        let mut p = Vec::new();
+        if self.protocol >= 2 {
+            let m = cut(message, 255);
+            let s = cut(source, 255);
+            p.push(m.len() as u8);
+            p.extend_from_slice(m.as_bytes());
+            p.push(s.len() as u8);
+            p.extend_from_slice(s.as_bytes());
+            p.push(level.code());
+        } else {
+            p.push(level.code());
+            p.extend_from_slice(cut(message, RTDE_MAX_PACKET_SIZE - 4).as_bytes());
+        }
+        push_packet(&mut self.outbox, RTDE_TEXT_MESSAGE, &p);
+    }
+
+    /// A non-fatal fault: an event, and an error text message to the client.
+    fn fault(&mut self, e: RtdeError) {
+        self.send_text(RtdeTextLevel::Error, &e.to_string(), "RTDE");
+        self.event(RtdeEvent::Error(e));
+    }
+
+    /// Feed bytes received from the client, in pieces of any size: every complete
+    /// packet is answered into the outbox, events are queued. Returns a fatal error
+    /// (also queued as an event, and returned again by every later call) when the
+    /// stream cannot be read on: the caller should close the connection.
+    pub fn handle_received(
+        &mut self,
+        registry: &mut InputRegistry,
+        mut bytes: &[u8],
+    ) -> Result<(), RtdeError> {
+        if let Some(e) = &self.fatal {
+            return Err(e.clone());
+        }
+        while !bytes.is_empty() {
+            let want = if self.inbuf.len() < 3 {
+                3 - self.inbuf.len()
+            } else {
+                let size = self.header_size();
+                size.saturating_sub(self.inbuf.len())
+            };
+            let n = want.min(bytes.len());
+            let (head, rest) = bytes.split_at(n);
+            self.inbuf.extend_from_slice(head);
+            bytes = rest;
+            if self.inbuf.len() == 3 {
+                let size = self.header_size();
+                let err = if size < 3 {
+                    Some(RtdeError::SizeTooSmall { size: size as u16 })
+                } else if size > RTDE_MAX_PACKET_SIZE {
+                    Some(RtdeError::SizeTooLarge { size: size as u16 })
+                } else {
+                    None
+                };
+                if let Some(e) = err {
+                    return Err(self.die(e));
+                }
+            }
+            if self.inbuf.len() >= 3 && self.inbuf.len() == self.header_size() {
+                let p = std::mem::take(&mut self.inbuf);
+                let ty = p.get(2).copied().unwrap_or(0);
+                let payload = p.get(3..).unwrap_or(&[]);
+                if let Err(e) = self.handle_packet(registry, ty, payload) {
+                    return Err(self.die(e));
+                }
+                self.inbuf = p;
+                self.inbuf.clear();
+            }
+        }
+        Ok(())
+    }
+
+    fn die(&mut self, e: RtdeError) -> RtdeError {
+        self.fatal = Some(e.clone());
+        self.started = false;
+        self.inbuf.clear();
+        self.event(RtdeEvent::Error(e.clone()));
+        e
+    }
+
+    fn header_size(&self) -> usize {
+        match self.inbuf.first_chunk::<2>() {
+            Some(b) => usize::from(u16::from_be_bytes(*b)),
+            None => 0,
+        }
+    }
+
+    fn handle_packet(
+        &mut self,
+        registry: &mut InputRegistry,
+        ty: u8,
+        payload: &[u8],
+    ) -> Result<(), RtdeError> {
+        match ty {
+            RTDE_REQUEST_PROTOCOL_VERSION => {
+                let requested = match payload.first_chunk::<2>() {
+                    Some(b) if payload.len() == 2 => u16::from_be_bytes(*b),
+                    _ => {
+                        self.event(RtdeEvent::Error(RtdeError::BadPayload {
+                            packet_type: ty,
+                            reason: "a protocol version is a u16",
+                        }));
+                        return self.reply(ty, &[0]);
+                    }
+                };
+                let accepted = requested == 1 || requested == 2;
+                if accepted {
+                    self.protocol = requested;
+                }
+                self.event(RtdeEvent::ProtocolVersion {
+                    requested,
+                    accepted,
+                });
+                self.reply(ty, &[u8::from(accepted)])
+            }
+            RTDE_GET_URCONTROL_VERSION => {
+                let mut p = Vec::with_capacity(16);
+                for v in self.version {
+                    p.extend_from_slice(&v.to_be_bytes());
+                }
+                self.reply(ty, &p)
+            }
+            RTDE_TEXT_MESSAGE => {
+                self.text_message(payload);
+                Ok(())
+            }
+            RTDE_SETUP_OUTPUTS => self.setup_outputs(payload),
+            RTDE_SETUP_INPUTS => self.setup_inputs(registry, payload),
+            RTDE_START => {
+                let accepted = !(self.outputs.is_empty() && self.inputs.is_empty());
+                if accepted {
+                    self.started = true;
+                    for r in &mut self.outputs {
+                        r.due = None;
+                    }
+                }
+                self.event(RtdeEvent::Started { accepted });
+                self.reply(ty, &[u8::from(accepted)])
+            }
+            RTDE_PAUSE => {
+                self.started = false;
+                self.event(RtdeEvent::Paused);
+                self.reply(ty, &[1])
+            }
+            RTDE_DATA_PACKAGE => {
+                self.input_data(payload);
+                Ok(())
+            }
+            other => {
+                self.fault(RtdeError::UnknownType { packet_type: other });
+                Ok(())
+            }
+        }
+    }
+
+    fn text_message(&mut self, payload: &[u8]) {
+        let parsed = if self.protocol >= 2 {
+            let mut r = Reader(payload);
+            (|| {
+                let n = usize::from(r.u8()?);
+                let m = r.bytes(n)?;
+                let n = usize::from(r.u8()?);
+                let s = r.bytes(n)?;
+                let level = r.u8()?;
+                r.0.is_empty().then_some((level, m, s))
+            })()
+        } else {
+            payload.split_first().map(|(level, m)| (*level, m, &[][..]))
+        };
+        match parsed {
+            Some((level, m, s)) => self.event(RtdeEvent::TextMessage {
+                level,
+                message: String::from_utf8_lossy(m).into_owned(),
+                source: String::from_utf8_lossy(s).into_owned(),
+            }),
+            None => self.fault(RtdeError::BadPayload {
+                packet_type: RTDE_TEXT_MESSAGE,
+                reason: "text message lengths do not match its size",
+            }),
+        }
+    }
+
+    /// Split a setup's names, or the error that refuses it.
+    fn names(payload: &[u8]) -> Result<Vec<String>, RtdeError> {
+        if payload.len() > RTDE_MAX_NAMES {
+            return Err(RtdeError::NamesTooLong { len: payload.len() });
+        }
+        let text = std::str::from_utf8(payload).map_err(|_| RtdeError::BadPayload {
+            packet_type: RTDE_SETUP_OUTPUTS,
+            reason: "names are not UTF-8",
+        })?;
+        // A trailing comma ends the list (ur_rtde sends `a,b,c,`); an empty list or an
+        // empty name elsewhere stays a name, NOT_FOUND.
+        let text = text.strip_suffix(',').unwrap_or(text);
+        let names: Vec<String> = text.split(',').map(str::to_string).collect();
+        if names.len() > RTDE_MAX_FIELDS {
+            return Err(RtdeError::TooManyFields { count: names.len() });
+        }
+        Ok(names)
+    }
+
+    fn setup_outputs(&mut self, payload: &[u8]) -> Result<(), RtdeError> {
+        let v2 = self.protocol >= 2;
+        let (frequency, names) = if v2 {
+            match payload.split_first_chunk::<8>() {
+                Some((f, rest)) => (f64::from_be_bytes(*f), rest),
+                None => {
+                    self.fault(RtdeError::BadPayload {
+                        packet_type: RTDE_SETUP_OUTPUTS,
+                        reason: "a v2 output setup starts with a f64 frequency",
+                    });
+                    return self.reply(RTDE_SETUP_OUTPUTS, &[0]);
+                }
+            }
+        } else {
+            (f64::from(self.max_hz), payload)
+        };
+        let names = match Self::names(names) {
+            Ok(n) => n,
+            Err(e) => {
+                self.fault(e);
+                return self.reply(RTDE_SETUP_OUTPUTS, if v2 { &[0] } else { &[] });
+            }
+        };
+        let mut fields = Vec::with_capacity(names.len());
+        let mut types = Vec::with_capacity(names.len());
+        for n in &names {
+            match lookup_output(n).filter(|(_, _, s)| s.allows(self.version)) {
+                Some((out, ty, _)) => {
+                    fields.push(out);
+                    types.push(ty.name().to_string());
+                }
+                None => types.push("NOT_FOUND".to_string()),
+            }
+        }
+        let mut ok = fields.len() == names.len();
+        let max = f64::from(self.max_hz);
+        if ok && !(frequency > 0.0 && frequency <= max) {
+            self.fault(RtdeError::Frequency {
+                bits: frequency.to_bits(),
+                max: self.max_hz,
+            });
+            ok = false;
+        }
+        if ok && v2 && self.outputs.len() >= RTDE_MAX_OUTPUT_RECIPES {
+            self.fault(RtdeError::TooManyRecipes);
+            ok = false;
+        }
+        let mut id = 0;
+        if ok {
+            // Whole nanoseconds: 500 Hz is 2 000 000, 125 Hz 8 000 000.
+            let period = (1e9 / frequency).round().max(1.0) as u128;
+            if v2 {
+                id = self.next_output;
+                self.next_output = self.next_output.wrapping_add(1).max(1);
+            } else {
+                id = 1;
+                self.outputs.clear();
+            }
+            self.outputs.push(OutputRecipe {
+                id,
+                fields,
+                period,
+                due: None,
+            });
+        }
+        let joined = types.join(",");
+        self.event(RtdeEvent::OutputSetup {
+            recipe: id,
+            frequency,
+            fields: names,
+            types,
+        });
+        let mut p = Vec::with_capacity(joined.len() + 1);
+        if v2 {
+            p.push(id);
+        }
+        p.extend_from_slice(joined.as_bytes());
+        self.reply(RTDE_SETUP_OUTPUTS, &p)
+    }
+
+    fn setup_inputs(
+        &mut self,
+        registry: &mut InputRegistry,
+        payload: &[u8],
+    ) -> Result<(), RtdeError> {
+        let names = match Self::names(payload) {
+            Ok(n) => n,
+            Err(e) => {
+                let e = match e {
+                    RtdeError::BadPayload { reason, .. } => RtdeError::BadPayload {
+                        packet_type: RTDE_SETUP_INPUTS,
+                        reason,
+                    },
+                    e => e,
+                };
+                self.fault(e);
+                return self.reply(RTDE_SETUP_INPUTS, &[0]);
+            }
+        };
+        let mut fields = Vec::with_capacity(names.len());
+        let mut types = Vec::with_capacity(names.len());
+        let mut ok = true;
+        let mut len = 1usize;
+        for n in &names {
+            match lookup_input(n).filter(|(_, _, s)| s.allows(self.version)) {
+                Some((f, ty, _)) => match registry.owners.get(&f) {
+                    Some(owner) if *owner != self.id => {
+                        types.push("IN_USE".to_string());
+                        ok = false;
+                    }
+                    _ => {
+                        types.push(ty.name().to_string());
+                        len += ty.size();
+                        fields.push((f, ty, n.clone()));
+                    }
+                },
+                None => {
+                    types.push("NOT_FOUND".to_string());
+                    ok = false;
+                }
+            }
+        }
+        if ok && len + 3 > RTDE_MAX_PACKET_SIZE {
+            self.fault(RtdeError::TooManyFields { count: names.len() });
+            ok = false;
+        }
+        if ok && self.inputs.len() >= RTDE_MAX_INPUT_RECIPES {
+            self.fault(RtdeError::TooManyRecipes);
+            ok = false;
+        }
+        let mut id = 0;
+        if ok {
+            id = self.next_input;
+            self.next_input = self.next_input.wrapping_add(1).max(1);
+            for (f, _, _) in &fields {
+                registry.owners.insert(*f, self.id);
+            }
+            self.inputs.push(InputRecipe { id, fields, len });
+        }
+        let joined = types.join(",");
+        self.event(RtdeEvent::InputSetup {
+            recipe: id,
+            fields: names,
+            types,
+        });
+        let mut p = Vec::with_capacity(joined.len() + 1);
+        p.push(id);
+        p.extend_from_slice(joined.as_bytes());
+        self.reply(RTDE_SETUP_INPUTS, &p)
+    }
+
+    fn input_data(&mut self, payload: &[u8]) {
+        let Some((&id, mut rest)) = payload.split_first() else {
+            self.fault(RtdeError::BadPayload {
+                packet_type: RTDE_DATA_PACKAGE,
+                reason: "a data package starts with its recipe id",
+            });
+            return;
+        };
+        if self.inputs.is_empty() {
+            self.fault(RtdeError::NoInputRecipe);
+            return;
+        }
+        let Some(recipe) = self.inputs.iter().find(|r| r.id == id) else {
+            self.fault(RtdeError::NoSuchRecipe { recipe: id });
+            return;
+        };
+        if payload.len() != recipe.len {
+            let e = RtdeError::DataLength {
+                recipe: id,
+                expected: recipe.len,
+                got: payload.len(),
+            };
+            self.fault(e);
+            return;
+        }
+        let mut values = Vec::with_capacity(recipe.fields.len());
+        for (f, ty, name) in &recipe.fields {
+            match RtdeValue::decode(*ty, rest) {
+                Some((v, r)) => {
+                    rest = r;
+                    values.push((*f, v, name.clone()));
+                }
+                None => return, // unreachable: the length was checked
+            }
+        }
+        let (inputs, unapplied) = self.apply(&values);
+        self.event(RtdeEvent::Inputs {
+            recipe: id,
+            inputs,
+            unapplied,
+        });
+    }
+
+    /// Turn one package's values into [`Inputs`], through the latched masks.
+    fn apply(&mut self, values: &[(In, RtdeValue, String)]) -> (Inputs, Vec<(String, RtdeValue)>) {
+        let l = &mut self.latched;
+        let mut inputs = Inputs::default();
+        let mut unapplied = Vec::new();
+        let (mut speed, mut std_do, mut conf_do, mut tool_do, mut analog, mut payload) =
+            (false, false, false, false, false, false);
+        for (f, v, name) in values {
+            match (*f, *v) {
+                (In::SpeedSliderMask, RtdeValue::Uint32(m)) => {
+                    l.speed_mask = m;
+                    speed = true;
+                }
+                (In::SpeedSliderFraction, RtdeValue::Double(x)) => {
+                    l.speed_fraction = x;
+                    speed = true;
+                }
+                (In::StandardDigitalOutputMask, RtdeValue::Uint8(m)) => {
+                    l.standard_do.0 = m;
+                    std_do = true;
+                }
+                (In::StandardDigitalOutput, RtdeValue::Uint8(x)) => {
+                    l.standard_do.1 = x;
+                    std_do = true;
+                }
+                (In::ConfigurableDigitalOutputMask, RtdeValue::Uint8(m)) => {
+                    l.configurable_do.0 = m;
+                    conf_do = true;
+                }
+                (In::ConfigurableDigitalOutput, RtdeValue::Uint8(x)) => {
+                    l.configurable_do.1 = x;
+                    conf_do = true;
+                }
+                (In::ToolDigitalOutputMask, RtdeValue::Uint8(m)) => {
+                    l.tool_do.0 = m;
+                    tool_do = true;
+                }
+                (In::ToolDigitalOutput, RtdeValue::Uint8(x)) => {
+                    l.tool_do.1 = x;
+                    tool_do = true;
+                }
+                (In::StandardAnalogOutputMask, RtdeValue::Uint8(m)) => {
+                    l.analog_mask = m;
+                    analog = true;
+                }
+                (In::StandardAnalogOutputType, RtdeValue::Uint8(t)) => {
+                    l.analog_types = t;
+                    analog = true;
+                }
+                (In::StandardAnalogOutput0, RtdeValue::Double(x)) => {
+                    l.analog[0] = x;
+                    analog = true;
+                }
+                (In::StandardAnalogOutput1, RtdeValue::Double(x)) => {
+                    l.analog[1] = x;
+                    analog = true;
+                }
+                (In::InputBitRegisters0To31, RtdeValue::Uint32(bits)) => {
+                    inputs
+                        .bool_registers
+                        .extend((0..32).map(|i| (i, bits >> i & 1 == 1)));
+                }
+                (In::InputBitRegisters32To63, RtdeValue::Uint32(bits)) => {
+                    inputs
+                        .bool_registers
+                        .extend((0..32).map(|i| (32 + i, bits >> i & 1 == 1)));
+                }
+                (In::InputBitRegister(n), RtdeValue::Bool(b)) => {
+                    inputs.bool_registers.push((usize::from(n), b));
+                }
+                (In::InputIntRegister(n), RtdeValue::Int32(x)) => {
+                    inputs.int_registers.push((usize::from(n), x));
+                }
+                (In::InputDoubleRegister(n), RtdeValue::Double(x)) => {
+                    inputs.double_registers.push((usize::from(n), x));
+                }
+                (In::Payload, RtdeValue::Double(m)) => {
+                    l.payload_mass = m;
+                    payload = true;
+                }
+                (In::PayloadCog, RtdeValue::Vector3d(c)) => {
+                    l.payload_cog = c;
+                    payload = true;
+                }
+                (In::PayloadInertia, RtdeValue::Vector6d(i)) => {
+                    l.payload_inertia = Some(i);
+                    payload = true;
+                }
+                (_, v) => unapplied.push((name.clone(), v)),
+            }
+        }
+        if speed && l.speed_mask & 1 == 1 {
+            inputs.speed_slider_fraction = Some(l.speed_fraction);
+        }
+        if std_do {
+            inputs.standard_digital_outputs = Some(l.standard_do);
+        }
+        if conf_do {
+            inputs.configurable_digital_outputs = Some(l.configurable_do);
+        }
+        if tool_do {
+            inputs.tool_digital_outputs = Some(l.tool_do);
+        }
+        if analog {
+            inputs.standard_analog_outputs = Some((l.analog_mask, l.analog_types, l.analog));
+        }
+        if payload {
+            inputs.payload = Some((l.payload_mass, l.payload_cog, l.payload_inertia));
+        }
+        (inputs, unapplied)
+    }
+
+    /// One controller step at `now` (any fixed origin, the same for every call): while
+    /// started, a RTDE_DATA_PACKAGE of `status` for every output recipe whose time has come.
+    /// Call it every step (2 ms); see the module's notes on timing.
+    pub fn on_step(&mut self, status: &Status, now: Duration) {
+        if !self.started || self.fatal.is_some() {
+            return;
+        }
+        let now = now.as_nanos();
+        let v2 = self.protocol >= 2;
+        for i in 0..self.outputs.len() {
+            let Some(r) = self.outputs.get_mut(i) else {
+                break;
+            };
+            let due = *r.due.get_or_insert(now);
+            if due > now {
+                continue;
+            }
+            let mut next = due.saturating_add(r.period);
+            if next <= now {
+                next = now.saturating_add(r.period);
+            }
+            r.due = Some(next);
+            if self.outbox.len() >= RTDE_MAX_OUTBOX {
+                self.skipped += 1;
+                continue;
+            }
+            let mut p = Vec::with_capacity(64);
+            if v2 {
+                p.push(r.id);
+            }
+            for f in &r.fields {
+                output_value(*f, status).encode(&mut p);
+            }
+            push_packet(&mut self.outbox, RTDE_DATA_PACKAGE, &p);
+        }
+    }
+
+    /// The connection ended: release every input field this session owns. Later calls
+    /// to [`RtdeSession::handle_received`] return [`RtdeError::Closed`]. Call it for
+    /// every session, after a fatal error too: a session dropped without `close` keeps
+    /// its fields owned in the registry.
+    pub fn close(&mut self, registry: &mut InputRegistry) {
+        registry.release(self.id);
+        self.started = false;
+        if self.fatal.is_none() {
+            self.fatal = Some(RtdeError::Closed);
+        }
+    }
+}
+
+/// Pack 32 bools starting at `from` into a `u32`, bit 0 first.
+fn pack_bits(bits: &[bool; 128], from: usize) -> u32 {
+    bits.iter()
+        .skip(from)
+        .take(32)
+        .enumerate()
+        .fold(0, |acc, (i, b)| acc | (u32::from(*b) << i))
+}
+
+fn joint_mode(status: &Status) -> i32 {
+    match status.safety {
+        SafetyStatus::Violation => return 251,
+        SafetyStatus::Fault => return 252,
+        _ => {}
+    }
+    match status.robot_mode {
+        RobotMode::Booting => 247,
+        RobotMode::PowerOn => 246,
+        RobotMode::Idle => 255,
+        RobotMode::Running => 253,
+        RobotMode::Backdrive => 238,
+        RobotMode::UpdatingFirmware => 249,
+        RobotMode::NoController
+        | RobotMode::Disconnected
+        | RobotMode::ConfirmSafety
+        | RobotMode::PowerOff => 239,
+    }
+}
+
+fn safety_status_bits(s: SafetyStatus) -> u32 {
+    let bits: &[u32] = match s {
+        SafetyStatus::Normal => &[0],
+        SafetyStatus::Reduced => &[1],
+        SafetyStatus::ProtectiveStop => &[2, 10],
+        SafetyStatus::Recovery => &[3, 10],
+        SafetyStatus::SafeguardStop
+        | SafetyStatus::AutomaticModeSafeguardStop
+        | SafetyStatus::SystemThreePositionEnablingStop => &[4, 10],
+        SafetyStatus::SystemEmergencyStop => &[5, 7, 10],
+        SafetyStatus::RobotEmergencyStop => &[6, 7, 10],
+        SafetyStatus::Violation => &[8, 10],
+        SafetyStatus::Fault => &[9, 10],
+    };
+    bits.iter().fold(0, |acc, b| acc | 1 << b)
+}
+
+/// The elbow's position and velocity: the origin of the frame after joint 2 (the end
+/// of the upper arm) from UR's DH parameters.
+fn elbow(status: &Status) -> ([f64; 3], [f64; 3]) {
+    let dh = status.model.dh();
+    let (d1, a2) = (dh.d[0], dh.a[1]);
+    let (q1, q2) = (status.actual_q[0], status.actual_q[1]);
+    let (w1, w2) = (status.actual_qd[0], status.actual_qd[1]);
+    let (s1, c1, s2, c2) = (q1.sin(), q1.cos(), q2.sin(), q2.cos());
+    let p = [a2 * c2 * c1, a2 * c2 * s1, d1 + a2 * s2];
+    let v = [
+        a2 * (-s2 * w2 * c1 - c2 * s1 * w1),
+        a2 * (-s2 * w2 * s1 + c2 * c1 * w1),
+        a2 * c2 * w2,
+    ];
+    (p, v)
+}
+
+fn output_value(f: Out, s: &Status) -> RtdeValue {
+    use RtdeValue::*;
+    let reg = |n: u8| usize::from(n);
+    match f {
+        Out::Timestamp => Double(s.time),
+        Out::TargetQ => Vector6d(s.target_q),
+        Out::TargetQd => Vector6d(s.target_qd),
+        Out::TargetQdd => Vector6d(s.target_qdd),
+        Out::TargetCurrent => Vector6d(s.target_current),
+        Out::TargetMoment => Vector6d(s.target_moment),
+        Out::ActualQ => Vector6d(s.actual_q),
+        Out::ActualQd => Vector6d(s.actual_qd),
+        Out::ActualCurrent => Vector6d(s.actual_current),
+        Out::ActualCurrentWindow => Vector6d([0.0; 6]),
+        Out::JointControlOutput => Vector6d(s.target_current),
+        Out::ActualTcpPose => Vector6d(s.actual_tcp_pose),
+        Out::ActualTcpSpeed => Vector6d(s.actual_tcp_speed),
+        Out::ActualTcpForce => Vector6d(s.actual_tcp_force),
+        Out::TargetTcpPose => Vector6d(s.target_tcp_pose),
+        Out::TargetTcpSpeed => Vector6d(s.target_tcp_speed),
+        Out::ActualDigitalInputBits => Uint64(s.digital_inputs),
+        Out::JointTemperatures => Vector6d(s.joint_temperatures),
+        Out::ActualExecutionTime => Double(0.3),
+        Out::RobotMode => Int32(s.robot_mode.code()),
+        Out::JointMode => Vector6Int32([joint_mode(s); 6]),
+        Out::SafetyMode => Int32(match s.safety {
+            SafetyStatus::AutomaticModeSafeguardStop
+            | SafetyStatus::SystemThreePositionEnablingStop => 5,
+            other => other.code(),
+        }),
+        Out::SafetyStatus => Int32(s.safety.code()),
+        Out::ActualToolAccelerometer => Vector3d(s.tool_accelerometer),
+        Out::SpeedScaling => Double(s.speed_scaling),
+        Out::TargetSpeedFraction => Double(s.speed_fraction),
+        Out::ActualMomentum => Double(0.0),
+        Out::ActualMainVoltage => Double(s.main_voltage),
+        Out::ActualRobotVoltage => Double(s.robot_voltage),
+        Out::ActualRobotCurrent => Double(s.robot_current),
+        Out::ActualJointVoltage => Vector6d(s.joint_voltage),
+        Out::ActualDigitalOutputBits => Uint64(s.digital_outputs),
+        Out::RuntimeState => Uint32(match s.program_state {
+            ProgramState::Stopped => 1,
+            ProgramState::Playing => 2,
+            ProgramState::Paused => 4,
+        }),
+        Out::ElbowPosition => Vector3d(elbow(s).0),
+        Out::ElbowVelocity => Vector3d(elbow(s).1),
+        Out::RobotStatusBits => {
+            let power = matches!(
+                s.robot_mode,
+                RobotMode::PowerOn | RobotMode::Idle | RobotMode::Running | RobotMode::Backdrive
+            );
+            let running = s.program_state == ProgramState::Playing;
+            Uint32(u32::from(power) | u32::from(running) << 1)
+        }
+        Out::SafetyStatusBits => Uint32(safety_status_bits(s.safety)),
+        Out::AnalogIoTypes => Uint32(s.analog_io_types),
+        Out::StandardAnalogInput0 => Double(s.analog_inputs[0]),
+        Out::StandardAnalogInput1 => Double(s.analog_inputs[1]),
+        Out::StandardAnalogOutput0 => Double(s.analog_outputs[0]),
+        Out::StandardAnalogOutput1 => Double(s.analog_outputs[1]),
+        Out::IoCurrent => Double(s.io_current),
+        Out::Euromap67InputBits | Out::Euromap67OutputBits => Uint32(0),
+        Out::Euromap6724vVoltage | Out::Euromap6724vCurrent => Double(0.0),
+        Out::ToolMode => Uint32(joint_mode(s) as u32),
+        Out::ToolAnalogInputTypes => Uint32(s.tool_analog_input_types),
+        Out::ToolAnalogInput0 => Double(s.tool_analog_inputs[0]),
+        Out::ToolAnalogInput1 => Double(s.tool_analog_inputs[1]),
+        Out::ToolOutputVoltage => Int32(s.tool_output_voltage),
+        Out::ToolOutputCurrent => Double(s.tool_current),
+        Out::ToolTemperature => Double(s.tool_temperature),
+        Out::TcpForceScalar => {
+            let [fx, fy, fz, ..] = s.actual_tcp_force;
+            Double((fx * fx + fy * fy + fz * fz).sqrt())
+        }
+        Out::OutputBitRegisters0To31 => Uint32(pack_bits(&s.output_bool_registers, 0)),
+        Out::OutputBitRegisters32To63 => Uint32(pack_bits(&s.output_bool_registers, 32)),
+        Out::OutputBitRegister(n) => Bool(
+            s.output_bool_registers
+                .get(reg(n))
+                .copied()
+                .unwrap_or(false),
+        ),
+        Out::OutputIntRegister(n) => {
+            Int32(s.output_int_registers.get(reg(n)).copied().unwrap_or(0))
+        }
+        Out::OutputDoubleRegister(n) => Double(
+            s.output_double_registers
+                .get(reg(n))
+                .copied()
+                .unwrap_or(0.0),
+        ),
+        Out::InputBitRegisters0To31 => Uint32(pack_bits(&s.input_bool_registers, 0)),
+        Out::InputBitRegisters32To63 => Uint32(pack_bits(&s.input_bool_registers, 32)),
+        Out::InputBitRegister(n) => {
+            Bool(s.input_bool_registers.get(reg(n)).copied().unwrap_or(false))
+        }
+        Out::InputIntRegister(n) => Int32(s.input_int_registers.get(reg(n)).copied().unwrap_or(0)),
+        Out::InputDoubleRegister(n) => {
+            Double(s.input_double_registers.get(reg(n)).copied().unwrap_or(0.0))
+        }
+        Out::ToolOutputMode => Uint8(0),
+        Out::ToolDigitalOutput0Mode | Out::ToolDigitalOutput1Mode => Uint8(1),
+        Out::Payload => Double(s.payload_mass),
+        Out::PayloadCog => Vector3d(s.payload_cog),
+        Out::PayloadInertia => Vector6d(s.payload_inertia),
+        Out::ScriptControlLine => Uint32(s.script_line),
+        Out::FtRawWrench => Vector6d(s.actual_tcp_force),
+        Out::JointPositionDeviationRatio | Out::CollisionDetectionRatio => Double(0.0),
+        Out::TimeScaleSource => Int32(0),
+        Out::TcpOffset => Vector6d(s.tcp_offset),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn packet_helper_sizes() {
+        assert_eq!(packet(b'S', &[1]), [0, 4, b'S', 1]);
+    }
+
+    #[test]
+    fn indexed_names_are_exact() {
+        assert_eq!(indexed("x_5", "x_", 0..=47), Some(5));
+        assert_eq!(indexed("x_05", "x_", 0..=47), None);
+        assert_eq!(indexed("x_48", "x_", 0..=47), None);
+        assert_eq!(indexed("x_", "x_", 0..=47), None);
+        assert_eq!(indexed("x_+1", "x_", 0..=47), None);
+        assert_eq!(indexed("x_999", "x_", 0..=47), None);
+    }
+
+    #[test]
+    fn every_table_name_is_unique() {
+        let mut names: Vec<&str> = OUTPUTS.iter().map(|(n, ..)| *n).collect();
+        names.sort_unstable();
+        let len = names.len();
+        names.dedup();
+        assert_eq!(len, names.len());
+    }
+}
