@@ -68,8 +68,11 @@
 //! (no leading zeros in N).
 //!
 //! Fields that later controller versions added are `NOT_FOUND` on an older
-//! [`Config::polyscope`]. The versions come from the guide's notes as far as they were
-//! available; where a version was not certain, the choice is marked (approximate):
+//! [`Config::polyscope`]. The versions are the guide's notes as far as they could be
+//! established, cross-checked with clients that gate on them (`ur_rtde` asks
+//! `payload_inertia` of a 3.15 controller, `ft_raw_wrench` only of e-Series, and the
+//! TCP acceleration of 5.23 and later); where a version was not certain, it is marked
+//! (approximate):
 //!
 //! | fields | CB3 | e-Series |
 //! |---|---|---|
