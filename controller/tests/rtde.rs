@@ -1320,3 +1320,36 @@ fn the_newest_fields_on_a_5_23_controller() {
     }
     assert_eq!(p, &want);
 }
+
+fn any_value() -> impl Strategy<Value = RtdeValue> {
+    let f = -1e6f64..1e6;
+    prop_oneof![
+        any::<bool>().prop_map(RtdeValue::Bool),
+        any::<u8>().prop_map(RtdeValue::Uint8),
+        any::<u32>().prop_map(RtdeValue::Uint32),
+        any::<u64>().prop_map(RtdeValue::Uint64),
+        any::<i32>().prop_map(RtdeValue::Int32),
+        f.clone().prop_map(RtdeValue::Double),
+        [f.clone(), f.clone(), f.clone()].prop_map(RtdeValue::Vector3d),
+        [f.clone(), f.clone(), f.clone(), f.clone(), f.clone(), f].prop_map(RtdeValue::Vector6d),
+        any::<[i32; 6]>().prop_map(RtdeValue::Vector6Int32),
+        any::<[u32; 6]>().prop_map(RtdeValue::Vector6Uint32),
+    ]
+}
+
+proptest! {
+    /// Every value encodes to its type's size and decodes back; one byte short is `None`.
+    #[test]
+    fn values_round_trip(v in any_value(), tail in proptest::collection::vec(any::<u8>(), 0..4)) {
+        let ty = v.rtde_type();
+        let mut bytes = Vec::new();
+        v.encode(&mut bytes);
+        prop_assert_eq!(bytes.len(), ty.size());
+        let short = &bytes[..bytes.len() - 1];
+        prop_assert!(RtdeValue::decode(ty, short).is_none());
+        bytes.extend_from_slice(&tail);
+        let (back, rest) = RtdeValue::decode(ty, &bytes).unwrap();
+        prop_assert_eq!(back, v);
+        prop_assert_eq!(rest, &tail[..]);
+    }
+}
