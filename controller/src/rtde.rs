@@ -33,6 +33,13 @@
 //!   (no Euromap67 interface); `ft_raw_wrench`: the TCP force;
 //!   `joint_position_deviation_ratio`, `collision_detection_ratio`, `time_scale_source`:
 //!   0; `tool_output_mode` 0, `tool_digital_output0_mode`/`1_mode` 1 (sinking NPN).
+//! - The newest fields: `actual_current_as_torque` the target moments (the virtual arm
+//!   follows its targets); `wrench_calc_from_currents` the TCP force; the TCP
+//!   accelerations, `target_base_acceleration`, `target_base_wrench`, the energies and
+//!   the encoders 0; `target_execution_time` 2.0 (ms, the e-Series period);
+//!   `target_gravity` `[0, 0, -9.82]`; `control_step` the step count, `time / 2 ms`;
+//!   the configurable digital inputs and outputs: bits 8-15 of the digital bits, shifted
+//!   down to 0-7.
 //! - `elbow_position` / `elbow_velocity`: the position (and its time derivative from
 //!   `actual_qd`) of the elbow joint, the end of the upper arm, from the model's DH
 //!   parameters and `actual_q`.
@@ -61,8 +68,11 @@
 //! (no leading zeros in N).
 //!
 //! Fields that later controller versions added are `NOT_FOUND` on an older
-//! [`Config::polyscope`]. The versions come from the guide's notes as far as they were
-//! available; where a version was not certain, the choice is marked (approximate):
+//! [`Config::polyscope`]. The versions are the guide's notes as far as they could be
+//! established, cross-checked with clients that gate on them (`ur_rtde` asks
+//! `payload_inertia` of a 3.15 controller, `ft_raw_wrench` only of e-Series, and the
+//! TCP acceleration of 5.23 and later); where a version was not certain, it is marked
+//! (approximate):
 //!
 //! | fields | CB3 | e-Series |
 //! |---|---|---|
@@ -72,11 +82,18 @@
 //! | `payload`, `payload_cog`, `payload_inertia` (outputs and inputs) | 3.11 | 5.5 |
 //! | `script_control_line` | 3.14 (approximate) | 5.6 (approximate) |
 //! | `tool_output_mode`, `tool_digital_output0_mode`, `tool_digital_output1_mode` | - | 5.2 (approximate) |
-//! | `ft_raw_wrench`, inputs `external_force_torque`, `ft_rtde_input_enable` | - | 5.9 |
+//! | `ft_raw_wrench`, input `external_force_torque` | - | 5.9 |
 //! | `joint_position_deviation_ratio`, `collision_detection_ratio`, `time_scale_source` | - | 5.14 (approximate) |
 //! | `actual_current_window`, `tcp_offset` | - | 5.20 (approximate) |
+//! | `actual_current_as_torque`, `actual_TCP_acceleration`, `target_TCP_acceleration`, `actual_configurable_digital_input_bits`, `actual_configurable_digital_output_bits`, `target_execution_time`, `actual_robot_energy_consumed`, `actual_robot_braking_energy_dissipated`, `encoder0_raw`, `encoder1_raw`, `wrench_calc_from_currents`, `target_gravity`, `target_base_acceleration`, `control_step`, `target_base_wrench` | - | 5.23 (approximate) |
 //!
 //! Everything else is available from RTDE's first version (CB3 3.4, e-Series 5.0).
+//!
+//! Two kinds of input names are served beyond the guide's input table:
+//! `tool_digital_output_mask` / `tool_digital_output` (controllers accept them and
+//! `ur_rtde`'s `RTDEIOInterface` sets them up), and `payload`, `payload_cog`,
+//! `payload_inertia` as inputs (the outputs' names, into [`Inputs::payload`]), an
+//! extension of this virtual controller.
 //!
 //! # Setup, ownership and recipes
 //!
@@ -553,8 +570,8 @@ pub enum RtdeEvent {
         recipe: u8,
         /// What to apply.
         inputs: Inputs,
-        /// Fields accepted that [`Inputs`] has no place for (`external_force_torque`,
-        /// `ft_rtde_input_enable`), with their values.
+        /// Fields accepted that [`Inputs`] has no place for (`external_force_torque`),
+        /// with their values.
         unapplied: Vec<(String, RtdeValue)>,
     },
     /// The client sent a text message.
@@ -615,9 +632,13 @@ const RATIOS: Since = Since {
     cb3: None,
     e: (5, 14),
 };
-const NEWEST: Since = Since {
+const NEWER: Since = Since {
     cb3: None,
     e: (5, 20),
+};
+const NEWEST: Since = Since {
+    cb3: None,
+    e: (5, 23),
 };
 
 impl Since {
@@ -708,6 +729,21 @@ enum Out {
     CollisionDetectionRatio,
     TimeScaleSource,
     TcpOffset,
+    ActualCurrentAsTorque,
+    ActualTcpAcceleration,
+    TargetTcpAcceleration,
+    ActualConfigurableDigitalInputBits,
+    ActualConfigurableDigitalOutputBits,
+    TargetExecutionTime,
+    ActualRobotEnergyConsumed,
+    ActualRobotBrakingEnergyDissipated,
+    Encoder0Raw,
+    Encoder1Raw,
+    WrenchCalcFromCurrents,
+    TargetGravity,
+    TargetBaseAcceleration,
+    ControlStep,
+    TargetBaseWrench,
 }
 
 use RtdeType as T;
@@ -727,7 +763,7 @@ const OUTPUTS: &[(&str, Out, RtdeType, Since)] = &[
         "actual_current_window",
         Out::ActualCurrentWindow,
         T::Vector6d,
-        NEWEST,
+        NEWER,
     ),
     (
         "joint_control_output",
@@ -964,7 +1000,77 @@ const OUTPUTS: &[(&str, Out, RtdeType, Since)] = &[
         RATIOS,
     ),
     ("time_scale_source", Out::TimeScaleSource, T::Int32, RATIOS),
-    ("tcp_offset", Out::TcpOffset, T::Vector6d, NEWEST),
+    ("tcp_offset", Out::TcpOffset, T::Vector6d, NEWER),
+    (
+        "actual_current_as_torque",
+        Out::ActualCurrentAsTorque,
+        T::Vector6d,
+        NEWEST,
+    ),
+    (
+        "actual_TCP_acceleration",
+        Out::ActualTcpAcceleration,
+        T::Vector6d,
+        NEWEST,
+    ),
+    (
+        "target_TCP_acceleration",
+        Out::TargetTcpAcceleration,
+        T::Vector6d,
+        NEWEST,
+    ),
+    (
+        "actual_configurable_digital_input_bits",
+        Out::ActualConfigurableDigitalInputBits,
+        T::Uint64,
+        NEWEST,
+    ),
+    (
+        "actual_configurable_digital_output_bits",
+        Out::ActualConfigurableDigitalOutputBits,
+        T::Uint64,
+        NEWEST,
+    ),
+    (
+        "target_execution_time",
+        Out::TargetExecutionTime,
+        T::Double,
+        NEWEST,
+    ),
+    (
+        "actual_robot_energy_consumed",
+        Out::ActualRobotEnergyConsumed,
+        T::Double,
+        NEWEST,
+    ),
+    (
+        "actual_robot_braking_energy_dissipated",
+        Out::ActualRobotBrakingEnergyDissipated,
+        T::Double,
+        NEWEST,
+    ),
+    ("encoder0_raw", Out::Encoder0Raw, T::Int32, NEWEST),
+    ("encoder1_raw", Out::Encoder1Raw, T::Int32, NEWEST),
+    (
+        "wrench_calc_from_currents",
+        Out::WrenchCalcFromCurrents,
+        T::Vector6d,
+        NEWEST,
+    ),
+    ("target_gravity", Out::TargetGravity, T::Vector3d, NEWEST),
+    (
+        "target_base_acceleration",
+        Out::TargetBaseAcceleration,
+        T::Vector6d,
+        NEWEST,
+    ),
+    ("control_step", Out::ControlStep, T::Uint64, NEWEST),
+    (
+        "target_base_wrench",
+        Out::TargetBaseWrench,
+        T::Vector6d,
+        NEWEST,
+    ),
 ];
 
 /// `prefix` followed by a number in `range`, spelled without leading zeros.
@@ -1036,7 +1142,6 @@ enum In {
     InputIntRegister(u8),
     InputDoubleRegister(u8),
     ExternalForceTorque,
-    FtRtdeInputEnable,
     Payload,
     PayloadCog,
     PayloadInertia,
@@ -1126,12 +1231,6 @@ const INPUTS: &[(&str, In, RtdeType, Since)] = &[
         "external_force_torque",
         In::ExternalForceTorque,
         T::Vector6d,
-        FT_RAW,
-    ),
-    (
-        "ft_rtde_input_enable",
-        In::FtRtdeInputEnable,
-        T::Bool,
         FT_RAW,
     ),
     ("payload", In::Payload, T::Double, PAYLOAD),
@@ -2204,6 +2303,19 @@ fn output_value(f: Out, s: &Status) -> RtdeValue {
         Out::JointPositionDeviationRatio | Out::CollisionDetectionRatio => Double(0.0),
         Out::TimeScaleSource => Int32(0),
         Out::TcpOffset => Vector6d(s.tcp_offset),
+        Out::ActualCurrentAsTorque => Vector6d(s.target_moment),
+        Out::ActualTcpAcceleration
+        | Out::TargetTcpAcceleration
+        | Out::TargetBaseAcceleration
+        | Out::TargetBaseWrench => Vector6d([0.0; 6]),
+        Out::ActualConfigurableDigitalInputBits => Uint64(s.digital_inputs >> 8 & 0xff),
+        Out::ActualConfigurableDigitalOutputBits => Uint64(s.digital_outputs >> 8 & 0xff),
+        Out::TargetExecutionTime => Double(2.0),
+        Out::ActualRobotEnergyConsumed | Out::ActualRobotBrakingEnergyDissipated => Double(0.0),
+        Out::Encoder0Raw | Out::Encoder1Raw => Int32(0),
+        Out::WrenchCalcFromCurrents => Vector6d(s.actual_tcp_force),
+        Out::TargetGravity => Vector3d([0.0, 0.0, -9.82]),
+        Out::ControlStep => Uint64((s.time.max(0.0) / 0.002).round() as u64),
     }
 }
 

@@ -421,7 +421,39 @@ fn the_full_output_table_on_a_current_controller() {
         ("tcp_offset", "VECTOR6D"),
         ("actual_current_window", "VECTOR6D"),
     ];
+    // The newest fields need a newer controller than the default 5.21.
+    let newest = [
+        ("actual_current_as_torque", "VECTOR6D"),
+        ("actual_TCP_acceleration", "VECTOR6D"),
+        ("target_TCP_acceleration", "VECTOR6D"),
+        ("actual_configurable_digital_input_bits", "UINT64"),
+        ("actual_configurable_digital_output_bits", "UINT64"),
+        ("target_execution_time", "DOUBLE"),
+        ("actual_robot_energy_consumed", "DOUBLE"),
+        ("actual_robot_braking_energy_dissipated", "DOUBLE"),
+        ("encoder0_raw", "INT32"),
+        ("encoder1_raw", "INT32"),
+        ("wrench_calc_from_currents", "VECTOR6D"),
+        ("target_gravity", "VECTOR3D"),
+        ("target_base_acceleration", "VECTOR6D"),
+        ("control_step", "UINT64"),
+        ("target_base_wrench", "VECTOR6D"),
+    ];
+    let v523 = version("5.23.0");
+    for (name, ty) in newest {
+        assert_eq!(rtde_output_type(name, &e), None, "{name} on 5.21");
+        assert_eq!(
+            rtde_output_type(name, &v523).map(|t| t.name()),
+            Some(ty),
+            "{name} on 5.23"
+        );
+    }
     for (name, ty) in expect {
+        assert_eq!(
+            rtde_output_type(name, &v523).map(|t| t.name()),
+            Some(ty),
+            "{name} on 5.23"
+        );
         assert_eq!(
             rtde_output_type(name, &e).map(|t| t.name()),
             Some(ty),
@@ -450,7 +482,6 @@ fn the_full_output_table_on_a_current_controller() {
         ("input_double_register_0", "DOUBLE"),
         ("input_double_register_47", "DOUBLE"),
         ("external_force_torque", "VECTOR6D"),
-        ("ft_rtde_input_enable", "BOOL"),
         ("payload", "DOUBLE"),
         ("payload_cog", "VECTOR3D"),
         ("payload_inertia", "VECTOR6D"),
@@ -463,6 +494,7 @@ fn the_full_output_table_on_a_current_controller() {
         );
     }
     assert_eq!(rtde_input_type("input_bit_register_63", &e), None);
+    assert_eq!(rtde_input_type("ft_rtde_input_enable", &e), None);
     assert_eq!(rtde_input_type("input_int_register_48", &e), None);
 }
 
@@ -1260,4 +1292,64 @@ fn an_undrained_outbox_skips_data_and_then_fails() {
     assert!(!c.s.is_started());
     // Drained, the bytes are still whole packets.
     assert!(packets(&c.s.take_outbox()).iter().all(|p| p.0 == b'U'));
+}
+
+#[test]
+fn the_newest_fields_on_a_5_23_controller() {
+    let mut c = Client::v2(&version("5.23.0"));
+    assert_eq!(
+        c.outputs(
+            500.0,
+            "actual_configurable_digital_output_bits,control_step,actual_current_as_torque,target_gravity"
+        ),
+        (1, "UINT64,UINT64,VECTOR6D,VECTOR3D".into())
+    );
+    c.start();
+    let s = Status {
+        time: 3.0,
+        digital_outputs: 0x2_a5_01, // tool bit 17, configurable 0xa5, standard 0x01
+        target_moment: [1.0, 2.0, 3.0, 4.0, 5.0, 6.0],
+        ..Status::default()
+    };
+    let p = &c.run(&s, 0, 2)[0];
+    let mut want = vec![1u8];
+    want.extend_from_slice(&0xa5u64.to_be_bytes());
+    want.extend_from_slice(&1500u64.to_be_bytes());
+    for x in [1.0f64, 2.0, 3.0, 4.0, 5.0, 6.0, 0.0, 0.0, -9.82] {
+        want.extend_from_slice(&x.to_be_bytes());
+    }
+    assert_eq!(p, &want);
+}
+
+fn any_value() -> impl Strategy<Value = RtdeValue> {
+    let f = -1e6f64..1e6;
+    prop_oneof![
+        any::<bool>().prop_map(RtdeValue::Bool),
+        any::<u8>().prop_map(RtdeValue::Uint8),
+        any::<u32>().prop_map(RtdeValue::Uint32),
+        any::<u64>().prop_map(RtdeValue::Uint64),
+        any::<i32>().prop_map(RtdeValue::Int32),
+        f.clone().prop_map(RtdeValue::Double),
+        [f.clone(), f.clone(), f.clone()].prop_map(RtdeValue::Vector3d),
+        [f.clone(), f.clone(), f.clone(), f.clone(), f.clone(), f].prop_map(RtdeValue::Vector6d),
+        any::<[i32; 6]>().prop_map(RtdeValue::Vector6Int32),
+        any::<[u32; 6]>().prop_map(RtdeValue::Vector6Uint32),
+    ]
+}
+
+proptest! {
+    /// Every value encodes to its type's size and decodes back; one byte short is `None`.
+    #[test]
+    fn values_round_trip(v in any_value(), tail in proptest::collection::vec(any::<u8>(), 0..4)) {
+        let ty = v.rtde_type();
+        let mut bytes = Vec::new();
+        v.encode(&mut bytes);
+        prop_assert_eq!(bytes.len(), ty.size());
+        let short = &bytes[..bytes.len() - 1];
+        prop_assert!(RtdeValue::decode(ty, short).is_none());
+        bytes.extend_from_slice(&tail);
+        let (back, rest) = RtdeValue::decode(ty, &bytes).unwrap();
+        prop_assert_eq!(back, v);
+        prop_assert_eq!(rest, &tail[..]);
+    }
 }
