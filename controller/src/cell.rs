@@ -395,6 +395,11 @@ impl Cell {
     fn run_program(&mut self, now: Duration) {
         let Some(r) = &mut self.running else { return };
         r.machine.run_until(now.saturating_sub(r.origin));
+        if std::mem::take(&mut r.machine.arm_mut().protective_stop) {
+            // `protective_stop()`: the program pauses, as a protective stop pauses it.
+            self.controller.protective_stop(now);
+            r.paused_at = Some(now);
+        }
         let mut out = Vec::new();
         while let Some(e) = r.machine.poll_event() {
             out.push(e);

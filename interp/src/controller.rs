@@ -77,6 +77,9 @@ pub struct Arm {
     pub(crate) path_offset: PathOffset,
     /// What the robot senses of the world: fixed values a test may change.
     pub world: World,
+    /// `protective_stop()` ran: a controller that runs the arm acts on it (a protective
+    /// stop pauses its program) and clears it.
+    pub protective_stop: bool,
 }
 
 /// A conveyor encoder (`encoder_*`): how it is fed and its tick count.
@@ -152,6 +155,7 @@ impl Default for Arm {
             conveyor: None,
             path_offset: PathOffset::default(),
             world: World::default(),
+            protective_stop: false,
         }
     }
 }

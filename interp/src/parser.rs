@@ -633,6 +633,10 @@ impl Parser {
     }
 
     fn unary(&mut self) -> Result<(Expr, u32), ParseError> {
+        // An operand must follow: a line end here does not end the statement, as on the
+        // controller, whose grammar is not line-based (`x = # comment` then the value on
+        // the next line parses; UR's ur_rtde control script relies on it).
+        self.skip_newlines();
         if self.peek().kind == Tok::Minus {
             let t = self.bump();
             self.enter()?;

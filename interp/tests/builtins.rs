@@ -434,3 +434,18 @@ fn optimove_and_movec_and_direct_torque() {
     // 0.3 rad at 0.3 rad/s, 0.1 m at 0.1 m/s (no ramps: a=0), one step.
     assert_eq!(h.now, Duration::from_millis(1000 + 1000 + 2));
 }
+
+#[test]
+fn servoc_moves_to_the_pose_and_protective_stop_is_left_for_the_controller() {
+    use std::time::Duration;
+    use urscript_interp::{Config, Machine, Program};
+    let src = "movej([0.2, -1.4, 1.0, -1.2, -1.5, 0.3])\np0 = get_actual_tcp_pose()\ntarget = pose_trans(p0, p[0, 0, 0.05, 0, 0, 0])\nservoc(target)\nd = pose_dist(get_actual_tcp_pose(), target)\nprotective_stop()\n";
+    let mut m = Machine::new(Program::parse(src).unwrap(), Config::default());
+    m.run_until(Duration::from_secs(5));
+    assert_eq!(m.state(), &urscript_interp::State::Finished);
+    match m.global("d") {
+        Some(urscript_interp::Value::Float(d)) => assert!(*d < 1e-9, "{d}"),
+        other => panic!("{other:?}"),
+    }
+    assert!(m.arm().protective_stop);
+}

@@ -419,3 +419,23 @@ fn real_world_syntax_variants() {
         ["inline", "sec", "False[-1, -2.5]", "10.5", "None"]
     );
 }
+
+#[test]
+fn an_operand_may_follow_on_the_next_line() {
+    // The controller's grammar is not line-based: after `=` or an operator an operand
+    // must follow, and a line end (after a comment) does not end the statement. Real
+    // generated scripts (ur_rtde's control script, after its value substitution) rely
+    // on it; the value's line may go on with the next statement.
+    assert_eq!(
+        msgs("x = # the offset\n24    y = 2\ntextmsg(x + y)\n"),
+        ["26"]
+    );
+    assert_eq!(msgs("z = 1 +\n  2\ntextmsg(z)\n"), ["3"]);
+    assert_eq!(msgs("textmsg(\n\"a\")\n"), ["a"]);
+    // A statement still cannot end where an operand is missing.
+    assert!(
+        parse_err("x =\n").contains("expected"),
+        "{}",
+        parse_err("x =\n")
+    );
+}

@@ -92,6 +92,20 @@ pub(super) const TABLE: &[Builtin] = &[
     ),
     Builtin::new("movep", D, &MOVEP, "Process move: timed as movel.", movej),
     Builtin::new(
+        "servoc",
+        D,
+        &MOVEP,
+        "Servo to a pose in a circular blend: timed as movel to the pose.",
+        movej,
+    ),
+    Builtin::new(
+        "protective_stop",
+        D,
+        NONE,
+        "Triggers a protective stop: the arm stops, and the controller running it pauses the program (Arm::protective_stop).",
+        protective_stop,
+    ),
+    Builtin::new(
         "optimovej",
         D,
         &OPTIMOVE,
@@ -743,6 +757,15 @@ fn movec(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
         secs(kinematics::move_time(dist, speed, accel)),
         Value::None,
     ))
+}
+
+/// `protective_stop()`: the arm stops at once and the request is left for the
+/// controller that runs the arm (a program alone just goes on, stopped).
+fn protective_stop(c: &mut Controller, _: &mut Args) -> Result<Out, Fault> {
+    c.arm.qd = [0.0; 6];
+    c.arm.tcp_speed = [0.0; 6];
+    c.arm.protective_stop = true;
+    Ok(Out::Value(Value::None))
 }
 
 fn servoj(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {

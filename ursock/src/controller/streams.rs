@@ -15,6 +15,7 @@ use std::time::Duration;
 
 use urscript_controller::primary::{self, RobotMessage};
 use urscript_controller::realtime;
+use urscript_controller::rtde::{InputRegistry, RtdeEvent, RtdeSession};
 use urscript_controller::script_intake::{Command, Intake, ScriptIntake};
 use urscript_controller::{CellEvent, Ended, Status, Submitted};
 use urscript_interp::drive::{Activity, Driver, Options};
@@ -55,6 +56,7 @@ struct Client {
     service: Service,
     stream: TcpStream,
     intake: ScriptIntake,
+    rtde: Option<RtdeSession>,
     queue: Vec<u8>,
     rx: u64,
     tx: u64,
@@ -112,6 +114,7 @@ pub fn run(shared: &Shared, listeners: Listeners) {
     let mut lp = Loop {
         clients: Vec::new(),
         driver: Driver::new(Options::default()),
+        registry: InputRegistry::new(),
         next_state: Duration::ZERO,
         buf: vec![0u8; 64 * 1024],
         frame: Vec::new(),
@@ -159,6 +162,8 @@ pub fn run(shared: &Shared, listeners: Listeners) {
 struct Loop {
     clients: Vec<Client>,
     driver: Driver,
+    /// Which RTDE client owns which input field.
+    registry: InputRegistry,
     next_state: Duration,
     buf: Vec<u8>,
     frame: Vec<u8>,
@@ -193,6 +198,8 @@ impl Loop {
                 service,
                 stream,
                 intake: ScriptIntake::new(),
+                rtde: (service == Service::Rtde)
+                    .then(|| RtdeSession::new(shared.config(), &mut self.registry)),
                 queue: Vec::new(),
                 rx: 0,
                 tx: 0,
@@ -242,7 +249,34 @@ impl Loop {
         let now = shared.now();
         let (conn, service) = (self.clients[i].conn, self.clients[i].service);
         if service == Service::Rtde {
-            return; // RTDE_HOOK
+            let c = &mut self.clients[i];
+            let Some(session) = c.rtde.as_mut() else {
+                return;
+            };
+            if let Err(e) = session.handle_received(&mut self.registry, bytes) {
+                if e.is_fatal() {
+                    c.gone = Some("RTDE protocol error");
+                }
+            }
+            let mut inputs = Vec::new();
+            while let Some(e) = session.poll_event() {
+                match e {
+                    RtdeEvent::Inputs { inputs: set, .. } => inputs.push(set),
+                    other => {
+                        let (what, text) = rtde_event(&other);
+                        shared.emit(client_event(conn, service, what, text));
+                    }
+                }
+            }
+            let out = session.take_outbox();
+            c.push(&out);
+            if !inputs.is_empty() {
+                let mut cell = shared.lock_cell();
+                for set in &inputs {
+                    cell.apply(set);
+                }
+            }
+            return;
         }
         let items = self.clients[i].intake.push(bytes);
         for item in items {
@@ -425,13 +459,29 @@ impl Loop {
                 c.offer(&self.frame);
             }
         }
+        // RTDE: each session at its own frequency (the session skips packages itself
+        // while its outbox is full).
+        for c in self
+            .clients
+            .iter_mut()
+            .filter(|c| c.service == Service::Rtde)
+        {
+            if let Some(s) = c.rtde.as_mut() {
+                s.on_step(status, now);
+                let out = s.take_outbox();
+                c.offer(&out);
+            }
+        }
     }
 
     fn drop_gone(&mut self, shared: &Shared) {
         let mut i = 0;
         while i < self.clients.len() {
             if let Some(reason) = self.clients[i].gone {
-                let c = self.clients.swap_remove(i);
+                let mut c = self.clients.swap_remove(i);
+                if let Some(s) = c.rtde.as_mut() {
+                    s.close(&mut self.registry);
+                }
                 let _ = c.stream.shutdown(Shutdown::Both);
                 shared.emit(Event::Close(report::Close {
                     t: report::now(),
@@ -512,4 +562,70 @@ fn client_event(conn: u64, service: Service, what: &'static str, text: String) -
         what,
         text,
     })
+}
+
+/// An RTDE session's event as a `client` event's `what` and `text`.
+fn rtde_event(e: &RtdeEvent) -> (&'static str, String) {
+    match e {
+        RtdeEvent::ProtocolVersion {
+            requested,
+            accepted,
+        } => (
+            "protocol",
+            format!(
+                "version {requested} {}",
+                if *accepted { "accepted" } else { "refused" }
+            ),
+        ),
+        RtdeEvent::OutputSetup {
+            recipe,
+            frequency,
+            fields,
+            types,
+        } => (
+            "outputs",
+            format!(
+                "recipe {recipe} at {frequency} Hz: {}",
+                fields
+                    .iter()
+                    .zip(types)
+                    .map(|(f, t)| format!("{f}:{t}"))
+                    .collect::<Vec<_>>()
+                    .join(",")
+            ),
+        ),
+        RtdeEvent::InputSetup {
+            recipe,
+            fields,
+            types,
+        } => (
+            "inputs",
+            format!(
+                "recipe {recipe}: {}",
+                fields
+                    .iter()
+                    .zip(types)
+                    .map(|(f, t)| format!("{f}:{t}"))
+                    .collect::<Vec<_>>()
+                    .join(",")
+            ),
+        ),
+        RtdeEvent::Started { accepted } => (
+            "start",
+            if *accepted {
+                "started"
+            } else {
+                "refused: no recipe"
+            }
+            .to_string(),
+        ),
+        RtdeEvent::Paused => ("pause", "paused".to_string()),
+        RtdeEvent::Inputs { recipe, .. } => ("inputs", format!("recipe {recipe}")),
+        RtdeEvent::TextMessage {
+            level,
+            message,
+            source,
+        } => ("text", format!("[{level}] {source}: {message}")),
+        RtdeEvent::Error(e) => ("error", e.to_string()),
+    }
 }
