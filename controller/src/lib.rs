@@ -47,6 +47,14 @@
 //! Playing a program keeps only the state (PLAYING until stop or pause): executing the
 //! `.urp`'s program is the next step.
 //!
+//! # PolyScope programs ([`urp`])
+//!
+//! [`read_urp`] reads a `.urp` (gzip-compressed XML, as PolyScope 3.x and 5.x save it)
+//! and translates its program tree into URScript that `urscript_interp` runs, within
+//! documented bounds (file and inflated size, element count, nesting). UR's External
+//! Control URCap node becomes a place in the program, with the host and port the URCap
+//! would ask; [`translate_with`] splices in the script fetched from there.
+//!
 //! # Where the reply texts come from, and the choices where sources disagree
 //!
 //! Sources: UR's dashboard server pages (the CB3 page "Dashboard Server, port 29999",
@@ -90,6 +98,7 @@
 mod dashboard;
 mod state;
 mod status;
+pub mod urp;
 
 pub use dashboard::{Dashboard, Reply, GREETING, LOCAL_CONTROL, MAX_LINE, UNLOCK_TOO_EARLY};
 pub use state::{
@@ -97,4 +106,5 @@ pub use state::{
     SafetyStatus, Timing, MAX_LOG,
 };
 pub use status::{Inputs, Status};
+pub use urp::{read_urp, translate_with, ExternalControlNode, UrpError, UrpProgram};
 pub use urscript_interp::kinematics::Model;
