@@ -106,5 +106,8 @@ pub use state::{
     SafetyStatus, Timing, MAX_LOG,
 };
 pub use status::{Inputs, Status};
-pub use urp::{read_urp, translate_with, ExternalControlNode, UrpError, UrpProgram};
+pub use urp::{
+    read_external_control_settings, read_urp, translate_with, ExternalControlNode,
+    ExternalControlSettings, UrpError, UrpProgram,
+};
 pub use urscript_interp::kinematics::Model;

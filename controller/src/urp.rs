@@ -23,7 +23,7 @@
 //! |---|---|---|
 //! | the file as given | [`MAX_URP_BYTES`] (16 MiB) | [`UrpError::TooLarge`] |
 //! | the XML after gunzip (a gzip bomb stops at the bound, never inflated further) | [`MAX_XML_BYTES`] (64 MiB) | [`UrpError::TooLarge`] |
-//! | XML elements | [`MAX_ELEMENTS`] (1 000 000) | [`UrpError::TooManyElements`] |
+//! | XML elements | [`MAX_ELEMENTS`] (250 000) | [`UrpError::TooManyElements`] |
 //! | nesting of XML elements (each program level is about two: the node and its `<children>`) | [`MAX_DEPTH`] (128) | [`UrpError::TooDeep`] |
 //! | chains of XStream `reference="..."` attributes | 64 hops | [`UrpError::Invalid`] |
 //!
@@ -47,7 +47,9 @@
 //! | `Set type="AnalogOutput"` (`<pin referencedName="analog_out[N]"/>`, `<analogValue>`) | `set_standard_analog_out(N, value)` (the value as stored) |
 //! | `Set type="Expression"` (`<pin>` or `<variable>`, `<expression>`) | the output set to the expression, or `global NAME = EXPR` |
 //! | `Set type="NoAction"` | nothing (a `Set` that sets a TCP or payload is refused) |
-//! | `Move motionType="MoveJ|MoveL|MoveP" speed acceleration [blendRadius]` with `Waypoint type="Fixed"` | `movej(q, a, v[, r])`; `movel`/`movep` to the waypoint's stored pose, or else the TCP pose of its joint angles through its TCP offset (`get_forward_kin(q, tcp)`) |
+//! | `Move motionType="MoveJ|MoveL|MoveP" speed acceleration [blendRadius]` with `Waypoint type="Fixed"` | `movej(q, a, v[, r])`; `movel`/`movep` to the waypoint's stored pose, or else the TCP pose of its joint angles through its TCP offset (`get_forward_kin(q, tcp)`); a waypoint's `<motionParameters>` (`jointSpeed`, `cartesianSpeed`, ..., `blendRadius`) win over the Move's |
+//! | `Waypoint type="Variable"` (`<variable>`) | the move to that variable's value |
+//! | other nodes inside a `Move` | translated in place, between its waypoints |
 //! | `Loop type="Forever"` / `"Counting"` (`count`) / `"While"` (`<expression>`) | `while (True):` / a counter `Loop_K` / `while (EXPR):` |
 //! | `If type="If|ElseIf|Else"` (`<expression>`) | `if`/`elif`/`else` chains (ElseIf and Else as the following siblings, or as the last children of the If) |
 //! | `Assignment` (`<variable name>`, `<expression>`) | `global NAME = EXPR` (PolyScope's own form) |
@@ -82,8 +84,9 @@ use quick_xml::Reader;
 pub const MAX_URP_BYTES: usize = 16 << 20;
 /// The largest XML document read after decompression (64 MiB).
 pub const MAX_XML_BYTES: usize = 64 << 20;
-/// The most XML elements in one document.
-pub const MAX_ELEMENTS: usize = 1_000_000;
+/// The most XML elements in one document (a waypoint is about 15): with the document
+/// size bound, this bounds the parsed tree's memory to some tens of MiB.
+pub const MAX_ELEMENTS: usize = 250_000;
 /// The deepest nesting of XML elements.
 pub const MAX_DEPTH: usize = 128;
 /// The External Control URCap's default host when the installation sets none.
@@ -92,6 +95,78 @@ pub const EXTERNAL_CONTROL_DEFAULT_HOST: &str = "192.168.56.1";
 pub const EXTERNAL_CONTROL_DEFAULT_PORT: u16 = 50002;
 
 const MAX_REFERENCE_HOPS: usize = 64;
+
+/// The External Control URCap's settings in an installation: where its nodes ask for
+/// their script.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct ExternalControlSettings {
+    /// `host_ip` ([`EXTERNAL_CONTROL_DEFAULT_HOST`] when not set).
+    pub host: String,
+    /// `port_nr` ([`EXTERNAL_CONTROL_DEFAULT_PORT`] when not set).
+    pub port: u16,
+    /// Whether the installation has the URCap's contribution at all.
+    pub installed: bool,
+}
+
+impl Default for ExternalControlSettings {
+    fn default() -> Self {
+        ExternalControlSettings {
+            host: EXTERNAL_CONTROL_DEFAULT_HOST.to_string(),
+            port: EXTERNAL_CONTROL_DEFAULT_PORT,
+            installed: false,
+        }
+    }
+}
+
+/// Reads the External Control URCap's settings from an `.installation` (gzip-compressed
+/// or plain XML, with the same bounds as [`read_urp`]): the `<Contributed>` element whose
+/// `ownerId` or `id` names `externalcontrol`, and its `<data key="host_ip">` and
+/// `<data key="port_nr">`. Without that element: the URCap's defaults, `installed` false.
+///
+/// ```
+/// use urscript_controller::urp::read_external_control_settings;
+/// let installation = br#"<Installation><Contributions><URCaps>
+///   <Contributed ownerId="com.fzi.externalcontrol" id="com.fzi.externalcontrol.impl.ExternalControlInstallationNodeService">
+///     <data key="host_ip" value="10.0.0.2"/>
+///   </Contributed>
+/// </URCaps></Contributions></Installation>"#;
+/// let settings = read_external_control_settings(installation).unwrap();
+/// assert_eq!((settings.host.as_str(), settings.port, settings.installed), ("10.0.0.2", 50002, true));
+/// ```
+pub fn read_external_control_settings(
+    installation: &[u8],
+) -> Result<ExternalControlSettings, UrpError> {
+    let doc = parse_xml(&inflate(installation)?)?;
+    if doc.name(0) != "Installation" {
+        return Err(UrpError::NotAnInstallation {
+            root: doc.name(0).to_string(),
+        });
+    }
+    let mut settings = ExternalControlSettings::default();
+    let found = (0..doc.elems.len()).find(|&id| {
+        doc.name(id) == "Contributed"
+            && ["ownerId", "id"].iter().any(|k| {
+                doc.attr(id, k)
+                    .is_some_and(|v| v.to_ascii_lowercase().contains("externalcontrol"))
+            })
+    });
+    if let Some(id) = found {
+        settings.installed = true;
+        for &d in &doc.elems[id].children {
+            match (doc.attr(d, "key"), doc.attr(d, "value")) {
+                (Some("host_ip"), Some(v)) if !v.is_empty() => settings.host = v.to_string(),
+                (Some("port_nr"), Some(v)) if !v.is_empty() => {
+                    settings.port = v
+                        .trim()
+                        .parse::<u16>()
+                        .map_err(|_| invalid(&doc, d, format!("port_nr `{v}` is not a port")))?;
+                }
+                _ => {}
+            }
+        }
+    }
+    Ok(settings)
+}
 
 /// Why a `.urp` could not be read or translated.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -134,6 +209,11 @@ pub enum UrpError {
     },
     /// The document's root is not `<URProgram>`.
     NotAProgram {
+        /// The root element's name.
+        root: String,
+    },
+    /// The document's root is not `<Installation>` ([`read_external_control_settings`]).
+    NotAnInstallation {
         /// The root element's name.
         root: String,
     },
@@ -181,6 +261,12 @@ impl fmt::Display for UrpError {
                 write!(
                     f,
                     "not a PolyScope program: the root is <{root}>, not <URProgram>"
+                )
+            }
+            UrpError::NotAnInstallation { root } => {
+                write!(
+                    f,
+                    "not an installation: the root is <{root}>, not <Installation>"
                 )
             }
             UrpError::UnknownNode { name, path } => {
@@ -237,7 +323,7 @@ enum Segment {
 
 impl UrpProgram {
     /// Sets every External Control node's host and port (as the installation's External
-    /// Control settings give them).
+    /// Control settings give them: [`read_external_control_settings`]).
     pub fn set_external_control_host(&mut self, host: &str, port: u16) {
         for node in &mut self.external_control {
             node.host = host.to_string();
@@ -1396,12 +1482,15 @@ impl Tx<'_> {
         for &w in &doc.elems[children].children.clone() {
             let w = doc.resolve(w)?;
             if doc.name(w) != "Waypoint" {
-                return Err(unknown(doc, w));
+                // PolyScope lets other nodes sit between a Move's waypoints.
+                self.nodes(&[w])?;
+                continue;
             }
-            match doc.attr(w, "type") {
-                None | Some("Fixed") => {}
+            let variable = match doc.attr(w, "type") {
+                None | Some("Fixed") => false,
+                Some("Variable") => true,
                 Some(other) => return Err(unsupported(doc, w, format!("a {other} waypoint"))),
-            }
+            };
             let (mut v, mut a, mut r) = (speed, accel, shared_blend);
             if let Some(mp) = doc.child(w, "motionParameters") {
                 let get = |key: &str| -> Result<Option<f64>, UrpError> {
@@ -1419,7 +1508,11 @@ impl Tx<'_> {
                 a = get(ak)?.or(a);
                 r = get("blendRadius")?.or(r);
             }
-            let target = self.waypoint_target(w, joint)?;
+            let target = if variable {
+                self.variable_name(w)?
+            } else {
+                self.waypoint_target(w, joint)?
+            };
             let mut call = format!("{f}({target}");
             if let Some(a) = a {
                 call.push_str(&format!(", a={}", num(a)));

@@ -637,3 +637,89 @@ proptest! {
         }
     }
 }
+
+#[test]
+fn the_installation_gives_the_external_control_host_and_port() {
+    use urscript_controller::{read_external_control_settings, ExternalControlSettings};
+    let installation = r#"<Installation INSTALLATION-VERSION="2" directory="/programs" fileName="default">
+  <IOs><DigitalInputNames value=", , "/></IOs>
+  <Contributions>
+    <URCaps>
+      <Contributed ownerId="com.example.other" id="Other" name="Other"/>
+      <Contributed ownerId="com.fzi.externalcontrol" id="com.fzi.externalcontrol.impl.ExternalControlInstallationNodeService" name="External Control">
+        <data key="name" value="driver PC"/>
+        <data key="host_ip" value="172.17.0.1"/>
+        <data key="port_nr" value="50012"/>
+      </Contributed>
+    </URCaps>
+  </Contributions>
+</Installation>"#;
+    let s = read_external_control_settings(&gzip(installation.as_bytes())).unwrap();
+    assert_eq!(
+        s,
+        ExternalControlSettings {
+            host: "172.17.0.1".into(),
+            port: 50012,
+            installed: true
+        }
+    );
+
+    let without = "<Installation><Contributions><URCaps/></Contributions></Installation>";
+    let s = read_external_control_settings(without.as_bytes()).unwrap();
+    assert_eq!(s, ExternalControlSettings::default());
+    assert_eq!(
+        (s.host.as_str(), s.port, s.installed),
+        ("192.168.56.1", 50002, false)
+    );
+
+    let bad_port = installation.replace("50012", "fifty");
+    assert!(matches!(
+        read_external_control_settings(bad_port.as_bytes()),
+        Err(UrpError::Invalid { message, .. }) if message.contains("fifty")
+    ));
+    assert!(matches!(
+        read_external_control_settings(&urp("")),
+        Err(UrpError::NotAnInstallation { root }) if root == "URProgram"
+    ));
+
+    let mut p = read(EC);
+    p.set_external_control_host(&s.host, s.port);
+    let script = translate_with(&p, |node| {
+        assert_eq!((node.host.as_str(), node.port), ("192.168.56.1", 50002));
+        Ok(String::from("textmsg(1)"))
+    });
+    assert!(script.is_ok());
+}
+
+#[test]
+fn variable_waypoints_and_nodes_between_waypoints() {
+    let main = format!(
+        r#"<Assignment><variable name="target"/>{target}</Assignment>
+<Move motionType="MoveJ" speed="1.0" acceleration="1.4">
+  <children>
+    {w1}
+    {between}
+    <Waypoint type="Variable" name="target_wp"><variable reference="../../../../Assignment/variable"/></Waypoint>
+  </children>
+</Move>"#,
+        target = expr("[0.3, -1.3, 1.2, -1.5, -1.57, 0.2]"),
+        w1 = waypoint("Waypoint_1", Q1, r#"jointSpeed="0.5" blendRadius="0.02""#),
+        between = script_line("textmsg(\"at 1\")"),
+    );
+    let p = read(&main);
+    assert!(
+        p.script
+            .contains("movej([0.1, -1.5, 1.4, -1.5, -1.57, 0.2], a=1.4, v=0.5, r=0.02)"),
+        "{}",
+        p.script
+    );
+    assert!(
+        p.script.contains("movej(target, a=1.4, v=1.0)"),
+        "{}",
+        p.script
+    );
+    let mut m = machine(&p.script);
+    assert_eq!(texts(&run(&mut m, Duration::from_secs(30))), ["at 1"]);
+    assert_eq!(m.state(), &State::Finished);
+    assert!((m.joint_positions()[0] - 0.3).abs() < 1e-6);
+}
