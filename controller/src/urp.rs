@@ -51,7 +51,7 @@
 //! | `Waypoint type="Variable"` (`<variable>`) | the move to that variable's value |
 //! | other nodes inside a `Move` | translated in place, between its waypoints |
 //! | `Loop type="Forever"` / `"Counting"` (`count`) / `"While"` (`<expression>`) | `while (True):` / a counter `Loop_K` / `while (EXPR):` |
-//! | `If type="If|ElseIf|Else"` (`<expression>`) | `if`/`elif`/`else` chains (ElseIf and Else as the following siblings, or as the last children of the If) |
+//! | `If type="If|ElseIf|Else"` (`<expression>`) | `if`/`elif`/`else` chains: an `If` and the `ElseIf`/`Else` siblings that follow it |
 //! | `Assignment` (`<variable name>`, `<expression>`) | `global NAME = EXPR` (PolyScope's own form) |
 //! | `Comment comment=...` | a `#` comment |
 //! | `Folder` | its nodes |
@@ -59,10 +59,11 @@
 //! | `CallSubProgram` with `<subprogram name=...>` (or an XStream `reference` to one) | `NAME()`, and `def NAME():` with the sub program's nodes, before the main program |
 //! | `Contributed` of the External Control URCap (`strategyClass` containing `externalcontrol`) | the fetched script ([`translate_with`]) |
 //!
-//! Expressions are the `<expression>`'s tokens in order: `<ExpressionChar character="c"/>`,
-//! `<ExpressionToken token="..."/>`, `<ExpressionVariable>` (the variable's name, from
-//! its `name`/`referencedName` attribute or a `<variable name=...>` child, references
-//! followed), or plain text inside `<expression>`.
+//! Expressions are the `<expression>`'s tokens in order: `<ExpressionChar character="c"/>`
+//! (PolyScope's `≟`, `≠`, `≤`, `≥` and `≔` become `==`, `!=`, `<=`, `>=` and `=`),
+//! `<ExpressionToken token=" and "/>`, `<ExpressionVariable>` (the name of the variable
+//! its child refers to, as 5.x saves it: `<ProgramVariable reference=".../variable"/>`;
+//! or its `name`/`referencedName` attribute), or plain text inside `<expression>`.
 //!
 //! Any other node is [`UrpError::UnknownNode`], never dropped; a known node in a form not
 //! translated (a `Relative` waypoint, an `If` checked continuously, an operator-entered
@@ -838,6 +839,19 @@ fn identifier(name: &str) -> String {
     out
 }
 
+/// PolyScope's expression editor writes comparison and assignment with its own symbols
+/// (`≟` for `==`); the script has URScript's.
+fn operator(c: &str) -> &str {
+    match c {
+        "\u{225f}" => "==",
+        "\u{2260}" => "!=",
+        "\u{2264}" => "<=",
+        "\u{2265}" => ">=",
+        "\u{2254}" => "=",
+        other => other,
+    }
+}
+
 fn string_literal(s: &str) -> String {
     let s: String = s
         .chars()
@@ -1145,10 +1159,12 @@ impl Tx<'_> {
         for &t in &doc.elems[e].children {
             let t = doc.resolve(t)?;
             match doc.name(t) {
-                "ExpressionChar" => out.push_str(
-                    doc.attr(t, "character")
-                        .ok_or_else(|| invalid(doc, t, "no character"))?,
-                ),
+                "ExpressionChar" => {
+                    let c = doc
+                        .attr(t, "character")
+                        .ok_or_else(|| invalid(doc, t, "no character"))?;
+                    out.push_str(operator(c));
+                }
                 "ExpressionToken" => out.push_str(
                     doc.attr(t, "token")
                         .ok_or_else(|| invalid(doc, t, "no token"))?,
@@ -1159,7 +1175,14 @@ impl Tx<'_> {
                         .or_else(|| doc.attr(t, "referencedName"))
                     {
                         Some(n) => n.to_string(),
-                        None => self.variable_name(t)?,
+                        // <ProgramVariable reference=".../variable"/> (5.x), or a
+                        // variable element of another kind.
+                        None => match doc.elems[t].children.first() {
+                            Some(&v) => self.named_variable(v)?,
+                            None => {
+                                return Err(invalid(doc, t, "a variable token names no variable"))
+                            }
+                        },
                     };
                     out.push_str(&name);
                 }
@@ -1181,6 +1204,12 @@ impl Tx<'_> {
         let v = doc
             .child(id, "variable")
             .ok_or_else(|| invalid(doc, id, "no <variable>"))?;
+        self.named_variable(v)
+    }
+
+    /// The name of a variable element (references followed).
+    fn named_variable(&self, v: usize) -> Result<String, UrpError> {
+        let doc = self.doc;
         let v = doc.resolve(v)?;
         let name = doc
             .attr(v, "name")
@@ -1597,34 +1626,8 @@ impl Tx<'_> {
 
     fn if_chain(&mut self, chain: &[usize]) -> Result<(), UrpError> {
         let doc = self.doc;
-        let mut branches: Vec<usize> = chain.to_vec();
-        // ElseIf/Else saved as the last children of the If.
-        let mut own_children: Vec<Vec<usize>> = Vec::new();
-        let mut i = 0;
-        while i < branches.len() {
-            let b = branches[i];
-            let mut kids = match doc.child(b, "children") {
-                Some(c) => doc.elems[c].children.clone(),
-                None => Vec::new(),
-            };
-            if let Some(split) = kids.iter().position(|&k| {
-                doc.name(k) == "If" && matches!(doc.attr(k, "type"), Some("ElseIf" | "Else"))
-            }) {
-                let tail = kids.split_off(split);
-                for (j, k) in tail.into_iter().enumerate() {
-                    if !(doc.name(k) == "If"
-                        && matches!(doc.attr(k, "type"), Some("ElseIf" | "Else")))
-                    {
-                        return Err(invalid(doc, k, "a node after an ElseIf/Else inside an If"));
-                    }
-                    branches.insert(i + 1 + j, k);
-                }
-            }
-            own_children.push(kids);
-            i += 1;
-        }
         let mut seen_else = false;
-        for (k, (&b, kids)) in branches.iter().zip(&own_children).enumerate() {
+        for (k, &b) in chain.iter().enumerate() {
             if doc.attr(b, "checkContinuously") == Some("true") {
                 return Err(unsupported(doc, b, "an If checked continuously"));
             }
@@ -1640,7 +1643,7 @@ impl Tx<'_> {
             };
             self.line(&head);
             self.indent += 1;
-            self.nodes(kids)?;
+            self.children_of(b)?;
             self.indent -= 1;
         }
         self.line("end");

@@ -356,16 +356,36 @@ fn sub_programs_are_defined_once_and_called_where_the_calls_are() {
 }
 
 #[test]
-fn else_branches_may_be_the_last_children_of_the_if() {
+fn an_if_else_nested_in_an_if_is_its_own_chain() {
+    // As PolyScope saves it: ElseIf/Else are siblings after their If (their own
+    // `<expression/>` empty for an Else), also inside another If's children.
     let main = format!(
-        r#"<If type="If">{cond}<children>{yes}<If type="Else"><children>{no}</children></If></children></If>"#,
-        cond = expr("get_standard_digital_in(0)"),
+        r#"<If type="If" checkContinuously="false">{outer}<children>
+  <If type="If" checkContinuously="false">{inner}<children>{yes}</children></If>
+  <If type="Else" checkContinuously="false"><expression/><children>{no}</children></If>
+  {after}
+</children></If>
+<If type="ElseIf" checkContinuously="false">{never}<children>{x}</children></If>"#,
+        outer = expr("True"),
+        inner = expr("get_standard_digital_in(0) \u{225f} True"),
         yes = script_line("textmsg(\"on\")"),
         no = script_line("textmsg(\"off\")"),
+        after = script_line("textmsg(\"after\")"),
+        never = expr("False"),
+        x = script_line("textmsg(\"x\")"),
     );
     let p = read(&main);
+    assert!(
+        p.script
+            .contains("if (get_standard_digital_in(0) == True):"),
+        "{}",
+        p.script
+    );
     let mut m = machine(&p.script);
-    assert_eq!(texts(&run(&mut m, Duration::from_secs(1))), ["off"]);
+    assert_eq!(
+        texts(&run(&mut m, Duration::from_secs(1))),
+        ["off", "after"]
+    );
 
     let orphan = format!(
         r#"<If type="Else"><children>{}</children></If>"#,
@@ -373,6 +393,56 @@ fn else_branches_may_be_the_last_children_of_the_if() {
     );
     assert!(matches!(
         read_urp(&urp(&orphan)),
+        Err(UrpError::Invalid { .. })
+    ));
+    let twice = format!(
+        r#"<If type="If">{c}<children/></If><If type="Else"><children/></If><If type="Else"><children/></If>"#,
+        c = expr("True")
+    );
+    assert!(
+        matches!(read_urp(&urp(&twice)), Err(UrpError::Invalid { message, .. }) if message.contains("after Else"))
+    );
+}
+
+#[test]
+fn variables_in_expressions_are_references_to_their_assignment() {
+    // 5.x: <ExpressionVariable><ProgramVariable reference=".../variable"/></ExpressionVariable>,
+    // words as <ExpressionToken token=" and "/>.
+    let main = r#"<Assignment valueSource="Expression">
+  <variable name="ready" prefersPersistentValue="false"><initializeExpression/></variable>
+  <expression><ExpressionToken token=" True "/></expression>
+</Assignment>
+<Loop type="While" checkContinuously="false">
+  <expression>
+    <ExpressionVariable><ProgramVariable reference="../../../../Assignment/variable"/></ExpressionVariable>
+    <ExpressionChar character="&#x225f;"/>
+    <ExpressionToken token=" True "/>
+    <ExpressionToken token=" and "/>
+    <ExpressionChar character="1"/><ExpressionChar character="&#x2264;"/><ExpressionChar character="2"/>
+  </expression>
+  <children>
+    <Assignment valueSource="Expression">
+      <variable reference="../../../../Assignment/variable"/>
+      <expression><ExpressionToken token=" False "/></expression>
+    </Assignment>
+    <Script type="Line"><expression><ExpressionChar character="t"/><ExpressionChar character="e"/><ExpressionChar character="x"/><ExpressionChar character="t"/><ExpressionChar character="m"/><ExpressionChar character="s"/><ExpressionChar character="g"/><ExpressionChar character="("/><ExpressionVariable><ProgramVariable reference="../../../../../../Assignment/variable"/></ExpressionVariable><ExpressionChar character=")"/></expression></Script>
+  </children>
+</Loop>"#;
+    let p = read(main);
+    assert!(
+        p.script.contains("while (ready== True  and 1<=2):"),
+        "{}",
+        p.script
+    );
+    assert!(p.script.contains("global ready =  False "), "{}", p.script);
+    let mut m = machine(&p.script);
+    assert_eq!(texts(&run(&mut m, Duration::from_secs(1))), ["False"]);
+    assert_eq!(m.state(), &State::Finished);
+
+    let nothing =
+        r#"<Wait type="Expression"><expression><ExpressionVariable/></expression></Wait>"#;
+    assert!(matches!(
+        read_urp(&urp(nothing)),
         Err(UrpError::Invalid { .. })
     ));
 }
