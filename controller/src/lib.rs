@@ -56,6 +56,14 @@
 //! cuts what clients write on those ports into programs, secondary programs, bare lines
 //! and commands, within fixed bounds.
 //!
+//! # PolyScope programs ([`urp`])
+//!
+//! [`read_urp`] reads a `.urp` (gzip-compressed XML, as PolyScope 3.x and 5.x save it)
+//! and translates its program tree into URScript that `urscript_interp` runs, within
+//! documented bounds (file and inflated size, element count, nesting). UR's External
+//! Control URCap node becomes a place in the program, with the host and port the URCap
+//! would ask; [`translate_with`] splices in the script fetched from there.
+//!
 //! # Where the reply texts come from, and the choices where sources disagree
 //!
 //! Sources: UR's dashboard server pages (the CB3 page "Dashboard Server, port 29999",
@@ -112,6 +120,7 @@ pub mod rtde;
 pub mod script_intake;
 mod state;
 mod status;
+pub mod urp;
 
 pub use cell::{Cell, CellEvent, Ended, Submitted, MAX_EVENTS};
 pub use dashboard::{Dashboard, Reply, GREETING, LOCAL_CONTROL, MAX_LINE, UNLOCK_TOO_EARLY};
@@ -128,4 +137,8 @@ pub use state::{
     SafetyStatus, Timing, MAX_LOG,
 };
 pub use status::{Inputs, Status};
+pub use urp::{
+    read_external_control_settings, read_urp, translate_with, ExternalControlNode,
+    ExternalControlSettings, UrpError, UrpProgram,
+};
 pub use urscript_interp::kinematics::Model;

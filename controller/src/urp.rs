@@ -1,0 +1,1695 @@
+//! PolyScope programs (`.urp`) read and translated into URScript, as the controller does
+//! when a dashboard client says `load NAME.urp` and `play`.
+//!
+//! A `.urp` is a gzip-compressed XML document that PolyScope writes (CB3 3.x and e-Series
+//! 5.x): `<URProgram name=... installation=...>` whose `<children>` hold the program's
+//! sections (`<MainProgram>`, `<SpecialSequence type="BeforeStart">`, sub programs) and,
+//! inside each `<children>`, the program nodes. Some files in the wild (UR's own test
+//! programs for URSim) are saved uncompressed; a document that starts with `<` (after
+//! blanks or a byte-order mark) is read as such.
+//!
+//! [`read_urp`] reads and translates in one pass; nothing here does I/O. The one node that
+//! needs the network, UR's External Control URCap node, is kept as a place in the
+//! program: [`UrpProgram::external_control`] lists where, with the host and port the
+//! URCap would ask, and [`translate_with`] splices in the script a caller fetched
+//! (`request_program\n` to that host and port, as the URCap does at play time).
+//!
+//! # Bounds
+//!
+//! A `.urp` is input: whatever it holds, reading it neither panics nor takes unbounded
+//! memory or time. Every bound is an error ([`UrpError`]):
+//!
+//! | what | bound | error |
+//! |---|---|---|
+//! | the file as given | [`MAX_URP_BYTES`] (16 MiB) | [`UrpError::TooLarge`] |
+//! | the XML after gunzip (a gzip bomb stops at the bound, never inflated further) | [`MAX_XML_BYTES`] (64 MiB) | [`UrpError::TooLarge`] |
+//! | XML elements | [`MAX_ELEMENTS`] (250 000) | [`UrpError::TooManyElements`] |
+//! | nesting of XML elements (each program level is about two: the node and its `<children>`) | [`MAX_DEPTH`] (128) | [`UrpError::TooDeep`] |
+//! | chains of XStream `reference="..."` attributes | 64 hops | [`UrpError::Invalid`] |
+//!
+//! The translation recurses once per program level, so its depth is bounded by
+//! [`MAX_DEPTH`]; sub programs are translated from a work list, not recursively.
+//!
+//! # Node types translated
+//!
+//! | node | URScript |
+//! |---|---|
+//! | `MainProgram` | the body of `def NAME():`; `runOnlyOnce="false"` wraps it in `while (True):` |
+//! | `SpecialSequence type="BeforeStart"` | its nodes, before the main program |
+//! | `InitVariablesNode` | its nodes, if any, first |
+//! | `Script type="Line"` (`<expression>`) / `type="File"` (`<cachedContents>`) | the line, or the file's lines as PolyScope cached them |
+//! | `Wait type="Sleep"` (`<waitTime>`) | `sleep(t)` |
+//! | `Wait type="DigitalInput"` (`<pin referencedName="digital_in[N]"/>`, `<digitalValue>`) | `while (not(get_standard_digital_in(N) == True)): sync() end` (also `configurable_in[N]`, `tool_in[N]`) |
+//! | `Wait type="AnalogInput"` (`<pin>`, `<analogComparison>` 0 less / 1 greater, `<analogValue>`) | a `while` on `get_standard_analog_in(N)` |
+//! | `Wait type="Expression"` / `"Condition"` (`<expression>`) | `while (not(EXPR)): sync() end` |
+//! | `Popup type="Message|Warning|Error" message=... haltProgram=...` | `popup(msg, title, warning, error, blocking=True)`, then `halt` when asked |
+//! | `Set type="DigitalOutput"` (`<pin referencedName="digital_out[N]"/>`, `<digitalValue>`) | `set_standard_digital_out(N, True)` (also `configurable_out[N]`, `tool_out[N]`) |
+//! | `Set type="AnalogOutput"` (`<pin referencedName="analog_out[N]"/>`, `<analogValue>`) | `set_standard_analog_out(N, value)` (the value as stored) |
+//! | `Set type="Expression"` (`<pin>` or `<variable>`, `<expression>`) | the output set to the expression, or `global NAME = EXPR` |
+//! | `Set type="NoAction"` | nothing (a `Set` that sets a TCP or payload is refused) |
+//! | `Move motionType="MoveJ|MoveL|MoveP" speed acceleration [blendRadius]` with `Waypoint type="Fixed"` | `movej(q, a, v[, r])`; `movel`/`movep` to the waypoint's stored pose, or else the TCP pose of its joint angles through its TCP offset (`get_forward_kin(q, tcp)`); a waypoint's `<motionParameters>` (`jointSpeed`, `cartesianSpeed`, ..., `blendRadius`) win over the Move's |
+//! | `Waypoint type="Variable"` (`<variable>`) | the move to that variable's value |
+//! | other nodes inside a `Move` | translated in place, between its waypoints |
+//! | `Loop type="Forever"` / `"Counting"` (`count`) / `"While"` (`<expression>`) | `while (True):` / a counter `Loop_K` / `while (EXPR):` |
+//! | `If type="If|ElseIf|Else"` (`<expression>`) | `if`/`elif`/`else` chains: an `If` and the `ElseIf`/`Else` siblings that follow it |
+//! | `Assignment` (`<variable name>`, `<expression>`) | `global NAME = EXPR` (PolyScope's own form) |
+//! | `Comment comment=...` | a `#` comment |
+//! | `Folder` | its nodes |
+//! | `Halt` | `halt` |
+//! | `CallSubProgram` with `<subprogram name=...>` (or an XStream `reference` to one) | `NAME()`, and `def NAME():` with the sub program's nodes, before the main program |
+//! | `Contributed` of the External Control URCap (`strategyClass` containing `externalcontrol`) | the fetched script ([`translate_with`]) |
+//!
+//! Expressions are the `<expression>`'s tokens in order: `<ExpressionChar character="c"/>`
+//! (PolyScope's `≟`, `≠`, `≤`, `≥` and `≔` become `==`, `!=`, `<=`, `>=` and `=`),
+//! `<ExpressionToken token=" and "/>`, `<ExpressionVariable>` (the name of the variable
+//! its child refers to, as 5.x saves it: `<ProgramVariable reference=".../variable"/>`;
+//! or its `name`/`referencedName` attribute), or plain text inside `<expression>`.
+//!
+//! Any other node is [`UrpError::UnknownNode`], never dropped; a known node in a form not
+//! translated (a `Relative` waypoint, an `If` checked continuously, an operator-entered
+//! assignment) is [`UrpError::Unsupported`]. Skipped as cosmetic only: `<kinematics>`
+//! (the calibration the waypoints were taught with), a Move's `<feature>` and `<tcp>`
+//! references, a waypoint's `<Kinematics>`, `<BaseToFeature>`, `<outputFlangePose>`
+//! and `<poseInFeatureCoordinates>` (the pose used is the base pose).
+//!
+//! String literals: URScript has no escapes, so a message with `"` is written between
+//! `'`; one with both quote characters has its `"` written as `'`.
+
+use std::fmt;
+use std::io::Read;
+
+use quick_xml::events::Event;
+use quick_xml::Reader;
+
+/// The largest `.urp` file read (16 MiB), compressed.
+pub const MAX_URP_BYTES: usize = 16 << 20;
+/// The largest XML document read after decompression (64 MiB).
+pub const MAX_XML_BYTES: usize = 64 << 20;
+/// The most XML elements in one document (a waypoint is about 15): with the document
+/// size bound, this bounds the parsed tree's memory to some tens of MiB.
+pub const MAX_ELEMENTS: usize = 250_000;
+/// The deepest nesting of XML elements.
+pub const MAX_DEPTH: usize = 128;
+/// The External Control URCap's default host when the installation sets none.
+pub const EXTERNAL_CONTROL_DEFAULT_HOST: &str = "192.168.56.1";
+/// The External Control URCap's default port (the ROS driver's script sender).
+pub const EXTERNAL_CONTROL_DEFAULT_PORT: u16 = 50002;
+
+const MAX_REFERENCE_HOPS: usize = 64;
+
+/// The External Control URCap's settings in an installation: where its nodes ask for
+/// their script.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct ExternalControlSettings {
+    /// `host_ip` ([`EXTERNAL_CONTROL_DEFAULT_HOST`] when not set).
+    pub host: String,
+    /// `port_nr` ([`EXTERNAL_CONTROL_DEFAULT_PORT`] when not set).
+    pub port: u16,
+    /// Whether the installation has the URCap's contribution at all.
+    pub installed: bool,
+}
+
+impl Default for ExternalControlSettings {
+    fn default() -> Self {
+        ExternalControlSettings {
+            host: EXTERNAL_CONTROL_DEFAULT_HOST.to_string(),
+            port: EXTERNAL_CONTROL_DEFAULT_PORT,
+            installed: false,
+        }
+    }
+}
+
+/// Reads the External Control URCap's settings from an `.installation` (gzip-compressed
+/// or plain XML, with the same bounds as [`read_urp`]): the `<Contributed>` element whose
+/// `ownerId` or `id` names `externalcontrol`, and its `<data key="host_ip">` and
+/// `<data key="port_nr">`. Without that element: the URCap's defaults, `installed` false.
+///
+/// ```
+/// use urscript_controller::urp::read_external_control_settings;
+/// let installation = br#"<Installation><Contributions><URCaps>
+///   <Contributed ownerId="com.fzi.externalcontrol" id="com.fzi.externalcontrol.impl.ExternalControlInstallationNodeService">
+///     <data key="host_ip" value="10.0.0.2"/>
+///   </Contributed>
+/// </URCaps></Contributions></Installation>"#;
+/// let settings = read_external_control_settings(installation).unwrap();
+/// assert_eq!((settings.host.as_str(), settings.port, settings.installed), ("10.0.0.2", 50002, true));
+/// ```
+pub fn read_external_control_settings(
+    installation: &[u8],
+) -> Result<ExternalControlSettings, UrpError> {
+    let doc = parse_xml(&inflate(installation)?)?;
+    if doc.name(0) != "Installation" {
+        return Err(UrpError::NotAnInstallation {
+            root: doc.name(0).to_string(),
+        });
+    }
+    let mut settings = ExternalControlSettings::default();
+    let found = (0..doc.elems.len()).find(|&id| {
+        doc.name(id) == "Contributed"
+            && ["ownerId", "id"].iter().any(|k| {
+                doc.attr(id, k)
+                    .is_some_and(|v| v.to_ascii_lowercase().contains("externalcontrol"))
+            })
+    });
+    if let Some(id) = found {
+        settings.installed = true;
+        for &d in &doc.elems[id].children {
+            match (doc.attr(d, "key"), doc.attr(d, "value")) {
+                (Some("host_ip"), Some(v)) if !v.is_empty() => settings.host = v.to_string(),
+                (Some("port_nr"), Some(v)) if !v.is_empty() => {
+                    settings.port = v
+                        .trim()
+                        .parse::<u16>()
+                        .map_err(|_| invalid(&doc, d, format!("port_nr `{v}` is not a port")))?;
+                }
+                _ => {}
+            }
+        }
+    }
+    Ok(settings)
+}
+
+/// Why a `.urp` could not be read or translated.
+#[derive(Debug, Clone, PartialEq, Eq)]
+#[non_exhaustive]
+pub enum UrpError {
+    /// The input, or what it inflates to, is over a bound.
+    TooLarge {
+        /// What was too large (`"file"`, `"XML after gunzip"`).
+        what: &'static str,
+        /// The bound in bytes.
+        limit: usize,
+    },
+    /// Neither a gzip stream nor an XML document.
+    NotGzip,
+    /// The gzip stream is corrupt or truncated.
+    Gzip {
+        /// The decompressor's message.
+        message: String,
+    },
+    /// The XML is malformed (or truncated).
+    Xml {
+        /// The byte offset in the (decompressed) XML.
+        offset: u64,
+        /// What was wrong.
+        message: String,
+    },
+    /// More than [`MAX_ELEMENTS`] elements.
+    TooManyElements {
+        /// The bound.
+        limit: usize,
+        /// The byte offset of the element over the bound.
+        offset: u64,
+    },
+    /// Elements nested deeper than [`MAX_DEPTH`].
+    TooDeep {
+        /// The bound.
+        limit: usize,
+        /// The byte offset of the element over the bound.
+        offset: u64,
+    },
+    /// The document's root is not `<URProgram>`.
+    NotAProgram {
+        /// The root element's name.
+        root: String,
+    },
+    /// The document's root is not `<Installation>` ([`read_external_control_settings`]).
+    NotAnInstallation {
+        /// The root element's name.
+        root: String,
+    },
+    /// A program node this translator does not know.
+    UnknownNode {
+        /// The node's element name (for a URCap node, `Contributed` with its node type).
+        name: String,
+        /// Its path in the document (`URProgram/children/MainProgram/children/Foo[2]`).
+        path: String,
+    },
+    /// A known node in a form that is not translated.
+    Unsupported {
+        /// The node's path.
+        path: String,
+        /// What is not supported.
+        what: String,
+    },
+    /// A known node with a missing or malformed part.
+    Invalid {
+        /// The node's path.
+        path: String,
+        /// What was wrong.
+        message: String,
+    },
+}
+
+impl fmt::Display for UrpError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            UrpError::TooLarge { what, limit } => {
+                write!(f, "the {what} is larger than {limit} bytes")
+            }
+            UrpError::NotGzip => f.write_str("not a .urp: neither gzip nor XML"),
+            UrpError::Gzip { message } => write!(f, "corrupt gzip stream: {message}"),
+            UrpError::Xml { offset, message } => {
+                write!(f, "malformed XML at byte {offset}: {message}")
+            }
+            UrpError::TooManyElements { limit, offset } => {
+                write!(f, "more than {limit} XML elements (at byte {offset})")
+            }
+            UrpError::TooDeep { limit, offset } => {
+                write!(f, "XML nested deeper than {limit} (at byte {offset})")
+            }
+            UrpError::NotAProgram { root } => {
+                write!(
+                    f,
+                    "not a PolyScope program: the root is <{root}>, not <URProgram>"
+                )
+            }
+            UrpError::NotAnInstallation { root } => {
+                write!(
+                    f,
+                    "not an installation: the root is <{root}>, not <Installation>"
+                )
+            }
+            UrpError::UnknownNode { name, path } => {
+                write!(f, "unknown program node <{name}> at {path}")
+            }
+            UrpError::Unsupported { path, what } => write!(f, "{path}: not supported: {what}"),
+            UrpError::Invalid { path, message } => write!(f, "{path}: {message}"),
+        }
+    }
+}
+
+impl std::error::Error for UrpError {}
+
+/// Where a program runs UR's External Control URCap node, and whom it asks.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct ExternalControlNode {
+    /// Which External Control node in the program (0 first, in document order).
+    pub index: usize,
+    /// The node's path in the document.
+    pub path: String,
+    /// The host the URCap connects to: the node's `host_ip` data if it has one (the
+    /// URCap keeps it in the installation), else [`EXTERNAL_CONTROL_DEFAULT_HOST`].
+    /// Set it from the installation ([`UrpProgram::set_external_control_host`]).
+    pub host: String,
+    /// The port: the node's `port_nr` data, else [`EXTERNAL_CONTROL_DEFAULT_PORT`].
+    pub port: u16,
+    /// The node's data model (`key`, `value`) as saved (`maxlostpackages`,
+    /// `gain_servo_j`, ...).
+    pub data: Vec<(String, String)>,
+}
+
+/// A `.urp` read and translated.
+#[derive(Debug, Clone, PartialEq)]
+pub struct UrpProgram {
+    /// The program's name (`URProgram name`).
+    pub name: String,
+    /// The installation it was saved with (`URProgram installation`).
+    pub installation: String,
+    /// The PolyScope version that created it (`createdIn`), if given.
+    pub created_in: Option<String>,
+    /// The URScript program: `def NAME():` ... `end`. Each External Control node is a
+    /// comment line here; [`translate_with`] gives the program with their scripts.
+    pub script: String,
+    /// The External Control nodes, in document order.
+    pub external_control: Vec<ExternalControlNode>,
+    segments: Vec<Segment>,
+}
+
+#[derive(Debug, Clone, PartialEq)]
+enum Segment {
+    Text(String),
+    External { index: usize, indent: usize },
+}
+
+impl UrpProgram {
+    /// Sets every External Control node's host and port (as the installation's External
+    /// Control settings give them: [`read_external_control_settings`]).
+    pub fn set_external_control_host(&mut self, host: &str, port: u16) {
+        for node in &mut self.external_control {
+            node.host = host.to_string();
+            node.port = port;
+        }
+    }
+}
+
+/// Reads a `.urp` (gzip-compressed or plain XML) and translates it.
+///
+/// ```
+/// use std::io::Write;
+/// let xml = r#"<URProgram name="hello" installation="default">
+///   <children>
+///     <MainProgram runOnlyOnce="true">
+///       <children>
+///         <Wait type="Sleep"><waitTime>0.5</waitTime></Wait>
+///         <Halt/>
+///       </children>
+///     </MainProgram>
+///   </children>
+/// </URProgram>"#;
+/// let mut gz = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::default());
+/// gz.write_all(xml.as_bytes()).unwrap();
+/// let program = urscript_controller::read_urp(&gz.finish().unwrap()).unwrap();
+/// assert_eq!(program.name, "hello");
+/// assert_eq!(program.script, "def hello():\n  sleep(0.5)\n  halt\nend\n");
+/// urscript_interp::Program::parse(&program.script).unwrap();
+///
+/// assert!(matches!(
+///     urscript_controller::read_urp(b"PK\x03\x04"),
+///     Err(urscript_controller::UrpError::NotGzip)
+/// ));
+/// ```
+pub fn read_urp(bytes: &[u8]) -> Result<UrpProgram, UrpError> {
+    let xml = inflate(bytes)?;
+    let doc = parse_xml(&xml)?;
+    translate(&doc)
+}
+
+/// The program's script with each External Control node's script spliced in, as the
+/// URCap builds it at play time.
+///
+/// The URCap asks its host once per program build (`request_program\n`) and reads the
+/// reply line by line until no more is buffered (the host closes the connection after
+/// sending; `fetch` returns everything received). It prefixes each line with a space,
+/// then splits the reply: the lines from `# HEADER_BEGIN` to `# HEADER_END` are the
+/// header, written once, before the first node's script; the lines after the header
+/// are the control loop, written at every External Control node. A reply without
+/// `# HEADER_END` is all control loop. `fetch` is called at most once, with the first
+/// node; when it fails, every node gets what the URCap writes then: a blocking error
+/// popup naming the host and the reason, and `sync()`.
+///
+/// ```
+/// use std::io::Write;
+/// let xml = r#"<URProgram name="ec" installation="default"><children>
+///   <MainProgram runOnlyOnce="true"><children>
+///     <Contributed strategyClass="com.fzi.externalcontrol.ExternalControlNode"
+///                  strategyProgramNodeType="External Control"><dataModel/></Contributed>
+///   </children></MainProgram>
+/// </children></URProgram>"#;
+/// let program = urscript_controller::read_urp(xml.as_bytes()).unwrap();
+/// assert_eq!(program.external_control[0].port, 50002);
+/// let script = urscript_controller::translate_with(&program, |node| {
+///     assert_eq!(node.host, "192.168.56.1");
+///     Ok("textmsg(\"driven\")\n".to_string())
+/// })
+/// .unwrap();
+/// assert_eq!(script, "def ec():\n   textmsg(\"driven\")\nend\n");
+/// ```
+pub fn translate_with(
+    program: &UrpProgram,
+    mut fetch: impl FnMut(&ExternalControlNode) -> Result<String, String>,
+) -> Result<String, UrpError> {
+    let mut fetched: Option<(String, String)> = None;
+    let mut header_written = false;
+    let mut out = String::new();
+    for segment in &program.segments {
+        match segment {
+            Segment::Text(text) => out.push_str(text),
+            Segment::External { index, indent } => {
+                let node =
+                    program
+                        .external_control
+                        .get(*index)
+                        .ok_or_else(|| UrpError::Invalid {
+                            path: String::from("URProgram"),
+                            message: format!("External Control node {index} is not listed"),
+                        })?;
+                if fetched.is_none() {
+                    let reply = match fetch(node) {
+                        Ok(text) => urcap_lines(&text),
+                        Err(why) => vec![
+                            format!(
+                                "popup({}, \"Receive program failed\", False, True, blocking=True)",
+                                string_literal(&format!(
+                                    "The connection to the remote PC at {}:{} could not be established. Reason: {}",
+                                    node.host, node.port, why
+                                ))
+                            ),
+                            String::from("sync()"),
+                        ],
+                    };
+                    fetched = Some(split_header(&reply));
+                }
+                let (header, control) = fetched
+                    .as_ref()
+                    .map(|(h, c)| (h.as_str(), c.as_str()))
+                    .unwrap_or(("", ""));
+                if !header_written {
+                    push_indented(&mut out, header, *indent);
+                    header_written = true;
+                }
+                push_indented(&mut out, control, *indent);
+            }
+        }
+    }
+    Ok(out)
+}
+
+/// The reply as the URCap reads it: one line at a time, each prefixed with a space.
+fn urcap_lines(reply: &str) -> Vec<String> {
+    let mut lines = Vec::new();
+    let mut rest = reply;
+    while !rest.is_empty() {
+        let end = rest.find(['\n', '\r']).unwrap_or(rest.len());
+        lines.push(format!(" {}", &rest[..end]));
+        rest = &rest[end..];
+        if rest.starts_with("\r\n") {
+            rest = &rest[2..];
+        } else if !rest.is_empty() {
+            rest = &rest[1..];
+        }
+    }
+    if lines.is_empty() {
+        // The URCap's first readLine of a closed, empty connection gives "null".
+        lines.push(String::from(" null"));
+    }
+    lines
+}
+
+/// Splits the reply's lines into header and control loop, as the URCap does.
+fn split_header(lines: &[String]) -> (String, String) {
+    let marker = |line: &str, name: &str| line.trim() == name;
+    let (mut header, mut control) = (String::new(), String::new());
+    let (mut in_header, mut header_end) = (false, false);
+    for line in lines {
+        if marker(line, "# HEADER_BEGIN") {
+            in_header = true;
+            header.push_str(line);
+            header.push('\n');
+        } else if marker(line, "# HEADER_END") && in_header {
+            header_end = true;
+            in_header = false;
+            header.push_str(line);
+            header.push('\n');
+        } else if in_header {
+            header.push_str(line);
+            header.push('\n');
+        } else if header_end {
+            control.push_str(line);
+            control.push('\n');
+        }
+    }
+    if !header_end {
+        header.clear();
+        control.clear();
+        for line in lines {
+            control.push_str(line);
+            control.push('\n');
+        }
+    }
+    (header, control)
+}
+
+fn push_indented(out: &mut String, text: &str, indent: usize) {
+    for line in text.lines() {
+        for _ in 0..indent {
+            out.push_str("  ");
+        }
+        out.push_str(line);
+        out.push('\n');
+    }
+}
+
+// ---------------------------------------------------------------------------------------
+// gunzip and XML
+
+fn inflate(bytes: &[u8]) -> Result<Vec<u8>, UrpError> {
+    if bytes.len() > MAX_URP_BYTES {
+        return Err(UrpError::TooLarge {
+            what: "file",
+            limit: MAX_URP_BYTES,
+        });
+    }
+    if bytes.starts_with(&[0x1f, 0x8b]) {
+        let mut xml = Vec::new();
+        let limit = (MAX_XML_BYTES as u64).saturating_add(1);
+        flate2::read::GzDecoder::new(bytes)
+            .take(limit)
+            .read_to_end(&mut xml)
+            .map_err(|e| UrpError::Gzip {
+                message: e.to_string(),
+            })?;
+        if xml.len() > MAX_XML_BYTES {
+            return Err(UrpError::TooLarge {
+                what: "XML after gunzip",
+                limit: MAX_XML_BYTES,
+            });
+        }
+        return Ok(xml);
+    }
+    let text = bytes.strip_prefix(b"\xef\xbb\xbf").unwrap_or(bytes);
+    match text.iter().find(|b| !b.is_ascii_whitespace()) {
+        Some(b'<') => Ok(text.to_vec()),
+        _ => Err(UrpError::NotGzip),
+    }
+}
+
+#[derive(Debug)]
+struct Elem {
+    name: String,
+    attrs: Vec<(String, String)>,
+    text: String,
+    children: Vec<usize>,
+    parent: Option<usize>,
+}
+
+#[derive(Debug)]
+struct Doc {
+    elems: Vec<Elem>,
+}
+
+fn xml_err(offset: u64, message: impl Into<String>) -> UrpError {
+    UrpError::Xml {
+        offset,
+        message: message.into(),
+    }
+}
+
+fn parse_xml(xml: &[u8]) -> Result<Doc, UrpError> {
+    let mut reader = Reader::from_reader(xml);
+    let mut elems: Vec<Elem> = Vec::new();
+    let mut stack: Vec<usize> = Vec::new();
+    let mut root_done = false;
+    loop {
+        let at = reader.buffer_position();
+        let event = reader
+            .read_event()
+            .map_err(|e| xml_err(reader.error_position(), e.to_string()))?;
+        match event {
+            Event::Start(ref e) | Event::Empty(ref e) => {
+                if root_done {
+                    return Err(xml_err(at, "a second root element"));
+                }
+                if stack.len() >= MAX_DEPTH {
+                    return Err(UrpError::TooDeep {
+                        limit: MAX_DEPTH,
+                        offset: at,
+                    });
+                }
+                if elems.len() >= MAX_ELEMENTS {
+                    return Err(UrpError::TooManyElements {
+                        limit: MAX_ELEMENTS,
+                        offset: at,
+                    });
+                }
+                let name = std::str::from_utf8(e.name().as_ref())
+                    .map_err(|_| xml_err(at, "an element name is not UTF-8"))?
+                    .to_string();
+                let mut attrs = Vec::new();
+                for attr in e.attributes() {
+                    let attr = attr.map_err(|err| xml_err(at, err.to_string()))?;
+                    let key = std::str::from_utf8(attr.key.as_ref())
+                        .map_err(|_| xml_err(at, "an attribute name is not UTF-8"))?
+                        .to_string();
+                    let value = attr
+                        .normalized_value(quick_xml::XmlVersion::Implicit1_0)
+                        .map_err(|err| xml_err(at, format!("attribute `{key}`: {err}")))?
+                        .into_owned();
+                    attrs.push((key, value));
+                }
+                let id = elems.len();
+                let parent = stack.last().copied();
+                elems.push(Elem {
+                    name,
+                    attrs,
+                    text: String::new(),
+                    children: Vec::new(),
+                    parent,
+                });
+                if let Some(p) = parent {
+                    elems[p].children.push(id);
+                }
+                if matches!(event, Event::Start(_)) {
+                    stack.push(id);
+                } else if stack.is_empty() {
+                    root_done = true;
+                }
+            }
+            Event::End(_) => {
+                stack.pop();
+                if stack.is_empty() {
+                    root_done = true;
+                }
+            }
+            Event::Text(t) => {
+                let text = t.decode().map_err(|e| xml_err(at, e.to_string()))?;
+                push_text(&mut elems, &stack, &text, at)?;
+            }
+            Event::CData(t) => {
+                let text = t.decode().map_err(|e| xml_err(at, e.to_string()))?;
+                push_text(&mut elems, &stack, &text, at)?;
+            }
+            Event::GeneralRef(r) => {
+                let ch = match r
+                    .resolve_char_ref()
+                    .map_err(|e| xml_err(at, e.to_string()))?
+                {
+                    Some(c) => c,
+                    None => match r.as_ref() {
+                        b"lt" => '<',
+                        b"gt" => '>',
+                        b"amp" => '&',
+                        b"quot" => '"',
+                        b"apos" => '\'',
+                        other => {
+                            return Err(xml_err(
+                                at,
+                                format!("unknown entity &{};", String::from_utf8_lossy(other)),
+                            ))
+                        }
+                    },
+                };
+                push_text(&mut elems, &stack, ch.encode_utf8(&mut [0; 4]), at)?;
+            }
+            Event::Eof => {
+                if let Some(&open) = stack.last() {
+                    return Err(xml_err(
+                        at,
+                        format!("the document ends inside <{}>", elems[open].name),
+                    ));
+                }
+                if elems.is_empty() {
+                    return Err(xml_err(at, "no root element"));
+                }
+                break;
+            }
+            Event::Decl(_) | Event::PI(_) | Event::Comment(_) | Event::DocType(_) => {}
+        }
+    }
+    Ok(Doc { elems })
+}
+
+fn push_text(elems: &mut [Elem], stack: &[usize], text: &str, at: u64) -> Result<(), UrpError> {
+    match stack.last() {
+        Some(&top) => elems[top].text.push_str(text),
+        None if text.trim().is_empty() => {}
+        None => return Err(xml_err(at, "text outside the root element")),
+    }
+    Ok(())
+}
+
+impl Doc {
+    fn attr(&self, id: usize, key: &str) -> Option<&str> {
+        self.elems[id]
+            .attrs
+            .iter()
+            .find(|(k, _)| k == key)
+            .map(|(_, v)| v.as_str())
+    }
+
+    fn name(&self, id: usize) -> &str {
+        &self.elems[id].name
+    }
+
+    fn child(&self, id: usize, name: &str) -> Option<usize> {
+        self.elems[id]
+            .children
+            .iter()
+            .copied()
+            .find(|&c| self.elems[c].name == name)
+    }
+
+    /// The element's path: names from the root, `Name[k]` for the k-th of its name.
+    fn path(&self, id: usize) -> String {
+        let mut parts = Vec::new();
+        let mut cur = Some(id);
+        while let Some(c) = cur {
+            let name = &self.elems[c].name;
+            let part = match self.elems[c].parent {
+                Some(p) => {
+                    let same = self.elems[p]
+                        .children
+                        .iter()
+                        .filter(|&&s| self.elems[s].name == *name);
+                    let k = same.clone().position(|&s| s == c).unwrap_or(0) + 1;
+                    if k > 1 {
+                        format!("{name}[{k}]")
+                    } else {
+                        name.clone()
+                    }
+                }
+                None => name.clone(),
+            };
+            parts.push(part);
+            cur = self.elems[c].parent;
+        }
+        parts.reverse();
+        parts.join("/")
+    }
+
+    /// Follows XStream `reference="..."` attributes (paths relative to the element).
+    fn resolve(&self, id: usize) -> Result<usize, UrpError> {
+        let mut cur = id;
+        for _ in 0..MAX_REFERENCE_HOPS {
+            let Some(reference) = self.attr(cur, "reference") else {
+                return Ok(cur);
+            };
+            let bad = |why: &str| UrpError::Invalid {
+                path: self.path(cur),
+                message: format!("reference `{reference}` {why}"),
+            };
+            let mut at = cur;
+            for seg in reference.split('/') {
+                at = match seg {
+                    "" | "." => at,
+                    ".." => self.elems[at]
+                        .parent
+                        .ok_or_else(|| bad("leaves the document"))?,
+                    _ => {
+                        let (name, k) = match seg.split_once('[') {
+                            Some((n, rest)) => {
+                                let k = rest
+                                    .strip_suffix(']')
+                                    .and_then(|k| k.parse::<usize>().ok())
+                                    .filter(|&k| k >= 1)
+                                    .ok_or_else(|| bad("has a malformed index"))?;
+                                (n, k)
+                            }
+                            None => (seg, 1),
+                        };
+                        self.elems[at]
+                            .children
+                            .iter()
+                            .copied()
+                            .filter(|&c| self.elems[c].name == name)
+                            .nth(k - 1)
+                            .ok_or_else(|| bad("does not resolve"))?
+                    }
+                };
+            }
+            cur = at;
+        }
+        Err(UrpError::Invalid {
+            path: self.path(id),
+            message: format!("more than {MAX_REFERENCE_HOPS} chained references"),
+        })
+    }
+}
+
+// ---------------------------------------------------------------------------------------
+// translation
+
+struct Tx<'a> {
+    doc: &'a Doc,
+    segments: Vec<Segment>,
+    indent: usize,
+    externals: Vec<ExternalControlNode>,
+    /// Sub programs: (resolved node, function name), in the order first met.
+    subprograms: Vec<(usize, String)>,
+    loops: usize,
+}
+
+fn invalid(doc: &Doc, id: usize, message: impl Into<String>) -> UrpError {
+    UrpError::Invalid {
+        path: doc.path(id),
+        message: message.into(),
+    }
+}
+
+fn unsupported(doc: &Doc, id: usize, what: impl Into<String>) -> UrpError {
+    UrpError::Unsupported {
+        path: doc.path(id),
+        what: what.into(),
+    }
+}
+
+fn unknown(doc: &Doc, id: usize) -> UrpError {
+    UrpError::UnknownNode {
+        name: doc.name(id).to_string(),
+        path: doc.path(id),
+    }
+}
+
+/// A URScript name from a PolyScope name: letters, digits and `_`, not starting with a
+/// digit.
+fn identifier(name: &str) -> String {
+    let mut out: String = name
+        .chars()
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || c == '_' {
+                c
+            } else {
+                '_'
+            }
+        })
+        .collect();
+    if out.is_empty() || out.starts_with(|c: char| c.is_ascii_digit()) {
+        out.insert(0, 'P');
+    }
+    out
+}
+
+/// PolyScope's expression editor writes comparison and assignment with its own symbols
+/// (`≟` for `==`); the script has URScript's.
+fn operator(c: &str) -> &str {
+    match c {
+        "\u{225f}" => "==",
+        "\u{2260}" => "!=",
+        "\u{2264}" => "<=",
+        "\u{2265}" => ">=",
+        "\u{2254}" => "=",
+        other => other,
+    }
+}
+
+fn string_literal(s: &str) -> String {
+    let s: String = s
+        .chars()
+        .map(|c| if c == '\n' || c == '\r' { ' ' } else { c })
+        .collect();
+    if !s.contains('"') {
+        format!("\"{s}\"")
+    } else if !s.contains('\'') {
+        format!("'{s}'")
+    } else {
+        format!("\"{}\"", s.replace('"', "'"))
+    }
+}
+
+fn translate(doc: &Doc) -> Result<UrpProgram, UrpError> {
+    if doc.name(0) != "URProgram" {
+        return Err(UrpError::NotAProgram {
+            root: doc.name(0).to_string(),
+        });
+    }
+    let name = doc.attr(0, "name").unwrap_or("Program").to_string();
+    let installation = doc.attr(0, "installation").unwrap_or("default").to_string();
+    let created_in = doc.attr(0, "createdIn").map(str::to_string);
+    let mut tx = Tx {
+        doc,
+        segments: Vec::new(),
+        indent: 1,
+        externals: Vec::new(),
+        subprograms: Vec::new(),
+        loops: 0,
+    };
+
+    let mut init = Vec::new();
+    let mut before = Vec::new();
+    let mut main = None;
+    if let Some(children) = doc.child(0, "children") {
+        for &c in &doc.elems[children].children {
+            match doc.name(c) {
+                "InitVariablesNode" => init.push(c),
+                "SpecialSequence" => match doc.attr(c, "type") {
+                    Some("BeforeStart") => before.push(c),
+                    other => {
+                        return Err(unsupported(
+                            doc,
+                            c,
+                            format!("special sequence type {}", other.unwrap_or("(none)")),
+                        ))
+                    }
+                },
+                "MainProgram" => {
+                    if main.replace(c).is_some() {
+                        return Err(invalid(doc, c, "a second MainProgram"));
+                    }
+                }
+                "SubProgram" => {
+                    let sub = doc.resolve(c)?;
+                    tx.subprogram_name(sub)?;
+                }
+                _ => return Err(unknown(doc, c)),
+            }
+        }
+    }
+    for &c in init.iter().chain(&before) {
+        tx.children_of(c)?;
+    }
+    let Some(main) = main else {
+        return Err(invalid(doc, 0, "the program has no MainProgram"));
+    };
+    let forever = doc.attr(main, "runOnlyOnce") == Some("false");
+    if forever {
+        tx.line("while (True):");
+        tx.indent += 1;
+    }
+    tx.children_of(main)?;
+    if forever {
+        tx.indent -= 1;
+        tx.line("end");
+    }
+    let body = std::mem::take(&mut tx.segments);
+
+    // Sub programs, from a work list (a sub program may call others, or itself).
+    let mut defs = Vec::new();
+    let mut next = 0;
+    while next < tx.subprograms.len() {
+        let (sub, fname) = tx.subprograms[next].clone();
+        next += 1;
+        tx.indent = 1;
+        tx.line(&format!("def {fname}():"));
+        tx.indent = 2;
+        tx.children_of(sub)?;
+        tx.indent = 1;
+        tx.line("end");
+        defs.append(&mut tx.segments);
+    }
+
+    let mut segments = vec![Segment::Text(format!("def {}():\n", identifier(&name)))];
+    segments.extend(defs);
+    segments.extend(body);
+    segments.push(Segment::Text(String::from("end\n")));
+    let segments = merge(segments);
+    let mut script = String::new();
+    for s in &segments {
+        match s {
+            Segment::Text(t) => script.push_str(t),
+            Segment::External { index, indent } => {
+                let node = &tx.externals[*index];
+                push_indented(
+                    &mut script,
+                    &format!(
+                        "# External Control node {index}: the script from {}:{} goes here",
+                        node.host, node.port
+                    ),
+                    *indent,
+                );
+            }
+        }
+    }
+    Ok(UrpProgram {
+        name,
+        installation,
+        created_in,
+        script,
+        external_control: tx.externals,
+        segments,
+    })
+}
+
+fn merge(segments: Vec<Segment>) -> Vec<Segment> {
+    let mut out: Vec<Segment> = Vec::new();
+    for s in segments {
+        match (out.last_mut(), s) {
+            (Some(Segment::Text(a)), Segment::Text(b)) => a.push_str(&b),
+            (_, s) => out.push(s),
+        }
+    }
+    out
+}
+
+fn parse_f64(doc: &Doc, id: usize, what: &str, text: &str) -> Result<f64, UrpError> {
+    text.trim()
+        .parse::<f64>()
+        .ok()
+        .filter(|v| v.is_finite())
+        .ok_or_else(|| invalid(doc, id, format!("{what} `{}` is not a number", text.trim())))
+}
+
+/// A number as URScript source (always with a decimal point or exponent).
+fn num(v: f64) -> String {
+    let s = format!("{v:?}");
+    if s.contains(['.', 'e', 'E']) {
+        s
+    } else {
+        format!("{s}.0")
+    }
+}
+
+fn vector6(doc: &Doc, id: usize, what: &str, text: &str) -> Result<[f64; 6], UrpError> {
+    let parts: Vec<&str> = text.split(',').collect();
+    if parts.len() != 6 {
+        return Err(invalid(
+            doc,
+            id,
+            format!("{what} `{text}` does not have 6 values"),
+        ));
+    }
+    let mut out = [0.0; 6];
+    for (o, p) in out.iter_mut().zip(parts) {
+        *o = parse_f64(doc, id, what, p)?;
+    }
+    Ok(out)
+}
+
+fn list(v: &[f64; 6]) -> String {
+    let items: Vec<String> = v.iter().map(|&x| num(x)).collect();
+    format!("[{}]", items.join(", "))
+}
+
+/// A pin reference `digital_out[3]`: (`digital_out`, 3).
+fn pin(doc: &Doc, id: usize) -> Result<(String, u32), UrpError> {
+    let p = doc
+        .child(id, "pin")
+        .ok_or_else(|| invalid(doc, id, "no <pin>"))?;
+    let p = doc.resolve(p)?;
+    let name = doc
+        .attr(p, "referencedName")
+        .or_else(|| doc.attr(p, "name"))
+        .ok_or_else(|| invalid(doc, p, "the pin has no name"))?;
+    let bad = || invalid(doc, p, format!("pin `{name}` is not of the form kind[N]"));
+    let (kind, rest) = name.split_once('[').ok_or_else(bad)?;
+    let n = rest
+        .strip_suffix(']')
+        .and_then(|n| n.trim().parse::<u32>().ok())
+        .ok_or_else(bad)?;
+    Ok((kind.to_string(), n))
+}
+
+fn bool_text(doc: &Doc, id: usize, what: &str, text: &str) -> Result<&'static str, UrpError> {
+    match text.trim() {
+        "1" | "true" | "True" | "HIGH" => Ok("True"),
+        "0" | "false" | "False" | "LOW" => Ok("False"),
+        other => Err(invalid(doc, id, format!("{what} `{other}` is not 0/1"))),
+    }
+}
+
+impl Tx<'_> {
+    fn line(&mut self, text: &str) {
+        let mut s = String::with_capacity(text.len() + 2 * self.indent + 1);
+        for _ in 0..self.indent {
+            s.push_str("  ");
+        }
+        s.push_str(text);
+        s.push('\n');
+        match self.segments.last_mut() {
+            Some(Segment::Text(t)) => t.push_str(&s),
+            _ => self.segments.push(Segment::Text(s)),
+        }
+    }
+
+    fn block(
+        &mut self,
+        head: &str,
+        f: impl FnOnce(&mut Self) -> Result<(), UrpError>,
+    ) -> Result<(), UrpError> {
+        self.line(head);
+        self.indent += 1;
+        f(self)?;
+        self.indent -= 1;
+        self.line("end");
+        Ok(())
+    }
+
+    /// The function name for a sub program node, registering it on first sight.
+    fn subprogram_name(&mut self, sub: usize) -> Result<String, UrpError> {
+        if let Some((_, n)) = self.subprograms.iter().find(|(s, _)| *s == sub) {
+            return Ok(n.clone());
+        }
+        let name = self
+            .doc
+            .attr(sub, "name")
+            .ok_or_else(|| invalid(self.doc, sub, "the sub program has no name"))?;
+        let fname = identifier(name);
+        if self.subprograms.iter().any(|(_, n)| *n == fname) {
+            return Err(invalid(
+                self.doc,
+                sub,
+                format!("two sub programs named {fname}"),
+            ));
+        }
+        self.subprograms.push((sub, fname.clone()));
+        Ok(fname)
+    }
+
+    /// Translates the nodes in `id`'s `<children>`.
+    fn children_of(&mut self, id: usize) -> Result<(), UrpError> {
+        let Some(children) = self.doc.child(id, "children") else {
+            return Ok(());
+        };
+        let list = self.doc.elems[children].children.clone();
+        self.nodes(&list)
+    }
+
+    fn nodes(&mut self, list: &[usize]) -> Result<(), UrpError> {
+        let doc = self.doc;
+        let mut i = 0;
+        while i < list.len() {
+            let id = doc.resolve(list[i])?;
+            if doc.name(id) == "If" {
+                // An If and the ElseIf/Else siblings that follow it.
+                let mut chain = vec![id];
+                if doc.attr(id, "type").unwrap_or("If") != "If" {
+                    return Err(invalid(
+                        doc,
+                        id,
+                        "an ElseIf or Else without an If before it",
+                    ));
+                }
+                while let Some(&next) = list.get(i + 1) {
+                    let next = doc.resolve(next)?;
+                    if doc.name(next) == "If"
+                        && matches!(doc.attr(next, "type"), Some("ElseIf" | "Else"))
+                    {
+                        chain.push(next);
+                        i += 1;
+                    } else {
+                        break;
+                    }
+                }
+                self.if_chain(&chain)?;
+            } else {
+                self.node(id)?;
+            }
+            i += 1;
+        }
+        Ok(())
+    }
+
+    fn expression(&self, id: usize) -> Result<String, UrpError> {
+        let doc = self.doc;
+        let e = doc
+            .child(id, "expression")
+            .ok_or_else(|| invalid(doc, id, "no <expression>"))?;
+        let e = doc.resolve(e)?;
+        let mut out = String::new();
+        out.push_str(doc.elems[e].text.trim());
+        for &t in &doc.elems[e].children {
+            let t = doc.resolve(t)?;
+            match doc.name(t) {
+                "ExpressionChar" => {
+                    let c = doc
+                        .attr(t, "character")
+                        .ok_or_else(|| invalid(doc, t, "no character"))?;
+                    out.push_str(operator(c));
+                }
+                "ExpressionToken" => out.push_str(
+                    doc.attr(t, "token")
+                        .ok_or_else(|| invalid(doc, t, "no token"))?,
+                ),
+                "ExpressionVariable" => {
+                    let name = match doc
+                        .attr(t, "name")
+                        .or_else(|| doc.attr(t, "referencedName"))
+                    {
+                        Some(n) => n.to_string(),
+                        // <ProgramVariable reference=".../variable"/> (5.x), or a
+                        // variable element of another kind.
+                        None => match doc.elems[t].children.first() {
+                            Some(&v) => self.named_variable(v)?,
+                            None => {
+                                return Err(invalid(doc, t, "a variable token names no variable"))
+                            }
+                        },
+                    };
+                    out.push_str(&name);
+                }
+                _ => return Err(unknown(doc, t)),
+            }
+        }
+        if out.trim().is_empty() {
+            return Err(invalid(doc, id, "the expression is empty"));
+        }
+        if out.contains(['\n', '\r']) {
+            return Err(invalid(doc, id, "the expression spans lines"));
+        }
+        Ok(out)
+    }
+
+    /// The name of the `<variable>` child of `id` (references followed).
+    fn variable_name(&self, id: usize) -> Result<String, UrpError> {
+        let doc = self.doc;
+        let v = doc
+            .child(id, "variable")
+            .ok_or_else(|| invalid(doc, id, "no <variable>"))?;
+        self.named_variable(v)
+    }
+
+    /// The name of a variable element (references followed).
+    fn named_variable(&self, v: usize) -> Result<String, UrpError> {
+        let doc = self.doc;
+        let v = doc.resolve(v)?;
+        let name = doc
+            .attr(v, "name")
+            .or_else(|| doc.attr(v, "referencedName"))
+            .ok_or_else(|| invalid(doc, v, "the variable has no name"))?;
+        if name.is_empty()
+            || name.starts_with(|c: char| c.is_ascii_digit())
+            || !name.chars().all(|c| c.is_ascii_alphanumeric() || c == '_')
+        {
+            return Err(invalid(doc, v, format!("`{name}` is not a variable name")));
+        }
+        Ok(name.to_string())
+    }
+
+    fn text_of(&self, id: usize, child: &str) -> Result<String, UrpError> {
+        let doc = self.doc;
+        let c = doc
+            .child(id, child)
+            .ok_or_else(|| invalid(doc, id, format!("no <{child}>")))?;
+        Ok(doc.elems[c].text.trim().to_string())
+    }
+
+    fn node(&mut self, id: usize) -> Result<(), UrpError> {
+        let doc = self.doc;
+        match doc.name(id) {
+            "Comment" => {
+                let text = doc.attr(id, "comment").unwrap_or("");
+                for l in text.lines() {
+                    self.line(&format!("# {l}"));
+                }
+            }
+            "Folder" => {
+                if let Some(n) = doc.attr(id, "name") {
+                    self.line(&format!("# Folder {}", n.replace(['\n', '\r'], " ")));
+                }
+                self.children_of(id)?;
+            }
+            "Halt" => self.line("halt"),
+            "Script" => self.script(id)?,
+            "Wait" => self.wait(id)?,
+            "Popup" => self.popup(id)?,
+            "Set" => self.set(id)?,
+            "Move" => self.motion(id)?,
+            "Loop" => self.loop_node(id)?,
+            "Assignment" => {
+                match doc.attr(id, "valueSource") {
+                    None | Some("Expression") => {}
+                    Some(other) => {
+                        return Err(unsupported(doc, id, format!("an assignment from {other}")))
+                    }
+                }
+                let name = self.variable_name(id)?;
+                let value = self.expression(id)?;
+                self.line(&format!("global {name} = {value}"));
+            }
+            "CallSubProgram" => {
+                let sub = doc
+                    .child(id, "subprogram")
+                    .ok_or_else(|| invalid(doc, id, "no <subprogram>"))?;
+                let sub = doc.resolve(sub)?;
+                let fname = self.subprogram_name(sub)?;
+                self.line(&format!("{fname}()"));
+            }
+            "Contributed" => self.contributed(id)?,
+            _ => return Err(unknown(doc, id)),
+        }
+        Ok(())
+    }
+
+    fn script(&mut self, id: usize) -> Result<(), UrpError> {
+        let doc = self.doc;
+        match doc.attr(id, "type") {
+            Some("Line") => {
+                let line = self.expression(id)?;
+                self.line(&line);
+            }
+            Some("File") => {
+                let Some(c) = doc.child(id, "cachedContents") else {
+                    let file = doc
+                        .child(id, "file")
+                        .map(|f| doc.elems[f].text.trim().to_string());
+                    return Err(invalid(
+                        doc,
+                        id,
+                        format!(
+                            "the script file {} has no <cachedContents>",
+                            file.unwrap_or_else(|| String::from("(unnamed)"))
+                        ),
+                    ));
+                };
+                let text = doc.elems[c].text.clone();
+                for l in text.lines() {
+                    let l = l.trim();
+                    if !l.is_empty() {
+                        self.line(l);
+                    }
+                }
+            }
+            other => {
+                return Err(unsupported(
+                    doc,
+                    id,
+                    format!("script type {}", other.unwrap_or("(none)")),
+                ))
+            }
+        }
+        Ok(())
+    }
+
+    fn input_call(&self, id: usize) -> Result<String, UrpError> {
+        let (kind, n) = pin(self.doc, id)?;
+        let f = match kind.as_str() {
+            "digital_in" => "get_standard_digital_in",
+            "configurable_in" => "get_configurable_digital_in",
+            "tool_in" => "get_tool_digital_in",
+            "digital_out" => "get_standard_digital_out",
+            "configurable_out" => "get_configurable_digital_out",
+            "tool_out" => "get_tool_digital_out",
+            "analog_in" => "get_standard_analog_in",
+            "tool_analog_in" => "get_tool_analog_in",
+            _ => {
+                return Err(unsupported(
+                    self.doc,
+                    id,
+                    format!("waiting on pin {kind}[{n}]"),
+                ))
+            }
+        };
+        Ok(format!("{f}({n})"))
+    }
+
+    fn wait(&mut self, id: usize) -> Result<(), UrpError> {
+        let doc = self.doc;
+        let cond = match doc.attr(id, "type") {
+            Some("Sleep") => {
+                let t = self.text_of(id, "waitTime")?;
+                let t = parse_f64(doc, id, "waitTime", &t)?;
+                if t < 0.0 {
+                    return Err(invalid(doc, id, "a negative wait time"));
+                }
+                self.line(&format!("sleep({})", num(t)));
+                return Ok(());
+            }
+            Some("DigitalInput") => {
+                let call = self.input_call(id)?;
+                let v = self.text_of(id, "digitalValue")?;
+                format!("{call} == {}", bool_text(doc, id, "digitalValue", &v)?)
+            }
+            Some("AnalogInput") => {
+                let call = self.input_call(id)?;
+                let v = self.text_of(id, "analogValue")?;
+                let v = parse_f64(doc, id, "analogValue", &v)?;
+                let op = match self.text_of(id, "analogComparison")?.as_str() {
+                    "0" | "LESS" | "LessThan" => "<",
+                    "1" | "GREATER" | "GreaterThan" => ">",
+                    other => return Err(invalid(doc, id, format!("analogComparison `{other}`"))),
+                };
+                format!("{call} {op} {}", num(v))
+            }
+            Some("Expression" | "Condition") => self.expression(id)?,
+            other => {
+                return Err(unsupported(
+                    doc,
+                    id,
+                    format!("wait type {}", other.unwrap_or("(none)")),
+                ))
+            }
+        };
+        self.block(&format!("while (not({cond})):"), |t| {
+            t.line("sync()");
+            Ok(())
+        })
+    }
+
+    fn popup(&mut self, id: usize) -> Result<(), UrpError> {
+        let doc = self.doc;
+        let (title, warning, error) = match doc.attr(id, "type").unwrap_or("Message") {
+            "Message" => ("Message", "False", "False"),
+            "Warning" => ("Warning", "True", "False"),
+            "Error" => ("Error", "False", "True"),
+            other => return Err(unsupported(doc, id, format!("popup type {other}"))),
+        };
+        let message = match doc.attr(id, "message") {
+            Some(m) => m.to_string(),
+            None => doc
+                .child(id, "message")
+                .map(|m| doc.elems[m].text.clone())
+                .unwrap_or_default(),
+        };
+        self.line(&format!(
+            "popup({}, \"{title}\", {warning}, {error}, blocking=True)",
+            string_literal(&message)
+        ));
+        if doc.attr(id, "haltProgram") == Some("true") {
+            self.line("halt");
+        }
+        Ok(())
+    }
+
+    fn set(&mut self, id: usize) -> Result<(), UrpError> {
+        let doc = self.doc;
+        match doc.attr(id, "type") {
+            Some("NoAction") => {
+                for c in &doc.elems[id].children {
+                    if matches!(
+                        doc.name(*c),
+                        "tcp" | "payload" | "payloadMass" | "centerOfGravity"
+                    ) {
+                        return Err(unsupported(
+                            doc,
+                            id,
+                            "a Set node that sets the TCP or payload",
+                        ));
+                    }
+                }
+            }
+            Some("DigitalOutput") => {
+                let v = self.text_of(id, "digitalValue")?;
+                let v = bool_text(doc, id, "digitalValue", &v)?;
+                self.set_digital(id, v)?;
+            }
+            Some("AnalogOutput") => {
+                let (kind, n) = pin(doc, id)?;
+                if kind != "analog_out" {
+                    return Err(unsupported(
+                        doc,
+                        id,
+                        format!("analog output pin {kind}[{n}]"),
+                    ));
+                }
+                let v = self.text_of(id, "analogValue")?;
+                let v = parse_f64(doc, id, "analogValue", &v)?;
+                self.line(&format!("set_standard_analog_out({n}, {})", num(v)));
+            }
+            Some("Expression") => {
+                let value = self.expression(id)?;
+                if doc.child(id, "pin").is_some() {
+                    self.set_digital(id, &value)?;
+                } else {
+                    let name = self.variable_name(id)?;
+                    self.line(&format!("global {name} = {value}"));
+                }
+            }
+            other => {
+                return Err(unsupported(
+                    doc,
+                    id,
+                    format!("set type {}", other.unwrap_or("(none)")),
+                ))
+            }
+        }
+        Ok(())
+    }
+
+    fn set_digital(&mut self, id: usize, value: &str) -> Result<(), UrpError> {
+        let (kind, n) = pin(self.doc, id)?;
+        let f = match kind.as_str() {
+            "digital_out" => "set_standard_digital_out",
+            "configurable_out" => "set_configurable_digital_out",
+            "tool_out" => "set_tool_digital_out",
+            "analog_out" => "set_standard_analog_out",
+            _ => {
+                return Err(unsupported(
+                    self.doc,
+                    id,
+                    format!("setting pin {kind}[{n}]"),
+                ))
+            }
+        };
+        self.line(&format!("{f}({n}, {value})"));
+        Ok(())
+    }
+
+    fn motion(&mut self, id: usize) -> Result<(), UrpError> {
+        let doc = self.doc;
+        let kind = doc.attr(id, "motionType").unwrap_or("MoveJ");
+        let f = match kind {
+            "MoveJ" => "movej",
+            "MoveL" => "movel",
+            "MoveP" => "movep",
+            other => return Err(unsupported(doc, id, format!("motion type {other}"))),
+        };
+        let joint = kind == "MoveJ";
+        let speed = match doc.attr(id, "speed") {
+            Some(s) => Some(parse_f64(doc, id, "speed", s)?),
+            None => None,
+        };
+        let accel = match doc.attr(id, "acceleration") {
+            Some(s) => Some(parse_f64(doc, id, "acceleration", s)?),
+            None => None,
+        };
+        let shared_blend = match doc.attr(id, "blendRadius") {
+            Some(s) => Some(parse_f64(doc, id, "blendRadius", s)?),
+            None => None,
+        };
+        let Some(children) = doc.child(id, "children") else {
+            return Ok(());
+        };
+        for &w in &doc.elems[children].children.clone() {
+            let w = doc.resolve(w)?;
+            if doc.name(w) != "Waypoint" {
+                // PolyScope lets other nodes sit between a Move's waypoints.
+                self.nodes(&[w])?;
+                continue;
+            }
+            let variable = match doc.attr(w, "type") {
+                None | Some("Fixed") => false,
+                Some("Variable") => true,
+                Some(other) => return Err(unsupported(doc, w, format!("a {other} waypoint"))),
+            };
+            let (mut v, mut a, mut r) = (speed, accel, shared_blend);
+            if let Some(mp) = doc.child(w, "motionParameters") {
+                let get = |key: &str| -> Result<Option<f64>, UrpError> {
+                    match doc.attr(mp, key) {
+                        Some(s) => Ok(Some(parse_f64(doc, mp, key, s)?)),
+                        None => Ok(None),
+                    }
+                };
+                let (vk, ak) = if joint {
+                    ("jointSpeed", "jointAcceleration")
+                } else {
+                    ("cartesianSpeed", "cartesianAcceleration")
+                };
+                v = get(vk)?.or(v);
+                a = get(ak)?.or(a);
+                r = get("blendRadius")?.or(r);
+            }
+            let target = if variable {
+                self.variable_name(w)?
+            } else {
+                self.waypoint_target(w, joint)?
+            };
+            let mut call = format!("{f}({target}");
+            if let Some(a) = a {
+                call.push_str(&format!(", a={}", num(a)));
+            }
+            if let Some(v) = v {
+                call.push_str(&format!(", v={}", num(v)));
+            }
+            if let Some(r) = r.filter(|&r| r > 0.0) {
+                call.push_str(&format!(", r={}", num(r)));
+            }
+            call.push(')');
+            if let Some(n) = doc.attr(w, "name") {
+                self.line(&format!("# {}", n.replace(['\n', '\r'], " ")));
+            }
+            self.line(&call);
+        }
+        Ok(())
+    }
+
+    /// The waypoint's target: joint angles for a MoveJ, a pose otherwise.
+    fn waypoint_target(&self, w: usize, joint: bool) -> Result<String, UrpError> {
+        let doc = self.doc;
+        let p = doc
+            .child(w, "position")
+            .ok_or_else(|| invalid(doc, w, "no <position>"))?;
+        let p = doc.resolve(p)?;
+        // 5.x: <JointAngles angles=.../> <TCPOffset pose=.../>; older: attributes.
+        let joints = match doc
+            .child(p, "JointAngles")
+            .and_then(|j| doc.attr(j, "angles"))
+        {
+            Some(a) => Some(vector6(doc, p, "joint angles", a)?),
+            None => match doc.attr(p, "joints") {
+                Some(a) => Some(vector6(doc, p, "joint angles", a)?),
+                None => None,
+            },
+        };
+        if joint {
+            let q = joints.ok_or_else(|| invalid(doc, w, "the waypoint has no joint angles"))?;
+            return Ok(list(&q));
+        }
+        if let Some(pose) = doc.attr(p, "pose") {
+            return Ok(format!("p{}", list(&vector6(doc, p, "pose", pose)?)));
+        }
+        let q = joints
+            .ok_or_else(|| invalid(doc, w, "the waypoint has neither pose nor joint angles"))?;
+        let tcp = match doc.child(p, "TCPOffset").and_then(|t| doc.attr(t, "pose")) {
+            Some(t) => vector6(doc, p, "TCP offset", t)?,
+            None => [0.0; 6],
+        };
+        Ok(format!("get_forward_kin({}, p{})", list(&q), list(&tcp)))
+    }
+
+    fn loop_node(&mut self, id: usize) -> Result<(), UrpError> {
+        let doc = self.doc;
+        match doc.attr(id, "type").unwrap_or("Forever") {
+            "Forever" => self.block("while (True):", |t| t.children_of(id)),
+            "Counting" | "XTimes" => {
+                let count = match doc.attr(id, "count") {
+                    Some(c) => c.to_string(),
+                    None => self.text_of(id, "count")?,
+                };
+                let n = count.trim().parse::<u32>().map_err(|_| {
+                    invalid(doc, id, format!("loop count `{count}` is not a count"))
+                })?;
+                self.loops += 1;
+                let var = format!("Loop_{}", self.loops);
+                self.line(&format!("{var} = 0"));
+                self.block(&format!("while ({var} < {n}):"), |t| {
+                    t.children_of(id)?;
+                    t.line(&format!("{var} = {var} + 1"));
+                    Ok(())
+                })
+            }
+            "While" | "Expression" => {
+                let cond = self.expression(id)?;
+                self.block(&format!("while ({cond}):"), |t| t.children_of(id))
+            }
+            other => Err(unsupported(doc, id, format!("loop type {other}"))),
+        }
+    }
+
+    fn if_chain(&mut self, chain: &[usize]) -> Result<(), UrpError> {
+        let doc = self.doc;
+        let mut seen_else = false;
+        for (k, &b) in chain.iter().enumerate() {
+            if doc.attr(b, "checkContinuously") == Some("true") {
+                return Err(unsupported(doc, b, "an If checked continuously"));
+            }
+            let head = match (k, doc.attr(b, "type").unwrap_or("If")) {
+                _ if seen_else => return Err(invalid(doc, b, "a branch after Else")),
+                (0, "If") => format!("if ({}):", self.expression(b)?),
+                (_, "ElseIf") if k > 0 => format!("elif ({}):", self.expression(b)?),
+                (_, "Else") if k > 0 => {
+                    seen_else = true;
+                    String::from("else:")
+                }
+                (_, other) => return Err(invalid(doc, b, format!("an If of type {other} here"))),
+            };
+            self.line(&head);
+            self.indent += 1;
+            self.children_of(b)?;
+            self.indent -= 1;
+        }
+        self.line("end");
+        Ok(())
+    }
+
+    fn contributed(&mut self, id: usize) -> Result<(), UrpError> {
+        let doc = self.doc;
+        let class = doc.attr(id, "strategyClass").unwrap_or("");
+        let kind = doc.attr(id, "strategyProgramNodeType").unwrap_or("");
+        if !class.to_ascii_lowercase().contains("externalcontrol") {
+            let label = if kind.is_empty() { class } else { kind };
+            return Err(UrpError::UnknownNode {
+                name: format!("Contributed ({label})"),
+                path: doc.path(id),
+            });
+        }
+        let mut data = Vec::new();
+        if let Some(m) = doc.child(id, "dataModel") {
+            for &d in &doc.elems[m].children {
+                if let (Some(k), Some(v)) = (doc.attr(d, "key"), doc.attr(d, "value")) {
+                    data.push((k.to_string(), v.to_string()));
+                }
+            }
+        }
+        let get = |key: &str| data.iter().find(|(k, _)| k == key).map(|(_, v)| v.clone());
+        let host = get("host_ip").unwrap_or_else(|| EXTERNAL_CONTROL_DEFAULT_HOST.to_string());
+        let port = match get("port_nr") {
+            Some(p) => p
+                .trim()
+                .parse::<u16>()
+                .map_err(|_| invalid(doc, id, format!("port_nr `{p}` is not a port")))?,
+            None => EXTERNAL_CONTROL_DEFAULT_PORT,
+        };
+        let index = self.externals.len();
+        self.externals.push(ExternalControlNode {
+            index,
+            path: doc.path(id),
+            host,
+            port,
+            data,
+        });
+        self.segments.push(Segment::External {
+            index,
+            indent: self.indent,
+        });
+        Ok(())
+    }
+}

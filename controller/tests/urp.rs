@@ -1,0 +1,795 @@
+//! `.urp` reading and translation. Every `.urp` here is written by the test itself: the
+//! XML modelled on the structure PolyScope saves, gzip-compressed with flate2.
+
+use std::io::Write;
+use std::time::Duration;
+
+use proptest::prelude::*;
+use urscript_controller::urp::{MAX_DEPTH, MAX_ELEMENTS, MAX_URP_BYTES, MAX_XML_BYTES};
+use urscript_controller::{read_urp, translate_with, UrpError, UrpProgram};
+use urscript_interp::{Config, Event, Machine, MessageKind, Program, State};
+
+fn gzip(bytes: &[u8]) -> Vec<u8> {
+    let mut gz = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::default());
+    gz.write_all(bytes).unwrap();
+    gz.finish().unwrap()
+}
+
+/// An expression as PolyScope saves it: one `<ExpressionChar>` per character.
+fn expr(text: &str) -> String {
+    let mut out = String::from("<expression>");
+    for c in text.chars() {
+        let c = match c {
+            '"' => "&quot;".to_string(),
+            '<' => "&lt;".to_string(),
+            '>' => "&gt;".to_string(),
+            '&' => "&amp;".to_string(),
+            c => c.to_string(),
+        };
+        out.push_str(&format!("<ExpressionChar character=\"{c}\"/>"));
+    }
+    out.push_str("</expression>");
+    out
+}
+
+fn script_line(text: &str) -> String {
+    format!("<Script type=\"Line\">{}</Script>", expr(text))
+}
+
+fn document(name: &str, run_once: bool, main: &str, extra: &str) -> String {
+    format!(
+        r#"<URProgram name="{name}" installation="default" installationRelativePath="default" directory="/programs" createdIn="5.11.0" lastSavedIn="5.11.0" robotSerialNumber="20000000000" crcValue="1">
+  <kinematics status="NOT_INITIALIZED" validChecksum="false">
+    <deltaTheta value="0.0, 0.0, 0.0, 0.0, 0.0, 0.0"/>
+  </kinematics>
+  <children>
+    <InitVariablesNode/>
+    {extra}
+    <MainProgram runOnlyOnce="{run_once}" InitVariablesNode="false">
+      <children>
+{main}
+      </children>
+    </MainProgram>
+  </children>
+</URProgram>"#
+    )
+}
+
+fn urp(main: &str) -> Vec<u8> {
+    gzip(document("test", true, main, "").as_bytes())
+}
+
+fn read(main: &str) -> UrpProgram {
+    let program = read_urp(&urp(main)).unwrap_or_else(|e| panic!("{e}"));
+    if let Err(e) = Program::parse(&program.script) {
+        panic!("{e:?}\n{}", program.script);
+    }
+    program
+}
+
+fn machine(script: &str) -> Machine {
+    let program = Program::parse(script).unwrap_or_else(|e| panic!("{e:?}\n{script}"));
+    Machine::new(program, Config::default())
+}
+
+/// Runs until `until` (virtual time) and returns the messages shown.
+fn run(m: &mut Machine, until: Duration) -> Vec<(MessageKind, String)> {
+    m.run_until(until);
+    std::iter::from_fn(|| m.poll_event())
+        .filter_map(|e| match e {
+            Event::Message(msg) => Some((msg.kind, msg.text)),
+            _ => None,
+        })
+        .collect()
+}
+
+fn texts(messages: &[(MessageKind, String)]) -> Vec<&str> {
+    messages.iter().map(|(_, t)| t.as_str()).collect()
+}
+
+fn waypoint(name: &str, q: [f64; 6], params: &str) -> String {
+    let q: Vec<String> = q.iter().map(|x| x.to_string()).collect();
+    format!(
+        r#"<Waypoint type="Fixed" name="{name}" kinematicsFlags="4">
+  <motionParameters {params}/>
+  <position>
+    <JointAngles angles="{}"/>
+    <TCPOffset pose="0.0, 0.0, 0.0, 0.0, 0.0, 0.0"/>
+    <Kinematics status="NOT_INITIALIZED" validChecksum="false"/>
+  </position>
+  <BaseToFeature pose="0.0, 0.0, 0.0, 0.0, 0.0, 0.0"/>
+</Waypoint>"#,
+        q.join(", ")
+    )
+}
+
+const Q1: [f64; 6] = [0.1, -1.5, 1.4, -1.5, -1.57, 0.2];
+const Q2: [f64; 6] = [0.2, -1.4, 1.3, -1.5, -1.57, 0.2];
+
+#[test]
+fn a_program_with_every_node_runs_as_polyscope_would() {
+    let main = format!(
+        r#"
+<Comment comment="set up"/>
+<Assignment valueSource="Expression"><variable name="count" prefersPersistentValue="false"/>{zero}</Assignment>
+<Loop type="Counting" count="3">
+  <children>
+    <Assignment valueSource="Expression"><variable reference="../../../../Assignment/variable"/>{incr}</Assignment>
+    {tick}
+  </children>
+</Loop>
+<If type="If" checkContinuously="false">{is2}<children>{two}</children></If>
+<If type="ElseIf">{is3}<children>{three}</children></If>
+<If type="Else"><children>{other}</children></If>
+<Folder name="outputs">
+  <children>
+    <Set type="DigitalOutput"><pin referencedName="digital_out[2]"/><digitalValue>1</digitalValue></Set>
+    <Set type="AnalogOutput"><pin referencedName="analog_out[1]"/><analogValue>0.25</analogValue></Set>
+    <Set type="Expression"><pin referencedName="tool_out[1]"/>{count3}</Set>
+  </children>
+</Folder>
+<Wait type="Sleep"><waitTime>0.1</waitTime></Wait>
+{after_sleep}
+<Wait type="DigitalInput"><pin referencedName="digital_in[1]"/><digitalValue>1</digitalValue></Wait>
+{after_input}
+<Move motionType="MoveJ" speed="1.0471975511965976" acceleration="1.3962634015954636" useActiveTCP="false">
+  <feature class="GeomFeatureReference" referencedName="Base"/>
+  <children>{w1}</children>
+</Move>
+<Move motionType="MoveL" speed="0.25" acceleration="1.2" useActiveTCP="false">
+  <children>{w2}</children>
+</Move>
+<Popup type="Message" haltProgram="false" message="all &quot;done&quot;"/>
+"#,
+        zero = expr("0"),
+        incr = expr("count + 1"),
+        tick = script_line("textmsg(\"tick \", count)"),
+        is2 = expr("count == 2"),
+        is3 = expr("count == 3"),
+        two = script_line("textmsg(\"two\")"),
+        three = script_line("textmsg(\"three\")"),
+        other = script_line("textmsg(\"other\")"),
+        count3 = expr("count == 3"),
+        after_sleep = script_line("textmsg(\"slept\")"),
+        after_input = script_line("textmsg(\"input\")"),
+        w1 = waypoint("Waypoint_1", Q1, ""),
+        w2 = waypoint(
+            "Waypoint_2",
+            Q2,
+            r#"cartesianSpeed="0.1" blendRadius="0.0""#
+        ),
+    );
+    let program = read(&main);
+    assert_eq!(program.name, "test");
+    assert_eq!(program.installation, "default");
+    assert_eq!(program.created_in.as_deref(), Some("5.11.0"));
+    assert!(program.external_control.is_empty());
+    let s = &program.script;
+    assert!(s.starts_with("def test():\n"), "{s}");
+    assert!(s.contains("\n  # set up\n"), "{s}");
+    assert!(s.contains("\n  global count = 0\n"), "{s}");
+    assert!(s.contains("\n  if (count == 2):\n"), "{s}");
+    assert!(s.contains("\n  elif (count == 3):\n"), "{s}");
+    assert!(s.contains("\n  else:\n"), "{s}");
+    assert!(s.contains("set_standard_digital_out(2, True)"), "{s}");
+    assert!(s.contains("set_standard_analog_out(1, 0.25)"), "{s}");
+    assert!(s.contains("set_tool_digital_out(1, count == 3)"), "{s}");
+    assert!(
+        s.contains("while (not(get_standard_digital_in(1) == True)):"),
+        "{s}"
+    );
+    assert!(
+        s.contains(
+            "movej([0.1, -1.5, 1.4, -1.5, -1.57, 0.2], a=1.3962634015954636, v=1.0471975511965976)"
+        ),
+        "{s}"
+    );
+    assert!(s.contains("movel(get_forward_kin([0.2, -1.4, 1.3, -1.5, -1.57, 0.2], p[0.0, 0.0, 0.0, 0.0, 0.0, 0.0]), a=1.2, v=0.1)"), "{s}");
+    assert!(
+        s.contains("popup('all \"done\"', \"Message\", False, False, blocking=True)"),
+        "{s}"
+    );
+    assert!(s.ends_with("end\n"));
+
+    let mut m = machine(s);
+    let first = run(&mut m, Duration::from_millis(500));
+    assert_eq!(
+        texts(&first),
+        ["tick 1", "tick 2", "tick 3", "three", "slept"]
+    );
+    assert_eq!(m.state(), &State::Running, "waits for digital_in[1]");
+    assert!(m.arm().digital_out[2]);
+    assert!(m.arm().tool_out[1]);
+    assert_eq!(m.arm().analog_out[1], 0.25);
+    m.world_mut().digital_in[1] = true;
+    let rest = run(&mut m, Duration::from_secs(30));
+    assert_eq!(m.state(), &State::Finished);
+    assert_eq!(texts(&rest), ["input", "all \"done\""]);
+    assert!(matches!(
+        rest[1].0,
+        MessageKind::Popup {
+            warning: false,
+            error: false,
+            ..
+        }
+    ));
+    let q = m.joint_positions();
+    for (got, want) in q.iter().zip(Q2) {
+        assert!((got - want).abs() < 1e-6, "joints {q:?}, want {Q2:?}");
+    }
+}
+
+#[test]
+fn a_popup_that_halts_and_a_halt_node_stop_the_program() {
+    let main = format!(
+        r#"<Popup type="Error" haltProgram="true" message="gripper lost"/>{}"#,
+        script_line("textmsg(\"never\")")
+    );
+    let p = read(&main);
+    let mut m = machine(&p.script);
+    let shown = run(&mut m, Duration::from_secs(1));
+    assert_eq!(m.state(), &State::Halted);
+    assert_eq!(texts(&shown), ["gripper lost"]);
+    assert!(
+        matches!(&shown[0].0, MessageKind::Popup { error: true, title, .. } if title == "Error")
+    );
+
+    let p = read(&format!("<Halt/>{}", script_line("textmsg(\"never\")")));
+    let mut m = machine(&p.script);
+    assert!(run(&mut m, Duration::from_secs(1)).is_empty());
+    assert_eq!(m.state(), &State::Halted);
+}
+
+#[test]
+fn a_program_that_loops_forever_repeats_its_nodes() {
+    let xml = document(
+        "loops",
+        false,
+        &format!(
+            "{}<Wait type=\"Sleep\"><waitTime>0.1</waitTime></Wait>",
+            script_line("textmsg(\"round\")")
+        ),
+        r#"<SpecialSequence type="BeforeStart"><children>
+             <Script type="Line"><expression>textmsg("before")</expression></Script>
+           </children></SpecialSequence>"#,
+    );
+    let p = read_urp(&gzip(xml.as_bytes())).unwrap();
+    assert!(
+        p.script
+            .contains("\n  while (True):\n    textmsg(\"round\")\n"),
+        "{}",
+        p.script
+    );
+    let mut m = machine(&p.script);
+    let shown = run(&mut m, Duration::from_millis(350));
+    assert_eq!(
+        texts(&shown),
+        ["before", "round", "round", "round", "round"]
+    );
+    assert_eq!(m.state(), &State::Running);
+}
+
+#[test]
+fn loops_while_an_expression_and_waits_for_one() {
+    let main = format!(
+        r#"<Assignment><variable name="i"/>{zero}</Assignment>
+<Loop type="While">{cond}<children>
+  <Assignment><variable name="i"/>{incr}</Assignment>
+  <Wait type="Sleep"><waitTime>0.01</waitTime></Wait>
+</children></Loop>
+<Wait type="Expression">{ready}</Wait>
+{done}
+<Loop type="Forever"><children><Halt/></children></Loop>"#,
+        zero = expr("0"),
+        cond = expr("i < 5"),
+        incr = expr("i + 1"),
+        ready = expr("i >= 5"),
+        done = script_line("textmsg(\"i = \", i)"),
+    );
+    let p = read(&main);
+    assert!(p.script.contains("while (i < 5):"), "{}", p.script);
+    assert!(
+        p.script.contains("while (not(i >= 5)):\n    sync()\n  end"),
+        "{}",
+        p.script
+    );
+    let mut m = machine(&p.script);
+    let shown = run(&mut m, Duration::from_secs(1));
+    assert_eq!(texts(&shown), ["i = 5"]);
+    assert_eq!(m.state(), &State::Halted);
+}
+
+#[test]
+fn script_files_run_their_cached_contents_line_by_line() {
+    let main = r#"<Script type="File">
+  <cachedContents>def greet(who):
+  textmsg("hello ", who)
+end
+greet("file")
+</cachedContents>
+  <file resolves-to="file">/programs/greet.script</file>
+</Script>"#;
+    let p = read(main);
+    let mut m = machine(&p.script);
+    assert_eq!(texts(&run(&mut m, Duration::from_secs(1))), ["hello file"]);
+    assert_eq!(m.state(), &State::Finished);
+
+    let missing = r#"<Script type="File"><file>/programs/x.script</file></Script>"#;
+    match read_urp(&urp(missing)) {
+        Err(UrpError::Invalid { path, message }) => {
+            assert_eq!(path, "URProgram/children/MainProgram/children/Script");
+            assert!(message.contains("/programs/x.script"), "{message}");
+        }
+        other => panic!("{other:?}"),
+    }
+}
+
+#[test]
+fn sub_programs_are_defined_once_and_called_where_the_calls_are() {
+    let main = format!(
+        r#"<CallSubProgram>
+  <subprogram name="Pick part" keepHidden="false" keepSynchronizedWithDisk="false">
+    <children>{}</children>
+  </subprogram>
+</CallSubProgram>
+<CallSubProgram><subprogram reference="../../CallSubProgram/subprogram"/></CallSubProgram>"#,
+        script_line("textmsg(\"picked\")")
+    );
+    let p = read(&main);
+    assert_eq!(
+        p.script.matches("def Pick_part():").count(),
+        1,
+        "{}",
+        p.script
+    );
+    assert_eq!(
+        p.script.matches("  Pick_part()\n").count(),
+        2,
+        "{}",
+        p.script
+    );
+    let mut m = machine(&p.script);
+    assert_eq!(
+        texts(&run(&mut m, Duration::from_secs(1))),
+        ["picked", "picked"]
+    );
+}
+
+#[test]
+fn an_if_else_nested_in_an_if_is_its_own_chain() {
+    // As PolyScope saves it: ElseIf/Else are siblings after their If (their own
+    // `<expression/>` empty for an Else), also inside another If's children.
+    let main = format!(
+        r#"<If type="If" checkContinuously="false">{outer}<children>
+  <If type="If" checkContinuously="false">{inner}<children>{yes}</children></If>
+  <If type="Else" checkContinuously="false"><expression/><children>{no}</children></If>
+  {after}
+</children></If>
+<If type="ElseIf" checkContinuously="false">{never}<children>{x}</children></If>"#,
+        outer = expr("True"),
+        inner = expr("get_standard_digital_in(0) \u{225f} True"),
+        yes = script_line("textmsg(\"on\")"),
+        no = script_line("textmsg(\"off\")"),
+        after = script_line("textmsg(\"after\")"),
+        never = expr("False"),
+        x = script_line("textmsg(\"x\")"),
+    );
+    let p = read(&main);
+    assert!(
+        p.script
+            .contains("if (get_standard_digital_in(0) == True):"),
+        "{}",
+        p.script
+    );
+    let mut m = machine(&p.script);
+    assert_eq!(
+        texts(&run(&mut m, Duration::from_secs(1))),
+        ["off", "after"]
+    );
+
+    let orphan = format!(
+        r#"<If type="Else"><children>{}</children></If>"#,
+        script_line("x = 1")
+    );
+    assert!(matches!(
+        read_urp(&urp(&orphan)),
+        Err(UrpError::Invalid { .. })
+    ));
+    let twice = format!(
+        r#"<If type="If">{c}<children/></If><If type="Else"><children/></If><If type="Else"><children/></If>"#,
+        c = expr("True")
+    );
+    assert!(
+        matches!(read_urp(&urp(&twice)), Err(UrpError::Invalid { message, .. }) if message.contains("after Else"))
+    );
+}
+
+#[test]
+fn variables_in_expressions_are_references_to_their_assignment() {
+    // 5.x: <ExpressionVariable><ProgramVariable reference=".../variable"/></ExpressionVariable>,
+    // words as <ExpressionToken token=" and "/>.
+    let main = r#"<Assignment valueSource="Expression">
+  <variable name="ready" prefersPersistentValue="false"><initializeExpression/></variable>
+  <expression><ExpressionToken token=" True "/></expression>
+</Assignment>
+<Loop type="While" checkContinuously="false">
+  <expression>
+    <ExpressionVariable><ProgramVariable reference="../../../../Assignment/variable"/></ExpressionVariable>
+    <ExpressionChar character="&#x225f;"/>
+    <ExpressionToken token=" True "/>
+    <ExpressionToken token=" and "/>
+    <ExpressionChar character="1"/><ExpressionChar character="&#x2264;"/><ExpressionChar character="2"/>
+  </expression>
+  <children>
+    <Assignment valueSource="Expression">
+      <variable reference="../../../../Assignment/variable"/>
+      <expression><ExpressionToken token=" False "/></expression>
+    </Assignment>
+    <Script type="Line"><expression><ExpressionChar character="t"/><ExpressionChar character="e"/><ExpressionChar character="x"/><ExpressionChar character="t"/><ExpressionChar character="m"/><ExpressionChar character="s"/><ExpressionChar character="g"/><ExpressionChar character="("/><ExpressionVariable><ProgramVariable reference="../../../../../../Assignment/variable"/></ExpressionVariable><ExpressionChar character=")"/></expression></Script>
+  </children>
+</Loop>"#;
+    let p = read(main);
+    assert!(
+        p.script.contains("while (ready== True  and 1<=2):"),
+        "{}",
+        p.script
+    );
+    assert!(p.script.contains("global ready =  False "), "{}", p.script);
+    let mut m = machine(&p.script);
+    assert_eq!(texts(&run(&mut m, Duration::from_secs(1))), ["False"]);
+    assert_eq!(m.state(), &State::Finished);
+
+    let nothing =
+        r#"<Wait type="Expression"><expression><ExpressionVariable/></expression></Wait>"#;
+    assert!(matches!(
+        read_urp(&urp(nothing)),
+        Err(UrpError::Invalid { .. })
+    ));
+}
+
+const EC: &str = r#"<Contributed strategyClass="com.fzi.externalcontrol.ExternalControlNode" strategyProgramNodeType="External Control" strategyURCapDeveloper="FZI Research Center for Information Technology" strategyURCapName="External Control"><dataModel/></Contributed>"#;
+
+#[test]
+fn external_control_nodes_get_the_fetched_script_header_once() {
+    let main = format!("{EC}{}{EC}", script_line("textmsg(\"between\")"));
+    let p = read(&main);
+    assert_eq!(p.external_control.len(), 2);
+    assert_eq!(p.external_control[0].host, "192.168.56.1");
+    assert_eq!(p.external_control[0].port, 50002);
+    assert_eq!(
+        p.external_control[1].path,
+        "URProgram/children/MainProgram/children/Contributed[2]"
+    );
+    let reply =
+        "# HEADER_BEGIN\r\ndef control():\n  textmsg(\"control\")\nend\n# HEADER_END\ncontrol()\n";
+    let mut calls = 0;
+    let script = translate_with(&p, |node| {
+        calls += 1;
+        assert_eq!(node.index, 0);
+        Ok(reply.to_string())
+    })
+    .unwrap();
+    assert_eq!(calls, 1, "the URCap asks once per program");
+    assert_eq!(script.matches("def control():").count(), 1, "{script}");
+    assert_eq!(script.matches("   control()\n").count(), 2, "{script}");
+    let mut m = machine(&script);
+    assert_eq!(
+        texts(&run(&mut m, Duration::from_secs(1))),
+        ["control", "between", "control"]
+    );
+
+    // No header markers: all of the reply is the control loop, at every node.
+    let script = translate_with(&p, |_| Ok("textmsg(\"loop\")".to_string())).unwrap();
+    let mut m = machine(&script);
+    assert_eq!(
+        texts(&run(&mut m, Duration::from_secs(1))),
+        ["loop", "between", "loop"]
+    );
+
+    // A host that cannot be reached: the URCap's error popup.
+    let mut p = p;
+    p.set_external_control_host("10.0.0.7", 50010);
+    let script = translate_with(&p, |node| {
+        assert_eq!((node.host.as_str(), node.port), ("10.0.0.7", 50010));
+        Err("Connection refused".to_string())
+    })
+    .unwrap();
+    let mut m = machine(&script);
+    let shown = run(&mut m, Duration::from_secs(1));
+    assert_eq!(shown.len(), 3);
+    assert!(shown[0].1.contains("10.0.0.7:50010"), "{}", shown[0].1);
+    assert!(shown[0].1.contains("Connection refused"), "{}", shown[0].1);
+    assert!(
+        matches!(&shown[0].0, MessageKind::Popup { error: true, title, .. } if title == "Receive program failed")
+    );
+}
+
+#[test]
+fn external_control_host_and_port_from_the_node_data() {
+    let node = r#"<Contributed strategyClass="com.ur.urcap.externalcontrol.Node" strategyProgramNodeType="External Control"><dataModel><data key="host_ip" value="10.1.2.3"/><data key="port_nr" value="50007"/><data key="maxlostpackages" value="1000"/></dataModel></Contributed>"#;
+    let p = read(node);
+    assert_eq!(p.external_control[0].host, "10.1.2.3");
+    assert_eq!(p.external_control[0].port, 50007);
+    assert_eq!(p.external_control[0].data.len(), 3);
+    assert!(
+        p.script.contains("# External Control node 0"),
+        "{}",
+        p.script
+    );
+}
+
+#[test]
+fn uncompressed_programs_are_read_too() {
+    let xml = document("plain", true, &script_line("textmsg(\"plain\")"), "");
+    let p = read_urp(xml.as_bytes()).unwrap();
+    assert_eq!(p.script, "def plain():\n  textmsg(\"plain\")\nend\n");
+}
+
+#[test]
+fn unknown_nodes_are_errors_naming_them() {
+    match read_urp(&urp(
+        "<Wait type=\"Sleep\"><waitTime>1</waitTime></Wait><Gripper force=\"3\"/>",
+    )) {
+        Err(UrpError::UnknownNode { name, path }) => {
+            assert_eq!(name, "Gripper");
+            assert_eq!(path, "URProgram/children/MainProgram/children/Gripper");
+        }
+        other => panic!("{other:?}"),
+    }
+    let rg = r#"<Contributed strategyClass="com.onrobot.urcap.RG" strategyProgramNodeType="RG Grip"><dataModel/></Contributed>"#;
+    match read_urp(&urp(rg)) {
+        Err(UrpError::UnknownNode { name, .. }) => assert_eq!(name, "Contributed (RG Grip)"),
+        other => panic!("{other:?}"),
+    }
+    let token = "<Wait type=\"Expression\"><expression><ExpressionWaypoint/></expression></Wait>";
+    assert!(
+        matches!(read_urp(&urp(token)), Err(UrpError::UnknownNode { name, .. }) if name == "ExpressionWaypoint")
+    );
+    let relative =
+        r#"<Move motionType="MoveL"><children><Waypoint type="Relative"/></children></Move>"#;
+    assert!(matches!(
+        read_urp(&urp(relative)),
+        Err(UrpError::Unsupported { .. })
+    ));
+    let circle = r#"<Move motionType="MoveC"><children/></Move>"#;
+    assert!(matches!(
+        read_urp(&urp(circle)),
+        Err(UrpError::Unsupported { .. })
+    ));
+    let bad_time = "<Wait type=\"Sleep\"><waitTime>soon</waitTime></Wait>";
+    assert!(
+        matches!(read_urp(&urp(bad_time)), Err(UrpError::Invalid { message, .. }) if message.contains("soon"))
+    );
+}
+
+#[test]
+fn broken_input_is_a_typed_error() {
+    assert_eq!(read_urp(b"").unwrap_err(), UrpError::NotGzip);
+    assert_eq!(
+        read_urp(b"PK\x03\x04 a zip").unwrap_err(),
+        UrpError::NotGzip
+    );
+    assert!(matches!(
+        read_urp(&gzip(b"hello")),
+        Err(UrpError::Xml { .. })
+    ));
+    assert!(matches!(
+        read_urp(&gzip(b"<a><b></a>")),
+        Err(UrpError::Xml { .. })
+    ));
+    assert!(
+        matches!(read_urp(&gzip(b"<Installation name=\"x\"/>")), Err(UrpError::NotAProgram { root }) if root == "Installation")
+    );
+    assert!(matches!(
+        read_urp(&gzip(b"<URProgram name=\"x\"/><URProgram/>")),
+        Err(UrpError::Xml { .. })
+    ));
+    assert!(matches!(
+        read_urp(&gzip(b"<URProgram>&bogus;</URProgram>")),
+        Err(UrpError::Xml { .. })
+    ));
+
+    // Truncated: the gzip stream, or a whole stream of half a document.
+    let full = urp(&script_line("textmsg(\"x\")"));
+    assert!(matches!(
+        read_urp(&full[..full.len() / 2]),
+        Err(UrpError::Gzip { .. })
+    ));
+    let xml = document("t", true, &script_line("textmsg(\"x\")"), "");
+    assert!(matches!(
+        read_urp(&gzip(&xml.as_bytes()[..xml.len() / 2])),
+        Err(UrpError::Xml { .. })
+    ));
+    let cut = xml.find("</MainProgram>").unwrap();
+    match read_urp(&gzip(&xml.as_bytes()[..cut])) {
+        Err(UrpError::Xml { offset, message }) => {
+            assert_eq!(offset, cut as u64);
+            assert!(message.contains("ends inside <MainProgram>"), "{message}");
+        }
+        other => panic!("{other:?}"),
+    }
+}
+
+#[test]
+fn a_gzip_bomb_stops_at_the_bound() {
+    let mut gz = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::fast());
+    gz.write_all(b"<URProgram name=\"bomb\">").unwrap();
+    let blanks = vec![b' '; 1 << 20];
+    for _ in 0..(MAX_XML_BYTES >> 20) + 1 {
+        gz.write_all(&blanks).unwrap();
+    }
+    let bomb = gz.finish().unwrap();
+    assert!(bomb.len() < 1 << 20, "the bomb is small: {}", bomb.len());
+    assert!(
+        matches!(read_urp(&bomb), Err(UrpError::TooLarge { limit, .. }) if limit == MAX_XML_BYTES)
+    );
+
+    let huge = vec![b'<'; MAX_URP_BYTES + 1];
+    assert!(matches!(
+        read_urp(&huge),
+        Err(UrpError::TooLarge { what: "file", .. })
+    ));
+}
+
+#[test]
+fn nesting_and_element_count_are_bounded() {
+    let mut deep = String::new();
+    for _ in 0..MAX_DEPTH {
+        deep.push_str("<Folder><children>");
+    }
+    for _ in 0..MAX_DEPTH {
+        deep.push_str("</children></Folder>");
+    }
+    assert!(
+        matches!(read_urp(&urp(&deep)), Err(UrpError::TooDeep { limit, .. }) if limit == MAX_DEPTH)
+    );
+
+    // Nesting within the bound translates (a few folders deep).
+    let mut ok = String::new();
+    for _ in 0..10 {
+        ok.push_str("<Folder><children>");
+    }
+    ok.push_str(&script_line("textmsg(\"deep\")"));
+    for _ in 0..10 {
+        ok.push_str("</children></Folder>");
+    }
+    assert!(read(&ok).script.contains("textmsg(\"deep\")"));
+
+    let many = "<Comment comment=\"\"/>".repeat(MAX_ELEMENTS);
+    assert!(
+        matches!(read_urp(&urp(&many)), Err(UrpError::TooManyElements { limit, .. }) if limit == MAX_ELEMENTS)
+    );
+}
+
+#[test]
+fn references_that_do_not_resolve_or_loop_are_errors() {
+    let dangling =
+        r#"<CallSubProgram><subprogram reference="../../Nothing/subprogram"/></CallSubProgram>"#;
+    assert!(
+        matches!(read_urp(&urp(dangling)), Err(UrpError::Invalid { message, .. }) if message.contains("does not resolve"))
+    );
+    let selfref = r#"<CallSubProgram><subprogram reference="."/></CallSubProgram>"#;
+    assert!(
+        matches!(read_urp(&urp(selfref)), Err(UrpError::Invalid { message, .. }) if message.contains("chained"))
+    );
+    let up =
+        r#"<CallSubProgram><subprogram reference="../../../../../../../.."/></CallSubProgram>"#;
+    assert!(matches!(read_urp(&urp(up)), Err(UrpError::Invalid { .. })));
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(512))]
+
+    #[test]
+    fn arbitrary_bytes_never_panic(bytes in proptest::collection::vec(any::<u8>(), 0..512)) {
+        let _ = read_urp(&bytes);
+        let _ = read_urp(&gzip(&bytes));
+    }
+
+    #[test]
+    fn damaged_programs_never_panic(
+        at in 0usize..4096,
+        with in proptest::collection::vec(any::<u8>(), 1..8),
+        cut in 0usize..4096,
+    ) {
+        let main = format!(
+            "{}<Loop type=\"Counting\" count=\"2\"><children>{}</children></Loop>{EC}",
+            script_line("textmsg(\"a\")"),
+            waypoint("w", Q1, "")
+        );
+        let mut xml = document("d", true, &main, "").into_bytes();
+        let at = at % xml.len();
+        let end = (at + with.len()).min(xml.len());
+        xml.splice(at..end, with);
+        xml.truncate(xml.len() - cut % xml.len());
+        if let Ok(p) = read_urp(&gzip(&xml)) {
+            let _ = translate_with(&p, |_| Ok(String::from("textmsg(1)")));
+        }
+    }
+}
+
+#[test]
+fn the_installation_gives_the_external_control_host_and_port() {
+    use urscript_controller::{read_external_control_settings, ExternalControlSettings};
+    let installation = r#"<Installation INSTALLATION-VERSION="2" directory="/programs" fileName="default">
+  <IOs><DigitalInputNames value=", , "/></IOs>
+  <Contributions>
+    <URCaps>
+      <Contributed ownerId="com.example.other" id="Other" name="Other"/>
+      <Contributed ownerId="com.fzi.externalcontrol" id="com.fzi.externalcontrol.impl.ExternalControlInstallationNodeService" name="External Control">
+        <data key="name" value="driver PC"/>
+        <data key="host_ip" value="172.17.0.1"/>
+        <data key="port_nr" value="50012"/>
+      </Contributed>
+    </URCaps>
+  </Contributions>
+</Installation>"#;
+    let s = read_external_control_settings(&gzip(installation.as_bytes())).unwrap();
+    assert_eq!(
+        s,
+        ExternalControlSettings {
+            host: "172.17.0.1".into(),
+            port: 50012,
+            installed: true
+        }
+    );
+
+    let without = "<Installation><Contributions><URCaps/></Contributions></Installation>";
+    let s = read_external_control_settings(without.as_bytes()).unwrap();
+    assert_eq!(s, ExternalControlSettings::default());
+    assert_eq!(
+        (s.host.as_str(), s.port, s.installed),
+        ("192.168.56.1", 50002, false)
+    );
+
+    let bad_port = installation.replace("50012", "fifty");
+    assert!(matches!(
+        read_external_control_settings(bad_port.as_bytes()),
+        Err(UrpError::Invalid { message, .. }) if message.contains("fifty")
+    ));
+    assert!(matches!(
+        read_external_control_settings(&urp("")),
+        Err(UrpError::NotAnInstallation { root }) if root == "URProgram"
+    ));
+
+    let mut p = read(EC);
+    p.set_external_control_host(&s.host, s.port);
+    let script = translate_with(&p, |node| {
+        assert_eq!((node.host.as_str(), node.port), ("192.168.56.1", 50002));
+        Ok(String::from("textmsg(1)"))
+    });
+    assert!(script.is_ok());
+}
+
+#[test]
+fn variable_waypoints_and_nodes_between_waypoints() {
+    let main = format!(
+        r#"<Assignment><variable name="target"/>{target}</Assignment>
+<Move motionType="MoveJ" speed="1.0" acceleration="1.4">
+  <children>
+    {w1}
+    {between}
+    <Waypoint type="Variable" name="target_wp"><variable reference="../../../../Assignment/variable"/></Waypoint>
+  </children>
+</Move>"#,
+        target = expr("[0.3, -1.3, 1.2, -1.5, -1.57, 0.2]"),
+        w1 = waypoint("Waypoint_1", Q1, r#"jointSpeed="0.5" blendRadius="0.02""#),
+        between = script_line("textmsg(\"at 1\")"),
+    );
+    let p = read(&main);
+    assert!(
+        p.script
+            .contains("movej([0.1, -1.5, 1.4, -1.5, -1.57, 0.2], a=1.4, v=0.5, r=0.02)"),
+        "{}",
+        p.script
+    );
+    assert!(
+        p.script.contains("movej(target, a=1.4, v=1.0)"),
+        "{}",
+        p.script
+    );
+    let mut m = machine(&p.script);
+    assert_eq!(texts(&run(&mut m, Duration::from_secs(30))), ["at 1"]);
+    assert_eq!(m.state(), &State::Finished);
+    assert!((m.joint_positions()[0] - 0.3).abs() < 1e-6);
+}
