@@ -28,8 +28,13 @@ impl Drop for Controller {
 
 impl Controller {
     fn start() -> Controller {
+        Self::start_with(&[])
+    }
+
+    fn start_with(extra: &[&str]) -> Controller {
         let mut child = Command::new(env!("CARGO_BIN_EXE_ursock"))
             .args(["controller", "--json"])
+            .args(extra)
             .args(["--dashboard-port", "0", "--primary-port", "0"])
             .args([
                 "--secondary-port",
@@ -282,4 +287,73 @@ fn a_program_is_refused_while_the_arm_is_powered_off() {
     let v = c.wait_event("refused", |v| v["event"] == "program");
     assert_eq!(v["what"], "refused");
     assert!(v["text"].as_str().unwrap().contains("POWER_OFF"), "{v}");
+}
+
+/// A `.urp` with an External Control node, gzip-compressed as PolyScope saves it.
+fn external_control_urp() -> Vec<u8> {
+    use std::io::Write as _;
+    let xml = r#"<URProgram name="ec" installation="default" createdIn="5.21.0">
+  <children>
+    <MainProgram runOnlyOnce="true">
+      <children>
+        <Script type="Line"><expression>textmsg(&quot;before&quot;)</expression></Script>
+        <Contributed strategyClass="com.fzi.externalcontrol.ExternalControlNode" strategyProgramNodeType="External Control"><dataModel/></Contributed>
+      </children>
+    </MainProgram>
+  </children>
+</URProgram>"#;
+    let mut gz = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::default());
+    gz.write_all(xml.as_bytes()).unwrap();
+    gz.finish().unwrap()
+}
+
+#[test]
+fn play_runs_a_urp_whose_external_control_node_fetches_its_script() {
+    // The driver's side: answers `request_program` with a script, then closes.
+    let host = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
+    let host_port = host.local_addr().unwrap().port();
+    let driver = std::thread::spawn(move || {
+        let (mut s, _) = host.accept().unwrap();
+        s.set_read_timeout(Some(WAIT)).unwrap();
+        let mut request = [0u8; 16];
+        s.read_exact(&mut request).unwrap();
+        s.write_all(b"textmsg(\"driven\")\nwrite_output_integer_register(1, 99)\n")
+            .unwrap();
+        request
+    });
+    let dir = std::env::temp_dir().join(format!("ursock-urp-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::write(dir.join("ec.urp"), external_control_urp()).unwrap();
+    let c = Controller::start_with(&[
+        "--programs",
+        dir.to_str().unwrap(),
+        "--urcap-host",
+        &format!("127.0.0.1:{host_port}"),
+    ]);
+    c.ready();
+    let d = c.connect("dashboard");
+    let mut r = BufReader::new(d.try_clone().unwrap());
+    let mut w = d;
+    let mut line = String::new();
+    r.read_line(&mut line).unwrap();
+    for (cmd, want) in [
+        ("load ec.urp", "Loading program: ec.urp"),
+        ("play", "Starting program"),
+    ] {
+        w.write_all(format!("{cmd}\n").as_bytes()).unwrap();
+        line.clear();
+        r.read_line(&mut line).unwrap();
+        assert_eq!(line.trim(), want);
+    }
+    assert_eq!(&driver.join().unwrap(), b"request_program\n");
+    let started = c.wait_event("program started", |v| v["event"] == "program");
+    assert_eq!(started["what"], "started", "{started}");
+    assert_eq!(started["name"], "ec.urp");
+    let before = c.wait_event("message", |v| v["event"] == "message");
+    assert_eq!(before["text"], "before");
+    let driven = c.wait_event("message", |v| v["event"] == "message");
+    assert_eq!(driven["text"], "driven");
+    let ended = c.wait_event("program end", |v| v["event"] == "program");
+    assert_eq!(ended["what"], "finished", "{ended}");
+    let _ = std::fs::remove_dir_all(&dir);
 }

@@ -11,6 +11,7 @@
 
 use std::io::{ErrorKind, Read, Write};
 use std::net::{Shutdown, TcpListener, TcpStream};
+use std::sync::Arc;
 use std::time::Duration;
 
 use urscript_controller::primary::{self, RobotMessage};
@@ -110,7 +111,7 @@ pub struct Listeners {
 }
 
 /// Runs the loop forever.
-pub fn run(shared: &Shared, listeners: Listeners) {
+pub fn run(shared: &Arc<Shared>, listeners: Listeners) {
     let mut lp = Loop {
         clients: Vec::new(),
         driver: Driver::new(Options::default()),
@@ -321,7 +322,7 @@ impl Loop {
 
     /// One step: the cell runs to `now`, the program's sockets are serviced, and every
     /// stream gets what is due.
-    fn step(&mut self, shared: &Shared, now: Duration) {
+    fn step(&mut self, shared: &Arc<Shared>, now: Duration) {
         let mut messages: Vec<RobotMessage> = Vec::new();
         let status = {
             let mut cell = shared.lock_cell();
@@ -396,10 +397,22 @@ impl Loop {
                         });
                     }
                     CellEvent::NeedProgram { name, path } => {
-                        let result = super::urp::load(shared, &path);
-                        match result {
-                            Ok(script) => cell.start_loaded(script, now),
-                            Err(why) => cell.refuse_loaded(format!("{name}: {why}"), now),
+                        // Reading, translating and fetching External Control scripts
+                        // take time: the streams go on meanwhile.
+                        let shared = Arc::clone(shared);
+                        let spawned = std::thread::Builder::new()
+                            .name("load-program".into())
+                            .spawn(move || {
+                                let result = super::urp::load(&shared, &path);
+                                let now = shared.now();
+                                let mut cell = shared.lock_cell();
+                                match result {
+                                    Ok(script) => cell.start_loaded(script, now),
+                                    Err(why) => cell.refuse_loaded(format!("{name}: {why}"), now),
+                                }
+                            });
+                        if let Err(e) = spawned {
+                            cell.refuse_loaded(format!("cannot start a thread: {e}"), now);
                         }
                     }
                 }

@@ -1,10 +1,31 @@
 //! Playing a loaded `.urp` program: read the file, translate it to URScript, and fetch
-//! the External Control URCap node's script from `--urcap-host` as the URCap does.
+//! each External Control URCap node's script as the URCap does at play time (connect to
+//! its host, send `request_program\n`, read the reply until the host closes). The host is
+//! `--urcap-host` if given, else the URCap's settings in the program's installation file
+//! beside it, else the URCap's default.
+
+use std::io::{Read, Write};
+use std::path::Path;
+use std::time::{Duration, Instant};
+
+use urscript_controller::urp::{
+    read_external_control_settings, read_urp, translate_with, ExternalControlNode,
+    EXTERNAL_CONTROL_DEFAULT_PORT,
+};
 
 use super::Shared;
 
-/// The External Control URCap's default port.
-pub const URCAP_PORT: u16 = 50002;
+/// The largest `.urp` or `.installation` file read.
+pub const MAX_FILE: u64 = 64 * 1024 * 1024;
+/// The largest script an External Control host may send.
+pub const MAX_FETCHED: usize = 16 * 1024 * 1024;
+/// How long connecting to the External Control host may take.
+const CONNECT_TIMEOUT: Duration = Duration::from_secs(3);
+/// How long the host may stay silent before its reply counts as complete (the URCap
+/// reads until nothing more is buffered).
+const QUIET: Duration = Duration::from_secs(2);
+/// The longest a whole fetch may take.
+const FETCH_LIMIT: Duration = Duration::from_secs(10);
 
 /// `HOST` or `HOST:PORT`.
 pub fn parse_host(text: &str) -> Result<(String, u16), String> {
@@ -15,13 +36,90 @@ pub fn parse_host(text: &str) -> Result<(String, u16), String> {
                 .map_err(|_| format!("{port:?} is not a port number"))?;
             Ok((host.to_string(), port))
         }
-        _ if !text.is_empty() => Ok((text.to_string(), URCAP_PORT)),
+        _ if !text.is_empty() => Ok((text.to_string(), EXTERNAL_CONTROL_DEFAULT_PORT)),
         _ => Err("give a host name or address".into()),
     }
 }
 
+fn read_bounded(path: &Path) -> Result<Vec<u8>, String> {
+    let file = std::fs::File::open(path).map_err(|e| format!("cannot open it: {e}"))?;
+    let mut bytes = Vec::new();
+    file.take(MAX_FILE + 1)
+        .read_to_end(&mut bytes)
+        .map_err(|e| format!("cannot read it: {e}"))?;
+    if bytes.len() as u64 > MAX_FILE {
+        return Err(format!("larger than {MAX_FILE} bytes"));
+    }
+    Ok(bytes)
+}
+
 /// The URScript of the program file at `path`.
 pub fn load(shared: &Shared, path: &str) -> Result<String, String> {
-    let _ = (&shared.urcap_host, path);
-    Err("playing .urp files is not available yet".into())
+    let path = Path::new(path);
+    let bytes = read_bounded(path)?;
+    let mut program = read_urp(&bytes).map_err(|e| e.to_string())?;
+    if !program.external_control.is_empty() {
+        let (host, port) = match &shared.urcap_host {
+            Some((h, p)) => (h.clone(), *p),
+            None => {
+                // The installation the program was saved with, beside it.
+                let name = format!("{}.installation", program.installation);
+                let installation = path.parent().map(|d| d.join(&name));
+                match installation.filter(|p| p.is_file()) {
+                    Some(p) => {
+                        let s = read_external_control_settings(&read_bounded(&p)?)
+                            .map_err(|e| format!("{name}: {e}"))?;
+                        (s.host, s.port)
+                    }
+                    None => {
+                        let node = &program.external_control[0];
+                        (node.host.clone(), node.port)
+                    }
+                }
+            }
+        };
+        program.set_external_control_host(&host, port);
+    }
+    translate_with(&program, request_program).map_err(|e| e.to_string())
+}
+
+/// What the External Control URCap does at play time: `request_program\n` to the host,
+/// the reply read until the host closes (or stays quiet, or the bounds are reached).
+fn request_program(node: &ExternalControlNode) -> Result<String, String> {
+    let mut stream = urscript_interp::drive::connect_stream(&node.host, node.port, CONNECT_TIMEOUT)
+        .map_err(|e| urscript_interp::drive::describe_connect_error(&node.host, node.port, &e))?;
+    let _ = stream.set_nonblocking(false);
+    let _ = stream.set_read_timeout(Some(QUIET));
+    stream
+        .write_all(b"request_program\n")
+        .map_err(|e| format!("sending request_program failed: {e}"))?;
+    let start = Instant::now();
+    let mut reply = Vec::new();
+    let mut buf = [0u8; 16 * 1024];
+    loop {
+        match stream.read(&mut buf) {
+            Ok(0) => break,
+            Ok(n) => {
+                reply.extend_from_slice(&buf[..n]);
+                if reply.len() > MAX_FETCHED {
+                    return Err(format!("the host sent more than {MAX_FETCHED} bytes"));
+                }
+            }
+            Err(e) if e.kind() == std::io::ErrorKind::Interrupted => continue,
+            // Quiet for a while with a reply in hand: it is complete.
+            Err(e)
+                if matches!(
+                    e.kind(),
+                    std::io::ErrorKind::WouldBlock | std::io::ErrorKind::TimedOut
+                ) && !reply.is_empty() =>
+            {
+                break
+            }
+            Err(e) => return Err(format!("reading the program failed: {e}")),
+        }
+        if start.elapsed() > FETCH_LIMIT {
+            break;
+        }
+    }
+    String::from_utf8(reply).map_err(|_| "the program sent is not UTF-8".to_string())
 }
