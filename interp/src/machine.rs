@@ -260,7 +260,18 @@ pub struct Machine {
 impl Machine {
     /// A machine about to run `program`'s first step at time 0.
     ///
-    /// A step time below 100 µs is raised to 100 µs.
+    /// A step time below 100 µs is raised to 100 µs. As on the controller, a program that
+    /// calls a function neither defined, built in nor stubbed, or reads a variable that
+    /// nothing in its scope can have assigned, does not start: its state is already
+    /// [`State::Error`], `compile_error_name_not_found:NAME:` at the first such name.
+    ///
+    /// ```
+    /// use urscript_interp::{Config, Machine, Program, State};
+    /// let m = Machine::new(Program::parse("x = 1\ntextmsg(x + y)\n").unwrap(), Config::default());
+    /// let State::Error(e) = m.state() else { panic!() };
+    /// assert_eq!((e.line(), e.column()), (2, 13));
+    /// assert!(e.message().starts_with("compile_error_name_not_found:y:"));
+    /// ```
     pub fn new(program: Program, config: Config) -> Self {
         Machine::with_arm(program, config, Arm::default())
     }
@@ -332,6 +343,28 @@ impl Machine {
                     ),
                 )
             });
+        // A variable read that nothing can have given a value is the same compile error;
+        // the controller names the first one in the text.
+        let unknown_variable = program.unknown_variable.as_ref().map(|(name, at)| {
+            RuntimeError::at(
+                at.line,
+                at.col,
+                Fault::new(
+                    K::UnknownVariable,
+                    format!(
+                        "compile_error_name_not_found:{name}: `{name}` is never assigned in its scope (not a global the program assigns, not a parameter or variable of its function)"
+                    ),
+                ),
+            )
+        });
+        let unknown = match (unknown, unknown_variable) {
+            (Some(f), Some(v)) => Some(if (v.line(), v.column()) < (f.line(), f.column()) {
+                v
+            } else {
+                f
+            }),
+            (f, v) => f.or(v),
+        };
         Machine {
             ctl: Controller {
                 dh: config.model.dh(),
