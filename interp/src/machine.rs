@@ -373,6 +373,8 @@ impl Machine {
                 arm,
                 sockets: Sockets::new(config.policy),
                 events: VecDeque::new(),
+                motion: None,
+                thread: 0,
             },
             site_stubs,
             prog: Arc::new(program),
@@ -555,6 +557,11 @@ impl Machine {
                 _ => self.ctl.step = target,
             }
         }
+        // Steps where no thread ran still move the arm: it is where the motion has it at
+        // the last step due.
+        if self.state == State::Running && self.ctl.motion.is_some() {
+            self.ctl.advance(self.ctl.step.saturating_sub(1));
+        }
     }
 
     /// The same as [`run_until`](Self::run_until), in quinn-proto's words: the moment
@@ -664,6 +671,8 @@ impl Machine {
 
     fn stop(&mut self, state: State) {
         self.state = state;
+        // The arm stops where it is.
+        self.ctl.halt();
         for t in &mut self.threads {
             t.done = true;
         }
@@ -689,6 +698,7 @@ impl Machine {
     /// leave the list at the end of the step, so a step visits at most the live threads
     /// and those started during it.
     fn run_step(&mut self) {
+        self.ctl.advance(self.ctl.step);
         self.run_threads();
         if self.state == State::Running {
             self.threads.retain(|t| !t.done);
@@ -768,6 +778,7 @@ impl Machine {
                     critical: 0,
                 };
                 let mut th = std::mem::replace(&mut self.threads[i], placeholder);
+                self.ctl.thread = th.id;
                 let prog = Arc::clone(&self.prog);
                 let flow = self.exec(&mut th, &prog);
                 self.threads[i] = th;
@@ -1078,6 +1089,10 @@ impl Machine {
                             return Ok(Flow::Finished);
                         }
                         if let Some(t) = self.threads.iter_mut().find(|t| t.id == id && !t.done) {
+                            // The motion it commanded stops where the arm is.
+                            if self.ctl.motion.as_ref().is_some_and(|m| m.owner == id) {
+                                self.ctl.halt();
+                            }
                             t.done = true;
                             t.frames = Vec::new();
                             t.stack = Vec::new();

@@ -528,6 +528,8 @@ mod tests {
             arm: crate::controller::Arm::default(),
             sockets: crate::sockets::Sockets::new(crate::sockets::Policy::default()),
             events: std::collections::VecDeque::new(),
+            motion: None,
+            thread: 0,
         };
         // The documented defaults.
         assert_eq!(
