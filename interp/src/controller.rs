@@ -15,7 +15,8 @@ use crate::kinematics::{self, Dh};
 use crate::sockets::Sockets;
 use crate::trajectory::{Kind, Motion};
 
-/// The virtual arm and the I/O around it: commanded state, not dynamics (see
+/// The virtual arm and the I/O around it: where the arm is now (mid-move too), not
+/// dynamics (see
 /// [`crate::builtins::motion`]). It outlives a program: a controller that runs program
 /// after program hands it from one [`Machine`](crate::Machine) to the next
 /// ([`Machine::with_arm`](crate::Machine::with_arm), [`Machine::into_arm`](crate::Machine::into_arm)),
@@ -29,11 +30,12 @@ use crate::trajectory::{Kind, Motion};
 #[derive(Debug, Clone)]
 #[non_exhaustive]
 pub struct Arm {
-    /// Commanded joint positions (rad). Default: UR's home pose `[0, -π/2, 0, -π/2, 0, 0]`.
+    /// Joint positions (rad) now: mid-move, where the motion has the arm at this step.
+    /// Default: UR's home pose `[0, -π/2, 0, -π/2, 0, 0]`.
     pub q: [f64; 6],
-    /// Commanded joint speeds (rad/s).
+    /// Joint speeds (rad/s) now.
     pub qd: [f64; 6],
-    /// Commanded TCP speed (m/s, rad/s).
+    /// TCP speed now (base frame: m/s, then rad/s).
     pub tcp_speed: [f64; 6],
     /// The active TCP offset (`set_tcp`), from the flange.
     pub tcp: [f64; 6],

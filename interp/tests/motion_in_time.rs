@@ -365,3 +365,30 @@ fn inverse_kinematics_picks_solutions_within_the_joint_range() {
         .flatten()
         .all(|x| x.abs() <= std::f64::consts::TAU));
 }
+
+#[test]
+fn speedl_and_stopl_move_the_tool_along_its_speed() {
+    let q0 = [0.3, -1.4, 1.6, -1.8, -1.57, 0.2];
+    let src = format!(
+        "set_pos({q0:?})\nspeedl([0.05, 0, 0, 0, 0, 0], 0.5, 0.5)\nstopl(0.5)\ntextmsg(is_steady())\n"
+    );
+    let p0 = forward(&Model::Ur5e.dh(), q0, [0.0; 6]);
+    let mut m = machine(&src);
+    let mut xs = Vec::new();
+    steps(&mut m, 2000, |_, m| {
+        let p = m.tcp_pose();
+        // Along x only.
+        assert!(
+            (p[1] - p0[1]).abs() < 1e-6 && (p[2] - p0[2]).abs() < 1e-6,
+            "{p:?}"
+        );
+        xs.push(p[0] - p0[0]);
+    });
+    assert_eq!(m.state(), &State::Finished);
+    assert_eq!(messages(&mut m), ["True"]);
+    assert!(xs.windows(2).all(|w| w[1] >= w[0] - 1e-12));
+    // 0.1 s up (2.5 mm), 0.4 s at 0.05 m/s (20 mm), 0.1 s down (2.5 mm).
+    let last = *xs.last().unwrap();
+    assert!((last - 0.025).abs() < 1e-6, "{last}");
+    assert_eq!(m.arm().tcp_speed, [0.0; 6]);
+}
