@@ -112,6 +112,9 @@ pub struct Program {
     pub(crate) sites: Vec<CallSite>,
     /// Names called that are not user functions, with the first line calling each.
     pub(crate) natives: Vec<(Sym, u32)>,
+    /// The first variable read that no assignment can give a value (see
+    /// [`unknown_variable`]): the controller refuses such a program before it runs.
+    pub(crate) unknown_variable: Option<(String, Pos)>,
     entry: Option<String>,
 }
 
@@ -185,6 +188,146 @@ impl Program {
             .map(|(s, l)| (self.names[*s as usize].as_str(), *l))
             .collect()
     }
+}
+
+/// The names a body assigns (`x = ...`, `global x`, `local x`; not `x[i] = ...`, which
+/// needs `x` to exist), into `assigned`; the names it declares `global`, into `globals`.
+/// Nested `def`s were moved out of the tree by [`Compiler::collect`], so their bodies are
+/// not seen here.
+fn assignments(body: &[Stmt], assigned: &mut HashSet<String>, globals: &mut HashSet<String>) {
+    for s in body {
+        match &s.kind {
+            StmtKind::Assign {
+                scope,
+                name,
+                indices,
+                ..
+            } => {
+                if *scope == Scope::Global {
+                    globals.insert(name.clone());
+                }
+                if indices.is_empty() || *scope != Scope::Auto {
+                    assigned.insert(name.clone());
+                }
+            }
+            StmtKind::If {
+                branches,
+                otherwise,
+            } => {
+                for (_, b) in branches {
+                    assignments(b, assigned, globals);
+                }
+                assignments(otherwise, assigned, globals);
+            }
+            StmtKind::While(_, b) => assignments(b, assigned, globals),
+            _ => {}
+        }
+    }
+}
+
+/// Every variable a body reads, with the line and column of the read, in source order
+/// (`x[i] = v` reads `x`).
+fn reads<'a>(body: &'a [Stmt], out: &mut Vec<(&'a str, (u32, u32))>) {
+    fn expr<'a>(e: &'a Expr, out: &mut Vec<(&'a str, (u32, u32))>) {
+        match e {
+            Expr::Name(n, at) => out.push((n, *at)),
+            Expr::Lit(_) | Expr::Run(..) => {}
+            Expr::List(items) | Expr::Pose(items) => items.iter().for_each(|i| expr(i, out)),
+            Expr::Index(b, i) => {
+                expr(b, out);
+                expr(i, out);
+            }
+            Expr::Call { args, kwargs, .. } => {
+                args.iter().for_each(|a| expr(a, out));
+                kwargs.iter().for_each(|(_, v)| expr(v, out));
+            }
+            Expr::Unary(_, i) => expr(i, out),
+            Expr::Binary(_, l, r) => {
+                expr(l, out);
+                expr(r, out);
+            }
+        }
+    }
+    for s in body {
+        match &s.kind {
+            StmtKind::Assign {
+                scope,
+                name,
+                indices,
+                value,
+            } => {
+                if !indices.is_empty() && *scope == Scope::Auto {
+                    out.push((name, (s.line, s.col)));
+                }
+                indices.iter().for_each(|i| expr(i, out));
+                if let Some(v) = value {
+                    expr(v, out);
+                }
+            }
+            StmtKind::Expr(e) | StmtKind::Join(e) | StmtKind::Kill(e) => expr(e, out),
+            StmtKind::Return(Some(e)) => expr(e, out),
+            StmtKind::If {
+                branches,
+                otherwise,
+            } => {
+                for (c, b) in branches {
+                    expr(c, out);
+                    reads(b, out);
+                }
+                reads(otherwise, out);
+            }
+            StmtKind::While(c, b) => {
+                expr(c, out);
+                reads(b, out);
+            }
+            _ => {}
+        }
+    }
+}
+
+/// The first read (in line and column order) of a variable that nothing can have given a
+/// value, as the controller's compiler refuses it (`compile_error_name_not_found`).
+///
+/// Conservative: a read is known if its name is assigned anywhere in the program's own
+/// body (a global: globals are program-wide, so a `def` may read one assigned after it,
+/// and order within a body is not checked, so a branch or a loop may assign it), is
+/// declared `global` (or `local`) anywhere in its function, is a parameter or assigned
+/// anywhere in its own function, or names a function of the program or a built-in. The
+/// body of the file's one `def` (the program drivers send) counts as the program's
+/// body, as the interpreter runs it.
+fn unknown_variable(
+    main: &[Stmt],
+    defs: &[FuncDef],
+    is_function: impl Fn(&str) -> bool,
+) -> Option<(String, Pos)> {
+    let mut globals = HashSet::new();
+    let mut main_assigned = HashSet::new();
+    assignments(main, &mut main_assigned, &mut globals);
+    globals.extend(main_assigned);
+    let mut locals: Vec<HashSet<String>> = Vec::with_capacity(defs.len());
+    for d in defs {
+        let mut l: HashSet<String> = d.params.iter().map(|(n, _)| n.clone()).collect();
+        assignments(&d.body, &mut l, &mut globals);
+        locals.push(l);
+    }
+    let mut first: Option<(String, (u32, u32))> = None;
+    let none = HashSet::new();
+    let bodies =
+        std::iter::once((main, &none)).chain(defs.iter().map(|d| &d.body[..]).zip(&locals));
+    let mut rs = Vec::new();
+    for (body, local) in bodies {
+        rs.clear();
+        reads(body, &mut rs);
+        for &(n, at) in &rs {
+            if local.contains(n) || globals.contains(n) || is_function(n) {
+                continue;
+            }
+            if first.as_ref().is_none_or(|(_, f)| at < *f) {
+                first = Some((n.to_string(), at));
+            }
+        }
+    }
+    first.map(|(n, (line, col))| (n, Pos { line, col }))
 }
 
 #[derive(Default)]
@@ -350,6 +493,9 @@ impl Compiler {
                 program_scope: false,
             });
         }
+        let unknown_variable = unknown_variable(&main_body, &defs, |n| {
+            self.func_ids.contains_key(n) || builtins::lookup(n).is_some()
+        });
         self.function(0, &main_body, 1)?;
         for (i, d) in defs.iter().enumerate() {
             // The entry def's body is the program; compiled once, as function 0.
@@ -361,6 +507,7 @@ impl Compiler {
             funcs: self.funcs,
             sites: self.sites,
             natives: self.natives,
+            unknown_variable,
             entry,
         })
     }
@@ -526,7 +673,7 @@ impl Compiler {
                 let c = self.constant(v.clone());
                 self.emit(Op::Const(c));
             }
-            Expr::Name(n) => {
+            Expr::Name(n, _) => {
                 let s = self.sym(n);
                 self.emit(Op::Load(s));
             }
@@ -543,7 +690,7 @@ impl Compiler {
                 self.emit(Op::MakePose(items.len() as u32));
             }
             Expr::Index(base, i) => match base.as_ref() {
-                Expr::Name(n) => {
+                Expr::Name(n, _) => {
                     let s = self.sym(n);
                     self.expr(i)?;
                     self.emit(Op::LoadIndex(s));

@@ -13,8 +13,10 @@ use crate::error::Fault;
 use crate::event::{Event, ReadRecord, MAX_READ_INPUT};
 use crate::kinematics::{self, Dh};
 use crate::sockets::Sockets;
+use crate::trajectory::{Kind, Motion};
 
-/// The virtual arm and the I/O around it: commanded state, not dynamics (see
+/// The virtual arm and the I/O around it: where the arm is now (mid-move too), not
+/// dynamics (see
 /// [`crate::builtins::motion`]). It outlives a program: a controller that runs program
 /// after program hands it from one [`Machine`](crate::Machine) to the next
 /// ([`Machine::with_arm`](crate::Machine::with_arm), [`Machine::into_arm`](crate::Machine::into_arm)),
@@ -28,11 +30,12 @@ use crate::sockets::Sockets;
 #[derive(Debug, Clone)]
 #[non_exhaustive]
 pub struct Arm {
-    /// Commanded joint positions (rad). Default: UR's home pose `[0, -π/2, 0, -π/2, 0, 0]`.
+    /// Joint positions (rad) now: mid-move, where the motion has the arm at this step.
+    /// Default: UR's home pose `[0, -π/2, 0, -π/2, 0, 0]`.
     pub q: [f64; 6],
-    /// Commanded joint speeds (rad/s).
+    /// Joint speeds (rad/s) now.
     pub qd: [f64; 6],
-    /// Commanded TCP speed (m/s, rad/s).
+    /// TCP speed now (base frame: m/s, then rad/s).
     pub tcp_speed: [f64; 6],
     /// The active TCP offset (`set_tcp`), from the flange.
     pub tcp: [f64; 6],
@@ -246,9 +249,49 @@ pub(crate) struct Controller {
     pub sockets: Sockets,
     /// What the driver must do or show, oldest first.
     pub events: VecDeque<Event>,
+    /// The motion under way, if the arm moves.
+    pub motion: Option<Motion>,
+    /// The handle of the thread running now (the owner of a motion it commands).
+    pub thread: u32,
 }
 
 impl Controller {
+    /// Starts a motion now (replacing any under way) for the thread running now, and puts
+    /// the arm at its start.
+    pub fn start_motion(&mut self, kind: Kind, tcp: [f64; 6]) {
+        self.motion = Some(Motion {
+            kind,
+            start: self.step,
+            owner: self.thread,
+            tcp,
+        });
+        self.advance(self.step);
+    }
+
+    /// Puts the arm where the motion under way has it at step `step`.
+    pub fn advance(&mut self, step: u64) {
+        let Some(m) = &self.motion else { return };
+        let t = step.saturating_sub(m.start) as f64 * self.step_time.as_secs_f64();
+        let s = m.sample(&self.dh, t, self.arm.q);
+        self.arm.q = s.q;
+        self.arm.qd = s.qd;
+        self.arm.tcp_speed = match s.tcp_speed {
+            Some(v) => v,
+            None => crate::trajectory::tcp_speed(&self.dh, s.q, s.qd, self.arm.tcp),
+        };
+        if s.done {
+            self.motion = None;
+        }
+    }
+
+    /// Stops the arm where it is (its thread was killed, the program stopped).
+    pub fn halt(&mut self) {
+        if self.motion.take().is_some() {
+            self.arm.qd = [0.0; 6];
+            self.arm.tcp_speed = [0.0; 6];
+        }
+    }
+
     /// The tool pose of the joints `q` through the active TCP offset.
     pub fn tool_pose(&self, q: [f64; 6]) -> [f64; 6] {
         kinematics::forward(&self.dh, q, self.arm.tcp)

@@ -94,6 +94,7 @@ pub mod machine;
 mod parser;
 mod pose;
 mod sockets;
+mod trajectory;
 mod value;
 
 pub use compile::Program;

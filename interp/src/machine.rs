@@ -260,7 +260,18 @@ pub struct Machine {
 impl Machine {
     /// A machine about to run `program`'s first step at time 0.
     ///
-    /// A step time below 100 µs is raised to 100 µs.
+    /// A step time below 100 µs is raised to 100 µs. As on the controller, a program that
+    /// calls a function neither defined, built in nor stubbed, or reads a variable that
+    /// nothing in its scope can have assigned, does not start: its state is already
+    /// [`State::Error`], `compile_error_name_not_found:NAME:` at the first such name.
+    ///
+    /// ```
+    /// use urscript_interp::{Config, Machine, Program, State};
+    /// let m = Machine::new(Program::parse("x = 1\ntextmsg(x + y)\n").unwrap(), Config::default());
+    /// let State::Error(e) = m.state() else { panic!() };
+    /// assert_eq!((e.line(), e.column()), (2, 13));
+    /// assert!(e.message().starts_with("compile_error_name_not_found:y:"));
+    /// ```
     pub fn new(program: Program, config: Config) -> Self {
         Machine::with_arm(program, config, Arm::default())
     }
@@ -332,6 +343,28 @@ impl Machine {
                     ),
                 )
             });
+        // A variable read that nothing can have given a value is the same compile error;
+        // the controller names the first one in the text.
+        let unknown_variable = program.unknown_variable.as_ref().map(|(name, at)| {
+            RuntimeError::at(
+                at.line,
+                at.col,
+                Fault::new(
+                    K::UnknownVariable,
+                    format!(
+                        "compile_error_name_not_found:{name}: `{name}` is never assigned in its scope (not a global the program assigns, not a parameter or variable of its function)"
+                    ),
+                ),
+            )
+        });
+        let unknown = match (unknown, unknown_variable) {
+            (Some(f), Some(v)) => Some(if (v.line(), v.column()) < (f.line(), f.column()) {
+                v
+            } else {
+                f
+            }),
+            (f, v) => f.or(v),
+        };
         Machine {
             ctl: Controller {
                 dh: config.model.dh(),
@@ -340,6 +373,8 @@ impl Machine {
                 arm,
                 sockets: Sockets::new(config.policy),
                 events: VecDeque::new(),
+                motion: None,
+                thread: 0,
             },
             site_stubs,
             prog: Arc::new(program),
@@ -522,6 +557,11 @@ impl Machine {
                 _ => self.ctl.step = target,
             }
         }
+        // Steps where no thread ran still move the arm: it is where the motion has it at
+        // the last step due.
+        if self.state == State::Running && self.ctl.motion.is_some() {
+            self.ctl.advance(self.ctl.step.saturating_sub(1));
+        }
     }
 
     /// The same as [`run_until`](Self::run_until), in quinn-proto's words: the moment
@@ -631,6 +671,8 @@ impl Machine {
 
     fn stop(&mut self, state: State) {
         self.state = state;
+        // The arm stops where it is.
+        self.ctl.halt();
         for t in &mut self.threads {
             t.done = true;
         }
@@ -656,6 +698,7 @@ impl Machine {
     /// leave the list at the end of the step, so a step visits at most the live threads
     /// and those started during it.
     fn run_step(&mut self) {
+        self.ctl.advance(self.ctl.step);
         self.run_threads();
         if self.state == State::Running {
             self.threads.retain(|t| !t.done);
@@ -735,6 +778,7 @@ impl Machine {
                     critical: 0,
                 };
                 let mut th = std::mem::replace(&mut self.threads[i], placeholder);
+                self.ctl.thread = th.id;
                 let prog = Arc::clone(&self.prog);
                 let flow = self.exec(&mut th, &prog);
                 self.threads[i] = th;
@@ -1045,6 +1089,10 @@ impl Machine {
                             return Ok(Flow::Finished);
                         }
                         if let Some(t) = self.threads.iter_mut().find(|t| t.id == id && !t.done) {
+                            // The motion it commanded stops where the arm is.
+                            if self.ctl.motion.as_ref().is_some_and(|m| m.owner == id) {
+                                self.ctl.halt();
+                            }
                             t.done = true;
                             t.frames = Vec::new();
                             t.stack = Vec::new();

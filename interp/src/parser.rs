@@ -43,7 +43,8 @@ pub(crate) enum UnOp {
 #[derive(Debug, Clone)]
 pub(crate) enum Expr {
     Lit(Value),
-    Name(String),
+    /// A variable, with the line and column of its name.
+    Name(String, (u32, u32)),
     List(Vec<Expr>),
     Pose(Vec<Expr>),
     Index(Box<Expr>, Box<Expr>),
@@ -737,7 +738,10 @@ impl Parser {
                         let mut it = items.into_iter();
                         let i = it.next().unwrap_or(Expr::Lit(Value::Int(0)));
                         Ok((
-                            Expr::Index(Box::new(Expr::Name("p".into())), Box::new(i)),
+                            Expr::Index(
+                                Box::new(Expr::Name("p".into(), (t.line, t.col))),
+                                Box::new(i),
+                            ),
                             h,
                         ))
                     }
@@ -771,9 +775,10 @@ impl Parser {
                 if let Some((_, why)) = UNSUPPORTED.iter().find(|(u, _)| u == w) {
                     return Err(self.err_here(*why));
                 }
+                let name_at = (t.line, t.col);
                 let name = self.name("an expression")?;
                 if self.peek().kind != Tok::LParen {
-                    return Ok((Expr::Name(name), 1));
+                    return Ok((Expr::Name(name, name_at), 1));
                 }
                 self.bump();
                 let mut args = Vec::new();

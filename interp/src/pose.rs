@@ -60,7 +60,7 @@ pub(crate) fn to_rotvec(m: M) -> [f64; 3] {
     axis.map(|a| a / n * th)
 }
 
-fn mul(a: M, b: M) -> M {
+pub(crate) fn mul(a: M, b: M) -> M {
     let mut o = [[0.0; 3]; 3];
     for (i, row) in o.iter_mut().enumerate() {
         for (j, cell) in row.iter_mut().enumerate() {
@@ -70,7 +70,7 @@ fn mul(a: M, b: M) -> M {
     o
 }
 
-fn transpose(a: M) -> M {
+pub(crate) fn transpose(a: M) -> M {
     let mut o = [[0.0; 3]; 3];
     for (i, row) in o.iter_mut().enumerate() {
         for (j, cell) in row.iter_mut().enumerate() {
@@ -80,7 +80,7 @@ fn transpose(a: M) -> M {
     o
 }
 
-fn apply(a: M, v: [f64; 3]) -> [f64; 3] {
+pub(crate) fn apply(a: M, v: [f64; 3]) -> [f64; 3] {
     [0, 1, 2].map(|i| (0..3).map(|k| a[i][k] * v[k]).sum())
 }
 

@@ -293,18 +293,22 @@ textmsg(get_actual_joint_speeds())
     let mut h = Harness::new(src, Config::default());
     h.run_silent(Duration::from_secs(10));
     assert_eq!(h.m.state(), &State::Finished);
-    assert_eq!(h.messages, ["0.1", "True", "-112.5", "[0, 0, 0, 0, 0, 0]"]);
+    // A servoj that ended leaves the arm at rest at its target (the speed of its segment,
+    // -112.5 rad/s, is what a sample during it sees: `motion_in_time.rs`).
+    assert_eq!(h.messages, ["0.1", "True", "0", "[0, 0, 0, 0, 0, 0]"]);
     // From the start position [0, -pi/2, 0, -pi/2, 0, 0] the first movej's longest joint
     // moves pi/2 at 0.5 rad/s with 1.4 rad/s² ramps; the movel 0.1 m at 0.1 m/s with
-    // 1.2 m/s² ramps; then 0.5 s, 8 ms, 0.1 s and one step.
+    // 1.2 m/s² ramps; then 0.5 s, 8 ms, 0.1 s, and stopj's 0.1 s ramp from 0.2 rad/s
+    // down at 2 rad/s².
     let t1 = steps(move_time(std::f64::consts::FRAC_PI_2, 0.5, 1.4));
     let t2 = steps(move_time(0.1, 0.1, 1.2));
     assert_eq!((t1, t2), (1750, 542));
     assert_eq!(
         h.now,
-        Duration::from_millis(2 * (t1 + t2 + 250 + 4 + 50 + 1))
+        Duration::from_millis(2 * (t1 + t2 + 250 + 4 + 50 + 50))
     );
-    // The joints moved by speedj for 0.1 s at 0.2 rad/s; the pose follows the joints.
+    // speedj ramped joint 0 from rest to 0.2 rad/s in its 0.1 s (0.01 rad), stopj back to
+    // rest in 0.1 s (0.01 rad); the pose follows the joints.
     let q = h.m.joint_positions();
     assert!((q[0] - 0.12).abs() < 1e-12, "{q:?}");
     let pose = urscript_interp::kinematics::forward(

@@ -79,8 +79,10 @@ fn comparisons_and_booleans_precedence() {
 
 #[test]
 fn short_circuit_avoids_evaluating_the_right_side() {
-    assert_eq!(one("False and undefined_var > 0"), "False");
-    assert_eq!(one("True or undefined_var > 0"), "True");
+    // (A name never assigned is refused before the program runs; an error the right
+    // side would raise shows it is not evaluated.)
+    assert_eq!(one("False and 1 % 0 > 0"), "False");
+    assert_eq!(one("True or 1 % 0 > 0"), "True");
 }
 
 #[test]
@@ -124,9 +126,8 @@ fn scoping_global_local() {
     // name assigned in a function is local; `local` shadows; `global` creates a global.
     let src = "def prog():\n  a = 1\n  def set_a():\n    a = 2\n    b = 3\n  end\n  def shadow():\n    local a = 100\n    return a\n  end\n  def make():\n    global c = 7\n  end\n  set_a()\n  textmsg(a, shadow())\n  textmsg(a)\n  make()\n  textmsg(c)\nend\n";
     assert_eq!(msgs(src), ["2100", "2", "7"]);
-    assert!(
-        runtime_error("def f():\n  b = 3\nend\nf()\ntextmsg(b)\n").contains("unknown variable `b`")
-    );
+    assert!(runtime_error("def f():\n  b = 3\nend\nf()\ntextmsg(b)\n")
+        .starts_with("line 5: compile_error_name_not_found:b:"));
 }
 
 #[test]
@@ -245,7 +246,13 @@ fn runtime_errors_say_the_line() {
         runtime_error("x = 1 / 0\n"),
         "line 1: division by zero (1 / 0)"
     );
-    assert_eq!(runtime_error("x = y\n"), "line 1: unknown variable `y`");
+    // A name never assigned is refused before the program runs, as the controller does;
+    // a global read before the program assigned it is a runtime error.
+    assert!(runtime_error("x = y\n").starts_with("line 1: compile_error_name_not_found:y: "));
+    assert_eq!(
+        runtime_error("textmsg(x)\nx = 1\n"),
+        "line 1: unknown variable `x`"
+    );
     assert_eq!(
         runtime_error("l = [1]\nl[1.5] = 2\n"),
         "line 2: type error: an index must be an int, got float 1.5"
@@ -305,7 +312,8 @@ fn runtime_errors_are_typed_with_line_and_column() {
         ("l = [1]\nx = l[1]\n", K::Index, 2, 1),
         ("x = 1 + \"a\"\n", K::Type, 1, 1),
         ("x = 1 % 0\n", K::DivisionByZero, 1, 1),
-        ("x = y\n", K::UnknownVariable, 1, 1),
+        ("x = y\n", K::UnknownVariable, 1, 5),
+        ("textmsg(1)\nz = 2 * zz\n", K::UnknownVariable, 2, 9),
         ("x = 1\nif x:\n  y = asin(2)\nend\n", K::Argument, 3, 7),
         ("x = 1\n  rq_activate()\n", K::UnknownFunction, 2, 3),
         ("while True:\nend\n", K::TooMuchTime, 1, 1),

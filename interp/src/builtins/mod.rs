@@ -19,7 +19,8 @@
 //! | [`time`] | `sync`, `sleep`, `get_steptime` |
 //!
 //! ## The virtual arm
-//! Commanded state and the time each command takes, not dynamics: see [`motion`] and
+//! The arm follows each motion command step by step (kinematics and speed profiles, not
+//! dynamics), and the I/O around it holds what the program set: see [`motion`] and
 //! [`io`] for what each function does to it.
 
 use std::sync::OnceLock;
@@ -528,6 +529,8 @@ mod tests {
             arm: crate::controller::Arm::default(),
             sockets: crate::sockets::Sockets::new(crate::sockets::Policy::default()),
             events: std::collections::VecDeque::new(),
+            motion: None,
+            thread: 0,
         };
         // The documented defaults.
         assert_eq!(

@@ -1,21 +1,37 @@
-//! Motion, the arm's state, and the arm's settings, on the **virtual arm**: commanded
-//! state and the time each command takes, not dynamics.
+//! Motion, the arm's state, and the arm's settings, on the **virtual arm**: the arm
+//! follows each command in time (kinematics, speed profiles), not dynamics. See
+//! `crate::trajectory` for the profiles; in short:
 //!
-//! - `movej(q, a=1.4, v=1.05, t=0, r=0)`: takes `t` if given, else the largest joint
-//!   distance / `v`; `movel(pose, a=1.2, v=0.25, t=0, r=0)` and `movep`: `t`, else the
-//!   straight-line distance / `v`; `movec(pose_via, pose_to, ...)`: like `movel` to
-//!   `pose_to`; `optimovej`/`optimovel`: like `movej`/`movel` (their `a`, `v` are
-//!   fractions on the robot; here they are taken as speeds). `direct_torque`: one step.
-//!   Every motion takes at least one step. A motion sets the commanded joints (a target
-//!   given as a list) or pose (a target given as a pose) when it starts; there is no
-//!   kinematics yet, so a `movej` does not change the pose and a `movel` does not change
-//!   the joints.
-//! - `servoj(q, a, v, t=0.002, lookahead_time=0.1, gain=300)`: sets `q`, takes `t`.
-//! - `speedj(qd, a, t)`, `speedl(xd, a, t, aRot)`: set the speed and integrate it over `t`
-//!   (one step if `t` is not given); `stopj(a)`, `stopl(a)`: zero speed, one step.
-//! - `get_actual_joint_positions()`, `get_target_joint_positions()`: the commanded `q`;
-//!   `get_actual_tcp_pose()`, `get_target_tcp_pose()`, `get_target_waypoint()`: the
-//!   commanded pose; speeds the commanded speeds; `tool_contact()`: 0; `is_steady()`: True.
+//! - `movej(q, a=1.4, v=1.05, t=0, r=0)`: a trapezoidal profile in joint space on the joint
+//!   that moves furthest (a triangle when too short to reach `v`), all joints arriving
+//!   together; `movel(pose, a=1.2, v=0.25, t=0, r=0)`, `movep`: the tool along the straight
+//!   line, its orientation turning about one axis, along the same profile on the path
+//!   length, the joints by inverse kinematics nearest the previous step's; `movec(pose_via,
+//!   pose_to, ...)`: the same along the arc through `pose_via`'s position (mode 1 is taken
+//!   as mode 0). `t > 0` stretches the profile to take `t`. `optimovej`/`optimovel`: like
+//!   `movej`/`movel` (their `a`, `v` are fractions on the robot; here they are taken as
+//!   speeds). A target given as a pose is reached through inverse kinematics nearest the
+//!   current joints (out of reach: a runtime error before the arm moves). **Blending
+//!   (`r`) has no effect**: every move ends at its target at rest, and the next starts
+//!   from there. Every motion takes at least one step; the arm is exactly at the target
+//!   in the step the move returns.
+//! - A joint target outside the joints' range, ±2π (±360°, UR's e-Series and CB3 arms),
+//!   is a runtime error (`movej`, `movel` with joints, `servoj`, `set_pos`); inverse
+//!   kinematics only gives solutions within it.
+//! - `servoj(q, a, v, t=0.002, lookahead_time=0.1, gain=300)`: straight to `q` at constant
+//!   speed over `t`.
+//! - `speedj(qd, a, t)`, `speedl(xd, a, t, aRot)`: the speed ramps linearly to the target
+//!   at `a`, then holds (the joints integrate it; for `speedl` they follow the tool) until
+//!   the next motion command; returns after `t` (one step if not given). `stopj(a)`,
+//!   `stopl(a, aRot)`: ramp the speed down to zero at `a`; return at rest.
+//! - A motion runs until it ends, another motion command replaces it, or the thread that
+//!   commanded it is killed or the program stops (then the arm stays where it is, at
+//!   rest).
+//! - `get_actual_joint_positions()`, `get_target_joint_positions()`: the arm's joints now
+//!   (mid-move too); `get_actual_tcp_pose()`, `get_target_tcp_pose()`,
+//!   `get_target_waypoint()`: the tool pose now; speeds the speeds now;
+//!   `tool_contact()`: 0; `is_steady()`: False while a motion is under way or a speed is
+//!   held.
 //! - Settings read back by their getters: payload (`set_target_payload`, `set_payload*`
 //!   -> `get_target_payload*`), TCP (`set_tcp` -> `get_tcp_offset`), gravity, base
 //!   acceleration, path offset (`path_offset_*`), `set_pos` (the joints).
@@ -30,7 +46,7 @@
 use super::{accept, float_list, floats, opt, req, secs, Args, Builtin, Default, Domain, Out};
 use crate::controller::Controller;
 use crate::error::Fault;
-use crate::kinematics;
+use crate::trajectory::{self, Kind, Path, Profile};
 use crate::value::Value;
 
 const D: Domain = Domain::Motion;
@@ -80,17 +96,17 @@ pub(super) const TABLE: &[Builtin] = &[
         "movej",
         D,
         &MOVEJ,
-        "Moves in joint space: takes t, else the largest joint distance / v.",
+        "Moves in joint space: a trapezoidal profile on the largest joint distance (t: stretched to take t).",
         movej,
     ),
     Builtin::new(
         "movel",
         D,
         &MOVEL,
-        "Moves in a straight line: takes t, else the distance / v.",
+        "Moves the tool in a straight line: a trapezoidal profile on the distance (t: stretched to take t).",
         movej,
     ),
-    Builtin::new("movep", D, &MOVEP, "Process move: timed as movel.", movej),
+    Builtin::new("movep", D, &MOVEP, "Process move: as movel.", movej),
     Builtin::new(
         "servoc",
         D,
@@ -130,7 +146,7 @@ pub(super) const TABLE: &[Builtin] = &[
             opt("r", Default::Float(0.0)),
             opt("mode", Default::Int(0)),
         ],
-        "Circular move: timed as a straight line to pose_to.",
+        "Circular move: the tool along the arc through pose_via to pose_to.",
         movec,
     ),
     Builtin::new(
@@ -144,14 +160,14 @@ pub(super) const TABLE: &[Builtin] = &[
             opt("lookahead_time", Default::Float(0.1)),
             opt("gain", Default::Float(300.0)),
         ],
-        "Sets the joints to q; takes t.",
+        "Moves to q at constant speed over t.",
         servoj,
     ),
     Builtin::new(
         "speedj",
         D,
         &[req("qd"), req("a"), opt("t", Default::Absent)],
-        "Joint speed for t (one step if not given), integrated into the joints.",
+        "Ramps the joint speeds to qd at a and holds them; returns after t (one step if not given).",
         speed,
     ),
     Builtin::new(
@@ -163,15 +179,15 @@ pub(super) const TABLE: &[Builtin] = &[
             opt("t", Default::Absent),
             opt("aRot", Default::Absent),
         ],
-        "Tool speed for t (one step if not given), integrated into the pose.",
+        "Ramps the tool speed to xd at a (aRot) and holds it; returns after t (one step if not given).",
         speed,
     ),
-    Builtin::new("stopj", D, &[req("a")], "Zero joint speed; one step.", stop),
+    Builtin::new("stopj", D, &[req("a")], "Ramps the joint speeds down to zero at a; returns at rest.", stop),
     Builtin::new(
         "stopl",
         D,
         &[req("a"), opt("aRot", Default::Absent)],
-        "Zero tool speed; one step.",
+        "Ramps the tool speed down to zero at a (aRot); returns at rest.",
         stop,
     ),
     Builtin::new(
@@ -399,7 +415,7 @@ pub(super) const TABLE: &[Builtin] = &[
         "set_pos",
         D,
         &[req("q")],
-        "Sets the joints of the simulated robot at once.",
+        "Sets the joints of the simulated robot at once (the arm at rest).",
         set_pos,
     ),
     Builtin::new(
@@ -462,7 +478,7 @@ pub(super) const TABLE: &[Builtin] = &[
         "is_steady",
         D,
         NONE,
-        "True: the virtual arm is always steady.",
+        "True when no motion is under way and the joints are at rest.",
         is_steady,
     ),
     Builtin::new(
@@ -691,126 +707,216 @@ fn joint_distance(from: [f64; 6], to: [f64; 6]) -> f64 {
     (0..6).map(|k| (to[k] - from[k]).abs()).fold(0.0, f64::max)
 }
 
-/// The straight-line distance between two poses' positions.
-fn line_distance(from: [f64; 6], to: [f64; 6]) -> f64 {
-    (0..3)
-        .map(|k| (to[k] - from[k]).powi(2))
-        .sum::<f64>()
-        .sqrt()
+/// The joint range of UR's arms (e-Series and CB3): ±2π, ±360°.
+pub const JOINT_LIMIT: f64 = std::f64::consts::TAU;
+
+/// Refuses joint targets outside the arm's range (a little rounding over ±2π passes).
+fn check_joints(name: &str, q: [f64; 6]) -> Result<[f64; 6], Fault> {
+    for (k, x) in q.iter().enumerate() {
+        if !x.is_finite() || x.abs() > JOINT_LIMIT + 1e-9 {
+            return Err(Fault::from(format!(
+                "`{name}`: joint {k} target {} rad is outside the joint limits (-6.2832 to 6.2832 rad, ±360°)",
+                Value::Float(*x).to_str()
+            )));
+        }
+    }
+    Ok(q)
 }
 
-/// How a move is timed: in joint space (the joint that moves furthest, at the joint
-/// speed) or along a line (the tool's path, at the tool speed).
-#[derive(Clone, Copy, PartialEq)]
-enum Path {
-    Joint,
-    Line,
-}
-
-/// Moves the arm to `target` (joints, or a pose reached through inverse kinematics nearest
-/// the current joints); the distance along `path`.
-fn go_to(c: &mut Controller, target: &Value, six: [f64; 6], path: Path) -> Result<f64, Fault> {
-    let from_q = c.arm.q;
-    let from_pose = c.tcp_pose();
-    let q = if matches!(target, Value::Pose(_)) {
-        c.inverse(six, from_q, c.arm.tcp)?
+/// A motion's target: joints (checked against the joint range), or a pose reached
+/// through inverse kinematics nearest the current joints. Returns the joints and the tool
+/// pose there (the pose given, for a pose).
+fn target(
+    c: &Controller,
+    name: &str,
+    v: &Value,
+    six: [f64; 6],
+) -> Result<([f64; 6], [f64; 6]), Fault> {
+    if matches!(v, Value::Pose(_)) {
+        Ok((c.inverse(six, c.arm.q, c.arm.tcp)?, six))
     } else {
-        six
-    };
-    c.arm.qd = [0.0; 6];
-    c.arm.q = q;
-    Ok(match path {
-        Path::Joint => joint_distance(from_q, q),
-        Path::Line => line_distance(from_pose, c.tcp_pose()),
-    })
+        let q = check_joints(name, six)?;
+        Ok((q, c.tool_pose(q)))
+    }
 }
 
-/// `movej`, `movel`, `movep`, `optimovej`, `optimovel`: the arm is at the target when the
-/// move ends; the move takes `t` if given, else a trapezoidal profile (accelerate at `a`
-/// to `v`, cruise, decelerate) over the distance.
+/// A move of the tool from where it is along a line (or the arc through `via`) to `pose`
+/// (joints `q1` there), along a trapezoidal profile; returns its duration (s).
+fn tool_move(
+    c: &mut Controller,
+    via: Option<[f64; 6]>,
+    pose: [f64; 6],
+    (q1, given): ([f64; 6], bool),
+    (accel, speed, t): (f64, f64, f64),
+) -> f64 {
+    let p0 = c.tcp_pose();
+    let path = Path::new(p0, via, pose);
+    let (r0, turn) = trajectory::turn_between(p0, pose);
+    let length = path.length();
+    // A move that only turns the tool is timed on its angle.
+    let dist = if length > 1e-9 {
+        length
+    } else {
+        (turn[0] * turn[0] + turn[1] * turn[1] + turn[2] * turn[2]).sqrt()
+    };
+    let profile = Profile::new(dist, speed, accel, t);
+    let tcp = c.arm.tcp;
+    c.start_motion(
+        Kind::Tool {
+            path,
+            r0,
+            turn,
+            profile,
+            dist,
+            to: pose,
+            q0: c.arm.q,
+            q1,
+            given,
+        },
+        tcp,
+    );
+    profile.total
+}
+
+/// `movej`, `movel`, `movep`, `optimovej`, `optimovel`: the arm moves along a trapezoidal
+/// profile (accelerate at `a` to `v`, cruise, decelerate), stretched to `t` if given, and
+/// is at the target when the move ends. `r` (blending) has no effect: every move ends at
+/// its target with the arm at rest.
 fn movej(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
-    let target = a.six(0)?;
+    let six = a.six(0)?;
     let (accel, speed) = (a.num(1)?, a.num(2)?);
     // movep and optimove* have no `t`.
     let t = if a.params.len() == 5 { a.num(3)? } else { 0.0 };
-    let path = if matches!(a.name, "movej" | "optimovej") {
-        Path::Joint
+    let (q1, pose) = target(c, a.name, &a.v[0], six)?;
+    let dur = if matches!(a.name, "movej" | "optimovej") {
+        let q0 = c.arm.q;
+        let profile = Profile::new(joint_distance(q0, q1), speed, accel, t);
+        let tcp = c.arm.tcp;
+        c.start_motion(Kind::Joint { q0, q1, profile }, tcp);
+        profile.total
     } else {
-        Path::Line
-    };
-    let dist = go_to(c, &a.v[0], target, path)?;
-    let dur = if t > 0.0 {
-        t
-    } else {
-        kinematics::move_time(dist, speed, accel)
+        let given = !matches!(a.v[0], Value::Pose(_));
+        tool_move(c, None, pose, (q1, given), (accel, speed, t))
     };
     Ok(Out::Wait(secs(dur), Value::None))
 }
 
-/// `movec`: timed as a straight line to `pose_to` (the arc through `pose_via` is not
-/// modelled).
+/// `movec`: along the arc from the tool's position through `pose_via`'s to `pose_to`'s
+/// (a line if the three are on one), the orientation turning from the start's to
+/// `pose_to`'s (mode 0; mode 1, orientation fixed to the arc, is not modelled).
 fn movec(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
-    let target = a.six(1)?;
+    let via_six = a.six(0)?;
+    let via = if matches!(a.v[0], Value::Pose(_)) {
+        via_six
+    } else {
+        c.tool_pose(check_joints(a.name, via_six)?)
+    };
+    let six = a.six(1)?;
     let (accel, speed) = (a.num(2)?, a.num(3)?);
-    let dist = go_to(c, &a.v[1], target, Path::Line)?;
-    Ok(Out::Wait(
-        secs(kinematics::move_time(dist, speed, accel)),
-        Value::None,
-    ))
+    let (q1, pose) = target(c, a.name, &a.v[1], six)?;
+    let given = !matches!(a.v[1], Value::Pose(_));
+    let dur = tool_move(c, Some(via), pose, (q1, given), (accel, speed, 0.0));
+    Ok(Out::Wait(secs(dur), Value::None))
 }
 
 /// `protective_stop()`: the arm stops at once and the request is left for the
 /// controller that runs the arm (a program alone just goes on, stopped).
 fn protective_stop(c: &mut Controller, _: &mut Args) -> Result<Out, Fault> {
+    c.halt();
     c.arm.qd = [0.0; 6];
     c.arm.tcp_speed = [0.0; 6];
     c.arm.protective_stop = true;
     Ok(Out::Value(Value::None))
 }
 
+/// `servoj`: straight to `q` in joint space at constant speed over `t` (`a`, `v`,
+/// `lookahead_time` and `gain` shape a real servo's tracking; not modelled).
 fn servoj(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
-    let q = a.six(0)?;
+    let q1 = check_joints(a.name, a.six(0)?)?;
     let t = a.num(3)?;
-    if t > 0.0 {
-        for ((qd, new), old) in c.arm.qd.iter_mut().zip(q).zip(c.arm.q) {
-            *qd = (new - old) / t;
-        }
-    }
-    c.arm.q = q;
+    let q0 = c.arm.q;
+    let profile = Profile::new(joint_distance(q0, q1), 0.0, 0.0, t);
+    let tcp = c.arm.tcp;
+    c.start_motion(Kind::Joint { q0, q1, profile }, tcp);
     Ok(Out::Wait(secs(t), Value::None))
 }
 
+/// `speedj(qd, a, t)`, `speedl(xd, a, t, aRot)`: the speed ramps linearly from the
+/// current one to the target at `a` (the component that changes most; `aRot` for the
+/// tool's rotation, `a` if left out), then holds until the next motion command; returns
+/// after `t` (one step if left out).
 fn speed(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
-    let qd = a.six(0)?;
-    a.num(1)?;
+    let target = a.six(0)?;
+    let acc = a.num(1)?;
     let t = if a.is_absent(2) {
         c.step_time.as_secs_f64()
     } else {
         a.num(2)?
     };
+    let tcp = c.arm.tcp;
     if a.name == "speedj" {
-        c.arm.qd = qd;
-        for (q, v) in c.arm.q.iter_mut().zip(qd) {
-            *q += v * t;
-        }
+        let qd0 = c.arm.qd;
+        let ramp = trajectory::ramp_time(&qd0, &target, acc);
+        let q0 = c.arm.q;
+        c.start_motion(
+            Kind::JointSpeed {
+                q0,
+                qd0,
+                qd1: target,
+                ramp,
+            },
+            tcp,
+        );
     } else {
-        // The tool moves at `xd` for `t`; the joints follow it (inverse kinematics nearest
-        // the current joints).
-        c.arm.tcp_speed = qd;
-        let mut pose = c.tcp_pose();
-        for (x, v) in pose.iter_mut().zip(qd) {
-            *x += v * t;
-        }
-        c.arm.q = c.inverse(pose, c.arm.q, c.arm.tcp)?;
+        let a_rot = if a.is_absent(3) { acc } else { a.num(3)? };
+        tool_speed(c, target, acc, a_rot);
     }
     Ok(Out::Wait(secs(t), Value::None))
 }
 
+/// Ramps the tool speed to `v1` from the current one.
+fn tool_speed(c: &mut Controller, v1: [f64; 6], acc: f64, a_rot: f64) {
+    let v0 = c.arm.tcp_speed;
+    let ramp = trajectory::ramp_time(&v0[..3], &v1[..3], acc).max(trajectory::ramp_time(
+        &v0[3..],
+        &v1[3..],
+        a_rot,
+    ));
+    let p0 = c.tcp_pose();
+    let tcp = c.arm.tcp;
+    c.start_motion(Kind::ToolSpeed { p0, v0, v1, ramp }, tcp);
+}
+
+/// `stopj(a)`: the joint speeds ramp down to zero at `a` (the fastest joint; the others
+/// in proportion); `stopl(a, aRot)`: the tool speed, at `a` (`aRot` for its rotation).
+/// Returns when the arm is at rest (at least one step).
 fn stop(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
-    a.num(0)?;
-    c.arm.qd = [0.0; 6];
-    c.arm.tcp_speed = [0.0; 6];
-    Ok(Out::Wait(c.step_time, Value::None))
+    let acc = a.num(0)?;
+    let ramp = if a.name == "stopj" {
+        let qd0 = c.arm.qd;
+        let ramp = trajectory::ramp_time(&qd0, &[0.0; 6], acc);
+        let (q0, tcp) = (c.arm.q, c.arm.tcp);
+        c.start_motion(
+            Kind::JointSpeed {
+                q0,
+                qd0,
+                qd1: [0.0; 6],
+                ramp,
+            },
+            tcp,
+        );
+        ramp
+    } else {
+        let a_rot = if a.is_absent(1) { acc } else { a.num(1)? };
+        let v0 = c.arm.tcp_speed;
+        tool_speed(c, [0.0; 6], acc, a_rot);
+        trajectory::ramp_time(&v0[..3], &[0.0; 3], acc).max(trajectory::ramp_time(
+            &v0[3..],
+            &[0.0; 3],
+            a_rot,
+        ))
+    };
+    Ok(Out::Wait(secs(ramp).max(c.step_time), Value::None))
 }
 
 fn direct_torque(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
@@ -946,8 +1052,11 @@ fn has_solution(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
 }
 
 fn set_pos(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
-    c.arm.q = a.six(0)?;
+    let q = check_joints(a.name, a.six(0)?)?;
+    c.halt();
+    c.arm.q = q;
     c.arm.qd = [0.0; 6];
+    c.arm.tcp_speed = [0.0; 6];
     Ok(Out::Value(Value::None))
 }
 
@@ -1012,6 +1121,10 @@ fn tool_contact(_: &mut Controller, _: &mut Args) -> Result<Out, Fault> {
     Ok(Out::Value(Value::Int(0)))
 }
 
-fn is_steady(_: &mut Controller, _: &mut Args) -> Result<Out, Fault> {
+fn is_steady(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+    if a.name == "is_steady" {
+        let still = c.motion.is_none() && c.arm.qd.iter().all(|v| *v == 0.0);
+        return Ok(Out::Value(Value::Bool(still)));
+    }
     Ok(Out::Value(Value::Bool(true)))
 }

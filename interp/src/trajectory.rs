@@ -1,0 +1,574 @@
+//! The arm in time: a motion command becomes a [`Motion`], a function of the time since
+//! it started, and the controller sets the arm's joints, joint speeds and tool speed from
+//! it at every step (so a thread, or a client sampling [`Machine::arm`](crate::Machine::arm),
+//! sees the arm move, not jump).
+//!
+//! - Joint moves (`movej`, `optimovej`): a trapezoidal speed profile on the distance of the
+//!   joint that moves furthest (accelerate at `a`, cruise at `v`, decelerate; a triangle
+//!   when the move is too short to reach `v`); every joint follows it in proportion, so all
+//!   start and arrive together.
+//! - Tool moves (`movel`, `movep`, `optimovel`; `movec` on its arc): the same profile on the
+//!   tool's path length; the position moves along the line (or the circle through the
+//!   via point), the orientation turns about one axis from the start's to the target's;
+//!   the joints at each step are the inverse kinematics nearest the previous step's.
+//! - A time `t > 0` stretches (or shrinks) that profile to take `t`.
+//! - `servoj`: straight to its target in joint space at constant speed over its `t`.
+//! - `speedj`/`stopj`: the joint speeds ramp linearly to the target (the joint whose speed
+//!   changes most at `a`, the others in proportion), the joints integrate them; the speed
+//!   holds until the next motion command. `speedl`/`stopl`: the same for the tool speed;
+//!   the joints follow the tool by inverse kinematics.
+//!
+//! The end state of a move is its target exactly.
+
+use crate::kinematics::{self, Dh};
+use crate::pose::{mul, to_matrix, to_rotvec, transpose};
+
+type M = [[f64; 3]; 3];
+
+/// A trapezoidal speed profile over a distance.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct Profile {
+    /// The distance.
+    d: f64,
+    /// Peak speed and acceleration of the nominal profile.
+    vp: f64,
+    acc: f64,
+    /// Nominal ramp time and total time.
+    ta: f64,
+    t0: f64,
+    /// Nominal time per real second (`t` given: the nominal profile stretched).
+    scale: f64,
+    /// Real duration (s).
+    pub total: f64,
+}
+
+impl Profile {
+    /// The profile over `d` at speed `v`, acceleration `a` (not positive: no ramps), taking
+    /// `t` instead if `t > 0`. The nominal time is [`kinematics::move_time`]'s.
+    pub fn new(d: f64, v: f64, a: f64, t: f64) -> Profile {
+        let ok = |x: f64| x.is_finite() && x > 0.0;
+        let d = if ok(d) { d } else { 0.0 };
+        let t0 = kinematics::move_time(d, v, a);
+        let (vp, acc, ta) = if !ok(t0) {
+            (0.0, 0.0, 0.0)
+        } else if !ok(a) {
+            (d / t0, 0.0, 0.0)
+        } else if d >= v * v / a {
+            (v, a, v / a)
+        } else {
+            let ta = (d / a).sqrt();
+            (a * ta, a, ta)
+        };
+        let mut p = Profile {
+            d,
+            vp,
+            acc,
+            ta,
+            t0,
+            scale: 1.0,
+            total: t0,
+        };
+        if ok(t) && d > 0.0 {
+            if ok(t0) {
+                p.scale = t0 / t;
+            } else {
+                // No usable speed: constant speed over t.
+                p.vp = d / t;
+                p.t0 = t;
+            }
+            p.total = t;
+        }
+        p
+    }
+
+    /// Distance covered and speed, `t` seconds after the start.
+    pub fn at(&self, t: f64) -> (f64, f64) {
+        let tau = t.max(0.0) * self.scale;
+        if tau >= self.t0 || self.d <= 0.0 {
+            return (self.d, 0.0);
+        }
+        let (s, sd) = if tau < self.ta {
+            (0.5 * self.acc * tau * tau, self.acc * tau)
+        } else if tau <= self.t0 - self.ta {
+            (
+                0.5 * self.acc * self.ta * self.ta + self.vp * (tau - self.ta),
+                self.vp,
+            )
+        } else {
+            let left = self.t0 - tau;
+            (self.d - 0.5 * self.acc * left * left, self.acc * left)
+        };
+        (s.clamp(0.0, self.d), sd * self.scale)
+    }
+}
+
+/// The tool's path in space: a line, or an arc of a circle.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) enum Path {
+    Line {
+        from: [f64; 3],
+        to: [f64; 3],
+    },
+    /// Centre, radius, the unit vectors from the centre to the start and a quarter turn on,
+    /// the angle swept.
+    Arc {
+        c: [f64; 3],
+        r: f64,
+        u: [f64; 3],
+        w: [f64; 3],
+        angle: f64,
+    },
+}
+
+fn sub3(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+}
+fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ]
+}
+fn scale3(a: [f64; 3], k: f64) -> [f64; 3] {
+    [a[0] * k, a[1] * k, a[2] * k]
+}
+fn norm(a: [f64; 3]) -> f64 {
+    dot(a, a).sqrt()
+}
+fn xyz(p: [f64; 6]) -> [f64; 3] {
+    [p[0], p[1], p[2]]
+}
+fn rot(p: [f64; 6]) -> M {
+    to_matrix([p[3], p[4], p[5]])
+}
+
+impl Path {
+    /// The line from `from` to `to`, or the arc from `from` through `via` to `to` (a line
+    /// if the three points are on one line).
+    pub fn new(from: [f64; 6], via: Option<[f64; 6]>, to: [f64; 6]) -> Path {
+        let (p0, p1) = (xyz(from), xyz(to));
+        let line = Path::Line { from: p0, to: p1 };
+        let Some(via) = via else { return line };
+        let pv = xyz(via);
+        let a = sub3(p0, p1);
+        let b = sub3(pv, p1);
+        let axb = cross(a, b);
+        let n2 = dot(axb, axb);
+        if !n2.is_finite() || n2 < 1e-18 {
+            return line;
+        }
+        let k = sub3(scale3(b, dot(a, a)), scale3(a, dot(b, b)));
+        let off = scale3(cross(k, axb), 1.0 / (2.0 * n2));
+        let c = [p1[0] + off[0], p1[1] + off[1], p1[2] + off[2]];
+        let r = norm(sub3(p0, c));
+        let n = cross(sub3(pv, p0), sub3(p1, pv));
+        let nn = norm(n);
+        if !(r.is_finite() && r > 1e-9 && nn > 1e-18) {
+            return line;
+        }
+        let n = scale3(n, 1.0 / nn);
+        let u = scale3(sub3(p0, c), 1.0 / r);
+        let w = cross(n, u);
+        let e = sub3(p1, c);
+        let mut angle = dot(e, w).atan2(dot(e, u));
+        if angle <= 0.0 {
+            angle += std::f64::consts::TAU;
+        }
+        Path::Arc { c, r, u, w, angle }
+    }
+
+    /// Its length (m).
+    pub fn length(&self) -> f64 {
+        match *self {
+            Path::Line { from, to } => norm(sub3(to, from)),
+            Path::Arc { r, angle, .. } => r * angle,
+        }
+    }
+
+    /// The point at fraction `f` of the way, and the unit tangent there.
+    fn at(&self, f: f64) -> ([f64; 3], [f64; 3]) {
+        match *self {
+            Path::Line { from, to } => {
+                let d = sub3(to, from);
+                let l = norm(d);
+                let t = if l > 0.0 {
+                    scale3(d, 1.0 / l)
+                } else {
+                    [0.0; 3]
+                };
+                (
+                    [from[0] + d[0] * f, from[1] + d[1] * f, from[2] + d[2] * f],
+                    t,
+                )
+            }
+            Path::Arc { c, r, u, w, angle } => {
+                let (s, co) = (angle * f).sin_cos();
+                let p = [
+                    c[0] + r * (co * u[0] + s * w[0]),
+                    c[1] + r * (co * u[1] + s * w[1]),
+                    c[2] + r * (co * u[2] + s * w[2]),
+                ];
+                let t = [
+                    -s * u[0] + co * w[0],
+                    -s * u[1] + co * w[1],
+                    -s * u[2] + co * w[2],
+                ];
+                (p, t)
+            }
+        }
+    }
+}
+
+/// What the arm does.
+#[derive(Debug, Clone, PartialEq)]
+#[allow(clippy::large_enum_variant)]
+pub(crate) enum Kind {
+    /// Joint space, along a profile on the largest joint distance.
+    Joint {
+        q0: [f64; 6],
+        q1: [f64; 6],
+        profile: Profile,
+    },
+    /// Tool space: position along `path`, orientation turning by `turn` (a rotation vector
+    /// in the base frame) from `r0`, both along `profile` on the path length (or on the
+    /// turn, for a move that only turns); joints by inverse kinematics; `q1` at the end.
+    Tool {
+        path: Path,
+        r0: M,
+        turn: [f64; 3],
+        profile: Profile,
+        /// The profile's distance: the path length (or the turn's angle).
+        dist: f64,
+        /// The target pose; the joints at the start and at the target (given, or the
+        /// inverse kinematics nearest the start), and whether they were given.
+        to: [f64; 6],
+        q0: [f64; 6],
+        q1: [f64; 6],
+        given: bool,
+    },
+    /// Joint speeds ramping linearly from `qd0` to `qd1` over `ramp` seconds, then held.
+    JointSpeed {
+        q0: [f64; 6],
+        qd0: [f64; 6],
+        qd1: [f64; 6],
+        ramp: f64,
+    },
+    /// Tool speed ramping linearly from `v0` to `v1` over `ramp` seconds, then held.
+    ToolSpeed {
+        p0: [f64; 6],
+        v0: [f64; 6],
+        v1: [f64; 6],
+        ramp: f64,
+    },
+}
+
+/// A motion under way.
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct Motion {
+    pub kind: Kind,
+    /// The step it started in.
+    pub start: u64,
+    /// The thread that commanded it (a kill of that thread stops the arm).
+    pub owner: u32,
+    /// The TCP offset the tool moves of (for tool motions).
+    pub tcp: [f64; 6],
+}
+
+/// Where the arm is `t` seconds into a motion: joints, joint speeds, tool speed (base
+/// frame), and whether the motion is over (its end state reached for good).
+pub(crate) struct Sample {
+    pub q: [f64; 6],
+    pub qd: [f64; 6],
+    /// Known tool speed (tool motions); `None`: derive it from the joints.
+    pub tcp_speed: Option<[f64; 6]>,
+    pub done: bool,
+}
+
+/// The speed ramp's linear interpolation: speed and distance `t` s into it.
+fn ramp(v0: f64, v1: f64, ramp: f64, t: f64) -> (f64, f64) {
+    if ramp <= 0.0 || t >= ramp {
+        let r = ramp.max(0.0);
+        (v1, 0.5 * (v0 + v1) * r + v1 * (t - r).max(0.0))
+    } else {
+        let v = v0 + (v1 - v0) * t / ramp;
+        (v, 0.5 * (v0 + v) * t)
+    }
+}
+
+/// The time a speed change from `from` to `to` takes at `a` on the component that
+/// changes most (0: at once).
+pub(crate) fn ramp_time(from: &[f64], to: &[f64], a: f64) -> f64 {
+    let most = from
+        .iter()
+        .zip(to)
+        .map(|(x, y)| (y - x).abs())
+        .fold(0.0, f64::max);
+    if a.is_finite() && a > 0.0 && most.is_finite() {
+        most / a
+    } else {
+        0.0
+    }
+}
+
+impl Motion {
+    /// The arm `t` seconds in; `prev_q` the joints at the previous sample (for inverse
+    /// kinematics).
+    pub fn sample(&self, dh: &Dh, t: f64, prev_q: [f64; 6]) -> Sample {
+        match &self.kind {
+            Kind::Joint { q0, q1, profile } => {
+                if t >= profile.total {
+                    return Sample {
+                        q: *q1,
+                        qd: [0.0; 6],
+                        tcp_speed: Some([0.0; 6]),
+                        done: true,
+                    };
+                }
+                let (s, sd) = profile.at(t);
+                let d = profile.d;
+                let mut q = *q0;
+                let mut qd = [0.0; 6];
+                if d > 0.0 {
+                    for k in 0..6 {
+                        let dq = q1[k] - q0[k];
+                        q[k] = q0[k] + dq * (s / d);
+                        qd[k] = dq * (sd / d);
+                    }
+                }
+                Sample {
+                    q,
+                    qd,
+                    tcp_speed: None,
+                    done: false,
+                }
+            }
+            Kind::Tool {
+                path,
+                r0,
+                turn,
+                profile,
+                dist,
+                to,
+                q0,
+                q1,
+                given,
+            } => {
+                if t >= profile.total {
+                    // The joints that follow the path to the target: the ones given, if
+                    // the path led there, else the solution nearest the last step's.
+                    let near = |q: &[f64; 6]| (0..6).all(|k| (q[k] - prev_q[k]).abs() < 0.1);
+                    let q = if *given && near(q1) {
+                        *q1
+                    } else {
+                        nearest_ik(dh, *to, self.tcp, prev_q).unwrap_or(*q1)
+                    };
+                    return Sample {
+                        q,
+                        qd: [0.0; 6],
+                        tcp_speed: Some([0.0; 6]),
+                        done: true,
+                    };
+                }
+                let (s, sd) = profile.at(t);
+                let f = if *dist > 0.0 { s / dist } else { 1.0 };
+                let fd = if *dist > 0.0 { sd / dist } else { 0.0 };
+                let (p, tangent) = path.at(f);
+                let r = mul(to_matrix(scale3(*turn, f)), *r0);
+                let rv = to_rotvec(r);
+                let pose = [p[0], p[1], p[2], rv[0], rv[1], rv[2]];
+                let v = scale3(tangent, fd * path.length());
+                let w = scale3(*turn, fd);
+                let xd = [v[0], v[1], v[2], w[0], w[1], w[2]];
+                match nearest_ik(dh, pose, self.tcp, prev_q) {
+                    Some(q) => Sample {
+                        q,
+                        qd: joint_speed(dh, q, self.tcp, xd),
+                        tcp_speed: Some(xd),
+                        done: false,
+                    },
+                    // No solution here (a singularity on the way, or out of reach): the
+                    // joints move in joint space at the same fraction of the move.
+                    None => Sample {
+                        q: std::array::from_fn(|k| q0[k] + (q1[k] - q0[k]) * f),
+                        qd: std::array::from_fn(|k| (q1[k] - q0[k]) * fd),
+                        tcp_speed: None,
+                        done: false,
+                    },
+                }
+            }
+            Kind::JointSpeed {
+                q0,
+                qd0,
+                qd1,
+                ramp: r,
+            } => {
+                let mut q = *q0;
+                let mut qd = [0.0; 6];
+                for k in 0..6 {
+                    let (v, x) = ramp(qd0[k], qd1[k], *r, t);
+                    qd[k] = v;
+                    q[k] += x;
+                }
+                // A stop (all speeds to 0) is over once the speed is 0.
+                let stopped = qd1.iter().all(|v| *v == 0.0) && t >= *r;
+                Sample {
+                    q,
+                    qd,
+                    tcp_speed: None,
+                    done: stopped,
+                }
+            }
+            Kind::ToolSpeed {
+                p0,
+                v0,
+                v1,
+                ramp: r,
+            } => {
+                let mut x = [0.0; 6];
+                let mut v = [0.0; 6];
+                for k in 0..6 {
+                    (v[k], x[k]) = ramp(v0[k], v1[k], *r, t);
+                }
+                // Translation added; rotation turned about the base axes.
+                let rr = mul(to_matrix([x[3], x[4], x[5]]), rot(*p0));
+                let rv = to_rotvec(rr);
+                let pose = [
+                    p0[0] + x[0],
+                    p0[1] + x[1],
+                    p0[2] + x[2],
+                    rv[0],
+                    rv[1],
+                    rv[2],
+                ];
+                let q = nearest_ik(dh, pose, self.tcp, prev_q);
+                let stopped = v1.iter().all(|s| *s == 0.0) && t >= *r;
+                Sample {
+                    q: q.unwrap_or(prev_q),
+                    qd: match q {
+                        Some(q) => joint_speed(dh, q, self.tcp, v),
+                        None => [0.0; 6],
+                    },
+                    tcp_speed: Some(if q.is_some() { v } else { [0.0; 6] }),
+                    done: stopped || q.is_none(),
+                }
+            }
+        }
+    }
+}
+
+/// The solution nearest `near`, each joint within the arm's range.
+pub(crate) fn nearest_ik(
+    dh: &Dh,
+    pose: [f64; 6],
+    tcp: [f64; 6],
+    near: [f64; 6],
+) -> Option<[f64; 6]> {
+    let all = kinematics::inverse(dh, pose, tcp, near);
+    kinematics::nearest(&all, near)
+}
+
+/// The turn from `r0` to `r1` as a rotation vector in the base frame (`r1 = Rot(v)·r0`).
+pub(crate) fn turn_between(p0: [f64; 6], p1: [f64; 6]) -> ([[f64; 3]; 3], [f64; 3]) {
+    let r0 = rot(p0);
+    let r1 = rot(p1);
+    (r0, to_rotvec(mul(r1, transpose(r0))))
+}
+
+/// The tool speed (base frame: linear m/s, angular rad/s) of joints `q` moving at `qd`,
+/// by a finite difference of the forward kinematics.
+pub(crate) fn tcp_speed(dh: &Dh, q: [f64; 6], qd: [f64; 6], tcp: [f64; 6]) -> [f64; 6] {
+    if qd.iter().all(|v| *v == 0.0) {
+        return [0.0; 6];
+    }
+    let h = 1e-6;
+    let a = kinematics::forward(dh, q, tcp);
+    let mut q2 = q;
+    for k in 0..6 {
+        q2[k] += qd[k] * h;
+    }
+    let b = kinematics::forward(dh, q2, tcp);
+    let w = to_rotvec(mul(rot(b), transpose(rot(a))));
+    [
+        (b[0] - a[0]) / h,
+        (b[1] - a[1]) / h,
+        (b[2] - a[2]) / h,
+        w[0] / h,
+        w[1] / h,
+        w[2] / h,
+    ]
+}
+
+/// The joint speeds that move the tool at `v` (base frame), by the inverse kinematics a
+/// short time ahead.
+fn joint_speed(dh: &Dh, q: [f64; 6], tcp: [f64; 6], v: [f64; 6]) -> [f64; 6] {
+    if v.iter().all(|x| *x == 0.0) {
+        return [0.0; 6];
+    }
+    let h = 1e-6;
+    let p = kinematics::forward(dh, q, tcp);
+    let r = mul(to_matrix([v[3] * h, v[4] * h, v[5] * h]), rot(p));
+    let rv = to_rotvec(r);
+    let ahead = [
+        p[0] + v[0] * h,
+        p[1] + v[1] * h,
+        p[2] + v[2] * h,
+        rv[0],
+        rv[1],
+        rv[2],
+    ];
+    match nearest_ik(dh, ahead, tcp, q) {
+        Some(q2) => std::array::from_fn(|k| (q2[k] - q[k]) / h),
+        None => [0.0; 6],
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_profile_ends_at_its_distance_with_the_move_time() {
+        for (d, v, a, t) in [
+            (1.0, 0.5, 1.0, 0.0),
+            (0.01, 1.0, 1.0, 0.0),
+            (1.0, 0.5, 0.0, 0.0),
+            (1.0, 0.5, 1.0, 7.0),
+        ] {
+            let p = Profile::new(d, v, a, t);
+            let want = if t > 0.0 {
+                t
+            } else {
+                kinematics::move_time(d, v, a)
+            };
+            assert!((p.total - want).abs() < 1e-12);
+            assert_eq!(p.at(p.total), (d, 0.0));
+            // Monotonic, never faster than v (unless t stretches it shorter).
+            let mut last = 0.0;
+            for k in 0..=1000 {
+                let (s, sd) = p.at(p.total * f64::from(k) / 1000.0);
+                assert!(s >= last - 1e-15 && sd >= 0.0);
+                if t == 0.0 {
+                    assert!(sd <= v + 1e-12);
+                }
+                last = s;
+            }
+        }
+    }
+
+    #[test]
+    fn an_arc_passes_through_its_via_point() {
+        let from = [1.0, 0.0, 0.0, 0.0, 0.0, 0.0];
+        let via = [0.0, 1.0, 0.0, 0.0, 0.0, 0.0];
+        let to = [-1.0, 0.0, 0.0, 0.0, 0.0, 0.0];
+        let p = Path::new(from, Some(via), to);
+        assert!((p.length() - std::f64::consts::PI).abs() < 1e-12);
+        let (mid, _) = p.at(0.5);
+        assert!(norm(sub3(mid, [0.0, 1.0, 0.0])) < 1e-12);
+        let (end, _) = p.at(1.0);
+        assert!(norm(sub3(end, [-1.0, 0.0, 0.0])) < 1e-12);
+    }
+}
