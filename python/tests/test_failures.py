@@ -27,6 +27,9 @@ def test_a_syntax_error_fails_the_test_with_line_column_and_stderr(pytester: pyt
             "*ursock robot exited with status 1*",
             "*stderr:*",
             "*ursock: line 4, column *",
+            "*program:*",
+            "*  > 4 | end*",
+            "*| ^*",
             "*command: *ursock robot --json --script *",
         ]
     )
@@ -52,7 +55,9 @@ def test_a_runtime_error_names_its_line_and_shows_the_last_calls(pytester: pytes
     result.stdout.fnmatch_lines(
         [
             "*ursock robot exited with status 1*",
-            "*line 4*",
+            "*line 4: index out of range*",
+            "*program:*",
+            "*  > 4 | textmsg(values[7])*",
             "*error at line 4*",
             "*last calls:*",
             '*line 2: socket_send_line("x", "never_opened") -> failed*',

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import json
 import os
+import re
 import subprocess
 import tempfile
 from dataclasses import dataclass, field
@@ -220,6 +221,8 @@ class RobotRun:
     stderr: str
     #: Lines of stdout that were not JSON (none, normally).
     other_output: List[str] = field(default_factory=list)
+    #: The program's text, as ursock numbered its lines (``None`` if unreadable).
+    program: Optional[str] = field(default=None, repr=False)
 
     @property
     def ok(self) -> bool:
@@ -277,12 +280,48 @@ class RobotRun:
             raise RobotRunError(self)
         return self
 
+    def error_position(self) -> Optional[Tuple[int, Optional[int]]]:
+        """``(line, column)`` of the error ursock reported (column ``None`` for a
+        runtime error), from its ``error`` event or its stderr."""
+        for e in self.errors:
+            if isinstance(e.get("line"), int):
+                column = e.get("column")
+                return (e["line"], column if isinstance(column, int) and column > 0 else None)
+        m = _POSITION.search(self.stderr)
+        if m:
+            return (int(m.group(1)), int(m.group(2)) if m.group(2) else None)
+        return None
+
+    def excerpt(self, context: int = 2) -> str:
+        """The program's lines around the error, numbered, with a caret under the
+        column (``""`` when there is no error or no program text)."""
+        position = self.error_position()
+        if position is None or self.program is None:
+            return ""
+        line, column = position
+        lines = self.program.splitlines()
+        if not 1 <= line <= len(lines) + 1:
+            return ""
+        out = []
+        width = len(str(min(len(lines), line + context)))
+        for n in range(max(1, line - context), min(len(lines), line + context) + 1):
+            mark = ">" if n == line else " "
+            out.append(f"  {mark} {n:>{width}} | {lines[n - 1]}")
+            if n == line and column:
+                out.append("    " + " " * width + " | " + " " * (column - 1) + "^")
+        if line == len(lines) + 1:
+            out.append(f"  > {line:>{width}} | (end of program)")
+        return "\n".join(out)
+
     def describe_failure(self) -> str:
         """A readable account of a failed run: the exit status, stderr, the error
         events and the last calls."""
         parts = [f"ursock robot exited with status {self.returncode}"]
         if self.error_text:
             parts.append("stderr:\n" + _indent(self.error_text))
+        excerpt = self.excerpt()
+        if excerpt:
+            parts.append("program:\n" + excerpt)
         for e in self.errors:
             where = f"line {e.get('line')}" + (f", column {e.get('column')}" if e.get("column") else "")
             parts.append(f"error at {where}: {e.get('text')}")
@@ -290,6 +329,9 @@ class RobotRun:
             parts.append("last calls:\n" + _indent("\n".join(_shown(c) for c in self.calls[-5:])))
         parts.append("command: " + " ".join(_quote(a) for a in self.command))
         return "\n".join(parts)
+
+
+_POSITION = re.compile(r"\bline (\d+)(?:, column (\d+))?")
 
 
 def _indent(text: str) -> str:
@@ -410,10 +452,16 @@ def run_robot(
     tmpdir: Optional[tempfile.TemporaryDirectory[str]] = None
     try:
         script_file: Optional[Union[str, "os.PathLike[str]"]] = None
+        program: Optional[str] = "\n".join(lines) if lines is not None else None
         if script is not None:
             if _is_path(script):
                 script_file = script
+                try:
+                    program = Path(script).read_text(encoding="utf-8")
+                except (OSError, UnicodeDecodeError):
+                    program = None
             else:
+                program = str(script)
                 tmpdir = tempfile.TemporaryDirectory(prefix="ursock-")
                 script_file = Path(tmpdir.name) / "program.script"
                 Path(script_file).write_text(str(script), encoding="utf-8")
@@ -453,5 +501,6 @@ def run_robot(
         messages=[Message.from_event(e) for e in events if e.get("event") == "message"],
         stderr=done.stderr,
         other_output=other,
+        program=program,
     )
     return run.check() if check else run
