@@ -25,6 +25,7 @@ one; the ``URSOCK_BINARY`` environment variable does the same).
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
 from typing import Any, Iterator, Optional, Protocol, Sequence
 
@@ -74,6 +75,8 @@ def _ursock_path(config: pytest.Config) -> Path:
         path = Path(configured)
         if not path.is_absolute():
             path = Path(str(config.rootpath)) / path
+        if not (path.is_file() and os.access(path, os.X_OK)):
+            pytest.fail(f"ursock_binary = {configured}: {path} is not an executable file", pytrace=False)
         return path
     try:
         return binary()
