@@ -5,6 +5,7 @@ from __future__ import annotations
 import socket
 import socketserver
 import threading
+import time
 from pathlib import Path
 from typing import Callable, Iterator, List
 
@@ -144,6 +145,10 @@ def test_a_program_from_a_file_and_a_pose_argument(
         sent = run.call("socket_send_line")
         assert sent.args == [Pose(0.1, -0.25, 0.3, 0, 2.5, 0)]
         assert sent.socket == "socket_0"
+    # The program ends without waiting for the server: give its thread time to read.
+    deadline = time.monotonic() + 5
+    while len(camera.requests) < 2 and time.monotonic() < deadline:
+        time.sleep(0.01)
     assert camera.requests == ["p[0.1, -0.25, 0.3, 0, 2.5, 0]"] * 2
 
 
