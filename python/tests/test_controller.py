@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import time
+from pathlib import Path
 from typing import Any, Dict, List
 
 import pytest
@@ -112,3 +113,31 @@ def test_a_bad_option_fails_with_stderr() -> None:
 )
 def test_listening_events_of_every_shape(event: Dict[str, Any], expected: List[Any]) -> None:
     assert ports_of_event(event) == expected
+
+
+@pytest.mark.parametrize("style", ["named", "unnamed"])
+def test_the_port_options_help_lists_are_passed_and_their_ports_exposed(
+    style: str, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    import json
+    import socket
+    import sys
+
+    fake = tmp_path / "ursock"
+    fake.write_text(f"#!{sys.executable}\n" + (Path(__file__).parent / "fake_ursock.py").read_text())
+    fake.chmod(0o755)
+    argv = tmp_path / "argv.json"
+    monkeypatch.setenv("FAKE_URSOCK_ARGV", str(argv))
+    monkeypatch.setenv("FAKE_URSOCK_STYLE", style)
+    with UrController(ursock=fake, startup_timeout=10) as ur:
+        assert ur.server_options() == ["primary", "rtde"]
+        args = json.loads(argv.read_text())
+        assert args[args.index("--primary-port") + 1] == "0"
+        assert args[args.index("--rtde-port") + 1] == "0"
+        assert "--secondary-port" not in args and "--realtime-port" not in args
+        assert set(ur.ports) == {"dashboard", "primary", "rtde"}
+        assert len(set(ur.ports.values())) == 3
+        assert ur.secondary_port is None and ur.realtime_port is None
+        for port in (ur.dashboard_port, ur.primary_port, ur.rtde_port):
+            assert port is not None
+            socket.create_connection((ur.host, port), timeout=5).close()

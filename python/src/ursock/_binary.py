@@ -76,11 +76,11 @@ def _find(override: Optional[str]) -> Path:
     )
 
 
-def help_text(*subcommand: str) -> str:
+def help_text(*subcommand: str, ursock: Optional[str] = None) -> str:
     """``ursock SUBCOMMAND --help``, as text (empty when it cannot be run)."""
     try:
         done = subprocess.run(
-            [str(binary()), *subcommand, "--help"],
+            [ursock or str(binary()), *subcommand, "--help"],
             capture_output=True,
             text=True,
             timeout=30,

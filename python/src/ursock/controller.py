@@ -201,7 +201,7 @@ class UrController:
     def server_options(self) -> List[str]:
         """The servers besides the dashboard that this ``ursock controller`` can start
         (those whose ``--NAME-port`` option its ``--help`` lists)."""
-        text = help_text("controller")
+        text = help_text("controller", ursock=self._ursock)
         return [name for name in SERVERS if name != "dashboard" and f"--{name}-port" in text]
 
     def start(self) -> "UrController":
@@ -238,7 +238,7 @@ class UrController:
         self._spawn(self._read_stdout)
         self._spawn(self._read_stderr)
         try:
-            self._await_listening(1 + len(others))
+            self._await_listening(["dashboard", *others])
         except BaseException:
             self.stop()
             raise
@@ -268,7 +268,8 @@ class UrController:
             with self._lock:
                 self._stderr.append(line)
 
-    def _await_listening(self, expected: int) -> None:
+    def _await_listening(self, started: List[str]) -> None:
+        expected = len(started)
         deadline = time.monotonic() + self._startup_timeout
         unnamed: List[int] = []
         first_seen: Optional[float] = None
@@ -296,9 +297,9 @@ class UrController:
                     unnamed.append(port)
                 else:
                     self.ports.setdefault(name, port)
-        # Servers the events did not name: the dashboard first (the only one today),
-        # then the others in the order of their options.
-        order = [n for n in SERVERS if n not in self.ports]
+        # Servers the events did not name: in the order they were started (the
+        # dashboard first, the only one today, then the others in option order).
+        order = [n for n in started if n not in self.ports]
         for name, port in zip(order, unnamed):
             self.ports[name] = port
         if "dashboard" not in self.ports:
