@@ -1,0 +1,49 @@
+"""``ursock`` for Python: the ``ursock`` executable (installed with this package), a
+typed API over its JSON output, and a pytest plugin.
+
+* :func:`binary` finds the executable.
+* :func:`run_robot` runs a URScript program on the virtual robot against your servers
+  and returns a :class:`RobotRun` (its :class:`CallRecord` list, its :class:`Message`
+  list, every raw event).
+* :class:`UrController` runs the virtual controller (its dashboard server and, when
+  this ``ursock`` has them, the other servers).
+* The pytest plugin (:mod:`ursock.pytest_plugin`, loaded by pytest on its own) gives
+  the fixtures ``virtual_robot`` and ``ur_controller``.
+"""
+
+from __future__ import annotations
+
+from ._binary import ENV_VAR, BinaryNotFound, binary
+from .controller import SERVERS, ControllerError, DashboardClient, UrController
+from .robot import (
+    CallRecord,
+    Message,
+    Pose,
+    ReadResult,
+    RobotRun,
+    RobotRunError,
+    ScriptSource,
+    decode_value,
+    parse_events,
+    run_robot,
+)
+
+__all__ = [
+    "ENV_VAR",
+    "SERVERS",
+    "BinaryNotFound",
+    "CallRecord",
+    "ControllerError",
+    "DashboardClient",
+    "Message",
+    "Pose",
+    "ReadResult",
+    "RobotRun",
+    "RobotRunError",
+    "ScriptSource",
+    "UrController",
+    "binary",
+    "decode_value",
+    "parse_events",
+    "run_robot",
+]

@@ -1,0 +1,446 @@
+"""``ursock controller``, the virtual UR controller, as a Python object.
+
+:class:`UrController` starts ``ursock controller --json`` on free ports, reads the
+addresses it bound from its ``listening`` events, keeps every event it prints, and
+talks to its dashboard server (:meth:`UrController.dashboard`).
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import queue
+import re
+import socket
+import subprocess
+import threading
+import time
+from typing import IO, Any, Dict, List, Mapping, Optional, Sequence, Tuple, Union
+
+from ._binary import binary, help_text
+
+__all__ = ["ControllerError", "DashboardClient", "UrController", "SERVERS"]
+
+#: The controller's servers, by the name used here, with the port a real controller
+#: uses. ``ursock controller`` always serves the dashboard; the others only when its
+#: ``--help`` lists their ``--NAME-port`` option.
+SERVERS: Mapping[str, int] = {
+    "dashboard": 29999,
+    "primary": 30001,
+    "secondary": 30002,
+    "realtime": 30003,
+    "rtde": 30004,
+}
+
+_ADDR = re.compile(r"^\[?(?P<host>[^\]]*)\]?:(?P<port>\d+)$")
+
+
+class ControllerError(RuntimeError):
+    """``ursock controller`` could not be started, or ended early."""
+
+
+def _known_name(text: str) -> Optional[str]:
+    low = text.lower()
+    for name in SERVERS:
+        if name in low:
+            return name
+    if "real-time" in low or "real time" in low:
+        return "realtime"
+    return None
+
+
+def _port_of(value: Any) -> Optional[Tuple[Optional[str], int]]:
+    """``(host, port)`` of ``"host:port"``, ``(None, port)`` of an integer port."""
+    if isinstance(value, bool):
+        return None
+    if isinstance(value, int):
+        return (None, value)
+    if isinstance(value, str):
+        m = _ADDR.match(value.strip())
+        if m:
+            return (m.group("host") or None, int(m.group("port")))
+    return None
+
+
+def ports_of_event(event: Mapping[str, Any]) -> List[Tuple[Optional[str], Optional[str], int]]:
+    """The servers a ``listening`` event reports, as ``(name, host, port)``.
+
+    Today's event is ``{"event": "listening", "addr": "127.0.0.1:PORT"}`` (the
+    dashboard server). The servers being added may say which one they are in a field
+    (``"server": "primary"``, say), as ``NAME_port`` / ``NAME`` keys, or in a nested
+    object; all of these are read. ``name`` is ``None`` when the event does not say.
+    """
+    found: List[Tuple[Optional[str], Optional[str], int]] = []
+    for key, value in event.items():
+        if key in ("event", "t", "time", "addr"):
+            continue
+        low = key.lower()
+        base = low[:-5] if low.endswith("_port") else low[:-5] if low.endswith("_addr") else low
+        if base in SERVERS:
+            hp = _port_of(value)
+            if hp:
+                found.append((base, hp[0], hp[1]))
+                continue
+        if isinstance(value, Mapping):
+            found.extend(ports_of_event(value))
+        elif isinstance(value, list):
+            for item in value:
+                if isinstance(item, Mapping):
+                    found.extend(ports_of_event(item))
+    if "addr" in event:
+        hp = _port_of(event["addr"])
+        if hp:
+            name = None
+            for key in ("server", "service", "name", "kind", "interface", "role", "what", "stream"):
+                v = event.get(key)
+                if isinstance(v, str) and _known_name(v):
+                    name = _known_name(v)
+                    break
+            if name is None:
+                for key, v in event.items():
+                    if key not in ("event", "addr", "time") and isinstance(v, str) and _known_name(v):
+                        name = _known_name(v)
+                        break
+            found.append((name, hp[0], hp[1]))
+    return found
+
+
+class DashboardClient:
+    """One connection to a dashboard server: a command line out, its reply line back,
+    as PolyScope's own clients speak it."""
+
+    def __init__(self, host: str, port: int, timeout: float = 10.0) -> None:
+        self._sock = socket.create_connection((host, port), timeout=timeout)
+        self._reader: IO[bytes] = self._sock.makefile("rb")
+        #: The line the server greets with (``Connected: Universal Robots Dashboard
+        #: Server``).
+        self.greeting: str = self._readline()
+
+    def _readline(self) -> str:
+        line = self._reader.readline()
+        if not line:
+            raise ConnectionError("the dashboard server closed the connection")
+        return line.decode("utf-8", errors="replace").rstrip("\r\n")
+
+    def send(self, command: str) -> str:
+        """Send ``command`` (a newline is added) and return the reply line, without
+        its newline."""
+        self._sock.sendall(command.encode("utf-8") + b"\n")
+        return self._readline()
+
+    def close(self) -> None:
+        """Close the connection."""
+        try:
+            self._reader.close()
+        finally:
+            self._sock.close()
+
+    def __enter__(self) -> "DashboardClient":
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+
+class UrController:
+    """A running ``ursock controller``: the virtual controller on free ports.
+
+    Use it as a context manager, or call :meth:`start` and :meth:`stop`::
+
+        with UrController() as ur:
+            assert ur.dashboard("power on") == "Powering on"
+
+    :param host: the address to bind (and to connect to).
+    :param model: the arm model (``--model``).
+    :param polyscope: the PolyScope version it reports (``--polyscope``).
+    :param programs: a directory of programs ``load`` finds (``--programs``).
+    :param local: start in local control (``--local``).
+    :param extra_args: more ``ursock controller`` options, passed as they are.
+    :param all_servers: also start every other server (primary, secondary, real-time,
+        RTDE) that this ``ursock`` has, each on a free port.
+    :param startup_timeout: seconds to wait for the servers to listen.
+    """
+
+    def __init__(
+        self,
+        *,
+        host: str = "127.0.0.1",
+        model: Optional[str] = None,
+        polyscope: Optional[str] = None,
+        programs: Optional[Union[str, "os.PathLike[str]"]] = None,
+        local: bool = False,
+        extra_args: Sequence[str] = (),
+        all_servers: bool = True,
+        startup_timeout: float = 20.0,
+        ursock: Optional[Union[str, "os.PathLike[str]"]] = None,
+    ) -> None:
+        self.host = host
+        self._model = model
+        self._polyscope = polyscope
+        self._programs = programs
+        self._local = local
+        self._extra_args = list(extra_args)
+        self._all_servers = all_servers
+        self._startup_timeout = startup_timeout
+        self._ursock = str(ursock or binary())
+        #: The port of each server that listens, by name (``"dashboard"``,
+        #: ``"primary"``, ``"secondary"``, ``"realtime"``, ``"rtde"``).
+        self.ports: Dict[str, int] = {}
+        #: The command that was run.
+        self.command: List[str] = []
+        self._proc: Optional[subprocess.Popen[str]] = None
+        self._events: List[Dict[str, Any]] = []
+        self._lock = threading.Lock()
+        self._queue: "queue.Queue[Optional[Dict[str, Any]]]" = queue.Queue()
+        self._stderr: List[str] = []
+        self._threads: List[threading.Thread] = []
+        self._client: Optional[DashboardClient] = None
+
+    # -- the process ------------------------------------------------------------------
+
+    def server_options(self) -> List[str]:
+        """The servers besides the dashboard that this ``ursock controller`` can start
+        (those whose ``--NAME-port`` option its ``--help`` lists)."""
+        text = help_text("controller", ursock=self._ursock)
+        return [name for name in SERVERS if name != "dashboard" and f"--{name}-port" in text]
+
+    def start(self) -> "UrController":
+        """Start the controller and wait until its servers listen.
+
+        :raises ControllerError: when it exits or says nothing in time, with its stderr.
+        """
+        if self._proc is not None:
+            return self
+        others = self.server_options() if self._all_servers else []
+        cmd = [self._ursock, "controller", "--json", "--bind", self.host, "--dashboard-port", "0"]
+        for name in others:
+            cmd += [f"--{name}-port", "0"]
+        if self._model:
+            cmd += ["--model", self._model]
+        if self._polyscope:
+            cmd += ["--polyscope", self._polyscope]
+        if self._programs is not None:
+            cmd += ["--programs", os.fspath(self._programs)]
+        if self._local:
+            cmd.append("--local")
+        cmd += self._extra_args
+        self.command = cmd
+        self._proc = subprocess.Popen(
+            cmd,
+            stdin=subprocess.PIPE,
+            stdout=subprocess.PIPE,
+            stderr=subprocess.PIPE,
+            text=True,
+            encoding="utf-8",
+            errors="replace",
+            bufsize=1,
+        )
+        self._spawn(self._read_stdout)
+        self._spawn(self._read_stderr)
+        try:
+            self._await_listening(["dashboard", *others])
+        except BaseException:
+            self.stop()
+            raise
+        return self
+
+    def _spawn(self, target: Any) -> None:
+        thread = threading.Thread(target=target, daemon=True, name=f"ursock-controller-{target.__name__}")
+        thread.start()
+        self._threads.append(thread)
+
+    def _read_stdout(self) -> None:
+        assert self._proc is not None and self._proc.stdout is not None
+        for line in self._proc.stdout:
+            try:
+                event = json.loads(line)
+            except ValueError:
+                continue
+            if isinstance(event, dict):
+                with self._lock:
+                    self._events.append(event)
+                self._queue.put(event)
+        self._queue.put(None)
+
+    def _read_stderr(self) -> None:
+        assert self._proc is not None and self._proc.stderr is not None
+        for line in self._proc.stderr:
+            with self._lock:
+                self._stderr.append(line)
+
+    def _await_listening(self, started: List[str]) -> None:
+        expected = len(started)
+        deadline = time.monotonic() + self._startup_timeout
+        unnamed: List[int] = []
+        first_seen: Optional[float] = None
+        while True:
+            named = set(self.ports)
+            if len(named) + len(unnamed) >= expected:
+                break
+            now = time.monotonic()
+            # Once one server listens the others follow at once; do not wait the whole
+            # startup timeout for a server this ursock turns out not to report.
+            limit = deadline if first_seen is None else min(deadline, first_seen + 3.0)
+            if now >= limit:
+                break
+            try:
+                event = self._queue.get(timeout=limit - now)
+            except queue.Empty:
+                break
+            if event is None:
+                raise ControllerError(self._failure("exited before listening"))
+            if event.get("event") != "listening":
+                continue
+            first_seen = first_seen or time.monotonic()
+            for name, host, port in ports_of_event(event):
+                if name is None:
+                    unnamed.append(port)
+                else:
+                    self.ports.setdefault(name, port)
+        # Servers the events did not name: in the order they were started (the
+        # dashboard first, the only one today, then the others in option order).
+        order = [n for n in started if n not in self.ports]
+        for name, port in zip(order, unnamed):
+            self.ports[name] = port
+        if "dashboard" not in self.ports:
+            raise ControllerError(self._failure("no dashboard server listened in time"))
+
+    def _failure(self, what: str) -> str:
+        status = self._proc.poll() if self._proc else None
+        time.sleep(0.1)  # the stderr reader's last lines
+        with self._lock:
+            err = "".join(self._stderr).strip()
+        return (
+            f"ursock controller {what}"
+            + (f" (exit status {status})" if status is not None else "")
+            + (f"\nstderr:\n{err}" if err else "")
+            + "\ncommand: "
+            + " ".join(self.command)
+        )
+
+    def stop(self, timeout: float = 5.0) -> Optional[int]:
+        """Stop the controller (if still running) and return its exit status."""
+        if self._client is not None:
+            try:
+                self._client.close()
+            except OSError:
+                pass
+            self._client = None
+        proc = self._proc
+        if proc is None:
+            return None
+        if proc.poll() is None:
+            proc.terminate()
+            try:
+                proc.wait(timeout)
+            except subprocess.TimeoutExpired:
+                proc.kill()
+                proc.wait(timeout)
+        for stream in (proc.stdin, proc.stdout, proc.stderr):
+            if stream is not None:
+                try:
+                    stream.close()
+                except OSError:
+                    pass
+        for thread in self._threads:
+            thread.join(1.0)
+        return proc.returncode
+
+    def __enter__(self) -> "UrController":
+        return self.start()
+
+    def __exit__(self, *exc: object) -> None:
+        self.stop()
+
+    @property
+    def running(self) -> bool:
+        """The process is running."""
+        return self._proc is not None and self._proc.poll() is None
+
+    @property
+    def returncode(self) -> Optional[int]:
+        """The exit status, once it ended."""
+        return None if self._proc is None else self._proc.poll()
+
+    @property
+    def stderr(self) -> str:
+        """What it wrote on stderr so far."""
+        with self._lock:
+            return "".join(self._stderr)
+
+    # -- ports ------------------------------------------------------------------------
+
+    def _port(self, name: str) -> Optional[int]:
+        return self.ports.get(name)
+
+    @property
+    def dashboard_port(self) -> int:
+        """The dashboard server's port (29999 on a real controller)."""
+        return self.ports["dashboard"]
+
+    @property
+    def primary_port(self) -> Optional[int]:
+        """The primary interface's port (30001), when this ursock serves it."""
+        return self._port("primary")
+
+    @property
+    def secondary_port(self) -> Optional[int]:
+        """The secondary interface's port (30002), when this ursock serves it."""
+        return self._port("secondary")
+
+    @property
+    def realtime_port(self) -> Optional[int]:
+        """The real-time interface's port (30003), when this ursock serves it."""
+        return self._port("realtime")
+
+    @property
+    def rtde_port(self) -> Optional[int]:
+        """The RTDE interface's port (30004), when this ursock serves it."""
+        return self._port("rtde")
+
+    # -- talking to it ----------------------------------------------------------------
+
+    def dashboard(self, command: str) -> str:
+        """Send one dashboard command (``"power on"``, ``"robotmode"``...) on the
+        controller's shared connection and return the reply line."""
+        if self._client is None:
+            self._client = DashboardClient(self.host, self.dashboard_port)
+        return self._client.send(command)
+
+    def dashboard_client(self, timeout: float = 10.0) -> DashboardClient:
+        """A new, separate connection to the dashboard server (close it when done)."""
+        return DashboardClient(self.host, self.dashboard_port, timeout=timeout)
+
+    def operator(self, command: str) -> None:
+        """Type an operator command on the controller's standard input: what happens at
+        the robot that no dashboard command causes (``"protective stop"``,
+        ``"emergency stop"``, ``"release"``, ``"local"``, ``"remote"``...)."""
+        if self._proc is None or self._proc.stdin is None:
+            raise ControllerError("the controller is not running")
+        self._proc.stdin.write(command + "\n")
+        self._proc.stdin.flush()
+
+    @property
+    def events(self) -> List[Dict[str, Any]]:
+        """Every JSON event printed so far (``listening``, ``connect``,
+        ``dashboard``, ``close``...)."""
+        with self._lock:
+            return list(self._events)
+
+    def events_of(self, kind: str) -> List[Dict[str, Any]]:
+        """The events named ``kind`` printed so far."""
+        return [e for e in self.events if e.get("event") == kind]
+
+    def wait_for_event(self, kind: str, count: int = 1, timeout: float = 5.0) -> List[Dict[str, Any]]:
+        """Wait until at least ``count`` events named ``kind`` were printed; return them.
+
+        :raises TimeoutError: when they do not come in time.
+        """
+        deadline = time.monotonic() + timeout
+        while True:
+            found = self.events_of(kind)
+            if len(found) >= count:
+                return found
+            if time.monotonic() >= deadline:
+                raise TimeoutError(f"{len(found)} {kind!r} events after {timeout} s, expected {count}")
+            time.sleep(0.01)

@@ -1,0 +1,506 @@
+"""Running a URScript program on ``ursock``'s virtual robot, with typed results.
+
+:func:`run_robot` runs ``ursock robot --json`` and parses the JSON lines it prints
+(one event per line, see ``docs/json-events.md`` of the repository) into
+:class:`CallRecord` and :class:`Message` values, kept in a :class:`RobotRun`.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import re
+import subprocess
+import tempfile
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Dict, Iterable, List, Mapping, Optional, Sequence, Tuple, Union
+
+from ._binary import binary
+
+__all__ = [
+    "CallRecord",
+    "Message",
+    "Pose",
+    "ReadResult",
+    "RobotRun",
+    "RobotRunError",
+    "ScriptSource",
+    "decode_value",
+    "parse_events",
+    "robot_command",
+    "run_robot",
+]
+
+#: A program: its text (``str``), or a file (``pathlib.Path`` or any ``os.PathLike``).
+#: A ``str`` without a newline that names an existing file is read as that file.
+ScriptSource = Union[str, "os.PathLike[str]"]
+
+
+@dataclass(frozen=True)
+class Pose:
+    """A URScript pose ``p[x, y, z, rx, ry, rz]`` (metres, radians; a non-finite
+    number is ``None``)."""
+
+    x: Optional[float]
+    y: Optional[float]
+    z: Optional[float]
+    rx: Optional[float]
+    ry: Optional[float]
+    rz: Optional[float]
+
+    def as_list(self) -> List[Optional[float]]:
+        """The six numbers, in order."""
+        return [self.x, self.y, self.z, self.rx, self.ry, self.rz]
+
+
+@dataclass(frozen=True)
+class ReadResult:
+    """What a robot read function returned as a list ``[count, v1, v2, ...]``:
+    ``socket_read_ascii_float``, ``socket_read_binary_integer``,
+    ``socket_read_byte_list``. ``values`` are the values after the count (a sentinel's
+    ``nan`` is ``None``)."""
+
+    count: int
+    values: List[Any]
+
+    def as_list(self) -> List[Any]:
+        """The list as URScript sees it: ``[count, v1, v2, ...]``."""
+        return [self.count, *self.values]
+
+
+def decode_value(value: Any) -> Any:
+    """A URScript value of the JSON events as a Python value.
+
+    Numbers, booleans and ``null`` (no value, or a non-finite float) stay as they are;
+    a string (``{"encoding": "utf-8", "text": ...}``) becomes ``str``, one that is not
+    UTF-8 (``{"encoding": "hex", ...}``) ``bytes``; ``{"pose": [...]}`` a :class:`Pose`;
+    ``{"count": n, "values": [...]}`` a :class:`ReadResult`; lists are decoded
+    element by element.
+    """
+    if isinstance(value, list):
+        return [decode_value(v) for v in value]
+    if isinstance(value, dict):
+        encoding = value.get("encoding")
+        if encoding == "utf-8" and "text" in value:
+            return value["text"]
+        if encoding == "hex" and "hex" in value:
+            return bytes.fromhex(value["hex"])
+        if "pose" in value and isinstance(value["pose"], list) and len(value["pose"]) == 6:
+            return Pose(*value["pose"])
+        if "count" in value and "values" in value:
+            return ReadResult(int(value["count"]), [decode_value(v) for v in value["values"]])
+    return value
+
+
+@dataclass(frozen=True)
+class CallRecord:
+    """One function call of the program (every socket function, and stubbed
+    functions), from a ``call`` event."""
+
+    #: Seconds since the start.
+    t: float
+    #: The program line (0: the socket_open of ``--connect``).
+    line: int
+    #: The column of the call's name.
+    column: int
+    #: The function, like ``"socket_read_ascii_float"``.
+    call: str
+    #: The call as URScript with its evaluated arguments, ``x = `` in front when the
+    #: statement assigns it.
+    source: str
+    #: The socket it used, for socket functions.
+    socket: Optional[str]
+    #: The arguments, positional then named (decoded by :func:`decode_value`).
+    args: List[Any]
+    #: What it returned (decoded by :func:`decode_value`: a read gives a
+    #: :class:`ReadResult`, a string read a ``str``).
+    result: Any
+    #: ``"returned"``, ``"timed_out"``, ``"stubbed"`` or ``"failed"``.
+    outcome: str
+    #: The result is a read's failure sentinel, or fewer floats than asked.
+    sentinel: bool
+    #: Why it failed or returned its sentinel, when known.
+    why: Optional[str]
+    #: The event as printed.
+    raw: Mapping[str, Any] = field(repr=False, compare=False)
+
+    @classmethod
+    def from_event(cls, event: Mapping[str, Any]) -> "CallRecord":
+        """The record of one ``call`` event."""
+        return cls(
+            t=float(event.get("t", 0.0)),
+            line=int(event.get("line", 0)),
+            column=int(event.get("column", 0)),
+            call=str(event.get("call", "")),
+            source=str(event.get("source", "")),
+            socket=event.get("socket"),
+            args=[decode_value(a) for a in event.get("args", [])],
+            result=decode_value(event.get("result")),
+            outcome=str(event.get("outcome", "")),
+            sentinel=bool(event.get("sentinel", False)),
+            why=event.get("why"),
+            raw=dict(event),
+        )
+
+    @property
+    def assigned_to(self) -> Optional[str]:
+        """The variable the statement assigned the result to (``pose`` for
+        ``pose = socket_read_ascii_float(3)``), if any."""
+        head, sep, rest = self.source.partition(" = ")
+        if sep and rest.startswith(self.call + "("):
+            return head
+        return None
+
+    @property
+    def ok(self) -> bool:
+        """The call returned normally (no timeout, no failure, no sentinel)."""
+        return self.outcome in ("returned", "stubbed") and not self.sentinel
+
+    @property
+    def values(self) -> List[Any]:
+        """A read's values (after the count); ``[]`` when the result is not a read's."""
+        return list(self.result.values) if isinstance(self.result, ReadResult) else []
+
+
+@dataclass(frozen=True)
+class Message:
+    """Text the program showed (``textmsg``, ``popup``, ``varmsg``), from a
+    ``message`` event."""
+
+    #: Seconds since the start.
+    t: float
+    #: The program line.
+    line: int
+    #: ``"textmsg"``, ``"popup"`` or ``"varmsg"``.
+    kind: str
+    #: The text shown.
+    text: str
+    #: The call that showed it, with its evaluated arguments.
+    source: str
+    #: The event as printed.
+    raw: Mapping[str, Any] = field(repr=False, compare=False)
+
+    @classmethod
+    def from_event(cls, event: Mapping[str, Any]) -> "Message":
+        """The message of one ``message`` event."""
+        return cls(
+            t=float(event.get("t", 0.0)),
+            line=int(event.get("line", 0)),
+            kind=str(event.get("kind", "")),
+            text=str(event.get("text", "")),
+            source=str(event.get("source", "")),
+            raw=dict(event),
+        )
+
+
+class RobotRunError(AssertionError):
+    """``ursock robot`` exited with an error (a syntax error, a runtime error, a bad
+    option). ``run`` holds everything it printed."""
+
+    def __init__(self, run: "RobotRun") -> None:
+        super().__init__(run.describe_failure())
+        self.run = run
+
+
+@dataclass
+class RobotRun:
+    """One run of ``ursock robot --json``: what the program did."""
+
+    #: The command that was run.
+    command: List[str]
+    #: Its exit status (0: the program ended, halted or reached ``max_time``).
+    returncode: int
+    #: Every JSON event, in order, as parsed dicts.
+    events: List[Dict[str, Any]]
+    #: The socket (and stubbed) calls, in order.
+    calls: List[CallRecord]
+    #: The texts shown (textmsg, popup, varmsg), in order.
+    messages: List[Message]
+    #: Everything written on stderr (errors and notes).
+    stderr: str
+    #: Lines of stdout that were not JSON (none, normally).
+    other_output: List[str] = field(default_factory=list)
+    #: The program's text, as ursock numbered its lines (``None`` if unreadable).
+    program: Optional[str] = field(default=None, repr=False)
+
+    @property
+    def ok(self) -> bool:
+        """``ursock`` exited with 0."""
+        return self.returncode == 0
+
+    @property
+    def outcome(self) -> Optional[str]:
+        """How the program ended (the ``end`` event): ``"finished"``, ``"halted"``,
+        ``"max_time"``, ``"error"``; ``None`` when no ``end`` event was printed (a
+        syntax error or a bad option stops ``ursock`` before the program starts)."""
+        for e in reversed(self.events):
+            if e.get("event") == "end":
+                return str(e.get("outcome"))
+        return None
+
+    @property
+    def errors(self) -> List[Dict[str, Any]]:
+        """The ``error`` events (a runtime error: its ``line``, ``column``, ``text``)."""
+        return [e for e in self.events if e.get("event") == "error"]
+
+    @property
+    def notes(self) -> List[str]:
+        """The texts of the ``note`` events."""
+        return [str(e.get("text", "")) for e in self.events if e.get("event") == "note"]
+
+    @property
+    def texts(self) -> List[str]:
+        """The texts the program showed, in order."""
+        return [m.text for m in self.messages]
+
+    @property
+    def error_text(self) -> str:
+        """What went wrong, as ursock said it on stderr (``""`` if nothing)."""
+        return self.stderr.strip()
+
+    def calls_to(self, name: str) -> List[CallRecord]:
+        """The calls of the function ``name``, in order."""
+        return [c for c in self.calls if c.call == name]
+
+    def call(self, name: str, index: int = 0) -> CallRecord:
+        """The ``index``-th call of ``name`` (the first by default).
+
+        :raises LookupError: when there are not that many, naming the calls made.
+        """
+        found = self.calls_to(name)
+        if index >= len(found) or index < -len(found):
+            made = ", ".join(c.source for c in self.calls) or "none"
+            raise LookupError(f"no call #{index} of {name} (calls made: {made})")
+        return found[index]
+
+    def check(self) -> "RobotRun":
+        """This run, or :class:`RobotRunError` if ursock exited with an error."""
+        if not self.ok:
+            raise RobotRunError(self)
+        return self
+
+    def error_position(self) -> Optional[Tuple[int, Optional[int]]]:
+        """``(line, column)`` of the error ursock reported (column ``None`` for a
+        runtime error), from its ``error`` event or its stderr."""
+        for e in self.errors:
+            if isinstance(e.get("line"), int):
+                column = e.get("column")
+                return (e["line"], column if isinstance(column, int) and column > 0 else None)
+        m = _POSITION.search(self.stderr)
+        if m:
+            return (int(m.group(1)), int(m.group(2)) if m.group(2) else None)
+        return None
+
+    def excerpt(self, context: int = 2) -> str:
+        """The program's lines around the error, numbered, with a caret under the
+        column (``""`` when there is no error or no program text)."""
+        position = self.error_position()
+        if position is None or self.program is None:
+            return ""
+        line, column = position
+        lines = self.program.splitlines()
+        if not 1 <= line <= len(lines) + 1:
+            return ""
+        out = []
+        width = len(str(min(len(lines), line + context)))
+        for n in range(max(1, line - context), min(len(lines), line + context) + 1):
+            mark = ">" if n == line else " "
+            out.append(f"  {mark} {n:>{width}} | {lines[n - 1]}")
+            if n == line and column:
+                out.append("    " + " " * width + " | " + " " * (column - 1) + "^")
+        if line == len(lines) + 1:
+            out.append(f"  > {line:>{width}} | (end of program)")
+        return "\n".join(out)
+
+    def describe_failure(self) -> str:
+        """A readable account of a failed run: the exit status, stderr, the error
+        events and the last calls."""
+        parts = [f"ursock robot exited with status {self.returncode}"]
+        if self.error_text:
+            parts.append("stderr:\n" + _indent(self.error_text))
+        excerpt = self.excerpt()
+        if excerpt:
+            parts.append("program:\n" + excerpt)
+        for e in self.errors:
+            where = f"line {e.get('line')}" + (f", column {e.get('column')}" if e.get("column") else "")
+            parts.append(f"error at {where}: {e.get('text')}")
+        if self.calls:
+            parts.append("last calls:\n" + _indent("\n".join(_shown(c) for c in self.calls[-5:])))
+        parts.append("command: " + " ".join(_quote(a) for a in self.command))
+        return "\n".join(parts)
+
+
+_POSITION = re.compile(r"\bline (\d+)(?:, column (\d+))?")
+
+
+def _indent(text: str) -> str:
+    return "\n".join("    " + line for line in text.splitlines())
+
+
+def _quote(arg: str) -> str:
+    return arg if arg and all(c.isalnum() or c in "-_./:=@," for c in arg) else repr(arg)
+
+
+def _shown(c: CallRecord) -> str:
+    return f"line {c.line}: {c.source} -> {c.outcome}" + (f" ({c.why})" if c.why else "")
+
+
+def parse_events(lines: Iterable[str]) -> Tuple[List[Dict[str, Any]], List[str]]:
+    """The JSON events among ``lines``, and the lines that are not events."""
+    events: List[Dict[str, Any]] = []
+    other: List[str] = []
+    for line in lines:
+        text = line.strip()
+        if not text:
+            continue
+        try:
+            event = json.loads(text)
+        except ValueError:
+            other.append(line)
+            continue
+        if isinstance(event, dict) and "event" in event:
+            events.append(event)
+        else:
+            other.append(line)
+    return events, other
+
+
+def _is_path(script: ScriptSource) -> bool:
+    if isinstance(script, os.PathLike):
+        return True
+    return "\n" not in script and len(script) < 4096 and Path(script).is_file()
+
+
+def robot_command(
+    *,
+    script_file: Optional[Union[str, "os.PathLike[str]"]] = None,
+    lines: Sequence[str] = (),
+    connect: Optional[str] = None,
+    stub: Sequence[str] = (),
+    max_time: Optional[float] = None,
+    step_time: Optional[float] = None,
+    model: Optional[str] = None,
+    trace: bool = False,
+    extra_args: Sequence[str] = (),
+    ursock: Optional[Union[str, "os.PathLike[str]"]] = None,
+) -> List[str]:
+    """The ``ursock robot ... --json`` command line for these options."""
+    cmd = [str(ursock or binary()), "robot", "--json"]
+    if script_file is not None:
+        cmd += ["--script", os.fspath(script_file)]
+    for line in lines:
+        cmd += ["-e", line]
+    if connect is not None:
+        cmd += ["--connect", connect]
+    for s in stub:
+        cmd += ["--stub", s]
+    if max_time is not None:
+        cmd += ["--max-time", repr(float(max_time))]
+    if step_time is not None:
+        cmd += ["--step-time", repr(float(step_time))]
+    if model is not None:
+        cmd += ["--model", model]
+    if trace:
+        cmd.append("--trace")
+    cmd += list(extra_args)
+    return cmd
+
+
+def run_robot(
+    script: Optional[ScriptSource] = None,
+    lines: Optional[Sequence[str]] = None,
+    *,
+    connect: Optional[str] = None,
+    stub: Sequence[str] = (),
+    max_time: Optional[float] = None,
+    step_time: Optional[float] = None,
+    model: Optional[str] = None,
+    trace: bool = False,
+    extra_args: Sequence[str] = (),
+    timeout: Optional[float] = None,
+    check: bool = False,
+    cwd: Optional[Union[str, "os.PathLike[str]"]] = None,
+    env: Optional[Mapping[str, str]] = None,
+    ursock: Optional[Union[str, "os.PathLike[str]"]] = None,
+) -> RobotRun:
+    """Run a URScript program on ``ursock``'s virtual robot, in real time, against
+    real servers, and return what it did.
+
+    Give exactly one of ``script`` (the program's text, or a file: a ``Path``, or a
+    ``str`` without newlines naming an existing file) and ``lines`` (statements, each
+    passed as ``-e``).
+
+    :param connect: ``HOST:PORT``: open ``socket_0`` there before the program runs.
+    :param stub: ``NAME`` or ``NAME=VALUE``: functions the virtual robot lacks (a
+        URCap's), made a no-op or a constant (``--stub``).
+    :param max_time: end a program that loops forever after this many seconds (a
+        success if nothing failed before; :attr:`RobotRun.outcome` is ``"max_time"``).
+    :param step_time: the controller's step (0.002 e-Series, 0.008 CB3).
+    :param model: the arm (``ur5e``, ``ur10e``, ...).
+    :param trace: also record the bytes both ways (``tx``/``rx`` events).
+    :param extra_args: more ``ursock robot`` options, passed as they are.
+    :param timeout: kill ursock after this many seconds (default: ``max_time`` + 30,
+        or 300 without ``max_time``); raises ``subprocess.TimeoutExpired``.
+    :param check: raise :class:`RobotRunError` when ursock exits with an error.
+    :param ursock: the executable (default: :func:`ursock.binary`).
+    """
+    if (script is None) == (lines is None):
+        raise TypeError("run_robot: give exactly one of script= and lines=")
+    if timeout is None:
+        timeout = (max_time + 30.0) if max_time is not None else 300.0
+    tmpdir: Optional[tempfile.TemporaryDirectory[str]] = None
+    try:
+        script_file: Optional[Union[str, "os.PathLike[str]"]] = None
+        program: Optional[str] = "\n".join(lines) if lines is not None else None
+        if script is not None:
+            if _is_path(script):
+                script_file = script
+                try:
+                    program = Path(script).read_text(encoding="utf-8")
+                except (OSError, UnicodeDecodeError):
+                    program = None
+            else:
+                program = str(script)
+                tmpdir = tempfile.TemporaryDirectory(prefix="ursock-")
+                script_file = Path(tmpdir.name) / "program.script"
+                Path(script_file).write_text(str(script), encoding="utf-8")
+        cmd = robot_command(
+            script_file=script_file,
+            lines=list(lines or ()),
+            connect=connect,
+            stub=stub,
+            max_time=max_time,
+            step_time=step_time,
+            model=model,
+            trace=trace,
+            extra_args=extra_args,
+            ursock=ursock,
+        )
+        done = subprocess.run(
+            cmd,
+            stdin=subprocess.DEVNULL,
+            capture_output=True,
+            text=True,
+            encoding="utf-8",
+            errors="replace",
+            timeout=timeout,
+            cwd=None if cwd is None else os.fspath(cwd),
+            env=None if env is None else dict(env),
+            check=False,
+        )
+    finally:
+        if tmpdir is not None:
+            tmpdir.cleanup()
+    events, other = parse_events(done.stdout.splitlines())
+    run = RobotRun(
+        command=cmd,
+        returncode=done.returncode,
+        events=events,
+        calls=[CallRecord.from_event(e) for e in events if e.get("event") == "call"],
+        messages=[Message.from_event(e) for e in events if e.get("event") == "message"],
+        stderr=done.stderr,
+        other_output=other,
+        program=program,
+    )
+    return run.check() if check else run

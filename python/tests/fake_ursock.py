@@ -1,0 +1,53 @@
+"""A stand-in for an ``ursock`` whose controller serves more than the dashboard (the
+primary and RTDE servers being added), to check that ``UrController`` passes the port
+options its ``--help`` lists and reads every port the ``listening`` events report.
+
+``FAKE_URSOCK_STYLE``: ``named`` (one event per server, with ``"server"``) or
+``unnamed`` (one event per server, in option order, without a name). The command line
+is written to ``FAKE_URSOCK_ARGV``.
+"""
+
+import json
+import os
+import socket
+import sys
+import time
+
+HELP = """Usage: ursock controller [OPTIONS]
+
+Options:
+      --bind <BIND>                      Address to bind [default: 127.0.0.1]
+      --dashboard-port <DASHBOARD_PORT>  The dashboard server's port (0 picks a free one)
+      --primary-port <PRIMARY_PORT>      The primary interface's port (0 picks a free one)
+      --rtde-port <RTDE_PORT>            The RTDE interface's port (0 picks a free one)
+      --json                             One JSON event per line
+"""
+
+
+def main() -> None:
+    args = sys.argv[1:]
+    if args[:1] == ["controller"] and "--help" in args:
+        print(HELP)
+        return
+    with open(os.environ["FAKE_URSOCK_ARGV"], "w") as f:
+        json.dump(args, f)
+    named = os.environ.get("FAKE_URSOCK_STYLE", "named") == "named"
+    listeners = []
+    for name in ("dashboard", "primary", "rtde"):
+        flag = f"--{name}-port"
+        if flag not in args or args[args.index(flag) + 1] != "0":
+            sys.exit(f"fake ursock: expected {flag} 0 in {args}")
+        s = socket.socket()
+        s.bind(("127.0.0.1", 0))
+        s.listen()
+        listeners.append(s)
+        event = {"event": "listening", "t": 0.0, "addr": "127.0.0.1:%d" % s.getsockname()[1]}
+        if named and name != "dashboard":
+            event["server"] = name
+        print(json.dumps(event), flush=True)
+    while True:
+        time.sleep(1)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,143 @@
+"""ur_controller: ursock controller on free ports, driven through its dashboard server."""
+
+from __future__ import annotations
+
+import time
+from pathlib import Path
+from typing import Any, Dict, List
+
+import pytest
+
+from ursock import UrController
+from ursock.controller import ports_of_event
+
+
+def _wait_for(ur: UrController, command: str, reply: str, seconds: float = 10.0) -> None:
+    deadline = time.monotonic() + seconds
+    last = ""
+    while time.monotonic() < deadline:
+        last = ur.dashboard(command)
+        if last == reply:
+            return
+        time.sleep(0.05)
+    raise AssertionError(f"{command!r} still answers {last!r}, expected {reply!r}")
+
+
+def test_power_on_and_robotmode_round_trip(ur_controller: UrController) -> None:
+    assert ur_controller.host == "127.0.0.1"
+    assert 0 < ur_controller.dashboard_port < 65536
+    assert ur_controller.dashboard_port != 29999 or ur_controller.ports["dashboard"] == 29999
+    assert ur_controller.dashboard("robotmode") == "Robotmode: POWER_OFF"
+    assert ur_controller.dashboard("power on") == "Powering on"
+    _wait_for(ur_controller, "robotmode", "Robotmode: IDLE")
+    assert ur_controller.dashboard("brake release") == "Brake releasing"
+    _wait_for(ur_controller, "robotmode", "Robotmode: RUNNING")
+    assert ur_controller.dashboard("power off") == "Powering off"
+    assert ur_controller.dashboard("robotmode") == "Robotmode: POWER_OFF"
+    # The controller printed each command and its reply as a `dashboard` event.
+    events = ur_controller.wait_for_event("dashboard", count=4)
+    assert events[0]["command"] == "robotmode" and events[0]["reply"] == ["Robotmode: POWER_OFF"]
+    assert {"command": "power on", "reply": ["Powering on"]}.items() <= events[1].items()
+
+
+def test_clients_share_one_controller(ur_controller: UrController) -> None:
+    with ur_controller.dashboard_client() as client:
+        assert "Dashboard Server" in client.greeting
+        assert client.send("power on") == "Powering on"
+    _wait_for(ur_controller, "robotmode", "Robotmode: IDLE")
+    ur_controller.wait_for_event("close")
+
+
+def test_operator_protective_stop(ur_controller: UrController) -> None:
+    ur_controller.dashboard("power on")
+    _wait_for(ur_controller, "robotmode", "Robotmode: IDLE")
+    ur_controller.dashboard("brake release")
+    _wait_for(ur_controller, "robotmode", "Robotmode: RUNNING")
+    ur_controller.operator("protective stop")
+    _wait_for(ur_controller, "safetystatus", "Safetystatus: PROTECTIVE_STOP")
+
+
+def test_every_port_the_controller_reports_is_exposed(ur_controller: UrController) -> None:
+    # Whatever servers this ursock has: each that --help lists was started and listens.
+    import socket
+
+    expected = {"dashboard", *ur_controller.server_options()}
+    assert set(ur_controller.ports) == expected
+    for name, port in ur_controller.ports.items():
+        with socket.create_connection((ur_controller.host, port), timeout=5):
+            pass
+        assert getattr(ur_controller, f"{name}_port") == port
+    for name in {"primary", "secondary", "realtime", "rtde"} - expected:
+        assert getattr(ur_controller, f"{name}_port") is None
+
+
+def test_stop_ends_the_process() -> None:
+    ur = UrController().start()
+    assert ur.running
+    ur.stop()
+    assert not ur.running and ur.returncode is not None
+
+
+def test_a_bad_option_fails_with_stderr() -> None:
+    from ursock import ControllerError
+
+    with pytest.raises(ControllerError) as info:
+        UrController(polyscope="five").start()
+    assert "--polyscope five" in str(info.value)
+
+
+@pytest.mark.parametrize(
+    "event, expected",
+    [
+        # Today's event: the dashboard server, unnamed.
+        ({"event": "listening", "t": 0.0, "addr": "127.0.0.1:4000"}, [(None, "127.0.0.1", 4000)]),
+        # One event per server, naming it.
+        (
+            {"event": "listening", "t": 0.0, "addr": "127.0.0.1:4001", "server": "primary"},
+            [("primary", "127.0.0.1", 4001)],
+        ),
+        (
+            {"event": "listening", "t": 0.0, "addr": "[::1]:4004", "interface": "RTDE"},
+            [("rtde", "::1", 4004)],
+        ),
+        # One event with every port.
+        (
+            {"event": "listening", "t": 0.0, "addr": "127.0.0.1:4000", "realtime_port": 4003},
+            [("realtime", None, 4003), (None, "127.0.0.1", 4000)],
+        ),
+        (
+            {"event": "listening", "t": 0.0, "ports": {"dashboard": 4000, "secondary": "127.0.0.1:4002"}},
+            [("dashboard", None, 4000), ("secondary", "127.0.0.1", 4002)],
+        ),
+    ],
+)
+def test_listening_events_of_every_shape(event: Dict[str, Any], expected: List[Any]) -> None:
+    assert ports_of_event(event) == expected
+
+
+@pytest.mark.parametrize("style", ["named", "unnamed"])
+def test_the_port_options_help_lists_are_passed_and_their_ports_exposed(
+    style: str, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    import json
+    import socket
+    import sys
+
+    fake = tmp_path / "ursock"
+    fake.write_text(f"#!{sys.executable}\n" + (Path(__file__).parent / "fake_ursock.py").read_text())
+    fake.chmod(0o755)
+    argv = tmp_path / "argv.json"
+    monkeypatch.setenv("FAKE_URSOCK_ARGV", str(argv))
+    monkeypatch.setenv("FAKE_URSOCK_STYLE", style)
+    with UrController(ursock=fake, startup_timeout=10) as ur:
+        assert ur.server_options() == ["primary", "rtde"]
+        args = json.loads(argv.read_text())
+        assert args[args.index("--primary-port") + 1] == "0"
+        assert args[args.index("--rtde-port") + 1] == "0"
+        assert "--secondary-port" not in args and "--realtime-port" not in args
+        assert set(ur.ports) == {"dashboard", "primary", "rtde"}
+        assert len(set(ur.ports.values())) == 3
+        assert ur.secondary_port is None and ur.realtime_port is None
+        for port in (ur.dashboard_port, ur.primary_port, ur.rtde_port):
+            assert port is not None
+            socket.create_connection((ur.host, port), timeout=5).close()
