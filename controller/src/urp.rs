@@ -25,7 +25,11 @@
 //! | the XML after gunzip (a gzip bomb stops at the bound, never inflated further) | [`MAX_XML_BYTES`] (64 MiB) | [`UrpError::TooLarge`] |
 //! | XML elements | [`MAX_ELEMENTS`] (250 000) | [`UrpError::TooManyElements`] |
 //! | nesting of XML elements (each program level is about two: the node and its `<children>`) | [`MAX_DEPTH`] (128) | [`UrpError::TooDeep`] |
-//! | chains of XStream `reference="..."` attributes | 64 hops | [`UrpError::Invalid`] |
+//! | attributes on one element | [`MAX_ATTRIBUTES`] (256) | [`UrpError::Xml`] |
+//! | an XStream `reference="..."` attribute; chains of them | 4096 bytes; 64 hops | [`UrpError::Invalid`] |
+//!
+//! The work is linear in the document: each reference is read once, siblings are
+//! indexed by name, sub programs by node.
 //!
 //! The translation recurses once per program level, so its depth is bounded by
 //! [`MAX_DEPTH`]; sub programs are translated from a work list, not recursively.
@@ -75,6 +79,7 @@
 //! String literals: URScript has no escapes, so a message with `"` is written between
 //! `'`; one with both quote characters has its `"` written as `'`.
 
+use std::collections::HashMap;
 use std::fmt;
 use std::io::Read;
 
@@ -96,6 +101,9 @@ pub const EXTERNAL_CONTROL_DEFAULT_HOST: &str = "192.168.56.1";
 pub const EXTERNAL_CONTROL_DEFAULT_PORT: u16 = 50002;
 
 const MAX_REFERENCE_HOPS: usize = 64;
+const MAX_REFERENCE_LEN: usize = 4096;
+/// The most attributes on one element.
+pub const MAX_ATTRIBUTES: usize = 256;
 
 /// The External Control URCap's settings in an installation: where its nodes ask for
 /// their script.
@@ -551,11 +559,18 @@ struct Elem {
     text: String,
     children: Vec<usize>,
     parent: Option<usize>,
+    /// Its position among its parent's children of its name, from 1 (XStream's `Name[k]`).
+    nth: u32,
 }
 
 #[derive(Debug)]
 struct Doc {
     elems: Vec<Elem>,
+    /// (parent, name, k) -> the parent's k-th child of that name, so that following a
+    /// reference costs the same whatever the number of siblings.
+    named: HashMap<(usize, String, u32), usize>,
+    /// Element -> where its `reference` attribute points (one hop), or why it does not.
+    links: HashMap<usize, Result<usize, String>>,
 }
 
 fn xml_err(offset: u64, message: impl Into<String>) -> UrpError {
@@ -568,7 +583,10 @@ fn xml_err(offset: u64, message: impl Into<String>) -> UrpError {
 fn parse_xml(xml: &[u8]) -> Result<Doc, UrpError> {
     let mut reader = Reader::from_reader(xml);
     let mut elems: Vec<Elem> = Vec::new();
+    let mut named = HashMap::new();
     let mut stack: Vec<usize> = Vec::new();
+    // For each open element, how many children of each name it has had so far.
+    let mut counts: Vec<HashMap<String, u32>> = Vec::new();
     let mut root_done = false;
     loop {
         let at = reader.buffer_position();
@@ -597,6 +615,12 @@ fn parse_xml(xml: &[u8]) -> Result<Doc, UrpError> {
                     .to_string();
                 let mut attrs = Vec::new();
                 for attr in e.attributes() {
+                    if attrs.len() >= MAX_ATTRIBUTES {
+                        return Err(xml_err(
+                            at,
+                            format!("more than {MAX_ATTRIBUTES} attributes on <{name}>"),
+                        ));
+                    }
                     let attr = attr.map_err(|err| xml_err(at, err.to_string()))?;
                     let key = std::str::from_utf8(attr.key.as_ref())
                         .map_err(|_| xml_err(at, "an attribute name is not UTF-8"))?
@@ -609,24 +633,36 @@ fn parse_xml(xml: &[u8]) -> Result<Doc, UrpError> {
                 }
                 let id = elems.len();
                 let parent = stack.last().copied();
+                let nth = match counts.last_mut() {
+                    Some(c) => {
+                        let n = c.entry(name.clone()).or_insert(0);
+                        *n += 1;
+                        *n
+                    }
+                    None => 1,
+                };
+                if let Some(p) = parent {
+                    elems[p].children.push(id);
+                    named.insert((p, name.clone(), nth), id);
+                }
                 elems.push(Elem {
                     name,
                     attrs,
                     text: String::new(),
                     children: Vec::new(),
                     parent,
+                    nth,
                 });
-                if let Some(p) = parent {
-                    elems[p].children.push(id);
-                }
                 if matches!(event, Event::Start(_)) {
                     stack.push(id);
+                    counts.push(HashMap::new());
                 } else if stack.is_empty() {
                     root_done = true;
                 }
             }
             Event::End(_) => {
                 stack.pop();
+                counts.pop();
                 if stack.is_empty() {
                     root_done = true;
                 }
@@ -676,7 +712,13 @@ fn parse_xml(xml: &[u8]) -> Result<Doc, UrpError> {
             Event::Decl(_) | Event::PI(_) | Event::Comment(_) | Event::DocType(_) => {}
         }
     }
-    Ok(Doc { elems })
+    let mut doc = Doc {
+        elems,
+        named,
+        links: HashMap::new(),
+    };
+    doc.link();
+    Ok(doc)
 }
 
 fn push_text(elems: &mut [Elem], stack: &[usize], text: &str, at: u64) -> Result<(), UrpError> {
@@ -714,75 +756,87 @@ impl Doc {
         let mut parts = Vec::new();
         let mut cur = Some(id);
         while let Some(c) = cur {
-            let name = &self.elems[c].name;
-            let part = match self.elems[c].parent {
-                Some(p) => {
-                    let same = self.elems[p]
-                        .children
-                        .iter()
-                        .filter(|&&s| self.elems[s].name == *name);
-                    let k = same.clone().position(|&s| s == c).unwrap_or(0) + 1;
-                    if k > 1 {
-                        format!("{name}[{k}]")
-                    } else {
-                        name.clone()
-                    }
-                }
-                None => name.clone(),
-            };
-            parts.push(part);
-            cur = self.elems[c].parent;
+            let e = &self.elems[c];
+            if e.nth > 1 {
+                parts.push(format!("{}[{}]", e.name, e.nth));
+            } else {
+                parts.push(e.name.clone());
+            }
+            cur = e.parent;
         }
         parts.reverse();
         parts.join("/")
     }
 
-    /// Follows XStream `reference="..."` attributes (paths relative to the element).
+    /// Where one XStream `reference="..."` points (a path relative to the element: `..`,
+    /// `Name`, `Name[k]`), one hop.
+    fn step(&self, id: usize, reference: &str) -> Result<usize, String> {
+        if reference.len() > MAX_REFERENCE_LEN {
+            return Err(format!("a reference longer than {MAX_REFERENCE_LEN} bytes"));
+        }
+        let bad = |why: &str| format!("reference `{reference}` {why}");
+        let mut at = id;
+        for seg in reference.split('/') {
+            at = match seg {
+                "" | "." => at,
+                ".." => self.elems[at]
+                    .parent
+                    .ok_or_else(|| bad("leaves the document"))?,
+                _ => {
+                    let (name, k) = match seg.split_once('[') {
+                        Some((n, rest)) => {
+                            let k = rest
+                                .strip_suffix(']')
+                                .and_then(|k| k.parse::<u32>().ok())
+                                .filter(|&k| k >= 1)
+                                .ok_or_else(|| bad("has a malformed index"))?;
+                            (n, k)
+                        }
+                        None => (seg, 1),
+                    };
+                    *self
+                        .named
+                        .get(&(at, name.to_string(), k))
+                        .ok_or_else(|| bad("does not resolve"))?
+                }
+            };
+        }
+        Ok(at)
+    }
+
+    /// Follows XStream `reference="..."` attributes to the element they name. Each
+    /// reference is read once ([`Doc::link`]); a chain is at most
+    /// [`MAX_REFERENCE_HOPS`] long.
     fn resolve(&self, id: usize) -> Result<usize, UrpError> {
         let mut cur = id;
         for _ in 0..MAX_REFERENCE_HOPS {
-            let Some(reference) = self.attr(cur, "reference") else {
-                return Ok(cur);
-            };
-            let bad = |why: &str| UrpError::Invalid {
-                path: self.path(cur),
-                message: format!("reference `{reference}` {why}"),
-            };
-            let mut at = cur;
-            for seg in reference.split('/') {
-                at = match seg {
-                    "" | "." => at,
-                    ".." => self.elems[at]
-                        .parent
-                        .ok_or_else(|| bad("leaves the document"))?,
-                    _ => {
-                        let (name, k) = match seg.split_once('[') {
-                            Some((n, rest)) => {
-                                let k = rest
-                                    .strip_suffix(']')
-                                    .and_then(|k| k.parse::<usize>().ok())
-                                    .filter(|&k| k >= 1)
-                                    .ok_or_else(|| bad("has a malformed index"))?;
-                                (n, k)
-                            }
-                            None => (seg, 1),
-                        };
-                        self.elems[at]
-                            .children
-                            .iter()
-                            .copied()
-                            .filter(|&c| self.elems[c].name == name)
-                            .nth(k - 1)
-                            .ok_or_else(|| bad("does not resolve"))?
-                    }
-                };
+            match self.links.get(&cur) {
+                None => return Ok(cur),
+                Some(Ok(next)) => cur = *next,
+                Some(Err(message)) => {
+                    return Err(UrpError::Invalid {
+                        path: self.path(cur),
+                        message: message.clone(),
+                    })
+                }
             }
-            cur = at;
         }
         Err(UrpError::Invalid {
             path: self.path(id),
             message: format!("more than {MAX_REFERENCE_HOPS} chained references"),
         })
+    }
+
+    /// Reads every `reference` attribute once: the cost of references is linear in the
+    /// document, however many elements name the same one.
+    fn link(&mut self) {
+        let mut links = HashMap::new();
+        for id in 0..self.elems.len() {
+            if let Some(r) = self.attr(id, "reference") {
+                links.insert(id, self.step(id, r));
+            }
+        }
+        self.links = links;
     }
 }
 
@@ -796,6 +850,8 @@ struct Tx<'a> {
     externals: Vec<ExternalControlNode>,
     /// Sub programs: (resolved node, function name), in the order first met.
     subprograms: Vec<(usize, String)>,
+    subprogram_index: HashMap<usize, usize>,
+    subprogram_names: std::collections::HashSet<String>,
     loops: usize,
 }
 
@@ -881,6 +937,8 @@ fn translate(doc: &Doc) -> Result<UrpProgram, UrpError> {
         indent: 1,
         externals: Vec::new(),
         subprograms: Vec::new(),
+        subprogram_index: HashMap::new(),
+        subprogram_names: std::collections::HashSet::new(),
         loops: 0,
     };
 
@@ -1085,21 +1143,22 @@ impl Tx<'_> {
 
     /// The function name for a sub program node, registering it on first sight.
     fn subprogram_name(&mut self, sub: usize) -> Result<String, UrpError> {
-        if let Some((_, n)) = self.subprograms.iter().find(|(s, _)| *s == sub) {
-            return Ok(n.clone());
+        if let Some(&k) = self.subprogram_index.get(&sub) {
+            return Ok(self.subprograms[k].1.clone());
         }
         let name = self
             .doc
             .attr(sub, "name")
             .ok_or_else(|| invalid(self.doc, sub, "the sub program has no name"))?;
         let fname = identifier(name);
-        if self.subprograms.iter().any(|(_, n)| *n == fname) {
+        if !self.subprogram_names.insert(fname.clone()) {
             return Err(invalid(
                 self.doc,
                 sub,
                 format!("two sub programs named {fname}"),
             ));
         }
+        self.subprogram_index.insert(sub, self.subprograms.len());
         self.subprograms.push((sub, fname.clone()));
         Ok(fname)
     }

@@ -793,3 +793,56 @@ fn variable_waypoints_and_nodes_between_waypoints() {
     assert_eq!(m.state(), &State::Finished);
     assert!((m.joint_positions()[0] - 0.3).abs() < 1e-6);
 }
+
+#[test]
+fn work_stays_linear_with_many_siblings_and_references() {
+    // 20 000 calls of one sub program, each naming it by a reference to the last
+    // sibling, and 10 000 External Control nodes: quadratic lookups would take minutes.
+    let n = 20_000;
+    let mut main = String::with_capacity(n * 80);
+    for _ in 1..n {
+        main.push_str(&format!(
+            r#"<CallSubProgram><subprogram reference="../../CallSubProgram[{n}]/subprogram"/></CallSubProgram>"#
+        ));
+    }
+    main.push_str(&format!(
+        r#"<CallSubProgram><subprogram name="S"><children>{}</children></subprogram></CallSubProgram>"#,
+        script_line("sync()")
+    ));
+    for _ in 0..10_000 {
+        main.push_str(EC);
+    }
+    let xml = document("many", true, &main, "");
+    let started = std::time::Instant::now();
+    let p = read_urp(xml.as_bytes()).unwrap();
+    assert_eq!(p.script.matches("  S()\n").count(), n);
+    assert_eq!(p.external_control.len(), 10_000);
+    assert_eq!(
+        p.external_control[9_999].path,
+        "URProgram/children/MainProgram/children/Contributed[10000]"
+    );
+    let script = translate_with(&p, |_| Ok(String::from("sync()"))).unwrap();
+    assert_eq!(script.matches("sync()").count(), 10_001);
+    assert!(
+        started.elapsed() < Duration::from_secs(20),
+        "{:?}",
+        started.elapsed()
+    );
+}
+
+#[test]
+fn attributes_and_references_are_bounded() {
+    use urscript_controller::urp::MAX_ATTRIBUTES;
+    let attrs: String = (0..=MAX_ATTRIBUTES)
+        .map(|i| format!(" a{i}=\"\""))
+        .collect();
+    let many = format!("<Halt{attrs}/>");
+    assert!(
+        matches!(read_urp(&urp(&many)), Err(UrpError::Xml { message, .. }) if message.contains("attributes"))
+    );
+    let long = "./".repeat(3000);
+    let call = format!(r#"<CallSubProgram><subprogram reference="{long}"/></CallSubProgram>"#);
+    assert!(
+        matches!(read_urp(&urp(&call)), Err(UrpError::Invalid { message, .. }) if message.contains("longer"))
+    );
+}
