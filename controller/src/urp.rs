@@ -69,12 +69,29 @@
 //! its child refers to, as 5.x saves it: `<ProgramVariable reference=".../variable"/>`;
 //! or its `name`/`referencedName` attribute), or plain text inside `<expression>`.
 //!
-//! Any other node is [`UrpError::UnknownNode`], never dropped; a known node in a form not
-//! translated (a `Relative` waypoint, an `If` checked continuously, an operator-entered
-//! assignment) is [`UrpError::Unsupported`]. Skipped as cosmetic only: `<kinematics>`
-//! (the calibration the waypoints were taught with), a Move's `<feature>` and `<tcp>`
-//! references, a waypoint's `<Kinematics>`, `<BaseToFeature>`, `<outputFlangePose>`
-//! and `<poseInFeatureCoordinates>` (the pose used is the base pose).
+//! Any other node is [`UrpError::UnknownNode`], never dropped (other URCaps' nodes
+//! included: `Contributed (Gripper)`); a known node in a form not translated (a
+//! `Relative` waypoint, an `If` or `Loop` checked continuously, an operator-entered
+//! assignment) is [`UrpError::Unsupported`]. Not translated, by choice: `<kinematics>`
+//! (the calibration the waypoints were taught with: the arm model's own kinematics are
+//! used), a waypoint's `<Kinematics>`, `<BaseToFeature>`, `<outputFlangePose>` and
+//! `<poseInFeatureCoordinates>`, and a Move's `<feature>` and `<tcp>`: waypoints are
+//! taken in the base frame, with the TCP that is active.
+//!
+//! # What the forms come from
+//!
+//! Checked against `.urp` files PolyScope saved (UR's URSim test programs, 3.x and 5.x,
+//! and published programs last saved by 5.11): the document's frame, `InitVariablesNode`,
+//! `SpecialSequence`, `MainProgram runOnlyOnce`, `Wait type="Sleep"`, `Script
+//! type="Line"`, `Assignment` with its `<variable>` (named, or a reference),
+//! `ExpressionChar`/`ExpressionToken`/`ExpressionVariable` tokens, `If`/`Else` siblings,
+//! `Loop type="Forever"|"While"`, `Popup`, `Comment`, `CallSubProgram`/`subprogram` and
+//! the root's `SubProgram` references, and URCap `Contributed` nodes. From documents
+//! describing the format and tools that write `.urp` files: `Move`/`Waypoint`,
+//! `Wait type="DigitalInput"`, `Set type="DigitalOutput"`, `Halt`, `Script type="File"`.
+//! The other forms (`Loop type="Counting"`, `ElseIf`, `Set type="AnalogOutput"|
+//! "Expression"`, `Wait type="AnalogInput"|"Expression"`, `Folder`) follow the same
+//! conventions but were not seen in a saved file.
 //!
 //! String literals: URScript has no escapes, so a message with `"` is written between
 //! `'`; one with both quote characters has its `"` written as `'`.
@@ -1382,10 +1399,10 @@ impl Tx<'_> {
         let (kind, n) = pin(self.doc, id)?;
         let f = match kind.as_str() {
             "digital_in" => "get_standard_digital_in",
-            "configurable_in" => "get_configurable_digital_in",
+            "configurable_in" | "config_in" => "get_configurable_digital_in",
             "tool_in" => "get_tool_digital_in",
             "digital_out" => "get_standard_digital_out",
-            "configurable_out" => "get_configurable_digital_out",
+            "configurable_out" | "config_out" => "get_configurable_digital_out",
             "tool_out" => "get_tool_digital_out",
             "analog_in" => "get_standard_analog_in",
             "tool_analog_in" => "get_tool_analog_in",
@@ -1527,7 +1544,7 @@ impl Tx<'_> {
         let (kind, n) = pin(self.doc, id)?;
         let f = match kind.as_str() {
             "digital_out" => "set_standard_digital_out",
-            "configurable_out" => "set_configurable_digital_out",
+            "configurable_out" | "config_out" => "set_configurable_digital_out",
             "tool_out" => "set_tool_digital_out",
             "analog_out" => "set_standard_analog_out",
             _ => {
@@ -1656,6 +1673,9 @@ impl Tx<'_> {
 
     fn loop_node(&mut self, id: usize) -> Result<(), UrpError> {
         let doc = self.doc;
+        if doc.attr(id, "checkContinuously") == Some("true") {
+            return Err(unsupported(doc, id, "a Loop checked continuously"));
+        }
         match doc.attr(id, "type").unwrap_or("Forever") {
             "Forever" => self.block("while (True):", |t| t.children_of(id)),
             "Counting" | "XTimes" => {

@@ -551,6 +551,13 @@ fn unknown_nodes_are_errors_naming_them() {
         read_urp(&urp(relative)),
         Err(UrpError::Unsupported { .. })
     ));
+    let continuous = format!(
+        r#"<Loop type="While" checkContinuously="true">{}<children/></Loop>"#,
+        expr("True")
+    );
+    assert!(
+        matches!(read_urp(&urp(&continuous)), Err(UrpError::Unsupported { what, .. }) if what.contains("continuously"))
+    );
     let circle = r#"<Move motionType="MoveC"><children/></Move>"#;
     assert!(matches!(
         read_urp(&urp(circle)),
