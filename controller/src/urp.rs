@@ -493,7 +493,15 @@ fn urcap_lines(reply: &str) -> Vec<String> {
 
 /// Splits the reply's lines into header and control loop, as the URCap does.
 fn split_header(lines: &[String]) -> (String, String) {
-    let marker = |line: &str, name: &str| line.trim() == name;
+    // The URCap matches `\p{Zs}*# HEADER_BEGIN\p{Zs}*`: only space separators around.
+    let zs = |c: char| {
+        matches!(
+            c,
+            ' ' | '\u{a0}' | '\u{1680}' | '\u{2000}'
+                ..='\u{200a}' | '\u{202f}' | '\u{205f}' | '\u{3000}'
+        )
+    };
+    let marker = |line: &str, name: &str| line.trim_matches(zs) == name;
     let (mut header, mut control) = (String::new(), String::new());
     let (mut in_header, mut header_end) = (false, false);
     for line in lines {

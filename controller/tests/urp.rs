@@ -486,6 +486,17 @@ fn external_control_nodes_get_the_fetched_script_header_once() {
         ["loop", "between", "loop"]
     );
 
+    // Markers must stand alone on their line (spaces around them only, as the URCap
+    // matches them); lines before the header are dropped, as the URCap drops them.
+    let reply = "textmsg(\"dropped\")\n\t# HEADER_BEGIN\n# HEADER_BEGIN  \ndef c2():\n  textmsg(\"c2\")\nend\n# HEADER_END\nc2()\n";
+    let script = translate_with(&p, |_| Ok(reply.to_string())).unwrap();
+    assert!(!script.contains("dropped"), "{script}");
+    let mut m = machine(&script);
+    assert_eq!(
+        texts(&run(&mut m, Duration::from_secs(1))),
+        ["c2", "between", "c2"]
+    );
+
     // A host that cannot be reached: the URCap's error popup.
     let mut p = p;
     p.set_external_control_host("10.0.0.7", 50010);
@@ -851,5 +862,59 @@ fn attributes_and_references_are_bounded() {
     let call = format!(r#"<CallSubProgram><subprogram reference="{long}"/></CallSubProgram>"#);
     assert!(
         matches!(read_urp(&urp(&call)), Err(UrpError::Invalid { message, .. }) if message.contains("longer"))
+    );
+}
+
+#[test]
+fn analog_waits_configurable_outputs_and_set_to_a_variable() {
+    let main = format!(
+        r#"<Set type="Expression"><variable name="level"/>{level}</Set>
+<Wait type="AnalogInput"><pin referencedName="analog_in[1]"/><analogComparison>1</analogComparison><analogValue>2.5</analogValue></Wait>
+<Set type="DigitalOutput"><pin referencedName="configurable_out[3]"/><digitalValue>1</digitalValue></Set>
+<Set type="NoAction"/>
+{report}"#,
+        level = expr("get_standard_analog_in(1)"),
+        report = script_line("textmsg(\"level \", level)"),
+    );
+    let p = read(&main);
+    assert!(
+        p.script
+            .contains("global level = get_standard_analog_in(1)"),
+        "{}",
+        p.script
+    );
+    assert!(
+        p.script
+            .contains("while (not(get_standard_analog_in(1) > 2.5)):"),
+        "{}",
+        p.script
+    );
+    assert!(
+        p.script.contains("set_configurable_digital_out(3, True)"),
+        "{}",
+        p.script
+    );
+    let mut m = machine(&p.script);
+    assert!(run(&mut m, Duration::from_millis(100)).is_empty());
+    assert_eq!(m.state(), &State::Running);
+    m.world_mut().analog_in[1] = 3.0;
+    assert_eq!(
+        texts(&run(&mut m, Duration::from_millis(200))),
+        ["level 0"]
+    );
+    assert!(
+        m.arm().digital_out[11],
+        "configurable outputs follow the 8 standard ones"
+    );
+    assert_eq!(m.state(), &State::Finished);
+
+    let tcp = r#"<Set type="NoAction"><tcp referencedName="Gripper"/></Set>"#;
+    assert!(matches!(
+        read_urp(&urp(tcp)),
+        Err(UrpError::Unsupported { .. })
+    ));
+    let pin = r#"<Set type="DigitalOutput"><pin referencedName="out3"/><digitalValue>1</digitalValue></Set>"#;
+    assert!(
+        matches!(read_urp(&urp(pin)), Err(UrpError::Invalid { message, .. }) if message.contains("out3"))
     );
 }
