@@ -1321,7 +1321,8 @@ impl Tx<'_> {
         match doc.name(id) {
             "Comment" => {
                 let text = doc.attr(id, "comment").unwrap_or("");
-                for l in text.lines() {
+                // Every line of it commented: URScript ends a line at `\r` too.
+                for l in text.split(['\n', '\r']).filter(|l| !l.is_empty()) {
                     self.line(&format!("# {l}"));
                 }
             }

@@ -898,10 +898,7 @@ fn analog_waits_configurable_outputs_and_set_to_a_variable() {
     assert!(run(&mut m, Duration::from_millis(100)).is_empty());
     assert_eq!(m.state(), &State::Running);
     m.world_mut().analog_in[1] = 3.0;
-    assert_eq!(
-        texts(&run(&mut m, Duration::from_millis(200))),
-        ["level 0"]
-    );
+    assert_eq!(texts(&run(&mut m, Duration::from_millis(200))), ["level 0"]);
     assert!(
         m.arm().digital_out[11],
         "configurable outputs follow the 8 standard ones"
@@ -917,4 +914,77 @@ fn analog_waits_configurable_outputs_and_set_to_a_variable() {
     assert!(
         matches!(read_urp(&urp(pin)), Err(UrpError::Invalid { message, .. }) if message.contains("out3"))
     );
+}
+
+/// Program trees of the translated nodes, with arbitrary texts where PolyScope keeps
+/// texts (comments, messages, names).
+fn arb_node() -> impl Strategy<Value = String> {
+    let text = "[ -~\n\r\"'<>&\u{e9}\u{225f}]{0,20}";
+    let escape = |s: String| {
+        s.replace('&', "&amp;")
+            .replace('"', "&quot;")
+            .replace('<', "&lt;")
+            .replace('>', "&gt;")
+            .replace('\n', "&#10;")
+            .replace('\r', "&#13;")
+    };
+    let leaf = prop_oneof![
+        text.prop_map(move |t| format!("<Comment comment=\"{}\"/>", escape(t))),
+        (text, any::<bool>(), 0..3u8).prop_map(move |(m, halt, kind)| format!(
+            "<Popup type=\"{}\" haltProgram=\"{halt}\" message=\"{}\"/>",
+            ["Message", "Warning", "Error"][kind as usize],
+            escape(m)
+        )),
+        (0..10u32).prop_map(|ms| format!("<Wait type=\"Sleep\"><waitTime>0.{ms}</waitTime></Wait>")),
+        Just("<Halt/>".to_string()),
+        (0..8u8, any::<bool>()).prop_map(|(n, v)| format!(
+            "<Set type=\"DigitalOutput\"><pin referencedName=\"digital_out[{n}]\"/><digitalValue>{}</digitalValue></Set>",
+            u8::from(v)
+        )),
+        (0..100i32).prop_map(|v| format!("<Assignment><variable name=\"v\"/>{}</Assignment>", expr(&v.to_string()))),
+        Just(script_line("textmsg(\"x\")")),
+    ];
+    leaf.prop_recursive(4, 24, 4, move |inner| {
+        let kids = proptest::collection::vec(inner, 0..4).prop_map(|v| v.concat());
+        prop_oneof![
+            (kids.clone(), "[ -~]{0,10}").prop_map(|(k, name)| format!(
+                "<Folder name=\"{}\"><children>{k}</children></Folder>",
+                name.replace('&', "&amp;").replace('"', "&quot;").replace('<', "&lt;")
+            )),
+            kids.clone().prop_map(|k| format!("<Loop type=\"Forever\"><children>{k}</children></Loop>")),
+            (kids.clone(), 0..4u32).prop_map(|(k, n)| format!(
+                "<Loop type=\"Counting\" count=\"{n}\"><children>{k}</children></Loop>"
+            )),
+            (kids.clone(), kids.clone(), kids.clone()).prop_map(|(a, b, c)| format!(
+                "<If type=\"If\">{}<children>{a}</children></If><If type=\"ElseIf\">{}<children>{b}</children></If><If type=\"Else\"><expression/><children>{c}</children></If>",
+                expr("v \u{225f} 1"),
+                expr("v > 2")
+            )),
+            kids.prop_map(|k| format!(
+                "<CallSubProgram><subprogram name=\"Sub\"><children>{k}</children></subprogram></CallSubProgram>"
+            )),
+        ]
+    })
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(256))]
+
+    /// A tree of the translated nodes, whatever the texts in it, gives a program the
+    /// interpreter accepts.
+    #[test]
+    fn translated_trees_always_parse(nodes in proptest::collection::vec(arb_node(), 0..5)) {
+        // A second inline definition of `Sub` is refused (PolyScope saves a second call
+        // as a reference to the first): that error is the one accepted.
+        let main = format!("<Assignment><variable name=\"v\"/>{}</Assignment>{}", expr("0"), nodes.concat());
+        match read_urp(&urp(&main)) {
+            Ok(p) => {
+                if let Err(e) = Program::parse(&p.script) {
+                    panic!("{e:?}\n{}", p.script);
+                }
+            }
+            Err(UrpError::Invalid { message, .. }) if message.contains("two sub programs") => {}
+            Err(e) => panic!("{e}"),
+        }
+    }
 }
