@@ -53,7 +53,8 @@
 //! and translates its program tree into URScript that `urscript_interp` runs, within
 //! documented bounds (file and inflated size, element count, nesting). UR's External
 //! Control URCap node becomes a place in the program, with the host and port the URCap
-//! would ask; [`translate_with`] splices in the script fetched from there.
+//! would ask (set from the installation: [`read_external_control_settings`]);
+//! [`translate_with`] splices in the script fetched from there.
 //!
 //! # Where the reply texts come from, and the choices where sources disagree
 //!

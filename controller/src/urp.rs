@@ -32,7 +32,10 @@
 //! indexed by name, sub programs by node.
 //!
 //! The translation recurses once per program level, so its depth is bounded by
-//! [`MAX_DEPTH`]; sub programs are translated from a work list, not recursively.
+//! [`MAX_DEPTH`]; sub programs are translated from a work list, not recursively. The
+//! script is at most a small multiple of the document; `urscript_interp` has its own
+//! bounds (16 MiB of program text, 64 nested blocks), which a program near these bounds
+//! can pass: `Program::parse` then refuses it with a syntax error.
 //!
 //! # Node types translated
 //!
@@ -334,7 +337,8 @@ pub struct UrpProgram {
     /// The PolyScope version that created it (`createdIn`), if given.
     pub created_in: Option<String>,
     /// The URScript program: `def NAME():` ... `end`. Each External Control node is a
-    /// comment line here; [`translate_with`] gives the program with their scripts.
+    /// comment line here; [`translate_with`] gives the program with their scripts (from
+    /// the translation as read: changing this text does not change what it gives).
     pub script: String,
     /// The External Control nodes, in document order.
     pub external_control: Vec<ExternalControlNode>,
@@ -399,8 +403,9 @@ pub fn read_urp(bytes: &[u8]) -> Result<UrpProgram, UrpError> {
 /// then splits the reply: the lines from `# HEADER_BEGIN` to `# HEADER_END` are the
 /// header, written once, before the first node's script; the lines after the header
 /// are the control loop, written at every External Control node. A reply without
-/// `# HEADER_END` is all control loop. `fetch` is called at most once, with the first
-/// node; when it fails, every node gets what the URCap writes then: a blocking error
+/// `# HEADER_END` is all control loop. `fetch` is called at most once, with the node
+/// that comes first in the script, and sees the node's `host` and `port` as they are
+/// now ([`UrpProgram::set_external_control_host`]); when it fails, every node gets what the URCap writes then: a blocking error
 /// popup naming the host and the reason, and `sync()`.
 ///
 /// ```
