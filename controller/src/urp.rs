@@ -561,7 +561,8 @@ fn inflate(bytes: &[u8]) -> Result<Vec<u8>, UrpError> {
     if bytes.starts_with(&[0x1f, 0x8b]) {
         let mut xml = Vec::new();
         let limit = (MAX_XML_BYTES as u64).saturating_add(1);
-        flate2::read::GzDecoder::new(bytes)
+        // Members one after another inflate to their concatenation, as gunzip does.
+        flate2::read::MultiGzDecoder::new(bytes)
             .take(limit)
             .read_to_end(&mut xml)
             .map_err(|e| UrpError::Gzip {
@@ -598,7 +599,9 @@ struct Doc {
     elems: Vec<Elem>,
     /// (parent, name, k) -> the parent's k-th child of that name, so that following a
     /// reference costs the same whatever the number of siblings.
-    named: HashMap<(usize, String, u32), usize>,
+    named: HashMap<(usize, u32, u32), usize>,
+    /// Element names, numbered (the keys of `named`).
+    name_ids: HashMap<String, u32>,
     /// Element -> where its `reference` attribute points (one hop), or why it does not.
     links: HashMap<usize, Result<usize, String>>,
 }
@@ -614,9 +617,10 @@ fn parse_xml(xml: &[u8]) -> Result<Doc, UrpError> {
     let mut reader = Reader::from_reader(xml);
     let mut elems: Vec<Elem> = Vec::new();
     let mut named = HashMap::new();
+    let mut name_ids: HashMap<String, u32> = HashMap::new();
     let mut stack: Vec<usize> = Vec::new();
     // For each open element, how many children of each name it has had so far.
-    let mut counts: Vec<HashMap<String, u32>> = Vec::new();
+    let mut counts: Vec<HashMap<u32, u32>> = Vec::new();
     let mut root_done = false;
     loop {
         let at = reader.buffer_position();
@@ -663,9 +667,18 @@ fn parse_xml(xml: &[u8]) -> Result<Doc, UrpError> {
                 }
                 let id = elems.len();
                 let parent = stack.last().copied();
+                let name_id = match name_ids.get(name.as_str()) {
+                    Some(&n) => n,
+                    None => {
+                        // At most one name per element: fits, as MAX_ELEMENTS does.
+                        let n = u32::try_from(name_ids.len()).unwrap_or(u32::MAX);
+                        name_ids.insert(name.clone(), n);
+                        n
+                    }
+                };
                 let nth = match counts.last_mut() {
                     Some(c) => {
-                        let n = c.entry(name.clone()).or_insert(0);
+                        let n = c.entry(name_id).or_insert(0);
                         *n += 1;
                         *n
                     }
@@ -673,7 +686,7 @@ fn parse_xml(xml: &[u8]) -> Result<Doc, UrpError> {
                 };
                 if let Some(p) = parent {
                     elems[p].children.push(id);
-                    named.insert((p, name.clone(), nth), id);
+                    named.insert((p, name_id, nth), id);
                 }
                 elems.push(Elem {
                     name,
@@ -745,6 +758,7 @@ fn parse_xml(xml: &[u8]) -> Result<Doc, UrpError> {
     let mut doc = Doc {
         elems,
         named,
+        name_ids,
         links: HashMap::new(),
     };
     doc.link();
@@ -824,9 +838,10 @@ impl Doc {
                         }
                         None => (seg, 1),
                     };
-                    *self
-                        .named
-                        .get(&(at, name.to_string(), k))
+                    self.name_ids
+                        .get(name)
+                        .and_then(|&n| self.named.get(&(at, n, k)))
+                        .copied()
                         .ok_or_else(|| bad("does not resolve"))?
                 }
             };

@@ -630,17 +630,24 @@ fn broken_input_is_a_typed_error() {
 
 #[test]
 fn a_gzip_bomb_stops_at_the_bound() {
-    let mut gz = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::fast());
-    gz.write_all(b"<URProgram name=\"bomb\">").unwrap();
-    let blanks = vec![b' '; 1 << 20];
+    // gzip members one after another inflate to their concatenation (as gunzip reads
+    // them): one member of 1 MiB of blanks, repeated past the bound.
+    let mut bomb = gzip(b"<URProgram name=\"bomb\">");
+    let member = gzip(&vec![b' '; 1 << 20]);
     for _ in 0..(MAX_XML_BYTES >> 20) + 1 {
-        gz.write_all(&blanks).unwrap();
+        bomb.extend_from_slice(&member);
     }
-    let bomb = gz.finish().unwrap();
     assert!(bomb.len() < 1 << 20, "the bomb is small: {}", bomb.len());
     assert!(
         matches!(read_urp(&bomb), Err(UrpError::TooLarge { limit, .. }) if limit == MAX_XML_BYTES)
     );
+
+    // Under the bound, members are read whole.
+    let xml = document("two", true, &script_line("textmsg(\"x\")"), "");
+    let (a, b) = xml.as_bytes().split_at(xml.len() / 2);
+    let mut two = gzip(a);
+    two.extend_from_slice(&gzip(b));
+    assert_eq!(read_urp(&two).unwrap().name, "two");
 
     let huge = vec![b'<'; MAX_URP_BYTES + 1];
     assert!(matches!(
@@ -673,9 +680,9 @@ fn nesting_and_element_count_are_bounded() {
     }
     assert!(read(&ok).script.contains("textmsg(\"deep\")"));
 
-    let many = "<Comment comment=\"\"/>".repeat(MAX_ELEMENTS);
+    let many = document("many", true, &"<Halt/>".repeat(MAX_ELEMENTS), "");
     assert!(
-        matches!(read_urp(&urp(&many)), Err(UrpError::TooManyElements { limit, .. }) if limit == MAX_ELEMENTS)
+        matches!(read_urp(many.as_bytes()), Err(UrpError::TooManyElements { limit, .. }) if limit == MAX_ELEMENTS)
     );
 }
 
