@@ -109,6 +109,6 @@ pub use state::{
 pub use status::{Inputs, Status};
 pub use urp::{
     read_external_control_settings, read_urp, translate_with, ExternalControlNode,
-    ExternalControlSettings, UrpError, UrpProgram,
+    ExternalControlSettings, FetchError, UrpError, UrpProgram,
 };
 pub use urscript_interp::kinematics::Model;

@@ -197,6 +197,21 @@ pub fn read_external_control_settings(
     Ok(settings)
 }
 
+/// What the External Control URCap sends its host (then it reads the reply).
+pub const EXTERNAL_CONTROL_REQUEST: &[u8] = b"request_program\n";
+
+/// Why fetching an External Control node's script failed: the URCap writes a different
+/// popup for each.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum FetchError {
+    /// No connection (refused, unreachable, the URCap's 5 s connect timeout), with the
+    /// reason as the popup shows it.
+    Connect(String),
+    /// Connected, but the first line of the reply did not come within the URCap's
+    /// 500 ms read timeout.
+    Timeout,
+}
+
 /// Why a `.urp` could not be read or translated.
 #[derive(Debug, Clone, PartialEq, Eq)]
 #[non_exhaustive]
@@ -405,8 +420,13 @@ pub fn read_urp(bytes: &[u8]) -> Result<UrpProgram, UrpError> {
 /// are the control loop, written at every External Control node. A reply without
 /// `# HEADER_END` is all control loop. `fetch` is called at most once, with the node
 /// that comes first in the script, and sees the node's `host` and `port` as they are
-/// now ([`UrpProgram::set_external_control_host`]); when it fails, every node gets what the URCap writes then: a blocking error
-/// popup naming the host and the reason, and `sync()`.
+/// now ([`UrpProgram::set_external_control_host`]). When it fails, every node gets what
+/// the URCap writes then: a blocking error popup titled `Receive program failed` that
+/// names the host ([`FetchError`] says which of its two texts), and `sync()`.
+///
+/// `fetch` may do the I/O itself; a sans-IO caller fetches first (the host and port are
+/// in [`UrpProgram::external_control`], the request is [`EXTERNAL_CONTROL_REQUEST`]) and
+/// passes a closure that returns what it got.
 ///
 /// ```
 /// use std::io::Write;
@@ -427,7 +447,7 @@ pub fn read_urp(bytes: &[u8]) -> Result<UrpProgram, UrpError> {
 /// ```
 pub fn translate_with(
     program: &UrpProgram,
-    mut fetch: impl FnMut(&ExternalControlNode) -> Result<String, String>,
+    mut fetch: impl FnMut(&ExternalControlNode) -> Result<String, FetchError>,
 ) -> Result<String, UrpError> {
     let mut fetched: Option<(String, String)> = None;
     let mut header_written = false;
@@ -447,16 +467,25 @@ pub fn translate_with(
                 if fetched.is_none() {
                     let reply = match fetch(node) {
                         Ok(text) => urcap_lines(&text),
-                        Err(why) => vec![
-                            format!(
-                                "popup({}, \"Receive program failed\", False, True, blocking=True)",
-                                string_literal(&format!(
+                        Err(why) => {
+                            let text = match why {
+                                FetchError::Timeout => format!(
+                                    "Timeout while reading requested program from {}:{}",
+                                    node.host, node.port
+                                ),
+                                FetchError::Connect(reason) => format!(
                                     "The connection to the remote PC at {}:{} could not be established. Reason: {}",
-                                    node.host, node.port, why
-                                ))
-                            ),
-                            String::from("sync()"),
-                        ],
+                                    node.host, node.port, reason
+                                ),
+                            };
+                            vec![
+                                format!(
+                                    "popup({}, \"Receive program failed\", False, True, blocking=True)",
+                                    string_literal(&text)
+                                ),
+                                String::from("sync()"),
+                            ]
+                        }
                     };
                     fetched = Some(split_header(&reply));
                 }

@@ -6,7 +6,7 @@ use std::time::Duration;
 
 use proptest::prelude::*;
 use urscript_controller::urp::{MAX_DEPTH, MAX_ELEMENTS, MAX_URP_BYTES, MAX_XML_BYTES};
-use urscript_controller::{read_urp, translate_with, UrpError, UrpProgram};
+use urscript_controller::{read_urp, translate_with, FetchError, UrpError, UrpProgram};
 use urscript_interp::{Config, Event, Machine, MessageKind, Program, State};
 
 fn gzip(bytes: &[u8]) -> Vec<u8> {
@@ -502,16 +502,26 @@ fn external_control_nodes_get_the_fetched_script_header_once() {
     p.set_external_control_host("10.0.0.7", 50010);
     let script = translate_with(&p, |node| {
         assert_eq!((node.host.as_str(), node.port), ("10.0.0.7", 50010));
-        Err("Connection refused".to_string())
+        Err(FetchError::Connect("Connection refused".to_string()))
     })
     .unwrap();
     let mut m = machine(&script);
     let shown = run(&mut m, Duration::from_secs(1));
     assert_eq!(shown.len(), 3);
-    assert!(shown[0].1.contains("10.0.0.7:50010"), "{}", shown[0].1);
-    assert!(shown[0].1.contains("Connection refused"), "{}", shown[0].1);
+    assert_eq!(
+        shown[0].1,
+        "The connection to the remote PC at 10.0.0.7:50010 could not be established. Reason: Connection refused"
+    );
     assert!(
         matches!(&shown[0].0, MessageKind::Popup { error: true, title, .. } if title == "Receive program failed")
+    );
+
+    let script = translate_with(&p, |_| Err(FetchError::Timeout)).unwrap();
+    let mut m = machine(&script);
+    let shown = run(&mut m, Duration::from_secs(1));
+    assert_eq!(
+        shown[0].1,
+        "Timeout while reading requested program from 10.0.0.7:50010"
     );
 }
 
