@@ -1005,3 +1005,51 @@ proptest! {
         }
     }
 }
+
+#[test]
+fn older_waypoints_with_a_stored_pose_and_movep_blends() {
+    // Older files keep the joints and the pose as attributes of <position>.
+    let main = r#"<Move motionType="MoveJ" speed="1.05" acceleration="1.4"><children>
+  <Waypoint type="Fixed" name="Start"><position joints="0.1, -1.5, 1.4, -1.5, -1.57, 0.2"/></Waypoint>
+</children></Move>
+<Move motionType="MoveP" speed="0.1" acceleration="1.2" blendRadius="0.005"><children>
+  <Waypoint type="Fixed" name="P1"><position joints="0, 0, 0, 0, 0, 0" pose="0.4, -0.1, 0.3, 0.0, 3.14, 0.0"/></Waypoint>
+  <Waypoint type="Fixed" name="P2"><motionParameters blendRadius="0.0"/><position joints="0, 0, 0, 0, 0, 0" pose="0.4, -0.15, 0.3, 0.0, 3.14, 0.0"/></Waypoint>
+</children></Move>"#;
+    let p = read(main);
+    assert!(
+        p.script
+            .contains("  # Start\n  movej([0.1, -1.5, 1.4, -1.5, -1.57, 0.2], a=1.4, v=1.05)\n"),
+        "{}",
+        p.script
+    );
+    assert!(
+        p.script
+            .contains("movep(p[0.4, -0.1, 0.3, 0.0, 3.14, 0.0], a=1.2, v=0.1, r=0.005)"),
+        "{}",
+        p.script
+    );
+    assert!(
+        p.script
+            .contains("movep(p[0.4, -0.15, 0.3, 0.0, 3.14, 0.0], a=1.2, v=0.1)\n"),
+        "{}",
+        p.script
+    );
+
+    let mut m = machine(&p.script);
+    run(&mut m, Duration::from_secs(30));
+    assert_eq!(m.state(), &State::Finished);
+    let tcp = m.tcp_pose();
+    for (got, want) in tcp.iter().zip([0.4, -0.15, 0.3]) {
+        assert!((got - want).abs() < 1e-4, "tcp {tcp:?}");
+    }
+
+    let no_joints = r#"<Move motionType="MoveJ"><children><Waypoint type="Fixed"><position/></Waypoint></children></Move>"#;
+    assert!(
+        matches!(read_urp(&urp(no_joints)), Err(UrpError::Invalid { message, .. }) if message.contains("joint angles"))
+    );
+    let five = r#"<Move motionType="MoveJ"><children><Waypoint type="Fixed"><position><JointAngles angles="1, 2, 3, 4, 5"/></position></Waypoint></children></Move>"#;
+    assert!(
+        matches!(read_urp(&urp(five)), Err(UrpError::Invalid { message, .. }) if message.contains("6 values"))
+    );
+}
