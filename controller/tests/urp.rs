@@ -447,7 +447,7 @@ fn variables_in_expressions_are_references_to_their_assignment() {
     ));
 }
 
-const EC: &str = r#"<Contributed strategyClass="com.fzi.externalcontrol.ExternalControlNode" strategyProgramNodeType="External Control" strategyURCapDeveloper="FZI Research Center for Information Technology" strategyURCapName="External Control"><dataModel/></Contributed>"#;
+const EC: &str = r#"<Contributed strategyClass="com.fzi.externalcontrol.ExternalControlNode" strategyProgramNodeType="External Control"><dataModel/></Contributed>"#;
 
 #[test]
 fn external_control_nodes_get_the_fetched_script_header_once() {
