@@ -62,7 +62,8 @@
 //! and translates its program tree into URScript that `urscript_interp` runs, within
 //! documented bounds (file and inflated size, element count, nesting). UR's External
 //! Control URCap node becomes a place in the program, with the host and port the URCap
-//! would ask; [`translate_with`] splices in the script fetched from there.
+//! would ask (set from the installation: [`read_external_control_settings`]);
+//! [`translate_with`] splices in the script fetched from there.
 //!
 //! # Where the reply texts come from, and the choices where sources disagree
 //!
@@ -139,6 +140,6 @@ pub use state::{
 pub use status::{Inputs, Status};
 pub use urp::{
     read_external_control_settings, read_urp, translate_with, ExternalControlNode,
-    ExternalControlSettings, UrpError, UrpProgram,
+    ExternalControlSettings, FetchError, UrpError, UrpProgram,
 };
 pub use urscript_interp::kinematics::Model;

@@ -25,10 +25,17 @@
 //! | the XML after gunzip (a gzip bomb stops at the bound, never inflated further) | [`MAX_XML_BYTES`] (64 MiB) | [`UrpError::TooLarge`] |
 //! | XML elements | [`MAX_ELEMENTS`] (250 000) | [`UrpError::TooManyElements`] |
 //! | nesting of XML elements (each program level is about two: the node and its `<children>`) | [`MAX_DEPTH`] (128) | [`UrpError::TooDeep`] |
-//! | chains of XStream `reference="..."` attributes | 64 hops | [`UrpError::Invalid`] |
+//! | attributes on one element | [`MAX_ATTRIBUTES`] (256) | [`UrpError::Xml`] |
+//! | an XStream `reference="..."` attribute; chains of them | 4096 bytes; 64 hops | [`UrpError::Invalid`] |
+//!
+//! The work is linear in the document: each reference is read once, siblings are
+//! indexed by name, sub programs by node.
 //!
 //! The translation recurses once per program level, so its depth is bounded by
-//! [`MAX_DEPTH`]; sub programs are translated from a work list, not recursively.
+//! [`MAX_DEPTH`]; sub programs are translated from a work list, not recursively. The
+//! script is at most a small multiple of the document; `urscript_interp` has its own
+//! bounds (16 MiB of program text, 64 nested blocks), which a program near these bounds
+//! can pass: `Program::parse` then refuses it with a syntax error.
 //!
 //! # Node types translated
 //!
@@ -65,16 +72,34 @@
 //! its child refers to, as 5.x saves it: `<ProgramVariable reference=".../variable"/>`;
 //! or its `name`/`referencedName` attribute), or plain text inside `<expression>`.
 //!
-//! Any other node is [`UrpError::UnknownNode`], never dropped; a known node in a form not
-//! translated (a `Relative` waypoint, an `If` checked continuously, an operator-entered
-//! assignment) is [`UrpError::Unsupported`]. Skipped as cosmetic only: `<kinematics>`
-//! (the calibration the waypoints were taught with), a Move's `<feature>` and `<tcp>`
-//! references, a waypoint's `<Kinematics>`, `<BaseToFeature>`, `<outputFlangePose>`
-//! and `<poseInFeatureCoordinates>` (the pose used is the base pose).
+//! Any other node is [`UrpError::UnknownNode`], never dropped (other URCaps' nodes
+//! included: `Contributed (Gripper)`); a known node in a form not translated (a
+//! `Relative` waypoint, an `If` or `Loop` checked continuously, an operator-entered
+//! assignment) is [`UrpError::Unsupported`]. Not translated, by choice: `<kinematics>`
+//! (the calibration the waypoints were taught with: the arm model's own kinematics are
+//! used), a waypoint's `<Kinematics>`, `<BaseToFeature>`, `<outputFlangePose>` and
+//! `<poseInFeatureCoordinates>`, and a Move's `<feature>` and `<tcp>`: waypoints are
+//! taken in the base frame, with the TCP that is active.
+//!
+//! # What the forms come from
+//!
+//! Checked against `.urp` files PolyScope saved (UR's URSim test programs, 3.x and 5.x,
+//! and published programs last saved by 5.11): the document's frame, `InitVariablesNode`,
+//! `SpecialSequence`, `MainProgram runOnlyOnce`, `Wait type="Sleep"`, `Script
+//! type="Line"`, `Assignment` with its `<variable>` (named, or a reference),
+//! `ExpressionChar`/`ExpressionToken`/`ExpressionVariable` tokens, `If`/`Else` siblings,
+//! `Loop type="Forever"|"While"`, `Popup`, `Comment`, `CallSubProgram`/`subprogram` and
+//! the root's `SubProgram` references, and URCap `Contributed` nodes. From documents
+//! describing the format and tools that write `.urp` files: `Move`/`Waypoint`,
+//! `Wait type="DigitalInput"`, `Set type="DigitalOutput"`, `Halt`, `Script type="File"`.
+//! The other forms (`Loop type="Counting"`, `ElseIf`, `Set type="AnalogOutput"|
+//! "Expression"`, `Wait type="AnalogInput"|"Expression"`, `Folder`) follow the same
+//! conventions but were not seen in a saved file.
 //!
 //! String literals: URScript has no escapes, so a message with `"` is written between
 //! `'`; one with both quote characters has its `"` written as `'`.
 
+use std::collections::HashMap;
 use std::fmt;
 use std::io::Read;
 
@@ -96,6 +121,9 @@ pub const EXTERNAL_CONTROL_DEFAULT_HOST: &str = "192.168.56.1";
 pub const EXTERNAL_CONTROL_DEFAULT_PORT: u16 = 50002;
 
 const MAX_REFERENCE_HOPS: usize = 64;
+const MAX_REFERENCE_LEN: usize = 4096;
+/// The most attributes on one element.
+pub const MAX_ATTRIBUTES: usize = 256;
 
 /// The External Control URCap's settings in an installation: where its nodes ask for
 /// their script.
@@ -167,6 +195,21 @@ pub fn read_external_control_settings(
         }
     }
     Ok(settings)
+}
+
+/// What the External Control URCap sends its host (then it reads the reply).
+pub const EXTERNAL_CONTROL_REQUEST: &[u8] = b"request_program\n";
+
+/// Why fetching an External Control node's script failed: the URCap writes a different
+/// popup for each.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum FetchError {
+    /// No connection (refused, unreachable, the URCap's 5 s connect timeout), with the
+    /// reason as the popup shows it.
+    Connect(String),
+    /// Connected, but the first line of the reply did not come within the URCap's
+    /// 500 ms read timeout.
+    Timeout,
 }
 
 /// Why a `.urp` could not be read or translated.
@@ -309,7 +352,8 @@ pub struct UrpProgram {
     /// The PolyScope version that created it (`createdIn`), if given.
     pub created_in: Option<String>,
     /// The URScript program: `def NAME():` ... `end`. Each External Control node is a
-    /// comment line here; [`translate_with`] gives the program with their scripts.
+    /// comment line here; [`translate_with`] gives the program with their scripts (from
+    /// the translation as read: changing this text does not change what it gives).
     pub script: String,
     /// The External Control nodes, in document order.
     pub external_control: Vec<ExternalControlNode>,
@@ -374,9 +418,15 @@ pub fn read_urp(bytes: &[u8]) -> Result<UrpProgram, UrpError> {
 /// then splits the reply: the lines from `# HEADER_BEGIN` to `# HEADER_END` are the
 /// header, written once, before the first node's script; the lines after the header
 /// are the control loop, written at every External Control node. A reply without
-/// `# HEADER_END` is all control loop. `fetch` is called at most once, with the first
-/// node; when it fails, every node gets what the URCap writes then: a blocking error
-/// popup naming the host and the reason, and `sync()`.
+/// `# HEADER_END` is all control loop. `fetch` is called at most once, with the node
+/// that comes first in the script, and sees the node's `host` and `port` as they are
+/// now ([`UrpProgram::set_external_control_host`]). When it fails, every node gets what
+/// the URCap writes then: a blocking error popup titled `Receive program failed` that
+/// names the host ([`FetchError`] says which of its two texts), and `sync()`.
+///
+/// `fetch` may do the I/O itself; a sans-IO caller fetches first (the host and port are
+/// in [`UrpProgram::external_control`], the request is [`EXTERNAL_CONTROL_REQUEST`]) and
+/// passes a closure that returns what it got.
 ///
 /// ```
 /// use std::io::Write;
@@ -397,7 +447,7 @@ pub fn read_urp(bytes: &[u8]) -> Result<UrpProgram, UrpError> {
 /// ```
 pub fn translate_with(
     program: &UrpProgram,
-    mut fetch: impl FnMut(&ExternalControlNode) -> Result<String, String>,
+    mut fetch: impl FnMut(&ExternalControlNode) -> Result<String, FetchError>,
 ) -> Result<String, UrpError> {
     let mut fetched: Option<(String, String)> = None;
     let mut header_written = false;
@@ -417,16 +467,25 @@ pub fn translate_with(
                 if fetched.is_none() {
                     let reply = match fetch(node) {
                         Ok(text) => urcap_lines(&text),
-                        Err(why) => vec![
-                            format!(
-                                "popup({}, \"Receive program failed\", False, True, blocking=True)",
-                                string_literal(&format!(
+                        Err(why) => {
+                            let text = match why {
+                                FetchError::Timeout => format!(
+                                    "Timeout while reading requested program from {}:{}",
+                                    node.host, node.port
+                                ),
+                                FetchError::Connect(reason) => format!(
                                     "The connection to the remote PC at {}:{} could not be established. Reason: {}",
-                                    node.host, node.port, why
-                                ))
-                            ),
-                            String::from("sync()"),
-                        ],
+                                    node.host, node.port, reason
+                                ),
+                            };
+                            vec![
+                                format!(
+                                    "popup({}, \"Receive program failed\", False, True, blocking=True)",
+                                    string_literal(&text)
+                                ),
+                                String::from("sync()"),
+                            ]
+                        }
                     };
                     fetched = Some(split_header(&reply));
                 }
@@ -468,7 +527,15 @@ fn urcap_lines(reply: &str) -> Vec<String> {
 
 /// Splits the reply's lines into header and control loop, as the URCap does.
 fn split_header(lines: &[String]) -> (String, String) {
-    let marker = |line: &str, name: &str| line.trim() == name;
+    // The URCap matches `\p{Zs}*# HEADER_BEGIN\p{Zs}*`: only space separators around.
+    let zs = |c: char| {
+        matches!(
+            c,
+            ' ' | '\u{a0}' | '\u{1680}' | '\u{2000}'
+                ..='\u{200a}' | '\u{202f}' | '\u{205f}' | '\u{3000}'
+        )
+    };
+    let marker = |line: &str, name: &str| line.trim_matches(zs) == name;
     let (mut header, mut control) = (String::new(), String::new());
     let (mut in_header, mut header_end) = (false, false);
     for line in lines {
@@ -523,7 +590,8 @@ fn inflate(bytes: &[u8]) -> Result<Vec<u8>, UrpError> {
     if bytes.starts_with(&[0x1f, 0x8b]) {
         let mut xml = Vec::new();
         let limit = (MAX_XML_BYTES as u64).saturating_add(1);
-        flate2::read::GzDecoder::new(bytes)
+        // Members one after another inflate to their concatenation, as gunzip does.
+        flate2::read::MultiGzDecoder::new(bytes)
             .take(limit)
             .read_to_end(&mut xml)
             .map_err(|e| UrpError::Gzip {
@@ -551,11 +619,20 @@ struct Elem {
     text: String,
     children: Vec<usize>,
     parent: Option<usize>,
+    /// Its position among its parent's children of its name, from 1 (XStream's `Name[k]`).
+    nth: u32,
 }
 
 #[derive(Debug)]
 struct Doc {
     elems: Vec<Elem>,
+    /// (parent, name, k) -> the parent's k-th child of that name, so that following a
+    /// reference costs the same whatever the number of siblings.
+    named: HashMap<(usize, u32, u32), usize>,
+    /// Element names, numbered (the keys of `named`).
+    name_ids: HashMap<String, u32>,
+    /// Element -> where its `reference` attribute points (one hop), or why it does not.
+    links: HashMap<usize, Result<usize, String>>,
 }
 
 fn xml_err(offset: u64, message: impl Into<String>) -> UrpError {
@@ -568,7 +645,11 @@ fn xml_err(offset: u64, message: impl Into<String>) -> UrpError {
 fn parse_xml(xml: &[u8]) -> Result<Doc, UrpError> {
     let mut reader = Reader::from_reader(xml);
     let mut elems: Vec<Elem> = Vec::new();
+    let mut named = HashMap::new();
+    let mut name_ids: HashMap<String, u32> = HashMap::new();
     let mut stack: Vec<usize> = Vec::new();
+    // For each open element, how many children of each name it has had so far.
+    let mut counts: Vec<HashMap<u32, u32>> = Vec::new();
     let mut root_done = false;
     loop {
         let at = reader.buffer_position();
@@ -597,6 +678,12 @@ fn parse_xml(xml: &[u8]) -> Result<Doc, UrpError> {
                     .to_string();
                 let mut attrs = Vec::new();
                 for attr in e.attributes() {
+                    if attrs.len() >= MAX_ATTRIBUTES {
+                        return Err(xml_err(
+                            at,
+                            format!("more than {MAX_ATTRIBUTES} attributes on <{name}>"),
+                        ));
+                    }
                     let attr = attr.map_err(|err| xml_err(at, err.to_string()))?;
                     let key = std::str::from_utf8(attr.key.as_ref())
                         .map_err(|_| xml_err(at, "an attribute name is not UTF-8"))?
@@ -609,24 +696,45 @@ fn parse_xml(xml: &[u8]) -> Result<Doc, UrpError> {
                 }
                 let id = elems.len();
                 let parent = stack.last().copied();
+                let name_id = match name_ids.get(name.as_str()) {
+                    Some(&n) => n,
+                    None => {
+                        // At most one name per element: fits, as MAX_ELEMENTS does.
+                        let n = u32::try_from(name_ids.len()).unwrap_or(u32::MAX);
+                        name_ids.insert(name.clone(), n);
+                        n
+                    }
+                };
+                let nth = match counts.last_mut() {
+                    Some(c) => {
+                        let n = c.entry(name_id).or_insert(0);
+                        *n += 1;
+                        *n
+                    }
+                    None => 1,
+                };
+                if let Some(p) = parent {
+                    elems[p].children.push(id);
+                    named.insert((p, name_id, nth), id);
+                }
                 elems.push(Elem {
                     name,
                     attrs,
                     text: String::new(),
                     children: Vec::new(),
                     parent,
+                    nth,
                 });
-                if let Some(p) = parent {
-                    elems[p].children.push(id);
-                }
                 if matches!(event, Event::Start(_)) {
                     stack.push(id);
+                    counts.push(HashMap::new());
                 } else if stack.is_empty() {
                     root_done = true;
                 }
             }
             Event::End(_) => {
                 stack.pop();
+                counts.pop();
                 if stack.is_empty() {
                     root_done = true;
                 }
@@ -676,7 +784,14 @@ fn parse_xml(xml: &[u8]) -> Result<Doc, UrpError> {
             Event::Decl(_) | Event::PI(_) | Event::Comment(_) | Event::DocType(_) => {}
         }
     }
-    Ok(Doc { elems })
+    let mut doc = Doc {
+        elems,
+        named,
+        name_ids,
+        links: HashMap::new(),
+    };
+    doc.link();
+    Ok(doc)
 }
 
 fn push_text(elems: &mut [Elem], stack: &[usize], text: &str, at: u64) -> Result<(), UrpError> {
@@ -714,75 +829,88 @@ impl Doc {
         let mut parts = Vec::new();
         let mut cur = Some(id);
         while let Some(c) = cur {
-            let name = &self.elems[c].name;
-            let part = match self.elems[c].parent {
-                Some(p) => {
-                    let same = self.elems[p]
-                        .children
-                        .iter()
-                        .filter(|&&s| self.elems[s].name == *name);
-                    let k = same.clone().position(|&s| s == c).unwrap_or(0) + 1;
-                    if k > 1 {
-                        format!("{name}[{k}]")
-                    } else {
-                        name.clone()
-                    }
-                }
-                None => name.clone(),
-            };
-            parts.push(part);
-            cur = self.elems[c].parent;
+            let e = &self.elems[c];
+            if e.nth > 1 {
+                parts.push(format!("{}[{}]", e.name, e.nth));
+            } else {
+                parts.push(e.name.clone());
+            }
+            cur = e.parent;
         }
         parts.reverse();
         parts.join("/")
     }
 
-    /// Follows XStream `reference="..."` attributes (paths relative to the element).
+    /// Where one XStream `reference="..."` points (a path relative to the element: `..`,
+    /// `Name`, `Name[k]`), one hop.
+    fn step(&self, id: usize, reference: &str) -> Result<usize, String> {
+        if reference.len() > MAX_REFERENCE_LEN {
+            return Err(format!("a reference longer than {MAX_REFERENCE_LEN} bytes"));
+        }
+        let bad = |why: &str| format!("reference `{reference}` {why}");
+        let mut at = id;
+        for seg in reference.split('/') {
+            at = match seg {
+                "" | "." => at,
+                ".." => self.elems[at]
+                    .parent
+                    .ok_or_else(|| bad("leaves the document"))?,
+                _ => {
+                    let (name, k) = match seg.split_once('[') {
+                        Some((n, rest)) => {
+                            let k = rest
+                                .strip_suffix(']')
+                                .and_then(|k| k.parse::<u32>().ok())
+                                .filter(|&k| k >= 1)
+                                .ok_or_else(|| bad("has a malformed index"))?;
+                            (n, k)
+                        }
+                        None => (seg, 1),
+                    };
+                    self.name_ids
+                        .get(name)
+                        .and_then(|&n| self.named.get(&(at, n, k)))
+                        .copied()
+                        .ok_or_else(|| bad("does not resolve"))?
+                }
+            };
+        }
+        Ok(at)
+    }
+
+    /// Follows XStream `reference="..."` attributes to the element they name. Each
+    /// reference is read once ([`Doc::link`]); a chain is at most
+    /// [`MAX_REFERENCE_HOPS`] long.
     fn resolve(&self, id: usize) -> Result<usize, UrpError> {
         let mut cur = id;
         for _ in 0..MAX_REFERENCE_HOPS {
-            let Some(reference) = self.attr(cur, "reference") else {
-                return Ok(cur);
-            };
-            let bad = |why: &str| UrpError::Invalid {
-                path: self.path(cur),
-                message: format!("reference `{reference}` {why}"),
-            };
-            let mut at = cur;
-            for seg in reference.split('/') {
-                at = match seg {
-                    "" | "." => at,
-                    ".." => self.elems[at]
-                        .parent
-                        .ok_or_else(|| bad("leaves the document"))?,
-                    _ => {
-                        let (name, k) = match seg.split_once('[') {
-                            Some((n, rest)) => {
-                                let k = rest
-                                    .strip_suffix(']')
-                                    .and_then(|k| k.parse::<usize>().ok())
-                                    .filter(|&k| k >= 1)
-                                    .ok_or_else(|| bad("has a malformed index"))?;
-                                (n, k)
-                            }
-                            None => (seg, 1),
-                        };
-                        self.elems[at]
-                            .children
-                            .iter()
-                            .copied()
-                            .filter(|&c| self.elems[c].name == name)
-                            .nth(k - 1)
-                            .ok_or_else(|| bad("does not resolve"))?
-                    }
-                };
+            match self.links.get(&cur) {
+                None => return Ok(cur),
+                Some(Ok(next)) => cur = *next,
+                Some(Err(message)) => {
+                    return Err(UrpError::Invalid {
+                        path: self.path(cur),
+                        message: message.clone(),
+                    })
+                }
             }
-            cur = at;
         }
         Err(UrpError::Invalid {
             path: self.path(id),
             message: format!("more than {MAX_REFERENCE_HOPS} chained references"),
         })
+    }
+
+    /// Reads every `reference` attribute once: the cost of references is linear in the
+    /// document, however many elements name the same one.
+    fn link(&mut self) {
+        let mut links = HashMap::new();
+        for id in 0..self.elems.len() {
+            if let Some(r) = self.attr(id, "reference") {
+                links.insert(id, self.step(id, r));
+            }
+        }
+        self.links = links;
     }
 }
 
@@ -796,6 +924,8 @@ struct Tx<'a> {
     externals: Vec<ExternalControlNode>,
     /// Sub programs: (resolved node, function name), in the order first met.
     subprograms: Vec<(usize, String)>,
+    subprogram_index: HashMap<usize, usize>,
+    subprogram_names: std::collections::HashSet<String>,
     loops: usize,
 }
 
@@ -881,6 +1011,8 @@ fn translate(doc: &Doc) -> Result<UrpProgram, UrpError> {
         indent: 1,
         externals: Vec::new(),
         subprograms: Vec::new(),
+        subprogram_index: HashMap::new(),
+        subprogram_names: std::collections::HashSet::new(),
         loops: 0,
     };
 
@@ -1085,21 +1217,22 @@ impl Tx<'_> {
 
     /// The function name for a sub program node, registering it on first sight.
     fn subprogram_name(&mut self, sub: usize) -> Result<String, UrpError> {
-        if let Some((_, n)) = self.subprograms.iter().find(|(s, _)| *s == sub) {
-            return Ok(n.clone());
+        if let Some(&k) = self.subprogram_index.get(&sub) {
+            return Ok(self.subprograms[k].1.clone());
         }
         let name = self
             .doc
             .attr(sub, "name")
             .ok_or_else(|| invalid(self.doc, sub, "the sub program has no name"))?;
         let fname = identifier(name);
-        if self.subprograms.iter().any(|(_, n)| *n == fname) {
+        if !self.subprogram_names.insert(fname.clone()) {
             return Err(invalid(
                 self.doc,
                 sub,
                 format!("two sub programs named {fname}"),
             ));
         }
+        self.subprogram_index.insert(sub, self.subprograms.len());
         self.subprograms.push((sub, fname.clone()));
         Ok(fname)
     }
@@ -1237,7 +1370,8 @@ impl Tx<'_> {
         match doc.name(id) {
             "Comment" => {
                 let text = doc.attr(id, "comment").unwrap_or("");
-                for l in text.lines() {
+                // Every line of it commented: URScript ends a line at `\r` too.
+                for l in text.split(['\n', '\r']).filter(|l| !l.is_empty()) {
                     self.line(&format!("# {l}"));
                 }
             }
@@ -1323,10 +1457,10 @@ impl Tx<'_> {
         let (kind, n) = pin(self.doc, id)?;
         let f = match kind.as_str() {
             "digital_in" => "get_standard_digital_in",
-            "configurable_in" => "get_configurable_digital_in",
+            "configurable_in" | "config_in" => "get_configurable_digital_in",
             "tool_in" => "get_tool_digital_in",
             "digital_out" => "get_standard_digital_out",
-            "configurable_out" => "get_configurable_digital_out",
+            "configurable_out" | "config_out" => "get_configurable_digital_out",
             "tool_out" => "get_tool_digital_out",
             "analog_in" => "get_standard_analog_in",
             "tool_analog_in" => "get_tool_analog_in",
@@ -1468,7 +1602,7 @@ impl Tx<'_> {
         let (kind, n) = pin(self.doc, id)?;
         let f = match kind.as_str() {
             "digital_out" => "set_standard_digital_out",
-            "configurable_out" => "set_configurable_digital_out",
+            "configurable_out" | "config_out" => "set_configurable_digital_out",
             "tool_out" => "set_tool_digital_out",
             "analog_out" => "set_standard_analog_out",
             _ => {
@@ -1597,6 +1731,9 @@ impl Tx<'_> {
 
     fn loop_node(&mut self, id: usize) -> Result<(), UrpError> {
         let doc = self.doc;
+        if doc.attr(id, "checkContinuously") == Some("true") {
+            return Err(unsupported(doc, id, "a Loop checked continuously"));
+        }
         match doc.attr(id, "type").unwrap_or("Forever") {
             "Forever" => self.block("while (True):", |t| t.children_of(id)),
             "Counting" | "XTimes" => {

@@ -6,7 +6,7 @@ use std::time::Duration;
 
 use proptest::prelude::*;
 use urscript_controller::urp::{MAX_DEPTH, MAX_ELEMENTS, MAX_URP_BYTES, MAX_XML_BYTES};
-use urscript_controller::{read_urp, translate_with, UrpError, UrpProgram};
+use urscript_controller::{read_urp, translate_with, FetchError, UrpError, UrpProgram};
 use urscript_interp::{Config, Event, Machine, MessageKind, Program, State};
 
 fn gzip(bytes: &[u8]) -> Vec<u8> {
@@ -447,7 +447,7 @@ fn variables_in_expressions_are_references_to_their_assignment() {
     ));
 }
 
-const EC: &str = r#"<Contributed strategyClass="com.fzi.externalcontrol.ExternalControlNode" strategyProgramNodeType="External Control" strategyURCapDeveloper="FZI Research Center for Information Technology" strategyURCapName="External Control"><dataModel/></Contributed>"#;
+const EC: &str = r#"<Contributed strategyClass="com.fzi.externalcontrol.ExternalControlNode" strategyProgramNodeType="External Control"><dataModel/></Contributed>"#;
 
 #[test]
 fn external_control_nodes_get_the_fetched_script_header_once() {
@@ -486,21 +486,42 @@ fn external_control_nodes_get_the_fetched_script_header_once() {
         ["loop", "between", "loop"]
     );
 
+    // Markers must stand alone on their line (spaces around them only, as the URCap
+    // matches them); lines before the header are dropped, as the URCap drops them.
+    let reply = "textmsg(\"dropped\")\n\t# HEADER_BEGIN\n# HEADER_BEGIN  \ndef c2():\n  textmsg(\"c2\")\nend\n# HEADER_END\nc2()\n";
+    let script = translate_with(&p, |_| Ok(reply.to_string())).unwrap();
+    assert!(!script.contains("dropped"), "{script}");
+    let mut m = machine(&script);
+    assert_eq!(
+        texts(&run(&mut m, Duration::from_secs(1))),
+        ["c2", "between", "c2"]
+    );
+
     // A host that cannot be reached: the URCap's error popup.
     let mut p = p;
     p.set_external_control_host("10.0.0.7", 50010);
     let script = translate_with(&p, |node| {
         assert_eq!((node.host.as_str(), node.port), ("10.0.0.7", 50010));
-        Err("Connection refused".to_string())
+        Err(FetchError::Connect("Connection refused".to_string()))
     })
     .unwrap();
     let mut m = machine(&script);
     let shown = run(&mut m, Duration::from_secs(1));
     assert_eq!(shown.len(), 3);
-    assert!(shown[0].1.contains("10.0.0.7:50010"), "{}", shown[0].1);
-    assert!(shown[0].1.contains("Connection refused"), "{}", shown[0].1);
+    assert_eq!(
+        shown[0].1,
+        "The connection to the remote PC at 10.0.0.7:50010 could not be established. Reason: Connection refused"
+    );
     assert!(
         matches!(&shown[0].0, MessageKind::Popup { error: true, title, .. } if title == "Receive program failed")
+    );
+
+    let script = translate_with(&p, |_| Err(FetchError::Timeout)).unwrap();
+    let mut m = machine(&script);
+    let shown = run(&mut m, Duration::from_secs(1));
+    assert_eq!(
+        shown[0].1,
+        "Timeout while reading requested program from 10.0.0.7:50010"
     );
 }
 
@@ -551,6 +572,13 @@ fn unknown_nodes_are_errors_naming_them() {
         read_urp(&urp(relative)),
         Err(UrpError::Unsupported { .. })
     ));
+    let continuous = format!(
+        r#"<Loop type="While" checkContinuously="true">{}<children/></Loop>"#,
+        expr("True")
+    );
+    assert!(
+        matches!(read_urp(&urp(&continuous)), Err(UrpError::Unsupported { what, .. }) if what.contains("continuously"))
+    );
     let circle = r#"<Move motionType="MoveC"><children/></Move>"#;
     assert!(matches!(
         read_urp(&urp(circle)),
@@ -612,17 +640,24 @@ fn broken_input_is_a_typed_error() {
 
 #[test]
 fn a_gzip_bomb_stops_at_the_bound() {
-    let mut gz = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::fast());
-    gz.write_all(b"<URProgram name=\"bomb\">").unwrap();
-    let blanks = vec![b' '; 1 << 20];
+    // gzip members one after another inflate to their concatenation (as gunzip reads
+    // them): one member of 1 MiB of blanks, repeated past the bound.
+    let mut bomb = gzip(b"<URProgram name=\"bomb\">");
+    let member = gzip(&vec![b' '; 1 << 20]);
     for _ in 0..(MAX_XML_BYTES >> 20) + 1 {
-        gz.write_all(&blanks).unwrap();
+        bomb.extend_from_slice(&member);
     }
-    let bomb = gz.finish().unwrap();
     assert!(bomb.len() < 1 << 20, "the bomb is small: {}", bomb.len());
     assert!(
         matches!(read_urp(&bomb), Err(UrpError::TooLarge { limit, .. }) if limit == MAX_XML_BYTES)
     );
+
+    // Under the bound, members are read whole.
+    let xml = document("two", true, &script_line("textmsg(\"x\")"), "");
+    let (a, b) = xml.as_bytes().split_at(xml.len() / 2);
+    let mut two = gzip(a);
+    two.extend_from_slice(&gzip(b));
+    assert_eq!(read_urp(&two).unwrap().name, "two");
 
     let huge = vec![b'<'; MAX_URP_BYTES + 1];
     assert!(matches!(
@@ -655,9 +690,9 @@ fn nesting_and_element_count_are_bounded() {
     }
     assert!(read(&ok).script.contains("textmsg(\"deep\")"));
 
-    let many = "<Comment comment=\"\"/>".repeat(MAX_ELEMENTS);
+    let many = document("many", true, &"<Halt/>".repeat(MAX_ELEMENTS), "");
     assert!(
-        matches!(read_urp(&urp(&many)), Err(UrpError::TooManyElements { limit, .. }) if limit == MAX_ELEMENTS)
+        matches!(read_urp(many.as_bytes()), Err(UrpError::TooManyElements { limit, .. }) if limit == MAX_ELEMENTS)
     );
 }
 
@@ -792,4 +827,229 @@ fn variable_waypoints_and_nodes_between_waypoints() {
     assert_eq!(texts(&run(&mut m, Duration::from_secs(30))), ["at 1"]);
     assert_eq!(m.state(), &State::Finished);
     assert!((m.joint_positions()[0] - 0.3).abs() < 1e-6);
+}
+
+#[test]
+fn work_stays_linear_with_many_siblings_and_references() {
+    // 20 000 calls of one sub program, each naming it by a reference to the last
+    // sibling, and 10 000 External Control nodes: quadratic lookups would take minutes.
+    let n = 20_000;
+    let mut main = String::with_capacity(n * 80);
+    for _ in 1..n {
+        main.push_str(&format!(
+            r#"<CallSubProgram><subprogram reference="../../CallSubProgram[{n}]/subprogram"/></CallSubProgram>"#
+        ));
+    }
+    main.push_str(&format!(
+        r#"<CallSubProgram><subprogram name="S"><children>{}</children></subprogram></CallSubProgram>"#,
+        script_line("sync()")
+    ));
+    for _ in 0..10_000 {
+        main.push_str(EC);
+    }
+    let xml = document("many", true, &main, "");
+    let started = std::time::Instant::now();
+    let p = read_urp(xml.as_bytes()).unwrap();
+    assert_eq!(p.script.matches("  S()\n").count(), n);
+    assert_eq!(p.external_control.len(), 10_000);
+    assert_eq!(
+        p.external_control[9_999].path,
+        "URProgram/children/MainProgram/children/Contributed[10000]"
+    );
+    let script = translate_with(&p, |_| Ok(String::from("sync()"))).unwrap();
+    assert_eq!(script.matches("sync()").count(), 10_001);
+    assert!(
+        started.elapsed() < Duration::from_secs(20),
+        "{:?}",
+        started.elapsed()
+    );
+}
+
+#[test]
+fn attributes_and_references_are_bounded() {
+    use urscript_controller::urp::MAX_ATTRIBUTES;
+    let attrs: String = (0..=MAX_ATTRIBUTES)
+        .map(|i| format!(" a{i}=\"\""))
+        .collect();
+    let many = format!("<Halt{attrs}/>");
+    assert!(
+        matches!(read_urp(&urp(&many)), Err(UrpError::Xml { message, .. }) if message.contains("attributes"))
+    );
+    let long = "./".repeat(3000);
+    let call = format!(r#"<CallSubProgram><subprogram reference="{long}"/></CallSubProgram>"#);
+    assert!(
+        matches!(read_urp(&urp(&call)), Err(UrpError::Invalid { message, .. }) if message.contains("longer"))
+    );
+}
+
+#[test]
+fn analog_waits_configurable_outputs_and_set_to_a_variable() {
+    let main = format!(
+        r#"<Set type="Expression"><variable name="level"/>{level}</Set>
+<Wait type="AnalogInput"><pin referencedName="analog_in[1]"/><analogComparison>1</analogComparison><analogValue>2.5</analogValue></Wait>
+<Set type="DigitalOutput"><pin referencedName="configurable_out[3]"/><digitalValue>1</digitalValue></Set>
+<Set type="NoAction"/>
+{report}"#,
+        level = expr("get_standard_analog_in(1)"),
+        report = script_line("textmsg(\"level \", level)"),
+    );
+    let p = read(&main);
+    assert!(
+        p.script
+            .contains("global level = get_standard_analog_in(1)"),
+        "{}",
+        p.script
+    );
+    assert!(
+        p.script
+            .contains("while (not(get_standard_analog_in(1) > 2.5)):"),
+        "{}",
+        p.script
+    );
+    assert!(
+        p.script.contains("set_configurable_digital_out(3, True)"),
+        "{}",
+        p.script
+    );
+    let mut m = machine(&p.script);
+    assert!(run(&mut m, Duration::from_millis(100)).is_empty());
+    assert_eq!(m.state(), &State::Running);
+    m.world_mut().analog_in[1] = 3.0;
+    assert_eq!(texts(&run(&mut m, Duration::from_millis(200))), ["level 0"]);
+    assert!(
+        m.arm().digital_out[11],
+        "configurable outputs follow the 8 standard ones"
+    );
+    assert_eq!(m.state(), &State::Finished);
+
+    let tcp = r#"<Set type="NoAction"><tcp referencedName="Gripper"/></Set>"#;
+    assert!(matches!(
+        read_urp(&urp(tcp)),
+        Err(UrpError::Unsupported { .. })
+    ));
+    let pin = r#"<Set type="DigitalOutput"><pin referencedName="out3"/><digitalValue>1</digitalValue></Set>"#;
+    assert!(
+        matches!(read_urp(&urp(pin)), Err(UrpError::Invalid { message, .. }) if message.contains("out3"))
+    );
+}
+
+/// Program trees of the translated nodes, with arbitrary texts where PolyScope keeps
+/// texts (comments, messages, names).
+fn arb_node() -> impl Strategy<Value = String> {
+    let text = "[ -~\n\r\"'<>&\u{e9}\u{225f}]{0,20}";
+    let escape = |s: String| {
+        s.replace('&', "&amp;")
+            .replace('"', "&quot;")
+            .replace('<', "&lt;")
+            .replace('>', "&gt;")
+            .replace('\n', "&#10;")
+            .replace('\r', "&#13;")
+    };
+    let leaf = prop_oneof![
+        text.prop_map(move |t| format!("<Comment comment=\"{}\"/>", escape(t))),
+        (text, any::<bool>(), 0..3u8).prop_map(move |(m, halt, kind)| format!(
+            "<Popup type=\"{}\" haltProgram=\"{halt}\" message=\"{}\"/>",
+            ["Message", "Warning", "Error"][kind as usize],
+            escape(m)
+        )),
+        (0..10u32).prop_map(|ms| format!("<Wait type=\"Sleep\"><waitTime>0.{ms}</waitTime></Wait>")),
+        Just("<Halt/>".to_string()),
+        (0..8u8, any::<bool>()).prop_map(|(n, v)| format!(
+            "<Set type=\"DigitalOutput\"><pin referencedName=\"digital_out[{n}]\"/><digitalValue>{}</digitalValue></Set>",
+            u8::from(v)
+        )),
+        (0..100i32).prop_map(|v| format!("<Assignment><variable name=\"v\"/>{}</Assignment>", expr(&v.to_string()))),
+        Just(script_line("textmsg(\"x\")")),
+    ];
+    leaf.prop_recursive(4, 24, 4, move |inner| {
+        let kids = proptest::collection::vec(inner, 0..4).prop_map(|v| v.concat());
+        prop_oneof![
+            (kids.clone(), "[ -~]{0,10}").prop_map(|(k, name)| format!(
+                "<Folder name=\"{}\"><children>{k}</children></Folder>",
+                name.replace('&', "&amp;").replace('"', "&quot;").replace('<', "&lt;")
+            )),
+            kids.clone().prop_map(|k| format!("<Loop type=\"Forever\"><children>{k}</children></Loop>")),
+            (kids.clone(), 0..4u32).prop_map(|(k, n)| format!(
+                "<Loop type=\"Counting\" count=\"{n}\"><children>{k}</children></Loop>"
+            )),
+            (kids.clone(), kids.clone(), kids.clone()).prop_map(|(a, b, c)| format!(
+                "<If type=\"If\">{}<children>{a}</children></If><If type=\"ElseIf\">{}<children>{b}</children></If><If type=\"Else\"><expression/><children>{c}</children></If>",
+                expr("v \u{225f} 1"),
+                expr("v > 2")
+            )),
+            kids.prop_map(|k| format!(
+                "<CallSubProgram><subprogram name=\"Sub\"><children>{k}</children></subprogram></CallSubProgram>"
+            )),
+        ]
+    })
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(256))]
+
+    /// A tree of the translated nodes, whatever the texts in it, gives a program the
+    /// interpreter accepts.
+    #[test]
+    fn translated_trees_always_parse(nodes in proptest::collection::vec(arb_node(), 0..5)) {
+        // A second inline definition of `Sub` is refused (PolyScope saves a second call
+        // as a reference to the first): that error is the one accepted.
+        let main = format!("<Assignment><variable name=\"v\"/>{}</Assignment>{}", expr("0"), nodes.concat());
+        match read_urp(&urp(&main)) {
+            Ok(p) => {
+                if let Err(e) = Program::parse(&p.script) {
+                    panic!("{e:?}\n{}", p.script);
+                }
+            }
+            Err(UrpError::Invalid { message, .. }) if message.contains("two sub programs") => {}
+            Err(e) => panic!("{e}"),
+        }
+    }
+}
+
+#[test]
+fn older_waypoints_with_a_stored_pose_and_movep_blends() {
+    // Older files keep the joints and the pose as attributes of <position>.
+    let main = r#"<Move motionType="MoveJ" speed="1.05" acceleration="1.4"><children>
+  <Waypoint type="Fixed" name="Start"><position joints="0.1, -1.5, 1.4, -1.5, -1.57, 0.2"/></Waypoint>
+</children></Move>
+<Move motionType="MoveP" speed="0.1" acceleration="1.2" blendRadius="0.005"><children>
+  <Waypoint type="Fixed" name="P1"><position joints="0, 0, 0, 0, 0, 0" pose="0.4, -0.1, 0.3, 0.0, 3.14, 0.0"/></Waypoint>
+  <Waypoint type="Fixed" name="P2"><motionParameters blendRadius="0.0"/><position joints="0, 0, 0, 0, 0, 0" pose="0.4, -0.15, 0.3, 0.0, 3.14, 0.0"/></Waypoint>
+</children></Move>"#;
+    let p = read(main);
+    assert!(
+        p.script
+            .contains("  # Start\n  movej([0.1, -1.5, 1.4, -1.5, -1.57, 0.2], a=1.4, v=1.05)\n"),
+        "{}",
+        p.script
+    );
+    assert!(
+        p.script
+            .contains("movep(p[0.4, -0.1, 0.3, 0.0, 3.14, 0.0], a=1.2, v=0.1, r=0.005)"),
+        "{}",
+        p.script
+    );
+    assert!(
+        p.script
+            .contains("movep(p[0.4, -0.15, 0.3, 0.0, 3.14, 0.0], a=1.2, v=0.1)\n"),
+        "{}",
+        p.script
+    );
+
+    let mut m = machine(&p.script);
+    run(&mut m, Duration::from_secs(30));
+    assert_eq!(m.state(), &State::Finished);
+    let tcp = m.tcp_pose();
+    for (got, want) in tcp.iter().zip([0.4, -0.15, 0.3]) {
+        assert!((got - want).abs() < 1e-4, "tcp {tcp:?}");
+    }
+
+    let no_joints = r#"<Move motionType="MoveJ"><children><Waypoint type="Fixed"><position/></Waypoint></children></Move>"#;
+    assert!(
+        matches!(read_urp(&urp(no_joints)), Err(UrpError::Invalid { message, .. }) if message.contains("joint angles"))
+    );
+    let five = r#"<Move motionType="MoveJ"><children><Waypoint type="Fixed"><position><JointAngles angles="1, 2, 3, 4, 5"/></position></Waypoint></children></Move>"#;
+    assert!(
+        matches!(read_urp(&urp(five)), Err(UrpError::Invalid { message, .. }) if message.contains("6 values"))
+    );
 }
