@@ -9,21 +9,22 @@ use std::path::Path;
 use std::time::{Duration, Instant};
 
 use urscript_controller::urp::{
-    read_external_control_settings, read_urp, translate_with, ExternalControlNode,
-    EXTERNAL_CONTROL_DEFAULT_PORT,
+    read_external_control_settings, read_urp, translate_with, ExternalControlNode, FetchError,
+    EXTERNAL_CONTROL_DEFAULT_PORT, EXTERNAL_CONTROL_REQUEST,
 };
 
 use super::Shared;
 
 /// The largest `.urp` or `.installation` file read.
 pub const MAX_FILE: u64 = 64 * 1024 * 1024;
-/// The largest script an External Control host may send.
+/// The most bytes of script read from an External Control host.
 pub const MAX_FETCHED: usize = 16 * 1024 * 1024;
-/// How long connecting to the External Control host may take.
-const CONNECT_TIMEOUT: Duration = Duration::from_secs(3);
-/// How long the host may stay silent before its reply counts as complete (the URCap
-/// reads until nothing more is buffered).
-const QUIET: Duration = Duration::from_secs(2);
+/// How long connecting to the External Control host may take (the URCap's 5 s).
+const CONNECT_TIMEOUT: Duration = Duration::from_secs(5);
+/// How long the host may stay silent: before its first bytes (the URCap's read
+/// timeout), and after them, when the reply counts as complete (the URCap reads until
+/// nothing more is buffered).
+const QUIET: Duration = Duration::from_millis(500);
 /// The longest a whole fetch may take.
 const FETCH_LIMIT: Duration = Duration::from_secs(10);
 
@@ -85,14 +86,14 @@ pub fn load(shared: &Shared, path: &str) -> Result<String, String> {
 
 /// What the External Control URCap does at play time: `request_program\n` to the host,
 /// the reply read until the host closes (or stays quiet, or the bounds are reached).
-fn request_program(node: &ExternalControlNode) -> Result<String, String> {
+fn request_program(node: &ExternalControlNode) -> Result<String, FetchError> {
     let mut stream = urscript_interp::drive::connect_stream(&node.host, node.port, CONNECT_TIMEOUT)
-        .map_err(|e| urscript_interp::drive::describe_connect_error(&node.host, node.port, &e))?;
+        .map_err(|e| FetchError::Connect(e.to_string()))?;
     let _ = stream.set_nonblocking(false);
     let _ = stream.set_read_timeout(Some(QUIET));
     stream
-        .write_all(b"request_program\n")
-        .map_err(|e| format!("sending request_program failed: {e}"))?;
+        .write_all(EXTERNAL_CONTROL_REQUEST)
+        .map_err(|e| FetchError::Connect(e.to_string()))?;
     let start = Instant::now();
     let mut reply = Vec::new();
     let mut buf = [0u8; 16 * 1024];
@@ -102,24 +103,26 @@ fn request_program(node: &ExternalControlNode) -> Result<String, String> {
             Ok(n) => {
                 reply.extend_from_slice(&buf[..n]);
                 if reply.len() > MAX_FETCHED {
-                    return Err(format!("the host sent more than {MAX_FETCHED} bytes"));
+                    break; // the bound: what came so far
                 }
             }
             Err(e) if e.kind() == std::io::ErrorKind::Interrupted => continue,
-            // Quiet for a while with a reply in hand: it is complete.
             Err(e)
                 if matches!(
                     e.kind(),
                     std::io::ErrorKind::WouldBlock | std::io::ErrorKind::TimedOut
-                ) && !reply.is_empty() =>
+                ) =>
             {
-                break
+                if reply.is_empty() {
+                    return Err(FetchError::Timeout);
+                }
+                break; // quiet with a reply in hand: it is complete
             }
-            Err(e) => return Err(format!("reading the program failed: {e}")),
+            Err(e) => return Err(FetchError::Connect(e.to_string())),
         }
         if start.elapsed() > FETCH_LIMIT {
             break;
         }
     }
-    String::from_utf8(reply).map_err(|_| "the program sent is not UTF-8".to_string())
+    Ok(String::from_utf8_lossy(&reply).into_owned())
 }
