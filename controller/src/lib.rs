@@ -1,11 +1,17 @@
-//! A virtual Universal Robots controller that unmodified clients drive, sans-IO like the
-//! rest of the workspace: time is an input, there are no sockets and no files in here.
-//! `ursock controller` serves it over TCP.
+//! A virtual Universal Robots controller that unmodified clients drive. Every interface
+//! is sans-IO like the rest of the workspace (time is an input, bytes in and out); the
+//! one module with sockets and threads, [`net`] (feature `net`, on by default), serves
+//! them all on the controller's ports, in-process for a driver's tests or as
+//! `ursock controller`.
 //!
-//! This first step is the **dashboard server** (port 29999) and the state machine behind
-//! it ([`Controller`]): robot mode, safety status, the loaded program and its state,
-//! operational mode, remote control, and what the controller says about itself (PolyScope
-//! version, serial number, model from [`urscript_interp::kinematics::Model`]).
+//! - [`Controller`]: the **dashboard server**'s state machine (robot mode, safety status,
+//!   the loaded program and its state, operational mode, remote control, what the
+//!   controller says about itself) and [`Dashboard`], its command lines and replies.
+//! - [`Cell`]: the controller, the arm and the program running on it, in time; one
+//!   [`Status`] per step for every stream.
+//! - [`primary`], [`realtime`], [`rtde`], [`script_intake`], [`urp`]: the other interfaces
+//!   (below).
+//! - [`net::Server`]: all of it on TCP.
 //!
 //! ```
 //! use std::time::Duration;
@@ -115,6 +121,8 @@
 
 mod cell;
 mod dashboard;
+#[cfg(feature = "net")]
+pub mod net;
 pub mod primary;
 pub mod realtime;
 pub mod rtde;

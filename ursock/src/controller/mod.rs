@@ -1,37 +1,16 @@
-//! `ursock controller`: a virtual UR controller that unmodified clients drive.
-//!
-//! - The dashboard server (29999): one thread per connection (at most
-//!   [`MAX_CONNECTIONS`]), every line a command, every reply written in one piece ending
-//!   in `"\n"`.
-//! - The primary (30001), secondary (30002), realtime (30003) and RTDE (30004)
-//!   interfaces, and the program running on the virtual arm: one real-time thread
-//!   ([`streams`]).
-//!
-//! Every interface reads and changes one [`Cell`] (the controller's state machine, the
-//! arm and its program); its clock is the time since the start.
+//! `ursock controller`: a virtual UR controller that unmodified clients drive. The
+//! server is the library's ([`urscript_controller::net::Server`]): this module reads the
+//! options, prints its events (human lines or `--json`), and takes the operator's
+//! commands on standard input.
 
-mod streams;
-mod urp;
+use std::io::{BufRead, Read};
+use std::path::PathBuf;
+use std::sync::mpsc;
 
-use std::io::{BufRead, ErrorKind, Read, Write};
-use std::net::{TcpListener, TcpStream};
-use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicU64, AtomicUsize, Ordering};
-use std::sync::{Arc, Mutex};
-use std::time::{Duration, Instant};
-
-use urscript_controller::{
-    Cell, Config, Controller, Dashboard, Model, Programs, Reply, SafetyStatus, MAX_LINE,
-};
+use urscript_controller::net::{parse_host, Ports, Server, ServerEvent, ServerOptions};
+use urscript_controller::{Config, Model, SafetyStatus, MAX_LINE};
 
 use crate::report::{self, Event};
-
-/// Connections served at once; more are accepted and closed at once.
-pub const MAX_CONNECTIONS: usize = 16;
-
-/// A write that cannot finish in this time (a client that stopped reading) ends the
-/// connection.
-const WRITE_TIMEOUT: Duration = Duration::from_secs(10);
 
 /// `ursock controller` options.
 #[derive(clap::Args, Debug)]
@@ -88,28 +67,6 @@ pub struct ControllerOptions {
     pub json: bool,
 }
 
-/// Programs in a directory of this machine: a name is found when it names a file inside
-/// the directory (after resolving `..` and links).
-struct DirPrograms {
-    root: PathBuf,
-}
-
-impl Programs for DirPrograms {
-    fn find(&self, name: &str) -> Option<String> {
-        if name.is_empty() || name.contains('\0') {
-            return None;
-        }
-        let path = Path::new(name);
-        let candidate = if path.is_absolute() {
-            path.to_path_buf()
-        } else {
-            self.root.join(path)
-        };
-        let real = candidate.canonicalize().ok()?;
-        (real.starts_with(&self.root) && real.is_file()).then(|| real.display().to_string())
-    }
-}
-
 fn valid_version(v: &str) -> bool {
     let parts: Vec<&str> = v.split('.').collect();
     (3..=4).contains(&parts.len())
@@ -118,53 +75,92 @@ fn valid_version(v: &str) -> bool {
             .all(|p| !p.is_empty() && p.len() <= 9 && p.bytes().all(|b| b.is_ascii_digit()))
 }
 
-struct Shared {
-    cell: Mutex<Cell>,
-    /// The controller's configuration (a copy: it never changes).
-    config: Config,
-    start: Instant,
-    json: bool,
-    active: AtomicUsize,
-    next_conn: AtomicU64,
-    /// `--programs`: where `.urp` files are.
-    urcap_host: Option<(String, u16)>,
+/// A server event as a report event.
+fn report_event(e: ServerEvent) -> Option<Event> {
+    let t = report::now();
+    Some(match e {
+        ServerEvent::Listening { service, addr } => Event::Listening(report::Listening {
+            t,
+            addr: addr.to_string(),
+            service: Some(service),
+        }),
+        ServerEvent::Connect {
+            conn,
+            service,
+            peer,
+        } => Event::Connect(report::Connect {
+            t,
+            conn,
+            peer,
+            service: Some(service),
+        }),
+        ServerEvent::Close {
+            conn,
+            reason,
+            rx,
+            tx,
+        } => Event::Close(report::Close {
+            t,
+            conn,
+            reason,
+            rx,
+            tx,
+            refused_sets: 0,
+        }),
+        ServerEvent::Dashboard {
+            conn,
+            command,
+            reply,
+        } => Event::Dashboard(report::Dashboard {
+            t,
+            conn,
+            command,
+            reply,
+        }),
+        ServerEvent::Client {
+            conn,
+            service,
+            what,
+            text,
+        } => Event::Client(report::Client {
+            t,
+            conn,
+            service,
+            what,
+            text,
+        }),
+        ServerEvent::Program {
+            what,
+            name,
+            line,
+            column,
+            text,
+        } => Event::Program(report::Program {
+            t,
+            what,
+            name,
+            line,
+            column,
+            text,
+        }),
+        ServerEvent::Message(m) => crate::script::message_event(&m),
+        ServerEvent::Call(c) => Event::Call(crate::script::call_event(&c, None)),
+        ServerEvent::Tx { socket, bytes } => Event::tx(&socket, &bytes),
+        ServerEvent::Rx { socket, bytes } => Event::rx(&socket, &bytes),
+        ServerEvent::Note(text) => Event::note(text),
+        _ => return None,
+    })
 }
 
-impl Shared {
-    fn now(&self) -> Duration {
-        self.start.elapsed()
+/// Prints an event: its JSON line, or its lines for people (`[#conn]` in front).
+fn print(json: bool, event: &Event) {
+    if json {
+        crate::out::line(&event.to_json());
+        return;
     }
-
-    fn config(&self) -> &Config {
-        &self.config
-    }
-
-    fn lock_cell(&self) -> std::sync::MutexGuard<'_, Cell> {
-        self.cell.lock().unwrap_or_else(|p| p.into_inner())
-    }
-
-    /// A new connection number, shared by every interface.
-    fn next_conn(&self) -> u64 {
-        self.next_conn.fetch_add(1, Ordering::SeqCst)
-    }
-
-    /// A line for people; nothing with `--json`.
-    fn say(&self, human: impl FnOnce() -> String) {
-        if !self.json {
-            crate::out::line(&human());
-        }
-    }
-
-    /// An event: its JSON line, or its lines for people (`[#conn]` in front).
-    fn emit(&self, event: Event) {
-        if self.json {
-            crate::out::line(&event.to_json());
-            return;
-        }
-        let prefix = event.conn().map(|c| format!("[#{c}] ")).unwrap_or_default();
-        for l in crate::listen::human(&event, usize::MAX) {
-            crate::out::line(&format!("{prefix}{l}"));
-        }
+    let prefix = event.conn().map(|c| format!("[#{c}] ")).unwrap_or_default();
+    for l in crate::listen::human(event, usize::MAX) {
+        crate::out::line(&format!("{prefix}{l}"));
     }
 }
 
@@ -184,278 +180,63 @@ pub fn run(opts: ControllerOptions) -> Result<(), String> {
             opts.serial
         ));
     }
-    let config = Config {
-        model,
-        polyscope: opts.polyscope.clone(),
-        serial: opts.serial.clone(),
-        remote_control: !opts.local,
-        ..Config::default()
-    };
-    let mut controller = Controller::new(config);
-    if let Some(dir) = &opts.programs {
-        let root = dir
-            .canonicalize()
-            .map_err(|e| format!("--programs {}: {e}", dir.display()))?;
-        if !root.is_dir() {
-            return Err(format!("--programs {}: not a directory", dir.display()));
-        }
-        controller = controller.with_programs(Box::new(DirPrograms { root }));
-    }
-    let bind = |port: u16, service: &'static str| -> Result<(TcpListener, String), String> {
-        let l = TcpListener::bind((opts.bind.as_str(), port))
-            .map_err(|e| format!("cannot listen on {}:{port} ({service}): {e}", opts.bind))?;
-        let addr = l
-            .local_addr()
-            .map(|a| a.to_string())
-            .unwrap_or_else(|_| format!("{}:{port}", opts.bind));
-        Ok((l, addr))
-    };
     let urcap_host = match &opts.urcap_host {
         None => None,
-        Some(h) => Some(urp::parse_host(h).map_err(|e| format!("--urcap-host {h}: {e}"))?),
+        Some(h) => Some(parse_host(h).map_err(|e| format!("--urcap-host {h}: {e}"))?),
     };
-    let (listener, addr) = bind(opts.dashboard_port, "dashboard")?;
-    let mut bound = vec![(addr, "dashboard")];
-    let listeners = if opts.no_streams {
-        None
-    } else {
-        let (primary, a1) = bind(opts.primary_port, "primary")?;
-        let (secondary, a2) = bind(opts.secondary_port, "secondary")?;
-        let (realtime, a3) = bind(opts.realtime_port, "realtime")?;
-        let (rtde, a4) = bind(opts.rtde_port, "rtde")?;
-        bound.extend([
-            (a1, "primary"),
-            (a2, "secondary"),
-            (a3, "realtime"),
-            (a4, "rtde"),
-        ]);
-        Some(streams::Listeners {
-            primary: Some(primary),
-            secondary: Some(secondary),
-            realtime: Some(realtime),
-            rtde: Some(rtde),
-        })
-    };
-    let config = controller.config().clone();
-    let interp = Cell::interp_config(&controller);
-    let shared = Arc::new(Shared {
-        cell: Mutex::new(Cell::new(controller, interp)),
-        config,
-        start: Instant::now(),
-        json: opts.json,
-        active: AtomicUsize::new(0),
-        next_conn: AtomicU64::new(1),
+    let stream = |port: u16| (!opts.no_streams).then_some(port);
+    let options = ServerOptions {
+        bind: opts.bind.clone(),
+        ports: Ports {
+            dashboard: Some(opts.dashboard_port),
+            primary: stream(opts.primary_port),
+            secondary: stream(opts.secondary_port),
+            realtime: stream(opts.realtime_port),
+            rtde: stream(opts.rtde_port),
+        },
+        config: Config {
+            model,
+            polyscope: opts.polyscope.clone(),
+            serial: opts.serial.clone(),
+            remote_control: !opts.local,
+            ..Config::default()
+        },
+        programs: opts.programs.clone(),
         urcap_host,
-    });
-    for (addr, service) in bound {
-        if opts.json {
-            let event = Event::Listening(report::Listening {
-                t: report::now(),
-                addr,
-                service: Some(service),
-            });
-            crate::out::line(&event.to_json());
-        } else {
-            crate::out::line(&format!("listening on {addr} ({service})"));
+    };
+    let json = opts.json;
+    let (shutdown_tx, shutdown) = mpsc::channel::<()>();
+    let shutdown_tx = std::sync::Mutex::new(shutdown_tx);
+    let server = Server::start(options, move |e| {
+        if e == ServerEvent::Shutdown {
+            if !json {
+                crate::out::line("shutdown: the controller turned off");
+            }
+            let tx = shutdown_tx.lock().unwrap_or_else(|p| p.into_inner());
+            let _ = tx.send(());
+            return;
         }
-    }
+        if let Some(event) = report_event(e) {
+            print(json, &event);
+        }
+    })
+    .map_err(|e| {
+        if e.kind() == std::io::ErrorKind::NotFound || e.kind() == std::io::ErrorKind::NotADirectory
+        {
+            format!("--programs: {e}")
+        } else {
+            e.to_string()
+        }
+    })?;
+    let server = std::sync::Arc::new(server);
     {
-        let shared = Arc::clone(&shared);
+        let server = std::sync::Arc::clone(&server);
         let _ = std::thread::Builder::new()
             .name("operator".into())
-            .spawn(move || operator(&shared));
+            .spawn(move || operator(&server, json));
     }
-    if let Some(listeners) = listeners {
-        let shared = Arc::clone(&shared);
-        std::thread::Builder::new()
-            .name("controller".into())
-            .spawn(move || streams::run(&shared, listeners))
-            .map_err(|e| format!("cannot start the controller's thread: {e}"))?;
-    }
-    loop {
-        let (stream, peer) = match listener.accept() {
-            Ok(s) => s,
-            Err(e) if e.kind() == ErrorKind::Interrupted => continue,
-            Err(e) => {
-                // Out of descriptors and the like: say so, wait a little, go on.
-                crate::out::note(&format!("accept failed: {e}"));
-                std::thread::sleep(Duration::from_millis(100));
-                continue;
-            }
-        };
-        if shared.active.load(Ordering::SeqCst) >= MAX_CONNECTIONS {
-            crate::out::note(&format!(
-                "{peer}: refused, {MAX_CONNECTIONS} connections are already open"
-            ));
-            drop(stream);
-            continue;
-        }
-        shared.active.fetch_add(1, Ordering::SeqCst);
-        let conn = shared.next_conn();
-        let spawned = std::thread::Builder::new()
-            .name(format!("dashboard-{conn}"))
-            .spawn({
-                let shared = Arc::clone(&shared);
-                move || {
-                    serve(stream, conn, peer.to_string(), &shared);
-                    shared.active.fetch_sub(1, Ordering::SeqCst);
-                }
-            });
-        if let Err(e) = spawned {
-            shared.active.fetch_sub(1, Ordering::SeqCst);
-            crate::out::note(&format!("{peer}: cannot start a thread: {e}"));
-        }
-    }
-}
-
-/// What one connection counted.
-struct Counts {
-    rx: u64,
-    tx: u64,
-}
-
-fn send(stream: &mut TcpStream, reply: &Reply, counts: &mut Counts) -> bool {
-    let bytes = reply.to_bytes();
-    let ok = stream
-        .write_all(&bytes)
-        .and_then(|()| stream.flush())
-        .is_ok();
-    if ok {
-        counts.tx += bytes.len() as u64;
-    }
-    ok
-}
-
-fn serve(mut stream: TcpStream, conn: u64, peer: String, shared: &Shared) {
-    let _ = stream.set_nodelay(true);
-    let _ = stream.set_write_timeout(Some(WRITE_TIMEOUT));
-    shared.emit(Event::Connect(report::Connect {
-        t: report::now(),
-        conn,
-        peer,
-        service: Some("dashboard"),
-    }));
-    let mut counts = Counts { rx: 0, tx: 0 };
-    let reason = session(&mut stream, conn, shared, &mut counts);
-    shared.emit(Event::Close(report::Close {
-        t: report::now(),
-        conn,
-        reason: reason.to_string(),
-        rx: counts.rx,
-        tx: counts.tx,
-        refused_sets: 0,
-    }));
-}
-
-/// Answer one command line; `Err(reason)` when the connection ends.
-fn answer(
-    stream: &mut TcpStream,
-    conn: u64,
-    shared: &Shared,
-    dashboard: &mut Dashboard,
-    line: &[u8],
-    too_long: bool,
-    counts: &mut Counts,
-) -> Result<(), &'static str> {
-    let text = String::from_utf8_lossy(line);
-    let text = text.strip_suffix('\r').unwrap_or(&text);
-    let (reply, shut_down) = {
-        let mut cell = shared.lock_cell();
-        let now = shared.now();
-        cell.advance(now);
-        let c = cell.controller();
-        let reply = if too_long {
-            dashboard.line_too_long(text)
-        } else {
-            dashboard.handle_line(c, text, now)
-        };
-        (reply, c.is_shut_down())
-    };
-    let shown = if too_long {
-        format!("{}...", text.chars().take(40).collect::<String>())
-    } else {
-        text.to_string()
-    };
-    shared.emit(Event::Dashboard(report::Dashboard {
-        t: report::now(),
-        conn,
-        command: shown,
-        reply: reply.lines.clone(),
-    }));
-    if !send(stream, &reply, counts) {
-        return Err("write failed: the client is not reading");
-    }
-    if shut_down {
-        let _ = stream.shutdown(std::net::Shutdown::Both);
-        shared.say(|| "shutdown: the controller turned off".into());
-        std::process::exit(0);
-    }
-    if reply.close {
-        return Err("quit");
-    }
-    Ok(())
-}
-
-fn session(
-    stream: &mut TcpStream,
-    conn: u64,
-    shared: &Shared,
-    counts: &mut Counts,
-) -> &'static str {
-    if !send(stream, &Dashboard::greeting(), counts) {
-        return "write failed";
-    }
-    let mut reader = match stream.try_clone() {
-        Ok(r) => r,
-        Err(_) => return "cannot read",
-    };
-    let mut dashboard = Dashboard::new();
-    let mut chunk = [0u8; 4096];
-    // The line so far (at most MAX_LINE bytes); `discarding`: a too-long line was
-    // answered and its rest is skipped up to the next newline.
-    let mut line: Vec<u8> = Vec::new();
-    let mut discarding = false;
-    loop {
-        let n = match reader.read(&mut chunk) {
-            Ok(0) => return "client closed",
-            Ok(n) => n,
-            Err(e) if e.kind() == ErrorKind::Interrupted => continue,
-            Err(_) => return "read failed",
-        };
-        counts.rx += n as u64;
-        let mut rest = &chunk[..n];
-        while !rest.is_empty() {
-            let end = rest.iter().position(|&b| b == b'\n');
-            let part = &rest[..end.unwrap_or(rest.len())];
-            rest = match end {
-                Some(i) => &rest[i + 1..],
-                None => &[],
-            };
-            if discarding {
-                discarding = end.is_none();
-                continue;
-            }
-            if line.len() + part.len() > MAX_LINE {
-                let room = MAX_LINE - line.len();
-                line.extend_from_slice(&part[..room.min(64)]);
-                let r = answer(stream, conn, shared, &mut dashboard, &line, true, counts);
-                line.clear();
-                discarding = end.is_none();
-                if let Err(reason) = r {
-                    return reason;
-                }
-                continue;
-            }
-            line.extend_from_slice(part);
-            if end.is_some() {
-                let r = answer(stream, conn, shared, &mut dashboard, &line, false, counts);
-                line.clear();
-                if let Err(reason) = r {
-                    return reason;
-                }
-            }
-        }
-    }
+    let _ = shutdown.recv();
+    std::process::exit(0);
 }
 
 /// The operator's commands on standard input: what happens at the robot that no
@@ -466,7 +247,7 @@ system emergency stop, safeguard stop, fault, violation, release, local, remote,
 
 /// Reads operator commands from standard input until its end (lines bounded at
 /// `MAX_LINE` bytes).
-fn operator(shared: &Shared) {
+fn operator(server: &Server, json: bool) {
     let stdin = std::io::stdin();
     let mut input = stdin.lock();
     let mut line = Vec::new();
@@ -500,61 +281,73 @@ fn operator(shared: &Shared) {
         if cmd.is_empty() {
             continue;
         }
-        let now = shared.now();
-        let mut cell = shared.lock_cell();
-        let c = cell.controller();
-        let status = match cmd.as_str() {
-            "protective stop" => {
-                c.protective_stop(now);
-                None
-            }
-            "emergency stop" => Some(SafetyStatus::RobotEmergencyStop),
-            "system emergency stop" => Some(SafetyStatus::SystemEmergencyStop),
-            "safeguard stop" => Some(SafetyStatus::SafeguardStop),
-            "fault" => Some(SafetyStatus::Fault),
-            "violation" => Some(SafetyStatus::Violation),
-            "release" => {
-                c.release_stop(now);
-                None
-            }
-            "local" => {
-                c.set_remote_control(false);
-                None
-            }
-            "remote" => {
-                c.set_remote_control(true);
-                None
-            }
-            "state" => None,
+        match cmd.as_str() {
             "help" => {
-                drop(cell);
-                shared.say(|| OPERATOR_HELP.into());
+                if !json {
+                    crate::out::line(OPERATOR_HELP);
+                }
                 continue;
             }
+            "protective stop"
+            | "emergency stop"
+            | "system emergency stop"
+            | "safeguard stop"
+            | "fault"
+            | "violation"
+            | "release"
+            | "local"
+            | "remote"
+            | "state" => {}
             _ => {
-                drop(cell);
                 crate::out::note(&format!(
                     "operator: unknown command {cmd:?}; {OPERATOR_HELP}"
                 ));
                 continue;
             }
-        };
-        if let Some(status) = status {
-            c.safety_event(now, status);
         }
-        let mode = c.robot_mode(now);
-        let safety = c.safety_status(now);
-        let program = c.program_state();
-        let remote = if c.remote_control() {
-            "remote"
-        } else {
-            "local"
-        };
-        drop(cell);
-        shared.say(|| {
+        let said = server.with_cell(|cell, now| {
+            let c = cell.controller();
+            let status = match cmd.as_str() {
+                "protective stop" => {
+                    c.protective_stop(now);
+                    None
+                }
+                "emergency stop" => Some(SafetyStatus::RobotEmergencyStop),
+                "system emergency stop" => Some(SafetyStatus::SystemEmergencyStop),
+                "safeguard stop" => Some(SafetyStatus::SafeguardStop),
+                "fault" => Some(SafetyStatus::Fault),
+                "violation" => Some(SafetyStatus::Violation),
+                "release" => {
+                    c.release_stop(now);
+                    None
+                }
+                "local" => {
+                    c.set_remote_control(false);
+                    None
+                }
+                "remote" => {
+                    c.set_remote_control(true);
+                    None
+                }
+                _ => None,
+            };
+            if let Some(status) = status {
+                c.safety_event(now, status);
+            }
+            let mode = c.robot_mode(now);
+            let safety = c.safety_status(now);
+            let program = c.program_state();
+            let remote = if c.remote_control() {
+                "remote"
+            } else {
+                "local"
+            };
             format!(
                 "operator: {cmd}: robot mode {mode}, safety {safety}, program {program}, {remote} control"
             )
         });
+        if !json {
+            crate::out::line(&said);
+        }
     }
 }

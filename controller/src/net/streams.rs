@@ -14,16 +14,15 @@ use std::net::{Shutdown, TcpListener, TcpStream};
 use std::sync::Arc;
 use std::time::Duration;
 
-use urscript_controller::primary::{self, RobotMessage};
-use urscript_controller::realtime;
-use urscript_controller::rtde::{InputRegistry, RtdeEvent, RtdeSession};
-use urscript_controller::script_intake::{Command, Intake, ScriptIntake};
-use urscript_controller::{CellEvent, Ended, Status, Submitted};
 use urscript_interp::drive::{Activity, Driver, Options};
 use urscript_interp::{Event as ProgramEvent, MessageKind};
 
-use super::Shared;
-use crate::report::{self, Event};
+use super::{ServerEvent as Event, Shared};
+use crate::primary::{self, RobotMessage};
+use crate::realtime;
+use crate::rtde::{InputRegistry, RtdeEvent, RtdeSession};
+use crate::script_intake::{Command, Intake, ScriptIntake};
+use crate::{CellEvent, Ended, Status, Submitted};
 
 /// Clients of the streaming interfaces served at once (all four together).
 pub const MAX_CLIENTS: usize = 64;
@@ -34,7 +33,7 @@ pub const MAX_QUEUE: usize = 4 * 1024 * 1024;
 
 /// Which interface a client is on.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Service {
+pub(crate) enum Service {
     Primary,
     Secondary,
     Realtime,
@@ -42,7 +41,7 @@ pub enum Service {
 }
 
 impl Service {
-    pub fn name(self) -> &'static str {
+    pub(crate) fn name(self) -> &'static str {
         match self {
             Service::Primary => "primary",
             Service::Secondary => "secondary",
@@ -103,15 +102,15 @@ impl Client {
 }
 
 /// The listeners of the streaming interfaces (each may be absent).
-pub struct Listeners {
-    pub primary: Option<TcpListener>,
-    pub secondary: Option<TcpListener>,
-    pub realtime: Option<TcpListener>,
-    pub rtde: Option<TcpListener>,
+pub(crate) struct Listeners {
+    pub(crate) primary: Option<TcpListener>,
+    pub(crate) secondary: Option<TcpListener>,
+    pub(crate) realtime: Option<TcpListener>,
+    pub(crate) rtde: Option<TcpListener>,
 }
 
-/// Runs the loop forever.
-pub fn run(shared: &Arc<Shared>, listeners: Listeners) {
+/// Runs the loop until the server stops.
+pub(crate) fn run(shared: &Arc<Shared>, listeners: Listeners) {
     let mut lp = Loop {
         clients: Vec::new(),
         driver: Driver::new(Options::default()),
@@ -136,7 +135,7 @@ pub fn run(shared: &Arc<Shared>, listeners: Listeners) {
         cell.step_time()
     };
     let mut next_step = shared.now();
-    loop {
+    while !shared.stopped() {
         for (l, service) in &listeners {
             if let Some(l) = l {
                 lp.accept(shared, l, *service);
@@ -179,21 +178,20 @@ impl Loop {
                 Err(_) => return, // WouldBlock, or out of descriptors: next round
             };
             if self.clients.len() >= MAX_CLIENTS {
-                crate::out::note(&format!(
+                shared.emit(Event::Note(format!(
                     "{peer}: {} refused, {MAX_CLIENTS} stream clients are already connected",
                     service.name()
-                ));
+                )));
                 continue;
             }
             let _ = stream.set_nonblocking(true);
             let _ = stream.set_nodelay(true);
             let conn = shared.next_conn();
-            shared.emit(Event::Connect(report::Connect {
-                t: report::now(),
+            shared.emit(Event::Connect {
                 conn,
+                service: service.name(),
                 peer: peer.to_string(),
-                service: Some(service.name()),
-            }));
+            });
             let mut client = Client {
                 conn,
                 service,
@@ -307,7 +305,7 @@ impl Loop {
                         Command::UnlockProtectiveStop => c.unlock_protective_stop(now),
                         Command::StopProgram => c.stop(now),
                         Command::SetSpeed(f) => {
-                            cell.apply(&urscript_controller::Inputs {
+                            cell.apply(&crate::Inputs {
                                 speed_slider_fraction: Some(f),
                                 ..Default::default()
                             });
@@ -333,11 +331,11 @@ impl Loop {
                     CellEvent::Program(e) => {
                         match &e {
                             ProgramEvent::Message(m) => {
-                                emit(crate::script::message_event(m));
+                                emit(Event::Message(m.clone()));
                                 messages.push(robot_message(m));
                             }
                             ProgramEvent::Call(c) => {
-                                emit(Event::Call(crate::script::call_event(c, None)));
+                                emit(Event::Call(c.clone()));
                             }
                             _ => {}
                         }
@@ -403,7 +401,7 @@ impl Loop {
                         let spawned = std::thread::Builder::new()
                             .name("load-program".into())
                             .spawn(move || {
-                                let result = super::urp::load(&shared, &path);
+                                let result = super::fetch::load(&shared, &path);
                                 let now = shared.now();
                                 let mut cell = shared.lock_cell();
                                 match result {
@@ -496,14 +494,12 @@ impl Loop {
                     s.close(&mut self.registry);
                 }
                 let _ = c.stream.shutdown(Shutdown::Both);
-                shared.emit(Event::Close(report::Close {
-                    t: report::now(),
+                shared.emit(Event::Close {
                     conn: c.conn,
                     reason: reason.to_string(),
                     rx: c.rx,
                     tx: c.tx,
-                    refused_sets: 0,
-                }));
+                });
             } else {
                 i += 1;
             }
@@ -514,17 +510,21 @@ impl Loop {
 /// What the program's sockets did, as events.
 fn show(emit: &impl Fn(Event), a: Activity<'_>) {
     match a {
-        Activity::Received { socket_name, bytes } => emit(Event::rx(socket_name, bytes)),
-        Activity::PeerClosed { socket_name } => emit(Event::note(format!(
+        Activity::Received { socket_name, bytes } => emit(Event::Rx {
+            socket: socket_name.to_string(),
+            bytes: bytes.to_vec(),
+        }),
+        Activity::PeerClosed { socket_name } => emit(Event::Note(format!(
             "the server closed the connection of socket {socket_name:?}"
         ))),
         Activity::SendFailed {
             socket_name,
             reason,
-        } => emit(Event::note(format!("socket {socket_name:?}: {reason}"))),
-        Activity::Event(ProgramEvent::Transmit { socket_name, bytes }) => {
-            emit(Event::tx(socket_name, bytes))
-        }
+        } => emit(Event::Note(format!("socket {socket_name:?}: {reason}"))),
+        Activity::Event(ProgramEvent::Transmit { socket_name, bytes }) => emit(Event::Tx {
+            socket: socket_name.to_string(),
+            bytes: bytes.clone(),
+        }),
         _ => {}
     }
 }
@@ -557,24 +557,22 @@ fn program_event(
     column: Option<u32>,
     text: Option<String>,
 ) -> Event {
-    Event::Program(report::Program {
-        t: report::now(),
+    Event::Program {
         what,
         name: name.to_string(),
         line,
         column,
         text,
-    })
+    }
 }
 
 fn client_event(conn: u64, service: Service, what: &'static str, text: String) -> Event {
-    Event::Client(report::Client {
-        t: report::now(),
+    Event::Client {
         conn,
         service: service.name(),
         what,
         text,
-    })
+    }
 }
 
 /// An RTDE session's event as a `client` event's `what` and `text`.

@@ -8,7 +8,7 @@ use std::io::{Read, Write};
 use std::path::Path;
 use std::time::{Duration, Instant};
 
-use urscript_controller::urp::{
+use crate::urp::{
     read_external_control_settings, read_urp, translate_with, ExternalControlNode, FetchError,
     EXTERNAL_CONTROL_DEFAULT_PORT, EXTERNAL_CONTROL_REQUEST,
 };
@@ -28,7 +28,7 @@ const QUIET: Duration = Duration::from_millis(500);
 /// The longest a whole fetch may take.
 const FETCH_LIMIT: Duration = Duration::from_secs(10);
 
-/// `HOST` or `HOST:PORT`.
+/// Reads `HOST` or `HOST:PORT` (the External Control URCap's port 50002 by default).
 pub fn parse_host(text: &str) -> Result<(String, u16), String> {
     match text.rsplit_once(':') {
         Some((host, port)) if !host.is_empty() && !host.contains(':') => {
@@ -55,7 +55,7 @@ fn read_bounded(path: &Path) -> Result<Vec<u8>, String> {
 }
 
 /// The URScript of the program file at `path`.
-pub fn load(shared: &Shared, path: &str) -> Result<String, String> {
+pub(crate) fn load(shared: &Shared, path: &str) -> Result<String, String> {
     let path = Path::new(path);
     let bytes = read_bounded(path)?;
     let mut program = read_urp(&bytes).map_err(|e| e.to_string())?;

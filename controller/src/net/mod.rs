@@ -1,0 +1,635 @@
+//! The virtual controller on TCP: every interface of the crate served on the controller's
+//! ports, in-process ([`Server::start`]), for a driver's tests or for `ursock controller`.
+//! This is the crate's one module with sockets, threads and files (feature `net`, on by
+//! default); everything it serves is the sans-IO code of the other modules.
+//!
+//! - The dashboard server: one thread per connection (at most [`MAX_CONNECTIONS`]), every
+//!   line a command, every reply written in one piece ending in `"\n"`.
+//! - Primary, secondary, realtime and RTDE, and the program running on the arm: one
+//!   real-time thread that steps the [`Cell`] at the controller's step (2 ms e-Series,
+//!   8 ms CB3). See [`streams`](self) for its bounds.
+//! - `.urp` programs are read, translated and their External Control scripts fetched in a
+//!   thread of their own when they play.
+//!
+//! What happens is reported as [`ServerEvent`]s to the callback given to
+//! [`Server::start`], from the server's threads.
+//!
+//! ```no_run
+//! use urscript_controller::net::{Ports, Server, ServerOptions};
+//! let server = Server::start(
+//!     ServerOptions { ports: Ports::any(), ..ServerOptions::default() },
+//!     |event| eprintln!("{event:?}"),
+//! )?;
+//! let dashboard = server.addr("dashboard").unwrap();
+//! // ... drive it as a client would: std::net::TcpStream::connect(dashboard) ...
+//! server.stop();
+//! # Ok::<(), std::io::Error>(())
+//! ```
+
+mod fetch;
+mod streams;
+
+use std::io::{ErrorKind, Read, Write};
+use std::net::{SocketAddr, TcpListener, TcpStream};
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, AtomicU64, AtomicUsize, Ordering};
+use std::sync::{Arc, Mutex, MutexGuard};
+use std::thread::JoinHandle;
+use std::time::{Duration, Instant};
+
+use urscript_interp::{CallRecord, Message};
+
+use crate::{Cell, Config, Controller, Dashboard, Programs, Reply, MAX_LINE};
+
+pub use fetch::{parse_host, MAX_FETCHED, MAX_FILE};
+pub use streams::{MAX_BACKLOG, MAX_CLIENTS, MAX_QUEUE};
+
+/// Dashboard connections served at once; more are accepted and closed at once.
+pub const MAX_CONNECTIONS: usize = 16;
+
+/// A dashboard reply that cannot be written in this time (a client that stopped reading)
+/// ends the connection.
+const WRITE_TIMEOUT: Duration = Duration::from_secs(10);
+
+/// The ports to serve on; `Some(0)` picks a free one, `None` serves nothing there.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Ports {
+    /// Dashboard server (29999).
+    pub dashboard: Option<u16>,
+    /// Primary interface (30001).
+    pub primary: Option<u16>,
+    /// Secondary interface (30002).
+    pub secondary: Option<u16>,
+    /// Realtime interface (30003).
+    pub realtime: Option<u16>,
+    /// RTDE (30004).
+    pub rtde: Option<u16>,
+}
+
+impl Ports {
+    /// The controller's own ports.
+    pub const STANDARD: Ports = Ports {
+        dashboard: Some(29999),
+        primary: Some(30001),
+        secondary: Some(30002),
+        realtime: Some(30003),
+        rtde: Some(30004),
+    };
+
+    /// Every interface on a free port (for tests that run side by side).
+    pub fn any() -> Ports {
+        Ports {
+            dashboard: Some(0),
+            primary: Some(0),
+            secondary: Some(0),
+            realtime: Some(0),
+            rtde: Some(0),
+        }
+    }
+}
+
+impl Default for Ports {
+    fn default() -> Self {
+        Ports::STANDARD
+    }
+}
+
+/// How a [`Server`] runs.
+#[derive(Debug, Clone)]
+pub struct ServerOptions {
+    /// The address to bind (default `127.0.0.1`).
+    pub bind: String,
+    /// The ports.
+    pub ports: Ports,
+    /// What the controller says about itself (model, version, serial, remote control).
+    pub config: Config,
+    /// Where `load NAME.urp` finds programs and installations; `None`: nowhere.
+    pub programs: Option<PathBuf>,
+    /// Where External Control URCap nodes fetch their script; `None`: the installation's
+    /// URCap settings, else the URCap's default.
+    pub urcap_host: Option<(String, u16)>,
+}
+
+impl Default for ServerOptions {
+    fn default() -> Self {
+        ServerOptions {
+            bind: "127.0.0.1".into(),
+            ports: Ports::STANDARD,
+            config: Config::default(),
+            programs: None,
+            urcap_host: None,
+        }
+    }
+}
+
+/// What happened, reported to the callback of [`Server::start`]. `conn` numbers every
+/// client of every interface, from 1.
+#[derive(Debug, Clone, PartialEq)]
+#[non_exhaustive]
+pub enum ServerEvent {
+    /// A server listens (`service`: `dashboard`, `primary`, `secondary`, `realtime`,
+    /// `rtde`).
+    Listening {
+        /// The interface.
+        service: &'static str,
+        /// Its address.
+        addr: SocketAddr,
+    },
+    /// A client connected.
+    Connect {
+        /// The client's number.
+        conn: u64,
+        /// The interface.
+        service: &'static str,
+        /// Its address.
+        peer: String,
+    },
+    /// A client's connection ended.
+    Close {
+        /// The client's number.
+        conn: u64,
+        /// Why.
+        reason: String,
+        /// Bytes received from it.
+        rx: u64,
+        /// Bytes sent to it.
+        tx: u64,
+    },
+    /// A dashboard command and its reply.
+    Dashboard {
+        /// The client.
+        conn: u64,
+        /// The command line as received (one too long cut, ending in `...`).
+        command: String,
+        /// The reply lines.
+        reply: Vec<String>,
+    },
+    /// What a primary, secondary, realtime or RTDE client did.
+    Client {
+        /// The client.
+        conn: u64,
+        /// Its interface.
+        service: &'static str,
+        /// `program`, `secondary`, `line`, `command`, `refused`; RTDE: `protocol`,
+        /// `outputs`, `inputs`, `start`, `pause`, `text`, `error`.
+        what: &'static str,
+        /// The program's name, the line, the command, the recipe.
+        text: String,
+    },
+    /// A program started, ended or was refused.
+    Program {
+        /// `started`, `finished`, `halted`, `stopped`, `error`, `refused`.
+        what: &'static str,
+        /// Its name (empty when refused).
+        name: String,
+        /// Where the error is.
+        line: Option<u32>,
+        /// Its column.
+        column: Option<u32>,
+        /// The error or the reason.
+        text: Option<String>,
+    },
+    /// `textmsg`, `popup` or `varmsg` of the running program.
+    Message(Message),
+    /// A socket call of the running program.
+    Call(Box<CallRecord>),
+    /// Bytes the program sent on one of its sockets.
+    Tx {
+        /// The socket's name.
+        socket: String,
+        /// The bytes.
+        bytes: Vec<u8>,
+    },
+    /// Bytes a server sent to the program.
+    Rx {
+        /// The socket's name.
+        socket: String,
+        /// The bytes.
+        bytes: Vec<u8>,
+    },
+    /// Something to say (an accept that failed, a peer that closed the program's socket).
+    Note(String),
+    /// A dashboard client said `shutdown`: the server has stopped.
+    Shutdown,
+}
+
+/// Programs in a directory of this machine: a name is found when it names a file inside
+/// the directory (after resolving `..` and links).
+pub struct DirPrograms {
+    root: PathBuf,
+}
+
+impl DirPrograms {
+    /// Programs under `dir` (which must exist).
+    pub fn new(dir: &Path) -> std::io::Result<Self> {
+        let root = dir.canonicalize()?;
+        if !root.is_dir() {
+            return Err(std::io::Error::new(
+                ErrorKind::NotADirectory,
+                format!("{} is not a directory", dir.display()),
+            ));
+        }
+        Ok(DirPrograms { root })
+    }
+}
+
+impl Programs for DirPrograms {
+    fn find(&self, name: &str) -> Option<String> {
+        if name.is_empty() || name.contains('\0') {
+            return None;
+        }
+        let path = Path::new(name);
+        let candidate = if path.is_absolute() {
+            path.to_path_buf()
+        } else {
+            self.root.join(path)
+        };
+        let real = candidate.canonicalize().ok()?;
+        (real.starts_with(&self.root) && real.is_file()).then(|| real.display().to_string())
+    }
+}
+
+type Sink = dyn Fn(ServerEvent) + Send + Sync;
+
+/// What the server's threads share.
+pub(crate) struct Shared {
+    cell: Mutex<Cell>,
+    config: Config,
+    start: Instant,
+    active: AtomicUsize,
+    next_conn: AtomicU64,
+    urcap_host: Option<(String, u16)>,
+    stop: AtomicBool,
+    sink: Box<Sink>,
+}
+
+impl Shared {
+    pub(crate) fn now(&self) -> Duration {
+        self.start.elapsed()
+    }
+
+    pub(crate) fn config(&self) -> &Config {
+        &self.config
+    }
+
+    pub(crate) fn lock_cell(&self) -> MutexGuard<'_, Cell> {
+        self.cell.lock().unwrap_or_else(|p| p.into_inner())
+    }
+
+    pub(crate) fn next_conn(&self) -> u64 {
+        self.next_conn.fetch_add(1, Ordering::SeqCst)
+    }
+
+    pub(crate) fn emit(&self, event: ServerEvent) {
+        (self.sink)(event);
+    }
+
+    pub(crate) fn stopped(&self) -> bool {
+        self.stop.load(Ordering::SeqCst)
+    }
+}
+
+/// A virtual controller serving its interfaces over TCP. See the module docs. Dropping it
+/// stops it.
+pub struct Server {
+    shared: Arc<Shared>,
+    addrs: Vec<(&'static str, SocketAddr)>,
+    threads: Vec<JoinHandle<()>>,
+}
+
+impl std::fmt::Debug for Server {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Server")
+            .field("addrs", &self.addrs)
+            .finish()
+    }
+}
+
+impl Server {
+    /// Binds every port, then serves them from threads of its own; `on_event` hears what
+    /// happens (from those threads). The `Listening` events come first, before this
+    /// returns.
+    pub fn start(
+        options: ServerOptions,
+        on_event: impl Fn(ServerEvent) + Send + Sync + 'static,
+    ) -> std::io::Result<Server> {
+        let mut controller = Controller::new(options.config.clone());
+        if let Some(dir) = &options.programs {
+            controller = controller.with_programs(Box::new(DirPrograms::new(dir)?));
+        }
+        let bind = |port: u16, service: &str| -> std::io::Result<(TcpListener, SocketAddr)> {
+            let l = TcpListener::bind((options.bind.as_str(), port)).map_err(|e| {
+                std::io::Error::new(
+                    e.kind(),
+                    format!("cannot listen on {}:{port} ({service}): {e}", options.bind),
+                )
+            })?;
+            let addr = l.local_addr()?;
+            Ok((l, addr))
+        };
+        let p = options.ports;
+        let mut addrs = Vec::new();
+        let dashboard = match p.dashboard {
+            Some(port) => {
+                let (l, a) = bind(port, "dashboard")?;
+                addrs.push(("dashboard", a));
+                Some(l)
+            }
+            None => None,
+        };
+        let mut stream = |port: Option<u16>, service: &'static str| match port {
+            Some(port) => {
+                let (l, a) = bind(port, service)?;
+                addrs.push((service, a));
+                Ok::<_, std::io::Error>(Some(l))
+            }
+            None => Ok(None),
+        };
+        let listeners = streams::Listeners {
+            primary: stream(p.primary, "primary")?,
+            secondary: stream(p.secondary, "secondary")?,
+            realtime: stream(p.realtime, "realtime")?,
+            rtde: stream(p.rtde, "rtde")?,
+        };
+        let interp = Cell::interp_config(&controller);
+        let shared = Arc::new(Shared {
+            cell: Mutex::new(Cell::new(controller, interp)),
+            config: options.config,
+            start: Instant::now(),
+            active: AtomicUsize::new(0),
+            next_conn: AtomicU64::new(1),
+            urcap_host: options.urcap_host,
+            stop: AtomicBool::new(false),
+            sink: Box::new(on_event),
+        });
+        for &(service, addr) in &addrs {
+            shared.emit(ServerEvent::Listening { service, addr });
+        }
+        let mut threads = Vec::new();
+        {
+            let shared = Arc::clone(&shared);
+            threads.push(
+                std::thread::Builder::new()
+                    .name("controller".into())
+                    .spawn(move || streams::run(&shared, listeners))?,
+            );
+        }
+        if let Some(listener) = dashboard {
+            let shared = Arc::clone(&shared);
+            threads.push(
+                std::thread::Builder::new()
+                    .name("dashboard".into())
+                    .spawn(move || accept_dashboard(&shared, &listener))?,
+            );
+        }
+        Ok(Server {
+            shared,
+            addrs,
+            threads,
+        })
+    }
+
+    /// The address an interface listens on (`dashboard`, `primary`, `secondary`,
+    /// `realtime`, `rtde`).
+    pub fn addr(&self, service: &str) -> Option<SocketAddr> {
+        self.addrs
+            .iter()
+            .find(|(s, _)| *s == service)
+            .map(|&(_, a)| a)
+    }
+
+    /// Every interface's address.
+    pub fn addrs(&self) -> &[(&'static str, SocketAddr)] {
+        &self.addrs
+    }
+
+    /// Acts on the controller as the operator or the world would (a protective stop, an
+    /// input switching, a temperature): `f` gets the cell and the controller's time.
+    pub fn with_cell<R>(&self, f: impl FnOnce(&mut Cell, Duration) -> R) -> R {
+        let now = self.shared.now();
+        let mut cell = self.shared.lock_cell();
+        cell.advance(now);
+        f(&mut cell, now)
+    }
+
+    /// Whether the server has stopped (a dashboard `shutdown`, or [`Server::stop`]).
+    pub fn is_stopped(&self) -> bool {
+        self.shared.stopped()
+    }
+
+    /// Stops serving: the listeners close and the threads end (dashboard connections
+    /// already open end when their client next speaks or leaves).
+    pub fn stop(mut self) {
+        self.halt();
+    }
+
+    fn halt(&mut self) {
+        self.shared.stop.store(true, Ordering::SeqCst);
+        // Wake the dashboard's blocking accept.
+        if let Some(a) = self.addr("dashboard") {
+            let _ = TcpStream::connect_timeout(&a, Duration::from_millis(200));
+        }
+        for t in self.threads.drain(..) {
+            let _ = t.join();
+        }
+    }
+}
+
+impl Drop for Server {
+    fn drop(&mut self) {
+        self.halt();
+    }
+}
+
+fn accept_dashboard(shared: &Arc<Shared>, listener: &TcpListener) {
+    loop {
+        let accepted = listener.accept();
+        if shared.stopped() {
+            return;
+        }
+        let (stream, peer) = match accepted {
+            Ok(s) => s,
+            Err(e) if e.kind() == ErrorKind::Interrupted => continue,
+            Err(e) => {
+                // Out of descriptors and the like: say so, wait a little, go on.
+                shared.emit(ServerEvent::Note(format!("accept failed: {e}")));
+                std::thread::sleep(Duration::from_millis(100));
+                continue;
+            }
+        };
+        if shared.active.load(Ordering::SeqCst) >= MAX_CONNECTIONS {
+            shared.emit(ServerEvent::Note(format!(
+                "{peer}: refused, {MAX_CONNECTIONS} connections are already open"
+            )));
+            drop(stream);
+            continue;
+        }
+        shared.active.fetch_add(1, Ordering::SeqCst);
+        let conn = shared.next_conn();
+        let spawned = std::thread::Builder::new()
+            .name(format!("dashboard-{conn}"))
+            .spawn({
+                let shared = Arc::clone(shared);
+                move || {
+                    serve(stream, conn, peer.to_string(), &shared);
+                    shared.active.fetch_sub(1, Ordering::SeqCst);
+                }
+            });
+        if let Err(e) = spawned {
+            shared.active.fetch_sub(1, Ordering::SeqCst);
+            shared.emit(ServerEvent::Note(format!(
+                "{peer}: cannot start a thread: {e}"
+            )));
+        }
+    }
+}
+
+/// What one connection counted.
+struct Counts {
+    rx: u64,
+    tx: u64,
+}
+
+fn send(stream: &mut TcpStream, reply: &Reply, counts: &mut Counts) -> bool {
+    let bytes = reply.to_bytes();
+    let ok = stream
+        .write_all(&bytes)
+        .and_then(|()| stream.flush())
+        .is_ok();
+    if ok {
+        counts.tx += bytes.len() as u64;
+    }
+    ok
+}
+
+fn serve(mut stream: TcpStream, conn: u64, peer: String, shared: &Shared) {
+    let _ = stream.set_nodelay(true);
+    let _ = stream.set_write_timeout(Some(WRITE_TIMEOUT));
+    shared.emit(ServerEvent::Connect {
+        conn,
+        service: "dashboard",
+        peer,
+    });
+    let mut counts = Counts { rx: 0, tx: 0 };
+    let reason = session(&mut stream, conn, shared, &mut counts);
+    shared.emit(ServerEvent::Close {
+        conn,
+        reason: reason.to_string(),
+        rx: counts.rx,
+        tx: counts.tx,
+    });
+}
+
+/// Answer one command line; `Err(reason)` when the connection ends.
+fn answer(
+    stream: &mut TcpStream,
+    conn: u64,
+    shared: &Shared,
+    dashboard: &mut Dashboard,
+    line: &[u8],
+    too_long: bool,
+    counts: &mut Counts,
+) -> Result<(), &'static str> {
+    let text = String::from_utf8_lossy(line);
+    let text = text.strip_suffix('\r').unwrap_or(&text);
+    let (reply, shut_down) = {
+        let mut cell = shared.lock_cell();
+        let now = shared.now();
+        cell.advance(now);
+        let c = cell.controller();
+        let reply = if too_long {
+            dashboard.line_too_long(text)
+        } else {
+            dashboard.handle_line(c, text, now)
+        };
+        (reply, c.is_shut_down())
+    };
+    let shown = if too_long {
+        format!("{}...", text.chars().take(40).collect::<String>())
+    } else {
+        text.to_string()
+    };
+    shared.emit(ServerEvent::Dashboard {
+        conn,
+        command: shown,
+        reply: reply.lines.clone(),
+    });
+    if !send(stream, &reply, counts) {
+        return Err("write failed: the client is not reading");
+    }
+    if shut_down {
+        let _ = stream.shutdown(std::net::Shutdown::Both);
+        shared.stop.store(true, Ordering::SeqCst);
+        shared.emit(ServerEvent::Shutdown);
+        return Err("shutdown");
+    }
+    if reply.close {
+        return Err("quit");
+    }
+    Ok(())
+}
+
+fn session(
+    stream: &mut TcpStream,
+    conn: u64,
+    shared: &Shared,
+    counts: &mut Counts,
+) -> &'static str {
+    if !send(stream, &Dashboard::greeting(), counts) {
+        return "write failed";
+    }
+    let mut reader = match stream.try_clone() {
+        Ok(r) => r,
+        Err(_) => return "cannot read",
+    };
+    let mut dashboard = Dashboard::new();
+    let mut chunk = [0u8; 4096];
+    // The line so far (at most MAX_LINE bytes); `discarding`: a too-long line was
+    // answered and its rest is skipped up to the next newline.
+    let mut line: Vec<u8> = Vec::new();
+    let mut discarding = false;
+    loop {
+        let n = match reader.read(&mut chunk) {
+            Ok(0) => return "client closed",
+            Ok(n) => n,
+            Err(e) if e.kind() == ErrorKind::Interrupted => continue,
+            Err(_) => return "read failed",
+        };
+        if shared.stopped() {
+            return "the server stopped";
+        }
+        counts.rx += n as u64;
+        let mut rest = &chunk[..n];
+        while !rest.is_empty() {
+            let end = rest.iter().position(|&b| b == b'\n');
+            let part = &rest[..end.unwrap_or(rest.len())];
+            rest = match end {
+                Some(i) => &rest[i + 1..],
+                None => &[],
+            };
+            if discarding {
+                discarding = end.is_none();
+                continue;
+            }
+            if line.len() + part.len() > MAX_LINE {
+                let room = MAX_LINE - line.len();
+                line.extend_from_slice(&part[..room.min(64)]);
+                let r = answer(stream, conn, shared, &mut dashboard, &line, true, counts);
+                line.clear();
+                discarding = end.is_none();
+                if let Err(reason) = r {
+                    return reason;
+                }
+                continue;
+            }
+            line.extend_from_slice(part);
+            if end.is_some() {
+                let r = answer(stream, conn, shared, &mut dashboard, &line, false, counts);
+                line.clear();
+                if let Err(reason) = r {
+                    return reason;
+                }
+            }
+        }
+    }
+}

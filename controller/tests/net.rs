@@ -1,0 +1,117 @@
+//! The in-process server (`net::Server`), as a driver's own Rust tests would use it: start
+//! a controller on free ports, drive it over TCP as a client, watch its events, act as
+//! the operator, stop it.
+
+use std::io::{BufRead, BufReader, Read, Write};
+use std::net::TcpStream;
+use std::sync::mpsc;
+use std::time::{Duration, Instant};
+
+use urscript_controller::net::{Ports, Server, ServerEvent, ServerOptions};
+use urscript_controller::SafetyStatus;
+
+const WAIT: Duration = Duration::from_secs(20);
+
+fn start() -> (Server, mpsc::Receiver<ServerEvent>) {
+    let (tx, rx) = mpsc::channel();
+    let tx = std::sync::Mutex::new(tx);
+    let server = Server::start(
+        ServerOptions {
+            ports: Ports::any(),
+            ..ServerOptions::default()
+        },
+        move |e| {
+            let _ = tx.lock().unwrap().send(e);
+        },
+    )
+    .expect("start");
+    (server, rx)
+}
+
+fn dashboard(server: &Server) -> (BufReader<TcpStream>, TcpStream) {
+    let s = TcpStream::connect(server.addr("dashboard").unwrap()).unwrap();
+    s.set_read_timeout(Some(WAIT)).unwrap();
+    let mut r = BufReader::new(s.try_clone().unwrap());
+    let mut greeting = String::new();
+    r.read_line(&mut greeting).unwrap();
+    assert_eq!(
+        greeting.trim(),
+        "Connected: Universal Robots Dashboard Server"
+    );
+    (r, s)
+}
+
+fn ask(d: &mut (BufReader<TcpStream>, TcpStream), cmd: &str) -> String {
+    d.1.write_all(format!("{cmd}\n").as_bytes()).unwrap();
+    let mut line = String::new();
+    d.0.read_line(&mut line).unwrap();
+    line.trim_end().to_string()
+}
+
+fn wait_for(rx: &mpsc::Receiver<ServerEvent>, want: impl Fn(&ServerEvent) -> bool) -> ServerEvent {
+    let start = Instant::now();
+    loop {
+        let e = rx
+            .recv_timeout(WAIT.saturating_sub(start.elapsed()))
+            .expect("the event");
+        if want(&e) {
+            return e;
+        }
+    }
+}
+
+#[test]
+fn a_test_starts_a_controller_drives_it_and_stops_it() {
+    let (server, events) = start();
+    let services: Vec<&str> = server.addrs().iter().map(|(s, _)| *s).collect();
+    assert_eq!(
+        services,
+        ["dashboard", "primary", "secondary", "realtime", "rtde"]
+    );
+    // The listening events came before start returned.
+    let first: Vec<ServerEvent> = events.try_iter().take(5).collect();
+    assert!(first
+        .iter()
+        .all(|e| matches!(e, ServerEvent::Listening { .. })));
+    let mut d = dashboard(&server);
+    assert_eq!(ask(&mut d, "brake release"), "Brake releasing");
+    let start = Instant::now();
+    while ask(&mut d, "robotmode") != "Robotmode: RUNNING" {
+        assert!(start.elapsed() < WAIT);
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    let mut primary = TcpStream::connect(server.addr("primary").unwrap()).unwrap();
+    primary
+        .write_all(b"def greet():\n  textmsg(\"hello from the arm\")\n  sleep(30)\nend\n")
+        .unwrap();
+    let message = wait_for(&events, |e| matches!(e, ServerEvent::Message(_)));
+    match message {
+        ServerEvent::Message(m) => assert_eq!(m.text, "hello from the arm"),
+        _ => unreachable!(),
+    }
+    assert_eq!(ask(&mut d, "programState"), "PLAYING <unnamed>");
+    // The operator (or the cell around the robot) acts through the cell.
+    server.with_cell(|cell, now| cell.controller().protective_stop(now));
+    assert_eq!(ask(&mut d, "safetystatus"), "Safetystatus: PROTECTIVE_STOP");
+    assert_eq!(ask(&mut d, "programState"), "PAUSED <unnamed>");
+    let status = server.with_cell(|cell, _| cell.status());
+    assert_eq!(status.safety, SafetyStatus::ProtectiveStop);
+    // Stopping closes every listener.
+    let primary_addr = server.addr("primary").unwrap();
+    server.stop();
+    assert!(
+        TcpStream::connect_timeout(&primary_addr, Duration::from_secs(2)).is_err(),
+        "still listening after stop"
+    );
+    let mut rest = Vec::new();
+    let _ = primary.read_to_end(&mut rest); // the server side closed
+}
+
+#[test]
+fn shutdown_on_the_dashboard_stops_the_server() {
+    let (server, events) = start();
+    let mut d = dashboard(&server);
+    assert_eq!(ask(&mut d, "shutdown"), "Shutting down");
+    wait_for(&events, |e| *e == ServerEvent::Shutdown);
+    assert!(server.is_stopped());
+}
