@@ -253,6 +253,8 @@ pub(crate) struct Controller {
     pub motion: Option<Motion>,
     /// The handle of the thread running now (the owner of a motion it commands).
     pub thread: u32,
+    /// The step the arm was last put at by the motion under way.
+    pub sampled: Option<u64>,
 }
 
 impl Controller {
@@ -265,12 +267,17 @@ impl Controller {
             owner: self.thread,
             tcp,
         });
+        self.sampled = None;
         self.advance(self.step);
     }
 
     /// Puts the arm where the motion under way has it at step `step`.
     pub fn advance(&mut self, step: u64) {
         let Some(m) = &self.motion else { return };
+        if self.sampled == Some(step) {
+            return;
+        }
+        self.sampled = Some(step);
         let t = step.saturating_sub(m.start) as f64 * self.step_time.as_secs_f64();
         let s = m.sample(&self.dh, t, self.arm.q);
         self.arm.q = s.q;

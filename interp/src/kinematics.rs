@@ -219,6 +219,34 @@ pub fn forward(dh: &Dh, q: [f64; 6], tcp: [f64; 6]) -> [f64; 6] {
     flange(dh, q).mul(&T::of_pose(tcp)).pose()
 }
 
+/// The tool's speed (base frame: linear m/s, then angular rad/s) when the joints `q` move
+/// at `qd`, with the TCP offset `tcp`: the geometric Jacobian times `qd`, from one pass
+/// over the links.
+pub(crate) fn tool_twist(dh: &Dh, q: [f64; 6], qd: [f64; 6], tcp: [f64; 6]) -> [f64; 6] {
+    // Each joint turns about the z axis of the frame before it, at that frame's origin.
+    let mut axes = [[0.0; 3]; 6];
+    let mut origins = [[0.0; 3]; 6];
+    let mut t = T::ID;
+    for i in 0..6 {
+        axes[i] = [t.r[0][2], t.r[1][2], t.r[2][2]];
+        origins[i] = t.t;
+        t = t.mul(&link(dh, i, q[i]));
+    }
+    let pe = t.mul(&T::of_pose(tcp)).t;
+    let mut out = [0.0; 6];
+    for i in 0..6 {
+        let (z, o, w) = (axes[i], origins[i], qd[i]);
+        let r = [pe[0] - o[0], pe[1] - o[1], pe[2] - o[2]];
+        out[0] += w * (z[1] * r[2] - z[2] * r[1]);
+        out[1] += w * (z[2] * r[0] - z[0] * r[2]);
+        out[2] += w * (z[0] * r[1] - z[1] * r[0]);
+        out[3] += w * z[0];
+        out[4] += w * z[1];
+        out[5] += w * z[2];
+    }
+    out
+}
+
 /// Brings `x` within ±2π to the value closest to `near`.
 fn wrap_near(x: f64, near: f64) -> f64 {
     let mut v = x + TAU * ((near - x) / TAU).round();

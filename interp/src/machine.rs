@@ -375,6 +375,7 @@ impl Machine {
                 events: VecDeque::new(),
                 motion: None,
                 thread: 0,
+                sampled: None,
             },
             site_stubs,
             prog: Arc::new(program),
@@ -463,7 +464,8 @@ impl Machine {
         self.globals.get(i)?.as_ref()
     }
 
-    /// The arm's commanded joint positions.
+    /// The arm's joint positions now (mid-move: where the motion has the arm at the last
+    /// step run).
     pub fn joint_positions(&self) -> [f64; 6] {
         self.ctl.arm.q
     }
@@ -495,14 +497,16 @@ impl Machine {
         self.ctl.arm
     }
 
-    /// The arm's commanded tool pose.
+    /// The arm's tool pose now.
     pub fn tcp_pose(&self) -> [f64; 6] {
         self.ctl.tcp_pose()
     }
 
     /// When the machine next has something to do: the time of the next step if a thread
     /// can run then, or of the first step where a sleep, a motion or a read timeout ends;
-    /// `None` if it only waits for inputs (a connection, bytes) or has stopped.
+    /// `None` if it only waits for inputs (a connection, bytes) or has stopped. A motion
+    /// under way needs no wake-up: [`run_until`](Self::run_until) puts the arm where the
+    /// motion has it at the last step due, whether or not a thread ran in between.
     pub fn poll_timeout(&self) -> Option<Duration> {
         if self.state != State::Running {
             return None;

@@ -478,28 +478,12 @@ pub(crate) fn turn_between(p0: [f64; 6], p1: [f64; 6]) -> ([[f64; 3]; 3], [f64; 
     (r0, to_rotvec(mul(r1, transpose(r0))))
 }
 
-/// The tool speed (base frame: linear m/s, angular rad/s) of joints `q` moving at `qd`,
-/// by a finite difference of the forward kinematics.
+/// The tool speed (base frame: linear m/s, angular rad/s) of joints `q` moving at `qd`.
 pub(crate) fn tcp_speed(dh: &Dh, q: [f64; 6], qd: [f64; 6], tcp: [f64; 6]) -> [f64; 6] {
     if qd.iter().all(|v| *v == 0.0) {
         return [0.0; 6];
     }
-    let h = 1e-6;
-    let a = kinematics::forward(dh, q, tcp);
-    let mut q2 = q;
-    for k in 0..6 {
-        q2[k] += qd[k] * h;
-    }
-    let b = kinematics::forward(dh, q2, tcp);
-    let w = to_rotvec(mul(rot(b), transpose(rot(a))));
-    [
-        (b[0] - a[0]) / h,
-        (b[1] - a[1]) / h,
-        (b[2] - a[2]) / h,
-        w[0] / h,
-        w[1] / h,
-        w[2] / h,
-    ]
+    kinematics::tool_twist(dh, q, qd, tcp)
 }
 
 /// The joint speeds that move the tool at `v` (base frame), by the inverse kinematics a
@@ -556,6 +540,37 @@ mod tests {
                 }
                 last = s;
             }
+        }
+    }
+
+    #[test]
+    fn the_jacobian_twist_matches_a_finite_difference() {
+        let dh = crate::kinematics::Model::Ur5e.dh();
+        let q = [0.3, -1.2, 1.4, -1.8, -1.57, 0.2];
+        let qd = [0.1, -0.2, 0.3, 0.05, -0.4, 0.7];
+        let tcp = [0.01, 0.02, 0.15, 0.1, 0.0, 0.2];
+        let h = 1e-7;
+        let a = kinematics::forward(&dh, q, tcp);
+        let q2: [f64; 6] = std::array::from_fn(|k| q[k] + qd[k] * h);
+        let b = kinematics::forward(&dh, q2, tcp);
+        // R(b)·R(a)ᵀ ≈ I + [ω]·h.
+        let m = mul(rot(b), transpose(rot(a)));
+        let w = [
+            (m[2][1] - m[1][2]) / 2.0,
+            (m[0][2] - m[2][0]) / 2.0,
+            (m[1][0] - m[0][1]) / 2.0,
+        ];
+        let fd = [
+            (b[0] - a[0]) / h,
+            (b[1] - a[1]) / h,
+            (b[2] - a[2]) / h,
+            w[0] / h,
+            w[1] / h,
+            w[2] / h,
+        ];
+        let j = tcp_speed(&dh, q, qd, tcp);
+        for k in 0..6 {
+            assert!((j[k] - fd[k]).abs() < 1e-5, "{k}: {j:?} vs {fd:?}");
         }
     }
 

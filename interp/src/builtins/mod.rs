@@ -531,6 +531,7 @@ mod tests {
             events: std::collections::VecDeque::new(),
             motion: None,
             thread: 0,
+            sampled: None,
         };
         // The documented defaults.
         assert_eq!(
