@@ -4,6 +4,17 @@
 //! an over-long line before each request; every request is still answered.
 //!
 //! Run: `cargo run --example tokio_front_page --features tokio`
+//!
+//! Copied into a project of its own, it needs (`futures-util` is a dev-dependency here;
+//! its `SinkExt::send` and `StreamExt::next` drive the `Framed`):
+//!
+//! ```toml
+//! [dependencies]
+//! urscript-socket = { version = "0.1", features = ["tokio"] }
+//! tokio = { version = "1", features = ["full"] }
+//! tokio-util = { version = "0.7", features = ["codec"] }
+//! futures-util = { version = "0.3", features = ["sink"] }
+//! ```
 
 // 3.14 is a pose angle here, not π.
 #![allow(clippy::approx_constant)]

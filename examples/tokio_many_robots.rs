@@ -4,6 +4,17 @@
 //! emulation. Everything runs over 127.0.0.1 in one process.
 //!
 //! Run: `cargo run --example tokio_many_robots --features tokio`
+//!
+//! Copied into a project of its own, it needs (`futures-util` is a dev-dependency here;
+//! its `SinkExt::send` and `StreamExt::next` drive the `Framed`):
+//!
+//! ```toml
+//! [dependencies]
+//! urscript-socket = { version = "0.1", features = ["tokio"] }
+//! tokio = { version = "1", features = ["full"] }
+//! tokio-util = { version = "0.7", features = ["codec"] }
+//! futures-util = { version = "0.3", features = ["sink"] }
+//! ```
 
 use std::error::Error;
 

@@ -13,7 +13,7 @@
 //! number = [+-]? (digits ("." digits?)? | "." digits) ([eE] [+-]? digits)?
 //! ```
 
-use crate::framer::{Framed, Framer, Noise, Parse, ShapeKind};
+use crate::framer::{FrameDecoder, Framer, Noise, Parse, ShapeKind};
 use crate::number::{is_space, parse_float_prefix, write_plain_f64, MAX_PLAIN_F64_LEN};
 #[cfg(doc)]
 use crate::DecodeError;
@@ -305,7 +305,7 @@ impl UrList {
 /// assert_eq!(t.values(), [1.414, 3.14159, 1.616, 0.0]);
 /// assert!(dec.decode_eof(b"(1,2").is_err());
 /// ```
-pub type FloatTupleDecoder = Framed<FloatTuples>;
+pub type FloatTupleDecoder = FrameDecoder<FloatTuples>;
 
 /// The parse step of [`FloatTupleDecoder`]: the text between `(` and `)` of one tuple, for a
 /// read of `number` values under a [`FloatReadPolicy`].
@@ -361,7 +361,7 @@ impl FloatTupleDecoder {
             number: number as u8,
             policy,
         };
-        Ok(Framed::from_parts(
+        Ok(FrameDecoder::from_parts(
             tuple_framer(&policy, DEFAULT_MAX_TUPLE_LEN),
             parser,
         ))

@@ -3,7 +3,7 @@
 //!
 //! Fixed-size like int32: a message is `number` bytes, counted, never scanned.
 
-use crate::framer::{Framed, Framer, Parse, ShapeKind};
+use crate::framer::{FrameDecoder, Framer, Parse, ShapeKind};
 use crate::{ArgumentError, ByteSink, EncodeError, ErrorKind};
 
 /// The most bytes one `socket_read_byte_list` call reads: the crate's one
@@ -51,7 +51,7 @@ pub fn encode_byte_list<S: ByteSink + ?Sized>(
 /// assert!(dec.decode(b"a").unwrap().item().is_none());
 /// assert!(ByteListDecoder::new(2).unwrap().decode_eof(b"a").is_err());
 /// ```
-pub type ByteListDecoder = Framed<ByteList>;
+pub type ByteListDecoder = FrameDecoder<ByteList>;
 
 /// The parse step of [`ByteListDecoder`]: the bytes as they are.
 #[derive(Debug, Clone, Copy)]
@@ -83,7 +83,7 @@ impl ByteListDecoder {
     }
 
     const fn of(number: u8) -> Self {
-        Framed::from_parts(Framer::counted(number as usize, 1), ByteList { number })
+        FrameDecoder::from_parts(Framer::counted(number as usize, 1), ByteList { number })
     }
 
     /// A decoder of one byte per message: a server reading `socket_send_byte`.

@@ -9,7 +9,7 @@
 //! | [`Shape::Counted`] | N int32 (4N bytes), N bytes | the next N bytes |
 //! | [`Shape::Window`] | `socket_read_string(prefix, suffix)` | the bytes after the prefix, before the suffix, in a 1024-byte window |
 //!
-//! A format is a [`Framer`] plus a pure [`Parse`] of one complete frame; [`Framed`] joins
+//! A format is a [`Framer`] plus a pure [`Parse`] of one complete frame; [`FrameDecoder`] joins
 //! the two and implements [`Decode`] once for all of them. The parser gets the frame's
 //! content and reports errors as offsets within it; the framer knows where the content sits
 //! in the stream ([`Status::Complete`]'s `at`), so nobody else counts bytes.
@@ -859,7 +859,7 @@ macro_rules! content_as_is {
 pub(crate) use content_as_is;
 
 /// The pure half of a format: one complete frame's content to an item. Errors are (what,
-/// offset within `content`); [`Framed`] makes the offset absolute.
+/// offset within `content`); [`FrameDecoder`] makes the offset absolute.
 pub trait Parse {
     /// What a frame decodes to; borrows the frame where the format allows it.
     type Output<'a>;
@@ -874,20 +874,20 @@ pub trait Parse {
 }
 
 /// A decoder: the framer for a format's frame shape and the format's [`Parse`]. Every
-/// decoder of the crate is one of these (`LineDecoder` is `Framed<Line>`, ...), so the
+/// decoder of the crate is one of these (`LineDecoder` is `FrameDecoder<Line>`, ...), so the
 /// [`Decode`] contract is implemented once, here.
 ///
 /// `decode`, `decode_eof` and `position` are also inherent methods, so calling them needs
 /// no trait import.
 #[derive(Debug, Clone)]
-pub struct Framed<P> {
+pub struct FrameDecoder<P> {
     pub(crate) framer: Framer,
     pub(crate) parser: P,
 }
 
-impl<P: Parse> Framed<P> {
+impl<P: Parse> FrameDecoder<P> {
     pub(crate) const fn from_parts(framer: Framer, parser: P) -> Self {
-        Framed { framer, parser }
+        FrameDecoder { framer, parser }
     }
 
     /// Looks at `buf` (the unconsumed bytes) for the next message. See [`Status`] for the
@@ -986,19 +986,19 @@ impl<P: Parse> Framed<P> {
     }
 }
 
-impl<P: Parse> Decode for Framed<P> {
+impl<P: Parse> Decode for FrameDecoder<P> {
     type Item<'buf> = P::Output<'buf>;
 
     #[inline]
     fn decode<'buf>(&mut self, buf: &'buf [u8]) -> Result<Status<Self::Item<'buf>>, DecodeError> {
-        Framed::decode(self, buf)
+        FrameDecoder::decode(self, buf)
     }
 
     fn decode_eof<'buf>(
         &mut self,
         buf: &'buf [u8],
     ) -> Result<Option<(Self::Item<'buf>, usize)>, DecodeError> {
-        Framed::decode_eof(self, buf)
+        FrameDecoder::decode_eof(self, buf)
     }
 
     #[inline]

@@ -4,7 +4,7 @@
 //! Fixed-size: a message is `4 × number` bytes, so no scan is needed; the decoder only
 //! counts bytes. Values are decoded in place from the caller's buffer ([`Int32Values`]).
 
-use crate::framer::{Framed, Framer, Parse, ShapeKind};
+use crate::framer::{FrameDecoder, Framer, Parse, ShapeKind};
 use crate::{ArgumentError, ByteSink, EncodeError, ErrorKind};
 
 /// The most values one `socket_read_binary_integer` call reads: the crate's one
@@ -170,7 +170,7 @@ impl<'a> Int32Values<'a> {
 /// assert_eq!(vals.iter().collect::<Vec<_>>(), [100, 2000, 30000]);
 /// assert!(dec.decode_eof(&[0, 0]).is_err());
 /// ```
-pub type Int32Decoder = Framed<Int32List>;
+pub type Int32Decoder = FrameDecoder<Int32List>;
 
 /// The parse step of [`Int32Decoder`]: `4 × number` bytes viewed as int32 values.
 #[derive(Debug, Clone, Copy)]
@@ -203,7 +203,7 @@ impl Int32Decoder {
     }
 
     const fn of(number: u8) -> Self {
-        Framed::from_parts(
+        FrameDecoder::from_parts(
             Framer::counted(number as usize * 4, 4),
             Int32List { number },
         )

@@ -11,6 +11,23 @@
 //! silently, so every format needs its own rule for where a message ends. This crate
 //! writes those rules down once.
 //!
+//! ## Adding it
+//!
+//! ```toml
+//! [dependencies]
+//! # the core and the blocking std adapters (default feature `std`)
+//! urscript-socket = "0.1"
+//! # or, for a tokio server: the tokio_util codecs
+//! # urscript-socket = { version = "0.1", features = ["tokio"] }
+//! # or the no_std core alone, no allocator
+//! # urscript-socket = { version = "0.1", default-features = false }
+//! # or firmware on embassy-net/smoltcp: the embedded-io-async adapters, no allocator
+//! # urscript-socket = { version = "0.1", default-features = false, features = ["embedded-io-async"] }
+//! ```
+//!
+//! The tokio server below also uses `tokio`, `tokio-util` (feature `codec`) and
+//! `futures-util` (feature `sink`, for `SinkExt::send`).
+//!
 //! ## Which API do I pick?
 //!
 //! | you are writing | use | feature |
@@ -31,9 +48,10 @@
 //! | `socket_send_string` | `DelimitedCodec` / [`string::DelimitedDecoder`] | `LineCodec`, [`string::encode_string`] for `socket_read_string` |
 //! | `socket_set_var`, `socket_get_var` | `VarCodec` / [`var::VarMessageDecoder`] | `VarCodec` / [`var::encode_var_reply`] |
 //!
-//! The cookbook in `docs/cookbook/` (shipped in the package, compiled as tests) has the
-//! four servers people write: a vision system (float tuples), a PLC gateway (`SET`/`GET`),
-//! a camera with CR framing (KEYENCE-style), and External Control (int32).
+//! The `cookbook` module (feature `tokio`; the text is `docs/cookbook/` in the package, compiled
+//! as doc tests) has the four servers people write: a vision system (float tuples), a PLC
+//! gateway (`SET`/`GET`), a camera with CR framing (KEYENCE-style), and External Control
+//! (int32).
 //!
 //! ## A tokio server
 //!
@@ -121,10 +139,10 @@
 //! ```no_run
 //! # #[cfg(feature = "embedded-io-async")] mod doc {
 //! use embedded_io_async::{Read, Write};
-//! use urscript_socket::adapters::embedded::{send, Error, MessageReader};
+//! use urscript_socket::adapters::embedded::{send, AdapterError, MessageReader};
 //! use urscript_socket::{ascii_float::encode_float_tuple, line::LineDecoder};
 //!
-//! pub async fn serve_robot<S: Read + Write>(socket: S) -> Result<(), Error<S::Error>> {
+//! pub async fn serve_robot<S: Read + Write>(socket: S) -> Result<(), AdapterError<S::Error>> {
 //!     let mut requests: MessageReader<S, LineDecoder, 256> =
 //!         MessageReader::new(socket, LineDecoder::with_max_len(200));
 //!     let mut scratch = [0u8; 64];
@@ -136,7 +154,7 @@
 //!             }
 //!             Ok(Some(false)) => {}                 // not a request we know
 //!             Ok(None) => return Ok(()),            // the robot closed
-//!             Err(Error::Decode(_)) => {}           // bad bytes, already skipped
+//!             Err(AdapterError::Decode(_)) => {}    // bad bytes, already skipped
 //!             Err(e) => return Err(e),
 //!         }
 //!     }
@@ -250,9 +268,54 @@ pub mod robot;
 
 pub mod adapters;
 
+#[cfg(feature = "tokio")]
+#[cfg_attr(docsrs, doc(cfg(feature = "tokio")))]
+pub mod cookbook {
+    //! The four servers people write, each a complete tokio server (feature `tokio`).
+    //! The robot is always the TCP client (`socket_open`); these are the PC side. Every
+    //! recipe here is compiled as a doc test of the crate, so it cannot rot; the text is
+    //! `docs/cookbook/*.md` in the package.
+    //!
+    //! | recipe | the robot sends | the server answers |
+    //! |---|---|---|
+    //! | [`vision`] | `socket_send_line("shoot")` | `(x,y,z,rx,ry,rz)` for `socket_read_ascii_float(6)` |
+    //! | [`plc_gateway`] | `socket_set_var`, `socket_get_var` | `name value\n` |
+    //! | [`camera_cr`] | `T1` + CR (`socket_send_string`, `socket_send_byte(13)`) | `OK,x,y,angle` + CR for `socket_read_string(suffix="\r")` |
+    //! | [`external_control`] | `socket_send_int(result)` | 8 int32 for `socket_read_binary_integer(8)` |
+    //!
+    //! Every recipe uses [`Tolerant`](crate::adapters::tokio_codec::Tolerant), so one bad
+    //! message is reported and the connection goes on answering: without it a
+    //! `tokio_util::codec::Framed` stream ends at the first decoding error while the robot
+    //! stays connected and sees only read timeouts.
+    //!
+    //! What the recipes need in `Cargo.toml` (`futures-util` for `SinkExt::send` and
+    //! `StreamExt::next` on a `Framed`):
+    //!
+    //! ```toml
+    //! [dependencies]
+    //! urscript-socket = { version = "0.1", features = ["tokio"] }
+    //! tokio = { version = "1", features = ["full"] }
+    //! tokio-util = { version = "0.7", features = ["codec"] }
+    //! futures-util = { version = "0.3", features = ["sink"] }
+    //! ```
+
+    pub mod vision {
+        #![doc = include_str!("../docs/cookbook/vision.md")]
+    }
+    pub mod plc_gateway {
+        #![doc = include_str!("../docs/cookbook/plc-gateway.md")]
+    }
+    pub mod camera_cr {
+        #![doc = include_str!("../docs/cookbook/camera-cr.md")]
+    }
+    pub mod external_control {
+        #![doc = include_str!("../docs/cookbook/external-control.md")]
+    }
+}
+
 pub use buffer::RecvBuffer;
 pub use error::{ArgumentError, DecodeError, EncodeError, ErrorKind};
-pub use framer::{Framed, Parse, MAX_BOUND};
+pub use framer::{FrameDecoder, Parse, MAX_BOUND};
 pub use sink::{ByteSink, SliceSink};
 pub use status::{Decode, Status};
 

@@ -1,7 +1,7 @@
 //! Lines: `socket_send_line` on the robot (`<s>\n`, LF only) and `socket_read_line()`
 //! reading a server's `\n` or `\r\n` terminated reply.
 
-use crate::framer::{AtEof, Framed, Framer, Parse, Pattern, ShapeKind};
+use crate::framer::{AtEof, FrameDecoder, Framer, Parse, Pattern, ShapeKind};
 use crate::{ByteSink, EncodeError, ErrorKind};
 
 /// Default bound on a line's content, in bytes (CR included, LF excluded). A robot's
@@ -45,7 +45,7 @@ pub fn encode_line<S: ByteSink + ?Sized>(text: &[u8], sink: &mut S) -> Result<us
 /// assert_eq!(got, Some(&b"reply from the server:"[..]));
 /// assert!(lines.decode_eof(b"tail").is_err());
 /// ```
-pub type LineDecoder = Framed<Line>;
+pub type LineDecoder = FrameDecoder<Line>;
 
 /// The parse step of [`LineDecoder`]: a line's content minus one trailing CR.
 #[derive(Debug, Clone, Copy, Default)]
@@ -94,7 +94,7 @@ impl LineDecoder {
     /// assert_eq!(LineDecoder::with_max_len(usize::MAX).max_len(), urscript_socket::MAX_BOUND);
     /// ```
     pub fn with_max_len(max_len: usize) -> Self {
-        Framed::from_parts(lf_framer(max_len), Line)
+        FrameDecoder::from_parts(lf_framer(max_len), Line)
     }
 
     /// The bound on a line's content.

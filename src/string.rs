@@ -8,7 +8,7 @@
 //! * [`encode_string`], [`encode_framed_string`]: what either side writes.
 
 pub use crate::framer::MAX_PATTERN_LEN;
-use crate::framer::{content_as_is, AtEof, Framed, Framer, Pattern, Shape};
+use crate::framer::{content_as_is, AtEof, FrameDecoder, Framer, Pattern, Shape};
 use crate::{ArgumentError, ByteSink, EncodeError};
 
 /// The most bytes one `socket_read_string` returns, terminators included (5.x manual): the
@@ -153,7 +153,7 @@ pub fn controller_pattern(
 /// assert_eq!(first.item(), Some(&b"hello"[..]));
 /// assert_eq!(read.decode(&buf[7..]).unwrap().item(), Some(&b"world"[..]));
 /// ```
-pub type ReadStringDecoder = Framed<ReadString>;
+pub type ReadStringDecoder = FrameDecoder<ReadString>;
 
 content_as_is!(
     /// The parse step of [`ReadStringDecoder`]: the content as it is.
@@ -180,7 +180,7 @@ impl ReadStringDecoder {
         let prefix = Pattern::new(&tmp[..n])?;
         let n = controller_pattern(suffix, interpret_escape, &mut tmp)?;
         let suffix = Pattern::new(&tmp[..n])?;
-        Ok(Framed::from_parts(
+        Ok(FrameDecoder::from_parts(
             Framer::window(prefix, suffix),
             ReadString,
         ))
@@ -229,7 +229,7 @@ impl ReadStringDecoder {
 /// assert_eq!(s.item(), Some(&b"OK"[..]));
 /// assert_eq!(dec.flush(&buf[4..]), Some((&b"NE"[..], 2)));
 /// ```
-pub type DelimitedDecoder = Framed<Delimited>;
+pub type DelimitedDecoder = FrameDecoder<Delimited>;
 
 content_as_is!(
     /// The parse step of [`DelimitedDecoder`]: the message as it is.
@@ -264,7 +264,7 @@ impl DelimitedDecoder {
             return Err(ArgumentError::EmptyPattern);
         }
         let framer = Framer::delimited(Pattern::new(delimiter)?, max_len, AtEof::Flush);
-        Ok(Framed::from_parts(framer, Delimited))
+        Ok(FrameDecoder::from_parts(framer, Delimited))
     }
 
     /// The delimiter.

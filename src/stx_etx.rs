@@ -1,7 +1,7 @@
 //! STX/ETX framing: `socket_send_byte(2)`, `socket_send_string(s)`, `socket_send_byte(3)`
 //! puts `02 <s> 03` on the wire, the most common way robot programs frame a message.
 
-use crate::framer::{content_as_is, Framed, Framer, Noise};
+use crate::framer::{content_as_is, FrameDecoder, Framer, Noise};
 use crate::{ByteSink, EncodeError};
 
 /// Start of text, `socket_send_byte(2)`.
@@ -57,7 +57,7 @@ pub fn encode_stx_etx<S: ByteSink + ?Sized>(
 /// assert_eq!((e.offset(), e.skip()), (4, 4));
 /// assert!(StxEtxDecoder::new().decode_eof(b"\x02open").is_err());
 /// ```
-pub type StxEtxDecoder = Framed<StxEtx>;
+pub type StxEtxDecoder = FrameDecoder<StxEtx>;
 
 content_as_is!(
     /// The parse step of [`StxEtxDecoder`]: the payload as it is.
@@ -99,7 +99,7 @@ impl StxEtxDecoder {
             max_len,
             false,
         );
-        Framed::from_parts(framer, StxEtx)
+        FrameDecoder::from_parts(framer, StxEtx)
     }
 
     /// The bound on a payload.

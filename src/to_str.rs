@@ -17,7 +17,7 @@ use nom::bytes::complete::{tag_no_case, take_while1};
 use nom::combinator::map;
 use nom::{IResult, Parser};
 
-use crate::framer::{Framed, Parse, ShapeKind};
+use crate::framer::{FrameDecoder, Parse, ShapeKind};
 use crate::line::{lf_framer, strip_cr};
 use crate::number::{is_space, parse_float_token, parse_i32, write_i32};
 use crate::{ByteSink, DecodeError, EncodeError, ErrorKind};
@@ -570,7 +570,7 @@ pub fn parse_value(text: &[u8]) -> Result<Value<'_>, DecodeError> {
 /// let e = d.decode(b"[1, x]\r\n").unwrap_err();
 /// assert_eq!((e.offset(), e.skip()), (20 + 4, 8));
 /// ```
-pub type ValueLineDecoder = Framed<ValueLine>;
+pub type ValueLineDecoder = FrameDecoder<ValueLine>;
 
 /// The parse step of [`ValueLineDecoder`]: [`parse_value`] on one line.
 #[derive(Debug, Clone, Copy, Default)]
@@ -609,7 +609,7 @@ impl ValueLineDecoder {
     /// assert!(ValueLineDecoder::with_max_len(2).decode(b"123\n").is_err());
     /// ```
     pub fn with_max_len(max_len: usize) -> Self {
-        Framed::from_parts(lf_framer(max_len), ValueLine)
+        FrameDecoder::from_parts(lf_framer(max_len), ValueLine)
     }
 
     /// The bound on a line's content.

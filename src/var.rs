@@ -10,7 +10,7 @@ use nom::combinator::{opt, recognize};
 use nom::sequence::preceded;
 use nom::{IResult, Parser};
 
-use crate::framer::{Framed, Parse, Pattern, ShapeKind};
+use crate::framer::{FrameDecoder, Parse, Pattern, ShapeKind};
 use crate::line::{lf_framer, strip_cr};
 use crate::number::{parse_i32, write_i32};
 use crate::{ArgumentError, ByteSink, EncodeError, ErrorKind};
@@ -222,7 +222,7 @@ fn offset_in(line: &[u8], part: &[u8]) -> usize {
 /// assert_eq!(e.offset(), 16);
 /// assert!(VarMessageDecoder::new().decode_eof(b"GET A").is_err());
 /// ```
-pub type VarMessageDecoder = Framed<VarMessages>;
+pub type VarMessageDecoder = FrameDecoder<VarMessages>;
 
 /// The parse step of [`VarMessageDecoder`]: [`parse_var_message`] on one line.
 #[derive(Debug, Clone, Copy, Default)]
@@ -251,7 +251,7 @@ impl VarMessageDecoder {
     /// let _ = VarMessageDecoder::new();
     /// ```
     pub fn new() -> Self {
-        Framed::from_parts(lf_framer(DEFAULT_MAX_VAR_LINE_LEN), VarMessages)
+        FrameDecoder::from_parts(lf_framer(DEFAULT_MAX_VAR_LINE_LEN), VarMessages)
     }
 }
 
@@ -292,7 +292,7 @@ fn ascii(name: &[u8]) -> &str {
 /// assert_eq!(dec.decode(b"POS 1\n").unwrap_err().kind(), ErrorKind::NameMismatch);
 /// assert!(VarReplyDecoder::new("A").unwrap().decode_eof(b"A 1").is_err());
 /// ```
-pub type VarReplyDecoder = Framed<VarReply>;
+pub type VarReplyDecoder = FrameDecoder<VarReply>;
 
 /// The parse step of [`VarReplyDecoder`]: `name int` for one variable name.
 #[derive(Debug, Clone, Copy)]
@@ -328,7 +328,7 @@ impl VarReplyDecoder {
         let parser = VarReply {
             name: Pattern::new(name.as_bytes())?,
         };
-        Ok(Framed::from_parts(
+        Ok(FrameDecoder::from_parts(
             lf_framer(DEFAULT_MAX_VAR_LINE_LEN),
             parser,
         ))

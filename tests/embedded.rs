@@ -3,7 +3,7 @@
 
 use core::convert::Infallible;
 
-use urscript_socket::adapters::embedded::{send, Error, MessageReader};
+use urscript_socket::adapters::embedded::{send, AdapterError, MessageReader};
 use urscript_socket::ascii_float::{encode_float_tuple, FloatTupleDecoder};
 use urscript_socket::line::LineDecoder;
 use urscript_socket::ErrorKind;
@@ -71,7 +71,7 @@ fn the_buffer_bound_and_a_cut_message() {
             LineDecoder::new(),
         );
         match r.next_with(|l| l.len()).await {
-            Err(Error::Decode(e)) => {
+            Err(AdapterError::Decode(e)) => {
                 assert_eq!(
                     (e.kind(), e.offset()),
                     (ErrorKind::TooLong { limit: 32 }, 32)
@@ -95,7 +95,9 @@ fn the_buffer_bound_and_a_cut_message() {
             Some(b"ok".to_vec())
         );
         match r.next_with(|l| l.len()).await {
-            Err(Error::Decode(e)) => assert_eq!((e.kind(), e.offset()), (ErrorKind::Truncated, 3)),
+            Err(AdapterError::Decode(e)) => {
+                assert_eq!((e.kind(), e.offset()), (ErrorKind::Truncated, 3))
+            }
             other => panic!("{other:?}"),
         }
     });
@@ -111,7 +113,7 @@ fn send_refuses_without_writing() {
             encode_float_tuple(&[1.5, 2.5], false, s)
         })
         .await;
-        assert!(matches!(r, Err(Error::Encode(_))));
+        assert!(matches!(r, Err(AdapterError::Encode(_))));
         assert_eq!(out, [0; 16]);
     });
 }

@@ -39,7 +39,7 @@ use crate::{Decode, EncodeError, RecvBuffer};
 /// default bound.
 pub const DEFAULT_CAPACITY: usize = 64 * 1024;
 
-/// Why a [`MessageReader`] call failed: the adapters' [`Error`](crate::adapters::Error)
+/// Why a [`MessageReader`] call failed: the adapters' [`AdapterError`](crate::adapters::AdapterError)
 /// over `std::io::Error`. Converts into `std::io::Error`.
 ///
 /// ```
@@ -48,7 +48,7 @@ pub const DEFAULT_CAPACITY: usize = 64 * 1024;
 /// assert_eq!(e.to_string(), "no complete message before the read timeout");
 /// assert_eq!(std::io::Error::from(e).kind(), std::io::ErrorKind::TimedOut);
 /// ```
-pub type ReadError = crate::adapters::Error<io::Error>;
+pub type ReadError = crate::adapters::AdapterError<io::Error>;
 
 /// Why a [`MessageWriter::send`] failed (`Io` or `Encode`): the same type as
 /// [`ReadError`]. Converts into `std::io::Error`.
@@ -58,7 +58,7 @@ pub type ReadError = crate::adapters::Error<io::Error>;
 /// let e = WriteError::Encode(EncodeError::NoValues);
 /// assert_eq!(std::io::Error::from(e).kind(), std::io::ErrorKind::InvalidInput);
 /// ```
-pub type WriteError = crate::adapters::Error<io::Error>;
+pub type WriteError = crate::adapters::AdapterError<io::Error>;
 
 /// Reads messages of one format from a blocking reader: a core decoder over a bounded
 /// buffer.

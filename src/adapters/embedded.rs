@@ -10,11 +10,11 @@ use crate::{Decode, EncodeError, RecvBuffer, SliceSink};
 /// error type.
 ///
 /// ```
-/// use urscript_socket::adapters::embedded::Error;
-/// let e: Error<core::convert::Infallible> = Error::BufferFull { capacity: 256 };
+/// use urscript_socket::adapters::embedded::AdapterError;
+/// let e: AdapterError<core::convert::Infallible> = AdapterError::BufferFull { capacity: 256 };
 /// assert_eq!(format!("{e}"), "receive buffer of 256 bytes full without a complete message");
 /// ```
-pub use crate::adapters::Error;
+pub use crate::adapters::AdapterError;
 
 /// Reads messages of one format from an `embedded_io_async::Read`, through a core decoder
 /// over an `N`-byte buffer (the memory bound).
@@ -77,28 +77,28 @@ impl<R: Read, D: Decode, const N: usize> MessageReader<R, D, N> {
     pub async fn next_with<T>(
         &mut self,
         f: impl FnOnce(D::Item<'_>) -> T,
-    ) -> Result<Option<T>, Error<R::Error>> {
+    ) -> Result<Option<T>, AdapterError<R::Error>> {
         loop {
             if self.eof {
                 return match self.rx.decode_eof(&mut self.decoder) {
                     Ok(Some(item)) => Ok(Some(f(item))),
                     Ok(None) => Ok(None),
-                    Err(e) => Err(Error::Decode(e)),
+                    Err(e) => Err(AdapterError::Decode(e)),
                 };
             }
             match self.rx.decode(&mut self.decoder) {
                 Ok(Some(item)) => return Ok(Some(f(item))),
                 Ok(None) => {}
-                Err(e) => return Err(Error::Decode(e)),
+                Err(e) => return Err(AdapterError::Decode(e)),
             }
             let space = self.rx.spare();
             if space.is_empty() {
-                return Err(Error::BufferFull { capacity: N });
+                return Err(AdapterError::BufferFull { capacity: N });
             }
             match self.reader.read(space).await {
                 Ok(0) => self.eof = true,
                 Ok(n) => self.rx.commit(n),
-                Err(e) => return Err(Error::Io(e)),
+                Err(e) => return Err(AdapterError::Io(e)),
             }
         }
     }
@@ -116,7 +116,7 @@ impl<R: Read, D: OwnedDecoder, const N: usize> MessageReader<R, D, N> {
     /// assert_eq!(r.next_owned().await.unwrap(), Some(2));
     /// # });
     /// ```
-    pub async fn next_owned(&mut self) -> Result<Option<D::Owned>, Error<R::Error>> {
+    pub async fn next_owned(&mut self) -> Result<Option<D::Owned>, AdapterError<R::Error>> {
         self.next_with(D::to_owned_item).await
     }
 }
@@ -138,8 +138,11 @@ pub async fn send<W: Write>(
     writer: &mut W,
     scratch: &mut [u8],
     encode: impl FnOnce(&mut SliceSink<'_>) -> Result<usize, EncodeError>,
-) -> Result<(), Error<W::Error>> {
+) -> Result<(), AdapterError<W::Error>> {
     let mut sink = SliceSink::new(scratch);
-    encode(&mut sink).map_err(Error::Encode)?;
-    writer.write_all(sink.written()).await.map_err(Error::Io)
+    encode(&mut sink).map_err(AdapterError::Encode)?;
+    writer
+        .write_all(sink.written())
+        .await
+        .map_err(AdapterError::Io)
 }

@@ -8,21 +8,21 @@ use crate::{DecodeError, EncodeError};
 /// and tokio adapters, the socket's error for `embedded-io-async`), bad bytes, a value
 /// the encoder refuses, or a bound. Each adapter names it for its transport:
 /// `blocking::ReadError`/`WriteError` and `tokio::CodecError` are
-/// `Error<std::io::Error>`; `embedded::Error<E>` is this type.
+/// `AdapterError<std::io::Error>`; the embedded adapter returns it over the socket's error.
 ///
-/// With `std`, `Error<std::io::Error>` converts into `std::io::Error`, so `?` works in a
-/// function returning `io::Result`.
+/// With `std`, `AdapterError<std::io::Error>` converts into `std::io::Error`, so `?` works
+/// in a function returning `io::Result`.
 ///
 /// ```
-/// use urscript_socket::adapters::Error;
+/// use urscript_socket::adapters::AdapterError;
 /// use urscript_socket::EncodeError;
-/// let e: Error<core::fmt::Error> = Error::Encode(EncodeError::NoValues);
+/// let e: AdapterError<core::fmt::Error> = AdapterError::Encode(EncodeError::NoValues);
 /// assert!(e.is_recoverable());
 /// assert_eq!(e.to_string(), "cannot encode: at least one value is required");
 /// ```
 #[derive(Debug)]
 #[non_exhaustive]
-pub enum Error<E> {
+pub enum AdapterError<E> {
     /// The transport failed.
     Io(E),
     /// Bad bytes: what and where. They are already skipped; the next call goes on with
@@ -47,70 +47,73 @@ pub enum Error<E> {
     TimedOut,
 }
 
-impl<E> Error<E> {
+impl<E> AdapterError<E> {
     /// Whether the connection can go on after this error: bad bytes (already skipped),
     /// a refused value and a read timeout are recoverable; a transport error, a close
     /// mid-message and a full buffer are not.
     ///
     /// ```
-    /// use urscript_socket::adapters::Error;
-    /// assert!(Error::<()>::TimedOut.is_recoverable());
-    /// assert!(!Error::<()>::BufferFull { capacity: 8 }.is_recoverable());
+    /// use urscript_socket::adapters::AdapterError;
+    /// assert!(AdapterError::<()>::TimedOut.is_recoverable());
+    /// assert!(!AdapterError::<()>::BufferFull { capacity: 8 }.is_recoverable());
     /// ```
     pub fn is_recoverable(&self) -> bool {
         matches!(
             self,
-            Error::Decode(_) | Error::Encode(_) | Error::WrongCount { .. } | Error::TimedOut
+            AdapterError::Decode(_)
+                | AdapterError::Encode(_)
+                | AdapterError::WrongCount { .. }
+                | AdapterError::TimedOut
         )
     }
 }
 
-impl<E: fmt::Display> fmt::Display for Error<E> {
+impl<E: fmt::Display> fmt::Display for AdapterError<E> {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
-            Error::Io(e) => write!(f, "transport error: {e}"),
-            Error::Decode(e) => write!(f, "bad input: {e}"),
-            Error::Encode(e) => write!(f, "cannot encode: {e}"),
-            Error::WrongCount { expected, found } => write!(
+            AdapterError::Io(e) => write!(f, "transport error: {e}"),
+            AdapterError::Decode(e) => write!(f, "bad input: {e}"),
+            AdapterError::Encode(e) => write!(f, "cannot encode: {e}"),
+            AdapterError::WrongCount { expected, found } => write!(
                 f,
                 "cannot encode: {found} values given to a codec of {expected} values per message"
             ),
-            Error::BufferFull { capacity } => write!(
+            AdapterError::BufferFull { capacity } => write!(
                 f,
                 "receive buffer of {capacity} bytes full without a complete message"
             ),
-            Error::TimedOut => f.write_str("no complete message before the read timeout"),
+            AdapterError::TimedOut => f.write_str("no complete message before the read timeout"),
         }
     }
 }
 
-impl<E: core::error::Error + 'static> core::error::Error for Error<E> {
+impl<E: core::error::Error + 'static> core::error::Error for AdapterError<E> {
     fn source(&self) -> Option<&(dyn core::error::Error + 'static)> {
         match self {
-            Error::Io(e) => Some(e),
-            Error::Decode(e) => Some(e),
-            Error::Encode(e) => Some(e),
+            AdapterError::Io(e) => Some(e),
+            AdapterError::Decode(e) => Some(e),
+            AdapterError::Encode(e) => Some(e),
             _ => None,
         }
     }
 }
 
-impl<E> From<DecodeError> for Error<E> {
+impl<E> From<DecodeError> for AdapterError<E> {
     fn from(e: DecodeError) -> Self {
-        Error::Decode(e)
+        AdapterError::Decode(e)
     }
 }
 
-impl<E> From<EncodeError> for Error<E> {
+impl<E> From<EncodeError> for AdapterError<E> {
     fn from(e: EncodeError) -> Self {
-        Error::Encode(e)
+        AdapterError::Encode(e)
     }
 }
 
 #[cfg(feature = "std")]
-impl From<std::io::Error> for Error<std::io::Error> {
+impl From<std::io::Error> for AdapterError<std::io::Error> {
     fn from(e: std::io::Error) -> Self {
-        Error::Io(e)
+        AdapterError::Io(e)
     }
 }
 
@@ -119,25 +122,25 @@ impl From<std::io::Error> for Error<std::io::Error> {
 /// `UnexpectedEof`, a full buffer `OutOfMemory`.
 ///
 /// ```
-/// use urscript_socket::adapters::Error;
-/// let e = std::io::Error::from(Error::<std::io::Error>::TimedOut);
+/// use urscript_socket::adapters::AdapterError;
+/// let e = std::io::Error::from(AdapterError::<std::io::Error>::TimedOut);
 /// assert_eq!(e.kind(), std::io::ErrorKind::TimedOut);
 /// ```
 #[cfg(feature = "std")]
-impl From<Error<std::io::Error>> for std::io::Error {
-    fn from(e: Error<std::io::Error>) -> Self {
+impl From<AdapterError<std::io::Error>> for std::io::Error {
+    fn from(e: AdapterError<std::io::Error>) -> Self {
         use std::io::ErrorKind as K;
         let kind = match &e {
-            Error::Io(_) => {
+            AdapterError::Io(_) => {
                 return match e {
-                    Error::Io(inner) => inner,
+                    AdapterError::Io(inner) => inner,
                     other => std::io::Error::other(other),
                 }
             }
-            Error::Decode(_) => K::InvalidData,
-            Error::Encode(_) | Error::WrongCount { .. } => K::InvalidInput,
-            Error::BufferFull { .. } => K::OutOfMemory,
-            Error::TimedOut => K::TimedOut,
+            AdapterError::Decode(_) => K::InvalidData,
+            AdapterError::Encode(_) | AdapterError::WrongCount { .. } => K::InvalidInput,
+            AdapterError::BufferFull { .. } => K::OutOfMemory,
+            AdapterError::TimedOut => K::TimedOut,
         };
         std::io::Error::new(kind, e)
     }

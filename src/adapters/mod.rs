@@ -12,7 +12,7 @@
 //!
 //! Shared by all three:
 //!
-//! * [`Error`]`<E>`: the one error type, generic over the transport's error; it converts
+//! * [`AdapterError`]`<E>`: the one error type, generic over the transport's error; it converts
 //!   into `std::io::Error` for the std transports.
 //! * [`Int32Stream`] and [`ByteStream`]: a server reading the robot's `socket_send_int` /
 //!   `socket_send_byte` gets one `i32` / `u8` per message, whatever the adapter.
@@ -21,7 +21,7 @@
 //!   blocking iterator and the embedded `next_owned` yield.
 
 mod error;
-pub use error::Error;
+pub use error::AdapterError;
 
 mod single;
 pub use single::{ByteStream, Int32Stream};
@@ -41,16 +41,3 @@ pub mod tokio_codec;
 mod tokio_robot;
 #[cfg(feature = "std")]
 pub(crate) mod virtual_robot;
-
-/// The cookbook in `docs/cookbook/`, compiled and run as doc tests so it cannot rot.
-#[cfg(all(doctest, feature = "tokio"))]
-pub mod cookbook {
-    #[doc = include_str!("../../docs/cookbook/vision.md")]
-    pub struct Vision;
-    #[doc = include_str!("../../docs/cookbook/plc-gateway.md")]
-    pub struct PlcGateway;
-    #[doc = include_str!("../../docs/cookbook/camera-cr.md")]
-    pub struct CameraCr;
-    #[doc = include_str!("../../docs/cookbook/external-control.md")]
-    pub struct ExternalControl;
-}

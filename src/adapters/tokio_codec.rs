@@ -39,7 +39,7 @@
 
 use std::vec::Vec;
 
-use bytes::{Buf, Bytes, BytesMut};
+use bytes::Buf;
 use tokio_util::codec;
 
 use crate::adapters::{ByteStream, Int32Stream};
@@ -54,9 +54,15 @@ use crate::{ArgumentError, Decode, DecodeError, Status};
 
 pub use super::tokio_robot::AsyncRobotSocket;
 
-/// The error of every codec here: the adapters' [`Error`](crate::adapters::Error) over
+/// The byte types the codecs take and yield (`bytes` 1.x, the version tokio-util uses):
+/// decoders yield [`Bytes`] split off the `BytesMut` read buffer, and the text and byte
+/// encoders accept [`Bytes`]. Re-exported so a server needs no `bytes` dependency of its
+/// own to name them.
+pub use bytes::{Bytes, BytesMut};
+
+/// The error of every codec here: the adapters' [`AdapterError`](crate::adapters::AdapterError) over
 /// `std::io::Error` (the transport, bad bytes with what and where, a value the encoder
-/// refuses, [`WrongCount`](crate::adapters::Error::WrongCount)). Converts into
+/// refuses, [`WrongCount`](crate::adapters::AdapterError::WrongCount)). Converts into
 /// `std::io::Error`, so `?` works in a function returning `io::Result`.
 ///
 /// ```
@@ -66,7 +72,7 @@ pub use super::tokio_robot::AsyncRobotSocket;
 /// let e = std::io::Error::from(CodecError::WrongCount { expected: 6, found: 5 });
 /// assert_eq!(e.kind(), std::io::ErrorKind::InvalidInput);
 /// ```
-pub type CodecError = crate::adapters::Error<std::io::Error>;
+pub type CodecError = crate::adapters::AdapterError<std::io::Error>;
 
 /// Runs a core decoder whose item is a slice of the buffer; returns the payload as
 /// `Bytes` split off `src` (no copy).

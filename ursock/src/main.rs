@@ -2,6 +2,7 @@
 //! functions. See `ursock --help`.
 #![forbid(unsafe_code)]
 
+mod client;
 mod controller;
 mod demo;
 pub mod diagnose;
@@ -35,6 +36,14 @@ enum Command {
     /// A server and a virtual robot on 127.0.0.1 walk through every socket function;
     /// prints both sides' traffic. Needs no robot.
     Demo,
+    /// Connect to a device (camera, PLC, a robot program's server) as its TCP client:
+    /// send what is typed, show what comes back as `listen` shows it.
+    ///
+    /// Each typed line (or --send TEXT) is sent: `hex 02 41 03` (or `hex: 02 41 03`) as
+    /// those bytes, anything else as text with `\r \n \t \0 \\ \xHH` escapes and the
+    /// --eol line end. Quits at the end of stdin (after --wait), when the device closes,
+    /// or after --max-time.
+    Client(client::ClientOptions),
     /// Listen for robots (socket_open connects here) and show their traffic decoded.
     ///
     /// Typed lines on stdin are sent: a reply spec (`floats 1 2 3`, `line OK`, `text a\r\n`,
@@ -164,6 +173,7 @@ fn run(cli: Cli) -> Result<(), String> {
     match cli.command {
         Command::Demo => demo::run(),
         Command::Listen(opts) => listen::listen(opts),
+        Command::Client(opts) => client::run(opts),
         Command::Controller(opts) => controller::run(opts),
         Command::Robot {
             connect,

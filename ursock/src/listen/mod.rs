@@ -8,7 +8,7 @@
 //! the listener hold; accept errors (out of descriptors) back off and are said once.
 
 mod dump;
-mod out;
+pub mod out;
 
 /// The human view of any report event (shared with `controller`).
 pub(crate) use out::human;
@@ -125,7 +125,8 @@ pub struct ListenOptions {
     /// and counters always carry the whole chunk.
     #[arg(long, default_value_t = DEFAULT_SHOW_MAX)]
     pub show_max: usize,
-    /// Write the whole session (every line, or every JSON event) to FILE.
+    /// Append the whole session (every line, or every JSON event) to FILE; an existing
+    /// FILE is kept and added to, never overwritten. Times are UTC.
     #[arg(long)]
     pub log: Option<PathBuf>,
     /// One JSON event per line on stdout (listening, connect, rx, decoded, tx, close,
@@ -266,7 +267,14 @@ pub fn listen(opts: ListenOptions) -> Result<(), String> {
     }
     let log = match &opts.log {
         Some(p) => {
-            Some(std::fs::File::create(p).map_err(|e| format!("--log {}: {e}", p.display()))?)
+            // Appended to: a second session never erases the first one's record.
+            Some(
+                std::fs::OpenOptions::new()
+                    .create(true)
+                    .append(true)
+                    .open(p)
+                    .map_err(|e| format!("--log {}: {e}", p.display()))?,
+            )
         }
         None => None,
     };
