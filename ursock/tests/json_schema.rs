@@ -538,3 +538,32 @@ fn controller_json_lines_match_the_schema() {
         ]
     );
 }
+
+#[test]
+fn client_json_lines_match_the_schema() {
+    use std::io::Read;
+    let root = schema();
+    let device = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
+    let addr = device.local_addr().unwrap().to_string();
+    let server = std::thread::spawn(move || {
+        let (mut s, _) = device.accept().unwrap();
+        s.set_read_timeout(Some(std::time::Duration::from_secs(20)))
+            .unwrap();
+        let mut got = [0u8; 5];
+        s.read_exact(&mut got).unwrap();
+        s.write_all(b"(1.5,2)\n").unwrap();
+        got
+    });
+    let (code, out, err) = run(
+        &["client", &addr, "--send", "ping", "--json", "--wait", "1"],
+        b"",
+    );
+    assert_eq!(code, 0, "{err}");
+    assert_eq!(&server.join().unwrap(), b"ping\n");
+    let kinds: Vec<String> = out
+        .lines()
+        .map(|l| check_event(&root, l)["event"].as_str().unwrap().to_string())
+        .collect();
+    assert!(kinds.contains(&"tx".to_string()), "{kinds:?}");
+    assert!(kinds.contains(&"rx".to_string()), "{kinds:?}");
+}
