@@ -43,3 +43,21 @@ fn matrix_product_of_mismatched_shapes_is_a_runtime_error() {
     let e = runtime_error("m = [[]]\nv = m * []\n");
     assert!(e.contains("matrix product"), "{e}");
 }
+
+/// A CB3-era program header, as PolyScope 3.0-3.2 and python-urx write it: the
+/// deprecated `set_runstate_outputs` is a built-in, with or without its list.
+#[test]
+fn cb3_header_with_set_runstate_outputs_runs() {
+    let src = "\
+def gripper_prog():
+\tset_analog_inputrange(0, 0)
+\tset_analog_outputdomain(0, 0)
+\tset_tool_voltage(0)
+\tset_runstate_outputs([])
+\tset_runstate_outputs()
+\tset_payload(1.1)
+\ttextmsg(\"header done\")
+end
+";
+    assert_eq!(messages(src), vec!["header done".to_string()]);
+}
