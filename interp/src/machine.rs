@@ -1387,6 +1387,10 @@ pub(crate) fn binary(op: BinOp, l: Value, r: Value) -> Result<Value, Fault> {
             BinOp::Div => return Ok(Float(f64::from(*a) / f64::from(*b))),
             _ => a.wrapping_rem(*b),
         })),
+        // A matrix (a list of lists) times a matrix or a flat list is the matrix product,
+        // as in the e-Series manual's matrix expressions (`inv(M) * f`); two flat lists
+        // multiply element by element.
+        (List(a), List(b)) if op == BinOp::Mul && is_matrix(a) => matrix_product(a, b),
         (List(a), List(b)) if matches!(op, BinOp::Add | BinOp::Sub | BinOp::Mul | BinOp::Div) => {
             if a.len() != b.len() {
                 return Err(Fault::new(
@@ -1440,6 +1444,97 @@ pub(crate) fn binary(op: BinOp, l: Value, r: Value) -> Result<Value, Fault> {
             }))
         }
     }
+}
+
+/// At most this many multiply-adds in one matrix product (a 1000×1000 by 1000×1000
+/// product would hold the controller thread for seconds).
+const MAX_MATRIX_PRODUCT_OPS: usize = 1 << 22;
+
+/// Whether a list is a matrix: non-empty, and every element a list.
+fn is_matrix(rows: &[Value]) -> bool {
+    !rows.is_empty() && rows.iter().all(|r| matches!(r, Value::List(_)))
+}
+
+/// The numbers of one row of a matrix operand of `*`.
+fn matrix_row(v: &Value) -> Result<Vec<f64>, Fault> {
+    let Value::List(items) = v else {
+        return Err(Fault::new(
+            K::Type,
+            format!(
+                "matrix product: a row must be a list, got {}",
+                v.type_name()
+            ),
+        ));
+    };
+    items
+        .iter()
+        .map(|x| {
+            x.as_f64().ok_or_else(|| {
+                Fault::new(
+                    K::Type,
+                    format!(
+                        "matrix product: elements must be numbers, got {}",
+                        x.type_name()
+                    ),
+                )
+            })
+        })
+        .collect()
+}
+
+/// `a * b` where `a` is a matrix: `b` a matrix gives the matrix product, `b` a flat list
+/// (a column vector) gives a flat list. Floats, as the controller's matrices hold.
+fn matrix_product(a: &[Value], b: &[Value]) -> Result<Value, Fault> {
+    let left: Vec<Vec<f64>> = a.iter().map(matrix_row).collect::<Result<_, _>>()?;
+    let inner = left[0].len();
+    if inner == 0 || left.iter().any(|r| r.len() != inner) {
+        return Err(Fault::new(
+            K::Type,
+            "matrix product: rows empty or of different lengths",
+        ));
+    }
+    let (right, column): (Vec<Vec<f64>>, bool) = if is_matrix(b) {
+        (b.iter().map(matrix_row).collect::<Result<_, _>>()?, false)
+    } else {
+        let col = matrix_row(&Value::List(b.to_vec()))?;
+        (col.into_iter().map(|x| vec![x]).collect(), true)
+    };
+    let cols = right.first().map_or(0, Vec::len);
+    if right.len() != inner || right.iter().any(|r| r.len() != cols) {
+        return Err(Fault::new(
+            K::Type,
+            format!(
+                "matrix product: a {}×{inner} matrix times a {} with {} rows",
+                left.len(),
+                if column { "list" } else { "matrix" },
+                right.len()
+            ),
+        ));
+    }
+    if left.len().saturating_mul(inner).saturating_mul(cols) > MAX_MATRIX_PRODUCT_OPS {
+        return Err(Fault::new(
+            K::Type,
+            "matrix product: the matrices are too large",
+        ));
+    }
+    let product: Vec<Vec<f64>> = left
+        .iter()
+        .map(|row| {
+            (0..cols)
+                .map(|j| row.iter().zip(&right).map(|(x, r)| x * r[j]).sum())
+                .collect()
+        })
+        .collect();
+    Ok(if column {
+        Value::List(product.into_iter().map(|r| Value::Float(r[0])).collect())
+    } else {
+        Value::List(
+            product
+                .into_iter()
+                .map(|r| Value::List(r.into_iter().map(Value::Float).collect()))
+                .collect(),
+        )
+    })
 }
 
 /// Binds a user function's arguments to its parameters, as the compiler matched them

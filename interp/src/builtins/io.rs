@@ -304,6 +304,15 @@ pub(super) const TABLE: &[Builtin] = &[
         "Accepted.",
         accept,
     ),
+    // CB3 3.x (deprecated there): PolyScope 3.0-3.2 program headers and python-urx
+    // emit `set_runstate_outputs([])`.
+    Builtin::new(
+        "set_runstate_outputs",
+        D,
+        &[opt("outputs", Default::Ints(&[]))],
+        "Accepted (CB3, deprecated): the outputs kept on when the program stops.",
+        accept,
+    ),
     Builtin::new("set_input_actions_to_default", D, &[], "Accepted.", accept),
     Builtin::new(
         "set_standard_digital_input_action",
