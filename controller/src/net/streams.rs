@@ -134,29 +134,44 @@ pub(crate) fn run(shared: &Arc<Shared>, listeners: Listeners) {
         let cell = shared.cell.lock().unwrap_or_else(|p| p.into_inner());
         cell.step_time()
     };
-    let mut next_step = shared.now();
+    // The controller's clock counts whole steps: each round runs at the last step
+    // boundary at or before the wall clock, so that the streams' timestamps are whole
+    // steps and RTDE's schedule (kept in the same steps) sends at every step that is
+    // due however late the thread woke. Steps the host was too slow for are skipped,
+    // never replayed.
+    let mut last: Option<Duration> = None;
     while !shared.stopped() {
+        let tick = step_boundary(shared.now(), step);
+        if let Some(last) = last.filter(|l| tick <= *l) {
+            // Woke before the next boundary (a spurious wake-up): sleep on.
+            std::thread::sleep((last + step).saturating_sub(shared.now()).min(step));
+            continue;
+        }
         for (l, service) in &listeners {
             if let Some(l) = l {
                 lp.accept(shared, l, *service);
             }
         }
         lp.read_clients(shared);
-        let now = shared.now();
-        lp.step(shared, now);
+        lp.step(shared, tick);
         for c in &mut lp.clients {
             c.flush();
         }
         lp.drop_gone(shared);
-        next_step += step;
+        last = Some(tick);
+        let next = tick + step;
         let now = shared.now();
-        if next_step > now {
-            std::thread::sleep((next_step - now).min(step));
-        } else if now - next_step > step * 50 {
-            // Far behind (the host was suspended, a long connect): start again from now.
-            next_step = now;
+        if next > now {
+            std::thread::sleep((next - now).min(step));
         }
     }
+}
+
+/// The last multiple of `step` at or before `t`.
+fn step_boundary(t: Duration, step: Duration) -> Duration {
+    let step = step.as_nanos().max(1);
+    let n = t.as_nanos();
+    Duration::from_nanos(u64::try_from(n - n % step).unwrap_or(u64::MAX))
 }
 
 struct Loop {
@@ -418,7 +433,11 @@ impl Loop {
             if let Some(m) = cell.machine_mut() {
                 self.driver.poll_sockets(m, &mut |a| show(&emit, a));
             }
-            cell.status()
+            let mut status = cell.status();
+            // The step's time (the dashboard's thread may have advanced the cell to the
+            // wall clock since this step's boundary).
+            status.time = now.as_secs_f64();
+            status
         };
         self.stream(shared, &status, &messages, now);
     }
