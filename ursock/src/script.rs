@@ -259,7 +259,26 @@ pub(crate) fn message_event(m: &Message) -> report::Event {
 /// stderr (and in `--log`). A compile error (nothing sent) or a runtime error is the
 /// `Err`, naming the line.
 pub fn run(script: &str, connect_to: Option<&str>, opts: Options) -> Result<(), String> {
-    let program = Program::parse(script).map_err(|e| e.to_string())?;
+    let program = match Program::parse(script) {
+        Ok(p) => p,
+        Err(e) => {
+            // As docs/json-events.md says: a compile error is an `error` event (with
+            // its line and column) and the `end`, nothing else.
+            if opts.json {
+                let mut printer = Printer {
+                    json: true,
+                    last_why: HashMap::new(),
+                };
+                printer.emit(report::Event::error(
+                    Some(e.line()),
+                    Some(e.column()),
+                    e.message(),
+                ));
+                printer.emit(report::Event::end(report::EndOutcome::Error));
+            }
+            return Err(e.to_string());
+        }
+    };
     let config = Config {
         step_time: opts.step_time,
         model: opts.model,

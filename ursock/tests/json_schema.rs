@@ -567,3 +567,19 @@ fn client_json_lines_match_the_schema() {
     assert!(kinds.contains(&"tx".to_string()), "{kinds:?}");
     assert!(kinds.contains(&"rx".to_string()), "{kinds:?}");
 }
+
+#[test]
+fn a_program_that_does_not_parse_reports_error_and_end_as_json() {
+    let root = schema();
+    let (code, out, _) = run(&["robot", "-e", "x = )", "--json"], b"");
+    assert_eq!(code, 1);
+    let events: Vec<Value> = out.lines().map(|l| check_event(&root, l)).collect();
+    assert_eq!(events.len(), 2, "{out}");
+    assert_eq!(events[0]["event"], "error");
+    assert_eq!(
+        (events[0]["line"].as_u64(), events[0]["column"].as_u64()),
+        (Some(1), Some(5))
+    );
+    assert_eq!(events[1]["event"], "end");
+    assert_eq!(events[1]["outcome"], "error");
+}
