@@ -10,6 +10,7 @@
 //! Every interface reads and changes one [`Cell`] (the controller's state machine, the
 //! arm and its program); its clock is the time since the start.
 
+mod clock;
 mod streams;
 mod urp;
 
@@ -18,7 +19,7 @@ use std::net::{TcpListener, TcpStream};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicU64, AtomicUsize, Ordering};
 use std::sync::{Arc, Mutex};
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
 use urscript_controller::{
     Cell, Config, Controller, Dashboard, Model, Programs, Reply, SafetyStatus, MAX_LINE,
@@ -122,7 +123,8 @@ struct Shared {
     cell: Mutex<Cell>,
     /// The controller's configuration (a copy: it never changes).
     config: Config,
-    start: Instant,
+    /// Controller time: wall time less what the host took from the real-time loop.
+    clock: clock::Clock,
     json: bool,
     active: AtomicUsize,
     next_conn: AtomicU64,
@@ -132,7 +134,7 @@ struct Shared {
 
 impl Shared {
     fn now(&self) -> Duration {
-        self.start.elapsed()
+        self.clock.now()
     }
 
     fn config(&self) -> &Config {
@@ -238,10 +240,12 @@ pub fn run(opts: ControllerOptions) -> Result<(), String> {
     };
     let config = controller.config().clone();
     let interp = Cell::interp_config(&controller);
+    let cell = Cell::new(controller, interp);
+    let step = cell.step_time();
     let shared = Arc::new(Shared {
-        cell: Mutex::new(Cell::new(controller, interp)),
+        cell: Mutex::new(cell),
         config,
-        start: Instant::now(),
+        clock: clock::Clock::new(step),
         json: opts.json,
         active: AtomicUsize::new(0),
         next_conn: AtomicU64::new(1),

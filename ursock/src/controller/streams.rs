@@ -136,13 +136,15 @@ pub fn run(shared: &Shared, listeners: Listeners) {
     };
     let mut next_step = shared.now();
     loop {
+        // A stall of the host is held back, not run through (see `clock`): what the
+        // clients sent meanwhile is read at the step after the last one.
+        let now = shared.clock.tick();
         for (l, service) in &listeners {
             if let Some(l) = l {
                 lp.accept(shared, l, *service);
             }
         }
         lp.read_clients(shared);
-        let now = shared.now();
         lp.step(shared, now);
         for c in &mut lp.clients {
             c.flush();
@@ -342,11 +344,9 @@ impl Loop {
                         }
                         match cell.machine_mut() {
                             Some(m) => self.driver.handle_event(m, e, &mut |a| show(&emit, a)),
-                            None => {
-                                if let ProgramEvent::Close { .. } = e {
-                                    self.driver.close_all();
-                                }
-                            }
+                            // The program has ended: what it sent last still goes
+                            // out, then its sockets close.
+                            None => self.driver.handle_event_after_end(e),
                         }
                     }
                     CellEvent::ProgramStarted { name } => {
