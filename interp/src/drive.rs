@@ -291,6 +291,33 @@ impl Driver {
         }
     }
 
+    /// Acts on one event a program left behind when it ended (its last sends, the
+    /// closing of its sockets), with no machine left to tell of a failure: a `Transmit`
+    /// is queued and written as far as the server takes it now, a `Close` closes that
+    /// socket after writing what it holds. Without this, what a program sends just
+    /// before its end would never reach the server.
+    pub fn handle_event_after_end(&mut self, event: Event) {
+        match event {
+            Event::Transmit { socket_name, bytes } => {
+                if let Some(c) = self.conns.get_mut(&socket_name) {
+                    if !c.broken && c.unsent.len().saturating_add(bytes.len()) <= MAX_UNSENT {
+                        c.unsent.extend_from_slice(&bytes);
+                        if flush(c).is_err() {
+                            c.broken = true;
+                        }
+                    }
+                }
+            }
+            Event::Close { socket_name } => {
+                if let Some(mut c) = self.conns.remove(&socket_name) {
+                    let _ = flush(&mut c);
+                    let _ = c.stream.shutdown(Shutdown::Both);
+                }
+            }
+            Event::Connect { .. } | Event::Message(_) | Event::Call(_) => {}
+        }
+    }
+
     /// Closes every connection, sending what each still holds as far as its server
     /// takes it now: the program that opened them has ended.
     pub fn close_all(&mut self) {

@@ -357,3 +357,78 @@ fn play_runs_a_urp_whose_external_control_node_fetches_its_script() {
     assert_eq!(ended["what"], "finished", "{ended}");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// What a program sends just before it ends reaches the server, then the socket closes
+/// (the script manual: a program's sockets close when it ends; bytes already sent are
+/// not taken back).
+#[test]
+fn the_last_bytes_a_program_sends_before_it_ends_reach_the_server() {
+    use std::net::TcpListener;
+    let c = Controller::start();
+    c.ready();
+    let server = TcpListener::bind("127.0.0.1:0").unwrap();
+    let port = server.local_addr().unwrap().port();
+    let mut p = c.connect("primary");
+    let program = format!(
+        "def last_words():\n  socket_open(\"127.0.0.1\", {port}, \"s\")\n  \
+         socket_send_string(\"bye\", \"s\")\nend\n"
+    );
+    p.write_all(program.as_bytes()).unwrap();
+    let (mut conn, _) = server.accept().unwrap();
+    conn.set_read_timeout(Some(WAIT)).unwrap();
+    let mut got = Vec::new();
+    conn.read_to_end(&mut got).unwrap();
+    assert_eq!(String::from_utf8_lossy(&got), "bye");
+}
+
+/// Sends a signal to the controller's process (Unix `kill`).
+#[cfg(unix)]
+fn signal(c: &Controller, sig: &str) {
+    let ok = Command::new("kill")
+        .args([sig, &c.child.id().to_string()])
+        .status()
+        .is_ok_and(|s| s.success());
+    assert!(ok, "kill {sig}");
+}
+
+/// The host stalls the controller (here: SIGSTOP for longer than the program's read
+/// timeout) while the server's reply is on its way. A controller whose steps are real
+/// time never sees that stall: the reply, there before the timeout in controller time,
+/// reaches the read, as UR's client library expects of the External Control script's
+/// reads with a timeout.
+#[cfg(unix)]
+#[test]
+fn a_host_stall_does_not_expire_a_read_whose_reply_came_in_time() {
+    use std::net::TcpListener;
+    let c = Controller::start();
+    c.ready();
+    let server = TcpListener::bind("127.0.0.1:0").unwrap();
+    let port = server.local_addr().unwrap().port();
+    let mut p = c.connect("primary");
+    let program = format!(
+        "def wait_reply():\n  socket_open(\"127.0.0.1\", {port}, \"s\")\n  \
+         socket_send_string(\"ready\", \"s\")\n  r = socket_read_binary_integer(1, \"s\", 0.3)\n  \
+         socket_send_string(to_str(r), \"s\")\nend\n"
+    );
+    p.write_all(program.as_bytes()).unwrap();
+    let (mut conn, _) = server.accept().unwrap();
+    conn.set_read_timeout(Some(WAIT)).unwrap();
+    let mut ready = [0u8; 5];
+    conn.read_exact(&mut ready).unwrap();
+    assert_eq!(&ready, b"ready");
+    signal(&c, "-STOP");
+    std::thread::sleep(Duration::from_millis(800));
+    conn.write_all(&7i32.to_be_bytes()).unwrap();
+    std::thread::sleep(Duration::from_millis(50));
+    signal(&c, "-CONT");
+    let mut got = Vec::new();
+    let mut buf = [0u8; 64];
+    let start = Instant::now();
+    while !got.contains(&b']') {
+        assert!(start.elapsed() < WAIT, "no reply: {got:?}");
+        let n = conn.read(&mut buf).unwrap();
+        assert!(n > 0, "closed: {:?}", String::from_utf8_lossy(&got));
+        got.extend_from_slice(&buf[..n]);
+    }
+    assert_eq!(String::from_utf8_lossy(&got), "[1, 7]");
+}

@@ -26,6 +26,7 @@
 //! # Ok::<(), std::io::Error>(())
 //! ```
 
+mod clock;
 mod fetch;
 mod streams;
 
@@ -35,7 +36,7 @@ use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, AtomicU64, AtomicUsize, Ordering};
 use std::sync::{Arc, Mutex, MutexGuard};
 use std::thread::JoinHandle;
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
 use urscript_interp::{CallRecord, Message};
 
@@ -255,7 +256,8 @@ type Sink = dyn Fn(ServerEvent) + Send + Sync;
 pub(crate) struct Shared {
     cell: Mutex<Cell>,
     config: Config,
-    start: Instant,
+    /// Controller time: wall time less what the host took from the real-time loop.
+    clock: clock::Clock,
     active: AtomicUsize,
     next_conn: AtomicU64,
     urcap_host: Option<(String, u16)>,
@@ -265,7 +267,7 @@ pub(crate) struct Shared {
 
 impl Shared {
     pub(crate) fn now(&self) -> Duration {
-        self.start.elapsed()
+        self.clock.now()
     }
 
     pub(crate) fn config(&self) -> &Config {
@@ -352,10 +354,12 @@ impl Server {
             rtde: stream(p.rtde, "rtde")?,
         };
         let interp = Cell::interp_config(&controller);
+        let cell = Cell::new(controller, interp);
+        let step = cell.step_time();
         let shared = Arc::new(Shared {
-            cell: Mutex::new(Cell::new(controller, interp)),
+            cell: Mutex::new(cell),
             config: options.config,
-            start: Instant::now(),
+            clock: clock::Clock::new(step),
             active: AtomicUsize::new(0),
             next_conn: AtomicU64::new(1),
             urcap_host: options.urcap_host,

@@ -135,13 +135,14 @@ pub(crate) fn run(shared: &Arc<Shared>, listeners: Listeners) {
         cell.step_time()
     };
     // The controller's clock counts whole steps: each round runs at the last step
-    // boundary at or before the wall clock, so that the streams' timestamps are whole
-    // steps and RTDE's schedule (kept in the same steps) sends at every step that is
-    // due however late the thread woke. Steps the host was too slow for are skipped,
-    // never replayed.
+    // boundary at or before the controller's time, so that the streams' timestamps are
+    // whole steps and RTDE's schedule (kept in the same steps) sends at every step that
+    // is due however late the thread woke. A stall of the host is held back, not run
+    // through (see `clock`): what the clients sent meanwhile is read at the step after
+    // the last one.
     let mut last: Option<Duration> = None;
     while !shared.stopped() {
-        let tick = step_boundary(shared.now(), step);
+        let tick = step_boundary(shared.clock.tick(), step);
         if let Some(last) = last.filter(|l| tick <= *l) {
             // Woke before the next boundary (a spurious wake-up): sleep on.
             std::thread::sleep((last + step).saturating_sub(shared.now()).min(step));
@@ -356,11 +357,9 @@ impl Loop {
                         }
                         match cell.machine_mut() {
                             Some(m) => self.driver.handle_event(m, e, &mut |a| show(&emit, a)),
-                            None => {
-                                if let ProgramEvent::Close { .. } = e {
-                                    self.driver.close_all();
-                                }
-                            }
+                            // The program has ended: what it sent last still goes
+                            // out, then its sockets close.
+                            None => self.driver.handle_event_after_end(e),
                         }
                     }
                     CellEvent::ProgramStarted { name } => {
