@@ -409,6 +409,9 @@ pub struct Controller {
     safety: SafetyStatus,
     /// When the current protective stop happened.
     protective_since: Option<Duration>,
+    /// When a protective stop unlocks by itself: `set unlock protective stop` came on
+    /// the primary interface before the hold had passed.
+    unlock_at: Option<Duration>,
     pending: Option<Pending>,
     program_state: ProgramState,
     /// The loaded program: the name as given to `load`, and the path shown.
@@ -449,6 +452,7 @@ impl Controller {
             robot_mode: RobotMode::PowerOff,
             safety: SafetyStatus::Normal,
             protective_since: None,
+            unlock_at: None,
             pending: None,
             program_state: ProgramState::Stopped,
             loaded: None,
@@ -476,11 +480,22 @@ impl Controller {
 
     /// When the next timed transition is due, if one is pending.
     pub fn poll_timeout(&self) -> Option<Duration> {
-        self.pending.map(Pending::at)
+        match (self.pending.map(Pending::at), self.unlock_at) {
+            (Some(a), Some(b)) => Some(a.min(b)),
+            (a, b) => a.or(b),
+        }
     }
 
     /// Settle every transition due at or before `now`.
     pub fn handle_timeout(&mut self, now: Duration) {
+        if let Some(at) = self.unlock_at.filter(|at| *at <= now) {
+            let _ = at;
+            self.unlock_at = None;
+            if self.safety == SafetyStatus::ProtectiveStop {
+                self.safety = SafetyStatus::Normal;
+                self.protective_since = None;
+            }
+        }
         while let Some(p) = self.pending {
             if p.at() > now {
                 return;
@@ -668,6 +683,7 @@ impl Controller {
         }
         self.safety = SafetyStatus::ProtectiveStop;
         self.protective_since = Some(now);
+        self.unlock_at = None;
         if self.program_state == ProgramState::Playing {
             self.program_state = ProgramState::Paused;
         }
@@ -687,6 +703,23 @@ impl Controller {
         }
         self.safety = SafetyStatus::Normal;
         self.protective_since = None;
+        Ok(())
+    }
+
+    /// `set unlock protective stop` on the primary interface: the stop is released as
+    /// soon as [`Timing::protective_stop_hold`] has passed (at once if it has). Unlike
+    /// the dashboard's command, which is refused before then, the primary interface's
+    /// waits (UR's client library sends it once right after the stop and waits for it).
+    pub fn request_unlock_protective_stop(&mut self, now: Duration) -> Result<(), Refused> {
+        self.remote()?;
+        self.handle_timeout(now);
+        if self.safety != SafetyStatus::ProtectiveStop {
+            return Ok(());
+        }
+        let since = self.protective_since.unwrap_or(now);
+        let at = since + self.config.timing.protective_stop_hold;
+        self.unlock_at = Some(at);
+        self.handle_timeout(now);
         Ok(())
     }
 

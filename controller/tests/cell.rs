@@ -236,3 +236,37 @@ fn play_of_a_loaded_program_asks_for_its_text() {
         .any(|e| matches!(e, CellEvent::ProgramStarted { name } if name == "pick.urp")));
     assert_eq!(cell.controller().program_state(), ProgramState::Stopped);
 }
+
+#[test]
+fn the_primary_interfaces_unlock_waits_for_the_hold_then_releases() {
+    use urscript_controller::SafetyStatus;
+    let (mut cell, _) = ready_cell();
+    cell.controller().protective_stop(ms(2000));
+    // Asked at once: no refusal, and the stop holds for its 5 s.
+    assert!(cell
+        .controller()
+        .request_unlock_protective_stop(ms(2100))
+        .is_ok());
+    assert_eq!(
+        cell.controller().safety_status(ms(6900)),
+        SafetyStatus::ProtectiveStop
+    );
+    assert_eq!(cell.controller().poll_timeout(), Some(ms(7000)));
+    assert_eq!(
+        cell.controller().safety_status(ms(7000)),
+        SafetyStatus::Normal
+    );
+    // A new stop is not released by the old request.
+    cell.controller()
+        .request_unlock_protective_stop(ms(8000))
+        .unwrap();
+    cell.controller().protective_stop(ms(8000));
+    cell.controller()
+        .request_unlock_protective_stop(ms(8001))
+        .unwrap();
+    cell.controller().protective_stop(ms(9000));
+    assert_eq!(
+        cell.controller().safety_status(ms(13_001)),
+        SafetyStatus::ProtectiveStop
+    );
+}

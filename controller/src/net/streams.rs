@@ -116,6 +116,8 @@ pub(crate) fn run(shared: &Arc<Shared>, listeners: Listeners) {
         driver: Driver::new(Options::default()),
         registry: InputRegistry::new(),
         next_state: Duration::ZERO,
+        safety: None,
+        state_key: None,
         buf: vec![0u8; 64 * 1024],
         frame: Vec::new(),
     };
@@ -181,6 +183,10 @@ struct Loop {
     /// Which RTDE client owns which input field.
     registry: InputRegistry,
     next_state: Duration,
+    /// The safety status the primary clients were last told of.
+    safety: Option<crate::SafetyStatus>,
+    /// The modes of the last state message.
+    state_key: Option<(crate::RobotMode, crate::SafetyStatus, crate::ProgramState)>,
     buf: Vec<u8>,
     frame: Vec<u8>,
 }
@@ -318,7 +324,7 @@ impl Loop {
                         Command::PowerOn => c.power_on(now),
                         Command::PowerOff => c.power_off(now),
                         Command::BrakeRelease => c.brake_release(now),
-                        Command::UnlockProtectiveStop => c.unlock_protective_stop(now),
+                        Command::UnlockProtectiveStop => c.request_unlock_protective_stop(now),
                         Command::StopProgram => c.stop(now),
                         Command::SetSpeed(f) => {
                             cell.apply(&crate::Inputs {
@@ -383,7 +389,7 @@ impl Loop {
                             messages.push(RobotMessage::RuntimeException {
                                 line: i32::try_from(e.line()).unwrap_or(i32::MAX),
                                 column: i32::try_from(e.column()).unwrap_or(i32::MAX),
-                                text: e.message().to_string(),
+                                text: controller_text(e.message()).to_string(),
                             });
                         }
                         messages.push(RobotMessage::program_stopped(&name));
@@ -438,6 +444,31 @@ impl Loop {
             status.time = now.as_secs_f64();
             status
         };
+        // A change of the safety status reaches the primary clients as the controller's
+        // safety mode message; a protective stop also as an error code of level
+        // WARNING (2), which UR's client library treats as a failed script unless told
+        // to ignore warnings. The code (209, argument 0) is our choice: UR does not
+        // document the code a protective stop reports.
+        if self.safety.is_some_and(|s| s != status.safety) {
+            messages.push(RobotMessage::SafetyMode {
+                code: 0,
+                argument: 0,
+                safety: status.safety,
+                report_data_type: 0,
+                report_data: 0,
+            });
+            if status.safety == crate::SafetyStatus::ProtectiveStop {
+                messages.push(RobotMessage::ErrorCode {
+                    code: 209,
+                    argument: 0,
+                    report_level: 2,
+                    data_type: 0,
+                    data: 0,
+                    text: "Protective stop".into(),
+                });
+            }
+        }
+        self.safety = Some(status.safety);
         self.stream(shared, &status, &messages, now);
     }
 
@@ -475,8 +506,13 @@ impl Loop {
                 c.offer(&self.frame);
             }
         }
-        // Primary and secondary: 10 Hz.
-        if now >= self.next_state {
+        // Primary and secondary: 10 Hz, and at once when the robot mode, the safety
+        // status or the program state changed (a client that acts on a change, e.g.
+        // waits for a protective stop to clear, reads it from the robot mode data).
+        let key = (status.robot_mode, status.safety, status.program_state);
+        let changed = self.state_key.is_some_and(|k| k != key);
+        self.state_key = Some(key);
+        if now >= self.next_state || changed {
             self.next_state = now + primary::STATE_PERIOD;
             self.frame.clear();
             primary::encode_robot_state(&mut self.frame, status, config);
@@ -656,5 +692,16 @@ fn rtde_event(e: &RtdeEvent) -> (&'static str, String) {
             source,
         } => ("text", format!("[{level}] {source}: {message}")),
         RtdeEvent::Error(e) => ("error", e.to_string()),
+    }
+}
+
+/// The controller's own text of an error: the interpreter's message starts with it
+/// (`compile_error_name_not_found:NAME:`) and may add an explanation for people after a
+/// space, which the controller does not send.
+fn controller_text(message: &str) -> &str {
+    if message.starts_with("compile_error") || message.starts_with("syntax_error") {
+        message.split(' ').next().unwrap_or(message)
+    } else {
+        message
     }
 }
