@@ -71,7 +71,7 @@ def test_check_false_returns_the_failed_run(pytester: pytest.Pytester) -> None:
         def test_program(virtual_robot):
             run = virtual_robot(lines=["x = ("], check=False)
             assert run.returncode == 1
-            assert run.outcome is None  # the program never started
+            assert run.outcome == "error"  # it never started: error and end events
             assert "line 1, column" in run.error_text
             assert run.calls == [] and run.messages == []
         """

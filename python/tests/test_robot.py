@@ -172,7 +172,8 @@ def test_run_robot_without_pytest() -> None:
     run: RobotRun = ursock.run_robot(lines=['textmsg("hello")'], max_time=5)
     assert run.texts == ["hello"] and run.returncode == 0 and run.events[-1]["event"] == "end"
     bad = ursock.run_robot("x = (1\n", max_time=5)
-    assert not bad.ok and bad.outcome is None
+    # A program that does not parse never starts: its error and end events say so.
+    assert not bad.ok and bad.outcome == "error"
     with pytest.raises(ursock.RobotRunError) as info:
         bad.check()
     assert "line 2" in str(info.value) or "line 1" in str(info.value)
