@@ -29,12 +29,14 @@ fn device<T: Send + 'static>(
     (addr, rx)
 }
 
-/// Reads until `n` bytes arrived or the peer closed.
+/// Reads exactly `n` bytes (fewer if the peer closed): never more, so what the client
+/// sends next is left for the next read however TCP coalesced the writes.
 fn read_n(s: &mut TcpStream, n: usize) -> Vec<u8> {
     let mut got = Vec::new();
     let mut buf = [0u8; 256];
     while got.len() < n {
-        match s.read(&mut buf) {
+        let want = (n - got.len()).min(buf.len());
+        match s.read(&mut buf[..want]) {
             Ok(0) | Err(_) => break,
             Ok(k) => got.extend_from_slice(&buf[..k]),
         }
