@@ -21,7 +21,6 @@ impl Server {
     }
 
     fn spawn(args: &[&str], stdin: Stdio) -> Server {
-        let started = Instant::now();
         let mut child = Command::new(env!("CARGO_BIN_EXE_ursock"))
             .args(["controller", "--dashboard-port", "0", "--no-streams"])
             .args(args)
@@ -51,11 +50,6 @@ impl Server {
                 .unwrap_or_else(|| panic!("listening line: {first:?}"))
                 .to_string()
         };
-        assert!(
-            started.elapsed() < Duration::from_secs(5),
-            "ready in {:?}",
-            started.elapsed()
-        );
         Server { child, addr }
     }
 

@@ -4,125 +4,14 @@
 //! virtual arm, robot messages for a program's start, end and runtime error, and a
 //! client that never reads slowing nobody. Every wait is bounded.
 
-use std::collections::HashMap;
-use std::io::{BufRead, BufReader, Read, Write};
+mod controller_common;
+
+use std::io::{Read, Write};
 use std::net::TcpStream;
-use std::process::{Child, Command, Stdio};
-use std::sync::mpsc;
+use std::process::Command;
 use std::time::{Duration, Instant};
 
-const WAIT: Duration = Duration::from_secs(20);
-
-struct Controller {
-    child: Child,
-    ports: HashMap<String, u16>,
-    events: mpsc::Receiver<serde_json::Value>,
-}
-
-impl Drop for Controller {
-    fn drop(&mut self) {
-        let _ = self.child.kill();
-        let _ = self.child.wait();
-    }
-}
-
-impl Controller {
-    fn start() -> Controller {
-        Self::start_with(&[])
-    }
-
-    fn start_with(extra: &[&str]) -> Controller {
-        let mut child = Command::new(env!("CARGO_BIN_EXE_ursock"))
-            .args(["controller", "--json"])
-            .args(extra)
-            .args(["--dashboard-port", "0", "--primary-port", "0"])
-            .args([
-                "--secondary-port",
-                "0",
-                "--realtime-port",
-                "0",
-                "--rtde-port",
-                "0",
-            ])
-            .stdin(Stdio::null())
-            .stdout(Stdio::piped())
-            .stderr(Stdio::null())
-            .spawn()
-            .expect("start ursock controller");
-        let out = BufReader::new(child.stdout.take().unwrap());
-        let (tx, events) = mpsc::channel();
-        std::thread::spawn(move || {
-            for line in out.lines() {
-                let Ok(line) = line else { return };
-                let v: serde_json::Value = serde_json::from_str(&line).expect("a JSON line");
-                if tx.send(v).is_err() {
-                    return;
-                }
-            }
-        });
-        let mut ports = HashMap::new();
-        while ports.len() < 5 {
-            let v = events.recv_timeout(WAIT).expect("listening events");
-            assert_eq!(v["event"], "listening", "{v}");
-            let addr = v["addr"].as_str().unwrap();
-            let port = addr.rsplit_once(':').unwrap().1.parse().unwrap();
-            ports.insert(v["service"].as_str().unwrap().to_string(), port);
-        }
-        Controller {
-            child,
-            ports,
-            events,
-        }
-    }
-
-    fn connect(&self, service: &str) -> TcpStream {
-        let s = TcpStream::connect(("127.0.0.1", self.ports[service])).expect("connect");
-        s.set_read_timeout(Some(WAIT)).unwrap();
-        s
-    }
-
-    /// Powers the arm on and releases the brakes through the dashboard server.
-    fn ready(&self) {
-        let d = self.connect("dashboard");
-        let mut r = BufReader::new(d.try_clone().unwrap());
-        let mut w = d;
-        let mut line = String::new();
-        r.read_line(&mut line).unwrap();
-        w.write_all(b"brake release\n").unwrap();
-        line.clear();
-        r.read_line(&mut line).unwrap();
-        let start = Instant::now();
-        loop {
-            w.write_all(b"robotmode\n").unwrap();
-            line.clear();
-            r.read_line(&mut line).unwrap();
-            if line.trim() == "Robotmode: RUNNING" {
-                return;
-            }
-            assert!(start.elapsed() < WAIT, "never RUNNING: {line}");
-            std::thread::sleep(Duration::from_millis(50));
-        }
-    }
-
-    /// Waits for the first event for which `want` holds.
-    fn wait_event(
-        &self,
-        what: &str,
-        want: impl Fn(&serde_json::Value) -> bool,
-    ) -> serde_json::Value {
-        let start = Instant::now();
-        loop {
-            let left = WAIT.saturating_sub(start.elapsed());
-            let v = self
-                .events
-                .recv_timeout(left)
-                .unwrap_or_else(|_| panic!("no {what} event"));
-            if want(&v) {
-                return v;
-            }
-        }
-    }
-}
+use controller_common::{Controller, WAIT};
 
 /// One message of the primary/secondary stream: its type and its bytes after the
 /// 5-byte header.
@@ -269,14 +158,7 @@ fn a_realtime_client_that_never_reads_slows_nobody() {
     }
     assert!(n > 300, "only {n} packages in 3 s");
     // The controller still answers.
-    let d = c.connect("dashboard");
-    let mut r = BufReader::new(d);
-    let mut greeting = String::new();
-    r.read_line(&mut greeting).unwrap();
-    assert_eq!(
-        greeting.trim(),
-        "Connected: Universal Robots Dashboard Server"
-    );
+    c.dashboard();
 }
 
 #[test]
@@ -331,19 +213,12 @@ fn play_runs_a_urp_whose_external_control_node_fetches_its_script() {
         &format!("127.0.0.1:{host_port}"),
     ]);
     c.ready();
-    let d = c.connect("dashboard");
-    let mut r = BufReader::new(d.try_clone().unwrap());
-    let mut w = d;
-    let mut line = String::new();
-    r.read_line(&mut line).unwrap();
+    let mut d = c.dashboard();
     for (cmd, want) in [
         ("load ec.urp", "Loading program: ec.urp"),
         ("play", "Starting program"),
     ] {
-        w.write_all(format!("{cmd}\n").as_bytes()).unwrap();
-        line.clear();
-        r.read_line(&mut line).unwrap();
-        assert_eq!(line.trim(), want);
+        assert_eq!(d.ask(cmd), want);
     }
     assert_eq!(&driver.join().unwrap(), b"request_program\n");
     let started = c.wait_event("program started", |v| v["event"] == "program");

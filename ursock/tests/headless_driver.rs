@@ -14,124 +14,15 @@
 //!
 //! The program is written here for this test (it is not the client library's script).
 
-use std::collections::HashMap;
-use std::io::{BufRead, BufReader, Read, Write};
+mod controller_common;
+
+use std::io::{Read, Write};
 use std::net::{TcpListener, TcpStream};
-use std::process::{Child, Command, Stdio};
-use std::sync::mpsc;
 use std::time::{Duration, Instant};
 
-const WAIT: Duration = Duration::from_secs(20);
+use controller_common::{rtde_read, rtde_send, Controller, WAIT};
+
 const SCALE: f64 = 1_000_000.0;
-
-struct Controller {
-    child: Child,
-    ports: HashMap<String, u16>,
-    events: mpsc::Receiver<serde_json::Value>,
-}
-
-impl Drop for Controller {
-    fn drop(&mut self) {
-        let _ = self.child.kill();
-        let _ = self.child.wait();
-    }
-}
-
-impl Controller {
-    fn start() -> Controller {
-        let mut child = Command::new(env!("CARGO_BIN_EXE_ursock"))
-            .args(["controller", "--json"])
-            .args(["--dashboard-port", "0", "--primary-port", "0"])
-            .args(["--secondary-port", "0", "--realtime-port", "0"])
-            .args(["--rtde-port", "0"])
-            .stdin(Stdio::null())
-            .stdout(Stdio::piped())
-            .stderr(Stdio::null())
-            .spawn()
-            .expect("start ursock controller");
-        let out = BufReader::new(child.stdout.take().unwrap());
-        let (tx, events) = mpsc::channel();
-        std::thread::spawn(move || {
-            for line in out.lines() {
-                let Ok(line) = line else { return };
-                let Ok(v) = serde_json::from_str::<serde_json::Value>(&line) else {
-                    continue;
-                };
-                if tx.send(v).is_err() {
-                    return;
-                }
-            }
-        });
-        let mut ports = HashMap::new();
-        while ports.len() < 5 {
-            let v = events.recv_timeout(WAIT).expect("listening events");
-            assert_eq!(v["event"], "listening", "{v}");
-            let addr = v["addr"].as_str().unwrap();
-            let port = addr.rsplit_once(':').unwrap().1.parse().unwrap();
-            ports.insert(v["service"].as_str().unwrap().to_string(), port);
-        }
-        Controller {
-            child,
-            ports,
-            events,
-        }
-    }
-
-    fn connect(&self, service: &str) -> TcpStream {
-        let s = TcpStream::connect(("127.0.0.1", self.ports[service])).expect("connect");
-        s.set_read_timeout(Some(WAIT)).unwrap();
-        s
-    }
-
-    fn wait_event(
-        &self,
-        what: &str,
-        want: impl Fn(&serde_json::Value) -> bool,
-    ) -> serde_json::Value {
-        let start = Instant::now();
-        loop {
-            let left = WAIT.saturating_sub(start.elapsed());
-            let v = self
-                .events
-                .recv_timeout(left)
-                .unwrap_or_else(|_| panic!("no {what} event"));
-            if want(&v) {
-                return v;
-            }
-        }
-    }
-}
-
-struct Dashboard {
-    r: BufReader<TcpStream>,
-    w: TcpStream,
-}
-
-impl Dashboard {
-    fn ask(&mut self, command: &str) -> String {
-        self.w.write_all(format!("{command}\n").as_bytes()).unwrap();
-        let mut line = String::new();
-        self.r.read_line(&mut line).unwrap();
-        line.trim_end().to_string()
-    }
-}
-
-/// One RTDE package: `u16` size (header included), `u8` type, payload.
-fn rtde_send(s: &mut TcpStream, kind: u8, payload: &[u8]) {
-    let mut p = ((payload.len() + 3) as u16).to_be_bytes().to_vec();
-    p.push(kind);
-    p.extend_from_slice(payload);
-    s.write_all(&p).unwrap();
-}
-
-fn rtde_read(s: &mut TcpStream) -> (u8, Vec<u8>) {
-    let mut head = [0u8; 3];
-    s.read_exact(&mut head).unwrap();
-    let size = u16::from_be_bytes([head[0], head[1]]) as usize;
-    let mut body = vec![0u8; size.saturating_sub(3)];
-    s.read_exact(&mut body).unwrap();
-    (head[2], body)
-}
 
 /// The next data package's `timestamp` and `actual_q` (recipe 1).
 fn rtde_state(s: &mut TcpStream) -> (f64, [f64; 6]) {
@@ -198,13 +89,7 @@ end
 fn a_headless_driver_starts_the_arm_streams_targets_and_stops() {
     let c = Controller::start();
     // 1. Dashboard: power on, brake release.
-    let d = c.connect("dashboard");
-    let mut dash = Dashboard {
-        r: BufReader::new(d.try_clone().unwrap()),
-        w: d,
-    };
-    let mut greeting = String::new();
-    dash.r.read_line(&mut greeting).unwrap();
+    let mut dash = c.dashboard();
     assert_eq!(dash.ask("power on"), "Powering on");
     assert_eq!(dash.ask("brake release"), "Brake releasing");
     let start = Instant::now();
