@@ -95,6 +95,43 @@ pub(crate) struct Func {
     pub program_scope: bool,
 }
 
+/// Definitions run before a program, as a URCap's installation preamble is (see
+/// [`Program::parse_with_preamble`]). Several texts may be added; they run in the order
+/// added. At most [`Preamble::MAX_STATEMENTS`] top-level statements in all.
+#[derive(Debug, Clone, Default)]
+pub struct Preamble {
+    stmts: Vec<Stmt>,
+}
+
+impl Preamble {
+    /// The most top-level statements (definitions included) a preamble holds.
+    pub const MAX_STATEMENTS: usize = 100_000;
+
+    /// Parses `text` and appends its statements. A syntax error names its line and
+    /// column in `text`; nothing of `text` is added then.
+    pub fn add(&mut self, text: &str) -> Result<(), ParseError> {
+        let toks = crate::lexer::lex(text)?;
+        let stmts = crate::parser::Parser::new(toks).program()?;
+        if self.stmts.len().saturating_add(stmts.len()) > Self::MAX_STATEMENTS {
+            return Err(ParseError::new(
+                1,
+                1,
+                format!(
+                    "the preamble would hold more than {} statements",
+                    Self::MAX_STATEMENTS
+                ),
+            ));
+        }
+        self.stmts.extend(stmts);
+        Ok(())
+    }
+
+    /// No statement added.
+    pub fn is_empty(&self) -> bool {
+        self.stmts.is_empty()
+    }
+}
+
 /// A parsed and compiled program, ready to run in a [`Machine`](crate::Machine).
 ///
 /// ```
@@ -135,9 +172,28 @@ impl Program {
     /// assert_eq!(e.to_string(), "line 2, column 1: `for` loops are not URScript (use `while`)");
     /// ```
     pub fn parse(src: &str) -> Result<Program, ParseError> {
+        Self::parse_with_preamble(&Preamble::default(), src)
+    }
+
+    /// [`parse`](Self::parse) of a program that runs after a [`Preamble`] (the
+    /// definitions a URCap adds to the installation), as PolyScope puts the preamble at
+    /// the top of the program: a program that is one `def` gets the preamble's
+    /// statements first in that `def`; a program of top-level statements gets them
+    /// before its first. The preamble's functions can then be called and its variables
+    /// read as the program's own.
+    ///
+    /// ```
+    /// use urscript_interp::{Preamble, Program};
+    /// let mut urcap = Preamble::default();
+    /// urcap.add("gripper_width = 85\ndef gripper_open():\n  textmsg(\"open\")\nend\n").unwrap();
+    /// let p = Program::parse_with_preamble(&urcap, "def prog():\n  gripper_open()\nend\n").unwrap();
+    /// assert_eq!(p.entry_name(), Some("prog"));
+    /// assert!(Program::parse("def prog():\n  gripper_open()\nend\n").unwrap().called_builtins() == ["gripper_open"]);
+    /// ```
+    pub fn parse_with_preamble(preamble: &Preamble, src: &str) -> Result<Program, ParseError> {
         let toks = crate::lexer::lex(src)?;
         let stmts = crate::parser::Parser::new(toks).program()?;
-        Compiler::default().program(stmts)
+        Compiler::default().program(stmts, &preamble.stmts)
     }
 
     /// [`parse`](Self::parse) of a program read as bytes: text that is not UTF-8 is a
@@ -430,7 +486,7 @@ impl Compiler {
         Ok(())
     }
 
-    fn program(mut self, mut stmts: Vec<Stmt>) -> Result<Program, ParseError> {
+    fn program(mut self, mut stmts: Vec<Stmt>, preamble: &[Stmt]) -> Result<Program, ParseError> {
         // The form drivers send: one `def` (and perhaps threads/defs), perhaps followed
         // by a call of it.
         let defs: Vec<&FuncDef> = stmts
@@ -459,6 +515,19 @@ impl Compiler {
             },
             _ => None,
         };
+        if !preamble.is_empty() {
+            // PolyScope writes the preamble at the top of the program's body.
+            let body = match &entry {
+                Some(name) => stmts.iter_mut().find_map(|s| match &mut s.kind {
+                    StmtKind::Def(f) if !f.is_thread && f.name == *name => Some(&mut f.body),
+                    _ => None,
+                }),
+                None => Some(&mut stmts),
+            };
+            if let Some(body) = body {
+                body.splice(0..0, preamble.iter().cloned());
+            }
+        }
         let mut defs = Vec::new();
         self.collect(&mut stmts, &mut defs)?;
         let main_body: Vec<Stmt> = match &entry {

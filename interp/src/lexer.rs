@@ -5,7 +5,7 @@
 use nom::branch::alt;
 use nom::bytes::complete::take_while1;
 use nom::character::complete::{char, digit0, digit1, one_of};
-use nom::combinator::{opt, recognize};
+use nom::combinator::opt;
 use nom::{IResult, Parser};
 
 use crate::error::ParseError;
@@ -86,17 +86,24 @@ impl Tok {
 
 /// A number literal: `12`, `1.5`, `.5`, `1.`, `1e-3`, `2.5E+2` (no sign: unary minus is an
 /// operator).
+///
+/// The text is cut by the length of what is left, not by `recognize`: at the very end of
+/// the input a parser may hand back an empty rest that is not a slice of the input, and
+/// `recognize`'s pointer arithmetic then returns `2.` of `2.25`.
 fn number(input: &str) -> IResult<&str, &str> {
     let exponent = (one_of("eE"), opt(one_of("+-")), digit1);
-    alt((
-        recognize((digit1, opt((char('.'), digit0)), opt(exponent))),
-        recognize((
+    let (after, ()) = alt((
+        (digit1, opt((char('.'), digit0)), opt(exponent)).map(|_| ()),
+        (
             char('.'),
             digit1,
             opt((one_of("eE"), opt(one_of("+-")), digit1)),
-        )),
+        )
+            .map(|_| ()),
     ))
-    .parse(input)
+    .parse(input)?;
+    let used = input.len().saturating_sub(after.len());
+    Ok((after, input.get(..used).unwrap_or(input)))
 }
 
 fn ident(input: &str) -> IResult<&str, &str> {

@@ -96,14 +96,16 @@ mod pose;
 mod sockets;
 mod trajectory;
 mod value;
+mod world_set;
 
-pub use compile::Program;
+pub use compile::{Preamble, Program};
 pub use controller::{Arm, World};
 pub use error::{ParseError, ParseErrorKind, RuntimeError, RuntimeErrorKind};
 pub use event::{CallRecord, Event, Message, MessageKind, Outcome, ReadRecord};
 pub use machine::{Config, Machine, State, Stub};
 pub use sockets::{Policy, Timeout};
 pub use value::{Value, MAX_VALUE_DEPTH};
+pub use world_set::{SetError, WORLD_SETTINGS};
 
 /// Reads a URScript constant: a number, `True`/`False`, a string, a list or a pose of
 /// constants (as a stub's value on a command line).

@@ -37,6 +37,23 @@ fn literals() {
 }
 
 #[test]
+fn a_number_may_be_the_last_bytes_of_the_program() {
+    // No line end after the last literal: the whole number is read, not `2.`.
+    for (src, want) in [
+        ("x = 2.25\ntextmsg(x)\nx = 2.25", "2.25"),
+        ("x = 1.5e-3\ntextmsg(x)\nx = 1.5e-3", "0.0015"),
+        ("x = .75\ntextmsg(x)\nx = .75", "0.75"),
+        ("x = 42\ntextmsg(x)\nx = 42", "42"),
+    ] {
+        assert_eq!(msgs(src), [want], "{src:?}");
+    }
+    assert_eq!(
+        urscript_interp::parse_constant("50.5").unwrap(),
+        urscript_interp::Value::Float(50.5)
+    );
+}
+
+#[test]
 fn comments_and_step_markers() {
     let m = msgs(
         "# a comment\n$ 1 \"Robot Program\"\nx = 1 # trailing\ntextmsg(\"#not a comment\", x)\n",
