@@ -93,6 +93,16 @@ enum Command {
         /// (`0`, `True`, `"ok"`, `[1, 2]`, `p[0,0,0,0,0,0]`). Repeatable.
         #[arg(long, value_name = "NAME[=VALUE]")]
         stub: Vec<String>,
+        /// A URCap's installation preamble (its definitions), run at the top of the
+        /// program as PolyScope writes it, so the program can call the URCap's functions.
+        /// Repeatable, in order.
+        #[arg(long, value_name = "FILE")]
+        preamble: Vec<std::path::PathBuf>,
+        /// What the robot senses at the start: `digital_in[3]=True`, `analog_in[0]=4.2`,
+        /// `tcp_force=[0,0,-9.8,0,0,0]`, `input_int_regs[2]=7`, `joint_temp[0]=41`,
+        /// `operator_int=3`... (`--set help` lists every name). Repeatable.
+        #[arg(long, value_name = "NAME=VALUE")]
+        set: Vec<String>,
     },
     /// A virtual UR controller that unmodified clients drive: the dashboard server
     /// (port 29999) with its state machine (power, brakes, safety, programs).
@@ -186,7 +196,27 @@ fn run(cli: Cli) -> Result<(), String> {
             step_time,
             model,
             stub,
+            preamble,
+            set,
         } => {
+            if set.iter().any(|s| s == "help") {
+                for (name, what) in urscript_interp::WORLD_SETTINGS {
+                    println!("{name:18} {what}");
+                }
+                return Ok(());
+            }
+            let mut world = urscript_interp::World::default();
+            for s in &set {
+                world.set(s).map_err(|e| format!("--set {e}"))?;
+            }
+            let mut urcaps = urscript_interp::Preamble::default();
+            for path in &preamble {
+                let text = std::fs::read_to_string(path)
+                    .map_err(|e| format!("--preamble {}: {e}", path.display()))?;
+                urcaps
+                    .add(&text)
+                    .map_err(|e| format!("--preamble {}: {e}", path.display()))?;
+            }
             if let Some(path) = &log {
                 out::open_log(path)?;
             }
@@ -233,6 +263,8 @@ fn run(cli: Cli) -> Result<(), String> {
                     step_time,
                     model,
                     stubs,
+                    preamble: urcaps,
+                    world,
                 },
             )
         }

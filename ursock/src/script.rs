@@ -36,6 +36,10 @@ pub struct Options {
     pub model: urscript_interp::kinematics::Model,
     /// Functions replaced by a no-op or a value.
     pub stubs: Vec<(String, Stub)>,
+    /// URCap preambles run before the program (`--preamble FILE`).
+    pub preamble: urscript_interp::Preamble,
+    /// What the robot senses at the start (`--set NAME=VALUE`).
+    pub world: urscript_interp::World,
 }
 
 /// How long a `socket_open` may take to connect before it returns False.
@@ -259,7 +263,7 @@ pub(crate) fn message_event(m: &Message) -> report::Event {
 /// stderr (and in `--log`). A compile error (nothing sent) or a runtime error is the
 /// `Err`, naming the line.
 pub fn run(script: &str, connect_to: Option<&str>, opts: Options) -> Result<(), String> {
-    let program = match Program::parse(script) {
+    let program = match Program::parse_with_preamble(&opts.preamble, script) {
         Ok(p) => p,
         Err(e) => {
             // As docs/json-events.md says: a compile error is an `error` event (with
@@ -288,6 +292,7 @@ pub fn run(script: &str, connect_to: Option<&str>, opts: Options) -> Result<(), 
         ..Config::default()
     };
     let mut machine = Machine::new(program, config);
+    *machine.world_mut() = opts.world.clone();
     let mut driver = Driver::new(drive::Options {
         max_time: opts.max_time,
         connect_timeout: CONNECT_TIMEOUT,

@@ -518,6 +518,84 @@ fn stubs_stand_in_for_functions_the_virtual_robot_lacks() {
 }
 
 #[test]
+fn a_urcap_preamble_defines_what_the_program_calls() {
+    let (l, port) = listener();
+    let server = thread::spawn(move || {
+        let (mut s, _) = l.accept().unwrap();
+        read_until(&mut s, b'\n')
+    });
+    // A preamble written for this test in the style of a gripper URCap's.
+    let preamble = std::env::temp_dir().join(format!("ursock-urcap-{}.script", std::process::id()));
+    std::fs::write(
+        &preamble,
+        format!("gripper_host = \"127.0.0.1\"\ndef gripper_close(force):\n  socket_open(gripper_host, {port}, \"gripper\")\n  socket_send_line(str_cat(\"CLOSE \", force), \"gripper\")\n  return True\nend\n"),
+    )
+    .unwrap();
+    let program = "def pick():\n  if gripper_close(40):\n    textmsg(\"closed\")\n  end\nend\n";
+    let (code, out, err) = run_program(
+        "preamble",
+        program,
+        &["--preamble", preamble.to_str().unwrap()],
+    );
+    assert_eq!(code, 0, "{out}\n{err}");
+    assert_eq!(server.join().unwrap().as_deref(), Some(&b"CLOSE 40"[..]));
+    assert!(out.contains("closed"), "{out}");
+    // Without it the program is refused before it starts, naming the function.
+    let (code, _, err) = run_program("nopreamble", program, &[]);
+    assert_ne!(code, 0);
+    assert!(err.contains("gripper_close"), "{err}");
+    // A preamble that does not parse names its file, line and column.
+    std::fs::write(&preamble, "x = 1\ndef broken(:\nend\n").unwrap();
+    let (code, _, err) = run_program(
+        "badpreamble",
+        program,
+        &["--preamble", preamble.to_str().unwrap()],
+    );
+    let _ = std::fs::remove_file(&preamble);
+    assert_ne!(code, 0);
+    assert!(
+        err.contains("--preamble") && err.contains("line 2, column 12"),
+        "{err}"
+    );
+}
+
+#[test]
+fn set_gives_the_inputs_the_program_reads() {
+    let program = "if get_standard_digital_in(3):\n  textmsg(\"part present, force \", get_tcp_force()[2])\nend\n";
+    let (code, out, err) = run_program(
+        "set",
+        program,
+        &[
+            "--set",
+            "digital_in[3]=True",
+            "--set",
+            "tcp_force=[0, 0, -9.5, 0, 0, 0]",
+        ],
+    );
+    assert_eq!(code, 0, "{out}\n{err}");
+    assert!(out.contains("part present, force -9.5"), "{out}");
+    let (code, out, _) = run_program("unset", program, &[]);
+    assert_eq!(code, 0);
+    assert!(!out.contains("part present"), "{out}");
+    let (code, _, err) = run_program("badset", program, &["--set", "digital_in[30]=True"]);
+    assert_ne!(code, 0);
+    assert!(
+        err.contains("--set digital_in[30]=True: index 30 is past the last (17)"),
+        "{err}"
+    );
+    let out = ursock()
+        .args(["robot", "--set", "help"])
+        .output()
+        .expect("spawn ursock");
+    let listed = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success());
+    assert!(
+        listed.contains("digital_in") && listed.contains("operator_string"),
+        "{listed}"
+    );
+}
+
+#[test]
 fn a_runtime_error_names_its_line_and_fails() {
     let (code, out, err) = run_program(
         "runtime",
