@@ -128,6 +128,29 @@ def test_lines_stubs_and_values(virtual_robot: VirtualRobot) -> None:
     assert run.texts[1].startswith("p[")
 
 
+def test_a_urcap_preamble_and_the_inputs_the_program_reads(
+    virtual_robot: VirtualRobot, tmp_path: Path
+) -> None:
+    urcap = tmp_path / "gripper_urcap.script"
+    urcap.write_text("def gripper_width():\n  return 42\nend\n", encoding="utf-8")
+    run = virtual_robot(
+        lines=[
+            "if get_standard_digital_in(3):",
+            '  textmsg("part, width ", gripper_width())',
+            "end",
+            "textmsg(get_tcp_force()[2], read_input_integer_register(5))",
+        ],
+        preamble=[urcap],
+        world={"digital_in[3]": True, "tcp_force": [0, 0, -9.5, 0, 0, 0], "input_int_regs[5]": 7},
+        max_time=5,
+    )
+    assert run.texts == ["part, width 42", "-9.57"]
+    # Without the preamble the program is refused before it starts.
+    refused = virtual_robot(lines=["gripper_width()"], max_time=5, check=False)
+    assert not refused.ok
+    assert refused.outcome == "error"
+
+
 def test_a_program_from_a_file_and_a_pose_argument(
     virtual_robot: VirtualRobot,
     tmp_path: Path,

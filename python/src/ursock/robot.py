@@ -372,12 +372,32 @@ def _is_path(script: ScriptSource) -> bool:
     return "\n" not in script and len(script) < 4096 and Path(script).is_file()
 
 
+def urscript_constant(value: Any) -> str:
+    """``value`` written as a URScript constant: ``True``/``False``, numbers, strings
+    in double quotes, lists as ``[a, b]``; a ``str`` that is already URScript (it
+    starts with ``[``, ``p[`` or ``"``) is passed as it is."""
+    if isinstance(value, bool):
+        return "True" if value else "False"
+    if isinstance(value, (int, float)):
+        return repr(value)
+    if isinstance(value, (list, tuple)):
+        return "[" + ", ".join(urscript_constant(v) for v in value) + "]"
+    text = str(value)
+    if text.startswith(("[", "p[", '"')):
+        return text
+    if '"' in text:
+        raise ValueError(f"a URScript string cannot hold a double quote: {text!r}")
+    return f'"{text}"'
+
+
 def robot_command(
     *,
     script_file: Optional[Union[str, "os.PathLike[str]"]] = None,
     lines: Sequence[str] = (),
     connect: Optional[str] = None,
     stub: Sequence[str] = (),
+    preamble: Sequence[Union[str, "os.PathLike[str]"]] = (),
+    world: Optional[Mapping[str, Any]] = None,
     max_time: Optional[float] = None,
     step_time: Optional[float] = None,
     model: Optional[str] = None,
@@ -395,6 +415,10 @@ def robot_command(
         cmd += ["--connect", connect]
     for s in stub:
         cmd += ["--stub", s]
+    for path in preamble:
+        cmd += ["--preamble", os.fspath(path)]
+    for name, value in (world or {}).items():
+        cmd += ["--set", f"{name}={urscript_constant(value)}"]
     if max_time is not None:
         cmd += ["--max-time", repr(float(max_time))]
     if step_time is not None:
@@ -413,6 +437,8 @@ def run_robot(
     *,
     connect: Optional[str] = None,
     stub: Sequence[str] = (),
+    preamble: Sequence[Union[str, "os.PathLike[str]"]] = (),
+    world: Optional[Mapping[str, Any]] = None,
     max_time: Optional[float] = None,
     step_time: Optional[float] = None,
     model: Optional[str] = None,
@@ -434,6 +460,10 @@ def run_robot(
     :param connect: ``HOST:PORT``: open ``socket_0`` there before the program runs.
     :param stub: ``NAME`` or ``NAME=VALUE``: functions the virtual robot lacks (a
         URCap's), made a no-op or a constant (``--stub``).
+    :param preamble: files of a URCap's installation preamble, run at the top of the
+        program as PolyScope writes them (``--preamble``).
+    :param world: what the robot senses at the start, by ``ursock robot --set`` name:
+        ``{"digital_in[3]": True, "tcp_force": [0, 0, -9.8, 0, 0, 0]}``.
     :param max_time: end a program that loops forever after this many seconds (a
         success if nothing failed before; :attr:`RobotRun.outcome` is ``"max_time"``).
     :param step_time: the controller's step (0.002 e-Series, 0.008 CB3).
@@ -470,6 +500,8 @@ def run_robot(
             lines=list(lines or ()),
             connect=connect,
             stub=stub,
+            preamble=preamble,
+            world=world,
             max_time=max_time,
             step_time=step_time,
             model=model,
