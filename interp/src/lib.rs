@@ -93,6 +93,7 @@ mod lexer;
 pub mod machine;
 mod parser;
 mod pose;
+mod rpc;
 mod sockets;
 mod trajectory;
 mod value;
@@ -103,7 +104,7 @@ pub use error::{ParseError, ParseErrorKind, RuntimeError, RuntimeErrorKind};
 pub use event::{CallRecord, Event, Message, MessageKind, Outcome, ReadRecord};
 pub use machine::{Config, Machine, State, Stub};
 pub use sockets::{Policy, Timeout};
-pub use value::{Value, MAX_VALUE_DEPTH};
+pub use value::{Value, MAX_STRUCT_MEMBERS, MAX_VALUE_DEPTH};
 
 /// Reads a URScript constant: a number, `True`/`False`, a string, a list or a pose of
 /// constants (as a stub's value on a command line).
