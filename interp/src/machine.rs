@@ -9,7 +9,8 @@
 //! time: `sync()` (to the next step), `sleep(t)` and motion (to the step where the time is
 //! over), a socket read whose bytes have not all arrived (until they arrive, checked at
 //! each step, or its timeout), `socket_open` (until the driver reports the connection),
-//! `join` of a thread that still runs. This is the manual's "Thread scheduling": 2 ms
+//! an XML-RPC call `handle.name(...)` (until its reply is complete, at most 10 s), `join`
+//! of a thread that still runs. This is the manual's "Thread scheduling": 2 ms
 //! frames, each runnable thread scheduled round robin, a thread that has used its frame
 //! waits for the next. A thread that runs more than
 //! [`Config::max_statements_per_step`] statements in one step without consuming time is a

@@ -2,7 +2,7 @@
 //! are XML-RPC calls (`camera = rpc_factory("xmlrpc", "http://10.0.0.5:8000/RPC2")`, then
 //! `target = camera.getTarget()`). Making the handle sends nothing; each
 //! `handle.name(args...)` connects, sends one HTTP POST and waits for the reply (see
-//! [`Machine`](crate::Machine)'s docs and the package README for the types and bounds).
+//! the crate docs' "Bounds" and the package README for the types, errors and bounds).
 
 use super::{req, Args, Builtin, Domain, Out};
 use crate::controller::Controller;
