@@ -675,7 +675,12 @@ impl Machine {
             }
             Err(why) => {
                 let msg = p.failure(&format!("could not connect: {why}"));
-                t.wait = rpc_done(&mut self.ctl.events, p, Err(msg));
+                t.wait = rpc_done(
+                    &mut self.ctl.events,
+                    p,
+                    Err(msg),
+                    self.config.max_value_size,
+                );
             }
         }
         true
@@ -704,7 +709,7 @@ impl Machine {
             crate::rpc::Reply::Value(v) => Ok(v),
             crate::rpc::Reply::Error(e) => Err(p.failure(&e)),
         };
-        t.wait = rpc_done(&mut self.ctl.events, p, outcome);
+        t.wait = rpc_done(&mut self.ctl.events, p, outcome, self.config.max_value_size);
         true
     }
 
@@ -929,7 +934,15 @@ impl Machine {
                         "no complete reply within {} s",
                         crate::rpc::TIMEOUT.as_secs()
                     ));
-                    (false, rpc_done(&mut self.ctl.events, &mut p, Err(msg)))
+                    (
+                        false,
+                        rpc_done(
+                            &mut self.ctl.events,
+                            &mut p,
+                            Err(msg),
+                            self.config.max_value_size,
+                        ),
+                    )
                 }
                 other => (false, other),
             };
@@ -1417,7 +1430,14 @@ fn rpc_done(
     events: &mut VecDeque<Event>,
     p: &mut crate::rpc::Pending,
     outcome: Result<Value, String>,
+    max_size: usize,
 ) -> Wait {
+    // The reply's value is within the value bounds, as every value the program holds.
+    let outcome = outcome.and_then(|v| {
+        check_value(&v, max_size)
+            .map(|()| v)
+            .map_err(|f| p.failure(&f.message))
+    });
     events.push_back(Event::Close {
         socket_name: p.socket.clone(),
     });

@@ -447,3 +447,24 @@ fn against_python_xmlrpc_server() {
     assert!(e.message().contains("fault 1:"), "{e}");
     assert!(e.message().contains("missing"), "{e}");
 }
+
+#[test]
+fn a_reply_is_held_to_the_value_bounds() {
+    let src = format!("rpc = rpc_factory(\"xmlrpc\", \"{URL}\")\nx = rpc.many()\n");
+    let config = Config {
+        // Above the URL's 29 bytes, below the reply's 100 elements.
+        max_value_size: 50,
+        ..Config::default()
+    };
+    let mut h = Harness::new(&src, config);
+    let items = "<value><int>1</int></value>".repeat(100);
+    let state = serve(&mut h, Duration::ZERO, move |_| {
+        response(&format!("<array><data>{items}</data></array>"))
+    });
+    let State::Error(e) = state else {
+        panic!("{state:?}")
+    };
+    assert_eq!(e.kind(), RuntimeErrorKind::RemoteCall);
+    assert!(e.message().contains("more than 50 elements"), "{e}");
+    assert_eq!(h.m.global("x"), None);
+}
