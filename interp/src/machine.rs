@@ -797,7 +797,9 @@ impl Machine {
             Box::new(CallRecord {
                 line: at.line,
                 column: at.col,
-                name: method.to_string(),
+                // `rpc_factory("xmlrpc", "URL").name`: the call as the program could
+                // write it, never mistaken for a built-in.
+                name: format!("{}.{method}", Value::Rpc(url.clone()).to_source()),
                 builtin: None,
                 args: args.clone(),
                 kwargs: Vec::new(),

@@ -106,7 +106,9 @@ fn a_call_returns_a_pose_and_waits_for_the_reply() {
     assert!((45..=55).contains(waited), "{waited}");
     // The call is recorded under its internal socket name.
     assert!(
-        h.calls.iter().any(|c| c.contains("get_position")),
+        h.calls.iter().any(|c| c.starts_with(&format!(
+            "10: rpc_factory(\"xmlrpc\", \"{URL}\").get_position(1, \"x\") -> p[0.4, -0.2"
+        ))),
         "{:?}",
         h.calls
     );
@@ -289,7 +291,19 @@ fn the_peer_closing_ends_the_reply() {
         b"HTTP/1.0 200 OK\r\nContent-Length: 100\r\n\r\n<methodResp",
     );
     m.handle_peer_closed(SOCKET);
-    step(&mut m);
+    let events = step(&mut m);
+    // The failed call is recorded under its internal socket name, with the reason.
+    let failed = events
+        .iter()
+        .find_map(|e| match e {
+            Event::Call(c) => Some(c),
+            _ => None,
+        })
+        .expect("a call record");
+    assert_eq!(failed.socket.as_deref(), Some(SOCKET));
+    assert!(
+        matches!(&failed.outcome, urscript_interp::Outcome::Failed(why) if why.contains("after 11"))
+    );
     let State::Error(e) = m.state() else {
         panic!("{:?}", m.state())
     };
