@@ -349,7 +349,8 @@ fn factory_and_handle_errors() {
 }
 
 /// A tiny XML-RPC server on 127.0.0.1: for each of `calls` connections, reads exactly
-/// one request (headers, then Content-Length bytes), answers `answer(body)` and closes.
+/// one request (headers, then Content-Length bytes), answers `answer(body)` in two
+/// writes 20 ms apart, and closes.
 fn tiny_server(
     calls: usize,
     answer: fn(&str) -> Vec<u8>,
@@ -376,7 +377,13 @@ fn tiny_server(
             r.read_exact(&mut body).unwrap();
             let body = String::from_utf8(body).unwrap();
             let mut s: TcpStream = r.into_inner();
-            s.write_all(&answer(&body)).unwrap();
+            // The reply in two segments: the program waits for the whole body.
+            let reply = answer(&body);
+            let half = reply.len() / 2;
+            s.write_all(&reply[..half]).unwrap();
+            s.flush().unwrap();
+            std::thread::sleep(Duration::from_millis(20));
+            s.write_all(&reply[half..]).unwrap();
             bodies.push(body);
         }
         bodies
