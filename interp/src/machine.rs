@@ -1159,11 +1159,16 @@ impl Machine {
                             format!("unknown variable `{name}`"),
                         )));
                     };
+                    // A list, struct or string stored may make the value deeper or
+                    // larger; a number or pose cannot.
+                    let grows = v.is_container();
                     store_path(target, steps, indices, v, prog).map_err(fail)?;
-                    if let Err(f) = check_value(target, max_size) {
-                        // The variable keeps no value over the bounds.
-                        *slot = None;
-                        return Err(fail(f));
+                    if grows {
+                        if let Err(f) = check_value(target, max_size) {
+                            // The variable keeps no value over the bounds.
+                            *slot = None;
+                            return Err(fail(f));
+                        }
                     }
                 }
                 Op::Method(id) => {

@@ -134,6 +134,16 @@ fn struct_values_are_bounded() {
         error("s = struct(a=0)\ni = 0\nwhile i < 40:\n  s = struct(a=s)\n  i = i + 1\nend\n");
     assert_eq!((kind, line), (RuntimeErrorKind::Limit, 4));
     assert!(msg.contains("nested"), "{msg}");
+    // The same through a member write: the variable keeps no value over the bound.
+    let src = "s = struct(a=0)\ni = 0\nwhile i < 40:\n  s.a = s\n  i = i + 1\nend\n";
+    let (kind, line, _, msg) = error(src);
+    assert_eq!((kind, line), (RuntimeErrorKind::Limit, 4));
+    assert!(msg.contains("nested"), "{msg}");
+    assert_eq!(run(src).global("s"), None);
+    // And by size: a member list doubled in a loop stops at Config::max_value_size.
+    let (kind, line, _, msg) = error("s = struct(l=[0])\nwhile True:\n  s.l = [s.l, s.l]\nend\n");
+    assert_eq!((kind, line), (RuntimeErrorKind::Limit, 3));
+    assert!(msg.contains("nested") || msg.contains("elements"), "{msg}");
 }
 
 #[test]
