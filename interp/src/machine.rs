@@ -659,7 +659,12 @@ impl Machine {
             .iter_mut()
             .find(|t| !t.done && matches!(&t.wait, Wait::Rpc(p) if p.socket == socket_name))
         else {
-            return false;
+            // A late answer for a call that already ended (timed out, its thread killed)
+            // opens nothing; a `socket_open` of such a name still gets its own.
+            let connecting = self.threads.iter().any(|t| {
+                !t.done && matches!(&t.wait, Wait::Connect { socket, .. } if socket == socket_name)
+            });
+            return socket_name.starts_with("rpc:") && !connecting;
         };
         let Wait::Rpc(p) = &mut t.wait else {
             return false;

@@ -189,6 +189,9 @@ fn no_answer_is_an_error_after_the_timeout() {
         "{e}"
     );
     assert_eq!(h.closed, [SOCKET]);
+    // A connection reported after the call ended opens nothing.
+    h.m.handle_connected(SOCKET, Ok(()));
+    assert!(h.m.open_sockets().is_empty());
 }
 
 #[test]
