@@ -82,6 +82,8 @@ pub(crate) enum Op {
     MakeStruct(u32),
     /// `value.name`: the struct is on the stack.
     Member(Sym),
+    /// `var.name` without copying the whole struct: the variable, the member.
+    LoadMember(Sym, Sym),
     /// `name<path> = v` with a member in the path ([`Program::paths`]`[i]`): the path's
     /// indices, then the value, are on the stack.
     StorePath(Sym, u32),
@@ -830,14 +832,20 @@ impl Compiler {
                 at,
             } => self.call(name, args, kwargs, *at, None)?,
             Expr::Member(base, name, at) => {
-                self.expr(base)?;
                 let m = self.sym(name);
                 let at = Pos {
                     line: at.0,
                     col: at.1,
                 };
+                let op = match base.as_ref() {
+                    Expr::Name(var, _) => Op::LoadMember(self.sym(var), m),
+                    _ => {
+                        self.expr(base)?;
+                        Op::Member(m)
+                    }
+                };
                 let saved = std::mem::replace(&mut self.pos, at);
-                self.emit(Op::Member(m));
+                self.emit(op);
                 self.pos = saved;
             }
             Expr::Method {

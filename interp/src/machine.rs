@@ -1142,6 +1142,23 @@ impl Machine {
                 Op::Member(m) => {
                     let v = pop(&mut th.stack, line)?;
                     let name = &prog.names[m as usize];
+                    th.stack.push(member(&v, name).map_err(fail)?);
+                }
+                Op::LoadMember(s, m) => {
+                    let v = frame
+                        .locals
+                        .iter()
+                        .rev()
+                        .find(|(n, _)| *n == s)
+                        .and_then(|(_, v)| v.as_ref())
+                        .or_else(|| self.globals[s as usize].as_ref());
+                    let Some(v) = v else {
+                        return Err(fail(Fault::new(
+                            K::UnknownVariable,
+                            format!("unknown variable `{}`", prog.names[s as usize]),
+                        )));
+                    };
+                    let name = &prog.names[m as usize];
                     th.stack.push(member(v, name).map_err(fail)?);
                 }
                 Op::StorePath(s, path) => {
@@ -1471,12 +1488,12 @@ fn rpc_done(
 }
 
 /// `v.name`: a member of a struct.
-fn member(v: Value, name: &str) -> Result<Value, Fault> {
+fn member(v: &Value, name: &str) -> Result<Value, Fault> {
     match v {
         Value::Struct(members) => members
-            .into_iter()
+            .iter()
             .find(|(n, _)| n == name)
-            .map(|(_, v)| v)
+            .map(|(_, v)| v.clone())
             .ok_or_else(|| {
                 Fault::new(
                     K::UnknownMember,
