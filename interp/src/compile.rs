@@ -6,8 +6,8 @@ use std::collections::{HashMap, HashSet};
 
 use crate::builtins::{self, Builtin};
 use crate::error::{ParseError, ParseErrorKind};
-use crate::parser::{BinOp, Expr, FuncDef, Scope, Stmt, StmtKind};
-use crate::value::Value;
+use crate::parser::{Access, BinOp, Expr, FuncDef, Scope, Stmt, StmtKind};
+use crate::value::{Value, MAX_STRUCT_MEMBERS};
 
 /// Index of a name in [`Program::names`].
 pub(crate) type Sym = u32;
@@ -43,6 +43,26 @@ pub(crate) struct CallSite {
     pub user: bool,
 }
 
+/// One step of an assignment's target (`s.a[i].b = v`) after the variable.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum PathStep {
+    /// `[i]`: the index is on the stack (in the path's order, under the value).
+    Index,
+    /// `.name`.
+    Member(Sym),
+}
+
+/// A remote procedure call `handle.name(args...)`, resolved by the compiler.
+#[derive(Debug, Clone)]
+pub(crate) struct MethodSite {
+    /// The method's name.
+    pub name: Sym,
+    /// Arguments on the stack (above the handle).
+    pub argc: u16,
+    /// Where the call is.
+    pub at: Pos,
+}
+
 #[derive(Debug, Clone, Copy)]
 pub(crate) enum Op {
     /// A statement starts: counts toward the per-step budget.
@@ -57,6 +77,19 @@ pub(crate) enum Op {
     LoadIndex(Sym),
     MakeList(u32),
     MakePose(u32),
+    /// `struct(...)`: the member values are on the stack, their names are
+    /// [`Program::shapes`]`[i]`.
+    MakeStruct(u32),
+    /// `value.name`: the struct is on the stack.
+    Member(Sym),
+    /// `var.name` without copying the whole struct: the variable, the member.
+    LoadMember(Sym, Sym),
+    /// `name<path> = v` with a member in the path ([`Program::paths`]`[i]`): the path's
+    /// indices, then the value, are on the stack.
+    StorePath(Sym, u32),
+    /// `handle.name(args)`: the handle then the arguments are on the stack;
+    /// [`Program::methods`]`[i]`.
+    Method(u32),
     Neg,
     Not,
     Bin(BinOp),
@@ -152,6 +185,12 @@ pub struct Program {
     /// The first variable read that no assignment can give a value (see
     /// [`unknown_variable`]): the controller refuses such a program before it runs.
     pub(crate) unknown_variable: Option<(String, Pos)>,
+    /// The member names of each `struct(...)`, by [`Op::MakeStruct`] index.
+    pub(crate) shapes: Vec<Vec<Sym>>,
+    /// The targets of member assignments, by [`Op::StorePath`] index.
+    pub(crate) paths: Vec<Vec<PathStep>>,
+    /// Every `handle.name(...)`, by [`Op::Method`] index.
+    pub(crate) methods: Vec<MethodSite>,
     entry: Option<String>,
 }
 
@@ -302,6 +341,11 @@ fn reads<'a>(body: &'a [Stmt], out: &mut Vec<(&'a str, (u32, u32))>) {
                 expr(l, out);
                 expr(r, out);
             }
+            Expr::Member(b, _, _) => expr(b, out),
+            Expr::Method { target, args, .. } => {
+                expr(target, out);
+                args.iter().for_each(|a| expr(a, out));
+            }
         }
     }
     for s in body {
@@ -319,6 +363,15 @@ fn reads<'a>(body: &'a [Stmt], out: &mut Vec<(&'a str, (u32, u32))>) {
                 if let Some(v) = value {
                     expr(v, out);
                 }
+            }
+            StmtKind::AssignPath { name, path, value } => {
+                out.push((name, (s.line, s.col)));
+                for a in path {
+                    if let Access::Index(i) = a {
+                        expr(i, out);
+                    }
+                }
+                expr(value, out);
             }
             StmtKind::Expr(e) | StmtKind::Join(e) | StmtKind::Kill(e) => expr(e, out),
             StmtKind::Return(Some(e)) => expr(e, out),
@@ -394,6 +447,9 @@ struct Compiler {
     funcs: Vec<Func>,
     func_ids: HashMap<String, u32>,
     sites: Vec<CallSite>,
+    shapes: Vec<Vec<Sym>>,
+    paths: Vec<Vec<PathStep>>,
+    methods: Vec<MethodSite>,
     natives: Vec<(Sym, u32)>,
     /// The names in `natives`, to find them in constant time.
     native_set: HashSet<Sym>,
@@ -577,6 +633,9 @@ impl Compiler {
             sites: self.sites,
             natives: self.natives,
             unknown_variable,
+            shapes: self.shapes,
+            paths: self.paths,
+            methods: self.methods,
             entry,
         })
     }
@@ -644,6 +703,26 @@ impl Compiler {
                 } else {
                     self.emit(Op::StoreIndex(sym, *scope, indices.len() as u8));
                 }
+            }
+            StmtKind::AssignPath { name, path, value } => {
+                let sym = self.sym(name);
+                let mut steps = Vec::with_capacity(path.len());
+                for a in path {
+                    match a {
+                        Access::Index(i) => {
+                            self.expr(i)?;
+                            steps.push(PathStep::Index);
+                        }
+                        Access::Member(m) => {
+                            let m = self.sym(m);
+                            steps.push(PathStep::Member(m));
+                        }
+                    }
+                }
+                self.expr(value)?;
+                self.paths.push(steps);
+                let id = (self.paths.len() - 1) as u32;
+                self.emit(Op::StorePath(sym, id));
             }
             StmtKind::Expr(e) => {
                 self.expr(e)?;
@@ -821,7 +900,90 @@ impl Compiler {
                 kwargs,
                 at,
             } => self.call(name, args, kwargs, *at, None)?,
+            Expr::Member(base, name, at) => {
+                let m = self.sym(name);
+                let at = Pos {
+                    line: at.0,
+                    col: at.1,
+                };
+                let op = match base.as_ref() {
+                    Expr::Name(var, _) => Op::LoadMember(self.sym(var), m),
+                    _ => {
+                        self.expr(base)?;
+                        Op::Member(m)
+                    }
+                };
+                let saved = std::mem::replace(&mut self.pos, at);
+                self.emit(op);
+                self.pos = saved;
+            }
+            Expr::Method {
+                target,
+                method,
+                args,
+                at,
+            } => {
+                let at = Pos {
+                    line: at.0,
+                    col: at.1,
+                };
+                if args.len() > 255 {
+                    return Err(err(at, format!("too many arguments to `.{method}`")));
+                }
+                self.expr(target)?;
+                for a in args {
+                    self.expr(a)?;
+                }
+                let name = self.sym(method);
+                self.methods.push(MethodSite {
+                    name,
+                    argc: args.len() as u16,
+                    at,
+                });
+                let id = (self.methods.len() - 1) as u32;
+                let saved = std::mem::replace(&mut self.pos, at);
+                self.emit(Op::Method(id));
+                self.pos = saved;
+            }
         }
+        Ok(())
+    }
+
+    /// `struct(name=value, ...)`: named members only, at least one, at most
+    /// [`MAX_STRUCT_MEMBERS`] (a name given twice is a syntax error already).
+    fn make_struct(
+        &mut self,
+        args: &[Expr],
+        kwargs: &[(String, Expr)],
+        at: Pos,
+    ) -> Result<(), ParseError> {
+        if !args.is_empty() {
+            return Err(err(
+                at,
+                "`struct` takes named members only: struct(name=value, ...)".into(),
+            ));
+        }
+        if kwargs.is_empty() {
+            return Err(err(at, "a struct needs at least one member".into()));
+        }
+        if kwargs.len() > MAX_STRUCT_MEMBERS {
+            return Err(err(
+                at,
+                format!(
+                    "a struct has at most {MAX_STRUCT_MEMBERS} members, this one has {}",
+                    kwargs.len()
+                ),
+            ));
+        }
+        for (_, v) in kwargs {
+            self.expr(v)?;
+        }
+        let names = kwargs.iter().map(|(k, _)| self.sym(k)).collect();
+        self.shapes.push(names);
+        let id = (self.shapes.len() - 1) as u32;
+        let saved = std::mem::replace(&mut self.pos, at);
+        self.emit(Op::MakeStruct(id));
+        self.pos = saved;
         Ok(())
     }
 
@@ -840,6 +1002,9 @@ impl Compiler {
             line: at.0,
             col: at.1,
         };
+        if name == "struct" && !self.func_ids.contains_key(name) {
+            return self.make_struct(args, kwargs, at);
+        }
         let argc = args.len() + kwargs.len();
         if argc > 255 {
             return Err(err(at, format!("too many arguments to `{name}`")));

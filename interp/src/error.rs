@@ -103,6 +103,11 @@ pub enum RuntimeErrorKind {
     TooMuchTime,
     /// A bound of the machine: threads, call depth.
     Limit,
+    /// A struct has no member of that name (`s.c` of `struct(a=1, b=2)`).
+    UnknownMember,
+    /// An XML-RPC call (`handle.name(...)` on an `rpc_factory` handle) failed: no
+    /// connection, a fault from the server, a malformed or missing reply.
+    RemoteCall,
     /// A bug of the interpreter (please report it).
     Internal,
 }

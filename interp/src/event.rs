@@ -124,7 +124,9 @@ pub struct CallRecord {
     pub column: u32,
     /// The function's name.
     pub name: String,
-    /// The built-in's table entry (`None` for a stub of a name that is not built in).
+    /// The built-in's table entry (`None` for a stub of a name that is not built in, and
+    /// for an XML-RPC call, named `rpc_factory("xmlrpc", "URL").method` with the socket
+    /// `rpc:URL`).
     pub builtin: Option<&'static Builtin>,
     /// Positional arguments, as evaluated.
     pub args: Vec<Value>,

@@ -31,7 +31,9 @@
 //! | program text | 16 MiB ([`Program::parse`], [`Program::parse_bytes`]), checked before lexing; lexing and parsing are linear in the text | syntax, line 1 |
 //! | nesting of blocks, brackets and unary operators (the parser's recursion) | 64 | syntax |
 //! | depth of an expression's tree: every operator, index, call, list and unary operator is a level, and a left-associative chain counts each link (`1+1+...+1` with 128 `+` is too deep) | 128 | syntax |
-//! | depth of a value (levels of nested lists) | [`MAX_VALUE_DEPTH`] (32) | runtime, [`RuntimeErrorKind::Limit`] |
+//! | depth of a value (levels of nested lists and structs) | [`MAX_VALUE_DEPTH`] (32) | runtime, [`RuntimeErrorKind::Limit`] |
+//! | members of a struct (`struct(a=1, ...)`) | [`MAX_STRUCT_MEMBERS`] (64) | compile |
+//! | an XML-RPC reply (`handle.name(...)` on an `rpc_factory` handle) | 1 MiB (headers 16 KiB), values 32 levels deep, complete within 10 s of program time | runtime, [`RuntimeErrorKind::RemoteCall`] |
 //! | size of one value (list elements at every depth, plus string bytes) | [`Config::max_value_size`] (1 000 000) | runtime, `Limit` |
 //! | nested calls per thread | 256 | runtime, `Limit` |
 //! | threads running at once | [`MAX_THREADS`](machine::MAX_THREADS) (64) | runtime, `Limit` |
@@ -93,6 +95,7 @@ mod lexer;
 pub mod machine;
 mod parser;
 mod pose;
+mod rpc;
 mod sockets;
 mod trajectory;
 mod value;
@@ -104,7 +107,7 @@ pub use error::{ParseError, ParseErrorKind, RuntimeError, RuntimeErrorKind};
 pub use event::{CallRecord, Event, Message, MessageKind, Outcome, ReadRecord};
 pub use machine::{Config, Machine, State, Stub};
 pub use sockets::{Policy, Timeout};
-pub use value::{Value, MAX_VALUE_DEPTH};
+pub use value::{Value, MAX_STRUCT_MEMBERS, MAX_VALUE_DEPTH};
 pub use world_set::{SetError, WORLD_SETTINGS};
 
 /// Reads a URScript constant: a number, `True`/`False`, a string, a list or a pose of

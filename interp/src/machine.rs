@@ -9,7 +9,8 @@
 //! time: `sync()` (to the next step), `sleep(t)` and motion (to the step where the time is
 //! over), a socket read whose bytes have not all arrived (until they arrive, checked at
 //! each step, or its timeout), `socket_open` (until the driver reports the connection),
-//! `join` of a thread that still runs. This is the manual's "Thread scheduling": 2 ms
+//! an XML-RPC call `handle.name(...)` (until its reply is complete, at most 10 s), `join`
+//! of a thread that still runs. This is the manual's "Thread scheduling": 2 ms
 //! frames, each runnable thread scheduled round robin, a thread that has used its frame
 //! waits for the next. A thread that runs more than
 //! [`Config::max_statements_per_step`] statements in one step without consuming time is a
@@ -35,7 +36,7 @@ use std::time::Duration;
 use urscript_socket::robot::ReadCall;
 
 use crate::builtins::{Args, Out};
-use crate::compile::{CallSite, Op, Program, Sym};
+use crate::compile::{CallSite, Op, PathStep, Program, Sym};
 use crate::controller::{Arm, Controller};
 use crate::error::{Fault, RuntimeError, RuntimeErrorKind as K};
 pub use crate::event::Event;
@@ -190,6 +191,10 @@ pub(crate) enum Wait {
     },
     /// `join` of a running thread.
     Join(u32),
+    /// An XML-RPC call (`handle.name(...)`) connecting or waiting for its reply.
+    Rpc(Box<crate::rpc::Pending>),
+    /// The call it waited for failed: the program stops with this error.
+    Failed(Box<RuntimeError>),
 }
 
 #[derive(Debug, Clone)]
@@ -532,6 +537,8 @@ impl Machine {
                 Wait::Steps { until, .. } => Some((*until).max(self.ctl.step)),
                 Wait::Read { .. } => None,
                 Wait::Connect { .. } => None,
+                Wait::Rpc(p) => Some(p.deadline.max(self.ctl.step)),
+                Wait::Failed(_) => Some(self.ctl.step),
                 Wait::Join(id) => match self.thread(*id) {
                     Some(_) => None,
                     None => Some(self.ctl.step),
@@ -577,6 +584,9 @@ impl Machine {
     /// The driver's answer to [`Event::Connect`]: the connection is up, or failed with a
     /// reason (then `socket_open` returns `False` and the program goes on).
     pub fn handle_connected(&mut self, socket_name: &str, result: Result<(), String>) {
+        if self.rpc_connected(socket_name, &result) {
+            return;
+        }
         let ok = result.is_ok();
         if ok {
             self.ctl.sockets.open(socket_name);
@@ -602,6 +612,9 @@ impl Machine {
     /// Bytes the server sent on `socket_name`. Returns how many the socket's receive
     /// buffer accepted (the rest must be offered again later, as a full TCP window would).
     pub fn handle_received(&mut self, socket_name: &str, bytes: &[u8]) -> usize {
+        if self.rpc_event(socket_name, Some(bytes)) {
+            return bytes.len();
+        }
         let n = self.ctl.sockets.receive(socket_name, bytes);
         // A recorded read waiting on the socket sees what arrived.
         for t in &mut self.threads {
@@ -624,6 +637,9 @@ impl Machine {
 
     /// The server closed `socket_name`: reads waiting on it end with their sentinels.
     pub fn handle_peer_closed(&mut self, socket_name: &str) {
+        if self.rpc_event(socket_name, None) {
+            return;
+        }
         self.ctl.sockets.peer_closed(socket_name);
         self.poll_reads(socket_name);
     }
@@ -633,6 +649,73 @@ impl Machine {
     pub fn handle_send_failed(&mut self, socket_name: &str) {
         self.ctl.sockets.send_failed(socket_name);
         self.handle_peer_closed(socket_name);
+    }
+
+    /// The connection of an XML-RPC call is up (its request goes out) or failed (the
+    /// call fails). False if no call waits for `socket_name`.
+    fn rpc_connected(&mut self, socket_name: &str, result: &Result<(), String>) -> bool {
+        let Some(t) = self
+            .threads
+            .iter_mut()
+            .find(|t| !t.done && matches!(&t.wait, Wait::Rpc(p) if p.socket == socket_name))
+        else {
+            // A late answer for a call that already ended (timed out, its thread killed)
+            // opens nothing; a `socket_open` of such a name still gets its own.
+            let connecting = self.threads.iter().any(|t| {
+                !t.done && matches!(&t.wait, Wait::Connect { socket, .. } if socket == socket_name)
+            });
+            return socket_name.starts_with("rpc:") && !connecting;
+        };
+        let Wait::Rpc(p) = &mut t.wait else {
+            return false;
+        };
+        match result {
+            Ok(()) => {
+                if let Some(bytes) = p.request.take() {
+                    self.ctl.events.push_back(Event::Transmit {
+                        socket_name: socket_name.to_string(),
+                        bytes,
+                    });
+                }
+            }
+            Err(why) => {
+                let msg = p.failure(&format!("could not connect: {why}"));
+                t.wait = rpc_done(
+                    &mut self.ctl.events,
+                    p,
+                    Err(msg),
+                    self.config.max_value_size,
+                );
+            }
+        }
+        true
+    }
+
+    /// Bytes (`Some`) or the peer's close (`None`) on `socket_name`, for the XML-RPC
+    /// call waiting on it: the call ends when its reply is complete, malformed or cut
+    /// short. False if no call waits for `socket_name`.
+    fn rpc_event(&mut self, socket_name: &str, bytes: Option<&[u8]>) -> bool {
+        let Some(t) = self
+            .threads
+            .iter_mut()
+            .find(|t| !t.done && matches!(&t.wait, Wait::Rpc(p) if p.socket == socket_name))
+        else {
+            return false;
+        };
+        let Wait::Rpc(p) = &mut t.wait else {
+            return false;
+        };
+        let reply = match bytes {
+            Some(b) => p.receive(b),
+            None => crate::rpc::reply(&p.reply, true),
+        };
+        let outcome = match reply {
+            crate::rpc::Reply::Incomplete => return true,
+            crate::rpc::Reply::Value(v) => Ok(v),
+            crate::rpc::Reply::Error(e) => Err(p.failure(&e)),
+        };
+        t.wait = rpc_done(&mut self.ctl.events, p, outcome, self.config.max_value_size);
+        true
     }
 
     /// Completes a read waiting on `socket_name` if its bytes are there.
@@ -673,12 +756,99 @@ impl Machine {
         self.ctl.sockets.open_names()
     }
 
+    /// `target.method(args)`: an XML-RPC call. `Ok(Some(v))` returns at once
+    /// (`closeXMLRPCClientConnection()`), `Ok(None)`: the thread waits (its wait is set).
+    fn rpc_call(
+        &mut self,
+        th: &mut Thread,
+        target: Value,
+        method: &str,
+        args: Vec<Value>,
+        at: crate::compile::Pos,
+    ) -> Result<Option<Value>, RuntimeError> {
+        let fail = |f: Fault| RuntimeError::at(at.line, at.col, f);
+        let Value::Rpc(url) = target else {
+            return Err(fail(Fault::new(
+                K::Type,
+                format!(
+                    "type error: `.{method}(...)` calls a remote procedure on an rpc_factory handle, not on a {}",
+                    target.type_name()
+                ),
+            )));
+        };
+        // Every call has its own connection (closed when its reply is in), so there is
+        // nothing to close.
+        if method == "closeXMLRPCClientConnection" && args.is_empty() {
+            return Ok(Some(Value::None));
+        }
+        let socket = crate::rpc::socket_name(&url);
+        if self
+            .threads
+            .iter()
+            .any(|t| !t.done && matches!(&t.wait, Wait::Rpc(p) if p.socket == socket))
+        {
+            return Err(fail(Fault::new(
+                K::RemoteCall,
+                format!("XML-RPC call `{method}` to {url}: another thread's call to this server is under way"),
+            )));
+        }
+        let parsed = crate::rpc::parse_url(&url).map_err(|e| fail(Fault::from(e)))?;
+        let request = crate::rpc::request(&parsed, method, &args).map_err(|e| {
+            fail(Fault::type_error(format!(
+                "XML-RPC call `{method}` to {url}: {e}"
+            )))
+        })?;
+        let record = (self.config.trace_socket_calls || self.config.trace_all_calls).then(|| {
+            Box::new(CallRecord {
+                line: at.line,
+                column: at.col,
+                // `rpc_factory("xmlrpc", "URL").name`: the call as the program could
+                // write it, never mistaken for a built-in.
+                name: format!("{}.{method}", Value::Rpc(url.clone()).to_source()),
+                builtin: None,
+                args: args.clone(),
+                kwargs: Vec::new(),
+                assigned_to: None,
+                result: Value::None,
+                outcome: Outcome::Returned,
+                socket: Some(socket.clone()),
+                read: None,
+            })
+        });
+        self.ctl.events.push_back(Event::Connect {
+            socket_name: socket.clone(),
+            host: parsed.host,
+            port: parsed.port,
+        });
+        let deadline = self
+            .ctl
+            .step
+            .saturating_add(self.steps_for(crate::rpc::TIMEOUT));
+        th.wait = Wait::Rpc(Box::new(crate::rpc::Pending {
+            socket,
+            url,
+            method: method.to_string(),
+            request: Some(request),
+            reply: Vec::new(),
+            deadline,
+            line: at.line,
+            col: at.col,
+            record,
+        }));
+        Ok(None)
+    }
+
     fn stop(&mut self, state: State) {
         self.state = state;
         // The arm stops where it is.
         self.ctl.halt();
         for t in &mut self.threads {
             t.done = true;
+            if let Wait::Rpc(p) = std::mem::replace(&mut t.wait, Wait::None) {
+                self.ctl.events.push_back(Event::Close {
+                    socket_name: p.socket,
+                });
+            }
         }
         for name in self.ctl.sockets.open_names() {
             self.ctl.close(&name);
@@ -766,8 +936,27 @@ impl Machine {
                     ),
                 },
                 Wait::Join(id) if self.thread(id).is_none() => (true, Wait::None),
+                Wait::Rpc(mut p) if p.deadline <= self.ctl.step => {
+                    let msg = p.failure(&format!(
+                        "no complete reply within {} s",
+                        crate::rpc::TIMEOUT.as_secs()
+                    ));
+                    (
+                        false,
+                        rpc_done(
+                            &mut self.ctl.events,
+                            &mut p,
+                            Err(msg),
+                            self.config.max_value_size,
+                        ),
+                    )
+                }
                 other => (false, other),
             };
+            if let Wait::Failed(e) = wait {
+                self.stop(State::Error(*e));
+                return;
+            }
             self.threads[i].wait = wait;
             if runnable {
                 self.current = i;
@@ -937,6 +1126,85 @@ impl Machine {
                     }
                     th.stack.push(Value::Pose(p));
                 }
+                Op::MakeStruct(shape) => {
+                    let names = prog.shapes.get(shape as usize).map_or(&[][..], |v| v);
+                    let at = th.stack.len().saturating_sub(names.len());
+                    let values = th.stack.split_off(at);
+                    let members = names
+                        .iter()
+                        .map(|n| prog.names[*n as usize].clone())
+                        .zip(values)
+                        .collect();
+                    let v = Value::Struct(members);
+                    check_value(&v, self.config.max_value_size).map_err(fail)?;
+                    th.stack.push(v);
+                }
+                Op::Member(m) => {
+                    let v = pop(&mut th.stack, line)?;
+                    let name = &prog.names[m as usize];
+                    th.stack.push(member(&v, name).map_err(fail)?);
+                }
+                Op::LoadMember(s, m) => {
+                    let v = frame
+                        .locals
+                        .iter()
+                        .rev()
+                        .find(|(n, _)| *n == s)
+                        .and_then(|(_, v)| v.as_ref())
+                        .or_else(|| self.globals[s as usize].as_ref());
+                    let Some(v) = v else {
+                        return Err(fail(Fault::new(
+                            K::UnknownVariable,
+                            format!("unknown variable `{}`", prog.names[s as usize]),
+                        )));
+                    };
+                    let name = &prog.names[m as usize];
+                    th.stack.push(member(v, name).map_err(fail)?);
+                }
+                Op::StorePath(s, path) => {
+                    let steps = prog.paths.get(path as usize).map_or(&[][..], |v| v);
+                    let v = pop(&mut th.stack, line)?;
+                    let n = steps
+                        .iter()
+                        .filter(|p| matches!(p, PathStep::Index))
+                        .count();
+                    let at = th.stack.len().saturating_sub(n);
+                    let indices = th.stack.split_off(at);
+                    let program_scope = func.program_scope;
+                    let max_size = self.config.max_value_size;
+                    let slot =
+                        self.slot(frame, s, Scope::Auto, program_scope, false, prog, line)?;
+                    let name = &prog.names[s as usize];
+                    let Some(target) = slot.as_mut() else {
+                        return Err(fail(Fault::new(
+                            K::UnknownVariable,
+                            format!("unknown variable `{name}`"),
+                        )));
+                    };
+                    // A list, struct or string stored may make the value deeper or
+                    // larger; a number or pose cannot.
+                    let grows = v.is_container();
+                    store_path(target, steps, indices, v, prog).map_err(fail)?;
+                    if grows {
+                        if let Err(f) = check_value(target, max_size) {
+                            // The variable keeps no value over the bounds.
+                            *slot = None;
+                            return Err(fail(f));
+                        }
+                    }
+                }
+                Op::Method(id) => {
+                    let site = &prog.methods[id as usize];
+                    let args = th
+                        .stack
+                        .split_off(th.stack.len().saturating_sub(usize::from(site.argc)));
+                    let target = pop(&mut th.stack, line)?;
+                    let method = &prog.names[site.name as usize];
+                    match self.rpc_call(th, target, method, args, site.at)? {
+                        Some(v) => th.stack.push(v),
+                        None => return Ok(Flow::Blocked),
+                    }
+                }
                 Op::Neg => {
                     let v = pop(&mut th.stack, line)?;
                     th.stack.push(match v {
@@ -1101,10 +1369,12 @@ impl Machine {
                             t.frames = Vec::new();
                             t.stack = Vec::new();
                             // A read it was waiting for ends with it.
-                            if let Wait::Read { socket, .. } =
-                                std::mem::replace(&mut t.wait, Wait::None)
-                            {
-                                self.ctl.sockets.give_up(&socket);
+                            match std::mem::replace(&mut t.wait, Wait::None) {
+                                Wait::Read { socket, .. } => self.ctl.sockets.give_up(&socket),
+                                Wait::Rpc(p) => self.ctl.events.push_back(Event::Close {
+                                    socket_name: p.socket,
+                                }),
+                                _ => {}
                             }
                         }
                     }
@@ -1159,17 +1429,17 @@ impl Machine {
     }
 }
 
-/// A list or string the program built, checked against [`MAX_VALUE_DEPTH`] and
+/// A list, struct or string the program built, checked against [`MAX_VALUE_DEPTH`] and
 /// [`Config::max_value_size`] (numbers and poses need no check).
 fn check_value(v: &Value, max_size: usize) -> Result<(), Fault> {
-    if !matches!(v, Value::List(_) | Value::Str(_)) {
+    if !v.is_container() {
         return Ok(());
     }
     let (depth, size) = v.measure(max_size);
     if depth > MAX_VALUE_DEPTH {
         return Err(Fault::new(
             K::Limit,
-            format!("a list nested more than {MAX_VALUE_DEPTH} levels deep"),
+            format!("a list or struct nested more than {MAX_VALUE_DEPTH} levels deep"),
         ));
     }
     if size > max_size {
@@ -1181,6 +1451,119 @@ fn check_value(v: &Value, max_size: usize) -> Result<(), Fault> {
         ));
     }
     Ok(())
+}
+
+/// The end of an XML-RPC call: its connection closes, its record (if traced) is
+/// emitted, and the thread resumes with the value or stops with the error.
+fn rpc_done(
+    events: &mut VecDeque<Event>,
+    p: &mut crate::rpc::Pending,
+    outcome: Result<Value, String>,
+    max_size: usize,
+) -> Wait {
+    // The reply's value is within the value bounds, as every value the program holds.
+    let outcome = outcome.and_then(|v| {
+        check_value(&v, max_size)
+            .map(|()| v)
+            .map_err(|f| p.failure(&f.message))
+    });
+    events.push_back(Event::Close {
+        socket_name: p.socket.clone(),
+    });
+    if let Some(mut r) = p.record.take() {
+        match &outcome {
+            Ok(v) => r.result = v.clone(),
+            Err(why) => r.outcome = Outcome::Failed(why.clone()),
+        }
+        events.push_back(Event::Call(r));
+    }
+    match outcome {
+        Ok(v) => Wait::Resume(v),
+        Err(msg) => Wait::Failed(Box::new(RuntimeError::at(
+            p.line,
+            p.col,
+            Fault::new(K::RemoteCall, msg),
+        ))),
+    }
+}
+
+/// `v.name`: a member of a struct.
+fn member(v: &Value, name: &str) -> Result<Value, Fault> {
+    match v {
+        Value::Struct(members) => members
+            .iter()
+            .find(|(n, _)| n == name)
+            .map(|(_, v)| v.clone())
+            .ok_or_else(|| {
+                Fault::new(
+                    K::UnknownMember,
+                    format!("the struct has no member `{name}`"),
+                )
+            }),
+        other => Err(Fault::new(
+            K::Type,
+            format!(
+                "type error: `.{name}` reads a member of a struct, not of a {}",
+                other.type_name()
+            ),
+        )),
+    }
+}
+
+/// Assigns `v` at `steps` (members and indices) inside `target`. A struct's members are
+/// fixed when it is made: assigning one it does not have is an error, as reading one is.
+fn store_path(
+    target: &mut Value,
+    steps: &[PathStep],
+    indices: Vec<Value>,
+    v: Value,
+    prog: &Program,
+) -> Result<(), Fault> {
+    let mut indices = indices.into_iter();
+    let mut at = target;
+    let Some((last, inner)) = steps.split_last() else {
+        *at = v;
+        return Ok(());
+    };
+    for step in inner {
+        at = match step {
+            PathStep::Member(m) => member_mut(at, &prog.names[*m as usize])?,
+            PathStep::Index => {
+                let i = indices.next().unwrap_or(Value::None);
+                index_mut(at, &i)?
+            }
+        };
+    }
+    match last {
+        PathStep::Member(m) => *member_mut(at, &prog.names[*m as usize])? = v,
+        PathStep::Index => {
+            let i = indices.next().unwrap_or(Value::None);
+            store_index(at, &i, v)?
+        }
+    }
+    Ok(())
+}
+
+fn member_mut<'a>(v: &'a mut Value, name: &str) -> Result<&'a mut Value, Fault> {
+    match v {
+        Value::Struct(members) => members
+            .iter_mut()
+            .find(|(n, _)| n == name)
+            .map(|(_, v)| v)
+            .ok_or_else(|| {
+                Fault::new(
+                    K::UnknownMember,
+                    format!("the struct has no member `{name}`"),
+                )
+            }),
+        other => Err(Fault::new(
+            K::Type,
+            format!(
+                "type error: `.{name} = ...` assigns a member of a struct, not of a {}",
+                other.type_name()
+            ),
+        )),
+    }
 }
 
 fn pop(stack: &mut Vec<Value>, line: u32) -> Result<Value, RuntimeError> {

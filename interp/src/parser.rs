@@ -59,6 +59,23 @@ pub(crate) enum Expr {
     Binary(BinOp, Box<Expr>, Box<Expr>),
     /// `run name()`, with the line and column of the name.
     Run(String, (u32, u32)),
+    /// `base.name`: a struct's member, with the line and column of the name.
+    Member(Box<Expr>, String, (u32, u32)),
+    /// `handle.name(args...)`: a remote procedure call on an `rpc_factory` handle, with
+    /// the line and column of the method's name.
+    Method {
+        target: Box<Expr>,
+        method: String,
+        args: Vec<Expr>,
+        at: (u32, u32),
+    },
+}
+
+/// One step of an assignment's target after the variable: `[i]` or `.name`.
+#[derive(Debug, Clone)]
+pub(crate) enum Access {
+    Index(Expr),
+    Member(String),
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -84,6 +101,13 @@ pub(crate) enum StmtKind {
         name: String,
         indices: Vec<Expr>,
         value: Option<Expr>,
+    },
+    /// `name.m = v`, `name[i].m = v`, `name.m[i] = v`: a target with at least one
+    /// member step (a target of indices only is an [`StmtKind::Assign`]).
+    AssignPath {
+        name: String,
+        path: Vec<Access>,
+        value: Expr,
     },
     Expr(Expr),
     If {
@@ -141,7 +165,6 @@ const KEYWORDS: &[&str] = &[
 /// Words of URScript (or of Python-like languages) this interpreter does not support.
 const UNSUPPORTED: &[(&str, &str)] = &[
     ("for", "`for` loops are not URScript (use `while`)"),
-    ("struct", "`struct` is not supported"),
     ("lambda", "`lambda` is not URScript"),
     ("import", "`import` is not URScript"),
 ];
@@ -411,10 +434,24 @@ impl Parser {
                 if !KEYWORDS.contains(&word.as_str()) {
                     let save = (self.pos, self.depth);
                     self.bump();
-                    if let Ok(indices) = self.target_indices() {
+                    if let Ok(path) = self.target_path() {
                         if self.eat(&Tok::Assign) {
                             let value = self.expr()?;
                             self.end_of_statement()?;
+                            if path.iter().any(|a| matches!(a, Access::Member(_))) {
+                                return Ok(StmtKind::AssignPath {
+                                    name: word,
+                                    path,
+                                    value,
+                                });
+                            }
+                            let indices = path
+                                .into_iter()
+                                .filter_map(|a| match a {
+                                    Access::Index(e) => Some(e),
+                                    Access::Member(_) => None,
+                                })
+                                .collect();
                             return Ok(StmtKind::Assign {
                                 scope: Scope::Auto,
                                 name: word,
@@ -429,7 +466,7 @@ impl Parser {
                 if self.peek().kind == Tok::Assign {
                     return Err(self.err_here("cannot assign to this expression"));
                 }
-                if !matches!(e, Expr::Call { .. } | Expr::Run(..)) {
+                if !matches!(e, Expr::Call { .. } | Expr::Run(..) | Expr::Method { .. }) {
                     return Err(self.not_a_statement(e));
                 }
                 self.end_of_statement()?;
@@ -439,13 +476,38 @@ impl Parser {
     }
 
     fn not_a_statement(&self, _e: Expr) -> ParseError {
-        if self.peek().kind == Tok::Dot {
-            return self.err_here("member access `.` (structs) is not supported");
-        }
         self.err_here(format!(
             "expected a statement (a call or an assignment), found an expression before {}",
             self.peek().kind.describe()
         ))
+    }
+
+    /// `[i]`, `.name`, in any order and number, after an assignment's variable.
+    fn target_path(&mut self) -> Result<Vec<Access>, ParseError> {
+        let mut out = Vec::new();
+        loop {
+            match self.peek().kind {
+                Tok::LBracket => {
+                    self.bump();
+                    out.push(Access::Index(self.expr()?));
+                    self.expect(&Tok::RBracket, "`]`")?;
+                }
+                Tok::Dot => {
+                    self.bump();
+                    out.push(Access::Member(self.member_name()?));
+                }
+                _ => return Ok(out),
+            }
+            if out.len() > MAX_DEPTH {
+                return Err(self.err_here("assignment target nested too deeply"));
+            }
+        }
+    }
+
+    /// The name after a `.`: any identifier (a member may be named like a keyword of
+    /// another language, not like one of URScript's).
+    fn member_name(&mut self) -> Result<String, ParseError> {
+        self.name("a member name after `.`")
     }
 
     /// `[i]` or `[i][j]` after an assignment target.
@@ -673,7 +735,24 @@ impl Parser {
                     e = Expr::Index(Box::new(e), Box::new(i));
                 }
                 Tok::Dot => {
-                    return Err(self.err_here("member access `.` (structs) is not supported"))
+                    let t = self.bump();
+                    let at = (self.peek().line, self.peek().col);
+                    let name = self.member_name()?;
+                    if self.peek().kind == Tok::LParen {
+                        self.bump();
+                        let (args, ha) =
+                            self.items(&Tok::RParen, "`,` or `)` in the argument list")?;
+                        h = self.over(h.max(ha), t.line, t.col)?;
+                        e = Expr::Method {
+                            target: Box::new(e),
+                            method: name,
+                            args,
+                            at,
+                        };
+                    } else {
+                        h = self.over(h, t.line, t.col)?;
+                        e = Expr::Member(Box::new(e), name, at);
+                    }
                 }
                 _ => return Ok((e, h)),
             }

@@ -27,6 +27,12 @@ pub enum Value {
     Pose([f64; 6]),
     /// A thread handle from `run`.
     Thread(u32),
+    /// `struct(name=value, ...)`: named members in the order given (at most
+    /// [`MAX_STRUCT_MEMBERS`]). A value, like a list: assigning or passing it copies it.
+    Struct(Vec<(String, Value)>),
+    /// The handle `rpc_factory("xmlrpc", url)` gives: the server's URL. Its methods are
+    /// called as `handle.name(args...)`.
+    Rpc(String),
     /// What a function without `return value` returns.
     None,
 }
@@ -41,6 +47,8 @@ impl PartialEq for Value {
             (Value::List(a), Value::List(b)) => a == b,
             (Value::Pose(a), Value::Pose(b)) => a == b,
             (Value::Thread(a), Value::Thread(b)) => a == b,
+            (Value::Struct(a), Value::Struct(b)) => a == b,
+            (Value::Rpc(a), Value::Rpc(b)) => a == b,
             (Value::None, Value::None) => true,
             (a, b) => match (a.as_f64(), b.as_f64()) {
                 (Some(x), Some(y)) => x == y,
@@ -55,6 +63,9 @@ impl PartialEq for Value {
 /// [`Limit`](crate::RuntimeErrorKind::Limit) error, so nothing recursive over a value
 /// (copying, comparing, writing, dropping it) can exhaust the stack.
 pub const MAX_VALUE_DEPTH: usize = 32;
+
+/// The most members a struct may have: a `struct(...)` with more is a compile error.
+pub const MAX_STRUCT_MEMBERS: usize = 64;
 
 /// The default of [`Config::max_value_size`](crate::Config::max_value_size).
 pub(crate) const DEFAULT_MAX_VALUE_SIZE: usize = 1_000_000;
@@ -77,12 +88,29 @@ impl Value {
                     if depth > MAX_VALUE_DEPTH || size > max_size {
                         break;
                     }
+                    todo.extend(items.iter().filter(|i| i.is_container()).map(|i| (i, d)));
+                }
+                // A struct is a level, as a list is, and each member counts one.
+                Value::Struct(members) => {
+                    let d = d + 1;
+                    depth = depth.max(d);
+                    size = size.saturating_add(members.len());
+                    if depth > MAX_VALUE_DEPTH || size > max_size {
+                        break;
+                    }
                     todo.extend(
-                        items
+                        members
                             .iter()
-                            .filter(|i| matches!(i, Value::List(_) | Value::Str(_)))
-                            .map(|i| (i, d)),
+                            .map(|(_, v)| v)
+                            .filter(|v| v.is_container())
+                            .map(|v| (v, d)),
                     );
+                }
+                Value::Rpc(url) => {
+                    size = size.saturating_add(url.len());
+                    if size > max_size {
+                        break;
+                    }
                 }
                 Value::Str(s) => {
                     size = size.saturating_add(s.len());
@@ -94,6 +122,14 @@ impl Value {
             }
         }
         (depth, size)
+    }
+
+    /// A list, struct or string: what [`measure`](Self::measure) looks into.
+    pub(crate) fn is_container(&self) -> bool {
+        matches!(
+            self,
+            Value::List(_) | Value::Str(_) | Value::Struct(_) | Value::Rpc(_)
+        )
     }
 
     /// The value as a float if it is a number.
@@ -125,6 +161,8 @@ impl Value {
             Value::List(_) => "list",
             Value::Pose(_) => "pose",
             Value::Thread(_) => "thread",
+            Value::Struct(_) => "struct",
+            Value::Rpc(_) => "rpc handle",
             Value::None => "none",
         }
     }
@@ -226,6 +264,25 @@ impl Value {
                     out.push(b']');
                 }
                 Value::Thread(id) => out.extend_from_slice(format!("<thread {id}>").as_bytes()),
+                // The manual gives no text for a struct; this one reads back as the
+                // expression that builds it: `struct(a=1, b=[1, 2])`.
+                Value::Struct(members) => {
+                    out.extend_from_slice(b"struct(");
+                    for (i, (name, v)) in members.iter().enumerate() {
+                        if i > 0 {
+                            out.extend_from_slice(b", ");
+                        }
+                        out.extend_from_slice(name.as_bytes());
+                        out.push(b'=');
+                        v.write_text(out, true);
+                    }
+                    out.push(b')');
+                }
+                Value::Rpc(url) => {
+                    out.extend_from_slice(b"rpc_factory(\"xmlrpc\", \"");
+                    out.extend_from_slice(url.as_bytes());
+                    out.extend_from_slice(b"\")");
+                }
                 Value::None => out.extend_from_slice(b"None"),
                 _ => {}
             }

@@ -219,8 +219,8 @@ fn parse_errors_name_line_column_and_construct() {
         "line 1, column 1: `end` without an open block"
     );
     assert_eq!(
-        parse_err("x = s.field\n"),
-        "line 1, column 6: member access `.` (structs) is not supported"
+        parse_err("x = s.\n"),
+        "line 1, column 7: expected a member name after `.`, found end of line"
     );
     assert_eq!(
         parse_err("x = \"abc\n"),

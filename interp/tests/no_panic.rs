@@ -30,6 +30,10 @@ fn fragment() -> impl Strategy<Value = String> {
         Just("socket_read_ascii_float(3, \"s\")\n".to_string()),
         Just("enter_critical\nexit_critical\n".to_string()),
         Just("halt\n".to_string()),
+        Just("x = struct(a=1, b=[x, 2], c=struct(d=p[1,2,3,4,5,6]))\n".to_string()),
+        Just("x.c.d[1] = x.a\n".to_string()),
+        Just("r = rpc_factory(\"xmlrpc\", \"http://h:1/\")\n".to_string()),
+        Just("y = r.m(x, 1.5, \"s\")\n".to_string()),
         "[ -~\n]{0,12}",
     ]
 }
@@ -51,6 +55,9 @@ proptest! {
             m.run_until(Duration::from_millis(20));
             m.handle_connected("s", Ok(()));
             m.handle_received("s", b"(1,2,3)\n");
+            m.handle_connected("rpc:http://h:1/", Ok(()));
+            m.handle_received("rpc:http://h:1/", b"HTTP/1.1 200 OK\r\n\r\n<methodResponse><params><param><value><int>1</int>");
+            m.handle_peer_closed("rpc:http://h:1/");
             m.run_until(Duration::from_millis(40));
             while m.poll_event().is_some() {}
         }
@@ -70,4 +77,14 @@ fn deep_nesting_is_an_error_not_a_stack_overflow() {
     assert!(Program::parse(&nots).is_err());
     let blocks = "if True:\n".repeat(10_000);
     assert!(Program::parse(&blocks).is_err());
+    // Member chains: read, call and assignment target.
+    let members = format!("x = s{}\n", ".a".repeat(100_000));
+    assert!(Program::parse(&members)
+        .unwrap_err()
+        .to_string()
+        .contains("nested too deeply"));
+    let target = format!("s{} = 1\n", ".a".repeat(100_000));
+    assert!(Program::parse(&target).is_err());
+    let calls = format!("x = r{}\n", ".m()".repeat(100_000));
+    assert!(Program::parse(&calls).is_err());
 }

@@ -15,6 +15,7 @@
 //! | [`math`] | numbers, lists of numbers, matrices (`inv`, `transpose`), bits, `random` |
 //! | [`strings`] | strings, `to_str`/`to_num`, list length, `size`, `make_list` |
 //! | [`poses`] | pose arithmetic, rotation vectors and RPY, wrenches, kinematics |
+//! | [`rpc`] | `rpc_factory`: XML-RPC handles (the Interfaces chapter) |
 //! | [`messages`] | `textmsg`, `varmsg`, `popup` |
 //! | [`time`] | `sync`, `sleep`, `get_steptime` |
 //!
@@ -36,6 +37,7 @@ pub mod math;
 pub mod messages;
 pub mod motion;
 pub mod poses;
+pub mod rpc;
 pub mod sockets;
 pub mod strings;
 pub mod time;
@@ -242,6 +244,7 @@ pub fn all() -> &'static [Builtin] {
             math::TABLE,
             strings::TABLE,
             poses::TABLE,
+            rpc::TABLE,
             messages::TABLE,
             time::TABLE,
         ]

@@ -1,0 +1,28 @@
+//! `rpc_factory` of the e-Series 5.x manual's Interfaces chapter: a handle whose methods
+//! are XML-RPC calls (`camera = rpc_factory("xmlrpc", "http://10.0.0.5:8000/RPC2")`, then
+//! `target = camera.getTarget()`). Making the handle sends nothing; each
+//! `handle.name(args...)` connects, sends one HTTP POST and waits for the reply (see
+//! the crate docs' "Bounds" and the package README for the types, errors and bounds).
+
+use super::{req, Args, Builtin, Domain, Out};
+use crate::controller::Controller;
+use crate::error::Fault;
+use crate::value::Value;
+
+pub(super) const TABLE: &[Builtin] = &[Builtin::new(
+    "rpc_factory",
+    Domain::Sockets,
+    &[req("type"), req("url")],
+    "Returns a handle for remote procedure calls to an XML-RPC server (type \"xmlrpc\", url http://host[:port]/path); `handle.name(args)` calls `name` on it.",
+    rpc_factory,
+)];
+
+fn rpc_factory(_c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+    let kind = a.text(0)?;
+    if kind != "xmlrpc" {
+        return Err(format!("`rpc_factory`: type must be \"xmlrpc\", got \"{kind}\"").into());
+    }
+    let url = a.text(1)?;
+    crate::rpc::parse_url(&url).map_err(|e| format!("`rpc_factory`: {e}"))?;
+    Ok(Out::Value(Value::Rpc(url)))
+}
