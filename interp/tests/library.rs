@@ -915,3 +915,27 @@ textmsg(get_rtde_value(\"timestamp\"))
             .contains("is not an RTDE output field")
     );
 }
+
+#[test]
+fn the_models_functions_refuse_what_is_not_joints_and_survive_what_is_not_finite() {
+    // Wrong shapes are type errors naming the argument.
+    assert!(runtime_error("get_jacobian([1, 2, 3])\n")
+        .contains("`get_jacobian` argument `q` needs 6 numbers"));
+    assert!(runtime_error("get_mass_matrix(q=\"x\")\n").contains("argument `q` needs 6 numbers"));
+    assert!(
+        runtime_error("get_coriolis_and_centrifugal_torques(qd=[1, 2])\n")
+            .contains("argument `qd` needs 6 numbers")
+    );
+    assert!(runtime_error("get_rtde_value(3)\n").contains("argument `key` needs a string"));
+    // Numbers too large to mean anything give numbers, not a crash.
+    let m = messages(
+        "q = [1e308, -1e308, 1e308, 0, 0, 0]
+j = get_jacobian(q, p[1e308, 0, 0, 0, 0, 0])
+m = get_mass_matrix(q)
+c = get_coriolis_and_centrifugal_torques(q, [1e308, 1e308, 0, 0, 0, 0])
+d = get_jacobian_time_derivative(q, [1e308, 0, 0, 0, 0, 0])
+textmsg(get_list_length(j), get_list_length(c))
+",
+    );
+    assert_eq!(m, ["66"]);
+}

@@ -319,6 +319,110 @@ pub fn coriolis_and_centrifugal_torques(
     inverse_dynamics(model, q, qd, [0.0; 6], payload)
 }
 
+/// The payload (mass, kg; centre of gravity from the flange in the flange frame, m)
+/// that explains the wrenches measured at `poses`, as `estimate_payload(poses, wrenches)`
+/// computes it: each wrench `[Fx, Fy, Fz, Tx, Ty, Tz]` is gravity acting on the payload,
+/// at the tool flange but in the base's orientation, measured with the flange at the
+/// matching pose (only its orientation counts). `gravity` is the gravity vector as
+/// `set_gravity` gives it (its length is g).
+///
+/// The mass is the mean of `|F| / g`; the centre of gravity the least-squares solution of
+/// `T_i = (R_i · cog) × F_i` over every pose. As the manual requires: at least four poses,
+/// as many wrenches, and no two orientations closer than `π / (2n)` radians (`n` poses);
+/// otherwise an error says what is wrong.
+///
+/// ```
+/// use urscript_interp::kinematics::dynamics::estimate_payload;
+/// let poses = [
+///     [0.0, 0.0, 0.5, 0.0, 0.0, 0.0],
+///     [0.0, 0.0, 0.5, 1.5, 0.0, 0.0],
+///     [0.0, 0.0, 0.5, 0.0, 1.5, 0.0],
+///     [0.0, 0.0, 0.5, 0.0, 0.0, 2.0],
+/// ];
+/// // 2 kg right at the flange: gravity pulls it down, and no torque at any pose.
+/// let wrenches = [[0.0, 0.0, -19.64, 0.0, 0.0, 0.0]; 4];
+/// let (mass, cog) = estimate_payload(&poses, &wrenches, [0.0, 0.0, 9.82]).unwrap();
+/// assert!((mass - 2.0).abs() < 1e-12);
+/// assert!(cog.iter().all(|c| c.abs() < 1e-12));
+/// assert!(estimate_payload(&poses[..3], &wrenches[..3], [0.0, 0.0, 9.82]).is_err());
+/// ```
+pub fn estimate_payload(
+    poses: &[[f64; 6]],
+    wrenches: &[[f64; 6]],
+    gravity: [f64; 3],
+) -> Result<(f64, [f64; 3]), String> {
+    let n = poses.len();
+    if n < 4 {
+        return Err(format!("needs at least 4 poses, {n} given"));
+    }
+    if wrenches.len() != n {
+        return Err(format!(
+            "needs one wrench per pose: {n} poses, {} wrenches",
+            wrenches.len()
+        ));
+    }
+    let g = dot(gravity, gravity).sqrt();
+    if !(g.is_finite() && g > 0.0) {
+        return Err("gravity is zero".to_string());
+    }
+    let rot: Vec<M3> = poses
+        .iter()
+        .map(|p| crate::pose::to_matrix([p[3], p[4], p[5]]))
+        .collect();
+    let min = std::f64::consts::PI / (2.0 * n as f64);
+    for i in 0..n {
+        for j in 0..i {
+            // The angle of Rᵢᵀ Rⱼ.
+            let tr: f64 = (0..3)
+                .map(|k| (0..3).map(|l| rot[i][l][k] * rot[j][l][k]).sum::<f64>())
+                .sum();
+            let angle = ((tr - 1.0) / 2.0).clamp(-1.0, 1.0).acos();
+            if angle.is_nan() || angle < min {
+                return Err(format!(
+                    "poses {j} and {i} are {angle:.4} rad apart, less than pi/(2n) = {min:.4}"
+                ));
+            }
+        }
+    }
+    let mass = wrenches
+        .iter()
+        .map(|w| (w[0] * w[0] + w[1] * w[1] + w[2] * w[2]).sqrt())
+        .sum::<f64>()
+        / (n as f64 * g);
+    // T = (R c) × F = −[F]× R c: accumulate the normal equations AᵀA c = Aᵀ T.
+    let mut ata = [[0.0; 3]; 3];
+    let mut atb = [0.0; 3];
+    for (r, w) in rot.iter().zip(wrenches) {
+        let f = [w[0], w[1], w[2]];
+        let fx = [[0.0, -f[2], f[1]], [f[2], 0.0, -f[0]], [-f[1], f[0], 0.0]];
+        let a: M3 = std::array::from_fn(|i| {
+            std::array::from_fn(|j| -(0..3).map(|k| fx[i][k] * r[k][j]).sum::<f64>())
+        });
+        for i in 0..3 {
+            for j in 0..3 {
+                ata[i][j] += (0..3).map(|k| a[k][i] * a[k][j]).sum::<f64>();
+            }
+            atb[i] += (0..3).map(|k| a[k][i] * w[3 + k]).sum::<f64>();
+        }
+    }
+    let det = |m: &M3| dot(m[0], cross(m[1], m[2]));
+    let d = det(&ata);
+    if !(d.is_finite() && d.abs() > 1e-12) {
+        return Err(
+            "the wrenches do not determine a centre of gravity (no force measured?)".to_string(),
+        );
+    }
+    // Cramer's rule: column i replaced by Aᵀ T.
+    let cog = std::array::from_fn(|i| {
+        let mut m = ata;
+        for (row, b) in m.iter_mut().zip(atb) {
+            row[i] = b;
+        }
+        det(&m) / d
+    });
+    Ok((mass, cog))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -372,6 +476,51 @@ mod tests {
                 "{model}: {from_m} vs {energy}"
             );
         }
+    }
+
+    /// Wrenches made from a known payload at varied poses give it back.
+    #[test]
+    fn payload_estimation_recovers_the_payload_that_made_the_wrenches() {
+        let (mass, cog) = (2.3, [0.03, -0.02, 0.11]);
+        let gravity = [0.0, 0.0, 9.82];
+        let poses: Vec<[f64; 6]> = [
+            [0.0, 0.0, 0.0],
+            [1.2, 0.0, 0.0],
+            [0.0, 1.3, 0.0],
+            [0.0, 0.0, 1.4],
+            [0.8, -0.9, 0.5],
+        ]
+        .iter()
+        .map(|r| [0.4, 0.1, 0.3, r[0], r[1], r[2]])
+        .collect();
+        let wrenches: Vec<[f64; 6]> = poses
+            .iter()
+            .map(|p| {
+                let rc = mat_vec(&crate::pose::to_matrix([p[3], p[4], p[5]]), cog);
+                let f = scale(-mass, gravity);
+                let t = cross(rc, f);
+                [f[0], f[1], f[2], t[0], t[1], t[2]]
+            })
+            .collect();
+        let (m, c) = estimate_payload(&poses, &wrenches, gravity).unwrap();
+        assert!((m - mass).abs() < 1e-12, "{m}");
+        for k in 0..3 {
+            assert!((c[k] - cog[k]).abs() < 1e-9, "{c:?}");
+        }
+        // What the manual refuses.
+        let e = estimate_payload(&poses[..3], &wrenches[..3], gravity).unwrap_err();
+        assert_eq!(e, "needs at least 4 poses, 3 given");
+        let e = estimate_payload(&poses, &wrenches[..4], gravity).unwrap_err();
+        assert_eq!(e, "needs one wrench per pose: 5 poses, 4 wrenches");
+        let mut close_poses = poses.clone();
+        close_poses[4] = [0.4, 0.1, 0.3, 0.0, 0.0, 0.1];
+        let e = estimate_payload(&close_poses, &wrenches, gravity).unwrap_err();
+        assert!(e.starts_with("poses 0 and 4 are 0.1000 rad apart"), "{e}");
+        let e = estimate_payload(&poses, &[[0.0; 6]; 5], gravity).unwrap_err();
+        assert!(e.contains("do not determine"), "{e}");
+        // Nothing panics on numbers that are not.
+        let nan = [[f64::NAN; 6]; 5];
+        assert!(estimate_payload(&nan, &nan, gravity).is_err());
     }
 
     #[test]
