@@ -6,7 +6,9 @@
 //!
 //! - `get_jacobian(q, tcp)`, `get_jacobian_time_derivative(q, qd, tcp)`: 6×6 matrices (a
 //!   list of 6 rows), rows `[vx, vy, vz, wx, wy, wz]` in the base frame, columns by joint;
-//!   `q`, `qd`, `tcp` default to the joints, joint speeds and TCP now.
+//!   `q`, `qd`, `tcp` default to the joints, joint speeds and TCP now. The manual does
+//!   not name the frame; the base frame is chosen so that `get_jacobian() * qd` is the
+//!   speed `get_actual_tcp_speed()` reports.
 //! - `get_mass_matrix(q, include_rotors_inertia=False)`: 6×6, with the active payload
 //!   (`set_target_payload`) on the flange; with `include_rotors_inertia` the rotor
 //!   inertias of [`World::rotor_inertia`](crate::World::rotor_inertia) are added on the
