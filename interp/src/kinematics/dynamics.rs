@@ -209,90 +209,104 @@ fn with_payload(link: &Link, p: &Payload) -> Body {
     Body { mass, com, inertia }
 }
 
-/// The joint torques that give the joints at `q`, moving at `qd`, the accelerations
-/// `qdd`, without gravity (recursive Newton–Euler, every vector in the base frame).
-fn inverse_dynamics(
-    model: Model,
-    q: [f64; 6],
-    qd: [f64; 6],
-    qdd: [f64; 6],
-    payload: &Payload,
-) -> [f64; 6] {
-    let f = frames(&model.dh(), q);
-    let links = model.links();
-    let bodies: [Body; 6] = std::array::from_fn(|i| {
-        if i == 5 {
-            with_payload(&links[5], payload)
-        } else {
-            with_payload(&links[i], &Payload::NONE)
+/// The arm at one set of joints: what every Newton–Euler pass there shares (all in the
+/// base frame).
+struct Posed {
+    /// Each joint's axis and a point on it.
+    axes: [[f64; 3]; 6],
+    origins: [[f64; 3]; 7],
+    /// Each link's mass, centre of mass and inertia about it (base axes).
+    mass: [f64; 6],
+    com: [[f64; 3]; 6],
+    inertia: [M3; 6],
+}
+
+impl Posed {
+    fn new(model: Model, q: [f64; 6], payload: &Payload) -> Posed {
+        let f = frames(&model.dh(), q);
+        let links = model.links();
+        let mut posed = Posed {
+            axes: [[0.0; 3]; 6],
+            origins: std::array::from_fn(|i| f[i].t),
+            mass: [0.0; 6],
+            com: [[0.0; 3]; 6],
+            inertia: [[[0.0; 3]; 3]; 6],
+        };
+        for i in 0..6 {
+            let b = with_payload(&links[i], if i == 5 { payload } else { &Payload::NONE });
+            let rot = &f[i + 1].r;
+            posed.axes[i] = [f[i].r[0][2], f[i].r[1][2], f[i].r[2][2]];
+            posed.mass[i] = b.mass;
+            posed.com[i] = add(f[i + 1].t, mat_vec(rot, b.com));
+            // The inertia in base axes: R I Rᵀ.
+            posed.inertia[i] = std::array::from_fn(|r_| {
+                std::array::from_fn(|c_| {
+                    (0..3)
+                        .map(|k| {
+                            (0..3)
+                                .map(|m| rot[r_][k] * b.inertia[k][m] * rot[c_][m])
+                                .sum::<f64>()
+                        })
+                        .sum()
+                })
+            });
         }
-    });
-    // Forward: each link's angular speed and acceleration, its frame origin's and its
-    // centre of mass's accelerations.
-    let mut w = [0.0; 3];
-    let mut wd = [0.0; 3];
-    let mut a_origin = [0.0; 3]; // acceleration of the previous frame's origin
-    let mut force = [[0.0; 3]; 6]; // m · a of each centre of mass
-    let mut moment = [[0.0; 3]; 6]; // I α + ω × I ω of each link, about its centre of mass
-    let mut com = [[0.0; 3]; 6];
-    let mut axes = [[0.0; 3]; 6];
-    for i in 0..6 {
-        let z = [f[i].r[0][2], f[i].r[1][2], f[i].r[2][2]];
-        axes[i] = z;
-        let w_prev = w;
-        w = add(w, scale(qd[i], z));
-        wd = add(add(wd, scale(qdd[i], z)), scale(qd[i], cross(w_prev, z)));
-        let r = sub(f[i + 1].t, f[i].t);
-        let a_next = add(add(a_origin, cross(wd, r)), cross(w, cross(w, r)));
-        let rot = &f[i + 1].r;
-        let b = &bodies[i];
-        let c = add(f[i + 1].t, mat_vec(rot, b.com));
-        let rc = sub(c, f[i + 1].t);
-        let a_c = add(add(a_next, cross(wd, rc)), cross(w, cross(w, rc)));
-        // The inertia in base axes: R I Rᵀ.
-        let i_base: M3 = std::array::from_fn(|r_| {
-            std::array::from_fn(|c_| {
-                (0..3)
-                    .map(|k| {
-                        (0..3)
-                            .map(|m| rot[r_][k] * b.inertia[k][m] * rot[c_][m])
-                            .sum::<f64>()
-                    })
-                    .sum()
-            })
-        });
-        force[i] = scale(b.mass, a_c);
-        moment[i] = add(mat_vec(&i_base, wd), cross(w, mat_vec(&i_base, w)));
-        com[i] = c;
-        a_origin = a_next;
+        posed
     }
-    // Backward: the force and moment each joint passes on, the torque about its axis.
-    let mut tau = [0.0; 6];
-    let mut f_next = [0.0; 3];
-    let mut n_next = [0.0; 3];
-    for i in (0..6).rev() {
-        let o = f[i].t;
-        let f_i = add(force[i], f_next);
-        let n_i = add(
-            add(add(moment[i], n_next), cross(sub(com[i], o), force[i])),
-            cross(sub(f[i + 1].t, o), f_next),
-        );
-        tau[i] = dot(n_i, axes[i]);
-        f_next = f_i;
-        n_next = n_i;
+
+    /// The joint torques that give the joints moving at `qd` the accelerations `qdd`,
+    /// without gravity (recursive Newton–Euler).
+    fn torques(&self, qd: [f64; 6], qdd: [f64; 6]) -> [f64; 6] {
+        // Forward: each link's angular speed and acceleration, its frame origin's and its
+        // centre of mass's accelerations.
+        let mut w = [0.0; 3];
+        let mut wd = [0.0; 3];
+        let mut a_origin = [0.0; 3]; // acceleration of the previous frame's origin
+        let mut force = [[0.0; 3]; 6]; // m · a of each centre of mass
+        let mut moment = [[0.0; 3]; 6]; // I α + ω × I ω of each link, about its centre of mass
+        for i in 0..6 {
+            let z = self.axes[i];
+            let w_prev = w;
+            w = add(w, scale(qd[i], z));
+            wd = add(add(wd, scale(qdd[i], z)), scale(qd[i], cross(w_prev, z)));
+            let r = sub(self.origins[i + 1], self.origins[i]);
+            let a_next = add(add(a_origin, cross(wd, r)), cross(w, cross(w, r)));
+            let rc = sub(self.com[i], self.origins[i + 1]);
+            let a_c = add(add(a_next, cross(wd, rc)), cross(w, cross(w, rc)));
+            let inertia = &self.inertia[i];
+            force[i] = scale(self.mass[i], a_c);
+            moment[i] = add(mat_vec(inertia, wd), cross(w, mat_vec(inertia, w)));
+            a_origin = a_next;
+        }
+        // Backward: the force and moment each joint passes on, the torque about its axis.
+        let mut tau = [0.0; 6];
+        let mut f_next = [0.0; 3];
+        let mut n_next = [0.0; 3];
+        for i in (0..6).rev() {
+            let o = self.origins[i];
+            let f_i = add(force[i], f_next);
+            let n_i = add(
+                add(add(moment[i], n_next), cross(sub(self.com[i], o), force[i])),
+                cross(sub(self.origins[i + 1], o), f_next),
+            );
+            tau[i] = dot(n_i, self.axes[i]);
+            f_next = f_i;
+            n_next = n_i;
+        }
+        tau
     }
-    tau
 }
 
 /// The joint-space mass (inertia) matrix at joints `q` with `payload` at the flange:
 /// symmetric, positive definite, kg·m² (rows and columns by joint).
 #[allow(clippy::needless_range_loop)] // the two halves of a symmetric matrix
 pub fn mass_matrix(model: Model, q: [f64; 6], payload: &Payload) -> [[f64; 6]; 6] {
+    let posed = Posed::new(model, q, payload);
     let mut m = [[0.0; 6]; 6];
     for j in 0..6 {
         let mut e = [0.0; 6];
         e[j] = 1.0;
-        let col = inverse_dynamics(model, q, [0.0; 6], e, payload);
+        let col = posed.torques([0.0; 6], e);
         for (row, v) in m.iter_mut().zip(col) {
             row[j] = v;
         }
@@ -316,7 +330,7 @@ pub fn coriolis_and_centrifugal_torques(
     qd: [f64; 6],
     payload: &Payload,
 ) -> [f64; 6] {
-    inverse_dynamics(model, q, qd, [0.0; 6], payload)
+    Posed::new(model, q, payload).torques(qd, [0.0; 6])
 }
 
 /// The payload (mass, kg; centre of gravity from the flange in the flange frame, m)
