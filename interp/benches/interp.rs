@@ -100,5 +100,35 @@ fn servo_step_with(c: &mut Criterion, trace: bool) {
     g.finish();
 }
 
-criterion_group!(benches, statements, servo_step);
+/// The arm model behind `get_jacobian`, `get_mass_matrix` and
+/// `get_coriolis_and_centrifugal_torques`, called as a 500 Hz control loop would (UR's
+/// joint impedance example calls all of them every step).
+fn arm_model(c: &mut Criterion) {
+    use urscript_interp::kinematics::dynamics::{self, Payload};
+    use urscript_interp::kinematics::{jacobian, jacobian_time_derivative, Model};
+    let q = [0.3, -1.1, 1.4, -0.7, 1.2, 0.5];
+    let qd = [0.4, -0.3, 0.8, 0.5, -0.6, 0.9];
+    let dh = Model::Ur5e.dh();
+    c.bench_function("get_jacobian_ur5e", |b| {
+        b.iter(|| jacobian(&dh, std::hint::black_box(q), [0.0; 6]))
+    });
+    c.bench_function("get_jacobian_time_derivative_ur5e", |b| {
+        b.iter(|| jacobian_time_derivative(&dh, std::hint::black_box(q), qd, [0.0; 6]))
+    });
+    c.bench_function("get_mass_matrix_ur5e", |b| {
+        b.iter(|| dynamics::mass_matrix(Model::Ur5e, std::hint::black_box(q), &Payload::NONE))
+    });
+    c.bench_function("get_coriolis_and_centrifugal_torques_ur5e", |b| {
+        b.iter(|| {
+            dynamics::coriolis_and_centrifugal_torques(
+                Model::Ur5e,
+                std::hint::black_box(q),
+                qd,
+                &Payload::NONE,
+            )
+        })
+    });
+}
+
+criterion_group!(benches, statements, servo_step, arm_model);
 criterion_main!(benches);

@@ -35,6 +35,9 @@ pub struct Arm {
     pub q: [f64; 6],
     /// Joint speeds (rad/s) now.
     pub qd: [f64; 6],
+    /// Joint accelerations (rad/s²) now: the change of the joint speeds over the last step
+    /// of the motion under way (zero at rest).
+    pub qdd: [f64; 6],
     /// TCP speed now (base frame: m/s, then rad/s).
     pub tcp_speed: [f64; 6],
     /// The active TCP offset (`set_tcp`), from the flange.
@@ -80,6 +83,16 @@ pub struct Arm {
     pub(crate) path_offset: PathOffset,
     /// What the robot senses of the world: fixed values a test may change.
     pub world: World,
+    /// Force mode damping (`force_mode_set_damping`, 0-1). Default 0.0, as the manual gives.
+    pub(crate) force_mode_damping: f64,
+    /// Force mode gain scaling (`force_mode_set_gain_scaling`, 0-2). Default 1.0.
+    pub(crate) force_mode_gain_scaling: f64,
+    /// Motion version for `movej`/`movel` (`motion_version_set`, 1 or 2). Default 1, the
+    /// behaviour up to PolyScope 5.21 (PolyScope sets it from the installation in a
+    /// program's preamble; a bare controller has no installation).
+    pub(crate) motion_version: i32,
+    /// Jerk gain scaling (`jerk_gain_scaling_set`, 0.01-1). Default 1.0.
+    pub(crate) jerk_gain_scaling: f64,
     /// `protective_stop()` ran: a controller that runs the arm acts on it (a protective
     /// stop pauses its program) and clears it.
     pub protective_stop: bool,
@@ -135,6 +148,7 @@ impl Default for Arm {
         Arm {
             q: [0.0, -FRAC_PI_2, 0.0, -FRAC_PI_2, 0.0, 0.0],
             qd: [0.0; 6],
+            qdd: [0.0; 6],
             tcp_speed: [0.0; 6],
             tcp: [0.0; 6],
             digital_out: [false; 18],
@@ -159,6 +173,10 @@ impl Default for Arm {
             path_offset: PathOffset::default(),
             world: World::default(),
             protective_stop: false,
+            force_mode_damping: 0.0,
+            force_mode_gain_scaling: 1.0,
+            motion_version: 1,
+            jerk_gain_scaling: 1.0,
         }
     }
 }
@@ -212,6 +230,15 @@ pub struct World {
     pub operator_float: f64,
     /// The answer to `request_string_from_primary_client`. Default "".
     pub operator_string: Vec<u8>,
+    /// The inertia of each joint's rotor as the joint sees it through its gear, kg·m²:
+    /// what `get_mass_matrix(include_rotors_inertia=True)` adds on the diagonal. UR
+    /// publishes no rotor inertias, so the default is 0.0 each (the flag changes nothing
+    /// until a test sets them).
+    pub rotor_inertia: [f64; 6],
+    /// The controller's real-time thread execution time per step (ms), RTDE's
+    /// `actual_execution_time` (`get_rtde_value`). Default 0.0 (the virtual controller's
+    /// steps take no controller time).
+    pub execution_time: f64,
 }
 
 impl Default for World {
@@ -232,6 +259,8 @@ impl Default for World {
             operator_int: 0,
             operator_float: 0.0,
             operator_string: Vec::new(),
+            rotor_inertia: [0.0; 6],
+            execution_time: 0.0,
         }
     }
 }
@@ -277,10 +306,19 @@ impl Controller {
         if self.sampled == Some(step) {
             return;
         }
+        // The joint accelerations: the change of speed since the last sample.
+        let steps = match self.sampled {
+            Some(last) if step > last => step - last,
+            _ => 1,
+        };
+        let dt = steps as f64 * self.step_time.as_secs_f64();
         self.sampled = Some(step);
         let t = step.saturating_sub(m.start) as f64 * self.step_time.as_secs_f64();
         let s = m.sample(&self.dh, t, self.arm.q);
         self.arm.q = s.q;
+        for ((a, new), old) in self.arm.qdd.iter_mut().zip(s.qd).zip(self.arm.qd) {
+            *a = if dt > 0.0 { (new - old) / dt } else { 0.0 };
+        }
         self.arm.qd = s.qd;
         self.arm.tcp_speed = match s.tcp_speed {
             Some(v) => v,
@@ -288,6 +326,7 @@ impl Controller {
         };
         if s.done {
             self.motion = None;
+            self.arm.qdd = [0.0; 6];
         }
     }
 
@@ -295,6 +334,7 @@ impl Controller {
     pub fn halt(&mut self) {
         if self.motion.take().is_some() {
             self.arm.qd = [0.0; 6];
+            self.arm.qdd = [0.0; 6];
             self.arm.tcp_speed = [0.0; 6];
         }
     }

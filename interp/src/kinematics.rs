@@ -22,6 +22,8 @@ use std::f64::consts::{FRAC_PI_2, TAU};
 use std::fmt;
 use std::str::FromStr;
 
+pub mod dynamics;
+
 /// A UR arm model.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
 #[non_exhaustive]
@@ -245,6 +247,104 @@ pub(crate) fn tool_twist(dh: &Dh, q: [f64; 6], qd: [f64; 6], tcp: [f64; 6]) -> [
         out[5] += w * z[2];
     }
     out
+}
+
+/// The frames of the arm at `q`: `[base, after joint 1, ..., after joint 6 (the flange)]`.
+fn frames(dh: &Dh, q: [f64; 6]) -> [T; 7] {
+    let mut out = [T::ID; 7];
+    for i in 0..6 {
+        out[i + 1] = out[i].mul(&link(dh, i, q[i]));
+    }
+    out
+}
+
+fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ]
+}
+
+fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+}
+
+fn add(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
+}
+
+fn scale(k: f64, a: [f64; 3]) -> [f64; 3] {
+    [k * a[0], k * a[1], k * a[2]]
+}
+
+/// The z axis of a frame (the axis the next joint turns about).
+fn z_axis(t: &T) -> [f64; 3] {
+    [t.r[0][2], t.r[1][2], t.r[2][2]]
+}
+
+/// The Jacobian of the tool at joints `q` through the TCP offset `tcp`: 6 rows (the TCP's
+/// linear speed along the base's x, y, z in m/s, then its angular speed about them in
+/// rad/s), one column per joint, so that `J · qd` is the speed of [`forward`]'s pose (what
+/// `get_actual_tcp_speed` reports). Column `j` is `[z × (p − o); z]` for joint `j`'s axis
+/// `z` through `o` and the TCP position `p`.
+///
+/// ```
+/// use urscript_interp::kinematics::{jacobian, Model};
+/// let j = jacobian(&Model::Ur5e.dh(), [0.0; 6], [0.0; 6]);
+/// // Joint 1 turns about the base's z axis.
+/// assert_eq!([j[3][0], j[4][0], j[5][0]], [0.0, 0.0, 1.0]);
+/// ```
+pub fn jacobian(dh: &Dh, q: [f64; 6], tcp: [f64; 6]) -> [[f64; 6]; 6] {
+    let f = frames(dh, q);
+    let p = f[6].mul(&T::of_pose(tcp)).t;
+    let mut j = [[0.0; 6]; 6];
+    for (col, t) in f.iter().take(6).enumerate() {
+        let z = z_axis(t);
+        let v = cross(z, sub(p, t.t));
+        for k in 0..3 {
+            j[k][col] = v[k];
+            j[k + 3][col] = z[k];
+        }
+    }
+    j
+}
+
+/// The time derivative of [`jacobian`] while the joints at `q` move at `qd`
+/// (`d/dt J(q(t))` with `dq/dt = qd`): `Jd · qd` is the part of the tool's acceleration
+/// `J · qdd + Jd · qd` that the joint speeds alone make. Each joint axis `z` turns with
+/// the links before it (`dz/dt = ω × z`); each axis point and the TCP move at the speeds
+/// the joints before them give.
+pub fn jacobian_time_derivative(
+    dh: &Dh,
+    q: [f64; 6],
+    qd: [f64; 6],
+    tcp: [f64; 6],
+) -> [[f64; 6]; 6] {
+    let f = frames(dh, q);
+    let p = f[6].mul(&T::of_pose(tcp)).t;
+    let axes: [[f64; 3]; 6] = std::array::from_fn(|i| z_axis(&f[i]));
+    // The linear speed of point `x` fixed to the link after joint `upto - 1`.
+    let speed_of = |x: [f64; 3], upto: usize| -> [f64; 3] {
+        (0..upto).fold([0.0; 3], |acc, k| {
+            add(acc, scale(qd[k], cross(axes[k], sub(x, f[k].t))))
+        })
+    };
+    let p_dot = speed_of(p, 6);
+    let mut jd = [[0.0; 6]; 6];
+    let mut w = [0.0; 3]; // the angular speed of the link before joint `col`
+    for col in 0..6 {
+        let z = axes[col];
+        let z_dot = cross(w, z);
+        let o_dot = speed_of(f[col].t, col);
+        let v = add(cross(z_dot, sub(p, f[col].t)), cross(z, sub(p_dot, o_dot)));
+        for k in 0..3 {
+            jd[k][col] = v[k];
+            jd[k + 3][col] = z_dot[k];
+        }
+        w = add(w, scale(qd[col], z));
+    }
+    jd
 }
 
 /// Brings `x` within ±2π to the value closest to `near`.

@@ -615,6 +615,22 @@ const ADDED: &[(&str, &[&str])] = &[
     ("rotvec2rpy", &["rotation_vector"]),
     ("rpy2rotvec", &["rpy_vector"]),
     ("wrench_trans", &["T_from_to", "w_from"]),
+    // The arm's model (internals, PolyScope 5.22 and later).
+    ("get_jacobian", &["q", "tcp"]),
+    ("get_jacobian_time_derivative", &["q", "qd", "tcp"]),
+    ("get_mass_matrix", &["q", "include_rotors_inertia"]),
+    ("get_coriolis_and_centrifugal_torques", &["q", "qd"]),
+    ("get_target_joint_accelerations", &[]),
+    ("get_actual_joint_accelerations", &[]),
+    // Settings read back.
+    ("force_mode_get_damping", &[]),
+    ("force_mode_get_gain_scaling", &[]),
+    ("motion_version_get", &[]),
+    ("motion_version_set", &["version"]),
+    ("jerk_gain_scaling_get", &[]),
+    ("jerk_gain_scaling_set", &["gain"]),
+    // Interfaces.
+    ("get_rtde_value", &["key"]),
 ];
 
 #[test]
@@ -663,6 +679,10 @@ fn every_added_function_is_in_the_table_with_the_manuals_parameters() {
     assert_eq!(sig("set_tcp"), r#"set_tcp(pose, tcp_name="")"#);
     assert_eq!(sig("optimovej"), "optimovej(goal, a=0.3, v=0.3, r=0.0)");
     assert_eq!(
+        sig("get_mass_matrix"),
+        "get_mass_matrix(q=None, include_rotors_inertia=False)"
+    );
+    assert_eq!(
         lookup("reset_revolution_counter").unwrap().params[0].default,
         Default::Floats(&[0.0; 6])
     );
@@ -672,4 +692,251 @@ fn every_added_function_is_in_the_table_with_the_manuals_parameters() {
     for name in ["rq_activate", "time", "estimate_payload"] {
         assert!(lookup(name).is_none(), "{name}");
     }
+}
+
+/// The numbers of a message, brackets of nested lists dropped: a matrix row by row.
+fn flat(msg: &str) -> Vec<f64> {
+    msg.split(['[', ']', ',', 'p'])
+        .map(str::trim)
+        .filter(|x| !x.is_empty())
+        .map(|x| x.parse().unwrap_or_else(|_| panic!("{msg:?}")))
+        .collect()
+}
+
+#[test]
+fn the_jacobian_maps_joint_speeds_to_the_tool_speed() {
+    // Hold a joint speed: the Jacobian times the joint speeds is the tool speed the arm
+    // reports, with the active TCP and with another one given.
+    let m = messages(
+        "set_tcp(p[0, 0.05, 0.1, 0, 0, 0])
+movej([0.2, -1.3, 1.5, -1.2, -1.4, 0.3])
+speedj([0.1, -0.2, 0.15, 0.3, -0.25, 0.4], 5, 0.5)
+q = get_actual_joint_positions()
+qd = get_actual_joint_speeds()
+textmsg(get_jacobian() * qd)
+textmsg(get_actual_tcp_speed())
+textmsg(get_jacobian(q, p[0, 0.05, 0.1, 0, 0, 0]) == get_jacobian())
+textmsg(get_jacobian(tcp=p[0, 0, 0, 0, 0, 0]) == get_jacobian())
+textmsg(get_jacobian([0, 0, 0, 0, 0, 0], p[0, 0, 0, 0, 0, 0]))
+stopj(5)
+",
+    );
+    let (jqd, speed) = (flat(&m[0]), flat(&m[1]));
+    assert_eq!(jqd.len(), 6);
+    for (a, b) in jqd.iter().zip(&speed) {
+        assert!((a - b).abs() < 1e-5, "{m:?}");
+    }
+    assert!(speed.iter().any(|x| x.abs() > 0.01), "the arm moves: {m:?}");
+    assert_eq!(m[2], "True");
+    assert_eq!(m[3], "False");
+    // At the zero position joint 1 turns about the base's z axis; the flange is at
+    // x = a2 + a3, y = -(d4 + d6) (UR5e).
+    let j = flat(&m[4]);
+    assert_eq!(j.len(), 36);
+    let col0: Vec<f64> = (0..6).map(|r| j[r * 6]).collect();
+    let (x, y) = (-0.425 - 0.3922, -(0.1333 + 0.0996));
+    close(&format!("{col0:?}"), &[-y, x, 0.0, 0.0, 0.0, 1.0], 1e-6);
+}
+
+#[test]
+fn the_jacobian_time_derivative_is_zero_at_rest_and_follows_the_speeds() {
+    let q = [0.2, -1.3, 1.5, -1.2, -1.4, 0.3];
+    let qd = [0.1, -0.2, 0.15, 0.3, -0.25, 0.4];
+    let m = messages(
+        "movej([0.2, -1.3, 1.5, -1.2, -1.4, 0.3])
+textmsg(get_jacobian_time_derivative())
+textmsg(get_jacobian_time_derivative(qd=[0.1, -0.2, 0.15, 0.3, -0.25, 0.4]))
+",
+    );
+    assert!(flat(&m[0]).iter().all(|x| *x == 0.0), "{}", m[0]);
+    let want = urscript_interp::kinematics::jacobian_time_derivative(
+        &urscript_interp::kinematics::Model::Ur5e.dh(),
+        q,
+        qd,
+        [0.0; 6],
+    );
+    let got = flat(&m[1]);
+    assert_eq!(got.len(), 36);
+    for (g, w) in got.iter().zip(want.iter().flatten()) {
+        assert!((g - w).abs() < 1e-5, "{} is not {want:?}", m[1]);
+    }
+    assert!(got.iter().any(|x| x.abs() > 1e-3));
+}
+
+#[test]
+fn the_mass_matrix_carries_the_payload_and_the_rotors() {
+    let src = "q = [0.0, -1.2, 1.4, -1.6, -1.57, 0.0]
+m0 = get_mass_matrix(q)
+textmsg(m0)
+textmsg(m0[1][2] == m0[2][1], m0[0][4] == m0[4][0])
+set_target_payload(5.0, [0, 0, 0.1])
+m1 = get_mass_matrix(q)
+textmsg(m1[0][0] > m0[0][0], m1[1][1] > m0[1][1] and m1[3][3] > m0[3][3])
+m2 = get_mass_matrix(q, include_rotors_inertia=True)
+textmsg(m2[0][0] - m1[0][0], m2[5][5] - m1[5][5])
+textmsg(m2[0][1] - m1[0][1])
+";
+    let mut h = common::Harness::new(src, urscript_interp::Config::default());
+    h.m.world_mut().rotor_inertia = [0.5, 0.5, 0.25, 0.1, 0.1, 0.125];
+    h.run_silent(std::time::Duration::from_secs(1));
+    assert_eq!(
+        h.m.state(),
+        &urscript_interp::State::Finished,
+        "{:?}",
+        h.messages
+    );
+    let m = &h.messages;
+    let want = urscript_interp::kinematics::dynamics::mass_matrix(
+        urscript_interp::kinematics::Model::Ur5e,
+        [0.0, -1.2, 1.4, -1.6, -1.57, 0.0],
+        &urscript_interp::kinematics::dynamics::Payload::NONE,
+    );
+    for (g, w) in flat(&m[0]).iter().zip(want.iter().flatten()) {
+        assert!((g - w).abs() < 1e-5, "{} is not {want:?}", m[0]);
+    }
+    assert_eq!(m[1], "TrueTrue");
+    assert_eq!(m[2], "TrueTrue");
+    // The rotor inertias the world gives, on the diagonal only.
+    assert_eq!(m[3], "0.50.125");
+    assert_eq!(m[4], "0");
+}
+
+#[test]
+fn coriolis_torques_are_zero_at_rest_and_grow_with_the_square_of_the_speeds() {
+    let m = messages(
+        "q = [0.3, -1.1, 1.4, -0.7, 1.2, 0.5]
+qd = [0.4, -0.3, 0.8, 0.5, -0.6, 0.9]
+textmsg(get_coriolis_and_centrifugal_torques())
+c1 = get_coriolis_and_centrifugal_torques(q, qd)
+c2 = get_coriolis_and_centrifugal_torques(q, [0.8, -0.6, 1.6, 1.0, -1.2, 1.8])
+textmsg(c1)
+textmsg(norm(c2 - c1 * 4) < 1e-9)
+",
+    );
+    assert_eq!(m[0], "[0, 0, 0, 0, 0, 0]");
+    let want = urscript_interp::kinematics::dynamics::coriolis_and_centrifugal_torques(
+        urscript_interp::kinematics::Model::Ur5e,
+        [0.3, -1.1, 1.4, -0.7, 1.2, 0.5],
+        [0.4, -0.3, 0.8, 0.5, -0.6, 0.9],
+        &urscript_interp::kinematics::dynamics::Payload::NONE,
+    );
+    close(&m[1], &want, 1e-5);
+    assert!(want.iter().any(|x| x.abs() > 0.01));
+    assert_eq!(m[2], "True");
+}
+
+#[test]
+fn joint_accelerations_follow_the_speed_ramp() {
+    // speedj ramps joint 1 up at 1 rad/s² for 0.5 s; after 0.1 s it is still ramping.
+    let m = messages(
+        "textmsg(get_target_joint_accelerations())
+speedj([0.5, 0, 0, 0, 0, -0.25], 1.0, 0.1)
+textmsg(get_target_joint_accelerations())
+textmsg(get_actual_joint_accelerations())
+stopj(10)
+textmsg(get_actual_joint_accelerations())
+",
+    );
+    assert_eq!(m[0], "[0, 0, 0, 0, 0, 0]");
+    // The joint that moves furthest ramps at a; the others in proportion.
+    close(&m[1], &[1.0, 0.0, 0.0, 0.0, 0.0, -0.5], 1e-6);
+    assert_eq!(m[1], m[2]);
+    assert_eq!(m[3], "[0, 0, 0, 0, 0, 0]");
+}
+
+#[test]
+fn force_mode_motion_version_and_jerk_settings_are_read_back() {
+    let m = messages(
+        "textmsg(force_mode_get_damping(), force_mode_get_gain_scaling())
+force_mode_set_damping(0.25)
+force_mode_set_gain_scaling(1.5)
+textmsg(force_mode_get_damping(), force_mode_get_gain_scaling())
+textmsg(motion_version_get(), jerk_gain_scaling_get())
+v = motion_version_get()
+motion_version_set(2)
+textmsg(motion_version_get())
+motion_version_set(v)
+jerk_gain_scaling_set(0.5)
+textmsg(motion_version_get(), jerk_gain_scaling_get())
+",
+    );
+    assert_eq!(m, ["01", "0.251.5", "11", "2", "10.5"]);
+    assert!(runtime_error("force_mode_set_damping(1.5)\n").contains("damping 1.5 is not in 0-1"));
+    assert!(runtime_error("force_mode_set_gain_scaling(-1)\n").contains("not in 0-2"));
+    assert!(runtime_error("jerk_gain_scaling_set(0)\n").contains("gain 0 is not in 0.01-1"));
+    assert!(runtime_error("motion_version_set(3)\n").contains("motion version 3 is not 1 or 2"));
+}
+
+#[test]
+fn get_rtde_value_reads_the_virtual_arms_fields() {
+    let src = "write_output_integer_register(3, 42)
+write_output_float_register(7, 2.5)
+write_output_boolean_register(1, True)
+write_output_boolean_register(65, True)
+set_standard_digital_out(2, True)
+sync()
+textmsg(get_rtde_value(\"output_int_register_3\"), get_rtde_value(\"output_double_register_7\"))
+textmsg(get_rtde_value(\"output_bit_registers0_to_31\"), get_rtde_value(\"output_bit_register_65\"))
+textmsg(get_rtde_value(\"actual_digital_output_bits\"), get_rtde_value(\"actual_digital_input_bits\"))
+textmsg(get_rtde_value(\"input_int_register_5\"), get_rtde_value(\"actual_execution_time\"))
+textmsg(get_rtde_value(\"actual_q\") == get_actual_joint_positions())
+textmsg(get_rtde_value(\"actual_TCP_pose\"))
+textmsg(get_rtde_value(\"robot_mode\"), get_rtde_value(\"safety_mode\"))
+textmsg(get_rtde_value(\"speed_scaling\"))
+textmsg(get_rtde_value(\"timestamp\"))
+";
+    let mut h = common::Harness::new(src, urscript_interp::Config::default());
+    h.m.world_mut().input_int_regs[5] = -7;
+    h.m.world_mut().execution_time = 0.42;
+    h.m.world_mut().digital_in[0] = true;
+    h.m.world_mut().digital_in[3] = true;
+    h.run_silent(std::time::Duration::from_secs(1));
+    assert_eq!(
+        h.m.state(),
+        &urscript_interp::State::Finished,
+        "{:?}",
+        h.messages
+    );
+    let m = &h.messages;
+    assert_eq!(m[0], "422.5");
+    assert_eq!(m[1], "2True");
+    assert_eq!(m[2], "49");
+    assert_eq!(m[3], "-70.42");
+    assert_eq!(m[4], "True");
+    // A VECTOR6D is a list, not a pose.
+    assert!(m[5].starts_with('[') && flat(&m[5]).len() == 6, "{}", m[5]);
+    assert_eq!(m[6], "71");
+    assert_eq!(m[7], "1");
+    // One sync() of 2 ms has passed.
+    close(&format!("[{}]", m[8]), &[0.002], 1e-12);
+    assert!(runtime_error("get_rtde_value(\"no_such_field\")\n")
+        .contains("\"no_such_field\" is not an RTDE output field"));
+    assert!(
+        runtime_error("get_rtde_value(\"output_int_register_48\")\n")
+            .contains("is not an RTDE output field")
+    );
+}
+
+#[test]
+fn the_models_functions_refuse_what_is_not_joints_and_survive_what_is_not_finite() {
+    // Wrong shapes are type errors naming the argument.
+    assert!(runtime_error("get_jacobian([1, 2, 3])\n")
+        .contains("`get_jacobian` argument `q` needs 6 numbers"));
+    assert!(runtime_error("get_mass_matrix(q=\"x\")\n").contains("argument `q` needs 6 numbers"));
+    assert!(
+        runtime_error("get_coriolis_and_centrifugal_torques(qd=[1, 2])\n")
+            .contains("argument `qd` needs 6 numbers")
+    );
+    assert!(runtime_error("get_rtde_value(3)\n").contains("argument `key` needs a string"));
+    // Numbers too large to mean anything give numbers, not a crash.
+    let m = messages(
+        "q = [1e308, -1e308, 1e308, 0, 0, 0]
+j = get_jacobian(q, p[1e308, 0, 0, 0, 0, 0])
+m = get_mass_matrix(q)
+c = get_coriolis_and_centrifugal_torques(q, [1e308, 1e308, 0, 0, 0, 0])
+d = get_jacobian_time_derivative(q, [1e308, 0, 0, 0, 0, 0])
+textmsg(get_list_length(j), get_list_length(c))
+",
+    );
+    assert_eq!(m, ["66"]);
 }

@@ -10,8 +10,10 @@
 //! | --- | --- |
 //! | [`sockets`] | every `socket_*` function of the e-Series 5.x manual |
 //! | [`motion`] | moves, servo/speed control, the arm's state, settings of the arm |
+//! | [`dynamics`] | the arm's model: Jacobians, mass matrix, Coriolis torques, joint accelerations |
 //! | [`conveyor`] | conveyor tracking and its encoders (the motion chapter; no conveyor) |
 //! | [`io`] | digital/analog I/O, tool I/O, flags, the RTDE registers, Modbus, I/O configuration |
+//! | [`rtde`] | `get_rtde_value`: RTDE output fields from the virtual arm's state |
 //! | [`math`] | numbers, lists of numbers, matrices (`inv`, `transpose`), bits, `random` |
 //! | [`strings`] | strings, `to_str`/`to_num`, list length, `size`, `make_list` |
 //! | [`poses`] | pose arithmetic, rotation vectors and RPY, wrenches, kinematics |
@@ -32,12 +34,14 @@ use crate::error::Fault;
 use crate::value::Value;
 
 pub mod conveyor;
+pub mod dynamics;
 pub mod io;
 pub mod math;
 pub mod messages;
 pub mod motion;
 pub mod poses;
 pub mod rpc;
+pub mod rtde;
 pub mod sockets;
 pub mod strings;
 pub mod time;
@@ -240,11 +244,13 @@ pub fn all() -> &'static [Builtin] {
             sockets::TABLE,
             motion::TABLE,
             conveyor::TABLE,
+            dynamics::TABLE,
             io::TABLE,
             math::TABLE,
             strings::TABLE,
             poses::TABLE,
             rpc::TABLE,
+            rtde::TABLE,
             messages::TABLE,
             time::TABLE,
         ]

@@ -568,15 +568,57 @@ pub(super) const TABLE: &[Builtin] = &[
         "force_mode_set_damping",
         D,
         &[req("damping")],
-        "Accepted.",
-        accept,
+        "Stores the force mode damping (0-1), as force_mode_get_damping reads it.",
+        motion_setting,
     ),
     Builtin::new(
         "force_mode_set_gain_scaling",
         D,
         &[req("scaling")],
-        "Accepted.",
-        accept,
+        "Stores the force mode gain scaling (0-2), as force_mode_get_gain_scaling reads it.",
+        motion_setting,
+    ),
+    Builtin::new(
+        "force_mode_get_damping",
+        D,
+        NONE,
+        "The force mode damping last set (default 0).",
+        motion_setting_get,
+    ),
+    Builtin::new(
+        "force_mode_get_gain_scaling",
+        D,
+        NONE,
+        "The force mode gain scaling last set (default 1).",
+        motion_setting_get,
+    ),
+    Builtin::new(
+        "motion_version_set",
+        D,
+        &[req("version")],
+        "Stores the motion version (1 or 2) for movej/movel (the virtual arm's profiles are the same for both).",
+        motion_setting,
+    ),
+    Builtin::new(
+        "motion_version_get",
+        D,
+        NONE,
+        "The motion version last set (default 1).",
+        motion_setting_get,
+    ),
+    Builtin::new(
+        "jerk_gain_scaling_set",
+        D,
+        &[req("gain")],
+        "Stores the jerk gain scaling (0.01-1) (the virtual arm's profiles have no jerk limit).",
+        motion_setting,
+    ),
+    Builtin::new(
+        "jerk_gain_scaling_get",
+        D,
+        NONE,
+        "The jerk gain scaling last set (default 1).",
+        motion_setting_get,
     ),
     Builtin::new(
         "freedrive_mode",
@@ -994,6 +1036,46 @@ fn set_payload(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
     // The deprecated setters reset the inertia.
     arm.payload_inertia = [0.0; 6];
     Ok(Out::Value(Value::None))
+}
+
+/// Settings stored on the arm and read back by their getters: each refuses a value
+/// outside the range the manual gives, naming it.
+fn motion_setting(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+    let arm = &mut c.arm;
+    let (slot, lo, hi) = match a.name {
+        "force_mode_set_damping" => (&mut arm.force_mode_damping, 0.0, 1.0),
+        "force_mode_set_gain_scaling" => (&mut arm.force_mode_gain_scaling, 0.0, 2.0),
+        "jerk_gain_scaling_set" => (&mut arm.jerk_gain_scaling, 0.01, 1.0),
+        _ => {
+            let v = a.int(0)?;
+            if v != 1 && v != 2 {
+                return Err(Fault::from(format!(
+                    "`motion_version_set`: motion version {v} is not 1 or 2"
+                )));
+            }
+            arm.motion_version = v;
+            return Ok(Out::Value(Value::None));
+        }
+    };
+    let v = a.num(0)?;
+    if !(lo..=hi).contains(&v) {
+        return Err(Fault::from(format!(
+            "`{}`: {} {v} is not in {lo}-{hi}",
+            a.name, a.params[0].name
+        )));
+    }
+    *slot = v;
+    Ok(Out::Value(Value::None))
+}
+
+fn motion_setting_get(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+    let arm = &c.arm;
+    Ok(Out::Value(match a.name {
+        "force_mode_get_damping" => Value::Float(arm.force_mode_damping),
+        "force_mode_get_gain_scaling" => Value::Float(arm.force_mode_gain_scaling),
+        "jerk_gain_scaling_get" => Value::Float(arm.jerk_gain_scaling),
+        _ => Value::Int(arm.motion_version),
+    }))
 }
 
 fn joint_torques(c: &mut Controller, _: &mut Args) -> Result<Out, Fault> {

@@ -1,0 +1,157 @@
+//! The arm's model as the e-Series 5.x manual's internals expose it (PolyScope 5.22 and
+//! later): Jacobians, the mass matrix, the Coriolis and centrifugal torques, and the joint
+//! accelerations. Computed on the virtual arm's model
+//! ([`crate::kinematics::jacobian`], [`crate::kinematics::dynamics`]: rigid links with
+//! UR's published masses and centres of mass, isotropic inertias, no friction).
+//!
+//! - `get_jacobian(q, tcp)`, `get_jacobian_time_derivative(q, qd, tcp)`: 6×6 matrices (a
+//!   list of 6 rows), rows `[vx, vy, vz, wx, wy, wz]` in the base frame, columns by joint;
+//!   `q`, `qd`, `tcp` default to the joints, joint speeds and TCP now. The manual does
+//!   not name the frame; the base frame is chosen so that `get_jacobian() * qd` is the
+//!   speed `get_actual_tcp_speed()` reports.
+//! - `get_mass_matrix(q, include_rotors_inertia=False)`: 6×6, with the active payload
+//!   (`set_target_payload`) on the flange; with `include_rotors_inertia` the rotor
+//!   inertias of [`World::rotor_inertia`](crate::World::rotor_inertia) are added on the
+//!   diagonal.
+//! - `get_coriolis_and_centrifugal_torques(q, qd)`: 6 torques (Nm), `C(q, qd)·qd`.
+//! - `get_target_joint_accelerations()`, `get_actual_joint_accelerations()`: the joint
+//!   accelerations of the motion under way ([`Arm::qdd`](crate::Arm::qdd)); the virtual
+//!   arm follows its target exactly, so both are the same.
+//!
+//! An arm whose DH parameters are not one of [`MODELS`]'s has no dynamics parameters:
+//! the dynamics functions are then a runtime error.
+
+use super::{float_list, floats, opt, Args, Builtin, Default, Domain, Out};
+use crate::controller::Controller;
+use crate::error::Fault;
+use crate::kinematics::dynamics::{self, Payload};
+use crate::kinematics::{self, Model, MODELS};
+use crate::value::Value;
+
+const NONE: &[super::Param] = &[];
+
+pub(super) const TABLE: &[Builtin] = &[
+    Builtin::new(
+        "get_jacobian",
+        Domain::Poses,
+        &[opt("q", Default::Absent), opt("tcp", Default::Absent)],
+        "The 6x6 Jacobian (base frame: linear, then angular speed per joint speed) at q (default: the joints now) through tcp (default: the active TCP).",
+        jacobian,
+    ),
+    Builtin::new(
+        "get_jacobian_time_derivative",
+        Domain::Poses,
+        &[
+            opt("q", Default::Absent),
+            opt("qd", Default::Absent),
+            opt("tcp", Default::Absent),
+        ],
+        "The time derivative of the Jacobian at q moving at qd (defaults: the joints and joint speeds now) through tcp (default: the active TCP).",
+        jacobian_time_derivative,
+    ),
+    Builtin::new(
+        "get_mass_matrix",
+        Domain::Motion,
+        &[
+            opt("q", Default::Absent),
+            opt("include_rotors_inertia", Default::Bool(false)),
+        ],
+        "The 6x6 joint-space mass matrix at q (default: the joints now) with the active payload, rotor inertias added if asked.",
+        mass_matrix,
+    ),
+    Builtin::new(
+        "get_coriolis_and_centrifugal_torques",
+        Domain::Motion,
+        &[opt("q", Default::Absent), opt("qd", Default::Absent)],
+        "The Coriolis and centrifugal joint torques at q moving at qd (defaults: the joints and joint speeds now).",
+        coriolis,
+    ),
+    Builtin::new(
+        "get_target_joint_accelerations",
+        Domain::Motion,
+        NONE,
+        "The joint accelerations of the motion under way (zero at rest).",
+        accelerations,
+    ),
+    Builtin::new(
+        "get_actual_joint_accelerations",
+        Domain::Motion,
+        NONE,
+        "The joint accelerations now (the virtual arm follows its target exactly).",
+        accelerations,
+    ),
+];
+
+/// A 6×6 matrix as URScript's matrix: a list of 6 rows.
+fn matrix(m: [[f64; 6]; 6]) -> Value {
+    Value::List(m.iter().map(|row| floats(*row)).collect())
+}
+
+/// Argument `i`, or `now` if it was left out.
+fn six_or(a: &Args, i: usize, now: [f64; 6]) -> Result<[f64; 6], Fault> {
+    if a.is_absent(i) {
+        Ok(now)
+    } else {
+        a.six(i)
+    }
+}
+
+/// The model whose DH parameters the arm has.
+fn model(c: &Controller, name: &str) -> Result<Model, Fault> {
+    MODELS
+        .iter()
+        .copied()
+        .find(|m| m.dh() == c.dh)
+        .ok_or_else(|| {
+            Fault::from(format!(
+                "`{name}`: the arm's DH parameters are not those of a UR model, so it has no dynamics parameters"
+            ))
+        })
+}
+
+fn payload(c: &Controller) -> Payload {
+    Payload {
+        mass: c.arm.payload_mass,
+        cog: c.arm.payload_cog,
+        inertia: c.arm.payload_inertia,
+    }
+}
+
+fn jacobian(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+    let q = six_or(a, 0, c.arm.q)?;
+    let tcp = six_or(a, 1, c.arm.tcp)?;
+    Ok(Out::Value(matrix(kinematics::jacobian(&c.dh, q, tcp))))
+}
+
+fn jacobian_time_derivative(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+    let q = six_or(a, 0, c.arm.q)?;
+    let qd = six_or(a, 1, c.arm.qd)?;
+    let tcp = six_or(a, 2, c.arm.tcp)?;
+    Ok(Out::Value(matrix(kinematics::jacobian_time_derivative(
+        &c.dh, q, qd, tcp,
+    ))))
+}
+
+fn mass_matrix(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+    let model = model(c, a.name)?;
+    let q = six_or(a, 0, c.arm.q)?;
+    let mut m = dynamics::mass_matrix(model, q, &payload(c));
+    if a.boolean(1)? {
+        for (i, row) in m.iter_mut().enumerate() {
+            row[i] += c.arm.world.rotor_inertia[i];
+        }
+    }
+    Ok(Out::Value(matrix(m)))
+}
+
+fn coriolis(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+    let model = model(c, a.name)?;
+    let q = six_or(a, 0, c.arm.q)?;
+    let qd = six_or(a, 1, c.arm.qd)?;
+    let tau = dynamics::coriolis_and_centrifugal_torques(model, q, qd, &payload(c));
+    Ok(Out::Value(float_list(&tau)))
+}
+
+fn accelerations(c: &mut Controller, _: &mut Args) -> Result<Out, Fault> {
+    Ok(Out::Value(floats(c.arm.qdd)))
+}
