@@ -17,6 +17,7 @@
 //! | [`poses`] | pose arithmetic, rotation vectors and RPY, wrenches, kinematics |
 //! | [`messages`] | `textmsg`, `varmsg`, `popup` |
 //! | [`time`] | `sync`, `sleep`, `get_steptime` |
+//! | [`interpreter`] | `interpreter_mode`, `end_interpreter`, `clear_interpreter` |
 //!
 //! ## The virtual arm
 //! The arm follows each motion command step by step (kinematics and speed profiles, not
@@ -31,6 +32,7 @@ use crate::error::Fault;
 use crate::value::Value;
 
 pub mod conveyor;
+pub mod interpreter;
 pub mod io;
 pub mod math;
 pub mod messages;
@@ -62,6 +64,8 @@ pub enum Domain {
     Messages,
     /// Threads and time.
     Time,
+    /// Interpreter mode.
+    Interpreter,
 }
 
 /// A parameter's default.
@@ -244,6 +248,7 @@ pub fn all() -> &'static [Builtin] {
             poses::TABLE,
             messages::TABLE,
             time::TABLE,
+            interpreter::TABLE,
         ]
         .concat();
         v.sort_by(|a, b| a.name.cmp(b.name));

@@ -1,0 +1,360 @@
+//! Interpreter mode (the interpreter socket's lines) in virtual time: the manual's
+//! "Interpreter Mode" chapter, statement by statement.
+
+use std::time::Duration;
+
+use urscript_interp::interpreter::{Command, Discard, Reply, MAX_LINE, MAX_UNEXECUTED};
+use urscript_interp::{Config, Event, Machine, Program, State};
+
+const STEP: Duration = Duration::from_millis(2);
+
+struct Run {
+    m: Machine,
+    now: Duration,
+    messages: Vec<String>,
+}
+
+impl Run {
+    fn new(src: &str) -> Run {
+        let p = Program::parse(src).unwrap_or_else(|e| panic!("parse: {e}"));
+        let mut r = Run {
+            m: Machine::new(p, Config::default()),
+            now: Duration::ZERO,
+            messages: Vec::new(),
+        };
+        r.m.run_until(Duration::ZERO);
+        r.drain();
+        r
+    }
+
+    fn drain(&mut self) {
+        while let Some(e) = self.m.poll_event() {
+            if let Event::Message(msg) = e {
+                self.messages.push(msg.text);
+            }
+        }
+    }
+
+    /// Runs `n` more steps.
+    fn steps(&mut self, n: u32) {
+        self.now += STEP * n;
+        self.m.run_until(self.now);
+        self.drain();
+    }
+
+    fn send(&mut self, line: &str) -> Reply {
+        self.m
+            .interpreter_line(line.as_bytes())
+            .unwrap_or_else(|| panic!("`{line}` was held"))
+    }
+
+    fn ack(&mut self, line: &str) -> u32 {
+        match self.send(line) {
+            Reply::Ack { id, statement } => {
+                assert_eq!(statement, line);
+                id
+            }
+            other => panic!("`{line}`: {other}"),
+        }
+    }
+
+    fn state(&mut self, command: &str) -> u64 {
+        match self.send(command) {
+            Reply::State { value, command: c } => {
+                assert_eq!(c.word(), command);
+                value
+            }
+            other => panic!("`{command}`: {other}"),
+        }
+    }
+}
+
+#[test]
+fn statements_run_in_order_and_ids_count_up() {
+    let mut r = Run::new("interpreter_mode()\n");
+    assert!(r.m.interpreter_status().active);
+    assert_eq!(r.state("statelastexecuted"), 0);
+    assert_eq!(r.state("statelastinterpreted"), 0);
+    let ids: Vec<u32> = (0..3)
+        .map(|k| r.ack(&format!("textmsg(\"line \", {k})")))
+        .collect();
+    assert_eq!(ids, [1, 2, 3]);
+    assert_eq!(r.state("statelastinterpreted"), 3);
+    assert_eq!(r.state("stateunexecuted"), 3);
+    assert_eq!(r.state("statelastexecuted"), 0);
+    // One statement starts per step.
+    r.steps(1);
+    assert_eq!(r.state("statelastexecuted"), 1);
+    r.steps(5);
+    assert_eq!(r.state("statelastexecuted"), 3);
+    assert_eq!(r.state("stateunexecuted"), 0);
+    assert_eq!(r.messages, ["line 0", "line 1", "line 2"]);
+    assert_eq!(r.m.state(), &State::Running);
+}
+
+#[test]
+fn definitions_and_variables_persist_between_lines() {
+    let mut r = Run::new("interpreter_mode()\n");
+    r.ack("def twice(x): return 2 * x end");
+    r.ack("y = twice(21)");
+    r.ack("textmsg(\"y = \", y)");
+    r.ack("thread t(): textmsg(\"in thread \", y + 1) end");
+    r.ack("h = run t()");
+    r.steps(10);
+    assert_eq!(r.messages, ["y = 42", "in thread 43"]);
+    assert_eq!(r.m.global("y"), Some(&urscript_interp::Value::Int(42)));
+}
+
+#[test]
+fn the_program_scope_is_seen_and_several_statements_share_a_line() {
+    let mut r = Run::new("base = 10\ninterpreter_mode()\n");
+    r.ack("a = base + 1 textmsg(\"a = \", a)");
+    r.steps(3);
+    assert_eq!(r.messages, ["a = 11"]);
+}
+
+#[test]
+fn a_motion_moves_the_arm_and_holds_the_next_statements() {
+    let mut r = Run::new("interpreter_mode()\n");
+    let start = r.m.joint_positions();
+    let target = [0.5, -1.2, 1.0, -1.4, -1.5, 0.3];
+    let mv = r.ack(&format!("movej({target:?}, a=1.4, v=1.05)"));
+    let after = r.ack("textmsg(\"arrived\")");
+    r.steps(5);
+    // The move runs: the arm left its start, the next statement waits.
+    assert_eq!(r.state("statelastexecuted"), u64::from(mv));
+    assert_eq!(r.state("stateunexecuted"), 1);
+    assert_ne!(r.m.joint_positions(), start);
+    assert!(r.messages.is_empty());
+    r.steps(5000);
+    assert_eq!(r.state("statelastexecuted"), u64::from(after));
+    assert_eq!(r.messages, ["arrived"]);
+    for (q, t) in r.m.joint_positions().iter().zip(target) {
+        assert!((q - t).abs() < 1e-6, "{q} vs {t}");
+    }
+}
+
+#[test]
+fn abort_stops_the_move_and_the_next_statement_runs() {
+    let mut r = Run::new("interpreter_mode()\n");
+    r.ack("movej([1.5, -1.2, 1.0, -1.4, -1.5, 0.3], a=1.4, v=1.05)");
+    r.ack("textmsg(\"next\")");
+    r.steps(20);
+    let mid = r.m.joint_positions();
+    assert_eq!(r.state("abort"), 1);
+    r.steps(3);
+    assert_eq!(r.messages, ["next"]);
+    assert_eq!(r.m.joint_positions(), mid, "the arm stopped where it was");
+    // Nothing moves now: a second abort has nothing to stop.
+    assert_eq!(r.state("abort"), 0);
+}
+
+#[test]
+fn skipbuffer_drops_the_statements_not_started() {
+    let mut r = Run::new("interpreter_mode()\n");
+    r.ack("sleep(1)");
+    for k in 0..3 {
+        r.ack(&format!("textmsg({k})"));
+    }
+    r.steps(2);
+    assert_eq!(r.state("skipbuffer"), 3);
+    assert_eq!(r.state("stateunexecuted"), 0);
+    // New statements are accepted right away and run after the sleep.
+    let id = r.ack("textmsg(\"after skip\")");
+    assert_eq!(id, 5);
+    r.steps(600);
+    assert_eq!(r.messages, ["after skip"]);
+}
+
+#[test]
+fn clear_interpreter_removes_what_was_interpreted_and_holds_later_lines() {
+    let mut r = Run::new("kept = 1\ninterpreter_mode()\n");
+    r.ack("def f(): textmsg(\"f\") end");
+    r.ack("made = 2");
+    let clear = r.ack("clear_interpreter()");
+    // Lines after the clear wait for it.
+    assert_eq!(r.m.interpreter_line(b"f()"), None);
+    assert_eq!(r.m.interpreter_line(b"textmsg(kept)"), None);
+    assert_eq!(r.m.poll_interpreter_reply(), None);
+    r.steps(10);
+    assert_eq!(r.state("statelastcleared"), u64::from(clear));
+    // `f` is gone; `kept`, the program's, stays.
+    match r.m.poll_interpreter_reply() {
+        Some(Reply::Discard {
+            reason: Discard::Compile { message, .. },
+            statement,
+        }) => {
+            assert_eq!(statement, "f()");
+            assert!(
+                message.starts_with("compile_error_name_not_found:f:"),
+                "{message}"
+            );
+        }
+        other => panic!("{other:?}"),
+    }
+    match r.m.poll_interpreter_reply() {
+        Some(Reply::Ack { id, statement }) => {
+            assert_eq!(statement, "textmsg(kept)");
+            assert_eq!(id, clear + 1);
+        }
+        other => panic!("{other:?}"),
+    }
+    assert_eq!(r.m.global("made"), None);
+    r.steps(3);
+    assert_eq!(r.messages, ["1"]);
+    // A name can be defined again after the clear.
+    r.ack("def f(): textmsg(\"f again\") end");
+    r.ack("f()");
+    r.steps(4);
+    assert_eq!(r.messages, ["1", "f again"]);
+}
+
+#[test]
+fn end_interpreter_returns_to_the_program() {
+    let mut r = Run::new("interpreter_mode()\ntextmsg(\"back in the program\")\ninterpreter_mode(clearOnEnd=False)\n");
+    r.ack("def g(): textmsg(\"g\") end");
+    r.ack("end_interpreter()");
+    r.steps(5);
+    assert_eq!(r.messages, ["back in the program"]);
+    // The second mode: `g` was cleared by the first mode's end (clearOnEnd=True).
+    assert!(r.m.interpreter_status().active);
+    assert!(matches!(
+        r.send("g()"),
+        Reply::Discard {
+            reason: Discard::Compile { .. },
+            ..
+        }
+    ));
+    r.ack("def h(): textmsg(\"h\") end");
+    r.ack("h()");
+    r.ack("end_interpreter()");
+    r.steps(10);
+    assert_eq!(r.messages, ["back in the program", "h"]);
+    assert_eq!(r.m.state(), &State::Finished);
+    assert!(!r.m.interpreter_status().active);
+}
+
+#[test]
+fn statements_sent_before_the_mode_are_dropped_or_run_as_asked() {
+    // Default: the queue is cleared on entry.
+    let mut r = Run::new("sleep(0.01)\ninterpreter_mode()\n");
+    let id = r.ack("textmsg(\"early\")");
+    r.steps(10);
+    assert!(r.messages.is_empty());
+    assert_eq!(r.state("statelastcleared"), u64::from(id));
+    // clearQueueOnEnter=False: they run.
+    let mut r = Run::new("sleep(0.01)\ninterpreter_mode(clearQueueOnEnter=False)\n");
+    r.ack("textmsg(\"early\")");
+    r.steps(10);
+    assert_eq!(r.messages, ["early"]);
+}
+
+#[test]
+fn bad_lines_are_discarded_with_the_reason() {
+    let mut r = Run::new("interpreter_mode()\n");
+    let long = format!("textmsg(\"{}\")", "x".repeat(MAX_LINE));
+    assert!(matches!(
+        r.send(&long),
+        Reply::Discard { reason: Discard::LineTooLong { len }, .. } if len == long.len()
+    ));
+    let reply = r.send("textmsg(");
+    assert!(
+        reply
+            .to_string()
+            .starts_with("discard: compile error at column"),
+        "{reply}"
+    );
+    assert!(matches!(
+        r.send("interpreter_mode()"),
+        Reply::Discard {
+            reason: Discard::Nested,
+            ..
+        }
+    ));
+    let reply = r.send("textmsg(nowhere)");
+    assert!(
+        reply
+            .to_string()
+            .contains("compile_error_name_not_found:nowhere:"),
+        "{reply}"
+    );
+    let reply = r.send("rq_gripper_open()");
+    assert!(
+        reply
+            .to_string()
+            .contains("compile_error_name_not_found:rq_gripper_open:"),
+        "{reply}"
+    );
+    assert!(matches!(
+        r.send("return 1"),
+        Reply::Discard {
+            reason: Discard::Compile { .. },
+            ..
+        }
+    ));
+    assert!(matches!(
+        r.m.interpreter_line(b"textmsg(\"caf\xe9\")"),
+        Some(Reply::Discard {
+            reason: Discard::NotUtf8,
+            ..
+        })
+    ));
+    // Nothing was interpreted: the next id is 1, and the program still runs.
+    assert_eq!(r.ack("textmsg(\"ok\")"), 1);
+    r.steps(2);
+    assert_eq!(r.messages, ["ok"]);
+}
+
+#[test]
+fn a_full_queue_discards() {
+    let mut r = Run::new("interpreter_mode()\n");
+    r.ack("sleep(10)");
+    r.steps(1);
+    for k in 0..MAX_UNEXECUTED {
+        r.ack(&format!("textmsg({k})"));
+    }
+    assert_eq!(r.state("stateunexecuted"), MAX_UNEXECUTED as u64);
+    let reply = r.send("textmsg(\"one too many\")");
+    assert!(
+        matches!(
+            reply,
+            Reply::Discard {
+                reason: Discard::QueueFull,
+                ..
+            }
+        ),
+        "{reply}"
+    );
+    // A command still answers.
+    assert_eq!(r.state("statelastexecuted"), 1);
+}
+
+#[test]
+fn no_program_no_statement() {
+    let mut r = Run::new("textmsg(\"done\")\n");
+    assert_eq!(r.m.state(), &State::Finished);
+    let reply = r.send("textmsg(1)");
+    assert_eq!(
+        reply.to_string(),
+        "discard: program not running: textmsg(1)"
+    );
+    assert_eq!(r.state("statelastinterpreted"), 0);
+}
+
+#[test]
+fn only_the_main_thread_enters_and_clear_needs_the_mode() {
+    let mut r = Run::new("thread t():\n  interpreter_mode()\nend\nrun t()\nsleep(1)\n");
+    r.steps(2);
+    let State::Error(e) = r.m.state() else {
+        panic!("{:?}", r.m.state())
+    };
+    assert!(e.message().contains("main thread"), "{}", e.message());
+    let r = Run::new("clear_interpreter()\n");
+    assert!(matches!(r.m.state(), State::Error(_)));
+}
+
+#[test]
+fn commands_parse_alone_on_their_line() {
+    assert_eq!(Command::parse(" skipbuffer "), Some(Command::SkipBuffer));
+    assert_eq!(Command::parse("abort textmsg(1)"), None);
+}
