@@ -43,6 +43,8 @@ impl Controller {
                 "0",
                 "--rtde-port",
                 "0",
+                "--interpreter-port",
+                "0",
             ])
             .stdin(Stdio::null())
             .stdout(Stdio::piped())
@@ -61,7 +63,7 @@ impl Controller {
             }
         });
         let mut ports = HashMap::new();
-        while ports.len() < 5 {
+        while ports.len() < 6 {
             let v = events.recv_timeout(WAIT).expect("listening events");
             assert_eq!(v["event"], "listening", "{v}");
             let addr = v["addr"].as_str().unwrap();

@@ -43,7 +43,7 @@ impl Controller {
             .args(["controller", "--json"])
             .args(["--dashboard-port", "0", "--primary-port", "0"])
             .args(["--secondary-port", "0", "--realtime-port", "0"])
-            .args(["--rtde-port", "0"])
+            .args(["--rtde-port", "0", "--interpreter-port", "0"])
             .stdin(Stdio::null())
             .stdout(Stdio::piped())
             .stderr(Stdio::null())
@@ -63,7 +63,7 @@ impl Controller {
             }
         });
         let mut ports = HashMap::new();
-        while ports.len() < 5 {
+        while ports.len() < 6 {
             let v = events.recv_timeout(WAIT).expect("listening events");
             assert_eq!(v["event"], "listening", "{v}");
             let addr = v["addr"].as_str().unwrap();

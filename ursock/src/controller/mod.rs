@@ -34,6 +34,12 @@ pub struct ControllerOptions {
     /// The RTDE interface's port.
     #[arg(long, default_value_t = 30004)]
     pub rtde_port: u16,
+    /// The interpreter socket's port (interpreter mode: a program that called
+    /// `interpreter_mode()` runs the statements sent here, one per line, and answers each
+    /// line `ack: ID: ...`, `discard: REASON: ...` or `state: N: ...`). Served for
+    /// PolyScope 5.10 and later only, as on the controller.
+    #[arg(long, default_value_t = 30020)]
+    pub interpreter_port: u16,
     /// Serve only the dashboard server.
     #[arg(long)]
     pub no_streams: bool,
@@ -73,6 +79,13 @@ fn valid_version(v: &str) -> bool {
         && parts
             .iter()
             .all(|p| !p.is_empty() && p.len() <= 9 && p.bytes().all(|b| b.is_ascii_digit()))
+}
+
+/// Whether a PolyScope version has interpreter mode (5.10 and later, e-Series).
+fn has_interpreter_mode(version: &str) -> bool {
+    let mut parts = version.split('.').map(|p| p.parse::<u32>().unwrap_or(0));
+    let (major, minor) = (parts.next().unwrap_or(0), parts.next().unwrap_or(0));
+    (major, minor) >= (5, 10)
 }
 
 /// A server event as a report event.
@@ -193,6 +206,8 @@ pub fn run(opts: ControllerOptions) -> Result<(), String> {
             secondary: stream(opts.secondary_port),
             realtime: stream(opts.realtime_port),
             rtde: stream(opts.rtde_port),
+            interpreter: stream(opts.interpreter_port)
+                .filter(|_| has_interpreter_mode(&opts.polyscope)),
         },
         config: Config {
             model,
