@@ -358,3 +358,101 @@ fn commands_parse_alone_on_their_line() {
     assert_eq!(Command::parse(" skipbuffer "), Some(Command::SkipBuffer));
     assert_eq!(Command::parse("abort textmsg(1)"), None);
 }
+
+#[test]
+fn a_clear_stops_the_threads_the_lines_started() {
+    let mut r = Run::new("interpreter_mode()\n");
+    r.ack("thread ticker(): while True: textmsg(\"tick\") sleep(0.01) end end");
+    r.ack("run ticker()");
+    r.steps(30);
+    let ticks = r.messages.len();
+    assert!(ticks >= 2, "{:?}", r.messages);
+    r.ack("clear_interpreter()");
+    r.steps(3);
+    let after_clear = r.messages.len();
+    r.steps(100);
+    assert_eq!(r.messages.len(), after_clear, "the thread still runs");
+    assert_eq!(r.m.state(), &State::Running);
+}
+
+#[test]
+fn end_interpreter_from_another_thread_ends_the_mode() {
+    let mut r = Run::new(
+        "thread stopper():\n  sleep(0.1)\n  end_interpreter()\nend\nrun stopper()\ninterpreter_mode()\ntextmsg(\"out\")\n",
+    );
+    r.steps(10);
+    assert!(r.m.interpreter_status().active);
+    r.steps(100);
+    assert_eq!(r.messages, ["out"]);
+    assert_eq!(r.m.state(), &State::Finished);
+}
+
+/// Whatever a client sends, the machine neither panics nor leaves interpreter mode
+/// broken: it still runs a statement after.
+#[test]
+fn hostile_lines_do_not_break_the_machine() {
+    let mut r = Run::new("interpreter_mode()\n");
+    let deep = format!("x = {}1{}", "(".repeat(500), ")".repeat(500));
+    let lines = [
+        "def",
+        "def f(",
+        "def g(): textmsg(1)",
+        "end",
+        "thread",
+        "run nothing()",
+        "while False: end",
+        "global",
+        "x[3] = 1",
+        "\u{0}\u{7f}",
+        "if True: textmsg(1) else: halt",
+        "kill 3",
+        "join 7",
+        "enter_critical",
+        "break",
+        "\"unterminated",
+        "1 +",
+        "textmsg(1) textmsg(2",
+        &deep,
+        "def f(): return 1 end def f(): return 2 end",
+        "     ",
+        "skipbuffer textmsg(1)",
+        "abort",
+        "\r",
+    ];
+    for line in lines {
+        let reply = r.m.interpreter_line(line.as_bytes());
+        r.steps(1);
+        assert_eq!(r.m.state(), &State::Running, "after {line:?}: {reply:?}");
+    }
+    let id = r.ack("textmsg(\"still here\")");
+    assert_eq!(r.state("statelastinterpreted"), u64::from(id));
+    r.steps(2000);
+    assert!(
+        r.messages.iter().any(|m| m == "still here"),
+        "{:?}",
+        r.messages
+    );
+}
+
+#[test]
+fn clear_on_end_false_keeps_definitions_for_the_next_mode() {
+    let mut r = Run::new("interpreter_mode(clearOnEnd=False)\ninterpreter_mode()\n");
+    r.ack("def kept(): textmsg(\"kept\") end");
+    r.ack("end_interpreter()");
+    r.steps(5);
+    assert!(r.m.interpreter_status().active, "the second mode");
+    r.ack("kept()");
+    r.steps(3);
+    assert_eq!(r.messages, ["kept"]);
+    // Nothing was cleared at the first end.
+    assert_eq!(r.state("statelastcleared"), 0);
+}
+
+#[test]
+fn a_runtime_error_in_a_statement_stops_the_program() {
+    let mut r = Run::new("interpreter_mode()\n");
+    r.ack("l = [1, 2]");
+    r.ack("textmsg(l[5])");
+    r.steps(5);
+    assert!(matches!(r.m.state(), State::Error(_)), "{:?}", r.m.state());
+}
