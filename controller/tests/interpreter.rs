@@ -235,3 +235,27 @@ fn a_client_drives_interpreter_mode_over_tcp() {
     );
     server.stop();
 }
+
+#[test]
+fn a_controller_before_polyscope_5_10_has_no_interpreter_port() {
+    let start = |polyscope: &str| {
+        Server::start(
+            ServerOptions {
+                ports: Ports::any(),
+                config: urscript_controller::Config {
+                    polyscope: polyscope.into(),
+                    ..urscript_controller::Config::default()
+                },
+                ..ServerOptions::default()
+            },
+            |_| {},
+        )
+        .expect("start")
+    };
+    for (version, served) in [("3.15.8", false), ("5.9.4", false), ("5.10.0", true)] {
+        let server = start(version);
+        assert_eq!(server.addr("interpreter").is_some(), served, "{version}");
+        assert!(server.addr("rtde").is_some());
+        server.stop();
+    }
+}

@@ -71,7 +71,8 @@ pub struct Ports {
     pub realtime: Option<u16>,
     /// RTDE (30004).
     pub rtde: Option<u16>,
-    /// The interpreter socket (30020; e-Series, PolyScope 5.10+).
+    /// The interpreter socket (30020), served only when the controller has interpreter
+    /// mode ([`Config::has_interpreter_mode`]: PolyScope 5.10 and later).
     pub interpreter: Option<u16>,
 }
 
@@ -364,7 +365,10 @@ impl Server {
             realtime: stream(p.realtime, "realtime")?,
             rtde: stream(p.rtde, "rtde")?,
         };
-        let interpreter = match p.interpreter {
+        let interpreter = match p
+            .interpreter
+            .filter(|_| options.config.has_interpreter_mode())
+        {
             Some(port) => {
                 let (l, a) = bind(port, "interpreter")?;
                 addrs.push(("interpreter", a));

@@ -81,13 +81,6 @@ fn valid_version(v: &str) -> bool {
             .all(|p| !p.is_empty() && p.len() <= 9 && p.bytes().all(|b| b.is_ascii_digit()))
 }
 
-/// Whether a PolyScope version has interpreter mode (5.10 and later, e-Series).
-fn has_interpreter_mode(version: &str) -> bool {
-    let mut parts = version.split('.').map(|p| p.parse::<u32>().unwrap_or(0));
-    let (major, minor) = (parts.next().unwrap_or(0), parts.next().unwrap_or(0));
-    (major, minor) >= (5, 10)
-}
-
 /// A server event as a report event.
 fn report_event(e: ServerEvent) -> Option<Event> {
     let t = report::now();
@@ -206,8 +199,8 @@ pub fn run(opts: ControllerOptions) -> Result<(), String> {
             secondary: stream(opts.secondary_port),
             realtime: stream(opts.realtime_port),
             rtde: stream(opts.rtde_port),
-            interpreter: stream(opts.interpreter_port)
-                .filter(|_| has_interpreter_mode(&opts.polyscope)),
+            // Served for PolyScope 5.10+ only (`Config::has_interpreter_mode`).
+            interpreter: stream(opts.interpreter_port),
         },
         config: Config {
             model,
