@@ -94,6 +94,52 @@ fn q_actual(package: &[u8]) -> [f64; 6] {
     q
 }
 
+/// Releases the brakes and waits until the arm is RUNNING.
+fn running(server: &Server, deadline: Instant) {
+    server
+        .with_cell(|cell, now| cell.controller().brake_release(now))
+        .expect("brake release");
+    while server.with_cell(|cell, now| cell.controller().robot_mode(now)) != RobotMode::Running {
+        assert!(Instant::now() < deadline, "the arm never got RUNNING");
+        std::thread::sleep(Duration::from_millis(10));
+    }
+}
+
+/// Waits until the running program is in interpreter mode.
+fn in_interpreter_mode(server: &Server, deadline: Instant) {
+    while !server.with_cell(|cell, _| cell.interpreter_status().is_some_and(|s| s.active)) {
+        assert!(Instant::now() < deadline, "interpreter mode never began");
+        std::thread::sleep(Duration::from_millis(10));
+    }
+}
+
+#[test]
+fn a_bare_interpreter_mode_line_on_the_secondary_port_opens_the_mode() {
+    let (server, events) = start();
+    let deadline = Instant::now() + WAIT;
+    running(&server, deadline);
+    let mut interp = Client::new(connect(&server, "interpreter"));
+    let mut secondary = connect(&server, "secondary");
+    secondary.write_all(b"interpreter_mode()\n").unwrap();
+    in_interpreter_mode(&server, deadline);
+    assert_eq!(
+        interp.say("textmsg(\"over 30020\")"),
+        "ack: 1: textmsg(\"over 30020\")"
+    );
+    message(&events, "over 30020");
+    assert_eq!(interp.say("end_interpreter()"), "ack: 2: end_interpreter()");
+    wait_for(&events, |e| {
+        matches!(
+            e,
+            ServerEvent::Program {
+                what: "finished",
+                ..
+            }
+        )
+    });
+    server.stop();
+}
+
 #[test]
 fn the_interpreter_port_is_served() {
     let (server, _events) = start();
@@ -136,14 +182,8 @@ fn a_client_drives_interpreter_mode_over_tcp() {
     assert_eq!(interp.say("stateunexecuted"), "state: 0: stateunexecuted");
 
     // The arm RUNNING, then the program, sent on the secondary interface.
-    server
-        .with_cell(|cell, now| cell.controller().brake_release(now))
-        .expect("brake release");
     let deadline = Instant::now() + WAIT;
-    while server.with_cell(|cell, now| cell.controller().robot_mode(now)) != RobotMode::Running {
-        assert!(Instant::now() < deadline, "the arm never got RUNNING");
-        std::thread::sleep(Duration::from_millis(10));
-    }
+    running(&server, deadline);
     let mut secondary = connect(&server, "secondary");
     secondary
         .write_all(
@@ -159,10 +199,7 @@ fn a_client_drives_interpreter_mode_over_tcp() {
             }
         )
     });
-    while !server.with_cell(|cell, _| cell.interpreter_status().is_some_and(|s| s.active)) {
-        assert!(Instant::now() < deadline, "interpreter mode never began");
-        std::thread::sleep(Duration::from_millis(10));
-    }
+    in_interpreter_mode(&server, deadline);
 
     // A motion, then a message after it.
     let target = [0.4, -1.3, 1.1, -1.2, -1.5, 0.25];
