@@ -41,11 +41,14 @@
 //! - Discard reasons are our words (see [`Discard`]); the manual gives only the form.
 //! - Each statement starts at the step after the previous one ended (one step at least
 //!   per statement).
-//! - Plain assignments in an interpreted line make globals of the program (the manual
-//!   says new globals are "not supported" without saying what happens); a read of a name
-//!   the program never mentioned is discarded as `compile_error_name_not_found`.
-//!   Interpreted statements see the program's globals, not the locals of a function that
-//!   called `interpreter_mode()`.
+//! - Statements run in the scope `interpreter_mode()` was called from (the manual):
+//!   they read and write the locals of the function that called it (and their changes
+//!   stay, as the manual says of "local variables from the enclosing scope") and the
+//!   program's globals. A plain assignment to a new name makes a global of the program
+//!   (the manual says declaring new globals is "not supported" without saying what
+//!   happens), removed again by a clear. A read of a name the program never mentioned is
+//!   discarded as `compile_error_name_not_found`; one it mentions but never assigned is
+//!   a runtime error when the statement runs.
 //! - `abort` stops the arm at once (the arm model has no deceleration ramp) and the
 //!   moving thread goes on with its next statement.
 //! - The bounds, which the manual does not give numbers for (it says an upper limit

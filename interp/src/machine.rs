@@ -1037,11 +1037,16 @@ impl Machine {
                         Value::None
                     };
                     let base = frame.base;
-                    th.frames.pop();
+                    let popped = th.frames.pop();
                     th.stack.truncate(base);
                     if th.id == 0 && self.interp.executing == Some(th.frames.len()) {
-                        // An interpreted statement ended: back to interpreter mode.
+                        // An interpreted statement ended: back to interpreter mode; the
+                        // locals it borrowed go back to the function that called
+                        // `interpreter_mode()`.
                         self.interp.executing = None;
+                        if let (Some(p), Some(caller)) = (popped, th.frames.last_mut()) {
+                            caller.locals = p.locals;
+                        }
                         th.wait = Wait::Interpreter;
                         return Ok(Flow::Blocked);
                     }
@@ -1911,10 +1916,17 @@ impl Machine {
                 self.interp.executing = Some(th.frames.len());
                 self.interp.status.last_executed = q.id;
                 let base = th.stack.len();
+                // The statement runs in the scope `interpreter_mode()` was called from:
+                // it borrows that function's locals (given back when it ends).
+                let locals = th
+                    .frames
+                    .last_mut()
+                    .map(|f| std::mem::take(&mut f.locals))
+                    .unwrap_or_default();
                 th.frames.push(Frame {
                     func: q.func,
                     pc: 0,
-                    locals: Vec::new(),
+                    locals,
                     base,
                 });
                 (true, Wait::None)
@@ -1956,6 +1968,13 @@ impl Machine {
         }
         Arc::make_mut(&mut self.prog).truncate(base);
         self.globals.truncate(base.names);
+        // Locals the statements made in the main thread's frames go with their names.
+        let names = base.names as Sym;
+        if let Some(main) = self.threads.iter_mut().find(|t| t.id == 0) {
+            for f in &mut main.frames {
+                f.locals.retain(|(s, _)| *s < names);
+            }
+        }
         self.site_stubs.truncate(base.sites);
     }
 

@@ -456,3 +456,22 @@ fn a_runtime_error_in_a_statement_stops_the_program() {
     r.steps(5);
     assert!(matches!(r.m.state(), State::Error(_)), "{:?}", r.m.state());
 }
+
+#[test]
+fn statements_run_in_the_scope_interpreter_mode_was_called_from() {
+    let mut r = Run::new(
+        "def helper(k):\n  speed = 5\n  interpreter_mode()\n  textmsg(\"speed after: \", speed)\nend\nhelper(3)\n",
+    );
+    assert!(r.m.interpreter_status().active);
+    r.ack("textmsg(\"k \", k)");
+    r.ack("textmsg(\"speed \", speed)");
+    r.ack("speed = speed + k");
+    r.ack("fresh = 1");
+    r.ack("end_interpreter()");
+    r.steps(10);
+    assert_eq!(r.messages, ["k 3", "speed 5", "speed after: 8"]);
+    assert_eq!(r.m.state(), &State::Finished);
+    // `speed` stayed the function's local; the new name was a global, cleared at the end.
+    assert_eq!(r.m.global("speed"), None);
+    assert_eq!(r.m.global("fresh"), None);
+}
