@@ -475,3 +475,58 @@ fn statements_run_in_the_scope_interpreter_mode_was_called_from() {
     assert_eq!(r.m.global("speed"), None);
     assert_eq!(r.m.global("fresh"), None);
 }
+
+mod arbitrary_lines {
+    use super::*;
+    use proptest::prelude::*;
+
+    /// One interpreter line: statements on one line, commands, junk.
+    fn line() -> impl Strategy<Value = String> {
+        prop_oneof![
+            Just("def f(a, b=1): return a + b end".to_string()),
+            Just("thread t(): sleep(0.01) textmsg(\"t\") end".to_string()),
+            Just("h = run t()".to_string()),
+            Just("kill h".to_string()),
+            Just("x = f(1)".to_string()),
+            Just("x = x + 1".to_string()),
+            Just("textmsg(x)".to_string()),
+            Just("movej([0.2, -1.4, 1.2, -1.3, -1.6, 0.1], a=3, v=3)".to_string()),
+            Just("movel(p[0.3, -0.2, 0.4, 0, 3.14, 0], a=1, v=1)".to_string()),
+            Just("sleep(0.004)".to_string()),
+            Just("clear_interpreter()".to_string()),
+            Just("end_interpreter()".to_string()),
+            Just("interpreter_mode()".to_string()),
+            Just("skipbuffer".to_string()),
+            Just("abort".to_string()),
+            Just("statelastexecuted".to_string()),
+            Just("stateunexecuted".to_string()),
+            Just("if x > 2: textmsg(\"big\") else: x = 0 end".to_string()),
+            "[ -~]{0,40}",
+        ]
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(64))]
+        /// Whatever lines arrive, in any order, with steps between: no panic, the numbers
+        /// stay consistent, the queue stays bounded.
+        #[test]
+        fn any_lines_keep_the_machine_consistent(
+            lines in proptest::collection::vec((line(), 0u32..4), 0..40)
+        ) {
+            let mut r = Run::new("x = 0\ninterpreter_mode(clearOnEnd=False)\ninterpreter_mode()\n");
+            for (text, steps) in lines {
+                let reply = r.m.interpreter_line(text.as_bytes());
+                if let Some(Reply::Ack { id, .. }) = &reply {
+                    prop_assert_eq!(u64::from(*id), r.state("statelastinterpreted"));
+                }
+                r.steps(steps);
+                while r.m.poll_interpreter_reply().is_some() {}
+                let s = r.m.interpreter_status();
+                prop_assert!(s.last_executed <= s.last_interpreted);
+                prop_assert!(s.last_cleared <= s.last_interpreted);
+                prop_assert!(s.unexecuted <= MAX_UNEXECUTED);
+            }
+            r.steps(500);
+        }
+    }
+}
