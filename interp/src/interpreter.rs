@@ -49,8 +49,10 @@
 //!   happens), removed again by a clear. A read of a name the program never mentioned is
 //!   discarded as `compile_error_name_not_found`; one it mentions but never assigned is
 //!   a runtime error when the statement runs.
-//! - `abort` stops the arm at once (the arm model has no deceleration ramp) and the
-//!   moving thread goes on with its next statement.
+//! - `abort` stops the arm at once (the arm model has no deceleration ramp; a blend
+//!   radius does not change that) and the moving thread goes on with its next statement.
+//!   It stops any joint or tool motion (`movej`, `movel`, and `movep`/`servoj`, which use
+//!   the same motions here), not `speedj`/`speedl`.
 //! - The bounds, which the manual does not give numbers for (it says an upper limit
 //!   exists): [`MAX_LINE`], [`MAX_UNEXECUTED`], [`MAX_INTERPRETED`].
 

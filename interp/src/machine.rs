@@ -1766,7 +1766,22 @@ impl Machine {
         }
     }
 
-    fn interpreter_command(
+    /// Runs a command at once, as a line that is one does
+    /// ([`interpreter_line`](Self::interpreter_line)): `skipbuffer` (drops the statements
+    /// not started; answers how many), `abort` (stops the `movej`/`movel` under way;
+    /// answers 1 if one was stopped), or a state command (answers its number).
+    ///
+    /// ```
+    /// use urscript_interp::interpreter::Command;
+    /// use urscript_interp::{Config, Machine, Program};
+    /// let mut m = Machine::new(Program::parse("interpreter_mode()\n").unwrap(), Config::default());
+    /// m.run_until(std::time::Duration::ZERO);
+    /// m.interpreter_line(b"sleep(1)");
+    /// m.interpreter_line(b"textmsg(1)");
+    /// let r = m.interpreter_command(Command::SkipBuffer);
+    /// assert_eq!(r.to_string(), "state: 2: skipbuffer");
+    /// ```
+    pub fn interpreter_command(
         &mut self,
         command: crate::interpreter::Command,
     ) -> crate::interpreter::Reply {
