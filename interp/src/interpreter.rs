@@ -41,6 +41,13 @@
 //! - Discard reasons are our words (see [`Discard`]); the manual gives only the form.
 //! - Each statement starts at the step after the previous one ended (one step at least
 //!   per statement).
+//! - A statement is compiled and acknowledged when it arrives, also before the program
+//!   calls `interpreter_mode()` (the manual says such statements are queued, not when
+//!   they are answered); the queue's entry clear counts them in `statelastcleared`.
+//! - A line that arrives after an acknowledged `clear_interpreter()` or
+//!   `end_interpreter()` that has not run yet is held (no reply yet) and compiled and
+//!   answered once that statement has run: the manual says so for the clear; the end
+//!   clears too (by default), so it is treated alike.
 //! - Statements run in the scope `interpreter_mode()` was called from (the manual):
 //!   they read and write the locals of the function that called it (and their changes
 //!   stay, as the manual says of "local variables from the enclosing scope") and the
