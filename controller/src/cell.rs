@@ -18,10 +18,24 @@
 //!   safety stop that cuts power) stops it: its sockets close, the arm keeps its state.
 //! - The arm keeps joints, outputs and registers from one program to the next
 //!   ([`urscript_interp::Machine::with_arm`]).
+//!
+//! # Interpreter mode (port 30020)
+//! [`Cell::interpreter_line`] takes one line of an interpreter client (e-Series,
+//! PolyScope 5.10+) and answers it as [`urscript_interp::interpreter`] documents: the
+//! running program compiles and queues the statement (`ack: <id>: <statement>`), or a
+//! command is answered at once (`state: <n>: <command>`). As the manual says, the socket
+//! takes statements whenever a program runs (those sent before the program calls
+//! `interpreter_mode()` wait in the queue); with no program running a statement is
+//! `discard: program not running: <statement>` and the state commands answer 0 (each
+//! program has its own interpreter: its ids start at 1). A line held behind a
+//! `clear_interpreter()` is answered later, to the connection that sent it
+//! ([`Cell::interpreter_replies`]); if the program stops first, it is answered
+//! `discard: program not running`.
 
 use std::collections::VecDeque;
 use std::time::Duration;
 
+use urscript_interp::interpreter::{self, Command, Discard};
 use urscript_interp::kinematics;
 use urscript_interp::{Arm, Event, Machine, Program, RuntimeError, State};
 
@@ -117,6 +131,13 @@ pub struct Cell {
     now: Duration,
     /// `NeedProgram` asked and not answered yet.
     awaiting_load: bool,
+    /// The interpreter connections whose lines the program holds (behind a
+    /// `clear_interpreter()`), in the order it will answer them, with the lines (at most
+    /// [`interpreter::MAX_UNEXECUTED`]).
+    held: VecDeque<(u64, String)>,
+    /// Answers to held lines, for their connections (at most
+    /// [`interpreter::MAX_UNEXECUTED`]; the oldest go first past it).
+    deferred: VecDeque<(u64, interpreter::Reply)>,
 }
 
 impl std::fmt::Debug for Cell {
@@ -142,7 +163,68 @@ impl Cell {
             speed_fraction: 1.0,
             now: Duration::ZERO,
             awaiting_load: false,
+            held: VecDeque::new(),
+            deferred: VecDeque::new(),
         }
+    }
+
+    /// One line (without its `\n`) from interpreter client `conn`, at `now`: the reply to
+    /// write back, or `None` when the program holds the line behind a
+    /// `clear_interpreter()` (its reply comes from [`Cell::interpreter_replies`]). See the
+    /// module docs.
+    pub fn interpreter_line(
+        &mut self,
+        conn: u64,
+        line: &[u8],
+        now: Duration,
+    ) -> Option<interpreter::Reply> {
+        self.advance(now);
+        let Some(r) = &mut self.running else {
+            let text = String::from_utf8_lossy(line);
+            let text = text.strip_suffix('\r').unwrap_or(&text);
+            return Some(match Command::parse(text) {
+                Some(command) => interpreter::Reply::State { value: 0, command },
+                None => interpreter::Reply::Discard {
+                    reason: Discard::NotRunning,
+                    statement: text.to_string(),
+                },
+            });
+        };
+        let reply = r.machine.interpreter_line(line);
+        if reply.is_none() {
+            let text = String::from_utf8_lossy(line);
+            let text = text.strip_suffix('\r').unwrap_or(&text).to_string();
+            self.held.push_back((conn, text));
+        }
+        reply
+    }
+
+    /// The replies to `conn`'s held lines that are ready, oldest first.
+    pub fn interpreter_replies(&mut self, conn: u64) -> Vec<interpreter::Reply> {
+        let mut out = Vec::new();
+        self.deferred.retain(|(c, r)| {
+            if *c == conn {
+                out.push(r.clone());
+                false
+            } else {
+                true
+            }
+        });
+        out
+    }
+
+    /// The running program's interpreter-mode numbers (`None`: no program runs).
+    pub fn interpreter_status(&self) -> Option<interpreter::Status> {
+        self.running
+            .as_ref()
+            .map(|r| r.machine.interpreter_status())
+    }
+
+    fn defer(&mut self, conn: u64, reply: interpreter::Reply) {
+        if self.deferred.len() >= interpreter::MAX_UNEXECUTED {
+            self.deferred.pop_front();
+        }
+        self.deferred.push_back((conn, reply));
     }
 
     /// The interpreter configuration of a controller: its model, and the step of its
@@ -349,6 +431,14 @@ impl Cell {
             arm.qd = [0.0; 6];
             arm.tcp_speed = [0.0; 6];
             self.arm = Some(arm);
+            // Lines held behind a clear that never ran: no program runs for them now.
+            while let Some((conn, statement)) = self.held.pop_front() {
+                let reply = interpreter::Reply::Discard {
+                    reason: Discard::NotRunning,
+                    statement,
+                };
+                self.defer(conn, reply);
+            }
             self.push(CellEvent::ProgramEnded { name: r.name, how });
         }
     }
@@ -404,6 +494,10 @@ impl Cell {
         while let Some(e) = r.machine.poll_event() {
             out.push(e);
         }
+        let mut replies = Vec::new();
+        while let Some(reply) = r.machine.poll_interpreter_reply() {
+            replies.push(reply);
+        }
         let end = match r.machine.state() {
             State::Running => None,
             State::Finished => Some(Ended::Finished),
@@ -412,6 +506,11 @@ impl Cell {
         };
         for e in out {
             self.push(CellEvent::Program(e));
+        }
+        for reply in replies {
+            if let Some((conn, _)) = self.held.pop_front() {
+                self.defer(conn, reply);
+            }
         }
         if let Some(how) = end {
             self.end_running(how);

@@ -340,6 +340,23 @@ impl Config {
         }
     }
 
+    /// Whether the controller has interpreter mode and its socket (30020): PolyScope 5.10
+    /// and later (UR's "Interpreter mode" article: "SW versions: 5.10 above", "e-Series
+    /// only").
+    ///
+    /// ```
+    /// use urscript_controller::Config;
+    /// let at = |v: &str| Config { polyscope: v.into(), ..Config::default() }.has_interpreter_mode();
+    /// assert!(at("5.10.0") && at("5.21.0.1234567"));
+    /// assert!(!at("5.9.4") && !at("3.15.8"));
+    /// ```
+    pub fn has_interpreter_mode(&self) -> bool {
+        let mut parts = self.polyscope.split('.').map(|p| p.parse::<u32>().ok());
+        let major = parts.next().flatten().unwrap_or(0);
+        let minor = parts.next().flatten().unwrap_or(0);
+        (major, minor) >= (5, 10)
+    }
+
     /// The major version: 5 for e-Series, 3 for CB3.
     pub fn major(&self) -> u32 {
         self.polyscope

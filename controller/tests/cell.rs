@@ -270,3 +270,57 @@ fn the_primary_interfaces_unlock_waits_for_the_hold_then_releases() {
         SafetyStatus::ProtectiveStop
     );
 }
+
+#[test]
+fn interpreter_lines_reach_the_program_and_late_replies_their_connection() {
+    let (mut cell, _dash) = ready_cell();
+    let say = |cell: &mut Cell, conn: u64, line: &str, t: u64| {
+        cell.interpreter_line(conn, line.as_bytes(), ms(t))
+            .map(|r| r.to_string())
+    };
+    let replies = |cell: &mut Cell, conn: u64| -> Vec<String> {
+        cell.interpreter_replies(conn)
+            .iter()
+            .map(ToString::to_string)
+            .collect()
+    };
+    assert_eq!(
+        say(&mut cell, 1, "textmsg(1)", 2000).unwrap(),
+        "discard: program not running: textmsg(1)"
+    );
+    assert_eq!(
+        say(&mut cell, 1, "statelastinterpreted", 2000).unwrap(),
+        "state: 0: statelastinterpreted"
+    );
+    cell.submit(
+        Submitted::Program("def remote():\n  interpreter_mode()\nend\n".into()),
+        ms(2000),
+    );
+    assert!(cell.interpreter_status().unwrap().active);
+    assert_eq!(
+        say(&mut cell, 1, "clear_interpreter()", 2002).unwrap(),
+        "ack: 1: clear_interpreter()"
+    );
+    // Two connections' lines wait behind the clear; each gets its own reply.
+    assert_eq!(say(&mut cell, 2, "textmsg(\"two\")\r", 2002), None);
+    assert_eq!(say(&mut cell, 1, "textmsg(\"one\")", 2002), None);
+    assert!(replies(&mut cell, 1).is_empty());
+    cell.advance(ms(2010));
+    assert_eq!(replies(&mut cell, 1), ["ack: 3: textmsg(\"one\")"]);
+    assert_eq!(replies(&mut cell, 2), ["ack: 2: textmsg(\"two\")"]);
+    assert!(replies(&mut cell, 1).is_empty(), "given once");
+    let shown = texts(&events(&mut cell));
+    assert_eq!(shown, ["two", "one"]);
+    // A line held when the program is replaced: no program runs for it.
+    assert_eq!(
+        say(&mut cell, 3, "sleep(10)", 2012).unwrap(),
+        "ack: 4: sleep(10)"
+    );
+    say(&mut cell, 3, "clear_interpreter()", 2012).unwrap();
+    assert_eq!(say(&mut cell, 3, "textmsg(3)", 2012), None);
+    cell.submit(Submitted::Program("textmsg(\"next\")\n".into()), ms(2020));
+    assert_eq!(
+        replies(&mut cell, 3),
+        ["discard: program not running: textmsg(3)"]
+    );
+}

@@ -66,10 +66,17 @@ fn a_test_starts_a_controller_drives_it_and_stops_it() {
     let services: Vec<&str> = server.addrs().iter().map(|(s, _)| *s).collect();
     assert_eq!(
         services,
-        ["dashboard", "primary", "secondary", "realtime", "rtde"]
+        [
+            "dashboard",
+            "primary",
+            "secondary",
+            "realtime",
+            "rtde",
+            "interpreter"
+        ]
     );
     // The listening events came before start returned.
-    let first: Vec<ServerEvent> = events.try_iter().take(5).collect();
+    let first: Vec<ServerEvent> = events.try_iter().take(6).collect();
     assert!(first
         .iter()
         .all(|e| matches!(e, ServerEvent::Listening { .. })));

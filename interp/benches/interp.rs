@@ -130,5 +130,40 @@ fn arm_model(c: &mut Criterion) {
     });
 }
 
-criterion_group!(benches, statements, servo_step, arm_model);
+/// Interpreter mode: 100 statement lines compiled into the running program
+/// (`Machine::interpreter_line`), run (one a step), then `clear_interpreter()`, as UR's
+/// example client clears after a batch.
+fn interpreter_lines(c: &mut Criterion) {
+    const LINES: usize = 100;
+    let program = Program::parse("total = 0\ninterpreter_mode()\n").unwrap();
+    let mut m = Machine::new(program, Config::default());
+    let mut now = Duration::ZERO;
+    m.run_until(now);
+    let lines: Vec<String> = (0..LINES)
+        .map(|k| format!("total = total + {k} q = [total, {k}, 0.5]"))
+        .collect();
+    let mut g = c.benchmark_group("interp");
+    g.throughput(Throughput::Elements(LINES as u64));
+    g.bench_function("interpreter_mode_100_lines_run_and_cleared", |b| {
+        b.iter(|| {
+            for line in &lines {
+                let _ = m.interpreter_line(line.as_bytes());
+            }
+            let _ = m.interpreter_line(b"clear_interpreter()");
+            now += Duration::from_millis(2) * (LINES as u32 + 3);
+            m.run_until(now);
+        })
+    });
+    assert_eq!(m.state(), &State::Running);
+    assert_eq!(m.interpreter_status().unexecuted, 0);
+    g.finish();
+}
+
+criterion_group!(
+    benches,
+    statements,
+    servo_step,
+    arm_model,
+    interpreter_lines
+);
 criterion_main!(benches);

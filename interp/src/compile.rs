@@ -192,6 +192,28 @@ pub struct Program {
     /// Every `handle.name(...)`, by [`Op::Method`] index.
     pub(crate) methods: Vec<MethodSite>,
     entry: Option<String>,
+    /// Each name's index in `names` (kept for [`Program::interpret`]).
+    pub(crate) name_ids: HashMap<String, Sym>,
+    /// Each `def`/`thread`'s id in `funcs` (kept for [`Program::interpret`]).
+    pub(crate) func_ids: HashMap<String, u32>,
+}
+
+/// How long a [`Program`]'s tables were: what [`Program::truncate`] goes back to.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) struct Sizes {
+    pub names: usize,
+    pub consts: usize,
+    pub funcs: usize,
+    pub sites: usize,
+}
+
+/// What [`Program::interpret`] added: the statement's function and its call sites.
+#[derive(Debug, Clone)]
+pub(crate) struct Interpreted {
+    /// The function that runs the line's statements (in the program's scope).
+    pub func: u32,
+    /// The call sites the line added (`sites[first_site..]`).
+    pub first_site: usize,
 }
 
 impl Program {
@@ -267,6 +289,72 @@ impl Program {
         self.entry.as_deref()
     }
 
+    /// The lengths of the tables now.
+    pub(crate) fn sizes(&self) -> Sizes {
+        Sizes {
+            names: self.names.len(),
+            consts: self.consts.len(),
+            funcs: self.funcs.len(),
+            sites: self.sites.len(),
+        }
+    }
+
+    /// Forgets everything added after `to` was taken (interpreter mode's clear): names,
+    /// constants, functions and call sites.
+    pub(crate) fn truncate(&mut self, to: Sizes) {
+        self.names.truncate(to.names);
+        self.consts.truncate(to.consts);
+        self.funcs.truncate(to.funcs);
+        self.sites.truncate(to.sites);
+        let (n, f) = (to.names as Sym, to.funcs as u32);
+        self.natives.retain(|(s, _)| *s < n);
+        self.name_ids.retain(|_, s| *s < n);
+        self.func_ids.retain(|_, id| *id < f);
+    }
+
+    /// Compiles one interpreter-mode line (already parsed) into the program: its `def`s
+    /// and `thread`s become functions of the program, its other statements one new
+    /// function that runs in the program's scope (plain assignments make globals). A
+    /// compile error leaves the program as it was.
+    ///
+    /// A read of a name the program never mentioned (not assigned in the line, not a
+    /// function, not a built-in) is `compile_error_name_not_found`, as for a program.
+    pub(crate) fn interpret(&mut self, stmts: Vec<Stmt>) -> Result<Interpreted, ParseError> {
+        let before = self.sizes();
+        let natives_before = self.natives.len();
+        let native_set = self.natives.iter().map(|(s, _)| *s).collect();
+        let mut c = Compiler {
+            names: std::mem::take(&mut self.names),
+            name_ids: std::mem::take(&mut self.name_ids),
+            consts: std::mem::take(&mut self.consts),
+            funcs: std::mem::take(&mut self.funcs),
+            func_ids: std::mem::take(&mut self.func_ids),
+            sites: std::mem::take(&mut self.sites),
+            natives: std::mem::take(&mut self.natives),
+            native_set,
+            ..Compiler::default()
+        };
+        let result = c.interpreted(stmts);
+        self.names = c.names;
+        self.name_ids = c.name_ids;
+        self.consts = c.consts;
+        self.funcs = c.funcs;
+        self.func_ids = c.func_ids;
+        self.sites = c.sites;
+        self.natives = c.natives;
+        match result {
+            Ok(func) => Ok(Interpreted {
+                func,
+                first_site: before.sites,
+            }),
+            Err(e) => {
+                self.truncate(before);
+                self.natives.truncate(natives_before);
+                Err(e)
+            }
+        }
+    }
+
     /// Every function the program calls that it does not define (built-ins, or names to
     /// stub), in order of first call.
     pub fn called_builtins(&self) -> Vec<&str> {
@@ -318,6 +406,22 @@ fn assignments(body: &[Stmt], assigned: &mut HashSet<String>, globals: &mut Hash
             _ => {}
         }
     }
+}
+
+/// The first `return` outside any `def` in `body` (in an `if` or `while` too).
+fn top_level_return(body: &[Stmt]) -> Option<Pos> {
+    body.iter().find_map(|s| match &s.kind {
+        StmtKind::Return(_) => Some(pos_of(s)),
+        StmtKind::If {
+            branches,
+            otherwise,
+        } => branches
+            .iter()
+            .find_map(|(_, b)| top_level_return(b))
+            .or_else(|| top_level_return(otherwise)),
+        StmtKind::While(_, b) => top_level_return(b),
+        _ => None,
+    })
 }
 
 /// Every variable a body reads, with the line and column of the read, in source order
@@ -459,6 +563,9 @@ struct Compiler {
     pos: Pos,
     /// Per open loop: its start and the `break` jumps to patch.
     loops: Vec<(u32, Vec<usize>)>,
+    /// The id [`Compiler::collect`] gives the first definition it finds, minus one
+    /// (0 for a program, whose function 0 is the program itself).
+    func_base: u32,
 }
 
 fn err(at: Pos, msg: String) -> ParseError {
@@ -513,7 +620,8 @@ impl Compiler {
                     if self.func_ids.contains_key(&f.name) {
                         return Err(err(at, format!("`{}` is defined twice", f.name)));
                     }
-                    self.func_ids.insert(f.name.clone(), out.len() as u32 + 1);
+                    self.func_ids
+                        .insert(f.name.clone(), self.func_base.max(1) + out.len() as u32);
                     let mut body = std::mem::take(&mut f.body);
                     let i = out.len();
                     out.push(FuncDef {
@@ -637,7 +745,63 @@ impl Compiler {
             paths: self.paths,
             methods: self.methods,
             entry,
+            name_ids: self.name_ids,
+            func_ids: self.func_ids,
         })
+    }
+
+    /// The body of [`Program::interpret`]: the line's function gets the next id, its
+    /// definitions the ones after.
+    fn interpreted(&mut self, mut stmts: Vec<Stmt>) -> Result<u32, ParseError> {
+        let id = self.funcs.len();
+        self.func_base = id as u32 + 1;
+        let mut defs = Vec::new();
+        self.collect(&mut stmts, &mut defs)?;
+        if let Some(at) = top_level_return(&stmts) {
+            return Err(err(
+                at,
+                "`return` outside a function: an interpreted statement is not a function".into(),
+            ));
+        }
+        let known = |n: &str| {
+            self.name_ids.contains_key(n)
+                || self.func_ids.contains_key(n)
+                || builtins::lookup(n).is_some()
+        };
+        if let Some((name, at)) = unknown_variable(&stmts, &defs, known) {
+            return Err(err(
+                at,
+                format!("compile_error_name_not_found:{name}: `{name}` is never assigned"),
+            ));
+        }
+        self.funcs.push(Func {
+            name: "<interpreter>".into(),
+            params: Vec::new(),
+            ops: Vec::new(),
+            lines: Vec::new(),
+            is_thread: false,
+            program_scope: true,
+        });
+        for d in &defs {
+            let params = d
+                .params
+                .iter()
+                .map(|(n, v)| (self.sym(n), v.clone()))
+                .collect();
+            self.funcs.push(Func {
+                name: d.name.clone(),
+                params,
+                ops: Vec::new(),
+                lines: Vec::new(),
+                is_thread: d.is_thread,
+                program_scope: false,
+            });
+        }
+        self.function(id, &stmts, 1)?;
+        for (i, d) in defs.iter().enumerate() {
+            self.function(id + 1 + i, &d.body, d.line)?;
+        }
+        Ok(id as u32)
     }
 
     fn function(&mut self, id: usize, body: &[Stmt], line: u32) -> Result<(), ParseError> {

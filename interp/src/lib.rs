@@ -90,6 +90,7 @@ mod controller;
 pub mod drive;
 mod error;
 pub mod event;
+pub mod interpreter;
 pub mod kinematics;
 mod lexer;
 pub mod machine;

@@ -67,7 +67,7 @@ def test_every_port_the_controller_reports_is_exposed(ur_controller: UrControlle
         with socket.create_connection((ur_controller.host, port), timeout=5):
             pass
         assert getattr(ur_controller, f"{name}_port") == port
-    for name in {"primary", "secondary", "realtime", "rtde"} - expected:
+    for name in {"primary", "secondary", "realtime", "rtde", "interpreter"} - expected:
         assert getattr(ur_controller, f"{name}_port") is None
 
 

@@ -201,7 +201,7 @@ impl Controller {
             .args(["controller", "--json"])
             .args(["--dashboard-port", "0", "--primary-port", "0"])
             .args(["--secondary-port", "0", "--realtime-port", "0"])
-            .args(["--rtde-port", "0"])
+            .args(["--rtde-port", "0", "--interpreter-port", "0"])
             .stdin(Stdio::null())
             .stdout(Stdio::piped())
             .stderr(Stdio::null())
@@ -210,7 +210,7 @@ impl Controller {
         let stdout = child.stdout.take().ok_or("no stdout")?;
         let mut out = BufReader::new(stdout);
         let mut addrs: Vec<(String, SocketAddr)> = Vec::new();
-        let wanted = if all { 5 } else { 1 };
+        let wanted = if all { 6 } else { 1 };
         let mut line = String::new();
         let outcome = loop {
             line.clear();

@@ -472,7 +472,7 @@ pub struct Listening {
     pub t: f64,
     pub addr: String,
     /// `controller`: which of its servers listens there (`dashboard`, `primary`,
-    /// `secondary`, `realtime`, `rtde`).
+    /// `secondary`, `realtime`, `rtde`, `interpreter`).
     #[serde(skip_serializing_if = "is_none")]
     pub service: Option<&'static str>,
 }
@@ -522,7 +522,7 @@ pub struct Program {
 pub struct Client {
     pub t: f64,
     pub conn: u64,
-    /// `primary`, `secondary`, `realtime` or `rtde`.
+    /// `primary`, `secondary`, `realtime`, `rtde` or `interpreter`.
     pub service: &'static str,
     /// `program`, `secondary`, `line`, `command`, `refused` (primary/secondary/realtime);
     /// `protocol`, `outputs`, `inputs`, `start`, `pause`, `text`, `error` (RTDE).

@@ -91,7 +91,7 @@ fn ur_rtde_drives_the_virtual_controller() {
     let mut out = BufReader::new(child.stdout.take().unwrap());
     let mut listening = 0;
     let mut line = String::new();
-    while listening < 5 {
+    while listening < 6 {
         line.clear();
         if out.read_line(&mut line).unwrap_or(0) == 0 {
             let _ = child.kill();

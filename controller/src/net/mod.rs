@@ -8,6 +8,10 @@
 //! - Primary, secondary, realtime and RTDE, and the program running on the arm: one
 //!   real-time thread that steps the [`Cell`] at the controller's step (2 ms e-Series,
 //!   8 ms CB3). See [`streams`](self) for its bounds.
+//! - The interpreter socket (30020): one thread per connection (at most
+//!   [`MAX_INTERPRETER_CONNECTIONS`]), each line a statement or command for the running
+//!   program's interpreter mode, each reply one line. See [`interpreter`](self) for the
+//!   wire behaviour.
 //! - `.urp` programs are read, translated and their External Control scripts fetched in a
 //!   thread of their own when they play.
 //!
@@ -28,6 +32,7 @@
 
 mod clock;
 mod fetch;
+mod interpreter;
 mod streams;
 
 use std::io::{ErrorKind, Read, Write};
@@ -43,6 +48,7 @@ use urscript_interp::{CallRecord, Message};
 use crate::{Cell, Config, Controller, Dashboard, Programs, Reply, MAX_LINE};
 
 pub use fetch::{parse_host, MAX_FETCHED, MAX_FILE};
+pub use interpreter::{MAX_INTERPRETER_CONNECTIONS, POLL as INTERPRETER_POLL};
 pub use streams::{MAX_BACKLOG, MAX_CLIENTS, MAX_QUEUE};
 
 /// Dashboard connections served at once; more are accepted and closed at once.
@@ -65,6 +71,9 @@ pub struct Ports {
     pub realtime: Option<u16>,
     /// RTDE (30004).
     pub rtde: Option<u16>,
+    /// The interpreter socket (30020), served only when the controller has interpreter
+    /// mode ([`Config::has_interpreter_mode`]: PolyScope 5.10 and later).
+    pub interpreter: Option<u16>,
 }
 
 impl Ports {
@@ -75,6 +84,7 @@ impl Ports {
         secondary: Some(30002),
         realtime: Some(30003),
         rtde: Some(30004),
+        interpreter: Some(30020),
     };
 
     /// Every interface on a free port (for tests that run side by side).
@@ -85,6 +95,7 @@ impl Ports {
             secondary: Some(0),
             realtime: Some(0),
             rtde: Some(0),
+            interpreter: Some(0),
         }
     }
 }
@@ -129,7 +140,7 @@ impl Default for ServerOptions {
 #[non_exhaustive]
 pub enum ServerEvent {
     /// A server listens (`service`: `dashboard`, `primary`, `secondary`, `realtime`,
-    /// `rtde`).
+    /// `rtde`, `interpreter`).
     Listening {
         /// The interface.
         service: &'static str,
@@ -172,7 +183,8 @@ pub enum ServerEvent {
         /// Its interface.
         service: &'static str,
         /// `program`, `secondary`, `line`, `command`, `refused`; RTDE: `protocol`,
-        /// `outputs`, `inputs`, `start`, `pause`, `text`, `error`.
+        /// `outputs`, `inputs`, `start`, `pause`, `text`, `error`; interpreter: `reply`
+        /// (the reply line written).
         what: &'static str,
         /// The program's name, the line, the command, the recipe.
         text: String,
@@ -353,6 +365,17 @@ impl Server {
             realtime: stream(p.realtime, "realtime")?,
             rtde: stream(p.rtde, "rtde")?,
         };
+        let interpreter = match p
+            .interpreter
+            .filter(|_| options.config.has_interpreter_mode())
+        {
+            Some(port) => {
+                let (l, a) = bind(port, "interpreter")?;
+                addrs.push(("interpreter", a));
+                Some(l)
+            }
+            None => None,
+        };
         let interp = Cell::interp_config(&controller);
         let cell = Cell::new(controller, interp);
         let step = cell.step_time();
@@ -386,6 +409,14 @@ impl Server {
                     .spawn(move || accept_dashboard(&shared, &listener))?,
             );
         }
+        if let Some(listener) = interpreter {
+            let shared = Arc::clone(&shared);
+            threads.push(
+                std::thread::Builder::new()
+                    .name("interpreter".into())
+                    .spawn(move || interpreter::accept(&shared, &listener))?,
+            );
+        }
         Ok(Server {
             shared,
             addrs,
@@ -394,7 +425,7 @@ impl Server {
     }
 
     /// The address an interface listens on (`dashboard`, `primary`, `secondary`,
-    /// `realtime`, `rtde`).
+    /// `realtime`, `rtde`, `interpreter`).
     pub fn addr(&self, service: &str) -> Option<SocketAddr> {
         self.addrs
             .iter()
@@ -429,9 +460,11 @@ impl Server {
 
     fn halt(&mut self) {
         self.shared.stop.store(true, Ordering::SeqCst);
-        // Wake the dashboard's blocking accept.
-        if let Some(a) = self.addr("dashboard") {
-            let _ = TcpStream::connect_timeout(&a, Duration::from_millis(200));
+        // Wake the blocking accepts.
+        for service in ["dashboard", "interpreter"] {
+            if let Some(a) = self.addr(service) {
+                let _ = TcpStream::connect_timeout(&a, Duration::from_millis(200));
+            }
         }
         for t in self.threads.drain(..) {
             let _ = t.join();

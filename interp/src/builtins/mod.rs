@@ -20,6 +20,7 @@
 //! | [`rpc`] | `rpc_factory`: XML-RPC handles (the Interfaces chapter) |
 //! | [`messages`] | `textmsg`, `varmsg`, `popup` |
 //! | [`time`] | `sync`, `sleep`, `get_steptime` |
+//! | [`interpreter`] | `interpreter_mode`, `end_interpreter`, `clear_interpreter` |
 //!
 //! ## The virtual arm
 //! The arm follows each motion command step by step (kinematics and speed profiles, not
@@ -35,6 +36,7 @@ use crate::value::Value;
 
 pub mod conveyor;
 pub mod dynamics;
+pub mod interpreter;
 pub mod io;
 pub mod math;
 pub mod messages;
@@ -68,6 +70,8 @@ pub enum Domain {
     Messages,
     /// Threads and time.
     Time,
+    /// Interpreter mode.
+    Interpreter,
 }
 
 /// A parameter's default.
@@ -253,6 +257,7 @@ pub fn all() -> &'static [Builtin] {
             rtde::TABLE,
             messages::TABLE,
             time::TABLE,
+            interpreter::TABLE,
         ]
         .concat();
         v.sort_by(|a, b| a.name.cmp(b.name));

@@ -30,7 +30,15 @@ SERVERS: Mapping[str, int] = {
     "secondary": 30002,
     "realtime": 30003,
     "rtde": 30004,
+    "interpreter": 30020,
 }
+
+def _has_interpreter_mode(polyscope: str) -> bool:
+    """Whether a PolyScope version (``5.21.0``) has interpreter mode (5.10 and later)."""
+    parts = [int(p) if p.isdigit() else 0 for p in polyscope.split(".")[:2]]
+    parts += [0] * (2 - len(parts))
+    return (parts[0], parts[1]) >= (5, 10)
+
 
 _ADDR = re.compile(r"^\[?(?P<host>[^\]]*)\]?:(?P<port>\d+)$")
 
@@ -202,7 +210,11 @@ class UrController:
         """The servers besides the dashboard that this ``ursock controller`` can start
         (those whose ``--NAME-port`` option its ``--help`` lists)."""
         text = help_text("controller", ursock=self._ursock)
-        return [name for name in SERVERS if name != "dashboard" and f"--{name}-port" in text]
+        names = [name for name in SERVERS if name != "dashboard" and f"--{name}-port" in text]
+        if self._polyscope and not _has_interpreter_mode(self._polyscope):
+            # The interpreter socket is PolyScope 5.10+'s: ursock serves none before.
+            names = [name for name in names if name != "interpreter"]
+        return names
 
     def start(self) -> "UrController":
         """Start the controller and wait until its servers listen.
@@ -397,6 +409,12 @@ class UrController:
     def rtde_port(self) -> Optional[int]:
         """The RTDE interface's port (30004), when this ursock serves it."""
         return self._port("rtde")
+
+    @property
+    def interpreter_port(self) -> Optional[int]:
+        """The interpreter socket's port (30020, interpreter mode; PolyScope 5.10+), when
+        this ursock serves it."""
+        return self._port("interpreter")
 
     # -- talking to it ----------------------------------------------------------------
 

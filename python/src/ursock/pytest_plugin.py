@@ -14,8 +14,8 @@ Fixtures:
 ``ur_controller``
     A running :class:`ursock.UrController` (the virtual controller on free ports),
     stopped after the test: ``.host``, ``.dashboard_port`` (and ``.primary_port``,
-    ``.secondary_port``, ``.realtime_port``, ``.rtde_port`` when this ``ursock`` serves
-    them), ``.dashboard("robotmode")``.
+    ``.secondary_port``, ``.realtime_port``, ``.rtde_port``, ``.interpreter_port`` when
+    this ``ursock`` serves them), ``.dashboard("robotmode")``.
 
 Settings (``pytest.ini``, ``pyproject.toml``'s ``[tool.pytest.ini_options]``):
 ``ursock_max_time`` (seconds, default 30: the ``--max-time`` given to every program

@@ -34,6 +34,12 @@ pub struct ControllerOptions {
     /// The RTDE interface's port.
     #[arg(long, default_value_t = 30004)]
     pub rtde_port: u16,
+    /// The interpreter socket's port (interpreter mode: a program that called
+    /// `interpreter_mode()` runs the statements sent here, one per line, and answers each
+    /// line `ack: ID: ...`, `discard: REASON: ...` or `state: N: ...`). Served for
+    /// PolyScope 5.10 and later only, as on the controller.
+    #[arg(long, default_value_t = 30020)]
+    pub interpreter_port: u16,
     /// Serve only the dashboard server.
     #[arg(long)]
     pub no_streams: bool,
@@ -193,6 +199,8 @@ pub fn run(opts: ControllerOptions) -> Result<(), String> {
             secondary: stream(opts.secondary_port),
             realtime: stream(opts.realtime_port),
             rtde: stream(opts.rtde_port),
+            // Served for PolyScope 5.10+ only (`Config::has_interpreter_mode`).
+            interpreter: stream(opts.interpreter_port),
         },
         config: Config {
             model,

@@ -14,7 +14,14 @@ use std::time::{Duration, Instant};
 pub const WAIT: Duration = Duration::from_secs(20);
 
 /// The services whose `listening` events a start waits for.
-const SERVICES: [&str; 5] = ["dashboard", "primary", "secondary", "realtime", "rtde"];
+const SERVICES: [&str; 6] = [
+    "dashboard",
+    "primary",
+    "secondary",
+    "realtime",
+    "rtde",
+    "interpreter",
+];
 
 /// A running `ursock controller --json` (killed when dropped).
 pub struct Controller {
@@ -43,7 +50,7 @@ impl Controller {
             .args(extra)
             .args(["--dashboard-port", "0", "--primary-port", "0"])
             .args(["--secondary-port", "0", "--realtime-port", "0"])
-            .args(["--rtde-port", "0"])
+            .args(["--rtde-port", "0", "--interpreter-port", "0"])
             .stdin(Stdio::null())
             .stdout(Stdio::piped())
             .stderr(Stdio::null())

@@ -1,0 +1,214 @@
+//! The interpreter socket (30020, e-Series PolyScope 5.10+): one thread per connection
+//! (at most [`MAX_INTERPRETER_CONNECTIONS`]); every line received is given to the
+//! [`Cell`](crate::Cell) ([`Cell::interpreter_line`](crate::Cell::interpreter_line)) and
+//! its reply written back as one line ending in `\n`, in the order the lines came.
+//!
+//! The wire behaviour (the `ack:`/`discard:`/`state:` lines, the commands, the bounds) is
+//! [`urscript_interp::interpreter`]'s, from UR's script manual ("Interpreter Mode") and
+//! UR's "Interpreter mode" support article; see there. Here:
+//! - The socket accepts connections whenever the controller runs, as the manual has it
+//!   accept statements whenever a program runs (statements sent before the program
+//!   calls `interpreter_mode()` wait in its queue); with no program running a statement
+//!   is discarded (`discard: program not running: ...`).
+//! - A line longer than [`MAX_LINE`] bytes is not kept: it is read to its `\n` and
+//!   answered `discard: line too long (N bytes, at most 65536): <its first 64 bytes>...`.
+//! - A line held behind a `clear_interpreter()` is answered when the program has run the
+//!   clear: the connection looks for such answers every [`POLL`].
+
+use std::io::{ErrorKind, Read, Write};
+use std::net::{TcpListener, TcpStream};
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::Arc;
+use std::time::Duration;
+
+use urscript_interp::interpreter::{Discard, Reply, MAX_LINE};
+
+use super::{ServerEvent, Shared, WRITE_TIMEOUT};
+
+/// Interpreter connections served at once; more are accepted and closed at once.
+pub const MAX_INTERPRETER_CONNECTIONS: usize = 16;
+
+/// How often a connection with nothing to read looks for late replies (and for the
+/// server stopping).
+pub const POLL: Duration = Duration::from_millis(20);
+
+/// Bytes of a too-long line echoed in its discard.
+const ECHO: usize = 64;
+
+pub(super) fn accept(shared: &Arc<Shared>, listener: &TcpListener) {
+    let active = Arc::new(AtomicUsize::new(0));
+    loop {
+        let accepted = listener.accept();
+        if shared.stopped() {
+            return;
+        }
+        let (stream, peer) = match accepted {
+            Ok(s) => s,
+            Err(e) if e.kind() == ErrorKind::Interrupted => continue,
+            Err(e) => {
+                shared.emit(ServerEvent::Note(format!("interpreter accept failed: {e}")));
+                std::thread::sleep(Duration::from_millis(100));
+                continue;
+            }
+        };
+        if active.load(Ordering::SeqCst) >= MAX_INTERPRETER_CONNECTIONS {
+            shared.emit(ServerEvent::Note(format!(
+                "{peer}: refused, {MAX_INTERPRETER_CONNECTIONS} interpreter connections are already open"
+            )));
+            drop(stream);
+            continue;
+        }
+        active.fetch_add(1, Ordering::SeqCst);
+        let conn = shared.next_conn();
+        let spawned = std::thread::Builder::new()
+            .name(format!("interpreter-{conn}"))
+            .spawn({
+                let shared = Arc::clone(shared);
+                let active = Arc::clone(&active);
+                move || {
+                    serve(stream, conn, peer.to_string(), &shared);
+                    active.fetch_sub(1, Ordering::SeqCst);
+                }
+            });
+        if let Err(e) = spawned {
+            active.fetch_sub(1, Ordering::SeqCst);
+            shared.emit(ServerEvent::Note(format!(
+                "{peer}: cannot start a thread: {e}"
+            )));
+        }
+    }
+}
+
+fn serve(mut stream: TcpStream, conn: u64, peer: String, shared: &Shared) {
+    let _ = stream.set_nodelay(true);
+    let _ = stream.set_write_timeout(Some(WRITE_TIMEOUT));
+    let _ = stream.set_read_timeout(Some(POLL));
+    shared.emit(ServerEvent::Connect {
+        conn,
+        service: "interpreter",
+        peer,
+    });
+    let (mut rx, mut tx) = (0u64, 0u64);
+    let reason = session(&mut stream, conn, shared, &mut rx, &mut tx);
+    shared.emit(ServerEvent::Close {
+        conn,
+        reason: reason.to_string(),
+        rx,
+        tx,
+    });
+}
+
+/// Writes one reply line; false when the client does not take it.
+fn send(stream: &mut TcpStream, conn: u64, shared: &Shared, reply: &Reply, tx: &mut u64) -> bool {
+    let text = reply.to_string();
+    shared.emit(ServerEvent::Client {
+        conn,
+        service: "interpreter",
+        what: "reply",
+        text: text.clone(),
+    });
+    let mut bytes = text.into_bytes();
+    bytes.push(b'\n');
+    let ok = stream
+        .write_all(&bytes)
+        .and_then(|()| stream.flush())
+        .is_ok();
+    if ok {
+        *tx += bytes.len() as u64;
+    }
+    ok
+}
+
+/// Answers one complete line (or a too-long one, of `len` bytes, of which `line` holds
+/// the first few).
+fn answer(
+    stream: &mut TcpStream,
+    conn: u64,
+    shared: &Shared,
+    line: &[u8],
+    too_long: Option<usize>,
+    tx: &mut u64,
+) -> bool {
+    let reply = match too_long {
+        Some(len) => Some(Reply::Discard {
+            reason: Discard::LineTooLong { len },
+            statement: format!("{}...", String::from_utf8_lossy(line)),
+        }),
+        None => {
+            let now = shared.now();
+            shared.lock_cell().interpreter_line(conn, line, now)
+        }
+    };
+    match reply {
+        Some(r) => send(stream, conn, shared, &r, tx),
+        None => true,
+    }
+}
+
+fn session(
+    stream: &mut TcpStream,
+    conn: u64,
+    shared: &Shared,
+    rx: &mut u64,
+    tx: &mut u64,
+) -> &'static str {
+    let mut reader = match stream.try_clone() {
+        Ok(r) => r,
+        Err(_) => return "cannot read",
+    };
+    let mut chunk = [0u8; 4096];
+    // The line so far (at most MAX_LINE bytes); `long`: the length of a line past
+    // MAX_LINE being skipped to its end (its first ECHO bytes kept in `line`).
+    let mut line: Vec<u8> = Vec::new();
+    let mut long: Option<usize> = None;
+    loop {
+        if shared.stopped() {
+            return "the server stopped";
+        }
+        let late = shared.lock_cell().interpreter_replies(conn);
+        for r in &late {
+            if !send(stream, conn, shared, r, tx) {
+                return "write failed: the client is not reading";
+            }
+        }
+        let n = match reader.read(&mut chunk) {
+            Ok(0) => return "client closed",
+            Ok(n) => n,
+            Err(e)
+                if matches!(
+                    e.kind(),
+                    ErrorKind::Interrupted | ErrorKind::WouldBlock | ErrorKind::TimedOut
+                ) =>
+            {
+                continue
+            }
+            Err(_) => return "read failed",
+        };
+        *rx += n as u64;
+        let mut rest = &chunk[..n];
+        while !rest.is_empty() {
+            let end = rest.iter().position(|&b| b == b'\n');
+            let part = &rest[..end.unwrap_or(rest.len())];
+            rest = match end {
+                Some(i) => &rest[i + 1..],
+                None => &[],
+            };
+            if let Some(len) = long.as_mut() {
+                *len += part.len();
+            } else if line.len() + part.len() > MAX_LINE {
+                long = Some(line.len() + part.len());
+                line.extend_from_slice(&part[..ECHO.saturating_sub(line.len()).min(part.len())]);
+                line.truncate(ECHO);
+            } else {
+                line.extend_from_slice(part);
+            }
+            if end.is_some() {
+                let ok = answer(stream, conn, shared, &line, long.take(), tx);
+                line.clear();
+                if !ok {
+                    return "write failed: the client is not reading";
+                }
+            }
+        }
+    }
+}
