@@ -297,8 +297,8 @@ pub(super) const TABLE: &[Builtin] = &[
         "get_target_waypoint",
         D,
         NONE,
-        "The target of the last move: the commanded tool pose.",
-        tcp_pose,
+        "The target of the move under way (during a blend, the next move's); at rest, the tool pose.",
+        waypoint,
     ),
     Builtin::new(
         "get_target_tcp_pose_along_path",
@@ -724,8 +724,8 @@ fn check_joints(name: &str, q: [f64; 6]) -> Result<[f64; 6], Fault> {
 }
 
 /// A motion's target: joints (checked against the joint range), or a pose reached
-/// through inverse kinematics nearest the current joints. Returns the joints and the tool
-/// pose there (the pose given, for a pose).
+/// through inverse kinematics nearest the joints the move starts from. Returns the joints
+/// and the tool pose there (the pose given, for a pose).
 fn target(
     c: &Controller,
     name: &str,
@@ -733,23 +733,38 @@ fn target(
     six: [f64; 6],
 ) -> Result<([f64; 6], [f64; 6]), Fault> {
     if matches!(v, Value::Pose(_)) {
-        Ok((c.inverse(six, c.arm.q, c.arm.tcp)?, six))
+        Ok((c.inverse(six, c.move_start().0, c.arm.tcp)?, six))
     } else {
         let q = check_joints(name, six)?;
         Ok((q, c.tool_pose(q)))
     }
 }
 
-/// A move of the tool from where it is along a line (or the arc through `via`) to `pose`
-/// (joints `q1` there), along a trapezoidal profile; returns its duration (s).
+/// The blend radius argument `r` (m): not negative.
+fn radius(a: &Args, i: usize) -> Result<f64, Fault> {
+    let r = a.num(i)?;
+    if r.is_finite() && r >= 0.0 {
+        Ok(r)
+    } else {
+        Err(Fault::from(format!(
+            "`{}`: blend radius r={} m is negative (0: no blend)",
+            a.name,
+            Value::Float(r).to_str()
+        )))
+    }
+}
+
+/// A move of the tool from where it starts ([`Controller::move_start`]) along a line (or
+/// the arc through `via`) to `pose` (joints `q1` there), along a trapezoidal profile,
+/// blend radius `r`; returns the time until the program gets control back.
 fn tool_move(
     c: &mut Controller,
     via: Option<[f64; 6]>,
     pose: [f64; 6],
     (q1, given): ([f64; 6], bool),
-    (accel, speed, t): (f64, f64, f64),
-) -> f64 {
-    let p0 = c.tcp_pose();
+    (accel, speed, t, r): (f64, f64, f64, f64),
+) -> std::time::Duration {
+    let (q0, p0) = c.move_start();
     let path = Path::new(p0, via, pose);
     let (r0, turn) = trajectory::turn_between(p0, pose);
     let length = path.length();
@@ -761,7 +776,7 @@ fn tool_move(
     };
     let profile = Profile::new(dist, speed, accel, t);
     let tcp = c.arm.tcp;
-    c.start_motion(
+    c.start_move(
         Kind::Tool {
             path,
             r0,
@@ -769,36 +784,36 @@ fn tool_move(
             profile,
             dist,
             to: pose,
-            q0: c.arm.q,
+            q0,
             q1,
             given,
         },
         tcp,
-    );
-    profile.total
+        r,
+    )
 }
 
 /// `movej`, `movel`, `movep`, `optimovej`, `optimovel`: the arm moves along a trapezoidal
 /// profile (accelerate at `a` to `v`, cruise, decelerate), stretched to `t` if given, and
-/// is at the target when the move ends. `r` (blending) has no effect: every move ends at
-/// its target with the arm at rest.
+/// is at the target when the move ends; with a blend radius `r > 0` the program gets
+/// control back where the blend begins (see [`Controller::start_move`]).
 fn movej(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
     let six = a.six(0)?;
     let (accel, speed) = (a.num(1)?, a.num(2)?);
-    // movep and optimove* have no `t`.
+    // movep and optimove* have no `t`; `r` is last.
     let t = if a.params.len() == 5 { a.num(3)? } else { 0.0 };
+    let r = radius(a, a.params.len() - 1)?;
     let (q1, pose) = target(c, a.name, &a.v[0], six)?;
-    let dur = if matches!(a.name, "movej" | "optimovej") {
-        let q0 = c.arm.q;
+    let back = if matches!(a.name, "movej" | "optimovej") {
+        let q0 = c.move_start().0;
         let profile = Profile::new(joint_distance(q0, q1), speed, accel, t);
         let tcp = c.arm.tcp;
-        c.start_motion(Kind::Joint { q0, q1, profile }, tcp);
-        profile.total
+        c.start_move(Kind::Joint { q0, q1, profile }, tcp, r)
     } else {
         let given = !matches!(a.v[0], Value::Pose(_));
-        tool_move(c, None, pose, (q1, given), (accel, speed, t))
+        tool_move(c, None, pose, (q1, given), (accel, speed, t, r))
     };
-    Ok(Out::Wait(secs(dur), Value::None))
+    Ok(Out::Wait(back, Value::None))
 }
 
 /// `movec`: along the arc from the tool's position through `pose_via`'s to `pose_to`'s
@@ -813,10 +828,11 @@ fn movec(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
     };
     let six = a.six(1)?;
     let (accel, speed) = (a.num(2)?, a.num(3)?);
+    let r = radius(a, 4)?;
     let (q1, pose) = target(c, a.name, &a.v[1], six)?;
     let given = !matches!(a.v[1], Value::Pose(_));
-    let dur = tool_move(c, Some(via), pose, (q1, given), (accel, speed, 0.0));
-    Ok(Out::Wait(secs(dur), Value::None))
+    let back = tool_move(c, Some(via), pose, (q1, given), (accel, speed, 0.0, r));
+    Ok(Out::Wait(back, Value::None))
 }
 
 /// `protective_stop()`: the arm stops at once and the request is left for the
@@ -934,6 +950,15 @@ fn joint_speeds(c: &mut Controller, _: &mut Args) -> Result<Out, Fault> {
 
 fn tcp_pose(c: &mut Controller, _: &mut Args) -> Result<Out, Fault> {
     Ok(Out::Value(Value::Pose(c.tcp_pose())))
+}
+
+fn waypoint(c: &mut Controller, _: &mut Args) -> Result<Out, Fault> {
+    let pose = c
+        .motion
+        .as_ref()
+        .and_then(|m| m.waypoint(&c.dh))
+        .unwrap_or_else(|| c.tcp_pose());
+    Ok(Out::Value(Value::Pose(pose)))
 }
 
 fn tcp_speed(c: &mut Controller, _: &mut Args) -> Result<Out, Fault> {
