@@ -18,6 +18,15 @@
 //!   holds until the next motion command. `speedl`/`stopl`: the same for the tool speed;
 //!   the joints follow the tool by inverse kinematics.
 //!
+//! - Blends (`r > 0`, [`blend_start`], [`blend`]): a move returns where the tool enters the
+//!   sphere of radius `r` around its target; the next move, commanded then, is planned
+//!   from that target and joined by a blend: for two joint moves a quadratic Bézier in
+//!   joint space (control point: the waypoint), for two straight tool moves a circular
+//!   arc tangent to both lines at constant tool speed; the rest of the next move starts
+//!   at the speed the blend hands over ([`Profile::with_start_speed`]). A move that
+//!   cannot blend waits, queued ([`Motion::next`], at most one), until the first ends at
+//!   rest at its target.
+//!
 //! The end state of a move is its target exactly.
 
 use crate::kinematics::{self, Dh};
@@ -1055,6 +1064,96 @@ mod tests {
                 last = s;
             }
         }
+    }
+
+    #[test]
+    fn a_profile_from_a_start_speed_is_continuous_and_ends_at_rest() {
+        // (d, v0, v, a): cruise above and below v0, triangles, and too short to stop at a.
+        for (d, v0, v, a) in [
+            (1.0, 0.3, 0.5, 1.0),
+            (1.0, 0.8, 0.5, 1.0),
+            (0.05, 0.3, 0.5, 1.0),
+            (0.01, 0.5, 0.5, 1.0),
+            (0.5, 0.0, 0.5, 1.0),
+            (0.2, 0.4, 0.4, 0.0),
+        ] {
+            let p = Profile::with_start_speed(d, v0, v, a);
+            assert!(p.total > 0.0 && p.total.is_finite());
+            assert_eq!(p.at(0.0), (0.0, v0));
+            assert_eq!(p.at(p.total), (d, 0.0));
+            let n = 2000;
+            let dt = p.total / f64::from(n);
+            let (mut last_s, mut last_v) = (0.0, v0);
+            for k in 1..n {
+                let (s, sd) = p.at(dt * f64::from(k));
+                assert!(s >= last_s - 1e-15, "{d} {v0}: {s} < {last_s}");
+                assert!(sd <= v0.max(v) + 1e-12, "{sd}");
+                // The speed changes by at most the largest deceleration per sample.
+                let most = a.max(v0 * v0 / (2.0 * d));
+                assert!(
+                    (sd - last_v).abs() <= most * dt + 1e-9,
+                    "{d} {v0}: {last_v} -> {sd}"
+                );
+                (last_s, last_v) = (s, sd);
+            }
+            // time_at inverts at.
+            let t = p.time_at(0.5 * d);
+            assert!((p.at(t).0 - 0.5 * d).abs() < 1e-9);
+        }
+    }
+
+    #[test]
+    fn a_straight_blend_is_an_arc_within_r_of_the_corner_tangent_to_both_lines() {
+        let dh = crate::kinematics::Model::Ur5e.dh();
+        let q0 = [0.3, -1.4, 1.6, -1.8, -1.57, 0.2];
+        let tcp = [0.0; 6];
+        let p0 = kinematics::forward(&dh, q0, tcp);
+        let w = [p0[0] + 0.2, p0[1], p0[2], p0[3], p0[4], p0[5]];
+        let c = [w[0] + 0.1, w[1] - 0.1, w[2], w[3], w[4], w[5]];
+        let line = |from: [f64; 6], to: [f64; 6], q0: [f64; 6]| {
+            let path = Path::new(from, None, to);
+            let (r0, turn) = turn_between(from, to);
+            let dist = path.length();
+            let q1 = nearest_ik(&dh, to, tcp, q0).unwrap();
+            Kind::Tool {
+                path,
+                r0,
+                turn,
+                profile: Profile::new(dist, 0.25, 1.2, 0.0),
+                dist,
+                to,
+                q0,
+                q1,
+                given: false,
+            }
+        };
+        let a = line(p0, w, q0);
+        let r = 0.05;
+        let start = blend_start(&dh, tcp, &a, r).unwrap();
+        let Kind::Tool { q1: qw, .. } = a else {
+            unreachable!()
+        };
+        let b = line(w, c, qw);
+        let q_now = a.sample(&dh, tcp, start.at, q0).q;
+        let k = blend(&dh, tcp, (&a, start.at), &b, q_now).unwrap();
+        let Kind::Then { first, dur, .. } = &k else {
+            panic!("{k:?}")
+        };
+        let Kind::Tool { path, .. } = **first else {
+            panic!("{first:?}")
+        };
+        assert!(matches!(path, Path::Arc { .. }));
+        for i in 0..=100 {
+            let (p, _) = path.at(f64::from(i) / 100.0);
+            assert!(norm(sub3(p, xyz(w))) <= r + 1e-9);
+        }
+        // Tangent to the first line where it begins, to the second where it ends.
+        let (_, t0) = path.at(0.0);
+        let (_, t1) = path.at(1.0);
+        assert!(norm(sub3(t0, [1.0, 0.0, 0.0])) < 1e-9, "{t0:?}");
+        let s = std::f64::consts::FRAC_1_SQRT_2;
+        assert!(norm(sub3(t1, [s, -s, 0.0])) < 1e-9, "{t1:?}");
+        assert!(*dur > 0.0 && k.duration() < a.duration() + b.duration());
     }
 
     #[test]

@@ -11,10 +11,20 @@
 //!   as mode 0). `t > 0` stretches the profile to take `t`. `optimovej`/`optimovel`: like
 //!   `movej`/`movel` (their `a`, `v` are fractions on the robot; here they are taken as
 //!   speeds). A target given as a pose is reached through inverse kinematics nearest the
-//!   current joints (out of reach: a runtime error before the arm moves). **Blending
-//!   (`r`) has no effect**: every move ends at its target at rest, and the next starts
-//!   from there. Every motion takes at least one step; the arm is exactly at the target
-//!   in the step the move returns.
+//!   joints the move starts from (out of reach: a runtime error before the arm moves).
+//!   Every motion takes at least one step; with `r = 0` the arm is exactly at the target,
+//!   at rest, in the step the move returns.
+//! - Blend radius `r > 0` (m; negative is a runtime error): the move returns where the
+//!   tool enters the sphere of radius `r` around its target (the program's next
+//!   statements run then, as on the controller, which evaluates them on entering the
+//!   blend radius). A `movej` commanded in that same step after a `movej`, or a straight
+//!   `movel`/`movep` after one, blends in without a stop (see `crate::trajectory::blend`:
+//!   joint speeds continuous, the tool within `r` of the corner, a straight-move blend a
+//!   circular arc at constant tool speed). A move commanded later (a `sleep`, `sync`, a
+//!   socket read ran first), or one that cannot blend (a joint move with a tool move,
+//!   `movec` either side, a next target inside the sphere), starts when the first has
+//!   stopped at its target: the lookahead holds one move. The radius is reduced so that
+//!   a blend never overlaps the one before it (UR: "blends cannot overlap").
 //! - A joint target outside the joints' range, ±2π (±360°, UR's e-Series and CB3 arms),
 //!   is a runtime error (`movej`, `movel` with joints, `servoj`, `set_pos`); inverse
 //!   kinematics only gives solutions within it.
@@ -28,10 +38,11 @@
 //!   commanded it is killed or the program stops (then the arm stays where it is, at
 //!   rest).
 //! - `get_actual_joint_positions()`, `get_target_joint_positions()`: the arm's joints now
-//!   (mid-move too); `get_actual_tcp_pose()`, `get_target_tcp_pose()`,
-//!   `get_target_waypoint()`: the tool pose now; speeds the speeds now;
-//!   `tool_contact()`: 0; `is_steady()`: False while a motion is under way or a speed is
-//!   held.
+//!   (mid-move and mid-blend too); `get_actual_tcp_pose()`, `get_target_tcp_pose()`: the
+//!   tool pose now; `get_target_waypoint()`: the target of the move under way (from the
+//!   start of a blend, the next move's), the tool pose at rest; speeds the speeds now;
+//!   `tool_contact()`: 0; `is_steady()`: False while a motion (a blend too) is under way
+//!   or a speed is held.
 //! - Settings read back by their getters: payload (`set_target_payload`, `set_payload*`
 //!   -> `get_target_payload*`), TCP (`set_tcp` -> `get_tcp_offset`), gravity, base
 //!   acceleration, path offset (`path_offset_*`), `set_pos` (the joints).
