@@ -829,7 +829,10 @@ pub(crate) fn blend_start(dh: &Dh, tcp: [f64; 6], kind: &Kind, r: f64) -> Option
 ///   waypoint. The orientation turns from `a`'s to `b`'s at those two points.
 /// - Not blended: a joint move with a tool move, `movec` either side, `b` shorter than
 ///   the radius (its target inside the sphere: the blends would overlap), a turn back
-///   along the same line, an arm at rest.
+///   along the same line, an arm at rest, and a blend that would take longer than
+///   stopping at the waypoint and starting again (it begins so early, for a radius close
+///   to the move's length, that the arm has not gathered speed: the blend moves at the
+///   speed it has where it begins).
 pub(crate) fn blend(
     dh: &Dh,
     tcp: [f64; 6],
@@ -867,6 +870,11 @@ pub(crate) fn blend(
                 return None;
             }
             let p2 = lerp6(*b0, *b1, g);
+            // A blend slower than stopping at the waypoint (it begins before the arm has
+            // gathered speed: a radius close to the move's length) is not made.
+            if dur > profile.total - tl + pb.time_at(g * db) {
+                return None;
+            }
             let (vb, ab) = pb.speed_and_acceleration();
             let rest = Kind::Joint {
                 q0: p2,
@@ -946,7 +954,8 @@ pub(crate) fn blend(
             };
             let len = arc.length();
             let dur = len / sd;
-            if !(dur > 0.0 && dur.is_finite()) {
+            // Not made if slower than stopping at the corner (see the joint blend).
+            if !(dur > 0.0 && dur.is_finite()) || dur > profile.total - tl + pb.time_at(r1) {
                 return None;
             }
             let q_out = nearest_ik(dh, pose_out, tcp, *qa1).unwrap_or(*qa1);

@@ -365,3 +365,43 @@ fn a_negative_radius_is_a_runtime_error() {
         other => panic!("{other:?}"),
     }
 }
+
+#[test]
+fn a_blend_that_begins_while_the_arm_still_accelerates_is_still_faster() {
+    // Short moves with a radius close to half of them: the tool enters the sphere
+    // before the arm has reached its cruise speed.
+    let q1 = add(Q0, [0.15, 0.0, 0.0, 0.0, 0.0, 0.0]);
+    let q2 = add(q1, [0.0, 0.0, 0.15, 0.0, 0.0, 0.0]);
+    let src = |r: f64| format!("set_pos({Q0:?})\nmovej({q1:?}, r={r})\nmovej({q2:?})\n");
+    let leg = dist(tool(Q0), tool(q1)).min(dist(tool(q1), tool(q2)));
+    let r = 0.9 * leg;
+    let (plain, _) = run(&src(0.0));
+    let (blended, _) = run(&src(r));
+    eprintln!(
+        "short movej pair (legs >= {leg} m, r = {r}): {} steps unblended, {} blended",
+        plain.len(),
+        blended.len()
+    );
+    assert!(blended.len() < plain.len());
+    let (f, l) = moving_span(&blended);
+    assert!(blended[f..=l].iter().all(moving));
+    assert!(largest_speed_step(&blended) < 0.02);
+}
+
+#[test]
+fn a_blend_slower_than_stopping_is_not_made() {
+    // A radius as long as the move: the blend would begin at once, at the speed of the
+    // first step. The arm stops at the waypoint instead, no slower than unblended.
+    let q1 = add(Q0, [0.15, 0.0, 0.0, 0.0, 0.0, 0.0]);
+    let q2 = add(q1, [0.0, 0.0, 0.15, 0.0, 0.0, 0.0]);
+    let src = |r: f64| format!("set_pos({Q0:?})\nmovej({q1:?}, r={r})\nmovej({q2:?})\n");
+    let (plain, _) = run(&src(0.0));
+    let (blended, _) = run(&src(1.0));
+    assert!(blended.iter().any(|a| !moving(a) && a.q == q1));
+    assert!(
+        blended.len() <= plain.len(),
+        "{} {}",
+        blended.len(),
+        plain.len()
+    );
+}
