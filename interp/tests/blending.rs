@@ -405,3 +405,28 @@ fn a_blend_slower_than_stopping_is_not_made() {
         plain.len()
     );
 }
+
+#[test]
+fn a_polyscope_style_loop_of_blended_waypoints_never_stops_until_its_last_move() {
+    // Three waypoints blended in a loop (the loop's condition takes no time, so the last
+    // move of one pass blends into the first of the next), then a final move without r.
+    let q1 = add(Q0, Q1_STEP);
+    let q2 = add(q1, Q2_STEP);
+    let src = format!(
+        "set_pos({Q0:?})\ni = 0\nwhile i < 3:\n  $ 1 \"Waypoint_1\"\n  movej({q1:?}, a=1.4, v=1.05, r=0.05)\n  movej({q2:?}, a=1.4, v=1.05, r=0.05)\n  movej({Q0:?}, a=1.4, v=1.05, r=0.05)\n  i = i + 1\nend\nmovej({q1:?})\n"
+    );
+    let (s, m) = run(&src);
+    assert_eq!(m.joint_positions(), q1);
+    let (f, l) = moving_span(&s);
+    assert!(s[f..=l].iter().all(moving));
+    assert!(largest_speed_step(&s) < 0.02);
+    // It never passes exactly through a waypoint before the last (leaving out the start
+    // at Q0 and the last 0.1 s before the end at q1).
+    for w in [q1, q2, Q0] {
+        let nearest = s[f + 100..l - 50]
+            .iter()
+            .map(|a| dist(a.p, tool(w)))
+            .fold(1.0, f64::min);
+        assert!(nearest > 1e-3, "{nearest}");
+    }
+}
