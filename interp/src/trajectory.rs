@@ -396,14 +396,16 @@ pub(crate) enum Kind {
         v1: [f64; 6],
         ramp: f64,
     },
-    /// A blend of two joint moves in joint space: the quadratic Bézier from `p1` (where
-    /// the blend starts) with control point `w` (the waypoint) to `p2` (where the next
-    /// move's path is rejoined), over `dur` seconds; its speed at each end is the move's
-    /// there.
+    /// A blend in joint space over `dur` seconds: the cubic Bézier from `p1` (where the
+    /// blend starts) through control points `c1`, `c2` to `p2` (where the next move's
+    /// path is rejoined), so that the joint speeds at its ends are the moves' there
+    /// (`3 (c1 - p1) / dur`, `3 (p2 - c2) / dur`). `w`: the waypoint's joints.
     JointBlend {
         p1: [f64; 6],
-        w: [f64; 6],
+        c1: [f64; 6],
+        c2: [f64; 6],
         p2: [f64; 6],
+        w: [f64; 6],
         dur: f64,
     },
     /// `first` for `dur` seconds, then `rest` (a blend, then the rest of the next move).
@@ -549,19 +551,18 @@ impl Kind {
                     rest.sample(dh, tcp, t - dur, prev_q)
                 }
             }
-            Kind::JointBlend { p1, w, p2, dur } => {
-                let sg = if *dur > 0.0 {
-                    (t / dur).clamp(0.0, 1.0)
-                } else {
-                    1.0
-                };
-                let (a, b, c) = ((1.0 - sg) * (1.0 - sg), 2.0 * sg * (1.0 - sg), sg * sg);
-                let k = if *dur > 0.0 { 2.0 / dur } else { 0.0 };
+            Kind::JointBlend {
+                p1,
+                c1,
+                c2,
+                p2,
+                dur,
+                ..
+            } => {
+                let (q, qd) = bezier(*p1, *c1, *c2, *p2, *dur, t);
                 Sample {
-                    q: std::array::from_fn(|j| a * p1[j] + b * w[j] + c * p2[j]),
-                    qd: std::array::from_fn(|j| {
-                        k * ((1.0 - sg) * (w[j] - p1[j]) + sg * (p2[j] - w[j]))
-                    }),
+                    q,
+                    qd,
                     tcp_speed: None,
                     done: false,
                 }
@@ -705,6 +706,34 @@ impl Kind {
             }
         }
     }
+}
+
+/// The cubic Bézier `p1, c1, c2, p2` over `dur` seconds, `t` seconds in: joints and
+/// joint speeds.
+fn bezier(
+    p1: [f64; 6],
+    c1: [f64; 6],
+    c2: [f64; 6],
+    p2: [f64; 6],
+    dur: f64,
+    t: f64,
+) -> ([f64; 6], [f64; 6]) {
+    let sg = if dur > 0.0 {
+        (t / dur).clamp(0.0, 1.0)
+    } else {
+        1.0
+    };
+    let u = 1.0 - sg;
+    let (b0, b1, b2, b3) = (u * u * u, 3.0 * u * u * sg, 3.0 * u * sg * sg, sg * sg * sg);
+    let k = if dur > 0.0 { 3.0 / dur } else { 0.0 };
+    (
+        std::array::from_fn(|j| b0 * p1[j] + b1 * c1[j] + b2 * c2[j] + b3 * p2[j]),
+        std::array::from_fn(|j| {
+            k * (u * u * (c1[j] - p1[j])
+                + 2.0 * u * sg * (c2[j] - c1[j])
+                + sg * sg * (p2[j] - c2[j]))
+        }),
+    )
 }
 
 /// Points sampled along a move to find where the tool crosses a blend's sphere (then
@@ -881,11 +910,14 @@ pub(crate) fn blend(
                 q1: *b1,
                 profile: Profile::with_start_speed((1.0 - g) * db, 2.0 * g * db / dur, vb, ab),
             };
+            // The quadratic Bézier with the waypoint as control point, as a cubic.
             Some(Kind::Then {
                 first: Box::new(Kind::JointBlend {
                     p1,
-                    w: *q1,
+                    c1: lerp6(p1, *q1, 2.0 / 3.0),
+                    c2: lerp6(p2, *q1, 2.0 / 3.0),
                     p2,
+                    w: *q1,
                     dur,
                 }),
                 dur,
