@@ -23,7 +23,8 @@
 //!   from that target and joined by a blend: for two joint moves a quadratic Bézier in
 //!   joint space (control point: the waypoint), for two straight tool moves a circular
 //!   arc tangent to both lines at constant tool speed; the rest of the next move starts
-//!   at the speed the blend hands over ([`Profile::with_start_speed`]). A move that
+//!   at the speed the blend hands over ([`Profile::with_start_speed`]); a joint move with
+//!   a tool move, a cubic Bézier in joint space between the two moves' joint speeds. A move that
 //!   cannot blend waits, queued ([`Motion::next`], at most one), until the first ends at
 //!   rest at its target.
 //!
@@ -856,7 +857,9 @@ pub(crate) fn blend_start(dh: &Dh, tcp: [f64; 6], kind: &Kind, r: f64) -> Option
 ///   at the same distance after it along `b`, at the constant tool speed the tool has
 ///   now (movep's "blend circular ... constant tool speed"); it lies within `r` of the
 ///   waypoint. The orientation turns from `a`'s to `b`'s at those two points.
-/// - Not blended: a joint move with a tool move, `movec` either side, `b` shorter than
+/// - A joint move into a straight tool move or one into the other: a cubic Bézier in
+///   joint space ([`mixed_blend`]).
+/// - Not blended: `movec` either side, `b` shorter than
 ///   the radius (its target inside the sphere: the blends would overlap), a turn back
 ///   along the same line, an arm at rest, and a blend that would take longer than
 ///   stopping at the waypoint and starting again (it begins so early, for a radius close
@@ -1020,8 +1023,185 @@ pub(crate) fn blend(
                 rest: Box::new(rest),
             })
         }
+        _ => mixed_blend(dh, tcp, (la, tl), b, q_now),
+    }
+}
+
+/// Where a joint move or a straight tool move is at fraction `f` of its way: joints (the
+/// inverse kinematics nearest `near`, for a tool move) and tool position.
+fn move_point(
+    dh: &Dh,
+    tcp: [f64; 6],
+    k: &Kind,
+    f: f64,
+    near: [f64; 6],
+) -> Option<([f64; 6], [f64; 3])> {
+    match k {
+        Kind::Joint { q0, q1, .. } => {
+            let q = lerp6(*q0, *q1, f);
+            Some((q, xyz(kinematics::forward(dh, q, tcp))))
+        }
+        Kind::Tool {
+            path: path @ Path::Line { .. },
+            r0,
+            turn,
+            ..
+        } => {
+            let p = path.at(f).0;
+            let pose = with_rot(p, mul(to_matrix(scale3(*turn, f)), *r0));
+            Some((nearest_ik(dh, pose, tcp, near)?, p))
+        }
         _ => None,
     }
+}
+
+/// The joint speeds of a joint move or a straight tool move at joints `q`, fraction `f`
+/// of its way, moving at `s` along its profile (rad/s of its leading joint, or m/s).
+fn move_joint_speed(dh: &Dh, tcp: [f64; 6], k: &Kind, q: [f64; 6], s: f64) -> [f64; 6] {
+    match k {
+        Kind::Joint { q0, q1, profile } => {
+            let d = profile.distance();
+            std::array::from_fn(|j| {
+                if d > 0.0 {
+                    (q1[j] - q0[j]) * s / d
+                } else {
+                    0.0
+                }
+            })
+        }
+        Kind::Tool {
+            path, turn, dist, ..
+        } if *dist > 0.0 => {
+            let (_, tangent) = path.at(0.0);
+            let v = scale3(tangent, s * path.length() / dist);
+            let w = scale3(*turn, s / dist);
+            joint_speed(dh, q, tcp, [v[0], v[1], v[2], w[0], w[1], w[2]])
+        }
+        _ => [0.0; 6],
+    }
+}
+
+/// How far (as a multiple of the radius it entered at) the tool may stray from the
+/// waypoint on a blend between a joint move and a tool move (a curve in joint space)
+/// before the blend is not made.
+const MIXED_STRAY: f64 = 1.25;
+
+/// A joint move into a straight tool move, or one into the other: a cubic Bézier in joint
+/// space from the joints now, at their speeds now, to the point of `b` where the tool
+/// leaves the sphere it entered, at `b`'s speeds there (the tool's speed where the blend
+/// began, at most `b`'s `v`), over the time the tool takes across the sphere's diameter
+/// at that speed. Not made if the tool would stray more than [`MIXED_STRAY`] times the
+/// radius from the waypoint (checked at 32 points), or if slower than stopping.
+fn mixed_blend(
+    dh: &Dh,
+    tcp: [f64; 6],
+    (la, tl): (&Kind, f64),
+    b: &Kind,
+    q_now: [f64; 6],
+) -> Option<Kind> {
+    let straight = |k: &Kind| {
+        matches!(
+            k,
+            Kind::Joint { .. }
+                | Kind::Tool {
+                    path: Path::Line { .. },
+                    ..
+                }
+        )
+    };
+    if !(straight(la) && straight(b)) {
+        return None;
+    }
+    let now = la.sample(dh, tcp, tl, q_now);
+    if now.done {
+        return None;
+    }
+    let (qw, wpose) = la.end(dh, tcp)?;
+    let w = xyz(wpose);
+    let fk = |q: [f64; 6]| xyz(kinematics::forward(dh, q, tcp));
+    let r1 = norm(sub3(fk(q_now), w));
+    let twist = tcp_speed(dh, q_now, now.qd, tcp);
+    let vt = norm([twist[0], twist[1], twist[2]]);
+    if r1 <= 1e-9 || vt.is_nan() || vt <= 1e-9 {
+        return None;
+    }
+    let g = crossing(
+        |f| move_point(dh, tcp, b, f, qw).map_or(0.0, |(_, p)| norm(sub3(p, w))),
+        r1,
+        false,
+    )?;
+    if !(g > 0.0 && g < 1.0) {
+        return None;
+    }
+    let (q2, p2) = move_point(dh, tcp, b, g, qw)?;
+    let (pb, db) = match b {
+        Kind::Joint { profile, .. } => (*profile, profile.distance()),
+        Kind::Tool { profile, dist, .. } => (*profile, *dist),
+        _ => return None,
+    };
+    let (vb, ab) = pb.speed_and_acceleration();
+    let s2 = match b {
+        Kind::Joint { .. } => vt * g * db / r1,
+        _ => vt,
+    }
+    .min(vb);
+    let dur = 2.0 * r1 / vt;
+    let total_a = match la {
+        Kind::Joint { profile, .. } | Kind::Tool { profile, .. } => profile.total,
+        _ => return None,
+    };
+    if s2.is_nan() || s2 <= 1e-9 || !dur.is_finite() || dur > total_a - tl + pb.time_at(g * db) {
+        return None;
+    }
+    let v2 = move_joint_speed(dh, tcp, b, q2, s2);
+    let c1: [f64; 6] = std::array::from_fn(|j| q_now[j] + now.qd[j] * dur / 3.0);
+    let c2: [f64; 6] = std::array::from_fn(|j| q2[j] - v2[j] * dur / 3.0);
+    let strays = (1..32).any(|i| {
+        let (q, _) = bezier(q_now, c1, c2, q2, dur, dur * f64::from(i) / 32.0);
+        norm(sub3(fk(q), w)) > MIXED_STRAY * r1
+    });
+    if strays {
+        return None;
+    }
+    let rest = match b {
+        Kind::Joint { q1, .. } => Kind::Joint {
+            q0: q2,
+            q1: *q1,
+            profile: Profile::with_start_speed((1.0 - g) * db, s2, vb, ab),
+        },
+        Kind::Tool {
+            path: Path::Line { to: c, .. },
+            r0,
+            turn,
+            to,
+            q1,
+            given,
+            ..
+        } => Kind::Tool {
+            path: Path::Line { from: p2, to: *c },
+            r0: mul(to_matrix(scale3(*turn, g)), *r0),
+            turn: scale3(*turn, 1.0 - g),
+            profile: Profile::with_start_speed((1.0 - g) * db, s2, vb, ab),
+            dist: (1.0 - g) * db,
+            to: *to,
+            q0: q2,
+            q1: *q1,
+            given: *given,
+        },
+        _ => return None,
+    };
+    Some(Kind::Then {
+        first: Box::new(Kind::JointBlend {
+            p1: q_now,
+            c1,
+            c2,
+            p2: q2,
+            w: qw,
+            dur,
+        }),
+        dur,
+        rest: Box::new(rest),
+    })
 }
 
 /// The solution nearest `near`, each joint within the arm's range.

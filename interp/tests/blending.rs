@@ -430,3 +430,77 @@ fn a_polyscope_style_loop_of_blended_waypoints_never_stops_until_its_last_move()
         assert!(nearest > 1e-3, "{nearest}");
     }
 }
+
+/// `movej` to `q1` then `movel` on (or `movel` to `q1`'s tool position then `movej`
+/// back to `Q0`), with blend radius `r` and without: (samples blended, samples
+/// unblended, the corner, the tool's straight line from, to).
+fn joint_and_tool(r: f64, tool_first: bool) -> (Vec<At>, Vec<At>, P3, P3, P3) {
+    let q1 = add(Q0, Q1_STEP);
+    let w = tool(q1);
+    let p1 = forward(&Model::Ur5e.dh(), q1, [0.0; 6]);
+    let rot = [p1[3], p1[4], p1[5]];
+    let c = [w[0] - 0.09, w[1] + 0.12, w[2] - 0.05];
+    let qc = format!("get_inverse_kin({}, qnear={q1:?})", pose(c, rot));
+    // Tool first: start at c, movel to w, then movej back to Q0.
+    let src = |r: f64| {
+        if tool_first {
+            format!(
+                "set_pos({q1:?})\nmovej({qc})\nmovel({}, r={r})\nmovej({Q0:?})\n",
+                pose(w, rot)
+            )
+        } else {
+            format!(
+                "set_pos({Q0:?})\nmovej({q1:?}, r={r})\nmovel({})\n",
+                pose(c, rot)
+            )
+        }
+    };
+    let (from, to) = if tool_first { (c, w) } else { (w, c) };
+    let (blended, _) = run(&src(r));
+    let (plain, _) = run(&src(0.0));
+    (blended, plain, w, from, to)
+}
+
+#[test]
+fn a_movej_blends_into_a_movel_and_a_movel_into_a_movej() {
+    let r = 0.04;
+    for tool_first in [false, true] {
+        let (blended, plain, w, from, to) = joint_and_tool(r, tool_first);
+        eprintln!(
+            "{}: {} steps unblended, {} blended",
+            if tool_first {
+                "movel -> movej"
+            } else {
+                "movej -> movel"
+            },
+            plain.len(),
+            blended.len()
+        );
+        assert!(blended.len() < plain.len());
+        // From the pair's first move on (the reverse case first moves to the line's
+        // start with a movej and stops there), the arm never stops until the end.
+        let start = if tool_first {
+            blended
+                .iter()
+                .position(|a| dist(a.p, from) < 1e-9 && !moving(a))
+                .unwrap()
+        } else {
+            0
+        };
+        let (f, l) = moving_span(&blended[start..]);
+        assert!(blended[start + f..=start + l].iter().all(moving));
+        assert!(largest_speed_step(&blended) < 0.05);
+        // The tool follows the straight line for a while, and cuts the corner.
+        let line_steps = blended
+            .iter()
+            .filter(|a| off_segment(a.p, from, to) < 1e-6 && dist(a.p, from) > 1e-3)
+            .count();
+        assert!(line_steps > 50, "{line_steps}");
+        // (The reverse case starts at the corner: from its stop at the line's start on.)
+        let nearest = blended[start..]
+            .iter()
+            .map(|a| dist(a.p, w))
+            .fold(1.0, f64::min);
+        assert!(nearest > 1e-3 && nearest < r, "{nearest}");
+    }
+}

@@ -17,12 +17,12 @@
 //! - Blend radius `r > 0` (m; negative is a runtime error): the move returns where the
 //!   tool enters the sphere of radius `r` around its target (the program's next
 //!   statements run then, as on the controller, which evaluates them on entering the
-//!   blend radius). A `movej` commanded in that same step after a `movej`, or a straight
-//!   `movel`/`movep` after one, blends in without a stop (see `crate::trajectory::blend`:
-//!   joint speeds continuous, the tool within `r` of the corner, a straight-move blend a
-//!   circular arc at constant tool speed). A move commanded later (a `sleep`, `sync`, a
-//!   socket read ran first), or one that cannot blend (a joint move with a tool move,
-//!   `movec` either side, a next target inside the sphere), starts when the first has
+//!   blend radius). A `movej`, `movel` or `movep` commanded in that same step after one
+//!   of them blends in without a stop (see `crate::trajectory::blend`: joint speeds
+//!   continuous, the tool within `r` of the corner, a straight-move blend a circular arc
+//!   at constant tool speed). A move commanded later (a `sleep`, `sync`, a socket read
+//!   ran first), or one that cannot blend (`movec` either side, a next target inside
+//!   the sphere), starts when the first has
 //!   stopped at its target: the lookahead holds one move. The radius is reduced so that
 //!   a blend never overlaps the one before it (UR: "blends cannot overlap").
 //! - A joint target outside the joints' range, ±2π (±360°, UR's e-Series and CB3 arms),
