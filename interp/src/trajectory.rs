@@ -709,6 +709,13 @@ impl Kind {
     }
 }
 
+/// Whether a move at speed `v0` can stop within `d` at deceleration `a` (none: at once).
+/// The rest of a move after a blend must be able to: the move after it is not known yet,
+/// and the arm must stop at the target if none comes.
+fn can_stop(v0: f64, d: f64, a: f64) -> bool {
+    !(a.is_finite() && a > 0.0) || v0 * v0 / (2.0 * a) <= d + 1e-12
+}
+
 /// The cubic Bézier `p1, c1, c2, p2` over `dur` seconds, `t` seconds in: joints and
 /// joint speeds.
 fn bezier(
@@ -864,7 +871,9 @@ pub(crate) fn blend_start(dh: &Dh, tcp: [f64; 6], kind: &Kind, r: f64) -> Option
 ///   along the same line, an arm at rest, and a blend that would take longer than
 ///   stopping at the waypoint and starting again (it begins so early, for a radius close
 ///   to the move's length, that the arm has not gathered speed: the blend moves at the
-///   speed it has where it begins).
+///   speed it has where it begins), and a blend after which the rest of `b` is too short
+///   to stop in at `b`'s acceleration from the speed the blend hands over (the move
+///   after `b` is not known yet: the arm must be able to stop at `b`'s target).
 pub(crate) fn blend(
     dh: &Dh,
     tcp: [f64; 6],
@@ -908,6 +917,9 @@ pub(crate) fn blend(
                 return None;
             }
             let (vb, ab) = pb.speed_and_acceleration();
+            if !can_stop(2.0 * g * db / dur, (1.0 - g) * db, ab) {
+                return None;
+            }
             let rest = Kind::Joint {
                 q0: p2,
                 q1: *b1,
@@ -993,8 +1005,11 @@ pub(crate) fn blend(
             if !(dur > 0.0 && dur.is_finite()) || dur > profile.total - tl + pb.time_at(r1) {
                 return None;
             }
-            let q_out = nearest_ik(dh, pose_out, tcp, *qa1).unwrap_or(*qa1);
             let (vb, ab) = pb.speed_and_acceleration();
+            if !can_stop(sd, lb - r1, ab) {
+                return None;
+            }
+            let q_out = nearest_ik(dh, pose_out, tcp, *qa1).unwrap_or(*qa1);
             let first = Kind::Tool {
                 path: arc,
                 r0: r_in,
@@ -1150,7 +1165,12 @@ fn mixed_blend(
         Kind::Joint { profile, .. } | Kind::Tool { profile, .. } => profile.total,
         _ => return None,
     };
-    if s2.is_nan() || s2 <= 1e-9 || !dur.is_finite() || dur > total_a - tl + pb.time_at(g * db) {
+    if s2.is_nan()
+        || s2 <= 1e-9
+        || !dur.is_finite()
+        || dur > total_a - tl + pb.time_at(g * db)
+        || !can_stop(s2, (1.0 - g) * db, ab)
+    {
         return None;
     }
     let v2 = move_joint_speed(dh, tcp, b, q2, s2);

@@ -311,10 +311,11 @@ fn movep_keeps_a_constant_tool_speed_through_its_blends() {
 #[test]
 fn a_radius_overlapping_the_previous_blend_is_reduced() {
     // Legs of 0.1 m with r = 0.08 at both corners: the second blend keeps to the
-    // 0.1 - 0.08 = 0.02 m the first leaves of the middle leg.
+    // 0.1 - 0.08 = 0.02 m the first leaves of the middle leg (slow enough, 0.1 m/s, to
+    // stop in those 0.02 m at 1.2 m/s^2 had no move come after).
     let (a, b, c, d, rot) = corners(0.15, 0.1, 0.15);
     let src = format!(
-        "set_pos({Q0:?})\nmovel({}, r=0.08)\nmovel({}, r=0.08)\nmovel({})\n",
+        "set_pos({Q0:?})\nmovel({}, v=0.1, r=0.08)\nmovel({}, v=0.1, r=0.08)\nmovel({}, v=0.1)\n",
         pose(b, rot),
         pose(c, rot),
         pose(d, rot)
@@ -374,7 +375,7 @@ fn a_blend_that_begins_while_the_arm_still_accelerates_is_still_faster() {
     let q2 = add(q1, [0.0, 0.0, 0.15, 0.0, 0.0, 0.0]);
     let src = |r: f64| format!("set_pos({Q0:?})\nmovej({q1:?}, r={r})\nmovej({q2:?})\n");
     let leg = dist(tool(Q0), tool(q1)).min(dist(tool(q1), tool(q2)));
-    let r = 0.9 * leg;
+    let r = 0.45 * leg;
     let (plain, _) = run(&src(0.0));
     let (blended, _) = run(&src(r));
     eprintln!(
@@ -503,4 +504,94 @@ fn a_movej_blends_into_a_movel_and_a_movel_into_a_movej() {
             .fold(1.0, f64::min);
         assert!(nearest > 1e-3 && nearest < r, "{nearest}");
     }
+}
+
+#[test]
+fn any_sequence_of_blended_moves_ends_at_its_last_target_without_a_jump() {
+    // Moves of every kind with radii from none to longer than the moves, collinear,
+    // reversing and tiny legs, times given: deterministic pseudo-random programs.
+    let mut seed: u64 = 0x9E37_79B9_7F4A_7C15;
+    let mut next = move || {
+        seed ^= seed << 13;
+        seed ^= seed >> 7;
+        seed ^= seed << 17;
+        (seed % 10_000) as f64 / 10_000.0
+    };
+    let p0 = forward(&Model::Ur5e.dh(), Q0, [0.0; 6]);
+    let rot = [p0[3], p0[4], p0[5]];
+    let mut finished = 0;
+    let mut worst_dv: f64 = 0.0;
+    for _ in 0..12 {
+        let mut src = format!("set_pos({Q0:?})\n");
+        let mut last = String::new();
+        for i in 0..5 {
+            let r = [0.0, 0.01, 0.05, 0.3][(next() * 4.0) as usize];
+            let kind = (next() * 5.0) as usize;
+            let p = [
+                p0[0] + 0.1 * (next() - 0.5),
+                p0[1] + 0.1 * (next() - 0.5),
+                p0[2] + 0.1 * (next() - 0.5),
+            ];
+            let target = pose(p, rot);
+            let line = match kind {
+                0 => format!("movej(get_inverse_kin({target}, qnear={Q0:?}), r={r})"),
+                1 => format!("movel({target}, r={r})"),
+                2 => format!("movep({target}, v=0.1, r={r})"),
+                3 => format!("movel({target}, t=0.6, r={r})"),
+                _ => {
+                    let via = pose([p[0] + 0.02, p[1] - 0.03, p[2]], rot);
+                    format!("movec({via}, {target}, r={r})")
+                }
+            };
+            if i % 2 == 1 {
+                // Sometimes the same target twice (a zero-length move).
+                src.push_str(&format!("{line}\n"));
+            }
+            src.push_str(&format!("{line}\n"));
+            last = target;
+        }
+        // A last move without a radius, to where the previous one went.
+        src.push_str(&format!("movel({last})\n"));
+        let mut m = Machine::new(Program::parse(&src).unwrap(), Config::default());
+        // From step 0 on (where set_pos puts the arm at Q0 at once).
+        m.run_until(Duration::ZERO);
+        let (mut prev, mut prev_qd) = (m.arm().q, m.arm().qd);
+        for k in 1..40_000u32 {
+            m.run_until(STEP * k);
+            let (q, qd) = (m.arm().q, m.arm().qd);
+            let d = (0..6).map(|j| (q[j] - prev[j]).abs()).fold(0.0, f64::max);
+            assert!(d < 0.05, "{src}: a jump of {d} rad at step {k}");
+            let dv = (0..6)
+                .map(|j| (qd[j] - prev_qd[j]).abs())
+                .fold(0.0, f64::max);
+            worst_dv = worst_dv.max(dv);
+            (prev, prev_qd) = (q, qd);
+            if m.state() != &State::Running {
+                break;
+            }
+        }
+        // An arc through a random via may be out of reach: a runtime error, not a panic.
+        if let State::Error(e) = m.state() {
+            assert!(e.to_string().contains("reach"), "{e}\n{src}");
+            continue;
+        }
+        assert_eq!(m.state(), &State::Finished, "{src}");
+        let end = m.tcp_pose();
+        let want: Vec<f64> = last
+            .trim_start_matches("p[")
+            .trim_end_matches(']')
+            .split(", ")
+            .map(|x| x.parse().unwrap())
+            .collect();
+        assert!(
+            (0..3).all(|k| (end[k] - want[k]).abs() < 1e-6),
+            "{end:?} {want:?}\n{src}"
+        );
+        finished += 1;
+    }
+    eprintln!("{finished} of 12 programs finished (the others: an arc out of reach); largest joint speed change in a step {worst_dv} rad/s");
+    assert!(finished >= 6, "{finished}");
+    // Joint speeds change gradually (a tight blend arc turns them fast, but no step
+    // stops a moving arm or starts one at speed).
+    assert!(worst_dv < 0.3, "{worst_dv}");
 }

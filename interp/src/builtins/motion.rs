@@ -757,8 +757,13 @@ fn radius(a: &Args, i: usize) -> Result<f64, Fault> {
     if r.is_finite() && r >= 0.0 {
         Ok(r)
     } else {
+        let what = if r < 0.0 {
+            "is negative"
+        } else {
+            "is not a finite number"
+        };
         Err(Fault::from(format!(
-            "`{}`: blend radius r={} m is negative (0: no blend)",
+            "`{}`: blend radius r={} m {what} (0: no blend)",
             a.name,
             Value::Float(r).to_str()
         )))
