@@ -595,3 +595,51 @@ fn any_sequence_of_blended_moves_ends_at_its_last_target_without_a_jump() {
     // stops a moving arm or starts one at speed).
     assert!(worst_dv < 0.3, "{worst_dv}");
 }
+
+#[test]
+fn during_a_blend_a_thread_sees_the_next_moves_waypoint_and_an_unsteady_arm() {
+    // A thread samples the waypoint and is_steady() at every step; the main program
+    // blends two moves.
+    let q1 = add(Q0, Q1_STEP);
+    let q2 = add(q1, Q2_STEP);
+    let src = format!(
+        "set_pos({Q0:?})\nthread watch():\n  while True:\n    w = get_target_waypoint()\n    textmsg(w[0], is_steady())\n    sync()\n  end\nend\nh = run watch()\nmovej({q1:?}, r=0.05)\nmovej({q2:?})\nkill h\n"
+    );
+    let mut m = Machine::new(Program::parse(&src).unwrap(), Config::default());
+    for k in 0..5000u32 {
+        m.run_until(STEP * k);
+        if m.state() != &State::Running {
+            break;
+        }
+    }
+    assert_eq!(m.state(), &State::Finished);
+    let samples: Vec<(f64, bool)> = std::iter::from_fn(|| m.poll_event())
+        .filter_map(|e| match e {
+            urscript_interp::Event::Message(msg) => Some(msg.text),
+            _ => None,
+        })
+        .map(|t| {
+            let steady = t.ends_with("True");
+            let x = t.trim_end_matches("True").trim_end_matches("False");
+            (x.parse().unwrap(), steady)
+        })
+        .collect();
+    let x1 = forward(&Model::Ur5e.dh(), q1, [0.0; 6])[0];
+    let x2 = forward(&Model::Ur5e.dh(), q2, [0.0; 6])[0];
+    // First the first move's target, then the next's, never back; never steady while
+    // the arm moves (the watcher is killed when the last move ends).
+    // (textmsg prints floats to a few decimals.)
+    assert!((x1 - x2).abs() > 0.01, "{x1} {x2}");
+    let first = samples
+        .iter()
+        .take_while(|s| (s.0 - x1).abs() < 1e-4)
+        .count();
+    let rest = &samples[first..];
+    assert!(
+        first > 100 && rest.len() > 100,
+        "{first} {} {samples:?}",
+        rest.len()
+    );
+    assert!(rest.iter().all(|s| (s.0 - x2).abs() < 1e-4));
+    assert!(samples.iter().all(|s| !s.1));
+}
