@@ -13,7 +13,7 @@ use crate::error::Fault;
 use crate::event::{Event, ReadRecord, MAX_READ_INPUT};
 use crate::kinematics::{self, Dh};
 use crate::sockets::Sockets;
-use crate::trajectory::{Kind, Motion};
+use crate::trajectory::{self, Kind, Motion};
 
 /// The virtual arm and the I/O around it: where the arm is now (mid-move too), not
 /// dynamics (see
@@ -295,14 +295,114 @@ impl Controller {
             start: self.step,
             owner: self.thread,
             tcp,
+            blend: None,
+            next: None,
         });
         self.sampled = None;
         self.advance(self.step);
     }
 
+    /// The move under way that the running thread commanded with a blend radius (the
+    /// program got control back when its blend began).
+    fn blending(&self) -> Option<&Motion> {
+        self.motion
+            .as_ref()
+            .filter(|m| m.owner == self.thread && m.blend.is_some())
+    }
+
+    /// Where the running thread's next move starts: the target (joints, tool pose) of a
+    /// move under way with a blend radius (the next move blends from it, or starts there
+    /// when it ends), else where the arm is.
+    pub fn move_start(&self) -> ([f64; 6], [f64; 6]) {
+        self.blending()
+            .and_then(|m| m.kind.end(&self.dh, m.tcp))
+            .unwrap_or_else(|| (self.arm.q, self.tcp_pose()))
+    }
+
+    /// Starts a move (`movej`, `movel`, `movep`, `movec`) planned from
+    /// [`move_start`](Self::move_start), with blend radius `r` at its target; returns the
+    /// time until the program gets control back: the move's end, or where its blend
+    /// begins (`r > 0`).
+    ///
+    /// If a move with a blend radius is under way for this thread: commanded in the step
+    /// its blend began (the program ran no statement that takes time since), the new move
+    /// blends from it ([`trajectory::blend`]); later (a `sleep`, a socket read, ... in
+    /// between), or if the two cannot blend, the arm stops at that move's target and the
+    /// new move starts there when it ends: the controller's lookahead of one move.
+    pub fn start_move(&mut self, kind: Kind, tcp: [f64; 6], r: f64) -> Duration {
+        let dt = self.step_time.as_secs_f64();
+        let steps = |secs: f64| {
+            if dt > 0.0 && secs.is_finite() {
+                (secs.max(0.0) / dt).ceil() as u64
+            } else {
+                0
+            }
+        };
+        let mut kind = kind;
+        let mut start = self.step;
+        if let Some(m) = self.blending() {
+            let t = self.step.saturating_sub(m.start) as f64 * dt;
+            let began = m.blend.is_some_and(|b| b.step == self.step);
+            let blended = if began {
+                trajectory::blend(&self.dh, tcp, (&m.kind, t), &kind, self.arm.q)
+            } else {
+                None
+            };
+            match blended {
+                Some(k) => kind = k,
+                None => start = m.start.saturating_add(steps(m.duration())).max(self.step),
+            }
+        }
+        let mut blend = trajectory::blend_start(&self.dh, tcp, &kind, r);
+        let back = blend.map_or(kind.duration(), |b| b.at);
+        let wait = self
+            .step_time
+            .saturating_mul(u32::try_from(start - self.step).unwrap_or(u32::MAX))
+            .saturating_add(crate::builtins::secs(back));
+        // The step the program gets control back in (as the scheduler counts a wait).
+        let n = wait
+            .as_nanos()
+            .div_ceil(self.step_time.as_nanos().max(1))
+            .max(1);
+        if let Some(b) = blend.as_mut() {
+            b.step = self
+                .step
+                .saturating_add(u64::try_from(n).unwrap_or(u64::MAX));
+        }
+        let motion = Motion {
+            kind,
+            start,
+            owner: self.thread,
+            tcp,
+            blend,
+            next: None,
+        };
+        if start > self.step {
+            if let Some(m) = self.motion.as_mut() {
+                m.next = Some(Box::new(motion));
+            }
+        } else {
+            self.motion = Some(motion);
+            self.sampled = None;
+            self.advance(self.step);
+        }
+        wait
+    }
+
     /// Puts the arm where the motion under way has it at step `step`.
     pub fn advance(&mut self, step: u64) {
-        let Some(m) = &self.motion else { return };
+        // The move queued behind a blended one starts when that one has ended.
+        if let Some(m) = self.motion.as_mut() {
+            if m.next.as_ref().is_some_and(|n| step >= n.start) {
+                if let Some(n) = m.next.take() {
+                    self.motion = Some(*n);
+                    self.sampled = None;
+                }
+            }
+        }
+        let Some(m) = self.motion.as_mut() else {
+            return;
+        };
         if self.sampled == Some(step) {
             return;
         }
@@ -325,7 +425,9 @@ impl Controller {
             None => crate::trajectory::tcp_speed(&self.dh, s.q, s.qd, self.arm.tcp),
         };
         if s.done {
-            self.motion = None;
+            // A move queued behind this one starts now (at rest, where this one ended).
+            let next = m.next.take();
+            self.motion = next.map(|n| *n);
             self.arm.qdd = [0.0; 6];
         }
     }

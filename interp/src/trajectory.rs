@@ -18,6 +18,16 @@
 //!   holds until the next motion command. `speedl`/`stopl`: the same for the tool speed;
 //!   the joints follow the tool by inverse kinematics.
 //!
+//! - Blends (`r > 0`, [`blend_start`], [`blend`]): a move returns where the tool enters the
+//!   sphere of radius `r` around its target; the next move, commanded then, is planned
+//!   from that target and joined by a blend: for two joint moves a quadratic Bézier in
+//!   joint space (control point: the waypoint), for two straight tool moves a circular
+//!   arc tangent to both lines at constant tool speed; the rest of the next move starts
+//!   at the speed the blend hands over ([`Profile::with_start_speed`]); a joint move with
+//!   a tool move, a cubic Bézier in joint space between the two moves' joint speeds. A move that
+//!   cannot blend waits, queued ([`Motion::next`], at most one), until the first ends at
+//!   rest at its target.
+//!
 //! The end state of a move is its target exactly.
 
 use crate::kinematics::{self, Dh};
@@ -25,15 +35,21 @@ use crate::pose::{mul, to_matrix, to_rotvec, transpose};
 
 type M = [[f64; 3]; 3];
 
-/// A trapezoidal speed profile over a distance.
+/// A trapezoidal speed profile over a distance: a ramp from the start speed `v0` to the
+/// peak `vp`, a cruise at `vp`, a ramp down to rest. A move from rest starts at `v0 = 0`;
+/// the rest of a move after a blend starts at the speed the blend hands over.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(crate) struct Profile {
     /// The distance.
     d: f64,
-    /// Peak speed and acceleration of the nominal profile.
+    /// Start speed, peak speed, the first ramp's (signed) acceleration and the last
+    /// ramp's deceleration, of the nominal profile.
+    v0: f64,
     vp: f64,
-    acc: f64,
-    /// Nominal ramp time and total time.
+    acc1: f64,
+    dec: f64,
+    /// Nominal times of the first ramp, of the last ramp, and in total.
+    ta1: f64,
     ta: f64,
     t0: f64,
     /// Nominal time per real second (`t` given: the nominal profile stretched).
@@ -61,8 +77,11 @@ impl Profile {
         };
         let mut p = Profile {
             d,
+            v0: 0.0,
             vp,
-            acc,
+            acc1: acc,
+            dec: acc,
+            ta1: ta,
             ta,
             t0,
             scale: 1.0,
@@ -81,24 +100,138 @@ impl Profile {
         p
     }
 
+    /// The profile over `d` that starts at speed `v0` (the speed a blend hands over):
+    /// ramps at `a` to `v` (down, if `v0` is above it), cruises, ramps down at `a` to rest;
+    /// a triangle if `d` is too short to reach `v`. If `d` is too short to stop from `v0`
+    /// at `a`, it decelerates from `v0` to rest over `d` at the deceleration that takes
+    /// (`v0² / 2d`, above `a`). Without a usable `a` the speed is constant (`v`, or `v0`).
+    pub fn with_start_speed(d: f64, v0: f64, v: f64, a: f64) -> Profile {
+        let ok = |x: f64| x.is_finite() && x > 0.0;
+        let d = if ok(d) { d } else { 0.0 };
+        let v0 = if ok(v0) { v0 } else { 0.0 };
+        let v = if ok(v) { v } else { v0 };
+        let mut p = Profile {
+            d,
+            v0,
+            vp: v,
+            acc1: 0.0,
+            dec: 0.0,
+            ta1: 0.0,
+            ta: 0.0,
+            t0: 0.0,
+            scale: 1.0,
+            total: 0.0,
+        };
+        if d <= 0.0 || !ok(v) {
+            return p;
+        }
+        if !ok(a) {
+            p.vp = v;
+            p.v0 = v;
+            p.t0 = d / v;
+            p.total = p.t0;
+            return p;
+        }
+        // Distances of the ramps to and from cruise at v.
+        let ramp_up = (v0 - v).abs() / a;
+        let s1 = 0.5 * (v0 + v) * ramp_up;
+        let s3 = v * v / (2.0 * a);
+        if s1 + s3 <= d {
+            p.vp = v;
+            p.ta1 = ramp_up;
+            p.acc1 = if v >= v0 { a } else { -a };
+            p.ta = v / a;
+            p.dec = a;
+            p.t0 = p.ta1 + (d - s1 - s3) / v + p.ta;
+        } else {
+            // A triangle from v0: up to vp then down, both at a.
+            let vp = ((2.0 * a * d + v0 * v0) / 2.0).sqrt();
+            if v0 <= v && vp >= v0 {
+                p.vp = vp;
+                p.acc1 = a;
+                p.ta1 = (vp - v0) / a;
+                p.dec = a;
+                p.ta = vp / a;
+                p.t0 = p.ta1 + p.ta;
+            } else {
+                // One deceleration from v0 to rest over d.
+                p.vp = v0;
+                p.dec = v0 * v0 / (2.0 * d);
+                p.ta = 2.0 * d / v0;
+                p.t0 = p.ta;
+            }
+        }
+        p.total = p.t0;
+        p
+    }
+
+    /// A constant speed `v` over `d` (a blend along its arc); ends at that speed.
+    pub fn constant(d: f64, v: f64) -> Profile {
+        let ok = |x: f64| x.is_finite() && x > 0.0;
+        let (d, v) = if ok(d) && ok(v) { (d, v) } else { (0.0, 0.0) };
+        let t0 = if v > 0.0 { d / v } else { 0.0 };
+        Profile {
+            d,
+            v0: v,
+            vp: v,
+            acc1: 0.0,
+            dec: 0.0,
+            ta1: 0.0,
+            ta: 0.0,
+            t0,
+            scale: 1.0,
+            total: t0,
+        }
+    }
+
+    /// Its distance.
+    pub fn distance(&self) -> f64 {
+        self.d
+    }
+
+    /// The cruise speed and acceleration this profile moves at, in real time (a profile
+    /// stretched to a time `t` moves slower than its `v` and `a`).
+    pub fn speed_and_acceleration(&self) -> (f64, f64) {
+        (
+            self.vp * self.scale,
+            self.acc1.abs().max(self.dec) * self.scale * self.scale,
+        )
+    }
+
     /// Distance covered and speed, `t` seconds after the start.
     pub fn at(&self, t: f64) -> (f64, f64) {
         let tau = t.max(0.0) * self.scale;
         if tau >= self.t0 || self.d <= 0.0 {
             return (self.d, 0.0);
         }
-        let (s, sd) = if tau < self.ta {
-            (0.5 * self.acc * tau * tau, self.acc * tau)
-        } else if tau <= self.t0 - self.ta {
+        let s1 = self.v0 * self.ta1 + 0.5 * self.acc1 * self.ta1 * self.ta1;
+        let (s, sd) = if tau < self.ta1 {
             (
-                0.5 * self.acc * self.ta * self.ta + self.vp * (tau - self.ta),
-                self.vp,
+                self.v0 * tau + 0.5 * self.acc1 * tau * tau,
+                self.v0 + self.acc1 * tau,
             )
+        } else if tau <= self.t0 - self.ta {
+            (s1 + self.vp * (tau - self.ta1), self.vp)
         } else {
             let left = self.t0 - tau;
-            (self.d - 0.5 * self.acc * left * left, self.acc * left)
+            (self.d - 0.5 * self.dec * left * left, self.dec * left)
         };
         (s.clamp(0.0, self.d), sd * self.scale)
+    }
+
+    /// The time (s) at which the profile has covered `s` (bisection: the distance only
+    /// grows; 60 halvings of the duration).
+    pub fn time_at(&self, s: f64) -> f64 {
+        let (mut lo, mut hi) = (0.0, self.total);
+        for _ in 0..60 {
+            let mid = 0.5 * (lo + hi);
+            if self.at(mid).0 < s {
+                lo = mid;
+            } else {
+                hi = mid;
+            }
+        }
+        hi
     }
 }
 
@@ -264,6 +397,24 @@ pub(crate) enum Kind {
         v1: [f64; 6],
         ramp: f64,
     },
+    /// A blend in joint space over `dur` seconds: the cubic Bézier from `p1` (where the
+    /// blend starts) through control points `c1`, `c2` to `p2` (where the next move's
+    /// path is rejoined), so that the joint speeds at its ends are the moves' there
+    /// (`3 (c1 - p1) / dur`, `3 (p2 - c2) / dur`). `w`: the waypoint's joints.
+    JointBlend {
+        p1: [f64; 6],
+        c1: [f64; 6],
+        c2: [f64; 6],
+        p2: [f64; 6],
+        w: [f64; 6],
+        dur: f64,
+    },
+    /// `first` for `dur` seconds, then `rest` (a blend, then the rest of the next move).
+    Then {
+        first: Box<Kind>,
+        dur: f64,
+        rest: Box<Kind>,
+    },
 }
 
 /// A motion under way.
@@ -276,6 +427,22 @@ pub(crate) struct Motion {
     pub owner: u32,
     /// The TCP offset the tool moves of (for tool motions).
     pub tcp: [f64; 6],
+    /// The blend at its target, if the move has a blend radius: the program got control
+    /// back when it began.
+    pub blend: Option<BlendStart>,
+    /// The move commanded after the blend began (too late to blend): it starts where and
+    /// when this one ends, at rest. The controller's lookahead: at most one.
+    pub next: Option<Box<Motion>>,
+}
+
+/// Where a move's blend begins: the tool enters the sphere of radius `r` (m) around the
+/// target, `at` seconds after the move started.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct BlendStart {
+    pub r: f64,
+    pub at: f64,
+    /// The step the program gets control back in (set by the controller).
+    pub step: u64,
 }
 
 /// Where the arm is `t` seconds into a motion: joints, joint speeds, tool speed (base
@@ -318,7 +485,89 @@ impl Motion {
     /// The arm `t` seconds in; `prev_q` the joints at the previous sample (for inverse
     /// kinematics).
     pub fn sample(&self, dh: &Dh, t: f64, prev_q: [f64; 6]) -> Sample {
-        match &self.kind {
+        self.kind.sample(dh, self.tcp, t, prev_q)
+    }
+
+    /// The target of the move under way (`get_target_waypoint`): the tool pose at its
+    /// target; during a blend, the next move's target.
+    pub fn waypoint(&self, dh: &Dh) -> Option<[f64; 6]> {
+        match self.kind.last() {
+            Kind::Joint { q1, .. } => Some(kinematics::forward(dh, *q1, self.tcp)),
+            Kind::Tool { to, .. } => Some(*to),
+            _ => None,
+        }
+    }
+
+    /// Its duration (s): infinite for a speed held.
+    pub fn duration(&self) -> f64 {
+        self.kind.duration()
+    }
+}
+
+impl Kind {
+    /// The last move of a blended sequence (itself, for a single one), and the time it
+    /// starts at.
+    pub fn last_with_offset(&self) -> (&Kind, f64) {
+        let mut k = self;
+        let mut off = 0.0;
+        // A sequence is one blend and one rest deep; the loop is bounded by that nesting.
+        while let Kind::Then { dur, rest, .. } = k {
+            off += *dur;
+            k = rest;
+        }
+        (k, off)
+    }
+
+    /// The last move of a blended sequence.
+    pub fn last(&self) -> &Kind {
+        self.last_with_offset().0
+    }
+
+    /// Its duration (s): infinite for a speed held.
+    pub fn duration(&self) -> f64 {
+        match self {
+            Kind::Joint { profile, .. } | Kind::Tool { profile, .. } => profile.total,
+            Kind::JointBlend { dur, .. } => *dur,
+            Kind::Then { dur, rest, .. } => dur + rest.duration(),
+            Kind::JointSpeed { .. } | Kind::ToolSpeed { .. } => f64::INFINITY,
+        }
+    }
+
+    /// The joints and tool pose (through `tcp`) where the move ends.
+    pub fn end(&self, dh: &Dh, tcp: [f64; 6]) -> Option<([f64; 6], [f64; 6])> {
+        match self.last() {
+            Kind::Joint { q1, .. } => Some((*q1, kinematics::forward(dh, *q1, tcp))),
+            Kind::Tool { q1, to, .. } => Some((*q1, *to)),
+            _ => None,
+        }
+    }
+
+    /// The arm `t` seconds in (see [`Motion::sample`]).
+    pub fn sample(&self, dh: &Dh, tcp: [f64; 6], t: f64, prev_q: [f64; 6]) -> Sample {
+        match self {
+            Kind::Then { first, dur, rest } => {
+                if t < *dur {
+                    first.sample(dh, tcp, t, prev_q)
+                } else {
+                    rest.sample(dh, tcp, t - dur, prev_q)
+                }
+            }
+            Kind::JointBlend {
+                p1,
+                c1,
+                c2,
+                p2,
+                dur,
+                ..
+            } => {
+                let (q, qd) = bezier(*p1, *c1, *c2, *p2, *dur, t);
+                Sample {
+                    q,
+                    qd,
+                    tcp_speed: None,
+                    done: false,
+                }
+            }
             Kind::Joint { q0, q1, profile } => {
                 if t >= profile.total {
                     return Sample {
@@ -364,7 +613,7 @@ impl Motion {
                     let q = if *given && near(q1) {
                         *q1
                     } else {
-                        nearest_ik(dh, *to, self.tcp, prev_q).unwrap_or(*q1)
+                        nearest_ik(dh, *to, tcp, prev_q).unwrap_or(*q1)
                     };
                     return Sample {
                         q,
@@ -383,10 +632,10 @@ impl Motion {
                 let v = scale3(tangent, fd * path.length());
                 let w = scale3(*turn, fd);
                 let xd = [v[0], v[1], v[2], w[0], w[1], w[2]];
-                match nearest_ik(dh, pose, self.tcp, prev_q) {
+                match nearest_ik(dh, pose, tcp, prev_q) {
                     Some(q) => Sample {
                         q,
-                        qd: joint_speed(dh, q, self.tcp, xd),
+                        qd: joint_speed(dh, q, tcp, xd),
                         tcp_speed: Some(xd),
                         done: false,
                     },
@@ -444,12 +693,12 @@ impl Motion {
                     rv[1],
                     rv[2],
                 ];
-                let q = nearest_ik(dh, pose, self.tcp, prev_q);
+                let q = nearest_ik(dh, pose, tcp, prev_q);
                 let stopped = v1.iter().all(|s| *s == 0.0) && t >= *r;
                 Sample {
                     q: q.unwrap_or(prev_q),
                     qd: match q {
-                        Some(q) => joint_speed(dh, q, self.tcp, v),
+                        Some(q) => joint_speed(dh, q, tcp, v),
                         None => [0.0; 6],
                     },
                     tcp_speed: Some(if q.is_some() { v } else { [0.0; 6] }),
@@ -458,6 +707,521 @@ impl Motion {
             }
         }
     }
+}
+
+/// Whether a move at speed `v0` can stop within `d` at deceleration `a` (none: at once).
+/// The rest of a move after a blend must be able to: the move after it is not known yet,
+/// and the arm must stop at the target if none comes.
+fn can_stop(v0: f64, d: f64, a: f64) -> bool {
+    !(a.is_finite() && a > 0.0) || v0 * v0 / (2.0 * a) <= d + 1e-12
+}
+
+/// The cubic Bézier `p1, c1, c2, p2` over `dur` seconds, `t` seconds in: joints and
+/// joint speeds.
+fn bezier(
+    p1: [f64; 6],
+    c1: [f64; 6],
+    c2: [f64; 6],
+    p2: [f64; 6],
+    dur: f64,
+    t: f64,
+) -> ([f64; 6], [f64; 6]) {
+    let sg = if dur > 0.0 {
+        (t / dur).clamp(0.0, 1.0)
+    } else {
+        1.0
+    };
+    let u = 1.0 - sg;
+    let (b0, b1, b2, b3) = (u * u * u, 3.0 * u * u * sg, 3.0 * u * sg * sg, sg * sg * sg);
+    let k = if dur > 0.0 { 3.0 / dur } else { 0.0 };
+    (
+        std::array::from_fn(|j| b0 * p1[j] + b1 * c1[j] + b2 * c2[j] + b3 * p2[j]),
+        std::array::from_fn(|j| {
+            k * (u * u * (c1[j] - p1[j])
+                + 2.0 * u * sg * (c2[j] - c1[j])
+                + sg * sg * (p2[j] - c2[j]))
+        }),
+    )
+}
+
+/// Points sampled along a move to find where the tool crosses a blend's sphere (then
+/// refined by 40 bisections): bounds the work of planning one blend.
+const CROSSING_SAMPLES: u32 = 256;
+
+/// The fraction of the way at which `dist` (the tool's distance from a point, at a
+/// fraction of the way) crosses `r`: coming back from the end (`from_end`, where the tool
+/// enters the sphere before the target) or going out from the start (where it leaves
+/// the sphere around the start). `None` if it never does.
+fn crossing(dist: impl Fn(f64) -> f64, r: f64, from_end: bool) -> Option<f64> {
+    let n = f64::from(CROSSING_SAMPLES);
+    let at = |k: u32| {
+        let f = f64::from(k) / n;
+        if from_end {
+            1.0 - f
+        } else {
+            f
+        }
+    };
+    // The first sample (from the chosen end) outside the sphere.
+    let k = (1..=CROSSING_SAMPLES).find(|k| dist(at(*k)) > r)?;
+    // Between the sample before it (inside) and it (outside).
+    let (mut inside, mut outside) = (at(k - 1), at(k));
+    for _ in 0..40 {
+        let mid = 0.5 * (inside + outside);
+        if dist(mid) > r {
+            outside = mid;
+        } else {
+            inside = mid;
+        }
+    }
+    Some(inside)
+}
+
+fn lerp6(a: [f64; 6], b: [f64; 6], f: f64) -> [f64; 6] {
+    std::array::from_fn(|k| a[k] + (b[k] - a[k]) * f)
+}
+
+fn with_rot(p: [f64; 3], r: M) -> [f64; 6] {
+    let v = to_rotvec(r);
+    [p[0], p[1], p[2], v[0], v[1], v[2]]
+}
+
+/// Where the blend at the end of `kind` (a move, or the rest of one after a blend)
+/// begins, for blend radius `r` (m): the time the tool enters the sphere of radius `r`
+/// around the target. The radius is first limited so that this blend does not overlap
+/// the one before it (UR: blends cannot overlap): to the distance from the previous
+/// blend's waypoint to this target less the previous radius (for a move not blended
+/// into, to the move's own length). `None`: no blend (`r` not positive, or nothing left
+/// of the move to blend over).
+pub(crate) fn blend_start(dh: &Dh, tcp: [f64; 6], kind: &Kind, r: f64) -> Option<BlendStart> {
+    if !(r.is_finite() && r > 0.0) {
+        return None;
+    }
+    let (last, off) = kind.last_with_offset();
+    match last {
+        Kind::Tool {
+            path,
+            profile,
+            dist,
+            to,
+            ..
+        } => {
+            // The rest of a tool move after a blend already starts past the previous
+            // blend: its own length is the room left.
+            let cap = path.length();
+            let r = r.min(cap);
+            if r <= 1e-9 || *dist <= 0.0 {
+                return None;
+            }
+            let target = xyz(*to);
+            // All of it within r (the room left is exactly r): the blend begins at once.
+            let f = crossing(|f| norm(sub3(path.at(f).0, target)), r, true).unwrap_or(0.0);
+            Some(BlendStart {
+                r,
+                at: off + profile.time_at(f * dist),
+                step: 0,
+            })
+        }
+        Kind::Joint { q0, q1, profile } => {
+            let fk = |q: [f64; 6]| xyz(kinematics::forward(dh, q, tcp));
+            let target = fk(*q1);
+            let cap = match kind {
+                Kind::Then { first, .. } => match **first {
+                    Kind::JointBlend { p1, w, .. } => {
+                        norm(sub3(target, fk(w))) - norm(sub3(fk(p1), fk(w)))
+                    }
+                    _ => norm(sub3(target, fk(*q0))),
+                },
+                _ => norm(sub3(target, fk(*q0))),
+            };
+            let r = r.min(cap);
+            if r <= 1e-9 || profile.distance() <= 0.0 {
+                return None;
+            }
+            let f =
+                crossing(|f| norm(sub3(fk(lerp6(*q0, *q1, f)), target)), r, true).unwrap_or(0.0);
+            Some(BlendStart {
+                r,
+                at: off + profile.time_at(f * profile.distance()),
+                step: 0,
+            })
+        }
+        _ => None,
+    }
+}
+
+/// The blend from the move `a`, `t` seconds into it (where its blend begins: the arm at
+/// joints `q_now`), into the next move `b` (planned from `a`'s target), then the rest of
+/// `b`; `None` if these two cannot blend (then the arm stops at `a`'s target and `b`
+/// starts from there):
+///
+/// - `movej` into `movej`: in joint space, the quadratic Bézier from the joints now,
+///   with the waypoint as control point, to the point of `b` where the tool leaves the
+///   sphere it entered; its speed at each end is the moves' there (joint speeds
+///   continuous), so the rest of `b` starts at the speed the blend hands over.
+/// - A straight tool move (`movel`, `movep`) into another: a circular arc tangent to both
+///   lines, entered where the tool is now (at distance `r` before the waypoint) and left
+///   at the same distance after it along `b`, at the constant tool speed the tool has
+///   now (movep's "blend circular ... constant tool speed"); it lies within `r` of the
+///   waypoint. The orientation turns from `a`'s to `b`'s at those two points.
+/// - A joint move into a straight tool move or one into the other: a cubic Bézier in
+///   joint space ([`mixed_blend`]).
+/// - Not blended: `movec` either side, `b` shorter than
+///   the radius (its target inside the sphere: the blends would overlap), a turn back
+///   along the same line, an arm at rest, and a blend that would take longer than
+///   stopping at the waypoint and starting again (it begins so early, for a radius close
+///   to the move's length, that the arm has not gathered speed: the blend moves at the
+///   speed it has where it begins), and a blend after which the rest of `b` is too short
+///   to stop in at `b`'s acceleration from the speed the blend hands over (the move
+///   after `b` is not known yet: the arm must be able to stop at `b`'s target).
+pub(crate) fn blend(
+    dh: &Dh,
+    tcp: [f64; 6],
+    (a, t): (&Kind, f64),
+    b: &Kind,
+    q_now: [f64; 6],
+) -> Option<Kind> {
+    let (la, off) = a.last_with_offset();
+    let tl = t - off;
+    if tl < 0.0 {
+        return None;
+    }
+    match (la, b) {
+        (
+            Kind::Joint { q0, q1, profile },
+            Kind::Joint {
+                q0: b0,
+                q1: b1,
+                profile: pb,
+            },
+        ) => {
+            let (s, sd) = profile.at(tl);
+            let d = profile.distance();
+            let db = pb.distance();
+            if !(sd > 1e-9 && d > 0.0 && db > 0.0) {
+                return None;
+            }
+            let p1 = lerp6(*q0, *q1, s / d);
+            let dur = 2.0 * (d - s) / sd;
+            let fk = |q: [f64; 6]| xyz(kinematics::forward(dh, q, tcp));
+            let w = fk(*q1);
+            let r1 = norm(sub3(fk(p1), w));
+            let g = crossing(|f| norm(sub3(fk(lerp6(*b0, *b1, f)), w)), r1, false)?;
+            if !(dur > 0.0 && dur.is_finite() && g > 0.0 && g < 1.0) {
+                return None;
+            }
+            let p2 = lerp6(*b0, *b1, g);
+            // A blend slower than stopping at the waypoint (it begins before the arm has
+            // gathered speed: a radius close to the move's length) is not made.
+            if dur > profile.total - tl + pb.time_at(g * db) {
+                return None;
+            }
+            let (vb, ab) = pb.speed_and_acceleration();
+            if !can_stop(2.0 * g * db / dur, (1.0 - g) * db, ab) {
+                return None;
+            }
+            let rest = Kind::Joint {
+                q0: p2,
+                q1: *b1,
+                profile: Profile::with_start_speed((1.0 - g) * db, 2.0 * g * db / dur, vb, ab),
+            };
+            // The quadratic Bézier with the waypoint as control point, as a cubic.
+            Some(Kind::Then {
+                first: Box::new(Kind::JointBlend {
+                    p1,
+                    c1: lerp6(p1, *q1, 2.0 / 3.0),
+                    c2: lerp6(p2, *q1, 2.0 / 3.0),
+                    p2,
+                    w: *q1,
+                    dur,
+                }),
+                dur,
+                rest: Box::new(rest),
+            })
+        }
+        (
+            Kind::Tool {
+                path: Path::Line { from: a0, to: wp },
+                r0: ra,
+                turn: ta,
+                profile,
+                dist,
+                q1: qa1,
+                ..
+            },
+            Kind::Tool {
+                path: Path::Line { to: c, .. },
+                r0: rb,
+                turn: tb,
+                profile: pb,
+                to: cto,
+                q1: qb1,
+                given,
+                ..
+            },
+        ) => {
+            let la_len = norm(sub3(*wp, *a0));
+            let lb = norm(sub3(*c, *wp));
+            let (s, sd) = profile.at(tl);
+            let r1 = la_len - s;
+            if la_len <= 1e-9 || *dist <= 0.0 || sd.is_nan() || sd <= 1e-9 || r1 <= 1e-9 || lb <= r1
+            {
+                return None;
+            }
+            let u1 = scale3(sub3(*wp, *a0), 1.0 / la_len);
+            let u2 = scale3(sub3(*c, *wp), 1.0 / lb);
+            let cos = dot(u1, u2).clamp(-1.0, 1.0);
+            if cos < -1.0 + 1e-9 {
+                return None;
+            }
+            let p1 = [a0[0] + u1[0] * s, a0[1] + u1[1] * s, a0[2] + u1[2] * s];
+            let p2 = [wp[0] + u2[0] * r1, wp[1] + u2[1] * r1, wp[2] + u2[2] * r1];
+            // Orientations where the blend begins and ends.
+            let r_in = mul(to_matrix(scale3(*ta, s / dist)), *ra);
+            let g = r1 / lb;
+            let r_out = mul(to_matrix(scale3(*tb, g)), *rb);
+            let pose_in = with_rot(p1, r_in);
+            let pose_out = with_rot(p2, r_out);
+            let arc = if cos > 1.0 - 1e-12 {
+                Path::Line { from: p1, to: p2 }
+            } else {
+                // The circle tangent to both lines at distance r1 from the waypoint:
+                // its centre on the bisector, its point nearest the waypoint the via.
+                let theta = cos.acos();
+                let bis = sub3(u2, u1);
+                let bis = scale3(bis, 1.0 / norm(bis));
+                let rho = r1 / (theta / 2.0).tan();
+                let dc = r1 / (theta / 2.0).sin();
+                let via = [
+                    wp[0] + bis[0] * (dc - rho),
+                    wp[1] + bis[1] * (dc - rho),
+                    wp[2] + bis[2] * (dc - rho),
+                ];
+                Path::new(pose_in, Some(with_rot(via, r_in)), pose_out)
+            };
+            let len = arc.length();
+            let dur = len / sd;
+            // Not made if slower than stopping at the corner (see the joint blend).
+            if !(dur > 0.0 && dur.is_finite()) || dur > profile.total - tl + pb.time_at(r1) {
+                return None;
+            }
+            let (vb, ab) = pb.speed_and_acceleration();
+            if !can_stop(sd, lb - r1, ab) {
+                return None;
+            }
+            let q_out = nearest_ik(dh, pose_out, tcp, *qa1).unwrap_or(*qa1);
+            let first = Kind::Tool {
+                path: arc,
+                r0: r_in,
+                turn: to_rotvec(mul(r_out, transpose(r_in))),
+                profile: Profile::constant(len, sd),
+                dist: len,
+                to: pose_out,
+                q0: q_now,
+                q1: q_out,
+                given: false,
+            };
+            let rest = Kind::Tool {
+                path: Path::Line { from: p2, to: *c },
+                r0: r_out,
+                turn: scale3(*tb, 1.0 - g),
+                profile: Profile::with_start_speed(lb - r1, sd, vb, ab),
+                dist: lb - r1,
+                to: *cto,
+                q0: q_out,
+                q1: *qb1,
+                given: *given,
+            };
+            Some(Kind::Then {
+                first: Box::new(first),
+                dur,
+                rest: Box::new(rest),
+            })
+        }
+        _ => mixed_blend(dh, tcp, (la, tl), b, q_now),
+    }
+}
+
+/// Where a joint move or a straight tool move is at fraction `f` of its way: joints (the
+/// inverse kinematics nearest `near`, for a tool move) and tool position.
+fn move_point(
+    dh: &Dh,
+    tcp: [f64; 6],
+    k: &Kind,
+    f: f64,
+    near: [f64; 6],
+) -> Option<([f64; 6], [f64; 3])> {
+    match k {
+        Kind::Joint { q0, q1, .. } => {
+            let q = lerp6(*q0, *q1, f);
+            Some((q, xyz(kinematics::forward(dh, q, tcp))))
+        }
+        Kind::Tool {
+            path: path @ Path::Line { .. },
+            r0,
+            turn,
+            ..
+        } => {
+            let p = path.at(f).0;
+            let pose = with_rot(p, mul(to_matrix(scale3(*turn, f)), *r0));
+            Some((nearest_ik(dh, pose, tcp, near)?, p))
+        }
+        _ => None,
+    }
+}
+
+/// The joint speeds of a joint move or a straight tool move at joints `q`, fraction `f`
+/// of its way, moving at `s` along its profile (rad/s of its leading joint, or m/s).
+fn move_joint_speed(dh: &Dh, tcp: [f64; 6], k: &Kind, q: [f64; 6], s: f64) -> [f64; 6] {
+    match k {
+        Kind::Joint { q0, q1, profile } => {
+            let d = profile.distance();
+            std::array::from_fn(|j| {
+                if d > 0.0 {
+                    (q1[j] - q0[j]) * s / d
+                } else {
+                    0.0
+                }
+            })
+        }
+        Kind::Tool {
+            path, turn, dist, ..
+        } if *dist > 0.0 => {
+            let (_, tangent) = path.at(0.0);
+            let v = scale3(tangent, s * path.length() / dist);
+            let w = scale3(*turn, s / dist);
+            joint_speed(dh, q, tcp, [v[0], v[1], v[2], w[0], w[1], w[2]])
+        }
+        _ => [0.0; 6],
+    }
+}
+
+/// How far (as a multiple of the radius it entered at) the tool may stray from the
+/// waypoint on a blend between a joint move and a tool move (a curve in joint space)
+/// before the blend is not made.
+const MIXED_STRAY: f64 = 1.25;
+
+/// A joint move into a straight tool move, or one into the other: a cubic Bézier in joint
+/// space from the joints now, at their speeds now, to the point of `b` where the tool
+/// leaves the sphere it entered, at `b`'s speeds there (the tool's speed where the blend
+/// began, at most `b`'s `v`), over the time the tool takes across the sphere's diameter
+/// at that speed. Not made if the tool would stray more than [`MIXED_STRAY`] times the
+/// radius from the waypoint (checked at 32 points), or if slower than stopping.
+fn mixed_blend(
+    dh: &Dh,
+    tcp: [f64; 6],
+    (la, tl): (&Kind, f64),
+    b: &Kind,
+    q_now: [f64; 6],
+) -> Option<Kind> {
+    let straight = |k: &Kind| {
+        matches!(
+            k,
+            Kind::Joint { .. }
+                | Kind::Tool {
+                    path: Path::Line { .. },
+                    ..
+                }
+        )
+    };
+    if !(straight(la) && straight(b)) {
+        return None;
+    }
+    let now = la.sample(dh, tcp, tl, q_now);
+    if now.done {
+        return None;
+    }
+    let (qw, wpose) = la.end(dh, tcp)?;
+    let w = xyz(wpose);
+    let fk = |q: [f64; 6]| xyz(kinematics::forward(dh, q, tcp));
+    let r1 = norm(sub3(fk(q_now), w));
+    let twist = tcp_speed(dh, q_now, now.qd, tcp);
+    let vt = norm([twist[0], twist[1], twist[2]]);
+    if r1 <= 1e-9 || vt.is_nan() || vt <= 1e-9 {
+        return None;
+    }
+    let g = crossing(
+        |f| move_point(dh, tcp, b, f, qw).map_or(0.0, |(_, p)| norm(sub3(p, w))),
+        r1,
+        false,
+    )?;
+    if !(g > 0.0 && g < 1.0) {
+        return None;
+    }
+    let (q2, p2) = move_point(dh, tcp, b, g, qw)?;
+    let (pb, db) = match b {
+        Kind::Joint { profile, .. } => (*profile, profile.distance()),
+        Kind::Tool { profile, dist, .. } => (*profile, *dist),
+        _ => return None,
+    };
+    let (vb, ab) = pb.speed_and_acceleration();
+    let s2 = match b {
+        Kind::Joint { .. } => vt * g * db / r1,
+        _ => vt,
+    }
+    .min(vb);
+    let dur = 2.0 * r1 / vt;
+    let total_a = match la {
+        Kind::Joint { profile, .. } | Kind::Tool { profile, .. } => profile.total,
+        _ => return None,
+    };
+    if s2.is_nan()
+        || s2 <= 1e-9
+        || !dur.is_finite()
+        || dur > total_a - tl + pb.time_at(g * db)
+        || !can_stop(s2, (1.0 - g) * db, ab)
+    {
+        return None;
+    }
+    let v2 = move_joint_speed(dh, tcp, b, q2, s2);
+    let c1: [f64; 6] = std::array::from_fn(|j| q_now[j] + now.qd[j] * dur / 3.0);
+    let c2: [f64; 6] = std::array::from_fn(|j| q2[j] - v2[j] * dur / 3.0);
+    let strays = (1..32).any(|i| {
+        let (q, _) = bezier(q_now, c1, c2, q2, dur, dur * f64::from(i) / 32.0);
+        norm(sub3(fk(q), w)) > MIXED_STRAY * r1
+    });
+    if strays {
+        return None;
+    }
+    let rest = match b {
+        Kind::Joint { q1, .. } => Kind::Joint {
+            q0: q2,
+            q1: *q1,
+            profile: Profile::with_start_speed((1.0 - g) * db, s2, vb, ab),
+        },
+        Kind::Tool {
+            path: Path::Line { to: c, .. },
+            r0,
+            turn,
+            to,
+            q1,
+            given,
+            ..
+        } => Kind::Tool {
+            path: Path::Line { from: p2, to: *c },
+            r0: mul(to_matrix(scale3(*turn, g)), *r0),
+            turn: scale3(*turn, 1.0 - g),
+            profile: Profile::with_start_speed((1.0 - g) * db, s2, vb, ab),
+            dist: (1.0 - g) * db,
+            to: *to,
+            q0: q2,
+            q1: *q1,
+            given: *given,
+        },
+        _ => return None,
+    };
+    Some(Kind::Then {
+        first: Box::new(Kind::JointBlend {
+            p1: q_now,
+            c1,
+            c2,
+            p2: q2,
+            w: qw,
+            dur,
+        }),
+        dur,
+        rest: Box::new(rest),
+    })
 }
 
 /// The solution nearest `near`, each joint within the arm's range.
@@ -541,6 +1305,96 @@ mod tests {
                 last = s;
             }
         }
+    }
+
+    #[test]
+    fn a_profile_from_a_start_speed_is_continuous_and_ends_at_rest() {
+        // (d, v0, v, a): cruise above and below v0, triangles, and too short to stop at a.
+        for (d, v0, v, a) in [
+            (1.0, 0.3, 0.5, 1.0),
+            (1.0, 0.8, 0.5, 1.0),
+            (0.05, 0.3, 0.5, 1.0),
+            (0.01, 0.5, 0.5, 1.0),
+            (0.5, 0.0, 0.5, 1.0),
+            (0.2, 0.4, 0.4, 0.0),
+        ] {
+            let p = Profile::with_start_speed(d, v0, v, a);
+            assert!(p.total > 0.0 && p.total.is_finite());
+            assert_eq!(p.at(0.0), (0.0, v0));
+            assert_eq!(p.at(p.total), (d, 0.0));
+            let n = 2000;
+            let dt = p.total / f64::from(n);
+            let (mut last_s, mut last_v) = (0.0, v0);
+            for k in 1..n {
+                let (s, sd) = p.at(dt * f64::from(k));
+                assert!(s >= last_s - 1e-15, "{d} {v0}: {s} < {last_s}");
+                assert!(sd <= v0.max(v) + 1e-12, "{sd}");
+                // The speed changes by at most the largest deceleration per sample.
+                let most = a.max(v0 * v0 / (2.0 * d));
+                assert!(
+                    (sd - last_v).abs() <= most * dt + 1e-9,
+                    "{d} {v0}: {last_v} -> {sd}"
+                );
+                (last_s, last_v) = (s, sd);
+            }
+            // time_at inverts at.
+            let t = p.time_at(0.5 * d);
+            assert!((p.at(t).0 - 0.5 * d).abs() < 1e-9);
+        }
+    }
+
+    #[test]
+    fn a_straight_blend_is_an_arc_within_r_of_the_corner_tangent_to_both_lines() {
+        let dh = crate::kinematics::Model::Ur5e.dh();
+        let q0 = [0.3, -1.4, 1.6, -1.8, -1.57, 0.2];
+        let tcp = [0.0; 6];
+        let p0 = kinematics::forward(&dh, q0, tcp);
+        let w = [p0[0] + 0.2, p0[1], p0[2], p0[3], p0[4], p0[5]];
+        let c = [w[0] + 0.1, w[1] - 0.1, w[2], w[3], w[4], w[5]];
+        let line = |from: [f64; 6], to: [f64; 6], q0: [f64; 6]| {
+            let path = Path::new(from, None, to);
+            let (r0, turn) = turn_between(from, to);
+            let dist = path.length();
+            let q1 = nearest_ik(&dh, to, tcp, q0).unwrap();
+            Kind::Tool {
+                path,
+                r0,
+                turn,
+                profile: Profile::new(dist, 0.25, 1.2, 0.0),
+                dist,
+                to,
+                q0,
+                q1,
+                given: false,
+            }
+        };
+        let a = line(p0, w, q0);
+        let r = 0.05;
+        let start = blend_start(&dh, tcp, &a, r).unwrap();
+        let Kind::Tool { q1: qw, .. } = a else {
+            unreachable!()
+        };
+        let b = line(w, c, qw);
+        let q_now = a.sample(&dh, tcp, start.at, q0).q;
+        let k = blend(&dh, tcp, (&a, start.at), &b, q_now).unwrap();
+        let Kind::Then { first, dur, .. } = &k else {
+            panic!("{k:?}")
+        };
+        let Kind::Tool { path, .. } = **first else {
+            panic!("{first:?}")
+        };
+        assert!(matches!(path, Path::Arc { .. }));
+        for i in 0..=100 {
+            let (p, _) = path.at(f64::from(i) / 100.0);
+            assert!(norm(sub3(p, xyz(w))) <= r + 1e-9);
+        }
+        // Tangent to the first line where it begins, to the second where it ends.
+        let (_, t0) = path.at(0.0);
+        let (_, t1) = path.at(1.0);
+        assert!(norm(sub3(t0, [1.0, 0.0, 0.0])) < 1e-9, "{t0:?}");
+        let s = std::f64::consts::FRAC_1_SQRT_2;
+        assert!(norm(sub3(t1, [s, -s, 0.0])) < 1e-9, "{t1:?}");
+        assert!(*dur > 0.0 && k.duration() < a.duration() + b.duration());
     }
 
     #[test]

@@ -11,10 +11,20 @@
 //!   as mode 0). `t > 0` stretches the profile to take `t`. `optimovej`/`optimovel`: like
 //!   `movej`/`movel` (their `a`, `v` are fractions on the robot; here they are taken as
 //!   speeds). A target given as a pose is reached through inverse kinematics nearest the
-//!   current joints (out of reach: a runtime error before the arm moves). **Blending
-//!   (`r`) has no effect**: every move ends at its target at rest, and the next starts
-//!   from there. Every motion takes at least one step; the arm is exactly at the target
-//!   in the step the move returns.
+//!   joints the move starts from (out of reach: a runtime error before the arm moves).
+//!   Every motion takes at least one step; with `r = 0` the arm is exactly at the target,
+//!   at rest, in the step the move returns.
+//! - Blend radius `r > 0` (m; negative is a runtime error): the move returns where the
+//!   tool enters the sphere of radius `r` around its target (the program's next
+//!   statements run then, as on the controller, which evaluates them on entering the
+//!   blend radius). A `movej`, `movel` or `movep` commanded in that same step after one
+//!   of them blends in without a stop (see `crate::trajectory::blend`: joint speeds
+//!   continuous, the tool within `r` of the corner, a straight-move blend a circular arc
+//!   at constant tool speed). A move commanded later (a `sleep`, `sync`, a socket read
+//!   ran first), or one that cannot blend (`movec` either side, a next target inside
+//!   the sphere), starts when the first has
+//!   stopped at its target: the lookahead holds one move. The radius is reduced so that
+//!   a blend never overlaps the one before it (UR: "blends cannot overlap").
 //! - A joint target outside the joints' range, ±2π (±360°, UR's e-Series and CB3 arms),
 //!   is a runtime error (`movej`, `movel` with joints, `servoj`, `set_pos`); inverse
 //!   kinematics only gives solutions within it.
@@ -28,10 +38,11 @@
 //!   commanded it is killed or the program stops (then the arm stays where it is, at
 //!   rest).
 //! - `get_actual_joint_positions()`, `get_target_joint_positions()`: the arm's joints now
-//!   (mid-move too); `get_actual_tcp_pose()`, `get_target_tcp_pose()`,
-//!   `get_target_waypoint()`: the tool pose now; speeds the speeds now;
-//!   `tool_contact()`: 0; `is_steady()`: False while a motion is under way or a speed is
-//!   held.
+//!   (mid-move and mid-blend too); `get_actual_tcp_pose()`, `get_target_tcp_pose()`: the
+//!   tool pose now; `get_target_waypoint()`: the target of the move under way (from the
+//!   start of a blend, the next move's), the tool pose at rest; speeds the speeds now;
+//!   `tool_contact()`: 0; `is_steady()`: False while a motion (a blend too) is under way
+//!   or a speed is held.
 //! - Settings read back by their getters: payload (`set_target_payload`, `set_payload*`
 //!   -> `get_target_payload*`), TCP (`set_tcp` -> `get_tcp_offset`), gravity, base
 //!   acceleration, path offset (`path_offset_*`), `set_pos` (the joints).
@@ -297,8 +308,8 @@ pub(super) const TABLE: &[Builtin] = &[
         "get_target_waypoint",
         D,
         NONE,
-        "The target of the last move: the commanded tool pose.",
-        tcp_pose,
+        "The target of the move under way (during a blend, the next move's); at rest, the tool pose.",
+        waypoint,
     ),
     Builtin::new(
         "get_target_tcp_pose_along_path",
@@ -766,8 +777,8 @@ fn check_joints(name: &str, q: [f64; 6]) -> Result<[f64; 6], Fault> {
 }
 
 /// A motion's target: joints (checked against the joint range), or a pose reached
-/// through inverse kinematics nearest the current joints. Returns the joints and the tool
-/// pose there (the pose given, for a pose).
+/// through inverse kinematics nearest the joints the move starts from. Returns the joints
+/// and the tool pose there (the pose given, for a pose).
 fn target(
     c: &Controller,
     name: &str,
@@ -775,23 +786,43 @@ fn target(
     six: [f64; 6],
 ) -> Result<([f64; 6], [f64; 6]), Fault> {
     if matches!(v, Value::Pose(_)) {
-        Ok((c.inverse(six, c.arm.q, c.arm.tcp)?, six))
+        Ok((c.inverse(six, c.move_start().0, c.arm.tcp)?, six))
     } else {
         let q = check_joints(name, six)?;
         Ok((q, c.tool_pose(q)))
     }
 }
 
-/// A move of the tool from where it is along a line (or the arc through `via`) to `pose`
-/// (joints `q1` there), along a trapezoidal profile; returns its duration (s).
+/// The blend radius argument `r` (m): not negative.
+fn radius(a: &Args, i: usize) -> Result<f64, Fault> {
+    let r = a.num(i)?;
+    if r.is_finite() && r >= 0.0 {
+        Ok(r)
+    } else {
+        let what = if r < 0.0 {
+            "is negative"
+        } else {
+            "is not a finite number"
+        };
+        Err(Fault::from(format!(
+            "`{}`: blend radius r={} m {what} (0: no blend)",
+            a.name,
+            Value::Float(r).to_str()
+        )))
+    }
+}
+
+/// A move of the tool from where it starts ([`Controller::move_start`]) along a line (or
+/// the arc through `via`) to `pose` (joints `q1` there), along a trapezoidal profile,
+/// blend radius `r`; returns the time until the program gets control back.
 fn tool_move(
     c: &mut Controller,
     via: Option<[f64; 6]>,
     pose: [f64; 6],
     (q1, given): ([f64; 6], bool),
-    (accel, speed, t): (f64, f64, f64),
-) -> f64 {
-    let p0 = c.tcp_pose();
+    (accel, speed, t, r): (f64, f64, f64, f64),
+) -> std::time::Duration {
+    let (q0, p0) = c.move_start();
     let path = Path::new(p0, via, pose);
     let (r0, turn) = trajectory::turn_between(p0, pose);
     let length = path.length();
@@ -803,7 +834,7 @@ fn tool_move(
     };
     let profile = Profile::new(dist, speed, accel, t);
     let tcp = c.arm.tcp;
-    c.start_motion(
+    c.start_move(
         Kind::Tool {
             path,
             r0,
@@ -811,36 +842,36 @@ fn tool_move(
             profile,
             dist,
             to: pose,
-            q0: c.arm.q,
+            q0,
             q1,
             given,
         },
         tcp,
-    );
-    profile.total
+        r,
+    )
 }
 
 /// `movej`, `movel`, `movep`, `optimovej`, `optimovel`: the arm moves along a trapezoidal
 /// profile (accelerate at `a` to `v`, cruise, decelerate), stretched to `t` if given, and
-/// is at the target when the move ends. `r` (blending) has no effect: every move ends at
-/// its target with the arm at rest.
+/// is at the target when the move ends; with a blend radius `r > 0` the program gets
+/// control back where the blend begins (see [`Controller::start_move`]).
 fn movej(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
     let six = a.six(0)?;
     let (accel, speed) = (a.num(1)?, a.num(2)?);
-    // movep and optimove* have no `t`.
+    // movep and optimove* have no `t`; `r` is last.
     let t = if a.params.len() == 5 { a.num(3)? } else { 0.0 };
+    let r = radius(a, a.params.len() - 1)?;
     let (q1, pose) = target(c, a.name, &a.v[0], six)?;
-    let dur = if matches!(a.name, "movej" | "optimovej") {
-        let q0 = c.arm.q;
+    let back = if matches!(a.name, "movej" | "optimovej") {
+        let q0 = c.move_start().0;
         let profile = Profile::new(joint_distance(q0, q1), speed, accel, t);
         let tcp = c.arm.tcp;
-        c.start_motion(Kind::Joint { q0, q1, profile }, tcp);
-        profile.total
+        c.start_move(Kind::Joint { q0, q1, profile }, tcp, r)
     } else {
         let given = !matches!(a.v[0], Value::Pose(_));
-        tool_move(c, None, pose, (q1, given), (accel, speed, t))
+        tool_move(c, None, pose, (q1, given), (accel, speed, t, r))
     };
-    Ok(Out::Wait(secs(dur), Value::None))
+    Ok(Out::Wait(back, Value::None))
 }
 
 /// `movec`: along the arc from the tool's position through `pose_via`'s to `pose_to`'s
@@ -855,10 +886,11 @@ fn movec(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
     };
     let six = a.six(1)?;
     let (accel, speed) = (a.num(2)?, a.num(3)?);
+    let r = radius(a, 4)?;
     let (q1, pose) = target(c, a.name, &a.v[1], six)?;
     let given = !matches!(a.v[1], Value::Pose(_));
-    let dur = tool_move(c, Some(via), pose, (q1, given), (accel, speed, 0.0));
-    Ok(Out::Wait(secs(dur), Value::None))
+    let back = tool_move(c, Some(via), pose, (q1, given), (accel, speed, 0.0, r));
+    Ok(Out::Wait(back, Value::None))
 }
 
 /// `protective_stop()`: the arm stops at once and the request is left for the
@@ -976,6 +1008,15 @@ fn joint_speeds(c: &mut Controller, _: &mut Args) -> Result<Out, Fault> {
 
 fn tcp_pose(c: &mut Controller, _: &mut Args) -> Result<Out, Fault> {
     Ok(Out::Value(Value::Pose(c.tcp_pose())))
+}
+
+fn waypoint(c: &mut Controller, _: &mut Args) -> Result<Out, Fault> {
+    let pose = c
+        .motion
+        .as_ref()
+        .and_then(|m| m.waypoint(&c.dh))
+        .unwrap_or_else(|| c.tcp_pose());
+    Ok(Out::Value(Value::Pose(pose)))
 }
 
 fn tcp_speed(c: &mut Controller, _: &mut Args) -> Result<Out, Fault> {
