@@ -6,7 +6,7 @@ use std::collections::{HashMap, HashSet};
 
 use crate::builtins::{self, Builtin};
 use crate::error::{ParseError, ParseErrorKind};
-use crate::parser::{Access, BinOp, Expr, FuncDef, Scope, Stmt, StmtKind};
+use crate::parser::{Access, BinOp, Expr, FuncDef, ParamDefault, Scope, Stmt, StmtKind};
 use crate::value::{Value, MAX_STRUCT_MEMBERS};
 
 /// Index of a name in [`Program::names`].
@@ -119,7 +119,7 @@ pub(crate) enum Op {
 #[derive(Debug, Clone)]
 pub(crate) struct Func {
     pub name: String,
-    pub params: Vec<(Sym, Option<Value>)>,
+    pub params: Vec<(Sym, Option<ParamDefault<Sym>>)>,
     pub ops: Vec<Op>,
     /// Where each op comes from.
     pub lines: Vec<Pos>,
@@ -715,8 +715,15 @@ impl Compiler {
             let params = d
                 .params
                 .iter()
-                .map(|(n, v)| (self.sym(n), v.clone()))
-                .collect();
+                .map(|(n, v)| {
+                    let d = match v {
+                        Some(ParamDefault::Const(v)) => Some(ParamDefault::Const(v.clone())),
+                        Some(ParamDefault::Var(g)) => Some(ParamDefault::Var(self.sym(g))),
+                        None => None,
+                    };
+                    (self.sym(n), d)
+                })
+                .collect::<Vec<_>>();
             self.funcs.push(Func {
                 name: d.name.clone(),
                 params,
@@ -786,8 +793,15 @@ impl Compiler {
             let params = d
                 .params
                 .iter()
-                .map(|(n, v)| (self.sym(n), v.clone()))
-                .collect();
+                .map(|(n, v)| {
+                    let d = match v {
+                        Some(ParamDefault::Const(v)) => Some(ParamDefault::Const(v.clone())),
+                        Some(ParamDefault::Var(g)) => Some(ParamDefault::Var(self.sym(g))),
+                        None => None,
+                    };
+                    (self.sym(n), d)
+                })
+                .collect::<Vec<_>>();
             self.funcs.push(Func {
                 name: d.name.clone(),
                 params,

@@ -1265,7 +1265,8 @@ impl Machine {
                         .stack
                         .split_off(th.stack.len().saturating_sub(usize::from(site.argc)));
                     let callee = &prog.funcs[fid as usize];
-                    let locals = bind_user(callee, site, args);
+                    let locals =
+                        bind_user(callee, site, args, &self.globals, &prog.names).map_err(fail)?;
                     if th.frames.len() >= 256 {
                         return Err(fail(Fault::new(
                             K::Limit,
@@ -1939,23 +1940,53 @@ fn matrix_product(a: &[Value], b: &[Value]) -> Result<Value, Fault> {
 }
 
 /// Binds a user function's arguments to its parameters, as the compiler matched them
-/// (every parameter without a default is given: the compiler checked).
+/// (every parameter without a default is given: the compiler checked). A default that
+/// names a variable is that global's value now; a global never assigned is an error.
 fn bind_user(
     callee: &crate::compile::Func,
     site: &CallSite,
     args: Vec<Value>,
-) -> Vec<(Sym, Option<Value>)> {
-    let mut out: Vec<(Sym, Option<Value>)> = callee
-        .params
-        .iter()
-        .map(|(p, default)| (*p, default.clone()))
-        .collect();
+    globals: &[Option<Value>],
+    names: &[String],
+) -> Result<Vec<(Sym, Option<Value>)>, Fault> {
+    let mut out: Vec<(Sym, Option<Value>)> = Vec::with_capacity(callee.params.len());
+    let mut given = vec![false; callee.params.len()];
+    for slot in &site.slots {
+        if let Some(g) = given.get_mut(usize::from(*slot)) {
+            *g = true;
+        }
+    }
+    for ((p, default), given) in callee.params.iter().zip(&given) {
+        let v = match default {
+            _ if *given => None,
+            None => None,
+            Some(crate::parser::ParamDefault::Const(v)) => Some(v.clone()),
+            Some(crate::parser::ParamDefault::Var(g)) => {
+                match globals.get(*g as usize).and_then(|v| v.as_ref()) {
+                    Some(v) => Some(v.clone()),
+                    None => {
+                        let name = |s: Sym| names.get(s as usize).map_or("?", |n| n.as_str());
+                        return Err(Fault::new(
+                            K::UnknownVariable,
+                            format!(
+                                "unknown variable `{}`, the default of parameter `{}` of `{}`",
+                                name(*g),
+                                name(*p),
+                                callee.name
+                            ),
+                        ));
+                    }
+                }
+            }
+        };
+        out.push((*p, v));
+    }
     for (slot, v) in site.slots.iter().zip(args) {
         if let Some(o) = out.get_mut(usize::from(*slot)) {
             o.1 = Some(v);
         }
     }
-    out
+    Ok(out)
 }
 
 impl Machine {

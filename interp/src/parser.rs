@@ -85,10 +85,20 @@ pub(crate) enum Scope {
     Global,
 }
 
+/// A parameter's default: a constant, or the name of a variable read when the function
+/// is called without that argument (`def f(hz=DEFAULT_HZ):`, as OnRobot's URCap writes).
+/// UR's manual shows only constant defaults and says nothing of names; a name is taken
+/// here and looked up among the globals at each call (not when the `def` is read).
+#[derive(Debug, Clone)]
+pub(crate) enum ParamDefault<N = String> {
+    Const(Value),
+    Var(N),
+}
+
 #[derive(Debug, Clone)]
 pub(crate) struct FuncDef {
     pub name: String,
-    pub params: Vec<(String, Option<Value>)>,
+    pub params: Vec<(String, Option<ParamDefault>)>,
     pub body: Vec<Stmt>,
     pub is_thread: bool,
     pub line: u32,
@@ -562,11 +572,21 @@ impl Parser {
                     seen_default = true;
                     let t = self.peek().clone();
                     let e = self.expr()?;
+                    if let Expr::Name(var, _) = &e {
+                        params.push((p, Some(ParamDefault::Var(var.clone()))));
+                        if self.eat(&Tok::RParen) {
+                            break;
+                        }
+                        self.expect(&Tok::Comma, "`,` or `)` in the parameter list")?;
+                        continue;
+                    }
                     let v = const_value(&e).ok_or_else(|| {
                         ParseError::new(
                             t.line,
                             t.col,
-                            format!("the default of parameter `{p}` must be a constant"),
+                            format!(
+                                "the default of parameter `{p}` must be a constant or a variable name"
+                            ),
                         )
                     })?;
                     // The value bounds hold for defaults too (no list literal in the
@@ -581,7 +601,7 @@ impl Parser {
                             ),
                         ));
                     }
-                    Some(v)
+                    Some(ParamDefault::Const(v))
                 } else {
                     if seen_default {
                         return Err(self.err_here(format!(

@@ -133,6 +133,26 @@ fn defaults_named_arguments_recursion() {
 }
 
 #[test]
+fn a_default_may_name_a_global() {
+    // As URCap-generated code writes `def f(hz=DEFAULT_HZ):`: the global's value when
+    // the function is called without that argument, read at each call.
+    let src = "def prog():\n  RATE = 5\n  def f(hz=RATE, tag=\"x\"):\n    return str_cat(tag, hz)\n  end\n  textmsg(f())\n  RATE = 7\n  textmsg(f())\n  textmsg(f(hz=0.2))\n  textmsg(f(1, \"y\"))\nend\n";
+    assert_eq!(msgs(src), ["x5", "x7", "x0.2", "y1"]);
+    // A name never assigned is an error when the default is needed, not before.
+    let src = "def f(a=NOWHERE):\n  return a\nend\ntextmsg(f(3))\ntextmsg(f())\n";
+    let e = runtime_error(src);
+    assert!(
+        e.contains("unknown variable `NOWHERE`, the default of parameter `a` of `f`"),
+        "{e}"
+    );
+    // Anything else than a constant or a name is still refused.
+    assert_eq!(
+        parse_err("def f(a=1+2):\nend\n"),
+        "line 1, column 9: the default of parameter `a` must be a constant or a variable name"
+    );
+}
+
+#[test]
 fn function_called_before_its_definition() {
     assert_eq!(msgs("textmsg(g())\ndef g():\n  return 5\nend\n"), ["5"]);
 }
