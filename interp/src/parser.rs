@@ -500,6 +500,15 @@ impl Parser {
                 Tok::LBracket => {
                     self.bump();
                     out.push(Access::Index(self.expr()?));
+                    // `m[i, j] = v`: the entry at row `i`, column `j`, as `m[i][j] = v`.
+                    if self.eat(&Tok::Comma) {
+                        out.push(Access::Index(self.expr()?));
+                        if self.peek().kind == Tok::Comma {
+                            return Err(
+                                self.err_here("a matrix entry takes two indices, `m[row, column]`")
+                            );
+                        }
+                    }
                     self.expect(&Tok::RBracket, "`]`")?;
                 }
                 Tok::Dot => {
@@ -750,9 +759,21 @@ impl Parser {
                 Tok::LBracket => {
                     let t = self.bump();
                     let (i, hi) = self.expr_h()?;
-                    self.expect(&Tok::RBracket, "`]` after the index")?;
                     h = self.over(h.max(hi), t.line, t.col)?;
                     e = Expr::Index(Box::new(e), Box::new(i));
+                    // `m[i, j]`: a matrix entry (UR's manual, "Matrix and array
+                    // expressions"), row `i` then column `j`, read as `m[i][j]`.
+                    if self.eat(&Tok::Comma) {
+                        let (j, hj) = self.expr_h()?;
+                        h = self.over(h.max(hj), t.line, t.col)?;
+                        e = Expr::Index(Box::new(e), Box::new(j));
+                        if self.peek().kind == Tok::Comma {
+                            return Err(
+                                self.err_here("a matrix entry takes two indices, `m[row, column]`")
+                            );
+                        }
+                    }
+                    self.expect(&Tok::RBracket, "`]` after the index")?;
                 }
                 Tok::Dot => {
                     let t = self.bump();

@@ -484,3 +484,26 @@ fn an_operand_may_follow_on_the_next_line() {
         parse_err("x =\n")
     );
 }
+
+#[test]
+fn a_matrix_entry_is_read_and_written_with_two_indices() {
+    // UR's manual, "Matrix and array expressions": `b = matrix[0,0]`, `matrix[2,1] = 20`
+    // (row, then column; 0-indexed). The same entry as `m[i][j]`.
+    let src = "m = [[1, 2], [3, 4], [5, 6]]\ntextmsg(m[0, 0], m[2,1])\nm[2, 1] = 20\ntextmsg(m)\ni = 1\nm[i, i - 1] = m[i, 1] * 10\ntextmsg(m[1])\ntextmsg(m[i, 0] == m[i][0])\ndef f():\n  global g = [[0, 0], [0, 0]]\n  g[1, 0] = 7\n  return g[1, 0]\nend\ntextmsg(f())\n";
+    assert_eq!(
+        msgs(src),
+        ["16", "[[1, 2], [3, 4], [5, 20]]", "[40, 4]", "True", "7"]
+    );
+    // Out of range, as `m[i][j]` would be.
+    let e = runtime_error("m = [[1, 2], [3, 4]]\nx = m[0, 2]\n");
+    assert!(e.starts_with("line 2"), "{e}");
+    // Two indices only.
+    assert_eq!(
+        parse_err("m = [[1]]\nx = m[0, 0, 0]\n"),
+        "line 2, column 11: a matrix entry takes two indices, `m[row, column]`"
+    );
+    assert_eq!(
+        parse_err("m = [[1]]\nm[0, 0, 0] = 1\n"),
+        "line 2, column 7: a matrix entry takes two indices, `m[row, column]`"
+    );
+}
