@@ -392,3 +392,74 @@ fn speedl_and_stopl_move_the_tool_along_its_speed() {
     assert!((last - 0.025).abs() < 1e-6, "{last}");
     assert_eq!(m.arm().tcp_speed, [0.0; 6]);
 }
+
+#[test]
+fn a_tool_move_toward_a_pose_out_of_reach_goes_as_far_as_the_reach_then_fails() {
+    // From a working pose, straight up 5 m: the arm follows the line until it can no
+    // longer, and the call fails then (not before it starts).
+    let src = "movej([0, -1.7, 1.9, -1.77, -1.57, 0])\nstart = get_actual_tcp_pose()\ntextmsg(start[2])\nmovel(pose_trans(p[0, 0, 5, 0, 0, 0], start), a=1, v=0.25)\ntextmsg(\"never\")\n";
+    let mut m = machine(src);
+    let mut z_while_running = Vec::new();
+    let end = steps(&mut m, 20_000, |_, m| {
+        if m.state() == &State::Running {
+            z_while_running.push(m.tcp_pose()[2]);
+        }
+    });
+    let State::Error(e) = m.state() else {
+        panic!("{:?}", m.state())
+    };
+    assert_eq!(e.kind(), RuntimeErrorKind::Argument, "{e}");
+    assert_eq!(e.line(), 4, "{e}");
+    assert!(e.message().contains("leaves the arm's reach"), "{e}");
+    let said = messages(&mut m);
+    assert_eq!(said.len(), 1, "{said:?}");
+    // It rose from where the move began all the way to the edge, without jumps, and
+    // failed there.
+    let z0: f64 = said[0].parse().unwrap();
+    let from = z_while_running
+        .iter()
+        .position(|z| (z - z0).abs() < 1e-5)
+        .unwrap();
+    let up = &z_while_running[from..];
+    let top = up.iter().cloned().fold(f64::MIN, f64::max);
+    assert!(top > z0 + 0.3, "rose from {z0} to {top} only");
+    assert!(up.windows(2).all(|w| (w[1] - w[0]).abs() < 0.01));
+    assert!(
+        (m.tcp_pose()[2] - top).abs() < 0.01,
+        "{} {top} {:?}",
+        m.tcp_pose()[2],
+        &up[up.len() - 3..]
+    );
+    assert!(end > 1000, "failed after {end} steps");
+}
+
+#[test]
+fn a_move_toward_a_pose_out_of_reach_ended_by_the_program_is_no_error() {
+    // PolyScope's "Direction" node: a thread moves toward a point far away, the program
+    // kills it on its condition and stops the arm.
+    let src = "movej([0, -1.7, 1.9, -1.77, -1.57, 0])\nthread mover():\n  movel(pose_trans(get_actual_tcp_pose(), p[0, 0, -1000, 0, 0, 0]), a=1, v=0.1)\nend\nz0 = get_actual_tcp_pose()[2]\nh = run mover()\nwhile get_actual_tcp_pose()[2] < z0 + 0.02:\n  sync()\nend\nkill h\nstopl(3)\ntextmsg(\"stopped\")\n";
+    let mut m = machine(src);
+    steps(&mut m, 20_000, |_, _| {});
+    assert_eq!(m.state(), &State::Finished);
+    assert_eq!(messages(&mut m), ["stopped"]);
+}
+
+#[test]
+fn a_move_that_leaves_the_reach_at_once_or_a_joint_move_out_of_reach_is_refused_at_once() {
+    // From the upright home pose any step up is out of reach; movej needs its target.
+    for src in [
+        "movel(pose_trans(get_actual_tcp_pose(), p[0, 0, -0.05, 0, 0, 0]))\n",
+        "movej(p[0, 0, 5, 0, 3.14, 0])\n",
+    ] {
+        let mut m = machine(src);
+        m.run_until(STEP);
+        let State::Error(e) = m.state() else {
+            panic!("{src}: {:?}", m.state())
+        };
+        assert!(
+            e.message().contains("no inverse kinematics solution"),
+            "{src}: {e}"
+        );
+        assert_eq!(m.joint_positions(), HOME, "{src}");
+    }
+}
