@@ -507,3 +507,30 @@ fn a_matrix_entry_is_read_and_written_with_two_indices() {
         "line 2, column 7: a matrix entry takes two indices, `m[row, column]`"
     );
 }
+
+#[test]
+fn jump_to_label_starts_at_a_step_marker() {
+    // PolyScope writes `jump_to_label(N)` to start a program at a selected node: the run
+    // goes on at the first statement after `$ N`, here inside a loop, which then loops
+    // as usual.
+    let src = "def prog():\n  textmsg(\"start\")\n  jump_to_label(3)\n  $ 1 \"Robot Program\"\n  textmsg(\"skipped\")\n  i = 0\n  while i < 2:\n    $ 2 \"first\"\n    textmsg(\"first\")\n    $ 3 \"second\" \"breakAfter\"\n    textmsg(\"second\")\n    i = i + 1\n  end\nend\n";
+    // `i` is not yet assigned where the jump lands: the condition reads it.
+    let e = runtime_error(src);
+    assert!(e.contains("`i`"), "{e}");
+    let src = src
+        .replace("  i = 0\n", "")
+        .replace("textmsg(\"start\")\n", "textmsg(\"start\")\n  i = 0\n");
+    assert_eq!(msgs(&src), ["start", "second", "first", "second"]);
+    // A marker that is not there, or not followed by a statement, is a compile error.
+    let e = Program::parse("textmsg(1)\njump_to_label(9)\n$ 9 \"last\"\n").unwrap_err();
+    assert_eq!(
+        e.to_string(),
+        "line 2, column 1: `jump_to_label(9)`: no step marker `$ 9` followed by a statement in this function"
+    );
+    assert!(Program::parse("jump_to_label(4)\n$ 5 \"x\"\ntextmsg(1)\n").is_err());
+    // The program's own `jump_to_label` is called as any function.
+    assert_eq!(
+        msgs("def jump_to_label(n):\n  textmsg(\"own\", n)\nend\njump_to_label(2)\n$ 2 \"x\"\n"),
+        ["own2"]
+    );
+}

@@ -905,6 +905,10 @@ fn beyond_reach(
     } else {
         (turn[0] * turn[0] + turn[1] * turn[1] + turn[2] * turn[2]).sqrt()
     };
+    if f * dist < 1e-4 {
+        // Less than 0.1 mm (or mrad) within the reach: it leaves the reach at once.
+        return None;
+    }
     let profile = Profile::new(dist, speed, accel, t);
     // The time the profile reaches fraction `f` of the way (bisection: `s` grows with t).
     let (mut lo, mut hi) = (0.0, profile.total);
