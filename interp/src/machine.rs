@@ -195,13 +195,6 @@ pub(crate) enum Wait {
     Rpc(Box<crate::rpc::Pending>),
     /// The call it waited for failed: the program stops with this error.
     Failed(Box<RuntimeError>),
-    /// Resumes at step `until` by failing with `fault` at line and column `at` (a move
-    /// that leaves the arm's reach on its way).
-    FailAt {
-        until: u64,
-        at: (u32, u32),
-        fault: Fault,
-    },
     /// The main thread in `interpreter_mode()`, between interpreted statements.
     Interpreter,
 }
@@ -551,7 +544,6 @@ impl Machine {
                 Wait::Connect { .. } => None,
                 Wait::Rpc(p) => Some(p.deadline.max(self.ctl.step)),
                 Wait::Failed(_) => Some(self.ctl.step),
-                Wait::FailAt { until, .. } => Some((*until).max(self.ctl.step)),
                 Wait::Join(id) => match self.thread(*id) {
                     Some(_) => None,
                     None => Some(self.ctl.step),
@@ -966,10 +958,6 @@ impl Machine {
                     )
                 }
                 Wait::Interpreter => self.interpreter_resume(i),
-                Wait::FailAt { until, at, fault } if until <= self.ctl.step => (
-                    false,
-                    Wait::Failed(Box::new(RuntimeError::at(at.0, at.1, fault))),
-                ),
                 other => (false, other),
             };
             if let Wait::Failed(e) = wait {
@@ -1305,10 +1293,7 @@ impl Machine {
                             check_value(&v, self.config.max_value_size).map_err(fail)?;
                             th.stack.push(v)
                         }
-                        Called::Block(mut w) => {
-                            if let Wait::FailAt { at, .. } = &mut w {
-                                *at = (line, col);
-                            }
+                        Called::Block(w) => {
                             th.wait = w;
                             return Ok(Flow::Blocked);
                         }
@@ -2118,17 +2103,6 @@ impl Machine {
                 }))
             }
             Out::Connect { socket } => return Ok(Called::Block(Wait::Connect { socket, record })),
-            Out::WaitFail(d, fault) => {
-                if let Some(r) = record {
-                    self.ctl.events.push_back(Event::Call(r));
-                }
-                let until = self.ctl.step.saturating_add(self.steps_for(d).max(1));
-                return Ok(Called::Block(Wait::FailAt {
-                    until,
-                    at: (0, 0),
-                    fault,
-                }));
-            }
         };
         if let Some(mut r) = record {
             r.result = value.clone();
@@ -2260,12 +2234,6 @@ impl Machine {
             if t.id == owner && !t.done {
                 if let Wait::Steps { until, .. } = &mut t.wait {
                     *until = step;
-                }
-                if matches!(t.wait, Wait::FailAt { .. }) {
-                    t.wait = Wait::Steps {
-                        until: step,
-                        result: Value::None,
-                    };
                 }
             }
         }

@@ -1235,47 +1235,6 @@ pub(crate) fn nearest_ik(
     kinematics::nearest(&all, near)
 }
 
-/// How far along a tool move (`path`, turning by `turn` from `r0`) the arm can follow it
-/// from joints `q0`, each point's joints nearest the previous point's: the fraction
-/// (0 to 1) where it first leaves the reach and the joints just before, or `None` if it
-/// leaves at once. Samples 256 points, then bisects the last interval (30 times).
-pub(crate) fn reach_along(
-    dh: &Dh,
-    path: &Path,
-    r0: [[f64; 3]; 3],
-    turn: [f64; 3],
-    tcp: [f64; 6],
-    q0: [f64; 6],
-) -> Option<(f64, [f64; 6])> {
-    const SAMPLES: u32 = 256;
-    let pose_at = |f: f64| {
-        let (p, _) = path.at(f);
-        let rv = to_rotvec(mul(to_matrix(scale3(turn, f)), r0));
-        [p[0], p[1], p[2], rv[0], rv[1], rv[2]]
-    };
-    let (mut lo, mut q) = (0.0, q0);
-    let mut hi = None;
-    for k in 1..=SAMPLES {
-        let f = f64::from(k) / f64::from(SAMPLES);
-        match nearest_ik(dh, pose_at(f), tcp, q) {
-            Some(next) => (lo, q) = (f, next),
-            None => {
-                hi = Some(f);
-                break;
-            }
-        }
-    }
-    let mut hi = hi?;
-    for _ in 0..30 {
-        let mid = (lo + hi) / 2.0;
-        match nearest_ik(dh, pose_at(mid), tcp, q) {
-            Some(next) => (lo, q) = (mid, next),
-            None => hi = mid,
-        }
-    }
-    (lo > 1e-9).then_some((lo, q))
-}
-
 /// The turn from `r0` to `r1` as a rotation vector in the base frame (`r1 = Rot(v)·r0`).
 pub(crate) fn turn_between(p0: [f64; 6], p1: [f64; 6]) -> ([[f64; 3]; 3], [f64; 3]) {
     let r0 = rot(p0);

@@ -155,9 +155,6 @@ pub(crate) enum Out {
     },
     /// `socket_open`, waiting for the driver's answer.
     Connect { socket: String },
-    /// Takes this much program time, then fails with this fault at the call (a move whose
-    /// path leaves the arm's reach on the way).
-    WaitFail(Duration, Fault),
 }
 
 /// The code of a built-in.

@@ -861,15 +861,7 @@ fn movej(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
     // movep and optimove* have no `t`; `r` is last.
     let t = if a.params.len() == 5 { a.num(3)? } else { 0.0 };
     let r = radius(a, a.params.len() - 1)?;
-    let (q1, pose) = match target(c, a.name, &a.v[0], six) {
-        Ok(x) => x,
-        // A tool move to a pose out of reach (PolyScope's "Direction" node aims 1000 m
-        // away and stops the move on its condition): see `beyond_reach`.
-        Err(e) if matches!(a.name, "movel" | "movep") && matches!(a.v[0], Value::Pose(_)) => {
-            return beyond_reach(c, a.name, six, (accel, speed, t)).ok_or(e);
-        }
-        Err(e) => return Err(e),
-    };
+    let (q1, pose) = target(c, a.name, &a.v[0], six)?;
     let back = if matches!(a.name, "movej" | "optimovej") {
         let q0 = c.move_start().0;
         let profile = Profile::new(joint_distance(q0, q1), speed, accel, t);
@@ -880,60 +872,6 @@ fn movej(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
         tool_move(c, None, pose, (q1, given), (accel, speed, t, r))
     };
     Ok(Out::Wait(back, Value::None))
-}
-
-/// `movel`/`movep` to a pose out of reach: the arm follows the line (on the profile the
-/// whole move would have) as far as the reach allows, and the call fails when the arm gets
-/// there, unless the program stops the move first (its thread killed, `stopl`); a move
-/// that leaves the reach at once is refused at once (`None`). The manual does not say
-/// when the controller refuses an unreachable target; PolyScope's own "Direction" node
-/// (`movel` toward a point 1000 m away, ended by its until-condition) shows it does not
-/// refuse it up front. Not blended (`r` is ignored).
-fn beyond_reach(
-    c: &mut Controller,
-    name: &str,
-    pose: [f64; 6],
-    (accel, speed, t): (f64, f64, f64),
-) -> Option<Out> {
-    let (q0, p0) = c.move_start();
-    let path = Path::new(p0, None, pose);
-    let (r0, turn) = trajectory::turn_between(p0, pose);
-    let (f, qf) = trajectory::reach_along(&c.dh, &path, r0, turn, c.arm.tcp, q0)?;
-    let length = path.length();
-    let dist = if length > 1e-9 {
-        length
-    } else {
-        (turn[0] * turn[0] + turn[1] * turn[1] + turn[2] * turn[2]).sqrt()
-    };
-    if f * dist < 1e-4 {
-        // Less than 0.1 mm (or mrad) within the reach: it leaves the reach at once.
-        return None;
-    }
-    let profile = Profile::new(dist, speed, accel, t);
-    // The time the profile reaches fraction `f` of the way (bisection: `s` grows with t).
-    let (mut lo, mut hi) = (0.0, profile.total);
-    for _ in 0..60 {
-        let mid = (lo + hi) / 2.0;
-        if profile.at(mid).0 < f * dist {
-            lo = mid;
-        } else {
-            hi = mid;
-        }
-    }
-    tool_move(c, None, pose, (qf, false), (accel, speed, t, 0.0));
-    let edge = c.tool_pose(qf);
-    // The call fails at the last step still within the reach (the arm is sampled at
-    // that step before the thread runs), a step early rather than one past the edge.
-    let at = (lo - c.step_time.as_secs_f64()).max(0.0);
-    Some(Out::WaitFail(
-        secs(at),
-        Fault::from(format!(
-            "`{name}`: the path to {} leaves the arm's reach at {} ({:.1} % of the way): no inverse kinematics solution beyond",
-            Value::Pose(pose).to_str(),
-            Value::Pose(edge).to_str(),
-            f * 100.0
-        )),
-    ))
 }
 
 /// `movec`: along the arc from the tool's position through `pose_via`'s to `pose_to`'s
