@@ -2,7 +2,8 @@
 //!
 //! One rule a line, `PATTERN => REPLY`; `#` starts a comment line. PATTERN is matched
 //! against the whole decoded message (a line's text without its LF, an int as decimal);
-//! `*` matches any run of characters and `?` one character; nothing else is special.
+//! `*` matches any run of characters and `?` one character (a byte that is not UTF-8
+//! counts as one); nothing else is special, and there is no escape.
 //! REPLY is a reply spec (`floats 0.1 0.2 0.3`, `line OK`, `hex 06`...). The first rule
 //! that matches wins; no match falls back to `--reply`.
 //!
@@ -64,39 +65,86 @@ pub fn parse(text: &str) -> Result<Vec<Rule>, String> {
 }
 
 pub fn find<'r>(rules: &'r [Rule], message: &[u8]) -> Option<&'r Rule> {
-    rules.iter().find(|r| glob(r.pattern.as_bytes(), message))
+    rules.iter().find(|r| glob(&r.pattern, message))
 }
 
-/// `*` any run, `?` one byte; iterative with one backtrack point (linear in practice).
-pub fn glob(p: &[u8], s: &[u8]) -> bool {
+// Why this matcher is ours and not a crate's (the adoption review, item 1). `wildmatch`
+// has exactly these semantics (`*`, `?`, nothing else special, no escapes) but matches
+// `&str`, and a message is bytes that need not be UTF-8: a line with a stray 0xE9 must
+// still match `*` or `err*`, and a lossy conversion would turn every bad byte into
+// U+FFFD (so a pattern could name bytes that were never sent). `globset` compiles to a
+// regex (regex-automata, a large dependency), makes `[`, `{` and `\` special and is
+// built for paths; a rule file written for "only `*` and `?` are special" would change
+// meaning. What is left is the classic one-backtrack-point wildcard loop, about twenty
+// lines. The property tests below hold it to two oracles: `wildmatch` itself on UTF-8
+// text, and a dynamic-programming matcher (the definition, written out) on any bytes.
+
+/// Whether `message` matches `pattern`: `*` matches any run of characters (also none),
+/// `?` exactly one character, any other character itself. A character is a UTF-8
+/// encoded one; a byte of `message` that is not part of a valid UTF-8 character counts as
+/// one character by itself (so `?` matches a lone 0xE9, and `caf?` matches `café`).
+///
+/// Iterative, with one backtrack point (the last `*`): time at most
+/// O(`pattern.len()` × `message.len()`), no recursion, no allocation. Both are bounded by
+/// the caller: a pattern is one line of the rules file, a message one decoded message
+/// (at most the listener's frame bound).
+pub fn glob(pattern: &str, message: &[u8]) -> bool {
+    let (p, s) = (pattern.as_bytes(), message);
     let (mut pi, mut si) = (0, 0);
+    // Where to resume after the last `*`: (its index in p, the message index it is at).
     let mut star: Option<(usize, usize)> = None;
     while si < s.len() {
-        match p.get(pi) {
+        let su = unit_len(s, si);
+        let matched = match p.get(pi) {
             Some(b'*') => {
                 star = Some((pi, si));
                 pi += 1;
+                continue;
             }
-            Some(&c) if c == b'?' || c == s[si] => {
-                pi += 1;
-                si += 1;
+            Some(b'?') => Some(1),
+            Some(_) => {
+                let pu = unit_len(p, pi);
+                (p[pi..pi + pu] == s[si..si + su]).then_some(pu)
             }
-            _ => match star {
-                Some((sp, ss)) => {
-                    pi = sp + 1;
-                    si = ss + 1;
-                    star = Some((sp, ss + 1));
-                }
-                None => return false,
-            },
+            None => None,
+        };
+        match (matched, star) {
+            (Some(pu), _) => {
+                pi += pu;
+                si += su;
+            }
+            (None, Some((sp, ss))) => {
+                // Let the last `*` swallow one more character and try again after it.
+                let next = ss + unit_len(s, ss);
+                star = Some((sp, next));
+                pi = sp + 1;
+                si = next;
+            }
+            (None, None) => return false,
         }
     }
     p[pi.min(p.len())..].iter().all(|&c| c == b'*')
 }
 
+/// The length of the character at `s[i]` (`i < s.len()`): that of a valid UTF-8
+/// encoded character starting there, else 1 (a byte that is not UTF-8 on its own).
+fn unit_len(s: &[u8], i: usize) -> usize {
+    let want = match s[i] {
+        0xC2..=0xDF => 2,
+        0xE0..=0xEF => 3,
+        0xF0..=0xF4 => 4,
+        _ => return 1,
+    };
+    match s.get(i..i + want) {
+        Some(c) if std::str::from_utf8(c).is_ok() => want,
+        _ => 1,
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::{glob, parse, text_of};
+    use proptest::prelude::*;
 
     #[test]
     fn rules_files_name_their_lines_whatever_ends_them() {
@@ -120,11 +168,76 @@ mod tests {
 
     #[test]
     fn globs() {
-        assert!(glob(b"job *", b"job 12"));
-        assert!(glob(b"trigger", b"trigger"));
-        assert!(!glob(b"trigger", b"trigger2"));
-        assert!(glob(b"t?g*r", b"tagger"));
-        assert!(glob(b"*", b""));
-        assert!(!glob(b"a*b", b"acc"));
+        assert!(glob("job *", b"job 12"));
+        assert!(glob("trigger", b"trigger"));
+        assert!(!glob("trigger", b"trigger2"));
+        assert!(glob("t?g*r", b"tagger"));
+        assert!(glob("*", b""));
+        assert!(!glob("?", b""));
+        assert!(!glob("a*b", b"acc"));
+        // `?` is one character, whatever its length in bytes; a bad byte is one too.
+        assert!(glob("caf?", "café".as_bytes()));
+        assert!(!glob("caf??", "café".as_bytes()));
+        assert!(glob("caf?", b"caf\xE9"));
+        assert!(glob("err*", b"err \xFF\xFE"));
+        assert!(glob("*é", "éé".as_bytes()));
+        assert!(!glob("é", b"\xC3"));
+    }
+
+    /// The definition written out: a table over (pattern units, message units), where a
+    /// unit is a character or a lone invalid byte. Quadratic, obviously right.
+    fn oracle(pattern: &str, message: &[u8]) -> bool {
+        let p: Vec<&str> = pattern.split_inclusive(|_: char| true).collect();
+        let s: Vec<&[u8]> = message
+            .utf8_chunks()
+            .flat_map(|c| {
+                let valid = c.valid().split_inclusive(|_: char| true).map(str::as_bytes);
+                valid.chain(c.invalid().chunks(1))
+            })
+            .collect();
+        // m[i][j]: p[i..] matches s[j..].
+        let mut m = vec![vec![false; s.len() + 1]; p.len() + 1];
+        m[p.len()][s.len()] = true;
+        for i in (0..p.len()).rev() {
+            for j in (0..=s.len()).rev() {
+                m[i][j] = match p[i] {
+                    "*" => m[i + 1][j] || (j < s.len() && m[i][j + 1]),
+                    "?" => j < s.len() && m[i + 1][j + 1],
+                    lit => j < s.len() && lit.as_bytes() == s[j] && m[i + 1][j + 1],
+                };
+            }
+        }
+        m[0][0]
+    }
+
+    fn pattern() -> impl Strategy<Value = String> {
+        proptest::collection::vec(
+            prop::sample::select(vec!['a', 'b', 'é', '€', '*', '?']),
+            0..10,
+        )
+        .prop_map(|v| v.into_iter().collect())
+    }
+
+    proptest! {
+        #[test]
+        fn glob_agrees_with_wildmatch_on_text(
+            p in pattern(),
+            s in proptest::collection::vec(prop::sample::select(vec!['a', 'b', 'é', '€']), 0..12),
+        ) {
+            let s: String = s.into_iter().collect();
+            prop_assert_eq!(glob(&p, s.as_bytes()), wildmatch::WildMatch::new(&p).matches(&s));
+        }
+
+        #[test]
+        fn glob_agrees_with_the_definition_on_any_bytes(
+            p in pattern(),
+            // 'a', 'b', é's two bytes, € (E2 82 AC) and bytes that break them up.
+            s in proptest::collection::vec(
+                prop::sample::select(vec![b'a', b'b', 0xC3, 0xA9, 0xE2, 0x82, 0xAC, 0xE9, 0xFF]),
+                0..14,
+            ),
+        ) {
+            prop_assert_eq!(glob(&p, &s), oracle(&p, &s));
+        }
     }
 }
