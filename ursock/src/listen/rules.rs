@@ -22,8 +22,23 @@ pub struct Rule {
     pub line: usize,
 }
 
+/// The largest rules file `load` reads: 1 MiB, room for thousands of rules. A larger file
+/// is refused rather than read whole. It also bounds the matching work per message: at
+/// most (the patterns' total length) × (the message's length) steps, see [`glob`].
+pub const MAX_RULES_FILE: u64 = 1 << 20;
+
 pub fn load(path: &std::path::Path) -> Result<Vec<Rule>, String> {
-    let bytes = std::fs::read(path).map_err(|e| format!("--rules {}: {e}", path.display()))?;
+    use std::io::Read as _;
+    let mut bytes = Vec::new();
+    std::fs::File::open(path)
+        .and_then(|f| f.take(MAX_RULES_FILE + 1).read_to_end(&mut bytes))
+        .map_err(|e| format!("--rules {}: {e}", path.display()))?;
+    if bytes.len() as u64 > MAX_RULES_FILE {
+        return Err(format!(
+            "--rules {}: larger than {MAX_RULES_FILE} bytes (1 MiB), the most a rules file may hold",
+            path.display()
+        ));
+    }
     let text = text_of(&bytes).map_err(|e| format!("--rules {}: {e}", path.display()))?;
     parse(text).map_err(|e| format!("--rules {}: {e}", path.display()))
 }
@@ -143,7 +158,7 @@ fn unit_len(s: &[u8], i: usize) -> usize {
 
 #[cfg(test)]
 mod tests {
-    use super::{glob, parse, text_of};
+    use super::{glob, load, parse, text_of, MAX_RULES_FILE};
     use proptest::prelude::*;
 
     #[test]
@@ -164,6 +179,25 @@ mod tests {
             assert!(e.starts_with("line 2:"), "{text:?}: {e}");
         }
         assert_eq!(parse("a => line x\r\nb => line y\r\n").unwrap().len(), 2);
+    }
+
+    #[test]
+    fn a_rules_file_is_read_up_to_its_bound() {
+        let dir = std::env::temp_dir().join(format!("ursock-rules-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("rules.txt");
+        // Exactly at the bound: read (a comment line filling it, then one rule).
+        let rule = "a => line x\n";
+        let fill = usize::try_from(MAX_RULES_FILE).unwrap() - rule.len() - 1;
+        let mut text = format!("#{}\n{rule}", "c".repeat(fill - 1));
+        assert_eq!(text.len() as u64, MAX_RULES_FILE);
+        std::fs::write(&path, &text).unwrap();
+        assert_eq!(load(&path).unwrap().len(), 1);
+        text.push('\n');
+        std::fs::write(&path, &text).unwrap();
+        let e = load(&path).err().unwrap_or_default();
+        assert!(e.contains("larger than 1048576 bytes"), "{e}");
+        let _ = std::fs::remove_dir_all(&dir);
     }
 
     #[test]
