@@ -146,14 +146,20 @@ mod tests {
         ::hex::decode(digits.replace([':', '-'], ""))
     }
 
+    /// Words of mostly hex digits (so that many are valid) with now and then a
+    /// character that is special, a separator or no digit at all.
     fn word() -> impl Strategy<Value = String> {
-        let chars = prop::sample::select(vec![
-            '0', '9', 'a', 'F', 'g', 'x', 'X', ':', '-', '+', ' ', ',', 'é',
-        ]);
+        let chars = prop_oneof![
+            6 => prop::sample::select(vec!['0', '9', 'a', 'F']),
+            1 => prop::sample::select(vec!['g', 'x', 'X', ':', '-', '+', ' ', ',', 'é']),
+        ];
         proptest::collection::vec(chars, 0..12).prop_map(|v| v.into_iter().collect())
     }
 
     proptest! {
+        // Cheap cases; enough of them that a sign in a valid position turns up every run.
+        #![proptest_config(ProptestConfig::with_cases(4000))]
+
         #[test]
         fn hex_agrees_with_the_hex_crate(words in proptest::collection::vec(word(), 0..4)) {
             let ours = hex(words.iter().map(String::as_str));

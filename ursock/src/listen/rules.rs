@@ -244,6 +244,42 @@ mod tests {
         m[0][0]
     }
 
+    /// Whole characters ('a', 'b', é, €) and pieces of them or bytes that are never
+    /// UTF-8, so that messages hold both valid and broken sequences.
+    const PIECES: &[&[u8]] = &[
+        b"a",
+        b"b",
+        "é".as_bytes(),
+        "€".as_bytes(),
+        b"\xC3",
+        b"\xA9",
+        b"\xE2\x82",
+        b"\xE9",
+        b"\xFF",
+    ];
+
+    /// A pattern and a message made to fit it, piece by piece: a literal for itself, one
+    /// piece for `?`, none to three for `*`. Most pairs match, some do not (a piece of two
+    /// bad bytes is two characters, and neighbouring pieces can join into one character):
+    /// both outcomes are common, unlike with independent random pairs.
+    fn instance() -> impl Strategy<Value = (String, Vec<u8>)> {
+        let piece = prop::sample::select(PIECES);
+        let token = prop_oneof![
+            prop::sample::select(vec!['a', 'b', 'é', '€'])
+                .prop_map(|c| (c.to_string(), c.to_string().into_bytes())),
+            piece.clone().prop_map(|p| ("?".to_string(), p.to_vec())),
+            proptest::collection::vec(piece, 0..3).prop_map(|ps| ("*".to_string(), ps.concat())),
+        ];
+        proptest::collection::vec(token, 0..8).prop_map(|tokens| {
+            let mut pair = (String::new(), Vec::new());
+            for (p, s) in tokens {
+                pair.0.push_str(&p);
+                pair.1.extend(s);
+            }
+            pair
+        })
+    }
+
     fn pattern() -> impl Strategy<Value = String> {
         proptest::collection::vec(
             prop::sample::select(vec!['a', 'b', 'é', '€', '*', '?']),
@@ -265,12 +301,14 @@ mod tests {
         #[test]
         fn glob_agrees_with_the_definition_on_any_bytes(
             p in pattern(),
-            // 'a', 'b', é's two bytes, € (E2 82 AC) and bytes that break them up.
-            s in proptest::collection::vec(
-                prop::sample::select(vec![b'a', b'b', 0xC3, 0xA9, 0xE2, 0x82, 0xAC, 0xE9, 0xFF]),
-                0..14,
-            ),
+            s in proptest::collection::vec(prop::sample::select(PIECES), 0..10)
+                .prop_map(|pieces| pieces.concat()),
         ) {
+            prop_assert_eq!(glob(&p, &s), oracle(&p, &s));
+        }
+
+        #[test]
+        fn glob_agrees_with_the_definition_on_messages_made_to_fit((p, s) in instance()) {
             prop_assert_eq!(glob(&p, &s), oracle(&p, &s));
         }
     }
