@@ -55,7 +55,7 @@ pub fn unescape(s: &str) -> Result<Vec<u8>, String> {
 // digits into a byte, one line with `char::to_digit`. Its error (`InvalidHexCharacter`)
 // also gives the index in the cleaned run, not in what was typed, and a byte index at
 // that (a non-ASCII character shows as its first byte). So the parser stays here, and
-// the `hex` crate is its oracle in the property tests below. That test found the old
+// the `hex` crate is its oracle in the property tests below. That test catches the old
 // version's bug: `u8::from_str_radix` on each pair took a sign, so `+1` was the byte 01.
 
 /// The bytes of hex words: pairs of hex digits, `0x` optional, separated by spaces or
