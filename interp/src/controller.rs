@@ -424,7 +424,15 @@ impl Controller {
             Some(v) => v,
             None => crate::trajectory::tcp_speed(&self.dh, s.q, s.qd, self.arm.tcp),
         };
-        if s.done {
+        if s.stop {
+            // The path left the arm's reach: it stops here (nothing queued goes on) and
+            // the controller running it makes that a protective stop.
+            self.motion = None;
+            self.arm.qd = [0.0; 6];
+            self.arm.qdd = [0.0; 6];
+            self.arm.tcp_speed = [0.0; 6];
+            self.arm.protective_stop = true;
+        } else if s.done {
             // A move queued behind this one starts now (at rest, where this one ended).
             let next = m.next.take();
             self.motion = next.map(|n| *n);
