@@ -46,6 +46,88 @@ fn type_matches(v: &Value, ty: &str) -> bool {
     }
 }
 
+/// The schema's pattern for `time`: RFC 3339, milliseconds, `Z` or a `+HH:MM` offset.
+const TIME_PATTERN: &str =
+    "^[0-9]{4}-[0-9]{2}-[0-9]{2}T[0-9]{2}:[0-9]{2}:[0-9]{2}[.][0-9]{3}(Z|[+-][0-9]{2}:[0-9]{2})$";
+
+/// [`TIME_PATTERN`], checked by hand: the shape, then that it names a real instant
+/// (jiff parses it as RFC 3339). Returns the offset part (`Z` or `+05:30`).
+fn rfc3339_millis(s: &str) -> Result<&str, String> {
+    let b = s.as_bytes();
+    let digits =
+        |r: std::ops::Range<usize>| b.get(r).is_some_and(|d| d.iter().all(u8::is_ascii_digit));
+    let shape = b.len() >= 24
+        && digits(0..4)
+        && b[4] == b'-'
+        && digits(5..7)
+        && b[7] == b'-'
+        && digits(8..10)
+        && b[10] == b'T'
+        && digits(11..13)
+        && b[13] == b':'
+        && digits(14..16)
+        && b[16] == b':'
+        && digits(17..19)
+        && b[19] == b'.'
+        && digits(20..23);
+    let offset = s.get(23..).unwrap_or("");
+    let ob = offset.as_bytes();
+    let offset_ok = offset == "Z"
+        || (ob.len() == 6
+            && (ob[0] == b'+' || ob[0] == b'-')
+            && ob[1..3].iter().all(u8::is_ascii_digit)
+            && ob[3] == b':'
+            && ob[4..6].iter().all(u8::is_ascii_digit));
+    if !shape || !offset_ok {
+        return Err(
+            "not RFC 3339 with milliseconds (YYYY-MM-DDTHH:MM:SS.mmm and Z or +HH:MM)".into(),
+        );
+    }
+    s.parse::<jiff::Timestamp>()
+        .map_err(|e| format!("not a valid instant: {e}"))?;
+    Ok(offset)
+}
+
+#[test]
+fn the_time_check_refuses_what_is_not_rfc3339() {
+    assert_eq!(rfc3339_millis("2026-11-23T21:40:01.123Z"), Ok("Z"));
+    assert_eq!(
+        rfc3339_millis("2026-11-24T03:10:01.123+05:30"),
+        Ok("+05:30")
+    );
+    for bad in [
+        "2026-11-23T21:40:01Z",
+        "2026-11-23T21:40:01.123",
+        "2026-11-23 21:40:01.123Z",
+        "2026-13-23T21:40:01.123Z",
+        "2026-11-23T21:40:01.123+0530",
+        "21:40:01.123",
+    ] {
+        assert!(rfc3339_millis(bad).is_err(), "{bad}");
+    }
+}
+
+/// `listen --json` under a fixed zone (a POSIX `TZ` string, no zone files needed): the
+/// stamps carry that zone's offset; with `--utc` they end in `Z`.
+#[test]
+fn listen_json_time_is_local_with_its_offset_or_utc() {
+    for (utc, want) in [(false, "+05:30"), (true, "Z")] {
+        let mut args = vec!["--json"];
+        if utc {
+            args.push("--utc");
+        }
+        let mut l = Listener::start_env(&[("TZ", "XST-5:30")], &args);
+        l.type_line("list");
+        let out = l.wait_for("\"list\"", false);
+        let root = schema();
+        for line in out.lines() {
+            let v = check_event(&root, line);
+            let time = v["time"].as_str().expect("listen events carry time");
+            assert_eq!(rfc3339_millis(time), Ok(want), "{line}");
+        }
+    }
+}
+
 /// The keywords the schema uses: `$ref`, `type`, `const`, `enum`, `oneOf`, `properties`,
 /// `required`, `additionalProperties: false`, `items`, `minItems`, `maxItems`, `minimum`,
 /// `maximum`, `pattern` (only `^([0-9a-f]{2})+$`). Any other keyword is an error, so the
@@ -154,6 +236,11 @@ fn validate(root: &Value, schema: &Value, v: &Value, at: &str) -> Result<(), Str
                     if !ok {
                         return Err(format!("{at}: {x} breaks {key} {bound}"));
                     }
+                }
+            }
+            "pattern" if rule == TIME_PATTERN => {
+                if let Some(s) = v.as_str() {
+                    rfc3339_millis(s).map_err(|e| format!("{at}: {s:?}: {e}"))?;
                 }
             }
             "pattern" => {

@@ -126,7 +126,8 @@ pub struct ListenOptions {
     #[arg(long, default_value_t = DEFAULT_SHOW_MAX)]
     pub show_max: usize,
     /// Append the whole session (every line, or every JSON event) to FILE; an existing
-    /// FILE is kept and added to, never overwritten. Times are UTC.
+    /// FILE is kept and added to, never overwritten. Times as on screen (local, or
+    /// UTC with --utc).
     #[arg(long)]
     pub log: Option<PathBuf>,
     /// One JSON event per line on stdout (listening, connect, rx, decoded, tx, close,
@@ -142,6 +143,10 @@ pub struct ListenOptions {
     /// Esc quits.
     #[arg(long)]
     pub tui: bool,
+    /// Wall-clock times in UTC (JSON `time` ends in `Z`) instead of the local time zone
+    /// (`TZ`, else /etc/localtime; JSON `time` is RFC 3339 with the local offset).
+    #[arg(long)]
+    pub utc: bool,
 }
 
 struct Shared {
@@ -287,17 +292,14 @@ pub fn listen(opts: ListenOptions) -> Result<(), String> {
     if opts.tui && opts.json {
         return Err("--tui and --json: choose one (the log can still be JSON-free --log)".into());
     }
-    let out = Out::new(opts.json, opts.quiet, log, opts.tui, opts.show_max);
+    let out = Out::new(opts.json, opts.quiet, log, opts.tui, opts.show_max).with_utc(opts.utc);
     let listening = Event::Listening(report::Listening {
         t: now(),
         addr: addr.to_string(),
         service: None,
     });
     if opts.json {
-        let since_epoch = std::time::SystemTime::now()
-            .duration_since(std::time::UNIX_EPOCH)
-            .unwrap_or_default();
-        out.stdout_line(&out.json_line(&listening, since_epoch));
+        out.stdout_line(&out.json_line(&listening, jiff::Timestamp::now()));
     } else {
         out.stdout_line(&out::human(&listening, opts.show_max).join("\n"));
     }

@@ -8,7 +8,6 @@ use std::collections::{BTreeMap, VecDeque};
 use std::fs::File;
 use std::io::{BufWriter, ErrorKind, Write};
 use std::sync::Mutex;
-use std::time::{SystemTime, UNIX_EPOCH};
 
 use crate::report::{EndOutcome, Event};
 
@@ -63,7 +62,49 @@ impl Screen {
     }
 }
 
+/// How wall-clock times are written: the system's local time zone (the default: `TZ`,
+/// else `/etc/localtime`, read by `jiff`), or UTC (`--utc`).
+#[derive(Clone, Debug)]
+pub enum Clock {
+    Local(jiff::tz::TimeZone),
+    Utc,
+}
+
+impl Clock {
+    /// The local zone, or UTC when asked (or when the system's zone cannot be read: then
+    /// the stamps end in `Z`, so they never claim an offset that was not known).
+    pub fn new(utc: bool) -> Clock {
+        if utc {
+            return Clock::Utc;
+        }
+        match jiff::tz::TimeZone::try_system() {
+            Ok(tz) => Clock::Local(tz),
+            Err(_) => Clock::Utc,
+        }
+    }
+
+    /// RFC 3339 with milliseconds: `2026-11-23T22:40:01.123+01:00` in local time,
+    /// `2026-11-23T21:40:01.123Z` in UTC.
+    pub fn rfc3339(&self, at: jiff::Timestamp) -> String {
+        match self {
+            Clock::Local(tz) => format!("{:.3}", at.display_with_offset(tz.to_offset(at))),
+            Clock::Utc => format!("{at:.3}"),
+        }
+    }
+
+    /// The time of day, `HH:MM:SS.mmm`, in the same zone as [`Clock::rfc3339`].
+    pub fn time_of_day(&self, at: jiff::Timestamp) -> String {
+        let offset = match self {
+            Clock::Local(tz) => tz.to_offset(at),
+            Clock::Utc => jiff::tz::Offset::UTC,
+        };
+        offset.to_datetime(at).strftime("%H:%M:%S%.3f").to_string()
+    }
+}
+
 pub struct Out {
+    /// The zone of the wall-clock times (`--utc`).
+    pub clock: Clock,
     /// With `--tui`: lines go to the screen, not to stdout/stderr.
     pub screen: Option<Mutex<Screen>>,
     json: bool,
@@ -79,6 +120,7 @@ pub struct Out {
 impl Out {
     pub fn new(json: bool, quiet: bool, log: Option<File>, tui: bool, show_max: usize) -> Self {
         Out {
+            clock: Clock::new(false),
             show_max,
             screen: tui.then(|| Mutex::new(Screen::default())),
             json,
@@ -87,6 +129,12 @@ impl Out {
             log: Mutex::new(log.map(BufWriter::new)),
             stdout: Mutex::new(()),
         }
+    }
+
+    /// Wall-clock times in UTC (`--utc`) instead of the local zone.
+    pub fn with_utc(mut self, utc: bool) -> Self {
+        self.clock = Clock::new(utc);
+        self
     }
 
     /// Whether traffic lines go anywhere (`--quiet` without `--log` drops them): callers
@@ -143,7 +191,7 @@ impl Out {
     }
 
     /// The event's JSON line: the event, then the wall-clock `time`.
-    pub fn json_line(&self, event: &Event, now: std::time::Duration) -> String {
+    pub fn json_line(&self, event: &Event, now: jiff::Timestamp) -> String {
         #[derive(serde::Serialize)]
         struct Stamped<'a> {
             #[serde(flatten)]
@@ -152,7 +200,7 @@ impl Out {
         }
         serde_json::to_string(&Stamped {
             event,
-            time: iso_time(now),
+            time: self.clock.rfc3339(now),
         })
         .unwrap_or_default()
     }
@@ -165,11 +213,9 @@ impl Out {
         }
         let rel = event.t();
         let conn = event.conn();
-        let now = SystemTime::now()
-            .duration_since(UNIX_EPOCH)
-            .unwrap_or_default();
+        let now = jiff::Timestamp::now();
         let lines = human(&event, self.show_max);
-        let stamp = format!("+{rel:.3}s {}", wall_clock(now));
+        let stamp = format!("+{rel:.3}s {}", self.clock.time_of_day(now));
         let stamped: Vec<String> = lines.iter().map(|l| format!("{stamp} {l}")).collect();
         let with_conn = |l: &String| match conn {
             Some(id) => format!("[#{id}] {l}"),
@@ -339,31 +385,25 @@ pub fn human(event: &Event, show_max: usize) -> Vec<String> {
     }
 }
 
-/// `HH:MM:SS.mmm` UTC.
-pub fn wall_clock(since_epoch: std::time::Duration) -> String {
-    let secs = since_epoch.as_secs();
-    let ms = since_epoch.subsec_millis();
-    let day = secs % 86_400;
-    format!(
-        "{:02}:{:02}:{:02}.{ms:03}",
-        day / 3600,
-        day / 60 % 60,
-        day % 60
-    )
-}
+#[cfg(test)]
+mod clock_tests {
+    use super::Clock;
+    use jiff::tz::{offset, TimeZone};
+    use jiff::Timestamp;
 
-/// `2026-11-22T20:59:01.123Z`.
-pub fn iso_time(since_epoch: std::time::Duration) -> String {
-    let days = (since_epoch.as_secs() / 86_400) as i64;
-    // Howard Hinnant's days-to-civil.
-    let z = days + 719_468;
-    let era = z.div_euclid(146_097);
-    let doe = z - era * 146_097;
-    let yoe = (doe - doe / 1460 + doe / 36_524 - doe / 146_096) / 365;
-    let doy = doe - (365 * yoe + yoe / 4 - yoe / 100);
-    let mp = (5 * doy + 2) / 153;
-    let d = doy - (153 * mp + 2) / 5 + 1;
-    let m = if mp < 10 { mp + 3 } else { mp - 9 };
-    let y = yoe + era * 400 + i64::from(m <= 2);
-    format!("{y:04}-{m:02}-{d:02}T{}Z", wall_clock(since_epoch))
+    #[test]
+    fn stamps_are_rfc3339_with_the_zone_offset() {
+        // 2026-11-23T21:40:01.123456Z
+        let at = Timestamp::new(1_795_470_001, 123_456_000).unwrap();
+        assert_eq!(Clock::Utc.rfc3339(at), "2026-11-23T21:40:01.123Z");
+        assert_eq!(Clock::Utc.time_of_day(at), "21:40:01.123");
+        let plus = Clock::Local(TimeZone::fixed(offset(5)));
+        assert_eq!(plus.rfc3339(at), "2026-11-24T02:40:01.123+05:00");
+        assert_eq!(plus.time_of_day(at), "02:40:01.123");
+        let minus = Clock::Local(TimeZone::fixed(offset(-8)));
+        assert_eq!(minus.rfc3339(at), "2026-11-23T13:40:01.123-08:00");
+        // Whole seconds still carry their milliseconds.
+        let whole = Timestamp::new(1_795_470_001, 0).unwrap();
+        assert_eq!(Clock::Utc.rfc3339(whole), "2026-11-23T21:40:01.000Z");
+    }
 }
