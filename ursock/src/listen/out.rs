@@ -354,6 +354,10 @@ pub fn human(event: &Event, show_max: usize) -> Vec<String> {
         Event::Dashboard(e) => std::iter::once(format!("<- {:?}", e.command))
             .chain(e.reply.iter().map(|l| format!("-> {l:?}")))
             .collect(),
+        // Multi-line notes (`help`, `snippets`) get one stamped line each.
+        Event::Help(e) | Event::Note(e) if e.text.contains('\n') => {
+            e.text.lines().map(String::from).collect()
+        }
         Event::Help(e) | Event::Note(e) => one(e.text.clone()),
         Event::Error(e) => one(e.text.clone()),
         Event::Call(e) => {
