@@ -675,7 +675,7 @@ pub(crate) fn help_lines() -> Vec<String> {
         format!("REPLY-SPEC        send to the only robot; formats: {}", spec::formats()),
         "                  e.g. floats 1 2 3 | line OK | text OK\\r\\n | hex 02 41 03".into(),
         "@N REPLY-SPEC     send to connection N".into(),
-        "@* REPLY-SPEC     send to every connected robot (also: all REPLY-SPEC); one line per robot says what happened".into(),
+        "@* REPLY-SPEC     send to every connected robot (also: all REPLY-SPEC); a line names each robot and what became of its copy".into(),
         "$NAME or $N       send a --snippets snippet (by name or number), e.g. @2 $pose, @* $pose".into(),
         "snippets          list the snippets with their numbers".into(),
         format!("every SECONDS [@N|@*] $NAME|SPEC   send it periodically (at least {} s, at most {MAX_PERIODIC} at once)", MIN_PERIOD.as_secs_f64()),

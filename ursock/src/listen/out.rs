@@ -22,15 +22,50 @@ pub enum Kind {
     Warn,
 }
 
-/// What the terminal UI shows: each connection's lines and the general ones, bounded.
+/// What the terminal UI shows: each connection's lines (its scrollback) and the general
+/// ones, bounded.
 #[derive(Default)]
 pub struct Screen {
-    pub per_conn: BTreeMap<u64, VecDeque<String>>,
+    pub per_conn: BTreeMap<u64, Scrollback>,
     pub general: VecDeque<String>,
 }
 
-/// Lines kept per connection, general lines kept, connections whose lines are kept.
-const SCREEN_LINES: usize = 1000;
+/// One connection's lines: the newest [`SCREEN_LINES`] lines and at most
+/// [`SCREEN_BYTES`] bytes of them (older ones are dropped first), and how many were
+/// ever added, so a view scrolled back can say how many arrived below it.
+#[derive(Default)]
+pub struct Scrollback {
+    pub lines: VecDeque<String>,
+    bytes: usize,
+    /// Lines ever added; the line `lines[i]` is number `total - lines.len() + i`.
+    pub total: u64,
+}
+
+impl Scrollback {
+    pub(crate) fn push(&mut self, line: String) {
+        while !self.lines.is_empty()
+            && (self.lines.len() >= SCREEN_LINES || self.bytes + line.len() > SCREEN_BYTES)
+        {
+            if let Some(old) = self.lines.pop_front() {
+                self.bytes -= old.len();
+            }
+        }
+        self.bytes += line.len();
+        self.lines.push_back(line);
+        self.total += 1;
+    }
+
+    /// The number of the oldest line still kept.
+    pub fn first(&self) -> u64 {
+        self.total - self.lines.len() as u64
+    }
+}
+
+/// Scrollback per connection: lines kept, and bytes kept (whichever bound is hit first
+/// drops the oldest lines); general (status) lines kept; connections whose lines are
+/// kept (the lowest-numbered go first). At most 256 × 256 KiB = 64 MiB of lines.
+pub const SCREEN_LINES: usize = 2000;
+pub const SCREEN_BYTES: usize = 256 * 1024;
 const SCREEN_GENERAL: usize = 200;
 const SCREEN_CONNS: usize = 256;
 
@@ -45,20 +80,45 @@ impl Screen {
             }
             let q = self.per_conn.entry(id).or_default();
             for l in line.lines() {
-                if q.len() >= SCREEN_LINES {
-                    q.pop_front();
-                }
-                q.push_back(l.to_string());
+                q.push(l.to_string());
             }
         }
         if general || conn.is_none() {
-            if self.general.len() >= SCREEN_GENERAL {
-                self.general.pop_front();
-            }
             let prefix = conn.map(|id| format!("[#{id}] ")).unwrap_or_default();
-            self.general
-                .push_back(format!("{prefix}{}", line.lines().next().unwrap_or("")));
+            for l in line.lines() {
+                if self.general.len() >= SCREEN_GENERAL {
+                    self.general.pop_front();
+                }
+                self.general.push_back(format!("{prefix}{l}"));
+            }
         }
+    }
+}
+
+#[cfg(test)]
+mod screen_tests {
+    use super::*;
+
+    #[test]
+    fn scrollback_keeps_the_newest_lines_within_both_bounds() {
+        let mut s = Scrollback::default();
+        for i in 0..SCREEN_LINES + 5 {
+            s.push(format!("{i}"));
+        }
+        assert_eq!(s.lines.len(), SCREEN_LINES);
+        assert_eq!(s.total, (SCREEN_LINES + 5) as u64);
+        assert_eq!(s.first(), 5);
+        assert_eq!(s.lines.front().map(String::as_str), Some("5"));
+        let big = "x".repeat(SCREEN_BYTES / 3);
+        for _ in 0..4 {
+            s.push(big.clone());
+        }
+        assert_eq!(s.lines.len(), 3, "three fit in the byte bound");
+        assert!(s.bytes <= SCREEN_BYTES);
+        // A line larger than the whole bound is still kept, alone.
+        s.push("y".repeat(SCREEN_BYTES + 1));
+        assert_eq!(s.lines.len(), 1);
+        assert_eq!(s.first() + 1, s.total);
     }
 }
 

@@ -203,6 +203,8 @@ pub fn read_line(s: &mut TcpStream) -> String {
                     break;
                 }
             }
+            // A signal is not the end of the reply (read_exact retries the same way).
+            Err(e) if e.kind() == std::io::ErrorKind::Interrupted => {}
             Err(e) => panic!("read: {e} after {:?}", String::from_utf8_lossy(&out)),
         }
     }
