@@ -140,8 +140,10 @@ pub struct ListenOptions {
     #[arg(long, short)]
     pub quiet: bool,
     /// A terminal UI: the connections (Up/Down selects), the selected one's traffic
-    /// decoded as it arrives, and an input line sending a reply spec to it (Enter);
-    /// Esc quits.
+    /// decoded as it arrives (a scrollback of 2000 lines per robot: PgUp/PgDn/Home/End),
+    /// and an input line sending a reply spec or $snippet to it (Enter) or to every robot
+    /// (Alt+Enter); F2..F9 send snippets 1..8; F1 or ? shows every key and command; Esc
+    /// quits.
     #[arg(long)]
     pub tui: bool,
     /// Wall-clock times in UTC (JSON `time` ends in `Z`) instead of the local time zone
