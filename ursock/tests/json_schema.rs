@@ -670,3 +670,36 @@ fn a_program_that_does_not_parse_reports_error_and_end_as_json() {
     assert_eq!(events[1]["event"], "end");
     assert_eq!(events[1]["outcome"], "error");
 }
+
+/// The events of snippets, `@*` and `every` match the schema too (`origin` `periodic`,
+/// multi-line notes).
+#[test]
+fn listen_snippet_all_and_periodic_events_match_the_schema() {
+    let dir = std::env::temp_dir().join(format!("ursock-schema-snips-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let file = dir.join("snippets.txt");
+    std::fs::write(&file, "tick = line T\nack = text OK\\r\\n\n").unwrap();
+    let root = schema();
+    let mut l = Listener::start(&["--json", "--snippets", file.to_str().unwrap()]);
+    let mut s = robot(&l.addr);
+    l.wait_for("\"connect\"", false);
+    l.type_line("snippets");
+    l.type_line("@* $ack");
+    assert_eq!(read_line(&mut s), "OK\r\n");
+    l.type_line("every 0.02 $tick");
+    assert_eq!(read_line(&mut s), "T\n");
+    assert_eq!(read_line(&mut s), "T\n");
+    l.wait_for("\"periodic\"", false);
+    l.type_line("every off");
+    let out = l.wait_for("stopped 1 periodic sends", false);
+    let mut origins = Vec::new();
+    for line in out.lines() {
+        let v = check_event(&root, line);
+        if let Some(o) = v["origin"].as_str() {
+            origins.push(o.to_string());
+        }
+    }
+    assert!(origins.iter().any(|o| o == "periodic"), "{origins:?}");
+    assert!(out.contains("$2 ack = text OK"), "{out}");
+    let _ = std::fs::remove_dir_all(&dir);
+}

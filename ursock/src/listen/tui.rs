@@ -16,7 +16,7 @@ use ratatui::crossterm::event::{self, Event, KeyCode, KeyEvent, KeyEventKind, Ke
 use ratatui::layout::{Constraint, Layout, Rect};
 use ratatui::style::{Modifier, Style};
 use ratatui::text::Line;
-use ratatui::widgets::{Block, Borders, Clear, List, ListItem, ListState, Paragraph, Wrap};
+use ratatui::widgets::{Block, Borders, Clear, List, ListItem, ListState, Paragraph};
 use tokio::sync::mpsc;
 use unicode_width::UnicodeWidthChar;
 
@@ -237,8 +237,9 @@ fn help_text(shared: &Shared) -> Vec<String> {
 
 /// A rectangle of `pct` percent of `area`, centred.
 fn centred(area: Rect, pct: u16) -> Rect {
-    let w = area.width * pct / 100;
-    let h = area.height * pct / 100;
+    // In u32: a terminal wider than 728 columns would overflow u16 here.
+    let part = |n: u16| u16::try_from(u32::from(n) * u32::from(pct.min(100)) / 100).unwrap_or(n);
+    let (w, h) = (part(area.width), part(area.height));
     Rect {
         x: area.x + (area.width - w) / 2,
         y: area.y + (area.height - h) / 2,
@@ -351,11 +352,16 @@ fn ui_loop(
                 f.render_widget(Paragraph::new(status), status_area);
                 if let Some(help) = &help {
                     let area = centred(f.area(), 90);
-                    let text: Vec<Line> = help.iter().map(|l| Line::raw(l.clone())).collect();
+                    // Scrolled no further than its last row.
+                    let inner = usize::from(area.width.saturating_sub(2));
+                    // Wrapped here, as the traffic is, so the row count is exact.
+                    let rows: Vec<Line> =
+                        help.iter().flat_map(|l| wrap(l, inner)).map(Line::raw).collect();
+                    let last = rows.len().saturating_sub(usize::from(area.height.saturating_sub(2)));
+                    ui.help_scroll = ui.help_scroll.min(u16::try_from(last).unwrap_or(u16::MAX));
                     f.render_widget(Clear, area);
                     f.render_widget(
-                        Paragraph::new(text)
-                            .wrap(Wrap { trim: false })
+                        Paragraph::new(rows)
                             .scroll((ui.help_scroll, 0))
                             .block(
                                 Block::default()
@@ -438,9 +444,10 @@ fn help_key(ui: &mut Ui, key: KeyEvent) {
     match key.code {
         KeyCode::Esc | KeyCode::F(1) | KeyCode::Char('?' | 'q') => ui.help = false,
         KeyCode::Up => ui.help_scroll = ui.help_scroll.saturating_sub(1),
-        KeyCode::Down => ui.help_scroll = ui.help_scroll.saturating_add(1).min(200),
+        // Clamped to the help's length when drawn.
+        KeyCode::Down => ui.help_scroll = ui.help_scroll.saturating_add(1),
         KeyCode::PageUp => ui.help_scroll = ui.help_scroll.saturating_sub(10),
-        KeyCode::PageDown => ui.help_scroll = ui.help_scroll.saturating_add(10).min(200),
+        KeyCode::PageDown => ui.help_scroll = ui.help_scroll.saturating_add(10),
         _ => {}
     }
 }
@@ -482,6 +489,15 @@ fn scroll(ui: &mut Ui, shared: &Shared, key: KeyCode) {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_help_pane_fits_any_terminal() {
+        let huge = Rect::new(0, 0, u16::MAX, u16::MAX);
+        let r = centred(huge, 90);
+        assert_eq!((r.width, r.height), (58981, 58981));
+        let tiny = centred(Rect::new(0, 0, 1, 1), 90);
+        assert_eq!((tiny.width, tiny.height), (0, 0));
+    }
 
     #[test]
     fn lines_wrap_by_display_width() {
