@@ -217,6 +217,14 @@ fn tui_help_scrollback_snippets_and_send_to_all() {
     t.key("End");
     let end = t.wait_for("= \"late\"");
     assert!(end.contains("(PgUp scrolls back)"), "{end}");
+    // F12 captures the mouse: one notch of the wheel (an SGR wheel-up report, as a
+    // terminal sends it) goes back 3 lines.
+    t.key("F12");
+    t.keys("\x1b[<64;60;10M");
+    t.wait_for("scrolled back: 3 new lines below");
+    t.key("F12");
+    t.key("End");
+    t.wait_for("(PgUp scrolls back)");
 
     // F2 sends the first snippet to the selected robot, `$ack` the second.
     t.key("F2");

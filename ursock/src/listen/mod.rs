@@ -140,7 +140,8 @@ pub struct ListenOptions {
     #[arg(long, short)]
     pub quiet: bool,
     /// A terminal UI: the connections (Up/Down selects), the selected one's traffic
-    /// decoded as it arrives (a scrollback of 2000 lines per robot: PgUp/PgDn/Home/End),
+    /// decoded as it arrives (a scrollback of 2000 lines per robot: PgUp/PgDn/Home/End,
+    /// the mouse wheel after F12),
     /// and an input line sending a reply spec or $snippet to it (Enter) or to every robot
     /// (Alt+Enter); F2..F9 send snippets 1..8; F1 or ? shows every key and command; Esc
     /// quits.

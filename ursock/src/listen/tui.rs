@@ -6,13 +6,17 @@
 //! scrollback of the selected robot's lines (bounded by [`out::SCREEN_LINES`] lines and
 //! [`out::SCREEN_BYTES`] bytes per connection): PgUp/PgDn/Home/End scroll it, and while it
 //! is scrolled back new lines do not move the view; the title counts them. The mouse
-//! wheel is not used on purpose: capturing the mouse would take away the terminal's own
-//! text selection, which is how a line is copied out of the traffic.
+//! wheel scrolls it too once F12 turns mouse capture on; it is off at start on purpose:
+//! capturing the mouse takes away the terminal's own text selection, which is how a line
+//! is copied out of the traffic (F12 again gives it back).
 
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Duration;
 
-use ratatui::crossterm::event::{self, Event, KeyCode, KeyEvent, KeyEventKind, KeyModifiers};
+use ratatui::crossterm::event::{
+    self, DisableMouseCapture, EnableMouseCapture, Event, KeyCode, KeyEvent, KeyEventKind,
+    KeyModifiers, MouseEventKind,
+};
 use ratatui::layout::{Constraint, Layout, Rect};
 use ratatui::style::{Modifier, Style};
 use ratatui::text::Line;
@@ -24,6 +28,9 @@ use super::{out, Shared};
 
 /// Snippets with a key of their own: F2 sends the first, ..., F9 the eighth.
 const SNIPPET_KEYS: u8 = 8;
+/// Lines one notch of the mouse wheel scrolls.
+const WHEEL_LINES: u64 = 3;
+
 /// Rows of the status area: the newest general lines (notes, warnings), wrapped.
 const STATUS_ROWS: usize = 4;
 
@@ -47,6 +54,8 @@ struct Ui {
     back: Option<u64>,
     /// Whole lines shown in the traffic pane at the last frame (one page).
     page: u64,
+    /// F12: the mouse is captured (the wheel scrolls the traffic).
+    mouse: bool,
     /// Rows and columns of the traffic pane at the last frame.
     height: usize,
     width: usize,
@@ -59,6 +68,8 @@ pub fn run(
 ) -> Result<(), String> {
     let mut terminal = ratatui::try_init().map_err(|e| format!("--tui needs a terminal: {e}"))?;
     let r = ui_loop(&mut terminal, shared, cmds, done);
+    // Whether or not F12 turned it on: the shell gets its mouse back.
+    let _ = ratatui::crossterm::execute!(std::io::stdout(), DisableMouseCapture);
     ratatui::restore();
     r
 }
@@ -205,6 +216,7 @@ fn help_text(shared: &Shared) -> Vec<String> {
         format!("  F2 .. F9           send snippet 1 .. {SNIPPET_KEYS} to the selected robot"),
         "  PgUp / PgDn        scroll the traffic back / forward by a page".into(),
         "  Home / End         the oldest kept line / follow the newest again".into(),
+        "  F12                mouse on/off: the wheel scrolls the traffic (off at start, so the terminal's selection copies text)".into(),
         "  Esc or Ctrl+C      quit".into(),
         String::new(),
         "Commands (typed, then Enter)".into(),
@@ -376,8 +388,19 @@ fn ui_loop(
         if !event::poll(Duration::from_millis(100)).map_err(|e| format!("terminal: {e}"))? {
             continue;
         }
-        let Event::Key(key) = event::read().map_err(|e| format!("terminal: {e}"))? else {
-            continue;
+        let key = match event::read().map_err(|e| format!("terminal: {e}"))? {
+            Event::Key(key) => key,
+            Event::Mouse(m) if !ui.help => {
+                match m.kind {
+                    MouseEventKind::ScrollUp => scroll(&mut ui, shared, Move::Up(WHEEL_LINES)),
+                    MouseEventKind::ScrollDown => {
+                        scroll(&mut ui, shared, Move::Down(WHEEL_LINES));
+                    }
+                    _ => {}
+                }
+                continue;
+            }
+            _ => continue,
         };
         if key.kind != KeyEventKind::Press {
             continue;
@@ -413,8 +436,25 @@ fn ui_loop(
                     select(&mut ui, next.map(|r| r.id));
                 }
             }
-            KeyCode::PageUp | KeyCode::PageDown | KeyCode::Home | KeyCode::End => {
-                scroll(&mut ui, shared, key.code);
+            KeyCode::PageUp => {
+                let page = ui.page.saturating_sub(1);
+                scroll(&mut ui, shared, Move::Up(page));
+            }
+            KeyCode::PageDown => {
+                let page = ui.page.saturating_sub(1);
+                scroll(&mut ui, shared, Move::Down(page));
+            }
+            KeyCode::Home => scroll(&mut ui, shared, Move::Home),
+            KeyCode::End => scroll(&mut ui, shared, Move::End),
+            KeyCode::F(12) => {
+                ui.mouse = !ui.mouse;
+                let mut out = std::io::stdout();
+                let r = if ui.mouse {
+                    ratatui::crossterm::execute!(out, EnableMouseCapture)
+                } else {
+                    ratatui::crossterm::execute!(out, DisableMouseCapture)
+                };
+                r.map_err(|e| format!("terminal: {e}"))?;
             }
             KeyCode::Enter => {
                 let line = std::mem::take(&mut ui.input);
@@ -459,9 +499,21 @@ fn select(ui: &mut Ui, id: Option<u64>) {
     ui.selected = id;
 }
 
-/// PgUp/PgDn move the traffic view by a page (the whole lines it showed, less one kept
-/// for context); Home goes to the oldest kept line; End (or PgDn to the end) follows again.
-fn scroll(ui: &mut Ui, shared: &Shared, key: KeyCode) {
+/// A move of the traffic view.
+#[derive(Clone, Copy)]
+enum Move {
+    /// Lines back (PgUp: the whole lines the pane showed, less one kept for context; the
+    /// wheel: [`WHEEL_LINES`]).
+    Up(u64),
+    Down(u64),
+    /// The oldest kept line at the top.
+    Home,
+    /// Follow the newest again.
+    End,
+}
+
+/// Moves the traffic view; reaching the end (End, or PgDn/wheel past it) follows again.
+fn scroll(ui: &mut Ui, shared: &Shared, how: Move) {
     let (Some(sc), Some(id)) = (shared.out.screen.as_ref(), ui.selected) else {
         return;
     };
@@ -471,17 +523,16 @@ fn scroll(ui: &mut Ui, shared: &Shared, key: KeyCode) {
     };
     let (first, total) = (sb.first(), sb.total);
     let end = ui.back.unwrap_or(total).clamp(first, total);
-    let step = ui.page.saturating_sub(1).max(1);
     // The view never ends before the pane is full of the oldest lines: Home shows the
     // oldest line at the top.
     let top = first
         .saturating_add(fit_from(sb, first, ui.width, ui.height))
         .min(total);
-    let next = match key {
-        KeyCode::PageUp => end.saturating_sub(step).max(top),
-        KeyCode::PageDown => end.saturating_add(step),
-        KeyCode::Home => top,
-        _ => total,
+    let next = match how {
+        Move::Up(n) => end.saturating_sub(n.max(1)).max(top),
+        Move::Down(n) => end.saturating_add(n.max(1)),
+        Move::Home => top,
+        Move::End => total,
     };
     ui.back = (next < total).then_some(next);
 }
