@@ -709,7 +709,18 @@ fn every_sends_periodically_until_stopped_or_the_robot_leaves() {
     let mut a = robot(&l.addr);
     l.wait_for("[#1] ", false);
     l.type_line("every 0.001 $tick");
-    l.wait_for("every 0.001: shorter than 0.01 s; nothing started", true);
+    l.wait_for(
+        "every 0.001: the period must be 0.01 to 86400 s; nothing started",
+        true,
+    );
+    l.type_line("every 1e30 $tick");
+    l.wait_for("every 1e30: the period must be 0.01 to 86400 s", true);
+    l.type_line("every -1 $tick");
+    l.wait_for("every -1: the period must be", true);
+    l.type_line("every soon $tick");
+    l.wait_for("every soon: not a number of seconds", true);
+    l.type_line("every 0.5");
+    l.wait_for("expected every SECONDS [@N|@*] $NAME", true);
     l.type_line("every 0.02 $tick");
     l.wait_for("job 1 started: every 0.02 s to #1: $tick", false);
     for _ in 0..3 {

@@ -192,6 +192,9 @@ struct Shared {
 pub const MAX_PERIODIC: usize = 16;
 /// The shortest period of `every` (a robot polling faster is better served by --reply).
 pub const MIN_PERIOD: Duration = Duration::from_millis(10);
+/// The longest period of `every`: a day (far longer ones would overflow the timer's
+/// deadline arithmetic).
+pub const MAX_PERIOD: Duration = Duration::from_secs(86_400);
 
 /// One `every` job: what it sends, and the task to stop.
 struct Periodic {
@@ -681,7 +684,7 @@ pub(crate) fn help_lines() -> Vec<String> {
         "@* REPLY-SPEC     send to every connected robot (also: all REPLY-SPEC); a line names each robot and what became of its copy".into(),
         "$NAME or $N       send a --snippets snippet (by name or number), e.g. @2 $pose, @* $pose".into(),
         "snippets          list the snippets with their numbers".into(),
-        format!("every SECONDS [@N|@*] $NAME|SPEC   send it periodically (at least {} s, at most {MAX_PERIODIC} at once)", MIN_PERIOD.as_secs_f64()),
+        format!("every SECONDS [@N|@*] $NAME|SPEC   send it periodically ({} to {} s apart, at most {MAX_PERIODIC} at once)", MIN_PERIOD.as_secs_f64(), MAX_PERIOD.as_secs_f64()),
         "every             list the periodic sends; every off [J]: stop all of them, or job J".into(),
         "list              the connections and the number of variables".into(),
         "close N           close connection N".into(),
@@ -915,18 +918,18 @@ fn every(shared: &Arc<Shared>, args: &str, conns: &[Arc<Conn>]) -> Result<(), St
     }
     let usage = "expected every SECONDS [@N|@*] $NAME (or a reply spec), e.g. every 0.5 $pose";
     let (secs, rest) = args.split_once(char::is_whitespace).ok_or(usage)?;
-    let period = secs
+    let seconds = secs
         .parse::<f64>()
         .ok()
         .filter(|s| s.is_finite())
-        .and_then(|s| Duration::try_from_secs_f64(s).ok())
         .ok_or_else(|| format!("every {secs}: not a number of seconds; {usage}"))?;
-    if period < MIN_PERIOD {
+    let (min, max) = (MIN_PERIOD.as_secs_f64(), MAX_PERIOD.as_secs_f64());
+    if !(min..=max).contains(&seconds) {
         return Err(format!(
-            "every {secs}: shorter than {} s; nothing started",
-            MIN_PERIOD.as_secs_f64()
+            "every {secs}: the period must be {min} to {max} s; nothing started"
         ));
     }
+    let period = Duration::from_secs_f64(seconds);
     let (target, body) = split_target(rest.trim())?;
     let reply = body_reply(shared, body).map_err(|e| format!("{e}; nothing started"))?;
     // No prefix: the robot connected now, for the job's whole life.
