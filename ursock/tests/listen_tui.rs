@@ -264,6 +264,17 @@ fn tui_help_scrollback_snippets_and_send_to_all() {
         "{}",
         t.status()
     );
+    // A periodic send shows in the input's title until it is stopped.
+    t.keys("every 0.2 @2 $ack");
+    t.key("Enter");
+    assert_eq!(read_n(&mut b, 4), b"OK\r\n");
+    assert_eq!(read_n(&mut b, 4), b"OK\r\n");
+    t.wait_for("| 1 periodic (every)");
+    t.keys("every off");
+    t.key("Enter");
+    t.wait_until("the periodic send to stop", |p| {
+        !p.contains("periodic (every)")
+    });
     t.key("Escape");
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -125,6 +125,18 @@ fn wrap(line: &str, width: usize) -> Vec<String> {
     rows
 }
 
+/// The end of `line` that fits in `width` display columns.
+fn tail(line: &str, width: usize) -> &str {
+    let mut used = 0;
+    for (i, c) in line.char_indices().rev() {
+        used += c.width().unwrap_or(0);
+        if used > width {
+            return &line[i + c.len_utf8()..];
+        }
+    }
+    line
+}
+
 /// The traffic pane's rows: the lines before `end` (a line number), as many as fit in
 /// `height` rows of `width`, the newest at the bottom (the top line may show only its
 /// last rows). Returns the rows and how many lines are shown whole.
@@ -299,6 +311,13 @@ fn ui_loop(
             })
             .unwrap_or_default();
         let help = ui.help.then(|| help_text(shared));
+        let jobs = shared
+            .periodic
+            .lock()
+            .unwrap_or_else(|p| p.into_inner())
+            .values()
+            .filter(|j| !j.task.is_finished())
+            .count();
         terminal
             .draw(|f| {
                 let (status_rows, _) =
@@ -352,10 +371,19 @@ fn ui_loop(
                     traffic_area,
                 );
                 let target = ui.selected.map(|id| format!("#{id}")).unwrap_or_else(|| "-".into());
+                let jobs = if jobs > 0 {
+                    format!(" | {jobs} periodic (every)")
+                } else {
+                    String::new()
+                };
+                // A line longer than the box shows its end, where the typing is.
+                let typed = format!("> {}", ui.input);
+                let inner = usize::from(input_area.width.saturating_sub(2));
+                let typed = tail(&typed, inner);
                 f.render_widget(
-                    Paragraph::new(format!("> {}", ui.input)).block(
+                    Paragraph::new(typed).block(
                         Block::default().borders(Borders::ALL).title(format!(
-                            "send to {target}: floats 1 2 3 | line OK | hex 02 41 03 | $snippet  (F1 help, Esc quits)"
+                            "send to {target}: floats 1 2 3 | line OK | hex 02 41 03 | $snippet{jobs}  (F1 help, Esc quits)"
                         )),
                     ),
                     input_area,
@@ -557,6 +585,10 @@ mod tests {
         // Two columns each: three fit in six.
         assert_eq!(wrap("日本語です", 6), ["日本語", "です"]);
         assert_eq!(wrap("ab", 0), ["a", "b"]);
+        assert_eq!(tail("> hex 02 41 03", 6), " 41 03");
+        assert_eq!(tail("> 日本語", 5), "本語");
+        assert_eq!(tail("> ab", 10), "> ab");
+        assert_eq!(tail("abc", 0), "");
     }
 
     #[test]
