@@ -1027,8 +1027,8 @@ fn estimate_payload_refuses_what_the_manual_refuses() {
         e.contains("argument `poses` needs 6 numbers in each item, item 2 is"),
         "{e}"
     );
-    let e = runtime_error("estimate_payload(make_list(1001, p[0, 0, 0, 0, 0, 0]), [])\n");
-    assert!(e.contains("1001 items in `poses`, at most 1000"), "{e}");
+    let e = runtime_error("estimate_payload(make_list(501, p[0, 0, 0, 0, 0, 0]), [])\n");
+    assert!(e.contains("501 items in `poses`, at most 500"), "{e}");
 }
 
 #[test]
