@@ -1081,3 +1081,34 @@ fn time_starts_at_zero_and_refuses_modes_the_manual_does_not_give() {
         other => panic!("{other:?}"),
     }
 }
+
+#[test]
+fn the_struct_returning_built_ins_survive_hostile_arguments() {
+    // Each either finishes or stops with a runtime error: none panics.
+    let cases = [
+        "estimate_payload([], [])",
+        "estimate_payload([1, 2, 3, 4], [1, 2, 3, 4])",
+        "estimate_payload(\"poses\", p[0, 0, 0, 0, 0, 0])",
+        "estimate_payload([p[0, 0, 0, 0, 0, 0], p[0, 0, 0, 1.5, 0, 0], p[0, 0, 0, 0, 1.5, 0], p[0, 0, 0, 0, 0, 2]], make_list(4, p[0, 0, -1e300, 1e300, 0, 0]))",
+        "estimate_payload([[1, 2, 3, 4, 5, \"6\"]], [])",
+        "estimate_payload([p[0, 0, 0, inf, 0, 0], p[0, 0, 0, 0, nan, 0], p[0, 0, 0, 0, 0, 1], p[0, 0, 0, 1, 1, 1]], [p[inf, 0, 0, 0, 0, 0], p[nan, 0, 0, 0, 0, 0], p[0, 0, 0, 0, 0, 0], p[1e308, 1e308, 1e308, 1e308, 1e308, 1e308]])",
+        "estimate_payload([p[0, 0, 0, 0, 0, 0], p[0, 0, 0, 1.5, 0, 0], p[0, 0, 0, 0, 1.5, 0], p[0, 0, 0, 0, 0, 2]], [p[1e308, 1e308, 1e308, 1e308, 1e308, 1e308], p[1e308, -1e308, 0, 0, 0, 0], p[0, 0, -1e308, 0, 0, 0], p[0, 0, 1e-308, 0, 0, 0]])",
+        "time(-1)",
+        "time(2147483647)",
+        "time(2.5)",
+        "time([0])",
+    ];
+    for case in cases {
+        let src = format!("inf = 1e308 * 10\nnan = inf - inf\nx = {case}\ntextmsg(x)\n");
+        let mut h = common::Harness::new(&src, urscript_interp::Config::default());
+        h.run_silent(std::time::Duration::from_secs(1));
+        assert!(
+            matches!(
+                h.m.state(),
+                urscript_interp::State::Finished | urscript_interp::State::Error(_)
+            ),
+            "{case}: {:?}",
+            h.m.state()
+        );
+    }
+}
