@@ -1039,6 +1039,7 @@ sleep(1.5)
 textmsg(time(0))
 t = time(2)
 textmsg(t, t.nanosec)
+textmsg(time().sec + 1, struct(sec=7).sec)
 ";
     let mut h = common::Harness::new(src, urscript_interp::Config::default());
     h.m.world_mut().controller_uptime = std::time::Duration::from_millis(100_250);
@@ -1056,9 +1057,9 @@ textmsg(t, t.nanosec)
     // 1.5 s of program time later.
     assert_eq!(m[1], "struct(sec=101, nanosec=750000000)");
     assert_eq!(m[2], "struct(sec=1700000001, nanosec=500000000)500000000");
-    // `t.sec` (the manual's own example) does not parse yet: `sec` is a keyword (the
-    // `sec` program header) and a member name after `.` may not be one. The parser's
-    // owner is told; until then this test reads `sec` from the text.
+    // The manual's own `time().sec`: `sec` is a keyword (the `sec` program header), a
+    // name after `.` and before `=` in an argument list all the same.
+    assert_eq!(m[3], "1027");
 }
 
 #[test]
