@@ -3,9 +3,43 @@
 //!
 //! Each message is one line: the LF framer of [`LineDecoder`](crate::line::LineDecoder)
 //! frames it, then a small nom parser (complete mode, run once per line) reads it.
+//!
+//! # The grammar and its errors
+//!
+//! ```text
+//! message = ("SET" blank name blank int | "GET" blank name) [blank]
+//! reply   = name blank int [blank]
+//! blank   = 1*(SP | HTAB)      name = 1*(printable ASCII but space)
+//! int     = ["+" | "-"] 1*DIGIT   (leading zeros allowed; it must fit an i32)
+//! ```
+//!
+//! A line that does not have this shape is an
+//! [`UnexpectedByte`](ErrorKind::UnexpectedByte) error at the first byte that cannot
+//! continue it (`GEX A` at byte 2, the `X`), or [`Truncated`](ErrorKind::Truncated) at
+//! the line's end when it stops early (`SET A`). Only a line of the right shape has its
+//! number read: one that does not fit is
+//! [`IntegerOutOfRange`](ErrorKind::IntegerOutOfRange) at the number's first byte.
+//! The decoders drop one CR before the LF, as every line framer of this crate does.
+//!
+//! # Why nom for two keywords
+//!
+//! The adoption review asked whether nom earns its place in a grammar this small. It
+//! stays, for these reasons: nom was asked for by the project's user, and it is a
+//! dependency of the core anyway (the value-line grammar of [`to_str`](crate::to_str)
+//! is larger and uses it), so this module costs no dependency, compiles without `std`
+//! or `alloc` (`default-features = false`), and allocates nothing. In complete mode
+//! over one framed line, every failure carries the input where it happened, so the
+//! error position is `line.len() - rest.len()` with no bookkeeping of ours. The
+//! keyword is read byte by byte (`one_of("SG")`, `E`, `T`) rather than with
+//! `alt((tag("SET"), tag("GET")))`, because a failed `tag` reports where the tag
+//! started, not the byte that differs. A hand-written reader of the grammar exists too,
+//! in the tests (`tests/var_grammar/oracle.rs`): with its cursor and its error rule
+//! spelled out it takes about three times the lines of the parser here, which is what
+//! nom saves. The property tests in `tests/var_grammar.rs` and the `var_message` and
+//! `var_reply` fuzz targets require the two to agree on values, error kinds and offsets.
 
-use nom::bytes::complete::{tag, take_while1};
-use nom::character::complete::space1;
+use nom::bytes::complete::take_while1;
+use nom::character::complete::{char, one_of, space1};
 use nom::combinator::{opt, recognize};
 use nom::sequence::preceded;
 use nom::{IResult, Parser};
@@ -140,18 +174,15 @@ fn name(input: &[u8]) -> PResult<'_, &[u8]> {
 }
 
 fn int_token(input: &[u8]) -> PResult<'_, &[u8]> {
-    recognize((
-        opt(nom::character::complete::one_of("+-")),
-        take_while1(|b: u8| b.is_ascii_digit()),
-    ))
-    .parse(input)
+    recognize((opt(one_of("+-")), take_while1(|b: u8| b.is_ascii_digit()))).parse(input)
 }
 
 /// `SET name int` | `GET name`, spaces or tabs between, nothing after. The keyword is
-/// matched first so that an error points into the rest of the line, not at its start.
+/// read byte by byte so that an error points at the first byte that is neither keyword
+/// (`GEX` at the `X`; a failed `tag` would point at its start).
 fn var_message(input: &[u8]) -> PResult<'_, VarParts<'_>> {
-    let (rest, keyword) = nom::branch::alt((tag(&b"SET"[..]), tag(&b"GET"[..]))).parse(input)?;
-    if keyword == b"SET" {
+    let (rest, (first, _, _)) = (one_of("SG"), char('E'), char('T')).parse(input)?;
+    if first == 'S' {
         let (rest, (n, v)) = (preceded(space1, name), preceded(space1, int_token)).parse(rest)?;
         Ok((rest, (true, n, Some(v))))
     } else {

@@ -37,7 +37,7 @@ use std::time::Duration;
 
 use urscript_interp::interpreter::{self, Command, Discard};
 use urscript_interp::kinematics;
-use urscript_interp::{Arm, Event, Machine, Program, RuntimeError, State};
+use urscript_interp::{Arm, Event, Machine, Preamble, Program, RuntimeError, State, World};
 
 use crate::state::{Controller, ProgramState};
 use crate::status::{Inputs, Status};
@@ -121,8 +121,9 @@ struct Running {
 pub struct Cell {
     controller: Controller,
     interp: urscript_interp::Config,
-    /// The arm while no program runs (a running program holds it).
-    arm: Option<Arm>,
+    /// The arm while no program runs. A running program holds the arm (its machine's);
+    /// this one is then a stale default until the program ends and hands it back.
+    arm: Arm,
     running: Option<Running>,
     events: VecDeque<CellEvent>,
     /// The speed slider (0..1), as an RTDE client set it.
@@ -131,6 +132,8 @@ pub struct Cell {
     now: Duration,
     /// `NeedProgram` asked and not answered yet.
     awaiting_load: bool,
+    /// The installation's URCap preamble, written into the `.urp` programs played.
+    preamble: Preamble,
     /// The interpreter connections whose lines the program holds (behind a
     /// `clear_interpreter()`), in the order it will answer them, with the lines (at most
     /// [`interpreter::MAX_UNEXECUTED`]).
@@ -157,12 +160,13 @@ impl Cell {
         Cell {
             controller,
             interp,
-            arm: Some(Arm::default()),
+            arm: Arm::default(),
             running: None,
             events: VecDeque::new(),
             speed_fraction: 1.0,
             now: Duration::ZERO,
             awaiting_load: false,
+            preamble: Preamble::default(),
             held: VecDeque::new(),
             deferred: VecDeque::new(),
         }
@@ -227,6 +231,21 @@ impl Cell {
         self.deferred.push_back((conn, reply));
     }
 
+    /// The installation's URCap preamble: PolyScope writes it at the top of every
+    /// program it generates, so it runs before each `.urp` program played here. A
+    /// script a client sends (primary/secondary/realtime) gets none, as on the
+    /// controller.
+    pub fn set_preamble(&mut self, preamble: Preamble) {
+        self.preamble = preamble;
+    }
+
+    /// What the robot senses (inputs, forces, temperatures, the operator's answers),
+    /// for a test or an operator to set; a running program sees a change at its next
+    /// step.
+    pub fn world_mut(&mut self) -> &mut World {
+        &mut self.arm_mut().world
+    }
+
     /// The interpreter configuration of a controller: its model, and the step of its
     /// generation (2 ms for e-Series, PolyScope 5; 8 ms for CB3, PolyScope 3).
     pub fn interp_config(controller: &Controller) -> urscript_interp::Config {
@@ -254,20 +273,18 @@ impl Cell {
         self.interp.step_time
     }
 
+    /// The arm: the running program's, else the cell's.
     fn arm(&self) -> &Arm {
-        match (&self.running, &self.arm) {
-            (Some(r), _) => r.machine.arm(),
-            (None, Some(a)) => a,
-            // One of the two always holds the arm; a default one is never shown.
-            (None, None) => unreachable_arm(),
+        match &self.running {
+            Some(r) => r.machine.arm(),
+            None => &self.arm,
         }
     }
 
     fn arm_mut(&mut self) -> &mut Arm {
-        match (&mut self.running, &mut self.arm) {
-            (Some(r), _) => r.machine.arm_mut(),
-            (None, Some(a)) => a,
-            (None, arm @ None) => arm.insert(Arm::default()),
+        match &mut self.running {
+            Some(r) => r.machine.arm_mut(),
+            None => &mut self.arm,
         }
     }
 
@@ -321,17 +338,16 @@ impl Cell {
     }
 
     fn start(&mut self, text: String, file: Option<String>, now: Duration) {
-        let program = match Program::parse(&text) {
+        // PolyScope writes the installation's URCap preamble into the programs it
+        // generates (a `.urp` played); a script a client sends gets none.
+        let preamble = file.as_ref().map(|_| &self.preamble);
+        let program = match parse(&text, preamble) {
             Ok(p) => p,
-            Err(e) => {
+            Err(refused) => {
                 if file.is_some() {
                     self.controller.program_ended();
                 }
-                self.push(CellEvent::Refused {
-                    line: e.line(),
-                    column: e.column(),
-                    text: format!("syntax_error_on_line:{}:{}", e.line(), e.message()),
-                });
+                self.push(refused);
                 return;
             }
         };
@@ -352,7 +368,7 @@ impl Cell {
         }
         self.end_running(Ended::Stopped);
         let name = file.unwrap_or_else(|| program.entry_name().unwrap_or("<script>").to_string());
-        let arm = self.arm.take().unwrap_or_default();
+        let arm = std::mem::take(&mut self.arm);
         let machine = Machine::with_arm(program, self.interp.clone(), arm);
         if self.controller.loaded_program().is_none() || !self.awaiting_or_playing_file(&name) {
             self.controller.script_started();
@@ -379,16 +395,9 @@ impl Cell {
     /// Runs a `sec` program to its end on a copy of the arm; what it set becomes the
     /// arm's (its joints cannot change: a secondary program may not move the arm).
     fn run_secondary(&mut self, text: &str) {
-        let program = match Program::parse(text) {
+        let program = match parse(text, None) {
             Ok(p) => p,
-            Err(e) => {
-                self.push(CellEvent::Refused {
-                    line: e.line(),
-                    column: e.column(),
-                    text: format!("syntax_error_on_line:{}:{}", e.line(), e.message()),
-                });
-                return;
-            }
+            Err(refused) => return self.push(refused),
         };
         let copy = self.arm().clone();
         let mut m = Machine::with_arm(program, self.interp.clone(), copy);
@@ -430,7 +439,7 @@ impl Cell {
             let mut arm = machine.into_arm();
             arm.qd = [0.0; 6];
             arm.tcp_speed = [0.0; 6];
-            self.arm = Some(arm);
+            self.arm = arm;
             // Lines held behind a clear that never ran: no program runs for them now.
             while let Some((conn, statement)) = self.held.pop_front() {
                 let reply = interpreter::Reply::Discard {
@@ -653,7 +662,7 @@ impl Cell {
             script_line: 0,
             target_q: arm.q,
             target_qd: arm.qd,
-            target_qdd: [0.0; 6],
+            target_qdd: arm.qdd,
             actual_q: arm.q,
             actual_qd: arm.qd,
             target_current: [0.0; 6],
@@ -698,9 +707,16 @@ impl Cell {
     }
 }
 
-/// The arm is always held by the running program or by the cell; this is never reached,
-/// and returns a default arm rather than panicking.
-fn unreachable_arm() -> &'static Arm {
-    static DEFAULT: std::sync::OnceLock<Arm> = std::sync::OnceLock::new();
-    DEFAULT.get_or_init(Arm::default)
+/// Parses a program (after `preamble`, if given); one that does not parse is refused with
+/// the controller's `syntax_error_on_line:LINE:...` text.
+fn parse(text: &str, preamble: Option<&Preamble>) -> Result<Program, CellEvent> {
+    match preamble {
+        Some(p) => Program::parse_with_preamble(p, text),
+        None => Program::parse(text),
+    }
+    .map_err(|e| CellEvent::Refused {
+        line: e.line(),
+        column: e.column(),
+        text: format!("syntax_error_on_line:{}:{}", e.line(), e.message()),
+    })
 }

@@ -239,6 +239,15 @@ pub struct World {
     /// `actual_execution_time` (`get_rtde_value`). Default 0.0 (the virtual controller's
     /// steps take no controller time).
     pub execution_time: f64,
+    /// How long the low-level controller had been running when the program started:
+    /// `time(0)` (the manual: controller execution time, counted since the low-level
+    /// controller started, monotonic) is this plus the program time. Default zero (the
+    /// virtual controller starts with the program).
+    pub controller_uptime: Duration,
+    /// The system clock (GMT, since 1970-01-01) when the program started: `time(2)` is
+    /// this plus the program time. Default zero, 1970-01-01 00:00:00: the machine never
+    /// reads a clock (time is an input), so a test or driver that wants the date sets it.
+    pub system_time: Duration,
 }
 
 impl Default for World {
@@ -261,6 +270,8 @@ impl Default for World {
             operator_string: Vec::new(),
             rotor_inertia: [0.0; 6],
             execution_time: 0.0,
+            controller_uptime: Duration::ZERO,
+            system_time: Duration::ZERO,
         }
     }
 }
@@ -424,7 +435,15 @@ impl Controller {
             Some(v) => v,
             None => crate::trajectory::tcp_speed(&self.dh, s.q, s.qd, self.arm.tcp),
         };
-        if s.done {
+        if s.stop {
+            // The path left the arm's reach: it stops here (nothing queued goes on) and
+            // the controller running it makes that a protective stop.
+            self.motion = None;
+            self.arm.qd = [0.0; 6];
+            self.arm.qdd = [0.0; 6];
+            self.arm.tcp_speed = [0.0; 6];
+            self.arm.protective_stop = true;
+        } else if s.done {
             // A move queued behind this one starts now (at rest, where this one ended).
             let next = m.next.take();
             self.motion = next.map(|n| *n);

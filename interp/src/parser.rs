@@ -523,10 +523,23 @@ impl Parser {
         }
     }
 
-    /// The name after a `.`: any identifier (a member may be named like a keyword of
-    /// another language, not like one of URScript's).
+    /// The name after a `.`: any identifier, a URScript keyword included (the manual's
+    /// own `time().sec`: after a `.` a word can only be a member).
     fn member_name(&mut self) -> Result<String, ParseError> {
-        self.name("a member name after `.`")
+        self.word("a member name after `.`")
+    }
+
+    /// Any identifier, keywords included: where the grammar allows only a name (after
+    /// `.`, before `=` in an argument list) a keyword cannot start anything else.
+    fn word(&mut self, what: &str) -> Result<String, ParseError> {
+        match &self.peek().kind {
+            Tok::Ident(w) => {
+                let w = w.clone();
+                self.bump();
+                Ok(w)
+            }
+            _ => Err(self.expected(what)),
+        }
     }
 
     /// `[i]` or `[i][j]` after an assignment target.
@@ -909,7 +922,8 @@ impl Parser {
                         let is_kw = matches!(self.peek().kind, Tok::Ident(_))
                             && *self.peek_at(1) == Tok::Assign;
                         if is_kw {
-                            let k = self.name("an argument name")?;
+                            // `struct(sec=1)`: a member named like a keyword.
+                            let k = self.word("an argument name")?;
                             self.bump();
                             let (v, hv) = self.expr_h()?;
                             h = h.max(hv);

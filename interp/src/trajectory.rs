@@ -453,6 +453,18 @@ pub(crate) struct Sample {
     /// Known tool speed (tool motions); `None`: derive it from the joints.
     pub tcp_speed: Option<[f64; 6]>,
     pub done: bool,
+    /// The motion cannot go on (a straight tool move whose path has left the arm's
+    /// reach): the arm stops here and the controller makes it a protective stop.
+    pub stop: bool,
+}
+
+/// Whether joints `q` put the tool (offset `tcp`) at `pose`, within 0.1 mm and 1 mrad.
+fn reaches(dh: &Dh, q: &[f64; 6], tcp: &[f64; 6], pose: &[f64; 6]) -> bool {
+    let at = kinematics::forward(dh, *q, *tcp);
+    let position = (0..3).all(|k| (at[k] - pose[k]).abs() < 1e-4);
+    let r = mul(transpose(rot(at)), rot(*pose));
+    let angle = to_rotvec(r);
+    position && (angle[0] * angle[0] + angle[1] * angle[1] + angle[2] * angle[2]).sqrt() < 1e-3
 }
 
 /// The speed ramp's linear interpolation: speed and distance `t` s into it.
@@ -566,6 +578,7 @@ impl Kind {
                     qd,
                     tcp_speed: None,
                     done: false,
+                    stop: false,
                 }
             }
             Kind::Joint { q0, q1, profile } => {
@@ -575,6 +588,7 @@ impl Kind {
                         qd: [0.0; 6],
                         tcp_speed: Some([0.0; 6]),
                         done: true,
+                        stop: false,
                     };
                 }
                 let (s, sd) = profile.at(t);
@@ -593,6 +607,7 @@ impl Kind {
                     qd,
                     tcp_speed: None,
                     done: false,
+                    stop: false,
                 }
             }
             Kind::Tool {
@@ -620,6 +635,7 @@ impl Kind {
                         qd: [0.0; 6],
                         tcp_speed: Some([0.0; 6]),
                         done: true,
+                        stop: false,
                     };
                 }
                 let (s, sd) = profile.at(t);
@@ -638,14 +654,28 @@ impl Kind {
                         qd: joint_speed(dh, q, tcp, xd),
                         tcp_speed: Some(xd),
                         done: false,
+                        stop: false,
                     },
-                    // No solution here (a singularity on the way, or out of reach): the
-                    // joints move in joint space at the same fraction of the move.
+                    // No solution here, and none at the target either (the joints
+                    // given for it are not where it is): the line has left the arm's
+                    // reach. A real arm runs into a singularity there and stops with a
+                    // protective stop (UR's client library tests a `movel` to an
+                    // unfeasible target that way): it stops where it is.
+                    None if !reaches(dh, q1, &tcp, to) => Sample {
+                        q: prev_q,
+                        qd: [0.0; 6],
+                        tcp_speed: Some([0.0; 6]),
+                        done: true,
+                        stop: true,
+                    },
+                    // No solution here (a singularity on the way): the joints move in
+                    // joint space at the same fraction of the move.
                     None => Sample {
                         q: std::array::from_fn(|k| q0[k] + (q1[k] - q0[k]) * f),
                         qd: std::array::from_fn(|k| (q1[k] - q0[k]) * fd),
                         tcp_speed: None,
                         done: false,
+                        stop: false,
                     },
                 }
             }
@@ -669,6 +699,7 @@ impl Kind {
                     qd,
                     tcp_speed: None,
                     done: stopped,
+                    stop: false,
                 }
             }
             Kind::ToolSpeed {
@@ -703,6 +734,7 @@ impl Kind {
                     },
                     tcp_speed: Some(if q.is_some() { v } else { [0.0; 6] }),
                     done: stopped || q.is_none(),
+                    stop: false,
                 }
             }
         }

@@ -69,6 +69,14 @@ pub const WORLD_SETTINGS: &[(&str, &str)] = &[
         "operator_string",
         "string: the answer to request_string_from_primary_client",
     ),
+    (
+        "controller_uptime",
+        "seconds: how long the controller ran before the program (time(0))",
+    ),
+    (
+        "system_time",
+        "seconds since 1970-01-01 GMT when the program starts (time(2))",
+    ),
 ];
 
 impl World {
@@ -165,6 +173,14 @@ impl World {
                     _ => Err("a string".to_string()),
                 }
             }
+            "controller_uptime" => {
+                scalar_only()?;
+                as_seconds(&value).map(|v| self.controller_uptime = v)
+            }
+            "system_time" => {
+                scalar_only()?;
+                as_seconds(&value).map(|v| self.system_time = v)
+            }
             _ => {
                 let known: Vec<&str> = WORLD_SETTINGS.iter().map(|(n, _)| *n).collect();
                 return Err(err(format!(
@@ -231,6 +247,16 @@ fn as_float(v: &Value) -> Result<f64, String> {
     }
 }
 
+/// A number of seconds, 0 or more (a float keeps about 0.2 µs at 10⁹ s).
+fn as_seconds(v: &Value) -> Result<std::time::Duration, String> {
+    let wanted = || "a number of seconds, 0 or more".to_string();
+    let s = as_float(v).map_err(|_| wanted())?;
+    if s < 0.0 {
+        return Err(wanted());
+    }
+    std::time::Duration::try_from_secs_f64(s).map_err(|_| wanted())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -245,6 +271,27 @@ mod tests {
                 assert!(!e.reason().contains("not a setting"), "{name}: {e}");
             }
         }
+    }
+
+    #[test]
+    fn clocks_take_seconds() {
+        let mut w = World::default();
+        w.set("system_time=1700000000").unwrap();
+        w.set("controller_uptime=12.5").unwrap();
+        assert_eq!(w.system_time, std::time::Duration::from_secs(1_700_000_000));
+        assert_eq!(
+            w.controller_uptime,
+            std::time::Duration::from_millis(12_500)
+        );
+        for bad in [
+            "system_time=-1",
+            "system_time=1e300",
+            "controller_uptime=True",
+        ] {
+            let e = w.set(bad).unwrap_err();
+            assert!(e.reason().contains("a number of seconds, 0 or more"), "{e}");
+        }
+        assert!(w.set("system_time[0]=1").is_err());
     }
 
     #[test]

@@ -321,7 +321,9 @@ textmsg(get_actual_joint_speeds())
 
 #[test]
 fn a_pose_out_of_reach_stops_the_program_as_on_the_controller() {
-    let h = common::run("movel(p[2, 0, 0.5, 0, 3.14, 0])\ntextmsg(\"never\")\n");
+    // (A `movel` there sets off along its line and ends in a protective stop:
+    // tests/motion_in_time.rs.)
+    let h = common::run("movej(p[2, 0, 0.5, 0, 3.14, 0])\ntextmsg(\"never\")\n");
     let State::Error(e) = h.m.state() else {
         panic!("{:?}", h.m.state())
     };

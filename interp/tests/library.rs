@@ -631,6 +631,9 @@ const ADDED: &[(&str, &[&str])] = &[
     ("jerk_gain_scaling_set", &["gain"]),
     // Interfaces.
     ("get_rtde_value", &["key"]),
+    // Functions returning structs.
+    ("estimate_payload", &["poses", "wrenches"]),
+    ("time", &["mode"]),
 ];
 
 #[test]
@@ -689,7 +692,9 @@ fn every_added_function_is_in_the_table_with_the_manuals_parameters() {
     // URCap functions are never built-ins; nor is what needs a network or a GUI the
     // virtual controller does not have (`rpc_factory` is one: its calls go through the
     // machine's socket events, see tests/rpc.rs).
-    for name in ["rq_activate", "time", "estimate_payload"] {
+    assert_eq!(sig("time"), "time(mode=0)");
+    assert_eq!(sig("estimate_payload"), "estimate_payload(poses, wrenches)");
+    for name in ["rq_activate", "add_frame", "get_pose", "convert_pose"] {
         assert!(lookup(name).is_none(), "{name}");
     }
 }
@@ -939,4 +944,172 @@ textmsg(get_list_length(j), get_list_length(c))
 ",
     );
     assert_eq!(m, ["66"]);
+}
+
+/// Four TCP poses a quarter turn apart (none, about x, about y, about z) and the wrench a
+/// 2 kg payload with its CoG at (0.01, 0.02, 0.05) m in the flange frame puts on the
+/// flange at each, worked by hand: F = (0, 0, -2 * 9.82), T = (R cog) x F.
+const PAYLOAD_POSES: &str = "h = 1.5707963267948966
+P = [p[0.3, 0, 0.4, 0, 0, 0], p[0.3, 0, 0.4, h, 0, 0], p[0.3, 0, 0.4, 0, h, 0], p[0.3, 0, 0.4, 0, 0, h]]
+W = [p[0, 0, -19.64, -0.3928, 0.1964, 0], [0, 0, -19.64, 0.982, 0.1964, 0], [0, 0, -19.64, -0.3928, 0.982, 0], p[0, 0, -19.64, -0.1964, -0.3928, 0]]
+";
+
+#[test]
+fn estimate_payload_returns_the_mass_and_cog_that_explain_the_wrenches() {
+    let m = messages(&format!(
+        "{PAYLOAD_POSES}pl = estimate_payload(P, W)
+textmsg(pl.mass)
+textmsg(pl.cog)
+set_target_payload(pl.mass, pl.cog)
+textmsg(get_target_payload())
+textmsg(get_target_payload_cog())
+textmsg(estimate_payload(wrenches=W, poses=P) == pl)
+"
+    ));
+    close(&format!("[{}]", m[0]), &[2.0], 1e-9);
+    close(&m[1], &[0.01, 0.02, 0.05], 1e-9);
+    close(&format!("[{}]", m[2]), &[2.0], 1e-9);
+    close(&m[3], &[0.01, 0.02, 0.05], 1e-9);
+    assert_eq!(m[4], "True");
+}
+
+#[test]
+fn estimate_payload_takes_tcp_poses_and_removes_the_tcps_rotation() {
+    // The same flange orientations, given as the poses of a TCP turned a quarter about
+    // z and shifted 0.1 m: the estimate is the same (in the flange frame).
+    let m = messages(&format!(
+        "{PAYLOAD_POSES}tcp = p[0, 0.03, 0.1, 0, 0, 1.5707963267948966]
+set_tcp(tcp)
+T = [pose_trans(P[0], tcp), pose_trans(P[1], tcp), pose_trans(P[2], tcp), pose_trans(P[3], tcp)]
+pl = estimate_payload(T, W)
+textmsg(pl.mass)
+textmsg(pl.cog)
+set_tcp(p[0, 0, 0, 0, 0, 0])
+textmsg(norm(estimate_payload(T, W).cog - pl.cog) > 0.01)
+"
+    ));
+    close(&format!("[{}]", m[0]), &[2.0], 1e-9);
+    close(&m[1], &[0.01, 0.02, 0.05], 1e-9);
+    // Taken as flange poses (no TCP), the turned orientations give another CoG.
+    assert_eq!(m[2], "True");
+}
+
+#[test]
+fn estimate_payload_refuses_what_the_manual_refuses() {
+    let e = runtime_error(&format!(
+        "{PAYLOAD_POSES}estimate_payload([P[0], P[1], P[2]], [W[0], W[1], W[2]])\n"
+    ));
+    assert!(
+        e.contains("`estimate_payload`: needs at least 4 poses, 3 given"),
+        "{e}"
+    );
+    let e = runtime_error(&format!(
+        "{PAYLOAD_POSES}estimate_payload(P, [W[0], W[1], W[2], W[3], W[0]])\n"
+    ));
+    assert!(
+        e.contains("needs one wrench per pose: 4 poses, 5 wrenches"),
+        "{e}"
+    );
+    // Two orientations 0.1 rad apart: less than pi/(2*4).
+    let e = runtime_error(&format!(
+        "{PAYLOAD_POSES}P[3] = p[0.3, 0, 0.4, 0.1, 0, 0]\nestimate_payload(P, W)\n"
+    ));
+    assert!(e.contains("poses 0 and 3 are 0.1000 rad apart"), "{e}");
+    let e = runtime_error(&format!("{PAYLOAD_POSES}estimate_payload(P, 3)\n"));
+    assert!(
+        e.contains("`estimate_payload` argument `wrenches` needs a list of wrenches"),
+        "{e}"
+    );
+    let e = runtime_error(&format!(
+        "{PAYLOAD_POSES}estimate_payload([P[0], P[1], [1, 2], P[3]], W)\n"
+    ));
+    assert!(
+        e.contains("argument `poses` needs 6 numbers in each item, item 2 is"),
+        "{e}"
+    );
+    let e = runtime_error("estimate_payload(make_list(501, p[0, 0, 0, 0, 0, 0]), [])\n");
+    assert!(e.contains("501 items in `poses`, at most 500"), "{e}");
+}
+
+#[test]
+fn time_reads_the_virtual_controllers_clocks() {
+    let src = "t = time()
+textmsg(t)
+sleep(1.5)
+textmsg(time(0))
+t = time(2)
+textmsg(t, t.nanosec)
+textmsg(time().sec + 1, struct(sec=7).sec)
+";
+    let mut h = common::Harness::new(src, urscript_interp::Config::default());
+    h.m.world_mut().controller_uptime = std::time::Duration::from_millis(100_250);
+    h.m.world_mut().system_time = std::time::Duration::from_secs(1_700_000_000);
+    h.run_silent(std::time::Duration::from_secs(5));
+    assert_eq!(
+        h.m.state(),
+        &urscript_interp::State::Finished,
+        "{:?}",
+        h.messages
+    );
+    let m = &h.messages;
+    // At the start: the controller's uptime.
+    assert_eq!(m[0], "struct(sec=100, nanosec=250000000)");
+    // 1.5 s of program time later.
+    assert_eq!(m[1], "struct(sec=101, nanosec=750000000)");
+    assert_eq!(m[2], "struct(sec=1700000001, nanosec=500000000)500000000");
+    // The manual's own `time().sec`: `sec` is a keyword (the `sec` program header), a
+    // name after `.` and before `=` in an argument list all the same.
+    assert_eq!(m[3], "1027");
+}
+
+#[test]
+fn time_starts_at_zero_and_refuses_modes_the_manual_does_not_give() {
+    assert_eq!(
+        messages("textmsg(time(), time(2))\n"),
+        ["struct(sec=0, nanosec=0)struct(sec=0, nanosec=0)"]
+    );
+    assert!(runtime_error("time(1)\n").contains("`time`: mode 1 is reserved"));
+    assert!(runtime_error("time(3)\n").contains("`time`: no mode 3 (modes: 0, 2)"));
+    assert!(runtime_error("time(\"x\")\n").contains("`time` argument `mode` needs an int"));
+    // A time an int cannot hold is an error, not a wrapped number.
+    let mut h = common::Harness::new("time(2)\n", urscript_interp::Config::default());
+    h.m.world_mut().system_time = std::time::Duration::from_secs(1 << 31);
+    h.run_silent(std::time::Duration::from_secs(1));
+    match h.m.state() {
+        urscript_interp::State::Error(e) => {
+            assert!(e.to_string().contains("does not fit in an int"), "{e}")
+        }
+        other => panic!("{other:?}"),
+    }
+}
+
+#[test]
+fn the_struct_returning_built_ins_survive_hostile_arguments() {
+    // Each either finishes or stops with a runtime error: none panics.
+    let cases = [
+        "estimate_payload([], [])",
+        "estimate_payload([1, 2, 3, 4], [1, 2, 3, 4])",
+        "estimate_payload(\"poses\", p[0, 0, 0, 0, 0, 0])",
+        "estimate_payload([p[0, 0, 0, 0, 0, 0], p[0, 0, 0, 1.5, 0, 0], p[0, 0, 0, 0, 1.5, 0], p[0, 0, 0, 0, 0, 2]], make_list(4, p[0, 0, -1e300, 1e300, 0, 0]))",
+        "estimate_payload([[1, 2, 3, 4, 5, \"6\"]], [])",
+        "estimate_payload([p[0, 0, 0, inf, 0, 0], p[0, 0, 0, 0, nan, 0], p[0, 0, 0, 0, 0, 1], p[0, 0, 0, 1, 1, 1]], [p[inf, 0, 0, 0, 0, 0], p[nan, 0, 0, 0, 0, 0], p[0, 0, 0, 0, 0, 0], p[1e308, 1e308, 1e308, 1e308, 1e308, 1e308]])",
+        "estimate_payload([p[0, 0, 0, 0, 0, 0], p[0, 0, 0, 1.5, 0, 0], p[0, 0, 0, 0, 1.5, 0], p[0, 0, 0, 0, 0, 2]], [p[1e308, 1e308, 1e308, 1e308, 1e308, 1e308], p[1e308, -1e308, 0, 0, 0, 0], p[0, 0, -1e308, 0, 0, 0], p[0, 0, 1e-308, 0, 0, 0]])",
+        "time(-1)",
+        "time(2147483647)",
+        "time(2.5)",
+        "time([0])",
+    ];
+    for case in cases {
+        let src = format!("inf = 1e308 * 10\nnan = inf - inf\nx = {case}\ntextmsg(x)\n");
+        let mut h = common::Harness::new(&src, urscript_interp::Config::default());
+        h.run_silent(std::time::Duration::from_secs(1));
+        assert!(
+            matches!(
+                h.m.state(),
+                urscript_interp::State::Finished | urscript_interp::State::Error(_)
+            ),
+            "{case}: {:?}",
+            h.m.state()
+        );
+    }
 }

@@ -392,3 +392,46 @@ fn speedl_and_stopl_move_the_tool_along_its_speed() {
     assert!((last - 0.025).abs() < 1e-6, "{last}");
     assert_eq!(m.arm().tcp_speed, [0.0; 6]);
 }
+
+/// A `movel` to a pose beyond the arm's reach: the tool sets off along the line and,
+/// where the line leaves the reach, the arm stops with a protective stop (as UR's client
+/// library expects of a real arm), not with a runtime error before it moves.
+#[test]
+fn movel_beyond_reach_moves_along_the_line_then_stops_with_a_protective_stop() {
+    let dh = Model::Ur5e.dh();
+    let q0 = [0.3, -1.4, 1.6, -1.8, -1.57, 0.2];
+    let p0 = forward(&dh, q0, [0.0; 6]);
+    // 3 m further out along x: far outside a UR5e's 0.85 m reach.
+    let p1 = [p0[0] + 3.0, p0[1], p0[2], p0[3], p0[4], p0[5]];
+    let src = format!(
+        "set_pos({q0:?})\nmovel(p[{}, {}, {}, {}, {}, {}], a=1.2, v=0.25)\ntextmsg(\"after\")\n",
+        p1[0], p1[1], p1[2], p1[3], p1[4], p1[5]
+    );
+    let mut m = machine(&src);
+    let mut stopped_at = None;
+    let mut furthest: f64 = 0.0;
+    steps(&mut m, 20_000, |k, m| {
+        let p = m.tcp_pose();
+        furthest = furthest.max(p[0] - p0[0]);
+        if stopped_at.is_none() && m.arm().protective_stop {
+            stopped_at = Some(k);
+        }
+    });
+    let k = stopped_at.expect("a protective stop");
+    // It moved out along the line first, and stopped short of the target, at rest.
+    assert!(furthest > 0.05 && furthest < 3.0, "{furthest}");
+    assert!(k > 10, "{k}");
+    assert_eq!(m.arm().qd, [0.0; 6]);
+    let p = m.tcp_pose();
+    assert!(
+        (p[1] - p0[1]).abs() < 1e-6 && (p[2] - p0[2]).abs() < 1e-6,
+        "{p:?}"
+    );
+    // The same target by `movej` is refused before the arm moves.
+    let mut j = machine(&src.replace("movel(", "movej("));
+    j.run_until(Duration::from_secs(1));
+    let State::Error(e) = j.state() else {
+        panic!("{:?}", j.state())
+    };
+    assert!(e.message().contains("out of reach"), "{e}");
+}

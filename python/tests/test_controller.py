@@ -71,6 +71,19 @@ def test_every_port_the_controller_reports_is_exposed(ur_controller: UrControlle
         assert getattr(ur_controller, f"{name}_port") is None
 
 
+def test_world_settings_reach_the_programs_clients_send(tmp_path: Path) -> None:
+    import socket
+
+    with UrController(world={"digital_in[2]": True, "joint_temp[0]": 41.5}) as ur:
+        ur.dashboard("brake release")
+        _wait_for(ur, "robotmode", "Robotmode: RUNNING")
+        assert ur.primary_port is not None
+        with socket.create_connection((ur.host, ur.primary_port), timeout=5) as s:
+            s.sendall(b"def sense():\n  textmsg(get_standard_digital_in(2), get_joint_temp(0))\nend\n")
+            message = ur.wait_for_event("message", timeout=10)[0]
+    assert message["text"] == "True41.5"
+
+
 def test_stop_ends_the_process() -> None:
     ur = UrController().start()
     assert ur.running

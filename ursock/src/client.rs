@@ -66,9 +66,13 @@ pub struct ClientOptions {
     /// Bytes of one chunk shown in its hex dump.
     #[arg(long, default_value_t = 256)]
     pub show_max: usize,
-    /// Append the whole session to FILE (times UTC).
+    /// Append the whole session to FILE (times as on screen: local, or UTC with --utc).
     #[arg(long, value_name = "FILE")]
     pub log: Option<PathBuf>,
+    /// Wall-clock times in UTC (JSON `time` ends in `Z`) instead of the local time zone,
+    /// as `listen --utc`.
+    #[arg(long)]
+    pub utc: bool,
 }
 
 /// A duration from a user's seconds: above 0, and a time too long for the clock is none.
@@ -191,7 +195,7 @@ pub fn run(opts: ClientOptions) -> Result<(), String> {
         .peer_addr()
         .map(|a| a.to_string())
         .unwrap_or_else(|_| opts.addr.clone());
-    let out = Out::new(opts.json, false, log, false, opts.show_max);
+    let out = Out::new(opts.json, false, log, false, opts.show_max).with_utc(opts.utc);
     // The JSON `connect` event names the peer; people read which way it went.
     out.emit(
         Kind::Note,

@@ -199,24 +199,10 @@ fn run(cli: Cli) -> Result<(), String> {
             preamble,
             set,
         } => {
-            if set.iter().any(|s| s == "help") {
-                for (name, what) in urscript_interp::WORLD_SETTINGS {
-                    println!("{name:18} {what}");
-                }
+            let Some(world) = script::world_from_settings(&set)? else {
                 return Ok(());
-            }
-            let mut world = urscript_interp::World::default();
-            for s in &set {
-                world.set(s).map_err(|e| format!("--set {e}"))?;
-            }
-            let mut urcaps = urscript_interp::Preamble::default();
-            for path in &preamble {
-                let text = std::fs::read_to_string(path)
-                    .map_err(|e| format!("--preamble {}: {e}", path.display()))?;
-                urcaps
-                    .add(&text)
-                    .map_err(|e| format!("--preamble {}: {e}", path.display()))?;
-            }
+            };
+            let urcaps = script::read_preambles(&preamble)?;
             if let Some(path) = &log {
                 out::open_log(path)?;
             }

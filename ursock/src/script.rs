@@ -42,6 +42,36 @@ pub struct Options {
     pub world: urscript_interp::World,
 }
 
+/// The URCap preambles of `--preamble FILE...`, in order; an error names the file and
+/// the line and column.
+pub fn read_preambles(paths: &[std::path::PathBuf]) -> Result<urscript_interp::Preamble, String> {
+    let mut preamble = urscript_interp::Preamble::default();
+    for path in paths {
+        let text = std::fs::read_to_string(path)
+            .map_err(|e| format!("--preamble {}: {e}", path.display()))?;
+        preamble
+            .add(&text)
+            .map_err(|e| format!("--preamble {}: {e}", path.display()))?;
+    }
+    Ok(preamble)
+}
+
+/// The world of `--set NAME=VALUE...` (`None` for `--set help`, after printing the
+/// names).
+pub fn world_from_settings(settings: &[String]) -> Result<Option<urscript_interp::World>, String> {
+    if settings.iter().any(|s| s == "help") {
+        for (name, what) in urscript_interp::WORLD_SETTINGS {
+            out::line(&format!("{name:18} {what}"));
+        }
+        return Ok(None);
+    }
+    let mut world = urscript_interp::World::default();
+    for s in settings {
+        world.set(s).map_err(|e| format!("--set {e}"))?;
+    }
+    Ok(Some(world))
+}
+
 /// How long a `socket_open` may take to connect before it returns False.
 const CONNECT_TIMEOUT: Duration = Duration::from_secs(2);
 

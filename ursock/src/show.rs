@@ -4,6 +4,16 @@ use std::fmt::Write as _;
 
 use urscript_socket::format::{write_quoted, Message};
 
+// Why the hex writers here are ours and not a crate's (the adoption review, item 1): the
+// `hex` crate writes one unbroken run (`hex::encode`), which is exactly the JSON form
+// below, but not the spaced upper-case form people read (`00 00 00 64`) or the dump with
+// offsets and an ASCII column; dump crates (`pretty-hex`, `hexyl`) each have their own
+// layout (lower case, other separators, colours), and this layout is the one the
+// listener, `ursock diagnose` and their docs show. Taking a crate for the one line the
+// JSON form needs would add a dependency to save three lines. So all three stay, and the
+// property tests below check them against the `hex` crate (the digits of every form) and
+// against the layout as documented (offsets, widths, the ASCII column).
+
 /// `00 00 00 64`
 pub fn hex(bytes: &[u8]) -> String {
     let mut s = String::with_capacity(bytes.len() * 3);
@@ -160,6 +170,7 @@ pub fn message_text(m: &Message<'_>) -> String {
 mod tests {
     use super::*;
     use crate::report::TypedMessage;
+    use proptest::prelude::*;
     use urscript_socket::format::Format;
     use urscript_socket::Decode;
 
@@ -195,5 +206,40 @@ mod tests {
             TypedMessage::new(&m, "frame").to_json(),
             r#"{"type":"frame","value":{"encoding":"utf-8","text":"hi"}}"#
         );
+    }
+
+    proptest! {
+        #[test]
+        fn hex_forms_hold_the_hex_crates_digits(bytes in proptest::collection::vec(any::<u8>(), 0..40)) {
+            let spaced = hex(&bytes);
+            let words: Vec<&str> = spaced.split(' ').filter(|w| !w.is_empty()).collect();
+            prop_assert_eq!(words.len(), bytes.len());
+            prop_assert_eq!(words.concat(), ::hex::encode_upper(&bytes));
+            prop_assert_eq!(spaced.len(), (bytes.len() * 3).saturating_sub(1));
+            let json = serde_json::to_value(JsonBytes::new(&bytes)).unwrap();
+            match std::str::from_utf8(&bytes) {
+                Ok(text) => prop_assert_eq!(json["text"].as_str(), Some(text)),
+                Err(_) => prop_assert_eq!(json["hex"].as_str().map(String::from), Some(::hex::encode(&bytes))),
+            }
+        }
+
+        #[test]
+        fn hex_dump_rows_follow_the_layout(bytes in proptest::collection::vec(any::<u8>(), 0..100)) {
+            let rows = hex_dump(&bytes);
+            prop_assert_eq!(rows.len(), bytes.len().div_ceil(16));
+            for (n, (row, chunk)) in rows.iter().zip(bytes.chunks(16)).enumerate() {
+                // `OOOO  ` + 16 columns of `HH ` + one extra space after the 8th + `|text|`.
+                let (offset, rest) = row.split_at(6);
+                prop_assert_eq!(offset, format!("{:04X}  ", n * 16));
+                let (digits, text) = rest.split_at(16 * 3 + 1);
+                prop_assert_eq!(digits.replace(' ', ""), ::hex::encode_upper(chunk));
+                prop_assert_eq!(&digits[24..25], " ");
+                let shown: String = chunk
+                    .iter()
+                    .map(|&b| if (0x20..0x7F).contains(&b) { b as char } else { '.' })
+                    .collect();
+                prop_assert_eq!(text, format!("|{shown}|"));
+            }
+        }
     }
 }

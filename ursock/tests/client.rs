@@ -306,3 +306,24 @@ fn listen_log_appends() {
     );
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// Stamps in the local zone (`TZ`) with its offset, or UTC with `--utc`, as `listen`.
+#[test]
+fn times_are_local_with_their_offset_or_utc() {
+    for (utc, suffix) in [(false, "+05:30"), (true, "Z")] {
+        let (addr, _got) = device(|mut s| read_n(&mut s, 3));
+        let mut cmd = Command::new(bin());
+        cmd.args(["client", &addr, "--json", "--send", "hi", "--wait", "0.2"])
+            .env("TZ", "XST-5:30")
+            .stdin(Stdio::null());
+        if utc {
+            cmd.arg("--utc");
+        }
+        let o = cmd.output().unwrap();
+        assert!(o.status.success(), "{o:?}");
+        let first: serde_json::Value =
+            serde_json::from_str(stdout(&o).lines().next().unwrap()).unwrap();
+        let time = first["time"].as_str().unwrap();
+        assert!(time.ends_with(suffix), "--utc {utc}: {time}");
+    }
+}

@@ -233,6 +233,76 @@ fn play_runs_a_urp_whose_external_control_node_fetches_its_script() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
+/// A `.urp` whose Script line calls a URCap's function, as PolyScope saves it.
+fn urcap_urp() -> Vec<u8> {
+    use std::io::Write as _;
+    let xml = r#"<URProgram name="pick" installation="default" createdIn="5.21.0">
+  <children>
+    <MainProgram runOnlyOnce="true">
+      <children>
+        <Script type="Line"><expression>gripper_grip(40)</expression></Script>
+      </children>
+    </MainProgram>
+  </children>
+</URProgram>"#;
+    let mut gz = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::default());
+    gz.write_all(xml.as_bytes()).unwrap();
+    gz.finish().unwrap()
+}
+
+/// `--preamble`: the installation's URCap preamble runs at the top of each `.urp`
+/// program played (PolyScope writes it there), not in scripts clients send; `--set`
+/// gives what the robot senses from the start.
+#[test]
+fn a_played_urp_calls_the_preamble_and_programs_read_what_set_gave() {
+    let dir = std::env::temp_dir().join(format!("ursock-preamble-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::write(dir.join("pick.urp"), urcap_urp()).unwrap();
+    let preamble = dir.join("gripper.script");
+    std::fs::write(
+        &preamble,
+        "def gripper_grip(width):\n  textmsg(\"grip \", width)\nend\n",
+    )
+    .unwrap();
+    let c = Controller::start_with(&[
+        "--programs",
+        dir.to_str().unwrap(),
+        "--preamble",
+        preamble.to_str().unwrap(),
+        "--set",
+        "digital_in[2]=True",
+    ]);
+    c.ready();
+    let mut d = c.dashboard();
+    assert_eq!(d.ask("load pick.urp"), "Loading program: pick.urp");
+    assert_eq!(d.ask("play"), "Starting program");
+    let grip = c.wait_event("message", |v| v["event"] == "message");
+    assert_eq!(grip["text"], "grip 40", "{grip}");
+    let ended = c.wait_event("program end", |v| {
+        v["event"] == "program" && v["what"] != "started"
+    });
+    assert_eq!(ended["what"], "finished", "{ended}");
+    // A script sent on the primary port gets no preamble: refused before it starts.
+    let mut p = c.connect("primary");
+    p.write_all(b"def direct():\n  gripper_grip(10)\nend\n")
+        .unwrap();
+    let refused = c.wait_event("error", |v| {
+        v["event"] == "program" && v["what"] != "started"
+    });
+    assert!(
+        refused["text"]
+            .as_str()
+            .is_some_and(|t| t.contains("gripper_grip")),
+        "{refused}"
+    );
+    // What --set gave.
+    p.write_all(b"def sense():\n  textmsg(\"in2 \", get_standard_digital_in(2))\nend\n")
+        .unwrap();
+    let sensed = c.wait_event("message", |v| v["event"] == "message");
+    assert_eq!(sensed["text"], "in2 True", "{sensed}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 /// What a program sends just before it ends reaches the server, then the socket closes
 /// (the script manual: a program's sockets close when it ends; bytes already sent are
 /// not taken back).

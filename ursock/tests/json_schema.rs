@@ -46,6 +46,88 @@ fn type_matches(v: &Value, ty: &str) -> bool {
     }
 }
 
+/// The schema's pattern for `time`: RFC 3339, milliseconds, `Z` or a `+HH:MM` offset.
+const TIME_PATTERN: &str =
+    "^[0-9]{4}-[0-9]{2}-[0-9]{2}T[0-9]{2}:[0-9]{2}:[0-9]{2}[.][0-9]{3}(Z|[+-][0-9]{2}:[0-9]{2})$";
+
+/// [`TIME_PATTERN`], checked by hand: the shape, then that it names a real instant
+/// (jiff parses it as RFC 3339). Returns the offset part (`Z` or `+05:30`).
+fn rfc3339_millis(s: &str) -> Result<&str, String> {
+    let b = s.as_bytes();
+    let digits =
+        |r: std::ops::Range<usize>| b.get(r).is_some_and(|d| d.iter().all(u8::is_ascii_digit));
+    let shape = b.len() >= 24
+        && digits(0..4)
+        && b[4] == b'-'
+        && digits(5..7)
+        && b[7] == b'-'
+        && digits(8..10)
+        && b[10] == b'T'
+        && digits(11..13)
+        && b[13] == b':'
+        && digits(14..16)
+        && b[16] == b':'
+        && digits(17..19)
+        && b[19] == b'.'
+        && digits(20..23);
+    let offset = s.get(23..).unwrap_or("");
+    let ob = offset.as_bytes();
+    let offset_ok = offset == "Z"
+        || (ob.len() == 6
+            && (ob[0] == b'+' || ob[0] == b'-')
+            && ob[1..3].iter().all(u8::is_ascii_digit)
+            && ob[3] == b':'
+            && ob[4..6].iter().all(u8::is_ascii_digit));
+    if !shape || !offset_ok {
+        return Err(
+            "not RFC 3339 with milliseconds (YYYY-MM-DDTHH:MM:SS.mmm and Z or +HH:MM)".into(),
+        );
+    }
+    s.parse::<jiff::Timestamp>()
+        .map_err(|e| format!("not a valid instant: {e}"))?;
+    Ok(offset)
+}
+
+#[test]
+fn the_time_check_refuses_what_is_not_rfc3339() {
+    assert_eq!(rfc3339_millis("2026-11-23T21:40:01.123Z"), Ok("Z"));
+    assert_eq!(
+        rfc3339_millis("2026-11-24T03:10:01.123+05:30"),
+        Ok("+05:30")
+    );
+    for bad in [
+        "2026-11-23T21:40:01Z",
+        "2026-11-23T21:40:01.123",
+        "2026-11-23 21:40:01.123Z",
+        "2026-13-23T21:40:01.123Z",
+        "2026-11-23T21:40:01.123+0530",
+        "21:40:01.123",
+    ] {
+        assert!(rfc3339_millis(bad).is_err(), "{bad}");
+    }
+}
+
+/// `listen --json` under a fixed zone (a POSIX `TZ` string, no zone files needed): the
+/// stamps carry that zone's offset; with `--utc` they end in `Z`.
+#[test]
+fn listen_json_time_is_local_with_its_offset_or_utc() {
+    for (utc, want) in [(false, "+05:30"), (true, "Z")] {
+        let mut args = vec!["--json"];
+        if utc {
+            args.push("--utc");
+        }
+        let mut l = Listener::start_env(&[("TZ", "XST-5:30")], &args);
+        l.type_line("list");
+        let out = l.wait_for("\"list\"", false);
+        let root = schema();
+        for line in out.lines() {
+            let v = check_event(&root, line);
+            let time = v["time"].as_str().expect("listen events carry time");
+            assert_eq!(rfc3339_millis(time), Ok(want), "{line}");
+        }
+    }
+}
+
 /// The keywords the schema uses: `$ref`, `type`, `const`, `enum`, `oneOf`, `properties`,
 /// `required`, `additionalProperties: false`, `items`, `minItems`, `maxItems`, `minimum`,
 /// `maximum`, `pattern` (only `^([0-9a-f]{2})+$`). Any other keyword is an error, so the
@@ -154,6 +236,11 @@ fn validate(root: &Value, schema: &Value, v: &Value, at: &str) -> Result<(), Str
                     if !ok {
                         return Err(format!("{at}: {x} breaks {key} {bound}"));
                     }
+                }
+            }
+            "pattern" if rule == TIME_PATTERN => {
+                if let Some(s) = v.as_str() {
+                    rfc3339_millis(s).map_err(|e| format!("{at}: {s:?}: {e}"))?;
                 }
             }
             "pattern" => {
@@ -582,4 +669,37 @@ fn a_program_that_does_not_parse_reports_error_and_end_as_json() {
     );
     assert_eq!(events[1]["event"], "end");
     assert_eq!(events[1]["outcome"], "error");
+}
+
+/// The events of snippets, `@*` and `every` match the schema too (`origin` `periodic`,
+/// multi-line notes).
+#[test]
+fn listen_snippet_all_and_periodic_events_match_the_schema() {
+    let dir = std::env::temp_dir().join(format!("ursock-schema-snips-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let file = dir.join("snippets.txt");
+    std::fs::write(&file, "tick = line T\nack = text OK\\r\\n\n").unwrap();
+    let root = schema();
+    let mut l = Listener::start(&["--json", "--snippets", file.to_str().unwrap()]);
+    let mut s = robot(&l.addr);
+    l.wait_for("\"connect\"", false);
+    l.type_line("snippets");
+    l.type_line("@* $ack");
+    assert_eq!(read_line(&mut s), "OK\r\n");
+    l.type_line("every 0.02 $tick");
+    assert_eq!(read_line(&mut s), "T\n");
+    assert_eq!(read_line(&mut s), "T\n");
+    l.wait_for("\"periodic\"", false);
+    l.type_line("every off");
+    let out = l.wait_for("stopped 1 periodic sends", false);
+    let mut origins = Vec::new();
+    for line in out.lines() {
+        let v = check_event(&root, line);
+        if let Some(o) = v["origin"].as_str() {
+            origins.push(o.to_string());
+        }
+    }
+    assert!(origins.iter().any(|o| o == "periodic"), "{origins:?}");
+    assert!(out.contains("$2 ack = text OK"), "{out}");
+    let _ = std::fs::remove_dir_all(&dir);
 }

@@ -92,7 +92,7 @@ fn typed_reply_with_no_robot_is_refused_and_said() {
     // Issue 12: reply specs typed with no robot connected were dropped silently.
     let mut l = Listener::start(&[]);
     l.type_line("floats 1 2 3");
-    l.wait_for("no robot connected: nothing sent", true);
+    l.wait_for("no robot connected; nothing sent", true);
 }
 
 #[test]
@@ -584,4 +584,158 @@ fn a_log_that_cannot_be_written_is_said_once_and_the_session_goes_on() {
     let err = l.wait_for("--log: write failed", true);
     assert_eq!(err.matches("--log: write failed").count(), 1, "{err}");
     assert_eq!(ask(&l.addr, "GET A\n"), "A 1\n");
+}
+
+/// A snippets file in the temp dir, removed on drop.
+struct TempFile(std::path::PathBuf);
+
+impl TempFile {
+    fn new(name: &str, text: &str) -> TempFile {
+        let p = std::env::temp_dir().join(format!("ursock-{}-{name}", std::process::id()));
+        std::fs::write(&p, text).unwrap();
+        TempFile(p)
+    }
+
+    fn path(&self) -> &str {
+        self.0.to_str().unwrap()
+    }
+}
+
+impl Drop for TempFile {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_file(&self.0);
+    }
+}
+
+#[test]
+fn send_to_all_reaches_every_robot_and_says_so_per_robot() {
+    let mut l = Listener::start(&[]);
+    let mut a = robot(&l.addr);
+    let mut b = robot(&l.addr);
+    l.wait_for("[#2] ", false);
+    // Without a target, two robots are still refused, and the message names @*.
+    l.type_line("line hi");
+    l.wait_for("or @* line hi for all; nothing sent", true);
+    l.type_line("@* line hi");
+    assert_eq!(read_line(&mut a), "hi\n");
+    assert_eq!(read_line(&mut b), "hi\n");
+    l.wait_for("sent 3 bytes to 2 of 2 robots (#1 #2)", false);
+    l.type_line("all hex 41 0a");
+    assert_eq!(read_line(&mut a), "A\n");
+    assert_eq!(read_line(&mut b), "A\n");
+    l.wait_for("sent 2 bytes to 2 of 2 robots (#1 #2)", false);
+    // With every robot gone, there is nobody to send to.
+    drop((a, b));
+    let start = std::time::Instant::now();
+    while l.stdout().matches("closed (").count() < 2 {
+        assert!(start.elapsed() < listen_common::WAIT, "{}", l.stdout());
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    l.type_line("@* line x");
+    l.wait_for("no robot connected; nothing sent", true);
+}
+
+#[test]
+fn send_to_all_reports_a_robot_that_got_nothing() {
+    let mut l = Listener::start(&["--max-queue", "4"]);
+    let mut a = robot(&l.addr);
+    l.wait_for("[#1] ", false);
+    l.type_line("@* line 12345678");
+    l.wait_for(
+        "sent 9 bytes to 0 of 1 robots; not sent to #1: larger than --max-queue 4",
+        false,
+    );
+    l.type_line("@* line 12");
+    assert_eq!(read_line(&mut a), "12\n");
+}
+
+#[test]
+fn snippets_are_sent_by_name_or_number() {
+    let f = TempFile::new(
+        "snips.txt",
+        "# camera answers\npose = floats 0.4 -0.2 0.3\nack  = text OK\\r\\n\n",
+    );
+    let mut l = Listener::start(&["--snippets", f.path()]);
+    let mut a = robot(&l.addr);
+    l.wait_for("[#1] ", false);
+    l.type_line("$pose");
+    assert_eq!(read_n(&mut a, 14), b"(0.4,-0.2,0.3)");
+    l.type_line("@1 $2");
+    assert_eq!(read_n(&mut a, 4), b"OK\r\n");
+    l.type_line("$nope");
+    l.wait_for(
+        "$nope: no such snippet (1..2 or a name; `snippets` lists them); nothing sent",
+        true,
+    );
+    l.type_line("snippets");
+    l.wait_for("$2 ack = text OK\\r\\n", false);
+    let mut b = robot(&l.addr);
+    l.wait_for("[#2] ", false);
+    l.type_line("@* $ack");
+    assert_eq!(read_n(&mut a, 4), b"OK\r\n");
+    assert_eq!(read_n(&mut b, 4), b"OK\r\n");
+}
+
+#[test]
+fn a_bad_snippets_file_is_refused_naming_the_line() {
+    let f = TempFile::new("bad-snips.txt", "ok = line a\n\nbad = floatz 1\n");
+    let out = std::process::Command::new(listen_common::bin())
+        .args([
+            "listen",
+            "--bind",
+            "127.0.0.1",
+            "--port",
+            "0",
+            "--snippets",
+            f.path(),
+        ])
+        .output()
+        .unwrap();
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains(&format!(
+            "--snippets {}: line 3 (bad): unknown reply format \"floatz\"",
+            f.path()
+        )),
+        "{err}"
+    );
+}
+
+#[test]
+fn every_sends_periodically_until_stopped_or_the_robot_leaves() {
+    let f = TempFile::new("every.txt", "tick = line T\n");
+    let mut l = Listener::start(&["--snippets", f.path()]);
+    let mut a = robot(&l.addr);
+    l.wait_for("[#1] ", false);
+    l.type_line("every 0.001 $tick");
+    l.wait_for(
+        "every 0.001: the period must be 0.01 to 86400 s; nothing started",
+        true,
+    );
+    l.type_line("every 1e30 $tick");
+    l.wait_for("every 1e30: the period must be 0.01 to 86400 s", true);
+    l.type_line("every -1 $tick");
+    l.wait_for("every -1: the period must be", true);
+    l.type_line("every soon $tick");
+    l.wait_for("every soon: not a number of seconds", true);
+    l.type_line("every 0.5");
+    l.wait_for("expected every SECONDS [@N|@*] $NAME", true);
+    l.type_line("every 0.02 $tick");
+    l.wait_for("job 1 started: every 0.02 s to #1: $tick", false);
+    for _ in 0..3 {
+        assert_eq!(read_line(&mut a), "T\n");
+    }
+    l.type_line("every");
+    l.wait_for("job 1: every 0.02 s to #1: $tick", false);
+    l.type_line("every off");
+    l.wait_for("stopped 1 periodic sends", false);
+    // A job bound to a robot ends when the robot leaves, and says so.
+    l.type_line("every 0.02 $tick");
+    l.wait_for("job 2 started", false);
+    assert_eq!(read_line(&mut a), "T\n");
+    drop(a);
+    l.wait_for("job 2 stopped: connection #1 is gone", false);
+    l.type_line("every");
+    l.wait_for("no periodic sends", false);
 }

@@ -236,13 +236,16 @@ impl Loop {
     }
 
     fn read_clients(&mut self, shared: &Shared) {
+        // The buffer is lent out while `received` (which needs `&mut self`) runs: no
+        // copy of the bytes per read.
+        let mut buf = std::mem::take(&mut self.buf);
         for i in 0..self.clients.len() {
             loop {
                 let c = &mut self.clients[i];
                 if c.gone.is_some() {
                     break;
                 }
-                let n = match c.stream.read(&mut self.buf) {
+                let n = match c.stream.read(&mut buf) {
                     Ok(0) => {
                         c.gone = Some("client closed");
                         break;
@@ -256,13 +259,13 @@ impl Loop {
                     }
                 };
                 c.rx += n as u64;
-                let bytes = self.buf[..n].to_vec();
-                self.received(shared, i, &bytes);
-                if n < self.buf.len() {
+                self.received(shared, i, &buf[..n]);
+                if n < buf.len() {
                     break;
                 }
             }
         }
+        self.buf = buf;
     }
 
     /// Bytes from client `i`.

@@ -18,6 +18,18 @@
 //!   accelerations of the motion under way ([`Arm::qdd`](crate::Arm::qdd)); the virtual
 //!   arm follows its target exactly, so both are the same.
 //!
+//! - `estimate_payload(poses, wrenches)`: `struct(mass, cog)` from the wrenches gravity
+//!   puts on the payload at four or more TCP poses
+//!   ([`dynamics::estimate_payload`]):
+//!   `mass` in kg, `cog` `[x, y, z]` in m from the flange in the flange's axes (as
+//!   `set_target_payload` takes it). The poses are TCP poses, as the manual asks
+//!   (`get_actual_tcp_pose()`): the active TCP's rotation is taken off each to get the
+//!   flange's orientation (with a TCP that only shifts the tool, they are the same).
+//!   Each wrench is at the flange in the base's axes (`get_tcp_force()`). The manual's
+//!   refusals (fewer than 4 poses, a wrench count that differs, two orientations closer
+//!   than π/(2n)) are runtime errors, as is more than [`MAX_PAYLOAD_POSES`] poses (our
+//!   bound: the check compares every pair).
+//!
 //! An arm whose DH parameters are not one of [`MODELS`]'s has no dynamics parameters:
 //! the dynamics functions are then a runtime error.
 
@@ -29,6 +41,11 @@ use crate::kinematics::{self, Model, MODELS};
 use crate::value::Value;
 
 const NONE: &[super::Param] = &[];
+
+/// The most poses `estimate_payload` takes. Its orientation check compares every pair
+/// (about 27 multiply-adds each): 500 poses are about 3.4 M, under the 4 M a matrix
+/// product may take, so one call stays well within a step.
+pub const MAX_PAYLOAD_POSES: usize = 500;
 
 pub(super) const TABLE: &[Builtin] = &[
     Builtin::new(
@@ -65,6 +82,13 @@ pub(super) const TABLE: &[Builtin] = &[
         &[opt("q", Default::Absent), opt("qd", Default::Absent)],
         "The Coriolis and centrifugal joint torques at q moving at qd (defaults: the joints and joint speeds now).",
         coriolis,
+    ),
+    Builtin::new(
+        "estimate_payload",
+        Domain::Motion,
+        &[super::req("poses"), super::req("wrenches")],
+        "struct(mass, cog): the payload whose weight explains the wrenches measured at the TCP poses (at least 4, orientations pi/(2n) apart).",
+        estimate_payload,
     ),
     Builtin::new(
         "get_target_joint_accelerations",
@@ -154,4 +178,62 @@ fn coriolis(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
 
 fn accelerations(c: &mut Controller, _: &mut Args) -> Result<Out, Fault> {
     Ok(Out::Value(floats(c.arm.qdd)))
+}
+
+/// Argument `i` as a list of 6-number items (poses, or lists of 6 numbers).
+fn sixes(a: &Args, i: usize, what: &str) -> Result<Vec<[f64; 6]>, Fault> {
+    let Value::List(items) = &a.v[i] else {
+        return Err(a.bad(i, what));
+    };
+    if items.len() > MAX_PAYLOAD_POSES {
+        return Err(Fault::from(format!(
+            "`{}`: {} items in `{}`, at most {MAX_PAYLOAD_POSES}",
+            a.name,
+            items.len(),
+            a.params[i].name
+        )));
+    }
+    items
+        .iter()
+        .enumerate()
+        .map(|(k, x)| match x {
+            Value::Pose(p) => Ok(*p),
+            Value::List(v) if v.len() == 6 => {
+                let mut out = [0.0; 6];
+                for (o, n) in out.iter_mut().zip(v) {
+                    *o = n.as_f64().ok_or_else(|| bad_item(a, i, k, x))?;
+                }
+                Ok(out)
+            }
+            _ => Err(bad_item(a, i, k, x)),
+        })
+        .collect()
+}
+
+fn bad_item(a: &Args, i: usize, k: usize, x: &Value) -> Fault {
+    Fault::type_error(format!(
+        "type error: `{}` argument `{}` needs 6 numbers in each item, item {k} is {} {}",
+        a.name,
+        a.params[i].name,
+        x.type_name(),
+        x.to_source()
+    ))
+}
+
+fn estimate_payload(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+    let poses = sixes(a, 0, "a list of poses")?;
+    let wrenches = sixes(a, 1, "a list of wrenches")?;
+    // The flange's orientation: the TCP pose composed with the inverse of the TCP's
+    // rotation (its offset does not change the orientation).
+    let tcp_rot_inv = crate::pose::inv([0.0, 0.0, 0.0, c.arm.tcp[3], c.arm.tcp[4], c.arm.tcp[5]]);
+    let flanges: Vec<[f64; 6]> = poses
+        .iter()
+        .map(|p| crate::pose::trans(*p, tcp_rot_inv))
+        .collect();
+    let (mass, cog) = dynamics::estimate_payload(&flanges, &wrenches, c.arm.gravity)
+        .map_err(|e| Fault::from(format!("`estimate_payload`: {e}")))?;
+    Ok(Out::Value(Value::Struct(vec![
+        ("mass".to_string(), Value::Float(mass)),
+        ("cog".to_string(), float_list(&cog)),
+    ])))
 }

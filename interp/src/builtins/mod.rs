@@ -10,7 +10,7 @@
 //! | --- | --- |
 //! | [`sockets`] | every `socket_*` function of the e-Series 5.x manual |
 //! | [`motion`] | moves, servo/speed control, the arm's state, settings of the arm |
-//! | [`dynamics`] | the arm's model: Jacobians, mass matrix, Coriolis torques, joint accelerations |
+//! | [`dynamics`] | the arm's model: Jacobians, mass matrix, Coriolis torques, joint accelerations, `estimate_payload` |
 //! | [`conveyor`] | conveyor tracking and its encoders (the motion chapter; no conveyor) |
 //! | [`io`] | digital/analog I/O, tool I/O, flags, the RTDE registers, Modbus, I/O configuration |
 //! | [`rtde`] | `get_rtde_value`: RTDE output fields from the virtual arm's state |
@@ -19,7 +19,7 @@
 //! | [`poses`] | pose arithmetic, rotation vectors and RPY, wrenches, kinematics |
 //! | [`rpc`] | `rpc_factory`: XML-RPC handles (the Interfaces chapter) |
 //! | [`messages`] | `textmsg`, `varmsg`, `popup` |
-//! | [`time`] | `sync`, `sleep`, `get_steptime` |
+//! | [`time`] | `sync`, `sleep`, `get_steptime`, `time` |
 //! | [`interpreter`] | `interpreter_mode`, `end_interpreter`, `clear_interpreter` |
 //!
 //! ## The virtual arm

@@ -11,7 +11,10 @@
 //!   as mode 0). `t > 0` stretches the profile to take `t`. `optimovej`/`optimovel`: like
 //!   `movej`/`movel` (their `a`, `v` are fractions on the robot; here they are taken as
 //!   speeds). A target given as a pose is reached through inverse kinematics nearest the
-//!   joints the move starts from (out of reach: a runtime error before the arm moves).
+//!   joints the move starts from (out of reach: for `movej` a runtime error before the
+//!   arm moves; for `movel`/`movep`/`movec` the tool sets off along its path and stops
+//!   where the path leaves the arm's reach, with a protective stop, `Arm::protective_stop`,
+//!   as a real arm stops when the line runs it into a singularity).
 //!   Every motion takes at least one step; with `r = 0` the arm is exactly at the target,
 //!   at rest, in the step the move returns.
 //! - Blend radius `r > 0` (m; negative is a runtime error): the move returns where the
@@ -793,6 +796,23 @@ fn target(
     }
 }
 
+/// [`target`] of a straight or circular tool move: a pose out of reach is no error
+/// here. The tool sets off along its path and, where the path leaves the arm's reach,
+/// stops with a protective stop (as a real arm stops when the line runs it into a
+/// singularity); the joints returned are then the move's start, which do not reach
+/// the pose.
+fn tool_target(
+    c: &Controller,
+    name: &str,
+    v: &Value,
+    six: [f64; 6],
+) -> Result<([f64; 6], [f64; 6]), Fault> {
+    match target(c, name, v, six) {
+        Err(_) if matches!(v, Value::Pose(_)) => Ok((c.move_start().0, six)),
+        other => other,
+    }
+}
+
 /// The blend radius argument `r` (m): not negative.
 fn radius(a: &Args, i: usize) -> Result<f64, Fault> {
     let r = a.num(i)?;
@@ -861,8 +881,13 @@ fn movej(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
     // movep and optimove* have no `t`; `r` is last.
     let t = if a.params.len() == 5 { a.num(3)? } else { 0.0 };
     let r = radius(a, a.params.len() - 1)?;
-    let (q1, pose) = target(c, a.name, &a.v[0], six)?;
-    let back = if matches!(a.name, "movej" | "optimovej") {
+    let joint_move = matches!(a.name, "movej" | "optimovej");
+    let (q1, pose) = if joint_move {
+        target(c, a.name, &a.v[0], six)?
+    } else {
+        tool_target(c, a.name, &a.v[0], six)?
+    };
+    let back = if joint_move {
         let q0 = c.move_start().0;
         let profile = Profile::new(joint_distance(q0, q1), speed, accel, t);
         let tcp = c.arm.tcp;
@@ -887,7 +912,7 @@ fn movec(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
     let six = a.six(1)?;
     let (accel, speed) = (a.num(2)?, a.num(3)?);
     let r = radius(a, 4)?;
-    let (q1, pose) = target(c, a.name, &a.v[1], six)?;
+    let (q1, pose) = tool_target(c, a.name, &a.v[1], six)?;
     let given = !matches!(a.v[1], Value::Pose(_));
     let back = tool_move(c, Some(via), pose, (q1, given), (accel, speed, 0.0, r));
     Ok(Out::Wait(back, Value::None))

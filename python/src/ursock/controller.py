@@ -18,6 +18,7 @@ import time
 from typing import IO, Any, Dict, List, Mapping, Optional, Sequence, Tuple, Union
 
 from ._binary import binary, help_text
+from .robot import urscript_constant
 
 __all__ = ["ControllerError", "DashboardClient", "UrController", "SERVERS"]
 
@@ -163,6 +164,10 @@ class UrController:
     :param polyscope: the PolyScope version it reports (``--polyscope``).
     :param programs: a directory of programs ``load`` finds (``--programs``).
     :param local: start in local control (``--local``).
+    :param preamble: files of the installation's URCap preamble, run in each ``.urp``
+        program played (``--preamble``).
+    :param world: what the robot senses from the start, by ``--set`` name:
+        ``{"digital_in[3]": True}``.
     :param extra_args: more ``ursock controller`` options, passed as they are.
     :param all_servers: also start every other server (primary, secondary, real-time,
         RTDE) that this ``ursock`` has, each on a free port.
@@ -177,6 +182,8 @@ class UrController:
         polyscope: Optional[str] = None,
         programs: Optional[Union[str, "os.PathLike[str]"]] = None,
         local: bool = False,
+        preamble: Sequence[Union[str, "os.PathLike[str]"]] = (),
+        world: Optional[Mapping[str, Any]] = None,
         extra_args: Sequence[str] = (),
         all_servers: bool = True,
         startup_timeout: float = 20.0,
@@ -187,6 +194,8 @@ class UrController:
         self._polyscope = polyscope
         self._programs = programs
         self._local = local
+        self._preamble = [os.fspath(p) for p in preamble]
+        self._world = dict(world or {})
         self._extra_args = list(extra_args)
         self._all_servers = all_servers
         self._startup_timeout = startup_timeout
@@ -235,6 +244,10 @@ class UrController:
             cmd += ["--programs", os.fspath(self._programs)]
         if self._local:
             cmd.append("--local")
+        for path in self._preamble:
+            cmd += ["--preamble", path]
+        for name, value in self._world.items():
+            cmd += ["--set", f"{name}={urscript_constant(value)}"]
         cmd += self._extra_args
         self.command = cmd
         self._proc = subprocess.Popen(

@@ -67,6 +67,14 @@ pub struct ControllerOptions {
     /// stop`, `emergency stop`, `release`, `local`, `remote`, `state`, `help`, ...)
     #[arg(long)]
     pub local: bool,
+    /// A URCap's installation preamble, written (as PolyScope does) at the top of every
+    /// `.urp` program played; scripts clients send get none. Repeatable, in order.
+    #[arg(long, value_name = "FILE")]
+    pub preamble: Vec<PathBuf>,
+    /// What the robot senses from the start: `digital_in[3]=True`, `tcp_force=[...]`,
+    /// `joint_temp[0]=41`... (`ursock robot --set help` lists every name). Repeatable.
+    #[arg(long, value_name = "NAME=VALUE")]
+    pub set: Vec<String>,
     /// One JSON event per line (docs/json-events.md): `listening`, then `connect`,
     /// `dashboard` (each command and its reply) and `close` for every client.
     #[arg(long)]
@@ -190,6 +198,10 @@ pub fn run(opts: ControllerOptions) -> Result<(), String> {
         None => None,
         Some(h) => Some(parse_host(h).map_err(|e| format!("--urcap-host {h}: {e}"))?),
     };
+    let preamble = crate::script::read_preambles(&opts.preamble)?;
+    let Some(world) = crate::script::world_from_settings(&opts.set)? else {
+        return Ok(());
+    };
     let stream = |port: u16| (!opts.no_streams).then_some(port);
     let options = ServerOptions {
         bind: opts.bind.clone(),
@@ -236,6 +248,10 @@ pub fn run(opts: ControllerOptions) -> Result<(), String> {
             e.to_string()
         }
     })?;
+    server.with_cell(|cell, _| {
+        cell.set_preamble(preamble);
+        *cell.world_mut() = world;
+    });
     let server = std::sync::Arc::new(server);
     {
         let server = std::sync::Arc::clone(&server);

@@ -13,6 +13,7 @@ pub mod out;
 /// The human view of any report event (shared with `controller`).
 pub(crate) use out::human;
 mod rules;
+mod snippets;
 mod spec;
 mod tui;
 
@@ -126,7 +127,8 @@ pub struct ListenOptions {
     #[arg(long, default_value_t = DEFAULT_SHOW_MAX)]
     pub show_max: usize,
     /// Append the whole session (every line, or every JSON event) to FILE; an existing
-    /// FILE is kept and added to, never overwritten. Times are UTC.
+    /// FILE is kept and added to, never overwritten. Times as on screen (local, or
+    /// UTC with --utc).
     #[arg(long)]
     pub log: Option<PathBuf>,
     /// One JSON event per line on stdout (listening, connect, rx, decoded, tx, close,
@@ -138,10 +140,22 @@ pub struct ListenOptions {
     #[arg(long, short)]
     pub quiet: bool,
     /// A terminal UI: the connections (Up/Down selects), the selected one's traffic
-    /// decoded as it arrives, and an input line sending a reply spec to it (Enter);
-    /// Esc quits.
+    /// decoded as it arrives (a scrollback of 2000 lines per robot: PgUp/PgDn/Home/End,
+    /// the mouse wheel after F12),
+    /// and an input line sending a reply spec or $snippet to it (Enter) or to every robot
+    /// (Alt+Enter); F2..F9 send snippets 1..8; F1 or ? shows every key and command; Esc
+    /// quits.
     #[arg(long)]
     pub tui: bool,
+    /// Wall-clock times in UTC (JSON `time` ends in `Z`) instead of the local time zone
+    /// (`TZ`, else /etc/localtime; JSON `time` is RFC 3339 with the local offset).
+    #[arg(long)]
+    pub utc: bool,
+    /// Named replies, one `NAME = REPLY-SPEC` a line (`#` comments), checked at start:
+    /// `$NAME` or `$N` sends one (`@2 $pose`, `@* $pose`), `every SECONDS $NAME` sends it
+    /// periodically, F2..F9 in --tui send the first eight to the selected robot.
+    #[arg(long, value_name = "FILE")]
+    pub snippets: Option<PathBuf>,
 }
 
 struct Shared {
@@ -150,6 +164,10 @@ struct Shared {
     delimiter: Vec<u8>,
     reply: Option<Reply>,
     rules: Vec<rules::Rule>,
+    snippets: Vec<snippets::Snippet>,
+    /// Periodic sends (`every`), by job number; at most [`MAX_PERIODIC`].
+    periodic: Mutex<BTreeMap<u64, Periodic>>,
+    next_job: AtomicU64,
     robot_reads: Option<ReadCall>,
     max_connections: usize,
     /// Idle time after which a connection may be evicted (`None`: never).
@@ -170,6 +188,20 @@ struct Shared {
 
 /// What the writer task shares with the rest (never the queue's sender, so the queue
 /// closes when the connection is forgotten).
+/// Periodic sends running at once (`every`).
+pub const MAX_PERIODIC: usize = 16;
+/// The shortest period of `every` (a robot polling faster is better served by --reply).
+pub const MIN_PERIOD: Duration = Duration::from_millis(10);
+/// The longest period of `every`: a day (far longer ones would overflow the timer's
+/// deadline arithmetic).
+pub const MAX_PERIOD: Duration = Duration::from_secs(86_400);
+
+/// One `every` job: what it sends, and the task to stop.
+struct Periodic {
+    what: String,
+    task: tokio::task::AbortHandle,
+}
+
 struct Stats {
     queued: AtomicUsize,
     rx_bytes: AtomicU64,
@@ -254,6 +286,10 @@ pub fn listen(opts: ListenOptions) -> Result<(), String> {
         Some(p) => rules::load(p)?,
         None => Vec::new(),
     };
+    let snippets = match &opts.snippets {
+        Some(p) => snippets::load(p)?,
+        None => Vec::new(),
+    };
     let robot_reads = match &opts.robot_reads {
         Some(s) => Some(diagnose::parse_robot_reads(s)?),
         None => None,
@@ -287,17 +323,14 @@ pub fn listen(opts: ListenOptions) -> Result<(), String> {
     if opts.tui && opts.json {
         return Err("--tui and --json: choose one (the log can still be JSON-free --log)".into());
     }
-    let out = Out::new(opts.json, opts.quiet, log, opts.tui, opts.show_max);
+    let out = Out::new(opts.json, opts.quiet, log, opts.tui, opts.show_max).with_utc(opts.utc);
     let listening = Event::Listening(report::Listening {
         t: now(),
         addr: addr.to_string(),
         service: None,
     });
     if opts.json {
-        let since_epoch = std::time::SystemTime::now()
-            .duration_since(std::time::UNIX_EPOCH)
-            .unwrap_or_default();
-        out.stdout_line(&out.json_line(&listening, since_epoch));
+        out.stdout_line(&out.json_line(&listening, jiff::Timestamp::now()));
     } else {
         out.stdout_line(&out::human(&listening, opts.show_max).join("\n"));
     }
@@ -330,6 +363,9 @@ pub fn listen(opts: ListenOptions) -> Result<(), String> {
         delimiter,
         reply,
         rules,
+        snippets,
+        periodic: Mutex::new(BTreeMap::new()),
+        next_job: AtomicU64::new(0),
         robot_reads,
         max_connections: opts.max_connections,
         evict_idle: (opts.evict_idle > 0.0)
@@ -610,8 +646,55 @@ fn evict_idlest(shared: &Shared) -> bool {
     }
 }
 
-/// One typed line: `list`, `close N`, `help`, `[@N] REPLY-SPEC`.
-fn operator(shared: &Shared, line: &str) {
+/// Who a typed send goes to.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Target {
+    /// `@N`: connection N.
+    One(u64),
+    /// `@*` or `all`: every connected robot.
+    All,
+    /// No prefix: the only connected robot (several: an error naming them).
+    Only,
+}
+
+/// Splits `@N BODY`, `@* BODY`, `all BODY` or `BODY`.
+fn split_target(line: &str) -> Result<(Target, &str), String> {
+    if let Some(rest) = line.strip_prefix("all ") {
+        return Ok((Target::All, rest.trim_start()));
+    }
+    let Some(rest) = line.strip_prefix('@') else {
+        return Ok((Target::Only, line));
+    };
+    let (n, body) = rest.split_once(char::is_whitespace).unwrap_or((rest, ""));
+    let body = body.trim_start();
+    if n == "*" {
+        return Ok((Target::All, body));
+    }
+    n.parse::<u64>()
+        .map(|n| (Target::One(n), body))
+        .map_err(|_| format!("@{n}: expected a connection number or *, e.g. @2 floats 1 2 3"))
+}
+
+/// The lines of `help` (and of the terminal UI's help pane, after its keys).
+pub(crate) fn help_lines() -> Vec<String> {
+    vec![
+        format!("REPLY-SPEC        send to the only robot; formats: {}", spec::formats()),
+        "                  e.g. floats 1 2 3 | line OK | text OK\\r\\n | hex 02 41 03".into(),
+        "@N REPLY-SPEC     send to connection N".into(),
+        "@* REPLY-SPEC     send to every connected robot (also: all REPLY-SPEC); a line names each robot and what became of its copy".into(),
+        "$NAME or $N       send a --snippets snippet (by name or number), e.g. @2 $pose, @* $pose".into(),
+        "snippets          list the snippets with their numbers".into(),
+        format!("every SECONDS [@N|@*] $NAME|SPEC   send it periodically ({} to {} s apart, at most {MAX_PERIODIC} at once)", MIN_PERIOD.as_secs_f64(), MAX_PERIOD.as_secs_f64()),
+        "every             list the periodic sends; every off [J]: stop all of them, or job J".into(),
+        "list              the connections and the number of variables".into(),
+        "close N           close connection N".into(),
+        "help              this".into(),
+    ]
+}
+
+/// One typed line: `list`, `close N`, `help`, `snippets`, `every ...`, `[@N|@*] BODY`
+/// where BODY is a reply spec or `$SNIPPET`.
+fn operator(shared: &Arc<Shared>, line: &str) {
     let line = line.trim();
     if line.is_empty() {
         return;
@@ -627,6 +710,11 @@ fn operator(shared: &Shared, line: &str) {
             }),
         )
     };
+    let note = |text: String| {
+        shared
+            .out
+            .emit(Kind::Note, Event::Note(report::Note { t: now(), text }))
+    };
     let conns: Vec<Arc<Conn>> = shared
         .conns
         .lock()
@@ -639,12 +727,23 @@ fn operator(shared: &Shared, line: &str) {
             Kind::Note,
             Event::Help(report::Note {
                 t: now(),
-                text: format!(
-                    "type a reply spec ({}), `@N SPEC` for connection N, `list`, `close N`",
-                    spec::formats()
-                ),
+                text: help_lines().join("\n"),
             }),
         );
+        return;
+    }
+    if line == "snippets" {
+        if shared.snippets.is_empty() {
+            note("no snippets loaded (start with --snippets FILE)".into());
+        } else {
+            let lines: Vec<String> = shared
+                .snippets
+                .iter()
+                .enumerate()
+                .map(|(i, s)| format!("${} {} = {}", i + 1, s.name, s.spec))
+                .collect();
+            note(lines.join("\n"));
+        }
         return;
     }
     if line == "list" {
@@ -681,68 +780,243 @@ fn operator(shared: &Shared, line: &str) {
         }
         return;
     }
-    let (target, spec_text) = match line.strip_prefix('@') {
-        Some(rest) => {
-            let (n, s) = rest.split_once(char::is_whitespace).unwrap_or((rest, ""));
-            match n.parse::<u64>() {
-                Ok(n) => (Some(n), s),
-                Err(_) => {
-                    error(format!(
-                        "@{n}: expected a connection number, e.g. @2 floats 1 2 3"
-                    ));
-                    return;
-                }
-            }
+    if line == "every" || line.starts_with("every ") {
+        if let Err(e) = every(shared, line["every".len()..].trim(), &conns) {
+            error(e);
         }
-        None => (None, line),
+        return;
+    }
+    let (target, body) = match split_target(line) {
+        Ok(t) => t,
+        Err(e) => return error(e),
     };
-    let reply = match spec::parse(spec_text) {
+    let reply = match body_reply(shared, body) {
         Ok(r) => r,
-        Err(e) => {
-            error(format!("{e}; nothing sent"));
-            return;
-        }
+        Err(e) => return error(format!("{e}; nothing sent")),
     };
-    let conn = match target {
-        Some(n) => match conns.iter().find(|c| c.id == n) {
-            Some(c) => c,
+    match resolve(&conns, target, body) {
+        Ok(Some(conn)) => {
+            let _ = send(shared, conn, &reply, "operator");
+        }
+        Ok(None) => note(send_all(shared, &conns, &reply, "operator")),
+        Err(e) => error(format!("{e}; nothing sent")),
+    }
+}
+
+/// A body: `$SNIPPET` or a reply spec.
+fn body_reply(shared: &Shared, body: &str) -> Result<Reply, String> {
+    match body.strip_prefix('$') {
+        Some(key) => snippets::find(&shared.snippets, key.trim()).map(|s| s.reply.clone()),
+        None => spec::parse(body),
+    }
+}
+
+/// The one connection a target names (`None`: every one, for [`Target::All`]).
+fn resolve<'a>(
+    conns: &'a [Arc<Conn>],
+    target: Target,
+    body: &str,
+) -> Result<Option<&'a Arc<Conn>>, String> {
+    match target {
+        Target::All if conns.is_empty() => Err("no robot connected".into()),
+        Target::All => Ok(None),
+        Target::One(n) => match conns.iter().find(|c| c.id == n) {
+            Some(c) => Ok(Some(c)),
             None => {
                 let ids: Vec<String> = conns.iter().map(|c| format!("#{}", c.id)).collect();
-                error(format!(
-                    "no connection #{n} (connected: {}); nothing sent",
+                Err(format!(
+                    "no connection #{n} (connected: {})",
                     if ids.is_empty() {
                         "none".into()
                     } else {
                         ids.join(" ")
                     }
-                ));
-                return;
+                ))
             }
         },
-        None => match conns.as_slice() {
-            [] => {
-                error("no robot connected: nothing sent".into());
-                return;
-            }
-            [c] => c,
+        Target::Only => match conns {
+            [] => Err("no robot connected".into()),
+            [c] => Ok(Some(c)),
             many => {
                 let ids: Vec<String> = many.iter().map(|c| format!("@{}", c.id)).collect();
-                error(format!(
-                    "{} robots connected ({}): say which, e.g. {} {spec_text}; nothing sent",
+                Err(format!(
+                    "{} robots connected ({}): say which, e.g. {} {body}, or @* {body} for all",
                     many.len(),
                     ids.join(" "),
                     ids[0]
-                ));
-                return;
+                ))
             }
         },
+    }
+}
+
+/// Sends to every connection in `conns`; the summary names each robot and what became
+/// of its copy.
+fn send_all(shared: &Shared, conns: &[Arc<Conn>], reply: &Reply, origin: &str) -> String {
+    let mut sent = Vec::new();
+    let mut failed = Vec::new();
+    for c in conns {
+        match send(shared, c, reply, origin) {
+            Ok(()) => sent.push(format!("#{}", c.id)),
+            Err(e) => failed.push(format!("#{}: {e}", c.id)),
+        }
+    }
+    let mut text = format!(
+        "sent {} bytes to {} of {} robots",
+        reply.bytes.len(),
+        sent.len(),
+        conns.len()
+    );
+    if !sent.is_empty() {
+        text.push_str(&format!(" ({})", sent.join(" ")));
+    }
+    if !failed.is_empty() {
+        text.push_str(&format!("; not sent to {}", failed.join("; ")));
+    }
+    text
+}
+
+/// `every`: list, `off [J]`, or `SECONDS [@N|@*] BODY` (a new periodic send).
+fn every(shared: &Arc<Shared>, args: &str, conns: &[Arc<Conn>]) -> Result<(), String> {
+    let note = |text: String| {
+        shared
+            .out
+            .emit(Kind::Note, Event::Note(report::Note { t: now(), text }))
     };
-    send(shared, conn, &reply, "operator");
+    let mut jobs = shared.periodic.lock().unwrap_or_else(|p| p.into_inner());
+    jobs.retain(|_, j| !j.task.is_finished());
+    if args.is_empty() {
+        if jobs.is_empty() {
+            note("no periodic sends (every SECONDS $NAME starts one)".into());
+        } else {
+            let lines: Vec<String> = jobs
+                .iter()
+                .map(|(n, j)| format!("job {n}: {}", j.what))
+                .collect();
+            note(lines.join("\n"));
+        }
+        return Ok(());
+    }
+    if let Some(which) = args.strip_prefix("off") {
+        let which = which.trim();
+        if which.is_empty() {
+            let n = jobs.len();
+            for (_, j) in std::mem::take(&mut *jobs) {
+                j.task.abort();
+            }
+            note(format!("stopped {n} periodic sends"));
+            return Ok(());
+        }
+        let job = which
+            .parse::<u64>()
+            .ok()
+            .and_then(|n| jobs.remove(&n).map(|j| (n, j)))
+            .ok_or_else(|| format!("every off {which}: no such job (`every` lists them)"))?;
+        job.1.task.abort();
+        note(format!("stopped job {}: {}", job.0, job.1.what));
+        return Ok(());
+    }
+    let usage = "expected every SECONDS [@N|@*] $NAME (or a reply spec), e.g. every 0.5 $pose";
+    let (secs, rest) = args.split_once(char::is_whitespace).ok_or(usage)?;
+    let seconds = secs
+        .parse::<f64>()
+        .ok()
+        .filter(|s| s.is_finite())
+        .ok_or_else(|| format!("every {secs}: not a number of seconds; {usage}"))?;
+    let (min, max) = (MIN_PERIOD.as_secs_f64(), MAX_PERIOD.as_secs_f64());
+    if !(min..=max).contains(&seconds) {
+        return Err(format!(
+            "every {secs}: the period must be {min} to {max} s; nothing started"
+        ));
+    }
+    let period = Duration::from_secs_f64(seconds);
+    let (target, body) = split_target(rest.trim())?;
+    let reply = body_reply(shared, body).map_err(|e| format!("{e}; nothing started"))?;
+    // No prefix: the robot connected now, for the job's whole life.
+    let target = match resolve(conns, target, body) {
+        Ok(Some(c)) => Target::One(c.id),
+        Ok(None) => Target::All,
+        Err(e) => return Err(format!("{e}; nothing started")),
+    };
+    if jobs.len() >= MAX_PERIODIC {
+        return Err(format!(
+            "{MAX_PERIODIC} periodic sends already run (`every off` stops them); nothing started"
+        ));
+    }
+    let job = shared.next_job.fetch_add(1, Ordering::Relaxed) + 1;
+    let to = match target {
+        Target::One(n) => format!("#{n}"),
+        _ => "every robot".into(),
+    };
+    let what = format!("every {} s to {to}: {body}", period.as_secs_f64());
+    let task =
+        tokio::spawn(periodic(Arc::clone(shared), job, target, reply, period)).abort_handle();
+    jobs.insert(
+        job,
+        Periodic {
+            what: what.clone(),
+            task,
+        },
+    );
+    drop(jobs);
+    note(format!(
+        "job {job} started: {what} (every off {job} stops it)"
+    ));
+    Ok(())
+}
+
+/// The task of one `every` job: sends at each period until stopped, or until its one
+/// robot is gone or dropped (then it says so and ends).
+async fn periodic(shared: Arc<Shared>, job: u64, target: Target, reply: Reply, period: Duration) {
+    let mut tick = tokio::time::interval(period);
+    // A late tick is not made up for with a burst.
+    tick.set_missed_tick_behavior(tokio::time::MissedTickBehavior::Delay);
+    // The first send gets the full diagnosis of a typed one; later ones only what changes.
+    let mut origin = "operator";
+    let end = loop {
+        tick.tick().await;
+        let conns: Vec<Arc<Conn>> = shared
+            .conns
+            .lock()
+            .unwrap_or_else(|p| p.into_inner())
+            .values()
+            .cloned()
+            .collect();
+        match target {
+            Target::One(n) => match conns.iter().find(|c| c.id == n) {
+                Some(c) => {
+                    if let Err(e) = send(&shared, c, &reply, origin) {
+                        break format!("job {job} stopped: #{n}: {e}");
+                    }
+                }
+                None => break format!("job {job} stopped: connection #{n} is gone"),
+            },
+            _ => {
+                for c in &conns {
+                    let _ = send(&shared, c, &reply, origin);
+                }
+            }
+        }
+        origin = "periodic";
+    };
+    shared
+        .periodic
+        .lock()
+        .unwrap_or_else(|p| p.into_inner())
+        .remove(&job);
+    shared.out.emit(
+        Kind::Note,
+        Event::Note(report::Note {
+            t: now(),
+            text: end,
+        }),
+    );
 }
 
 /// Queues `reply` for `conn`'s writer, showing it and saying what the robot's read will
 /// make of it. A queue over `--max-queue` bytes means the robot is not reading: dropped.
-fn send(shared: &Shared, conn: &Conn, reply: &Reply, origin: &str) {
+/// `Err` says why nothing was queued (the error or the drop is also emitted).
+fn send(shared: &Shared, conn: &Conn, reply: &Reply, origin: &str) -> Result<(), String> {
     let after_lf = conn.after_tuple_lf.load(Ordering::Relaxed);
     let waited = conn
         .waiting_since
@@ -768,6 +1042,9 @@ fn send(shared: &Shared, conn: &Conn, reply: &Reply, origin: &str) {
                 late_seconds: Some(w.as_secs_f64()),
             }),
         );
+    }
+    if let Some(why) = conn.stats.reason() {
+        return Err(format!("closing ({why})"));
     }
     // `--reply` and rules were checked once at start; what the operator types, each time.
     let warnings = if origin == "operator" {
@@ -804,27 +1081,28 @@ fn send(shared: &Shared, conn: &Conn, reply: &Reply, origin: &str) {
                 ),
             }),
         );
-        return;
+        return Err(format!("larger than --max-queue {}", shared.max_queue));
     }
     let queued = conn.stats.queued.load(Ordering::Relaxed);
     if queued + len > shared.max_queue {
-        conn.stats.kill(format!(
+        let why = format!(
             "the robot is not reading: {queued} bytes of replies still queued (--max-queue {}); dropped",
             shared.max_queue
-        ));
-        return;
+        );
+        conn.stats.kill(why.clone());
+        return Err(why);
     }
     conn.stats.queued.fetch_add(len, Ordering::Relaxed);
     if conn.tx.send((Instant::now(), reply.bytes.clone())).is_err() {
         conn.stats.queued.fetch_sub(len, Ordering::Relaxed);
-        return;
+        return Err("the connection is closed".into());
     }
     conn.after_tuple_lf.store(
         diagnose::ends_with_tuple_and_lf(&reply.bytes),
         Ordering::Relaxed,
     );
     if !shared.out.traffic_wanted() {
-        return;
+        return Ok(());
     }
     shared.out.emit(
         Kind::Traffic,
@@ -838,6 +1116,7 @@ fn send(shared: &Shared, conn: &Conn, reply: &Reply, origin: &str) {
             format: Some(reply.format.clone()),
         }),
     );
+    Ok(())
 }
 
 /// Writes queued replies in order. A reply still not handed to the kernel `stall` after
@@ -1139,11 +1418,11 @@ fn handle_chunk(
                     pattern: rule.pattern.clone(),
                 }),
             );
-            send(shared, conn, &rule.reply, "rule");
+            let _ = send(shared, conn, &rule.reply, "rule");
             replied = true;
         } else if !raw_mode {
             if let Some(r) = &shared.reply {
-                send(shared, conn, r, "reply");
+                let _ = send(shared, conn, r, "reply");
                 replied = true;
             }
         }
@@ -1151,7 +1430,7 @@ fn handle_chunk(
     // Without --decode, --reply answers each chunk that brought more than SET/GET lines.
     if raw_mode && other_content && !replied {
         if let Some(r) = &shared.reply {
-            send(shared, conn, r, "reply");
+            let _ = send(shared, conn, r, "reply");
         }
     }
 }
@@ -1248,7 +1527,7 @@ fn handle_var(shared: &Shared, conn: &Conn, d: &Decoded) -> bool {
             }
             let mut bytes = Vec::new();
             if encode_var_reply(name, value.unwrap_or(0), &mut bytes).is_ok() {
-                send(
+                let _ = send(
                     shared,
                     conn,
                     &Reply {

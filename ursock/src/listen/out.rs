@@ -8,7 +8,6 @@ use std::collections::{BTreeMap, VecDeque};
 use std::fs::File;
 use std::io::{BufWriter, ErrorKind, Write};
 use std::sync::Mutex;
-use std::time::{SystemTime, UNIX_EPOCH};
 
 use crate::report::{EndOutcome, Event};
 
@@ -23,15 +22,50 @@ pub enum Kind {
     Warn,
 }
 
-/// What the terminal UI shows: each connection's lines and the general ones, bounded.
+/// What the terminal UI shows: each connection's lines (its scrollback) and the general
+/// ones, bounded.
 #[derive(Default)]
 pub struct Screen {
-    pub per_conn: BTreeMap<u64, VecDeque<String>>,
+    pub per_conn: BTreeMap<u64, Scrollback>,
     pub general: VecDeque<String>,
 }
 
-/// Lines kept per connection, general lines kept, connections whose lines are kept.
-const SCREEN_LINES: usize = 1000;
+/// One connection's lines: the newest [`SCREEN_LINES`] lines and at most
+/// [`SCREEN_BYTES`] bytes of them (older ones are dropped first), and how many were
+/// ever added, so a view scrolled back can say how many arrived below it.
+#[derive(Default)]
+pub struct Scrollback {
+    pub lines: VecDeque<String>,
+    bytes: usize,
+    /// Lines ever added; the line `lines[i]` is number `total - lines.len() + i`.
+    pub total: u64,
+}
+
+impl Scrollback {
+    pub(crate) fn push(&mut self, line: String) {
+        while !self.lines.is_empty()
+            && (self.lines.len() >= SCREEN_LINES || self.bytes + line.len() > SCREEN_BYTES)
+        {
+            if let Some(old) = self.lines.pop_front() {
+                self.bytes -= old.len();
+            }
+        }
+        self.bytes += line.len();
+        self.lines.push_back(line);
+        self.total += 1;
+    }
+
+    /// The number of the oldest line still kept.
+    pub fn first(&self) -> u64 {
+        self.total - self.lines.len() as u64
+    }
+}
+
+/// Scrollback per connection: lines kept, and bytes kept (whichever bound is hit first
+/// drops the oldest lines); general (status) lines kept; connections whose lines are
+/// kept (the lowest-numbered go first). At most 256 × 256 KiB = 64 MiB of lines.
+pub const SCREEN_LINES: usize = 2000;
+pub const SCREEN_BYTES: usize = 256 * 1024;
 const SCREEN_GENERAL: usize = 200;
 const SCREEN_CONNS: usize = 256;
 
@@ -46,24 +80,91 @@ impl Screen {
             }
             let q = self.per_conn.entry(id).or_default();
             for l in line.lines() {
-                if q.len() >= SCREEN_LINES {
-                    q.pop_front();
-                }
-                q.push_back(l.to_string());
+                q.push(l.to_string());
             }
         }
         if general || conn.is_none() {
-            if self.general.len() >= SCREEN_GENERAL {
-                self.general.pop_front();
-            }
             let prefix = conn.map(|id| format!("[#{id}] ")).unwrap_or_default();
-            self.general
-                .push_back(format!("{prefix}{}", line.lines().next().unwrap_or("")));
+            for l in line.lines() {
+                if self.general.len() >= SCREEN_GENERAL {
+                    self.general.pop_front();
+                }
+                self.general.push_back(format!("{prefix}{l}"));
+            }
         }
     }
 }
 
+#[cfg(test)]
+mod screen_tests {
+    use super::*;
+
+    #[test]
+    fn scrollback_keeps_the_newest_lines_within_both_bounds() {
+        let mut s = Scrollback::default();
+        for i in 0..SCREEN_LINES + 5 {
+            s.push(format!("{i}"));
+        }
+        assert_eq!(s.lines.len(), SCREEN_LINES);
+        assert_eq!(s.total, (SCREEN_LINES + 5) as u64);
+        assert_eq!(s.first(), 5);
+        assert_eq!(s.lines.front().map(String::as_str), Some("5"));
+        let big = "x".repeat(SCREEN_BYTES / 3);
+        for _ in 0..4 {
+            s.push(big.clone());
+        }
+        assert_eq!(s.lines.len(), 3, "three fit in the byte bound");
+        assert!(s.bytes <= SCREEN_BYTES);
+        // A line larger than the whole bound is still kept, alone.
+        s.push("y".repeat(SCREEN_BYTES + 1));
+        assert_eq!(s.lines.len(), 1);
+        assert_eq!(s.first() + 1, s.total);
+    }
+}
+
+/// How wall-clock times are written: the system's local time zone (the default: `TZ`,
+/// else `/etc/localtime`, read by `jiff`), or UTC (`--utc`).
+#[derive(Clone, Debug)]
+pub enum Clock {
+    Local(jiff::tz::TimeZone),
+    Utc,
+}
+
+impl Clock {
+    /// The local zone, or UTC when asked (or when the system's zone cannot be read: then
+    /// the stamps end in `Z`, so they never claim an offset that was not known).
+    pub fn new(utc: bool) -> Clock {
+        if utc {
+            return Clock::Utc;
+        }
+        match jiff::tz::TimeZone::try_system() {
+            Ok(tz) => Clock::Local(tz),
+            Err(_) => Clock::Utc,
+        }
+    }
+
+    /// RFC 3339 with milliseconds: `2026-11-23T22:40:01.123+01:00` in local time,
+    /// `2026-11-23T21:40:01.123Z` in UTC.
+    pub fn rfc3339(&self, at: jiff::Timestamp) -> String {
+        match self {
+            Clock::Local(tz) => format!("{:.3}", at.display_with_offset(tz.to_offset(at))),
+            Clock::Utc => format!("{at:.3}"),
+        }
+    }
+
+    /// The time of day, `HH:MM:SS.mmm`, in the same zone as [`Clock::rfc3339`].
+    pub fn time_of_day(&self, at: jiff::Timestamp) -> String {
+        let offset = match self {
+            Clock::Local(tz) => tz.to_offset(at),
+            Clock::Utc => jiff::tz::Offset::UTC,
+        };
+        offset.to_datetime(at).strftime("%H:%M:%S%.3f").to_string()
+    }
+}
+
 pub struct Out {
+    /// The zone of the wall-clock times (`--utc`).
+    pub clock: Clock,
     /// With `--tui`: lines go to the screen, not to stdout/stderr.
     pub screen: Option<Mutex<Screen>>,
     json: bool,
@@ -79,6 +180,7 @@ pub struct Out {
 impl Out {
     pub fn new(json: bool, quiet: bool, log: Option<File>, tui: bool, show_max: usize) -> Self {
         Out {
+            clock: Clock::new(false),
             show_max,
             screen: tui.then(|| Mutex::new(Screen::default())),
             json,
@@ -87,6 +189,12 @@ impl Out {
             log: Mutex::new(log.map(BufWriter::new)),
             stdout: Mutex::new(()),
         }
+    }
+
+    /// Wall-clock times in UTC (`--utc`) instead of the local zone.
+    pub fn with_utc(mut self, utc: bool) -> Self {
+        self.clock = Clock::new(utc);
+        self
     }
 
     /// Whether traffic lines go anywhere (`--quiet` without `--log` drops them): callers
@@ -143,7 +251,7 @@ impl Out {
     }
 
     /// The event's JSON line: the event, then the wall-clock `time`.
-    pub fn json_line(&self, event: &Event, now: std::time::Duration) -> String {
+    pub fn json_line(&self, event: &Event, now: jiff::Timestamp) -> String {
         #[derive(serde::Serialize)]
         struct Stamped<'a> {
             #[serde(flatten)]
@@ -152,7 +260,7 @@ impl Out {
         }
         serde_json::to_string(&Stamped {
             event,
-            time: iso_time(now),
+            time: self.clock.rfc3339(now),
         })
         .unwrap_or_default()
     }
@@ -165,11 +273,9 @@ impl Out {
         }
         let rel = event.t();
         let conn = event.conn();
-        let now = SystemTime::now()
-            .duration_since(UNIX_EPOCH)
-            .unwrap_or_default();
+        let now = jiff::Timestamp::now();
         let lines = human(&event, self.show_max);
-        let stamp = format!("+{rel:.3}s {}", wall_clock(now));
+        let stamp = format!("+{rel:.3}s {}", self.clock.time_of_day(now));
         let stamped: Vec<String> = lines.iter().map(|l| format!("{stamp} {l}")).collect();
         let with_conn = |l: &String| match conn {
             Some(id) => format!("[#{id}] {l}"),
@@ -308,6 +414,10 @@ pub fn human(event: &Event, show_max: usize) -> Vec<String> {
         Event::Dashboard(e) => std::iter::once(format!("<- {:?}", e.command))
             .chain(e.reply.iter().map(|l| format!("-> {l:?}")))
             .collect(),
+        // Multi-line notes (`help`, `snippets`) get one stamped line each.
+        Event::Help(e) | Event::Note(e) if e.text.contains('\n') => {
+            e.text.lines().map(String::from).collect()
+        }
         Event::Help(e) | Event::Note(e) => one(e.text.clone()),
         Event::Error(e) => one(e.text.clone()),
         Event::Call(e) => {
@@ -339,31 +449,25 @@ pub fn human(event: &Event, show_max: usize) -> Vec<String> {
     }
 }
 
-/// `HH:MM:SS.mmm` UTC.
-pub fn wall_clock(since_epoch: std::time::Duration) -> String {
-    let secs = since_epoch.as_secs();
-    let ms = since_epoch.subsec_millis();
-    let day = secs % 86_400;
-    format!(
-        "{:02}:{:02}:{:02}.{ms:03}",
-        day / 3600,
-        day / 60 % 60,
-        day % 60
-    )
-}
+#[cfg(test)]
+mod clock_tests {
+    use super::Clock;
+    use jiff::tz::{offset, TimeZone};
+    use jiff::Timestamp;
 
-/// `2026-11-22T20:59:01.123Z`.
-pub fn iso_time(since_epoch: std::time::Duration) -> String {
-    let days = (since_epoch.as_secs() / 86_400) as i64;
-    // Howard Hinnant's days-to-civil.
-    let z = days + 719_468;
-    let era = z.div_euclid(146_097);
-    let doe = z - era * 146_097;
-    let yoe = (doe - doe / 1460 + doe / 36_524 - doe / 146_096) / 365;
-    let doy = doe - (365 * yoe + yoe / 4 - yoe / 100);
-    let mp = (5 * doy + 2) / 153;
-    let d = doy - (153 * mp + 2) / 5 + 1;
-    let m = if mp < 10 { mp + 3 } else { mp - 9 };
-    let y = yoe + era * 400 + i64::from(m <= 2);
-    format!("{y:04}-{m:02}-{d:02}T{}Z", wall_clock(since_epoch))
+    #[test]
+    fn stamps_are_rfc3339_with_the_zone_offset() {
+        // 2026-11-23T21:40:01.123456Z
+        let at = Timestamp::new(1_795_470_001, 123_456_000).unwrap();
+        assert_eq!(Clock::Utc.rfc3339(at), "2026-11-23T21:40:01.123Z");
+        assert_eq!(Clock::Utc.time_of_day(at), "21:40:01.123");
+        let plus = Clock::Local(TimeZone::fixed(offset(5)));
+        assert_eq!(plus.rfc3339(at), "2026-11-24T02:40:01.123+05:00");
+        assert_eq!(plus.time_of_day(at), "02:40:01.123");
+        let minus = Clock::Local(TimeZone::fixed(offset(-8)));
+        assert_eq!(minus.rfc3339(at), "2026-11-23T13:40:01.123-08:00");
+        // Whole seconds still carry their milliseconds.
+        let whole = Timestamp::new(1_795_470_001, 0).unwrap();
+        assert_eq!(Clock::Utc.rfc3339(whole), "2026-11-23T21:40:01.000Z");
+    }
 }

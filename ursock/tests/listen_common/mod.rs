@@ -44,6 +44,15 @@ impl Listener {
         Self::spawn(cmd)
     }
 
+    /// [`Listener::start`] with environment variables set (`TZ`...).
+    pub fn start_env(env: &[(&str, &str)], args: &[&str]) -> Listener {
+        let mut cmd = Command::new(bin());
+        cmd.args(["listen", "--bind", "127.0.0.1", "--port", "0"])
+            .args(args)
+            .envs(env.iter().copied());
+        Self::spawn(cmd)
+    }
+
     /// The same under `sh -c 'ulimit -n FDS; exec ursock listen ...'`.
     pub fn start_with_fd_limit(fds: u32, args: &[&str]) -> Listener {
         let mut script = format!("ulimit -n {fds} && exec \"$0\" listen --bind 127.0.0.1 --port 0");
@@ -194,6 +203,8 @@ pub fn read_line(s: &mut TcpStream) -> String {
                     break;
                 }
             }
+            // A signal is not the end of the reply (read_exact retries the same way).
+            Err(e) if e.kind() == std::io::ErrorKind::Interrupted => {}
             Err(e) => panic!("read: {e} after {:?}", String::from_utf8_lossy(&out)),
         }
     }
