@@ -37,7 +37,7 @@ use std::time::Duration;
 
 use urscript_interp::interpreter::{self, Command, Discard};
 use urscript_interp::kinematics;
-use urscript_interp::{Arm, Event, Machine, Preamble, Program, RuntimeError, State, World};
+use urscript_interp::{Arm, Event, Machine, Preamble, Program, RuntimeError, State};
 
 use crate::state::{Controller, ProgramState};
 use crate::status::{Inputs, Status};
@@ -239,13 +239,6 @@ impl Cell {
         self.preamble = preamble;
     }
 
-    /// What the robot senses (inputs, forces, temperatures, the operator's answers),
-    /// for a test or an operator to set; a running program sees a change at its next
-    /// step.
-    pub fn world_mut(&mut self) -> &mut World {
-        &mut self.arm_mut().world
-    }
-
     /// The interpreter configuration of a controller: its model, and the step of its
     /// generation (2 ms for e-Series, PolyScope 5; 8 ms for CB3, PolyScope 3).
     pub fn interp_config(controller: &Controller) -> urscript_interp::Config {
@@ -281,7 +274,11 @@ impl Cell {
         }
     }
 
-    fn arm_mut(&mut self) -> &mut Arm {
+    /// The arm: the running program's, else the cell's. For a test or an operator to
+    /// set its joints at rest or what it senses (`arm.world`: inputs, forces,
+    /// temperatures, the operator's answers); a running program sees a change at its
+    /// next step.
+    pub fn arm_mut(&mut self) -> &mut Arm {
         match &mut self.running {
             Some(r) => r.machine.arm_mut(),
             None => &mut self.arm,

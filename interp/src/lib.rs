@@ -109,7 +109,7 @@ pub use event::{CallRecord, Event, Message, MessageKind, Outcome, ReadRecord};
 pub use machine::{Config, Machine, State, Stub};
 pub use sockets::{Policy, Timeout};
 pub use value::{Value, MAX_STRUCT_MEMBERS, MAX_VALUE_DEPTH};
-pub use world_set::{SetError, WORLD_SETTINGS};
+pub use world_set::{SetError, ARM_SETTINGS, WORLD_SETTINGS};
 
 /// Reads a URScript constant: a number, `True`/`False`, a string, a list or a pose of
 /// constants (as a stub's value on a command line).

@@ -2,7 +2,7 @@
 //! (`ursock robot --set digital_in[3]=True`), where NAME is a field of [`World`] and
 //! VALUE a URScript constant (`True`, `4.2`, `[0, 0, -10, 0, 0, 0]`, `"ok"`).
 
-use crate::controller::World;
+use crate::controller::{Arm, World};
 use crate::value::Value;
 
 /// Why a setting was refused: the setting as given and what is wrong with it.
@@ -99,22 +99,7 @@ impl World {
     /// ```
     pub fn set(&mut self, setting: &str) -> Result<(), SetError> {
         let err = |reason: String| SetError::new(setting, reason);
-        let (target, text) = setting
-            .split_once('=')
-            .ok_or_else(|| err("give NAME=VALUE or NAME[INDEX]=VALUE".into()))?;
-        let target = target.trim();
-        let (name, index) = match target.split_once('[') {
-            Some((name, rest)) => {
-                let i = rest
-                    .strip_suffix(']')
-                    .and_then(|i| i.trim().parse::<usize>().ok())
-                    .ok_or_else(|| err(format!("`{target}`: the index is not a number in [ ]")))?;
-                (name.trim(), Some(i))
-            }
-            None => (target, None),
-        };
-        let value = crate::parse_constant(text.trim())
-            .map_err(|e| err(format!("`{}` is not a URScript constant: {e}", text.trim())))?;
+        let (name, index, value) = parse(setting)?;
         let slot = |len: usize| -> Result<Option<usize>, SetError> {
             match index {
                 Some(i) if i >= len => Err(err(format!(
@@ -190,6 +175,74 @@ impl World {
             }
         }
         .map_err(|wanted| err(format!("`{name}` takes {wanted}")))
+    }
+}
+
+/// `NAME=VALUE` or `NAME[I]=VALUE`: the name, the index, the value.
+fn parse(setting: &str) -> Result<(&str, Option<usize>, Value), SetError> {
+    let err = |reason: String| SetError::new(setting, reason);
+    let (target, text) = setting
+        .split_once('=')
+        .ok_or_else(|| err("give NAME=VALUE or NAME[INDEX]=VALUE".into()))?;
+    let target = target.trim();
+    let (name, index) = match target.split_once('[') {
+        Some((name, rest)) => {
+            let i = rest
+                .strip_suffix(']')
+                .and_then(|i| i.trim().parse::<usize>().ok())
+                .ok_or_else(|| err(format!("`{target}`: the index is not a number in [ ]")))?;
+            (name.trim(), Some(i))
+        }
+        None => (target, None),
+    };
+    let value = crate::parse_constant(text.trim())
+        .map_err(|e| err(format!("`{}` is not a URScript constant: {e}", text.trim())))?;
+    Ok((name, index, value))
+}
+
+/// The names [`Arm::set`] knows besides the world's ([`WORLD_SETTINGS`]).
+pub const ARM_SETTINGS: &[(&str, &str)] = &[(
+    "q",
+    "6 floats: the joint positions at the start (rad, each within ±2π)",
+)];
+
+impl Arm {
+    /// Sets the arm's joints from `q=[...]` or `q[I]=VALUE` (rad, each within ±2π, the
+    /// joints' range), or anything of its world ([`World::set`]): the arm a program
+    /// starts with (`Machine::with_arm`).
+    ///
+    /// ```
+    /// use urscript_interp::Arm;
+    /// let mut arm = Arm::default();
+    /// arm.set("q=[0, -1.2, 1.5, -1.9, -1.57, 0]").unwrap();
+    /// arm.set("digital_in[1]=True").unwrap();
+    /// assert_eq!(arm.q[1], -1.2);
+    /// assert!(arm.world.digital_in[1]);
+    /// assert!(arm.set("q[0]=7").is_err());
+    /// ```
+    pub fn set(&mut self, setting: &str) -> Result<(), SetError> {
+        let (name, index, value) = parse(setting)?;
+        if name != "q" {
+            return self.world.set(setting);
+        }
+        let err = |reason: String| SetError::new(setting, reason);
+        if let Some(i) = index.filter(|i| *i >= 6) {
+            return Err(err(format!("index {i} is past the last (5)")));
+        }
+        let mut q = self.q;
+        fill(&mut q, index, &value, as_float).map_err(|w| err(format!("`q` takes {w}")))?;
+        let limit = 2.0 * core::f64::consts::PI;
+        if let Some((k, v)) = q
+            .iter()
+            .enumerate()
+            .find(|(_, v)| !v.is_finite() || v.abs() > limit)
+        {
+            return Err(err(format!(
+                "joint {k} at {v} rad is outside the joints' range (±2π)"
+            )));
+        }
+        self.q = q;
+        Ok(())
     }
 }
 

@@ -98,7 +98,8 @@ enum Command {
         /// Repeatable, in order.
         #[arg(long, value_name = "FILE")]
         preamble: Vec<std::path::PathBuf>,
-        /// What the robot senses at the start: `digital_in[3]=True`, `analog_in[0]=4.2`,
+        /// The arm at the start: its joints `q=[0,-1.2,1.5,-1.9,-1.57,0]` and what it
+        /// senses: `digital_in[3]=True`, `analog_in[0]=4.2`,
         /// `tcp_force=[0,0,-9.8,0,0,0]`, `input_int_regs[2]=7`, `joint_temp[0]=41`,
         /// `operator_int=3`... (`--set help` lists every name). Repeatable.
         #[arg(long, value_name = "NAME=VALUE")]
@@ -199,7 +200,7 @@ fn run(cli: Cli) -> Result<(), String> {
             preamble,
             set,
         } => {
-            let Some(world) = script::world_from_settings(&set)? else {
+            let Some(arm) = script::arm_from_settings(&set)? else {
                 return Ok(());
             };
             let urcaps = script::read_preambles(&preamble)?;
@@ -250,7 +251,7 @@ fn run(cli: Cli) -> Result<(), String> {
                     model,
                     stubs,
                     preamble: urcaps,
-                    world,
+                    arm,
                 },
             )
         }

@@ -38,8 +38,8 @@ pub struct Options {
     pub stubs: Vec<(String, Stub)>,
     /// URCap preambles run before the program (`--preamble FILE`).
     pub preamble: urscript_interp::Preamble,
-    /// What the robot senses at the start (`--set NAME=VALUE`).
-    pub world: urscript_interp::World,
+    /// The arm at the start: its joints and what it senses (`--set NAME=VALUE`).
+    pub arm: urscript_interp::Arm,
 }
 
 /// The URCap preambles of `--preamble FILE...`, in order; an error names the file and
@@ -56,20 +56,23 @@ pub fn read_preambles(paths: &[std::path::PathBuf]) -> Result<urscript_interp::P
     Ok(preamble)
 }
 
-/// The world of `--set NAME=VALUE...` (`None` for `--set help`, after printing the
-/// names).
-pub fn world_from_settings(settings: &[String]) -> Result<Option<urscript_interp::World>, String> {
+/// The arm of `--set NAME=VALUE...`: its joints (`q`) and its world (`None` for `--set
+/// help`, after printing the names).
+pub fn arm_from_settings(settings: &[String]) -> Result<Option<urscript_interp::Arm>, String> {
     if settings.iter().any(|s| s == "help") {
-        for (name, what) in urscript_interp::WORLD_SETTINGS {
+        let names = urscript_interp::ARM_SETTINGS
+            .iter()
+            .chain(urscript_interp::WORLD_SETTINGS);
+        for (name, what) in names {
             out::line(&format!("{name:18} {what}"));
         }
         return Ok(None);
     }
-    let mut world = urscript_interp::World::default();
+    let mut arm = urscript_interp::Arm::default();
     for s in settings {
-        world.set(s).map_err(|e| format!("--set {e}"))?;
+        arm.set(s).map_err(|e| format!("--set {e}"))?;
     }
-    Ok(Some(world))
+    Ok(Some(arm))
 }
 
 /// How long a `socket_open` may take to connect before it returns False.
@@ -321,8 +324,7 @@ pub fn run(script: &str, connect_to: Option<&str>, opts: Options) -> Result<(), 
         trace_all_calls: false,
         ..Config::default()
     };
-    let mut machine = Machine::new(program, config);
-    *machine.world_mut() = opts.world.clone();
+    let mut machine = Machine::with_arm(program, config, opts.arm.clone());
     let mut driver = Driver::new(drive::Options {
         max_time: opts.max_time,
         connect_timeout: CONNECT_TIMEOUT,

@@ -574,6 +574,17 @@ fn set_gives_the_inputs_the_program_reads() {
     );
     assert_eq!(code, 0, "{out}\n{err}");
     assert!(out.contains("part present, force -9.5"), "{out}");
+    // The joints the arm starts at.
+    let (code, out, err) = run_program(
+        "setq",
+        "textmsg(get_actual_joint_positions())\n",
+        &["--set", "q=[0.5, -1.25, 1.5, -1.75, -1.5, 0]"],
+    );
+    assert_eq!(code, 0, "{out}\n{err}");
+    assert!(out.contains("[0.5, -1.25, 1.5, -1.75, -1.5, 0]"), "{out}");
+    let (code, _, err) = run_program("badq", "x = 1\n", &["--set", "q[1]=9"]);
+    assert_ne!(code, 0);
+    assert!(err.contains("outside the joints' range"), "{err}");
     let (code, out, _) = run_program("unset", program, &[]);
     assert_eq!(code, 0);
     assert!(!out.contains("part present"), "{out}");

@@ -71,7 +71,8 @@ pub struct ControllerOptions {
     /// `.urp` program played; scripts clients send get none. Repeatable, in order.
     #[arg(long, value_name = "FILE")]
     pub preamble: Vec<PathBuf>,
-    /// What the robot senses from the start: `digital_in[3]=True`, `tcp_force=[...]`,
+    /// The arm from the start: its joints `q=[...]` and what it senses:
+    /// `digital_in[3]=True`, `tcp_force=[...]`,
     /// `joint_temp[0]=41`... (`ursock robot --set help` lists every name). Repeatable.
     #[arg(long, value_name = "NAME=VALUE")]
     pub set: Vec<String>,
@@ -199,7 +200,7 @@ pub fn run(opts: ControllerOptions) -> Result<(), String> {
         Some(h) => Some(parse_host(h).map_err(|e| format!("--urcap-host {h}: {e}"))?),
     };
     let preamble = crate::script::read_preambles(&opts.preamble)?;
-    let Some(world) = crate::script::world_from_settings(&opts.set)? else {
+    let Some(arm) = crate::script::arm_from_settings(&opts.set)? else {
         return Ok(());
     };
     let stream = |port: u16| (!opts.no_streams).then_some(port);
@@ -250,7 +251,7 @@ pub fn run(opts: ControllerOptions) -> Result<(), String> {
     })?;
     server.with_cell(|cell, _| {
         cell.set_preamble(preamble);
-        *cell.world_mut() = world;
+        *cell.arm_mut() = arm;
     });
     let server = std::sync::Arc::new(server);
     {
