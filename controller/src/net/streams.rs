@@ -8,6 +8,14 @@
 //! read waits in its queue; past [`MAX_BACKLOG`] bytes new state packages are skipped
 //! for it (it sees a gap, as a client of a real controller that falls behind does) and
 //! past [`MAX_QUEUE`] it is disconnected: a client that never reads slows nothing down.
+//!
+//! So a client that never reads holds at most [`MAX_BACKLOG`] bytes and one package
+//! (realtime, secondary, RTDE data: packages are only skipped, and it keeps its slot
+//! until it leaves), or at most [`MAX_QUEUE`] bytes and one message before it is
+//! dropped (what it must get: the primary's robot messages and version message, RTDE
+//! replies). What a client sends is read [`READ_CHUNK`] bytes at a time into one buffer
+//! of the loop, at most [`MAX_READS_PER_STEP`] reads a step, and kept only as far as its
+//! intake or RTDE session bounds allow.
 
 use std::io::{ErrorKind, Read, Write};
 use std::net::{Shutdown, TcpListener, TcpStream};
@@ -24,12 +32,23 @@ use crate::rtde::{InputRegistry, RtdeEvent, RtdeSession};
 use crate::script_intake::{Command, Intake, ScriptIntake};
 use crate::{CellEvent, Ended, Status, Submitted};
 
-/// Clients of the streaming interfaces served at once (all four together).
+/// Clients of the streaming interfaces served at once (all four together); more are
+/// accepted and closed at once. They cost no thread; the bound caps the memory their
+/// queues may take (`MAX_CLIENTS` x [`MAX_QUEUE`]) and the work of one step.
 pub const MAX_CLIENTS: usize = 64;
-/// Queued bytes past which a client's state packages are skipped.
+/// Queued bytes past which a client's state packages are skipped: about 200 realtime
+/// packages (0.4 s at 500 Hz), on top of what the kernel's socket buffers hold.
 pub const MAX_BACKLOG: usize = 256 * 1024;
-/// Queued bytes past which a client is disconnected.
+/// Queued bytes past which a client is disconnected: sixteen times the backlog, room
+/// for bursts of robot messages and RTDE replies to a client that reads late.
 pub const MAX_QUEUE: usize = 4 * 1024 * 1024;
+/// Bytes read from one client at a time (the loop's one read buffer).
+pub const READ_CHUNK: usize = 64 * 1024;
+/// Reads of one client in one step, at most: 1 MiB a step (500 MiB/s at 2 ms steps) is
+/// more than any client sends, and a peer that floods faster than the loop reads cannot
+/// keep the loop reading instead of stepping. The rest waits in the kernel for the next
+/// step.
+pub const MAX_READS_PER_STEP: usize = 16;
 
 /// Which interface a client is on.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -118,7 +137,7 @@ pub(crate) fn run(shared: &Arc<Shared>, listeners: Listeners) {
         next_state: Duration::ZERO,
         safety: None,
         state_key: None,
-        buf: vec![0u8; 64 * 1024],
+        buf: vec![0u8; READ_CHUNK],
         frame: Vec::new(),
     };
     let listeners = [
@@ -240,7 +259,7 @@ impl Loop {
         // copy of the bytes per read.
         let mut buf = std::mem::take(&mut self.buf);
         for i in 0..self.clients.len() {
-            loop {
+            for _ in 0..MAX_READS_PER_STEP {
                 let c = &mut self.clients[i];
                 if c.gone.is_some() {
                     break;
