@@ -36,9 +36,15 @@ fn serial() -> MutexGuard<'static, ()> {
         std::panic::set_hook(Box::new(move |info| {
             // The server's threads (a test's own failed assertion is not counted).
             let name = thread::current().name().unwrap_or("").to_string();
-            if ["dashboard", "interpreter", "controller", "load-program"]
-                .iter()
-                .any(|n| name.starts_with(n))
+            if [
+                "dashboard",
+                "interpreter",
+                "controller",
+                "load-program",
+                "connect",
+            ]
+            .iter()
+            .any(|n| name.starts_with(n))
             {
                 PANICS.fetch_add(1, Ordering::SeqCst);
             }
@@ -185,9 +191,15 @@ fn check_threads(after: &str) {
     let all = thread_names()
         .iter()
         .filter(|name| {
-            ["dashboard", "interpreter", "controller", "load-program"]
-                .iter()
-                .any(|p| name.starts_with(p))
+            [
+                "dashboard",
+                "interpreter",
+                "controller",
+                "load-program",
+                "connect",
+            ]
+            .iter()
+            .any(|p| name.starts_with(p))
         })
         .count();
     assert!(
@@ -744,4 +756,55 @@ fn hostile_programs_end_in_runtime_errors_and_the_next_program_runs() {
     stop.store(true, Ordering::SeqCst);
     let _ = acceptor.join();
     let _ = primary.stream.shutdown(Shutdown::Both);
+}
+
+#[test]
+fn connects_to_a_server_that_never_answers_block_nothing() {
+    let _turn = serial();
+    let f = start();
+    running(&f);
+    // A server that never answers: a listener that never accepts, its backlog full, so
+    // the kernel drops further SYNs and a connect waits out its timeout.
+    let blackhole = TcpListener::bind("127.0.0.1:0").expect("bind");
+    let addr = blackhole.local_addr().expect("addr");
+    let mut filling = Vec::new();
+    for _ in 0..4096 {
+        match TcpStream::connect_timeout(&addr, Duration::from_millis(300)) {
+            Ok(s) => filling.push(s),
+            Err(_) => break,
+        }
+    }
+    let port = addr.port();
+    // Forty program threads connecting to it over and over: were a connect made in the
+    // real-time loop, the loop (and the dashboard, waiting for the cell) would hang for
+    // the connect timeout of each in turn.
+    let mut p = connect(f.addr("primary")).expect("connect");
+    p.write_all(
+        format!(
+            "def hang():\n  thread t():\n    while True:\n      socket_open(\"127.0.0.1\", {port}, \"x\")\n    end\n  end\n  i = 0\n  while i < 40:\n    h = run t()\n    i = i + 1\n  end\n  while True:\n    sync()\n  end\nend\n"
+        )
+        .as_bytes(),
+    )
+    .expect("send");
+    f.wait_log("the program started", |l| {
+        l.programs
+            .iter()
+            .any(|(w, _, _)| w == "started")
+            .then_some(())
+    });
+    for round in 0..3 {
+        f.healthy(&format!("connects that never finish (round {round})"));
+    }
+    let stopped = dashboard_ask(f.addr("dashboard"), "stop").expect("stop");
+    assert_eq!(stopped, "Stopped");
+    p.write_all(b"def after():\n  textmsg(\"after the hang\")\nend\n")
+        .expect("send");
+    f.wait_log("the next program", |l| {
+        l.messages
+            .iter()
+            .any(|m| m == "after the hang")
+            .then_some(())
+    });
+    f.healthy("a program whose connects never finished");
+    drop(filling);
 }

@@ -25,8 +25,10 @@
 //!
 //! - Threads: at most [`MAX_SERVER_THREADS`]: the real-time loop, the dashboard's and the
 //!   interpreter's accepting threads, one per dashboard connection ([`MAX_CONNECTIONS`]),
-//!   one per interpreter connection ([`MAX_INTERPRETER_CONNECTIONS`]), and one reading a
-//!   played `.urp` program (the cell asks for one program at a time).
+//!   one per interpreter connection ([`MAX_INTERPRETER_CONNECTIONS`]), one per connect
+//!   of the running program in progress ([`MAX_CONNECTING`]: a connect never blocks the
+//!   real-time loop), and one reading a played `.urp` program (the cell asks for one
+//!   program at a time).
 //! - Connections past a limit are accepted and closed at once, so the kernel's listen
 //!   backlog (the standard library's 128, capped by the system) drains however many
 //!   peers knock; the stream listeners are drained every step.
@@ -82,7 +84,9 @@ use crate::{Cell, Config, Controller, Dashboard, Programs, Reply, MAX_LINE};
 
 pub use fetch::{parse_host, MAX_FETCHED, MAX_FILE};
 pub use interpreter::{MAX_INTERPRETER_CONNECTIONS, POLL as INTERPRETER_POLL};
-pub use streams::{MAX_BACKLOG, MAX_CLIENTS, MAX_QUEUE, MAX_READS_PER_STEP, READ_CHUNK};
+pub use streams::{
+    MAX_BACKLOG, MAX_CLIENTS, MAX_CONNECTING, MAX_QUEUE, MAX_READS_PER_STEP, READ_CHUNK,
+};
 
 /// Dashboard connections served at once; more are accepted and closed at once. Each is
 /// a thread; UR's clients open one or two, and a cell a few more, so 16 leaves room
@@ -91,8 +95,10 @@ pub const MAX_CONNECTIONS: usize = 16;
 
 /// The most threads a [`Server`] runs at once: the real-time loop, two accepting
 /// threads, [`MAX_CONNECTIONS`] dashboard and [`MAX_INTERPRETER_CONNECTIONS`]
-/// interpreter connections, and one reading a played `.urp` program.
-pub const MAX_SERVER_THREADS: usize = 3 + MAX_CONNECTIONS + MAX_INTERPRETER_CONNECTIONS + 1;
+/// interpreter connections, [`MAX_CONNECTING`] connects of the program, and one reading
+/// a played `.urp` program.
+pub const MAX_SERVER_THREADS: usize =
+    3 + MAX_CONNECTIONS + MAX_INTERPRETER_CONNECTIONS + MAX_CONNECTING + 1;
 
 /// A dashboard or interpreter reply that cannot be written in this time (a client that
 /// stopped reading) ends the connection: long enough for a client that is merely slow,

@@ -17,12 +17,13 @@
 //! of the loop, at most [`MAX_READS_PER_STEP`] reads a step, and kept only as far as its
 //! intake or RTDE session bounds allow.
 
+use std::collections::VecDeque;
 use std::io::{ErrorKind, Read, Write};
 use std::net::{Shutdown, TcpListener, TcpStream};
-use std::sync::Arc;
+use std::sync::{mpsc, Arc};
 use std::time::Duration;
 
-use urscript_interp::drive::{Activity, Driver, Options};
+use urscript_interp::drive::{connect_stream, describe_connect_error, Activity, Driver, Options};
 use urscript_interp::{Event as ProgramEvent, MessageKind};
 
 use super::{ServerEvent as Event, Shared};
@@ -44,6 +45,13 @@ pub const MAX_BACKLOG: usize = 256 * 1024;
 pub const MAX_QUEUE: usize = 4 * 1024 * 1024;
 /// Bytes read from one client at a time (the loop's one read buffer).
 pub const READ_CHUNK: usize = 64 * 1024;
+/// The running program's connects (`socket_open`, an XML-RPC call) in progress at once.
+/// Each runs in a thread of its own (`connect`), so a server that does not answer (a
+/// dropped SYN waits out the connect timeout, 2 s, per address) holds up only the
+/// program thread that waits for it, never the loop and with it every stream and the
+/// dashboard. More wait their turn (at most one per program thread); those of a program
+/// that ended are dropped. Eight is more than programs open at once.
+pub const MAX_CONNECTING: usize = 8;
 /// Reads of one client in one step, at most: 1 MiB a step (500 MiB/s at 2 ms steps) is
 /// more than any client sends, and a peer that floods faster than the loop reads cannot
 /// keep the loop reading instead of stepping. The rest waits in the kernel for the next
@@ -130,9 +138,18 @@ pub(crate) struct Listeners {
 
 /// Runs the loop until the server stops.
 pub(crate) fn run(shared: &Arc<Shared>, listeners: Listeners) {
+    let (done_tx, done_rx) = mpsc::channel();
     let mut lp = Loop {
         clients: Vec::new(),
         driver: Driver::new(Options::default()),
+        connects: Connects {
+            timeout: Options::default().connect_timeout,
+            generation: 0,
+            waiting: VecDeque::new(),
+            in_flight: 0,
+            done_tx,
+            done_rx,
+        },
         registry: InputRegistry::new(),
         next_state: Duration::ZERO,
         safety: None,
@@ -196,9 +213,88 @@ fn step_boundary(t: Duration, step: Duration) -> Duration {
     Duration::from_nanos(u64::try_from(n - n % step).unwrap_or(u64::MAX))
 }
 
+/// A connect the program asked for, not started yet.
+struct ConnectRequest {
+    generation: u64,
+    socket_name: String,
+    host: String,
+    port: u16,
+}
+
+/// A connect's outcome, from its thread.
+struct Connected {
+    generation: u64,
+    socket_name: String,
+    result: Result<TcpStream, String>,
+}
+
+/// The program's connects, each in a thread of its own (see [`MAX_CONNECTING`]).
+struct Connects {
+    timeout: Duration,
+    /// Counts the programs: an outcome for an earlier one is dropped.
+    generation: u64,
+    waiting: VecDeque<ConnectRequest>,
+    in_flight: usize,
+    done_tx: mpsc::Sender<Connected>,
+    done_rx: mpsc::Receiver<Connected>,
+}
+
+impl Connects {
+    /// A program started or ended: what its connects bring is no one's.
+    fn next_program(&mut self) {
+        self.generation += 1;
+        self.waiting.clear();
+    }
+
+    /// Hands the finished connects to the program, and starts waiting ones.
+    fn service(&mut self, driver: &mut Driver, mut machine: Option<&mut urscript_interp::Machine>) {
+        while let Ok(done) = self.done_rx.try_recv() {
+            self.in_flight = self.in_flight.saturating_sub(1);
+            match machine.as_deref_mut() {
+                Some(m) if done.generation == self.generation => {
+                    driver.adopt(m, &done.socket_name, done.result);
+                }
+                _ => {
+                    if let Ok(stream) = done.result {
+                        let _ = stream.shutdown(Shutdown::Both);
+                    }
+                }
+            }
+        }
+        while self.in_flight < MAX_CONNECTING {
+            let Some(r) = self.waiting.pop_front() else {
+                break;
+            };
+            let tx = self.done_tx.clone();
+            let timeout = self.timeout;
+            let name = r.socket_name.clone();
+            let spawned = std::thread::Builder::new()
+                .name("connect".into())
+                .spawn(move || {
+                    let result = connect_stream(&r.host, r.port, timeout)
+                        .map_err(|e| describe_connect_error(&r.host, r.port, &e));
+                    let _ = tx.send(Connected {
+                        generation: r.generation,
+                        socket_name: r.socket_name,
+                        result,
+                    });
+                });
+            match spawned {
+                Ok(_) => self.in_flight += 1,
+                Err(e) => {
+                    if let Some(m) = machine.as_deref_mut() {
+                        driver.adopt(m, &name, Err(format!("cannot start a thread: {e}")));
+                    }
+                }
+            }
+        }
+    }
+}
+
 struct Loop {
     clients: Vec<Client>,
     driver: Driver,
+    connects: Connects,
     /// Which RTDE client owns which input field.
     registry: InputRegistry,
     next_state: Duration,
@@ -384,6 +480,22 @@ impl Loop {
                             _ => {}
                         }
                         match cell.machine_mut() {
+                            // A connect must not block the loop: a thread makes it.
+                            Some(_) if matches!(e, ProgramEvent::Connect { .. }) => {
+                                if let ProgramEvent::Connect {
+                                    socket_name,
+                                    host,
+                                    port,
+                                } = e
+                                {
+                                    self.connects.waiting.push_back(ConnectRequest {
+                                        generation: self.connects.generation,
+                                        socket_name,
+                                        host,
+                                        port,
+                                    });
+                                }
+                            }
                             Some(m) => self.driver.handle_event(m, e, &mut |a| show(&emit, a)),
                             // The program has ended: what it sent last still goes
                             // out, then its sockets close.
@@ -391,6 +503,7 @@ impl Loop {
                         }
                     }
                     CellEvent::ProgramStarted { name } => {
+                        self.connects.next_program();
                         emit(program_event("started", &name, None, None, None));
                         messages.push(RobotMessage::program_started(&name));
                     }
@@ -416,6 +529,7 @@ impl Loop {
                         }
                         messages.push(RobotMessage::program_stopped(&name));
                         self.driver.close_all();
+                        self.connects.next_program();
                     }
                     CellEvent::Refused { line, column, text } => {
                         let at = (line > 0).then_some(line);
@@ -457,6 +571,7 @@ impl Loop {
                     }
                 }
             }
+            self.connects.service(&mut self.driver, cell.machine_mut());
             if let Some(m) = cell.machine_mut() {
                 self.driver.poll_sockets(m, &mut |a| show(&emit, a));
             }
