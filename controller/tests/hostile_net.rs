@@ -367,7 +367,7 @@ fn random_and_adversarial_bytes_on_every_port() {
 fn a_line_of_many_mib_without_a_newline() {
     let _turn = serial();
     let f = start();
-    const SENT: usize = 48 * 1024 * 1024;
+    const SENT: usize = 24 * 1024 * 1024;
     let line = vec![b'x'; SENT];
     for service in LINE_PORTS {
         let before = rss();
@@ -413,7 +413,7 @@ fn a_program_that_never_ends_and_floods_of_setups_and_lines() {
     // `def p():` and then endless lines: dropped past MAX_PROGRAM, never buffered whole.
     for service in ["primary", "secondary", "realtime"] {
         let mut program = b"def p():\n".to_vec();
-        while program.len() < 24 * 1024 * 1024 {
+        while program.len() < 12 * 1024 * 1024 {
             program.extend_from_slice(b"  x = [1, 2, 3]  # and on, and on\n");
         }
         let before = rss();
@@ -807,4 +807,45 @@ fn connects_to_a_server_that_never_answers_block_nothing() {
     });
     f.healthy("a program whose connects never finished");
     drop(filling);
+}
+
+#[test]
+fn an_interpreter_flood_while_a_program_is_in_interpreter_mode() {
+    let _turn = serial();
+    let f = start();
+    running(&f);
+    let mut p = connect(f.addr("primary")).expect("connect");
+    p.write_all(b"def im():\n  interpreter_mode()\nend\n")
+        .expect("send");
+    f.wait_log("the interpreter program started", |l| {
+        l.programs
+            .iter()
+            .any(|(w, _, _)| w == "started")
+            .then_some(())
+    });
+    let lines = b"x = [1, 2, 3]\nsleep(10)\ntextmsg(\"flood\")\n".repeat(60_000);
+    let before = rss();
+    // Two flooders that never read their replies, and one that floods without newlines.
+    let mut floods = Vec::new();
+    for _ in 0..2 {
+        let mut s = connect(f.addr("interpreter")).expect("connect");
+        let _ = s.set_write_timeout(Some(Duration::from_secs(2)));
+        write_some(&mut s, &lines);
+        floods.push(s);
+    }
+    f.healthy("an interpreter flood in interpreter mode");
+    let grown = rss().saturating_sub(before);
+    assert!(
+        grown < lines.len() as u64,
+        "the process grew by {grown} bytes for an interpreter flood of {} bytes",
+        2 * lines.len()
+    );
+    // A client that reads gets answers still.
+    let mut s = connect(f.addr("interpreter")).expect("connect");
+    s.write_all(b"statelastexecuted\n").expect("send");
+    let reply = read_line(&mut s).expect("a reply");
+    assert!(reply.starts_with("state: "), "{reply:?}");
+    drop(floods);
+    let _ = dashboard_ask(f.addr("dashboard"), "stop");
+    f.healthy("an interpreter flood, the program stopped");
 }
