@@ -697,35 +697,40 @@ fn hostile_programs_end_in_runtime_errors_and_the_next_program_runs() {
             }
         })
     };
-    let programs: [(&str, String); 5] = [
+    let programs: [(&str, String, &str); 5] = [
         (
             "allocation",
             "def grow():\n  l = [1, 2]\n  while True:\n    l = [l, l]\n    sync()\n  end\nend\n"
                 .to_string(),
+            "more than 1000000 elements",
         ),
         (
             "recursion",
             "def deep():\n  def r(n):\n    return r(n + 1)\n  end\n  r(0)\nend\n".to_string(),
+            "nested too deeply",
         ),
         (
             "thread storm",
             "def storm():\n  thread t():\n    sleep(100)\n  end\n  while True:\n    h = run t()\n    sync()\n  end\nend\n"
                 .to_string(),
+            "more than 64 threads",
         ),
         (
             "tight loop",
             "def spin():\n  x = 0\n  while True:\n    x = x + 1\n  end\nend\n".to_string(),
+            "too much time",
         ),
         (
             "socket storm",
             format!(
                 "def sockets():\n  i = 0\n  while True:\n    socket_open(\"127.0.0.1\", {port}, str_cat(\"s\", i))\n    i = i + 1\n  end\nend\n"
             ),
+            "64 sockets are open already",
         ),
     ];
     let primary = Primary::connect(f.addr("primary"));
     let mut sender = connect(f.addr("primary")).expect("connect");
-    for (n, (what, source)) in programs.iter().enumerate() {
+    for (n, (what, source, expected)) in programs.iter().enumerate() {
         let seen = f.log().programs.len();
         sender.write_all(source.as_bytes()).expect("send");
         let (how, text) = f.wait_log(&format!("the {what} program's end"), |l| {
@@ -735,6 +740,10 @@ fn hostile_programs_end_in_runtime_errors_and_the_next_program_runs() {
                 .map(|(w, _, t)| (w.clone(), t.clone().unwrap_or_default()))
         });
         assert_eq!(how, "error", "the {what} program ended {how}: {text}");
+        assert!(
+            text.contains(expected),
+            "the {what} program's error: {text}"
+        );
         let start = Instant::now();
         while !primary.saw(&text) {
             assert!(
