@@ -18,7 +18,7 @@ use std::time::{Duration, Instant};
 
 use urscript_controller::net::{
     Ports, Server, ServerEvent, ServerOptions, MAX_CLIENTS, MAX_CONNECTIONS,
-    MAX_INTERPRETER_CONNECTIONS, MAX_SERVER_THREADS,
+    MAX_INTERPRETER_CONNECTIONS, MAX_SERVER_THREADS, MAX_STALL,
 };
 
 /// The longest any wait of these tests lasts before the test fails.
@@ -99,7 +99,14 @@ fn start() -> Fixture {
                 ServerEvent::Program {
                     what, name, text, ..
                 } => l.programs.push((what.to_string(), name, text)),
-                ServerEvent::Message(m) => l.messages.push(m.text),
+                // Short ones only, the last 10 000: a program's message flood does not
+                // grow the test.
+                ServerEvent::Message(m) if m.text.len() < 256 => {
+                    if l.messages.len() >= 10_000 {
+                        l.messages.remove(0);
+                    }
+                    l.messages.push(m.text)
+                }
                 ServerEvent::Close { conn, reason, .. } => l.closes.push((conn, reason)),
                 ServerEvent::Connect { conn, service, .. } => l.connects.push((conn, service)),
                 _ => {}
@@ -589,6 +596,37 @@ fn clients_that_never_read_are_bounded_and_slow_nothing_down() {
             .map(|(_, r)| r.clone())
     });
     assert_eq!(reason, "the client stopped reading");
+    assert_eq!(
+        dashboard_ask(f.addr("dashboard"), "stop").expect("stop"),
+        "Stopped"
+    );
+    // The realtime clients that never read: their packages skipped, then, after
+    // MAX_STALL of taking nothing, dropped.
+    let realtime: Vec<u64> = f
+        .log()
+        .connects
+        .iter()
+        .filter(|(_, s)| *s == "realtime")
+        .map(|(c, _)| *c)
+        .collect();
+    assert_eq!(realtime.len(), 8);
+    let start = Instant::now();
+    loop {
+        let dropped = f
+            .log()
+            .closes
+            .iter()
+            .filter(|(c, r)| realtime.contains(c) && r == "the client stopped reading")
+            .count();
+        if dropped == realtime.len() {
+            break;
+        }
+        assert!(
+            start.elapsed() < WAIT + MAX_STALL,
+            "only {dropped} of the deaf realtime clients were dropped"
+        );
+        thread::sleep(Duration::from_millis(50));
+    }
     f.healthy("clients that never read");
     let grown = rss().saturating_sub(before);
     // 33 clients, each at most MAX_QUEUE (4 MiB) queued: well under this.
@@ -598,7 +636,6 @@ fn clients_that_never_read_are_bounded_and_slow_nothing_down() {
     );
     drop(idle);
     drop(deaf);
-    let _ = dashboard_ask(f.addr("dashboard"), "stop");
 }
 
 /// Brakes released, the arm running (programs run).

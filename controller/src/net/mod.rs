@@ -85,7 +85,7 @@ use crate::{Cell, Config, Controller, Dashboard, Programs, Reply, MAX_LINE};
 pub use fetch::{parse_host, MAX_FETCHED, MAX_FILE};
 pub use interpreter::{MAX_INTERPRETER_CONNECTIONS, POLL as INTERPRETER_POLL};
 pub use streams::{
-    MAX_BACKLOG, MAX_CLIENTS, MAX_CONNECTING, MAX_QUEUE, MAX_READS_PER_STEP, READ_CHUNK,
+    MAX_BACKLOG, MAX_CLIENTS, MAX_CONNECTING, MAX_QUEUE, MAX_READS_PER_STEP, MAX_STALL, READ_CHUNK,
 };
 
 /// Dashboard connections served at once; more are accepted and closed at once. Each is

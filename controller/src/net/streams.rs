@@ -10,10 +10,10 @@
 //! past [`MAX_QUEUE`] it is disconnected: a client that never reads slows nothing down.
 //!
 //! So a client that never reads holds at most [`MAX_BACKLOG`] bytes and one package
-//! (realtime, secondary, RTDE data: packages are only skipped, and it keeps its slot
-//! until it leaves), or at most [`MAX_QUEUE`] bytes and one message before it is
-//! dropped (what it must get: the primary's robot messages and version message, RTDE
-//! replies). What a client sends is read [`READ_CHUNK`] bytes at a time into one buffer
+//! (realtime, secondary, RTDE data: packages are skipped, and after [`MAX_STALL`] of
+//! taking nothing it is dropped), or at most [`MAX_QUEUE`] bytes and one message
+//! before it is dropped (what it must get: the primary's robot messages and version
+//! message, RTDE replies). What a client sends is read [`READ_CHUNK`] bytes at a time into one buffer
 //! of the loop, at most [`MAX_READS_PER_STEP`] reads a step, and kept only as far as its
 //! intake or RTDE session bounds allow.
 
@@ -43,6 +43,13 @@ pub const MAX_BACKLOG: usize = 256 * 1024;
 /// Queued bytes past which a client is disconnected: sixteen times the backlog, room
 /// for bursts of robot messages and RTDE replies to a client that reads late.
 pub const MAX_QUEUE: usize = 4 * 1024 * 1024;
+/// How long a client may take no byte at all while its packages are being skipped
+/// (its queue past [`MAX_BACKLOG`]) before it is dropped ("the client stopped
+/// reading"): a client that reads, however slowly, stays; one that has stopped frees
+/// its slot among the [`MAX_CLIENTS`]. By then it has missed the kernel's buffers, the
+/// backlog and 5 s more of packages, so it could not have gone on anyway. UR does not
+/// document a limit; 5 s is our choice, longer than any pause of a working client.
+pub const MAX_STALL: Duration = Duration::from_secs(5);
 /// Bytes read from one client at a time (the loop's one read buffer).
 pub const READ_CHUNK: usize = 64 * 1024;
 /// The running program's connects (`socket_open`, an XML-RPC call) in progress at once.
@@ -88,13 +95,19 @@ struct Client {
     rx: u64,
     tx: u64,
     gone: Option<&'static str>,
+    /// Controller time of the last flush that wrote something (or found nothing to
+    /// write).
+    last_write: Duration,
 }
 
 impl Client {
-    /// Queues a state package unless the client is behind.
-    fn offer(&mut self, bytes: &[u8]) {
+    /// Queues a state package unless the client is behind; drops a client that took
+    /// nothing for [`MAX_STALL`] while behind.
+    fn offer(&mut self, bytes: &[u8], now: Duration) {
         if self.queue.len() <= MAX_BACKLOG {
             self.queue.extend_from_slice(bytes);
+        } else if now.saturating_sub(self.last_write) > MAX_STALL {
+            self.gone = Some("the client stopped reading");
         }
     }
 
@@ -106,7 +119,7 @@ impl Client {
         }
     }
 
-    fn flush(&mut self) {
+    fn flush(&mut self, now: Duration) {
         let mut written = 0;
         while written < self.queue.len() {
             match self.stream.write(&self.queue[written..]) {
@@ -125,6 +138,9 @@ impl Client {
         }
         self.tx += written as u64;
         self.queue.drain(..written);
+        if written > 0 || self.queue.is_empty() {
+            self.last_write = now;
+        }
     }
 }
 
@@ -194,7 +210,7 @@ pub(crate) fn run(shared: &Arc<Shared>, listeners: Listeners) {
         lp.read_clients(shared);
         lp.step(shared, tick);
         for c in &mut lp.clients {
-            c.flush();
+            c.flush(tick);
         }
         lp.drop_gone(shared);
         last = Some(tick);
@@ -340,6 +356,7 @@ impl Loop {
                 rx: 0,
                 tx: 0,
                 gone: None,
+                last_write: shared.now(),
             };
             if matches!(service, Service::Primary | Service::Secondary) {
                 self.frame.clear();
@@ -640,7 +657,7 @@ impl Loop {
                 .iter_mut()
                 .filter(|c| c.service == Service::Realtime)
             {
-                c.offer(&self.frame);
+                c.offer(&self.frame, now);
             }
         }
         // Primary and secondary: 10 Hz, and at once when the robot mode, the safety
@@ -658,7 +675,7 @@ impl Loop {
                 .iter_mut()
                 .filter(|c| matches!(c.service, Service::Primary | Service::Secondary))
             {
-                c.offer(&self.frame);
+                c.offer(&self.frame, now);
             }
         }
         // RTDE: each session at its own frequency (the session skips packages itself
@@ -671,7 +688,7 @@ impl Loop {
             if let Some(s) = c.rtde.as_mut() {
                 s.on_step(status, now);
                 let out = s.take_outbox();
-                c.offer(&out);
+                c.offer(&out, now);
             }
         }
     }
