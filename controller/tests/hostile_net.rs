@@ -458,6 +458,27 @@ fn a_program_that_never_ends_and_floods_of_setups_and_lines() {
         write_some(&mut s, &flood);
         f.healthy("an RTDE setup flood from a client that does not read");
     }
+    // Dashboard command floods: from every slot at once, nobody reading the replies
+    // (each connection ends once its replies cannot be written, WRITE_TIMEOUT).
+    {
+        let lines = b"robotmode\nprogramState\nget serial number\n".repeat(20_000);
+        let floods: Vec<_> = (0..MAX_CONNECTIONS - 1)
+            .map(|_| {
+                let addr = f.addr("dashboard");
+                let lines = lines.clone();
+                thread::spawn(move || {
+                    if let Ok(mut s) = connect(addr) {
+                        let _ = s.set_write_timeout(Some(Duration::from_secs(2)));
+                        write_some(&mut s, &lines);
+                    }
+                })
+            })
+            .collect();
+        for t in floods {
+            let _ = t.join();
+        }
+        f.healthy("dashboard command floods");
+    }
     // Interpreter lines flood, nobody reading the replies (no program runs: each is
     // discarded; the connection ends once its replies cannot be written).
     {
