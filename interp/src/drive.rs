@@ -171,6 +171,30 @@ impl Driver {
         Ok(())
     }
 
+    /// Answers the machine's [`Event::Connect`] for `socket_name` with the outcome of a
+    /// connect made elsewhere (a caller whose loop must not block on a connect, as a
+    /// virtual controller's real-time loop, connects in a thread of its own with
+    /// [`connect_stream`], then hands the stream, or the reason in words, here).
+    pub fn adopt(
+        &mut self,
+        machine: &mut Machine,
+        socket_name: &str,
+        result: Result<TcpStream, String>,
+    ) {
+        match result {
+            Ok(stream) => {
+                if let Some(old) = self
+                    .conns
+                    .insert(socket_name.to_string(), Conn::new(stream))
+                {
+                    let _ = old.stream.shutdown(Shutdown::Both);
+                }
+                machine.handle_connected(socket_name, Ok(()));
+            }
+            Err(why) => machine.handle_connected(socket_name, Err(why)),
+        }
+    }
+
     /// Runs `machine` against real servers until it ends, fails, or
     /// [`Options::max_time`] passes. `on_activity` sees every event first, and every
     /// read from a server; a runtime error is the `Err`. The machine stays with the

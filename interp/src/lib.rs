@@ -37,6 +37,7 @@
 //! | size of one value (list elements at every depth, plus string bytes) | [`Config::max_value_size`] (1 000 000) | runtime, `Limit` |
 //! | nested calls per thread | 256 | runtime, `Limit` |
 //! | threads running at once | [`MAX_THREADS`](machine::MAX_THREADS) (64) | runtime, `Limit` |
+//! | sockets open at once (`socket_open` of a new name past it) | [`MAX_SOCKETS`](builtins::sockets::MAX_SOCKETS) (64) | runtime, `Limit` |
 //! | statements per thread per step without consuming time | [`Config::max_statements_per_step`] (100 000) | runtime, [`RuntimeErrorKind::TooMuchTime`] |
 //!
 //! Everything recursive (parsing, compiling, cloning, comparing, writing and dropping

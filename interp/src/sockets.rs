@@ -56,6 +56,11 @@ impl Sockets {
         self.robot.socket(name).is_some()
     }
 
+    /// How many sockets are open now.
+    pub fn count(&self) -> usize {
+        self.robot.names().count()
+    }
+
     pub fn open_names(&self) -> Vec<String> {
         self.robot.names().map(str::to_string).collect()
     }

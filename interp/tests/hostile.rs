@@ -355,3 +355,47 @@ fn fuzz_seeds_replay() {
         }
     }
 }
+
+// ---------------------------------------------------------------------------------------
+// Sockets
+
+#[test]
+fn opening_sockets_under_new_names_without_end_is_a_limit_error() {
+    use urscript_interp::builtins::sockets::MAX_SOCKETS;
+    let src = "i = 0\nwhile True:\n  socket_open(\"127.0.0.1\", 5000, str_cat(\"s\", i))\n  i = i + 1\nend\n";
+    let config = Config::default();
+    let step = config.step_time;
+    let mut m = Machine::new(Program::parse(src).unwrap(), config);
+    let mut connected = 0usize;
+    // Every connect succeeds (the test is the driver): the bound, not the network, ends it.
+    for k in 0..10 * MAX_SOCKETS as u32 {
+        m.run_until(step * k);
+        while let Some(e) = m.poll_event() {
+            if let urscript_interp::Event::Connect { socket_name, .. } = e {
+                m.handle_connected(&socket_name, Ok(()));
+                connected += 1;
+            }
+        }
+        if m.state() != &State::Running {
+            break;
+        }
+    }
+    let e = limit_error(m.state().clone());
+    assert!(e.contains("sockets are open already"), "{e}");
+    assert_eq!(connected, MAX_SOCKETS);
+    // Reopening an open name, or opening after a close, stays within it.
+    let src = "i = 0\nwhile i < 200:\n  socket_open(\"127.0.0.1\", 5000, str_cat(\"s\", i % 8))\n  socket_close(str_cat(\"s\", (i + 4) % 8))\n  i = i + 1\nend\n";
+    let mut m = Machine::new(Program::parse(src).unwrap(), Config::default());
+    for k in 0..2_000u32 {
+        m.run_until(step * k);
+        while let Some(e) = m.poll_event() {
+            if let urscript_interp::Event::Connect { socket_name, .. } = e {
+                m.handle_connected(&socket_name, Ok(()));
+            }
+        }
+        if m.state() != &State::Running {
+            break;
+        }
+    }
+    assert_eq!(m.state(), &State::Finished);
+}

@@ -25,7 +25,10 @@ use urscript_interp::interpreter::{Discard, Reply, MAX_LINE};
 
 use super::{ServerEvent, Shared, WRITE_TIMEOUT};
 
-/// Interpreter connections served at once; more are accepted and closed at once.
+/// Interpreter connections served at once; more are accepted and closed at once. Each
+/// is a thread; a program in interpreter mode has one client as a rule, so 16 is ample
+/// and bounds what a flood of peers can take, as [`MAX_CONNECTIONS`](super::MAX_CONNECTIONS)
+/// does for the dashboard.
 pub const MAX_INTERPRETER_CONNECTIONS: usize = 16;
 
 /// How often a connection with nothing to read looks for late replies (and for the

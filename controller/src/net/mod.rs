@@ -18,6 +18,41 @@
 //! What happens is reported as [`ServerEvent`]s to the callback given to
 //! [`Server::start`], from the server's threads.
 //!
+//! # Bounds
+//!
+//! Whatever its peers and programs do, the server neither panics, nor stops serving, nor
+//! grows without bound (the test `tests/hostile_net.rs` attacks every port). Each bound:
+//!
+//! - Threads: at most [`MAX_SERVER_THREADS`]: the real-time loop, the dashboard's and the
+//!   interpreter's accepting threads, one per dashboard connection ([`MAX_CONNECTIONS`]),
+//!   one per interpreter connection ([`MAX_INTERPRETER_CONNECTIONS`]), one per connect
+//!   of the running program in progress ([`MAX_CONNECTING`]: a connect never blocks the
+//!   real-time loop), and one reading a played `.urp` program (the cell asks for one
+//!   program at a time).
+//! - Connections past a limit are accepted and closed at once, so the kernel's listen
+//!   backlog (the standard library's 128, capped by the system) drains however many
+//!   peers knock; the stream listeners are drained every step.
+//! - Dashboard connection: the line read so far, at most [`MAX_LINE`] bytes (a longer
+//!   one is answered and skipped to its newline); a reply not taken within
+//!   [`WRITE_TIMEOUT`] ends it. An idle client holds its slot until it leaves, as on
+//!   the robot, where a dashboard client may stay connected for hours.
+//! - Interpreter connection: the line so far, at most 64 KiB
+//!   ([`urscript_interp::interpreter::MAX_LINE`]); the same write timeout; the lines
+//!   the program holds are bounded by [`urscript_interp::interpreter::MAX_UNEXECUTED`].
+//! - Stream clients (primary, secondary, realtime, RTDE): at most [`MAX_CLIENTS`] in
+//!   all; per client the bytes queued for it ([`MAX_BACKLOG`], [`MAX_QUEUE`]), its
+//!   script intake ([`crate::script_intake::MAX_LINE`], [`crate::script_intake::MAX_PROGRAM`])
+//!   or its RTDE session ([`crate::rtde::RTDE_MAX_PACKET_SIZE`],
+//!   [`crate::rtde::RTDE_MAX_OUTBOX`], [`crate::rtde::RTDE_MAX_EVENTS`], the recipe
+//!   counts). See [`streams`](self) for who is dropped when.
+//! - The running program: the interpreter's bounds (value size, call depth, threads,
+//!   statements per step, sockets open: see `urscript_interp`'s crate documentation),
+//!   each a runtime error reported to the primary clients; what its sockets leave
+//!   unsent, [`urscript_interp::drive::MAX_UNSENT`] per socket.
+//! - A played `.urp`: its file at most [`MAX_FILE`] bytes, an External Control script
+//!   at most [`MAX_FETCHED`] bytes fetched within 10 s.
+//! - The cell's events between two steps: [`crate::MAX_EVENTS`].
+//!
 //! ```no_run
 //! use urscript_controller::net::{Ports, Server, ServerOptions};
 //! let server = Server::start(
@@ -49,14 +84,26 @@ use crate::{Cell, Config, Controller, Dashboard, Programs, Reply, MAX_LINE};
 
 pub use fetch::{parse_host, MAX_FETCHED, MAX_FILE};
 pub use interpreter::{MAX_INTERPRETER_CONNECTIONS, POLL as INTERPRETER_POLL};
-pub use streams::{MAX_BACKLOG, MAX_CLIENTS, MAX_QUEUE};
+pub use streams::{
+    MAX_BACKLOG, MAX_CLIENTS, MAX_CONNECTING, MAX_QUEUE, MAX_READS_PER_STEP, MAX_STALL, READ_CHUNK,
+};
 
-/// Dashboard connections served at once; more are accepted and closed at once.
+/// Dashboard connections served at once; more are accepted and closed at once. Each is
+/// a thread; UR's clients open one or two, and a cell a few more, so 16 leaves room
+/// while bounding the threads and descriptors a flood of peers can take.
 pub const MAX_CONNECTIONS: usize = 16;
 
-/// A dashboard reply that cannot be written in this time (a client that stopped reading)
-/// ends the connection.
-const WRITE_TIMEOUT: Duration = Duration::from_secs(10);
+/// The most threads a [`Server`] runs at once: the real-time loop, two accepting
+/// threads, [`MAX_CONNECTIONS`] dashboard and [`MAX_INTERPRETER_CONNECTIONS`]
+/// interpreter connections, [`MAX_CONNECTING`] connects of the program, and one reading
+/// a played `.urp` program.
+pub const MAX_SERVER_THREADS: usize =
+    3 + MAX_CONNECTIONS + MAX_INTERPRETER_CONNECTIONS + MAX_CONNECTING + 1;
+
+/// A dashboard or interpreter reply that cannot be written in this time (a client that
+/// stopped reading) ends the connection: long enough for a client that is merely slow,
+/// short enough that a deaf one frees its thread.
+pub const WRITE_TIMEOUT: Duration = Duration::from_secs(10);
 
 /// The ports to serve on; `Some(0)` picks a free one, `None` serves nothing there.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

@@ -8,13 +8,22 @@
 //! read waits in its queue; past [`MAX_BACKLOG`] bytes new state packages are skipped
 //! for it (it sees a gap, as a client of a real controller that falls behind does) and
 //! past [`MAX_QUEUE`] it is disconnected: a client that never reads slows nothing down.
+//!
+//! So a client that never reads holds at most [`MAX_BACKLOG`] bytes and one package
+//! (realtime, secondary, RTDE data: packages are skipped, and after [`MAX_STALL`] of
+//! taking nothing it is dropped), or at most [`MAX_QUEUE`] bytes and one message
+//! before it is dropped (what it must get: the primary's robot messages and version
+//! message, RTDE replies). What a client sends is read [`READ_CHUNK`] bytes at a time into one buffer
+//! of the loop, at most [`MAX_READS_PER_STEP`] reads a step, and kept only as far as its
+//! intake or RTDE session bounds allow.
 
+use std::collections::VecDeque;
 use std::io::{ErrorKind, Read, Write};
 use std::net::{Shutdown, TcpListener, TcpStream};
-use std::sync::Arc;
+use std::sync::{mpsc, Arc};
 use std::time::Duration;
 
-use urscript_interp::drive::{Activity, Driver, Options};
+use urscript_interp::drive::{connect_stream, describe_connect_error, Activity, Driver, Options};
 use urscript_interp::{Event as ProgramEvent, MessageKind};
 
 use super::{ServerEvent as Event, Shared};
@@ -24,12 +33,37 @@ use crate::rtde::{InputRegistry, RtdeEvent, RtdeSession};
 use crate::script_intake::{Command, Intake, ScriptIntake};
 use crate::{CellEvent, Ended, Status, Submitted};
 
-/// Clients of the streaming interfaces served at once (all four together).
+/// Clients of the streaming interfaces served at once (all four together); more are
+/// accepted and closed at once. They cost no thread; the bound caps the memory their
+/// queues may take (`MAX_CLIENTS` x [`MAX_QUEUE`]) and the work of one step.
 pub const MAX_CLIENTS: usize = 64;
-/// Queued bytes past which a client's state packages are skipped.
+/// Queued bytes past which a client's state packages are skipped: about 200 realtime
+/// packages (0.4 s at 500 Hz), on top of what the kernel's socket buffers hold.
 pub const MAX_BACKLOG: usize = 256 * 1024;
-/// Queued bytes past which a client is disconnected.
+/// Queued bytes past which a client is disconnected: sixteen times the backlog, room
+/// for bursts of robot messages and RTDE replies to a client that reads late.
 pub const MAX_QUEUE: usize = 4 * 1024 * 1024;
+/// How long a client may take no byte at all while its packages are being skipped
+/// (its queue past [`MAX_BACKLOG`]) before it is dropped ("the client stopped
+/// reading"): a client that reads, however slowly, stays; one that has stopped frees
+/// its slot among the [`MAX_CLIENTS`]. By then it has missed the kernel's buffers, the
+/// backlog and 5 s more of packages, so it could not have gone on anyway. UR does not
+/// document a limit; 5 s is our choice, longer than any pause of a working client.
+pub const MAX_STALL: Duration = Duration::from_secs(5);
+/// Bytes read from one client at a time (the loop's one read buffer).
+pub const READ_CHUNK: usize = 64 * 1024;
+/// The running program's connects (`socket_open`, an XML-RPC call) in progress at once.
+/// Each runs in a thread of its own (`connect`), so a server that does not answer (a
+/// dropped SYN waits out the connect timeout, 2 s, per address) holds up only the
+/// program thread that waits for it, never the loop and with it every stream and the
+/// dashboard. More wait their turn (at most one per program thread); those of a program
+/// that ended are dropped. Eight is more than programs open at once.
+pub const MAX_CONNECTING: usize = 8;
+/// Reads of one client in one step, at most: 1 MiB a step (500 MiB/s at 2 ms steps) is
+/// more than any client sends, and a peer that floods faster than the loop reads cannot
+/// keep the loop reading instead of stepping. The rest waits in the kernel for the next
+/// step.
+pub const MAX_READS_PER_STEP: usize = 16;
 
 /// Which interface a client is on.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -61,13 +95,19 @@ struct Client {
     rx: u64,
     tx: u64,
     gone: Option<&'static str>,
+    /// Controller time of the last flush that wrote something (or found nothing to
+    /// write).
+    last_write: Duration,
 }
 
 impl Client {
-    /// Queues a state package unless the client is behind.
-    fn offer(&mut self, bytes: &[u8]) {
+    /// Queues a state package unless the client is behind; drops a client that took
+    /// nothing for [`MAX_STALL`] while behind.
+    fn offer(&mut self, bytes: &[u8], now: Duration) {
         if self.queue.len() <= MAX_BACKLOG {
             self.queue.extend_from_slice(bytes);
+        } else if now.saturating_sub(self.last_write) > MAX_STALL {
+            self.gone = Some("the client stopped reading");
         }
     }
 
@@ -79,7 +119,7 @@ impl Client {
         }
     }
 
-    fn flush(&mut self) {
+    fn flush(&mut self, now: Duration) {
         let mut written = 0;
         while written < self.queue.len() {
             match self.stream.write(&self.queue[written..]) {
@@ -98,6 +138,9 @@ impl Client {
         }
         self.tx += written as u64;
         self.queue.drain(..written);
+        if written > 0 || self.queue.is_empty() {
+            self.last_write = now;
+        }
     }
 }
 
@@ -111,14 +154,23 @@ pub(crate) struct Listeners {
 
 /// Runs the loop until the server stops.
 pub(crate) fn run(shared: &Arc<Shared>, listeners: Listeners) {
+    let (done_tx, done_rx) = mpsc::channel();
     let mut lp = Loop {
         clients: Vec::new(),
         driver: Driver::new(Options::default()),
+        connects: Connects {
+            timeout: Options::default().connect_timeout,
+            generation: 0,
+            waiting: VecDeque::new(),
+            in_flight: 0,
+            done_tx,
+            done_rx,
+        },
         registry: InputRegistry::new(),
         next_state: Duration::ZERO,
         safety: None,
         state_key: None,
-        buf: vec![0u8; 64 * 1024],
+        buf: vec![0u8; READ_CHUNK],
         frame: Vec::new(),
     };
     let listeners = [
@@ -158,7 +210,7 @@ pub(crate) fn run(shared: &Arc<Shared>, listeners: Listeners) {
         lp.read_clients(shared);
         lp.step(shared, tick);
         for c in &mut lp.clients {
-            c.flush();
+            c.flush(tick);
         }
         lp.drop_gone(shared);
         last = Some(tick);
@@ -177,9 +229,88 @@ fn step_boundary(t: Duration, step: Duration) -> Duration {
     Duration::from_nanos(u64::try_from(n - n % step).unwrap_or(u64::MAX))
 }
 
+/// A connect the program asked for, not started yet.
+struct ConnectRequest {
+    generation: u64,
+    socket_name: String,
+    host: String,
+    port: u16,
+}
+
+/// A connect's outcome, from its thread.
+struct Connected {
+    generation: u64,
+    socket_name: String,
+    result: Result<TcpStream, String>,
+}
+
+/// The program's connects, each in a thread of its own (see [`MAX_CONNECTING`]).
+struct Connects {
+    timeout: Duration,
+    /// Counts the programs: an outcome for an earlier one is dropped.
+    generation: u64,
+    waiting: VecDeque<ConnectRequest>,
+    in_flight: usize,
+    done_tx: mpsc::Sender<Connected>,
+    done_rx: mpsc::Receiver<Connected>,
+}
+
+impl Connects {
+    /// A program started or ended: what its connects bring is no one's.
+    fn next_program(&mut self) {
+        self.generation += 1;
+        self.waiting.clear();
+    }
+
+    /// Hands the finished connects to the program, and starts waiting ones.
+    fn service(&mut self, driver: &mut Driver, mut machine: Option<&mut urscript_interp::Machine>) {
+        while let Ok(done) = self.done_rx.try_recv() {
+            self.in_flight = self.in_flight.saturating_sub(1);
+            match machine.as_deref_mut() {
+                Some(m) if done.generation == self.generation => {
+                    driver.adopt(m, &done.socket_name, done.result);
+                }
+                _ => {
+                    if let Ok(stream) = done.result {
+                        let _ = stream.shutdown(Shutdown::Both);
+                    }
+                }
+            }
+        }
+        while self.in_flight < MAX_CONNECTING {
+            let Some(r) = self.waiting.pop_front() else {
+                break;
+            };
+            let tx = self.done_tx.clone();
+            let timeout = self.timeout;
+            let name = r.socket_name.clone();
+            let spawned = std::thread::Builder::new()
+                .name("connect".into())
+                .spawn(move || {
+                    let result = connect_stream(&r.host, r.port, timeout)
+                        .map_err(|e| describe_connect_error(&r.host, r.port, &e));
+                    let _ = tx.send(Connected {
+                        generation: r.generation,
+                        socket_name: r.socket_name,
+                        result,
+                    });
+                });
+            match spawned {
+                Ok(_) => self.in_flight += 1,
+                Err(e) => {
+                    if let Some(m) = machine.as_deref_mut() {
+                        driver.adopt(m, &name, Err(format!("cannot start a thread: {e}")));
+                    }
+                }
+            }
+        }
+    }
+}
+
 struct Loop {
     clients: Vec<Client>,
     driver: Driver,
+    connects: Connects,
     /// Which RTDE client owns which input field.
     registry: InputRegistry,
     next_state: Duration,
@@ -225,6 +356,7 @@ impl Loop {
                 rx: 0,
                 tx: 0,
                 gone: None,
+                last_write: shared.now(),
             };
             if matches!(service, Service::Primary | Service::Secondary) {
                 self.frame.clear();
@@ -240,7 +372,7 @@ impl Loop {
         // copy of the bytes per read.
         let mut buf = std::mem::take(&mut self.buf);
         for i in 0..self.clients.len() {
-            loop {
+            for _ in 0..MAX_READS_PER_STEP {
                 let c = &mut self.clients[i];
                 if c.gone.is_some() {
                     break;
@@ -365,6 +497,22 @@ impl Loop {
                             _ => {}
                         }
                         match cell.machine_mut() {
+                            // A connect must not block the loop: a thread makes it.
+                            Some(_) if matches!(e, ProgramEvent::Connect { .. }) => {
+                                if let ProgramEvent::Connect {
+                                    socket_name,
+                                    host,
+                                    port,
+                                } = e
+                                {
+                                    self.connects.waiting.push_back(ConnectRequest {
+                                        generation: self.connects.generation,
+                                        socket_name,
+                                        host,
+                                        port,
+                                    });
+                                }
+                            }
                             Some(m) => self.driver.handle_event(m, e, &mut |a| show(&emit, a)),
                             // The program has ended: what it sent last still goes
                             // out, then its sockets close.
@@ -372,6 +520,7 @@ impl Loop {
                         }
                     }
                     CellEvent::ProgramStarted { name } => {
+                        self.connects.next_program();
                         emit(program_event("started", &name, None, None, None));
                         messages.push(RobotMessage::program_started(&name));
                     }
@@ -397,6 +546,7 @@ impl Loop {
                         }
                         messages.push(RobotMessage::program_stopped(&name));
                         self.driver.close_all();
+                        self.connects.next_program();
                     }
                     CellEvent::Refused { line, column, text } => {
                         let at = (line > 0).then_some(line);
@@ -438,6 +588,7 @@ impl Loop {
                     }
                 }
             }
+            self.connects.service(&mut self.driver, cell.machine_mut());
             if let Some(m) = cell.machine_mut() {
                 self.driver.poll_sockets(m, &mut |a| show(&emit, a));
             }
@@ -506,7 +657,7 @@ impl Loop {
                 .iter_mut()
                 .filter(|c| c.service == Service::Realtime)
             {
-                c.offer(&self.frame);
+                c.offer(&self.frame, now);
             }
         }
         // Primary and secondary: 10 Hz, and at once when the robot mode, the safety
@@ -524,7 +675,7 @@ impl Loop {
                 .iter_mut()
                 .filter(|c| matches!(c.service, Service::Primary | Service::Secondary))
             {
-                c.offer(&self.frame);
+                c.offer(&self.frame, now);
             }
         }
         // RTDE: each session at its own frequency (the session skips packages itself
@@ -537,7 +688,7 @@ impl Loop {
             if let Some(s) = c.rtde.as_mut() {
                 s.on_step(status, now);
                 let out = s.take_outbox();
-                c.offer(&out);
+                c.offer(&out, now);
             }
         }
     }

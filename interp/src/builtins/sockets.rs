@@ -6,10 +6,19 @@ use urscript_socket::robot::ReadCall;
 
 use super::{opt, req, Args, Builtin, Default, Domain, Out, SOCKET_NAME};
 use crate::controller::Controller;
-use crate::error::Fault;
+use crate::error::{Fault, RuntimeErrorKind};
 use crate::value::Value;
 
 const D: Domain = Domain::Sockets;
+
+/// The most sockets a program may have open at once. Each open socket is a connection
+/// (a file descriptor and its buffers) of the process that runs the program, so without
+/// a bound a program that opens sockets under new names in a loop takes every
+/// descriptor of its host (the controller's listeners then cannot accept). UR's manuals
+/// give no number; 64 is our choice, far above what programs open (a gripper, a camera,
+/// a PC), as [`MAX_THREADS`](crate::machine::MAX_THREADS) is for threads. Opening one
+/// more stops the program with a [`Limit`](RuntimeErrorKind::Limit) error.
+pub const MAX_SOCKETS: usize = 64;
 const TIMEOUT: super::Param = opt("timeout", Default::Float(2.0));
 
 pub(super) const TABLE: &[Builtin] = &[
@@ -120,6 +129,14 @@ fn open(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
     let socket = a.text(2)?;
     // Policy: opening an open name closes the old connection first.
     c.close(&socket);
+    if c.sockets.count() >= MAX_SOCKETS {
+        return Err(Fault::new(
+            RuntimeErrorKind::Limit,
+            format!(
+                "`socket_open`: {MAX_SOCKETS} sockets are open already (at most {MAX_SOCKETS})"
+            ),
+        ));
+    }
     c.events.push_back(crate::event::Event::Connect {
         socket_name: socket.clone(),
         host,
