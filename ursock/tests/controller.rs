@@ -115,11 +115,30 @@ impl Client {
     }
 }
 
+/// A `.urp` (gzip XML, as PolyScope saves it) whose program waits a minute: it runs
+/// until stopped, so the program's state does not depend on how fast it is read.
+fn waiting_urp(name: &str) -> Vec<u8> {
+    let xml = format!(
+        r#"<URProgram name="{name}" installation="default" createdIn="5.21.0">
+  <children>
+    <MainProgram runOnlyOnce="true">
+      <children>
+        <Script type="Line"><expression>sleep(60)</expression></Script>
+      </children>
+    </MainProgram>
+  </children>
+</URProgram>"#
+    );
+    let mut gz = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::default());
+    gz.write_all(xml.as_bytes()).unwrap();
+    gz.finish().unwrap()
+}
+
 fn programs_dir() -> std::path::PathBuf {
     let dir = std::env::temp_dir().join(format!("ursock-controller-test-{}", std::process::id()));
     std::fs::create_dir_all(dir.join("sub")).unwrap();
-    std::fs::write(dir.join("pick.urp"), b"").unwrap();
-    std::fs::write(dir.join("sub/place.urp"), b"").unwrap();
+    std::fs::write(dir.join("pick.urp"), waiting_urp("pick")).unwrap();
+    std::fs::write(dir.join("sub/place.urp"), waiting_urp("place")).unwrap();
     dir
 }
 
