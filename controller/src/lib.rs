@@ -53,6 +53,9 @@
 //! - In local control ([`Config::remote_control`] false) every command that acts (load,
 //!   play, stop, pause, shutdown, power, brakes, unlock, restart safety, operational
 //!   mode, load installation) gets the controller's refusal; queries still answer.
+//!   With the remote control setting off ([`Config::remote_control_enabled`] false, a new
+//!   robot's and URSim's state, which UR's client library's tests expect) every command
+//!   is accepted and `is in remote control` answers false.
 //!
 //! Playing a program keeps only the state (PLAYING until stop or pause): executing the
 //! `.urp`'s program is the next step.

@@ -308,6 +308,11 @@ pub struct Config {
     pub serial: String,
     /// Whether the pendant is in remote control (the default: clients drive it).
     pub remote_control: bool,
+    /// Whether the remote control setting is on (the default). Off, as on a new robot
+    /// and on URSim, there is no local/remote switch: every command is accepted and
+    /// `is in remote control` answers false (UR's dashboard page: false when remote
+    /// control is disabled or the pendant is in local control).
+    pub remote_control_enabled: bool,
     /// The durations of the timed transitions.
     pub timing: Timing,
 }
@@ -320,6 +325,7 @@ impl Default for Config {
             build_date: "Jan 01 2025".into(),
             serial: "20235500001".into(),
             remote_control: true,
+            remote_control_enabled: true,
             timing: Timing::default(),
         }
     }
@@ -561,9 +567,10 @@ impl Controller {
         self.operational_mode
     }
 
-    /// Whether the pendant is in remote control.
+    /// Whether the pendant is in remote control: never with the remote control setting
+    /// off ([`Config::remote_control_enabled`]).
     pub fn remote_control(&self) -> bool {
-        self.remote_control
+        self.config.remote_control_enabled && self.remote_control
     }
 
     /// Switch the pendant between remote (`true`) and local control.
@@ -600,7 +607,7 @@ impl Controller {
     }
 
     fn remote(&self) -> Result<(), Refused> {
-        if self.remote_control {
+        if self.remote_control || !self.config.remote_control_enabled {
             Ok(())
         } else {
             Err(Refused::LocalControl)
