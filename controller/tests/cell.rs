@@ -321,3 +321,17 @@ fn interpreter_lines_reach_the_program_and_late_replies_their_connection() {
         ["discard: program not running: textmsg(3)"]
     );
 }
+
+#[test]
+fn protective_stop_in_a_secondary_program_stops_the_arm() {
+    use urscript_controller::SafetyStatus;
+    let (mut cell, _) = ready_cell();
+    cell.submit(
+        Submitted::Secondary("sec setup():\n  protective_stop()\nend\n".into()),
+        ms(2100),
+    );
+    assert_eq!(
+        cell.controller().safety_status(ms(2100)),
+        SafetyStatus::ProtectiveStop
+    );
+}
