@@ -302,7 +302,7 @@ impl Cell {
         self.advance(now);
         match submitted {
             Submitted::Program(text) => self.start(text, None, now),
-            Submitted::Secondary(text) => self.run_secondary(&text),
+            Submitted::Secondary(text) => self.run_secondary(&text, now),
         }
     }
 
@@ -391,7 +391,7 @@ impl Cell {
 
     /// Runs a `sec` program to its end on a copy of the arm; what it set becomes the
     /// arm's (its joints cannot change: a secondary program may not move the arm).
-    fn run_secondary(&mut self, text: &str) {
+    fn run_secondary(&mut self, text: &str, now: Duration) {
         let program = match parse(text, None) {
             Ok(p) => p,
             Err(refused) => return self.push(refused),
@@ -421,6 +421,14 @@ impl Cell {
         arm.q = q;
         arm.qd = qd;
         arm.tcp_speed = tcp_speed;
+        // `protective_stop()` in a secondary program stops the arm as in a main one (UR's
+        // client library's driver test sends one and waits for the stop's error code).
+        if std::mem::take(&mut arm.protective_stop) {
+            self.controller.protective_stop(now);
+            if let Some(r) = &mut self.running {
+                r.paused_at.get_or_insert(now);
+            }
+        }
     }
 
     fn end_running(&mut self, how: Ended) {

@@ -36,6 +36,10 @@
 //!   powered on on the fly").
 //! - A protective stop ([`Controller::protective_stop`]) pauses a playing program and
 //!   holds 5 s: `unlock protective stop` before that gets the controller's refusal text.
+//!   The primary interface's `set unlock protective stop` releases it at once: UR
+//!   documents the hold for the dashboard command, and UR's client library, tested
+//!   against URSim, unlocks through the primary interface right after a stop and
+//!   expects the stop gone within 5 s ([`Controller::request_unlock_protective_stop`]).
 //! - `play` needs a loaded program, RUNNING and a safety that allows motion; `pause` only
 //!   from PLAYING; `stop` needs a loaded program (stopping a stopped one answers
 //!   `Stopped`, undocumented: chosen so that clients that stop defensively go on);
@@ -49,6 +53,9 @@
 //! - In local control ([`Config::remote_control`] false) every command that acts (load,
 //!   play, stop, pause, shutdown, power, brakes, unlock, restart safety, operational
 //!   mode, load installation) gets the controller's refusal; queries still answer.
+//!   With the remote control setting off ([`Config::remote_control_enabled`] false, a new
+//!   robot's and URSim's state, which UR's client library's tests expect) every command
+//!   is accepted and `is in remote control` answers false.
 //!
 //! Playing a program keeps only the state (PLAYING until stop or pause): executing the
 //! `.urp`'s program is the next step.

@@ -308,6 +308,11 @@ pub struct Config {
     pub serial: String,
     /// Whether the pendant is in remote control (the default: clients drive it).
     pub remote_control: bool,
+    /// Whether the remote control setting is on (the default). Off, as on a new robot
+    /// and on URSim, there is no local/remote switch: every command is accepted and
+    /// `is in remote control` answers false (UR's dashboard page: false when remote
+    /// control is disabled or the pendant is in local control).
+    pub remote_control_enabled: bool,
     /// The durations of the timed transitions.
     pub timing: Timing,
 }
@@ -320,6 +325,7 @@ impl Default for Config {
             build_date: "Jan 01 2025".into(),
             serial: "20235500001".into(),
             remote_control: true,
+            remote_control_enabled: true,
             timing: Timing::default(),
         }
     }
@@ -426,9 +432,6 @@ pub struct Controller {
     safety: SafetyStatus,
     /// When the current protective stop happened.
     protective_since: Option<Duration>,
-    /// When a protective stop unlocks by itself: `set unlock protective stop` came on
-    /// the primary interface before the hold had passed.
-    unlock_at: Option<Duration>,
     pending: Option<Pending>,
     program_state: ProgramState,
     /// The loaded program: the name as given to `load`, and the path shown.
@@ -469,7 +472,6 @@ impl Controller {
             robot_mode: RobotMode::PowerOff,
             safety: SafetyStatus::Normal,
             protective_since: None,
-            unlock_at: None,
             pending: None,
             program_state: ProgramState::Stopped,
             loaded: None,
@@ -497,22 +499,11 @@ impl Controller {
 
     /// When the next timed transition is due, if one is pending.
     pub fn poll_timeout(&self) -> Option<Duration> {
-        match (self.pending.map(Pending::at), self.unlock_at) {
-            (Some(a), Some(b)) => Some(a.min(b)),
-            (a, b) => a.or(b),
-        }
+        self.pending.map(Pending::at)
     }
 
     /// Settle every transition due at or before `now`.
     pub fn handle_timeout(&mut self, now: Duration) {
-        if let Some(at) = self.unlock_at.filter(|at| *at <= now) {
-            let _ = at;
-            self.unlock_at = None;
-            if self.safety == SafetyStatus::ProtectiveStop {
-                self.safety = SafetyStatus::Normal;
-                self.protective_since = None;
-            }
-        }
         while let Some(p) = self.pending {
             if p.at() > now {
                 return;
@@ -576,9 +567,10 @@ impl Controller {
         self.operational_mode
     }
 
-    /// Whether the pendant is in remote control.
+    /// Whether the pendant is in remote control: never with the remote control setting
+    /// off ([`Config::remote_control_enabled`]).
     pub fn remote_control(&self) -> bool {
-        self.remote_control
+        self.config.remote_control_enabled && self.remote_control
     }
 
     /// Switch the pendant between remote (`true`) and local control.
@@ -615,7 +607,7 @@ impl Controller {
     }
 
     fn remote(&self) -> Result<(), Refused> {
-        if self.remote_control {
+        if self.remote_control || !self.config.remote_control_enabled {
             Ok(())
         } else {
             Err(Refused::LocalControl)
@@ -700,7 +692,6 @@ impl Controller {
         }
         self.safety = SafetyStatus::ProtectiveStop;
         self.protective_since = Some(now);
-        self.unlock_at = None;
         if self.program_state == ProgramState::Playing {
             self.program_state = ProgramState::Paused;
         }
@@ -723,20 +714,18 @@ impl Controller {
         Ok(())
     }
 
-    /// `set unlock protective stop` on the primary interface: the stop is released as
-    /// soon as [`Timing::protective_stop_hold`] has passed (at once if it has). Unlike
-    /// the dashboard's command, which is refused before then, the primary interface's
-    /// waits (UR's client library sends it once right after the stop and waits for it).
+    /// `set unlock protective stop` on the primary interface: the stop is released at
+    /// once, without the dashboard's 5 s hold. UR documents the hold for the dashboard
+    /// command only; UR's client library, whose tests UR runs against URSim, sends this
+    /// command right after a stop and requires the stop gone within 5 s of sending it,
+    /// which neither a refusal nor a release deferred to the end of the hold would give.
     pub fn request_unlock_protective_stop(&mut self, now: Duration) -> Result<(), Refused> {
         self.remote()?;
         self.handle_timeout(now);
-        if self.safety != SafetyStatus::ProtectiveStop {
-            return Ok(());
+        if self.safety == SafetyStatus::ProtectiveStop {
+            self.safety = SafetyStatus::Normal;
+            self.protective_since = None;
         }
-        let since = self.protective_since.unwrap_or(now);
-        let at = since + self.config.timing.protective_stop_hold;
-        self.unlock_at = Some(at);
-        self.handle_timeout(now);
         Ok(())
     }
 

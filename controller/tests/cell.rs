@@ -238,35 +238,32 @@ fn play_of_a_loaded_program_asks_for_its_text() {
 }
 
 #[test]
-fn the_primary_interfaces_unlock_waits_for_the_hold_then_releases() {
+fn the_primary_interfaces_unlock_releases_at_once_the_dashboards_is_held() {
     use urscript_controller::SafetyStatus;
     let (mut cell, _) = ready_cell();
     cell.controller().protective_stop(ms(2000));
-    // Asked at once: no refusal, and the stop holds for its 5 s.
-    assert!(cell
-        .controller()
-        .request_unlock_protective_stop(ms(2100))
-        .is_ok());
+    // The dashboard's command is refused within the 5 s hold...
+    assert!(cell.controller().unlock_protective_stop(ms(2050)).is_err());
     assert_eq!(
-        cell.controller().safety_status(ms(6900)),
+        cell.controller().safety_status(ms(2050)),
         SafetyStatus::ProtectiveStop
     );
-    assert_eq!(cell.controller().poll_timeout(), Some(ms(7000)));
+    // ...the primary interface's releases the stop when it arrives, nothing left timed.
+    cell.controller()
+        .request_unlock_protective_stop(ms(2100))
+        .unwrap();
     assert_eq!(
-        cell.controller().safety_status(ms(7000)),
+        cell.controller().safety_status(ms(2100)),
         SafetyStatus::Normal
     );
-    // A new stop is not released by the old request.
+    assert_eq!(cell.controller().poll_timeout(), None);
+    // With no stop it changes nothing, and a later stop stays until unlocked again.
     cell.controller()
-        .request_unlock_protective_stop(ms(8000))
+        .request_unlock_protective_stop(ms(2200))
         .unwrap();
-    cell.controller().protective_stop(ms(8000));
-    cell.controller()
-        .request_unlock_protective_stop(ms(8001))
-        .unwrap();
-    cell.controller().protective_stop(ms(9000));
+    cell.controller().protective_stop(ms(3000));
     assert_eq!(
-        cell.controller().safety_status(ms(13_001)),
+        cell.controller().safety_status(ms(60_000)),
         SafetyStatus::ProtectiveStop
     );
 }
@@ -322,5 +319,19 @@ fn interpreter_lines_reach_the_program_and_late_replies_their_connection() {
     assert_eq!(
         replies(&mut cell, 3),
         ["discard: program not running: textmsg(3)"]
+    );
+}
+
+#[test]
+fn protective_stop_in_a_secondary_program_stops_the_arm() {
+    use urscript_controller::SafetyStatus;
+    let (mut cell, _) = ready_cell();
+    cell.submit(
+        Submitted::Secondary("sec setup():\n  protective_stop()\nend\n".into()),
+        ms(2100),
+    );
+    assert_eq!(
+        cell.controller().safety_status(ms(2100)),
+        SafetyStatus::ProtectiveStop
     );
 }

@@ -323,6 +323,32 @@ fn local_control_refuses_actions_answers_queries() {
 }
 
 #[test]
+fn with_remote_control_disabled_commands_act_and_remote_control_is_false() {
+    // The setting off (a new robot, URSim): no local/remote switch to refuse anything.
+    let mut s = Session::new(Config {
+        remote_control: false,
+        remote_control_enabled: false,
+        ..Config::default()
+    });
+    let t = ms(0);
+    assert_eq!(s.ask("is in remote control", t), "false");
+    assert_eq!(s.ask("load pick.urp", t), "Loading program: pick.urp");
+    assert_eq!(
+        s.ask("set operational mode automatic", t),
+        "Operational mode 'automatic' is set"
+    );
+    assert_eq!(
+        s.ask("clear operational mode", t),
+        "No longer controlling the operational mode. Current operational mode: 'NONE'."
+    );
+    assert_eq!(s.ask("power on", t), "Powering on");
+    // The switch means nothing while the setting is off.
+    s.c.set_remote_control(true);
+    assert_eq!(s.ask("is in remote control", t), "false");
+    assert_eq!(s.ask("power off", t), "Powering off");
+}
+
+#[test]
 fn every_command_is_answered() {
     let mut s = Session::new(Config::default());
     let t = ms(0);

@@ -122,3 +122,33 @@ fn shutdown_on_the_dashboard_stops_the_server() {
     wait_for(&events, |e| *e == ServerEvent::Shutdown);
     assert!(server.is_stopped());
 }
+
+#[test]
+fn the_primary_interfaces_unlock_lets_the_next_program_run() {
+    // UR's client library unlocks through the primary interface right after a stop and
+    // then sends its next program: the unlock has to take effect when it arrives.
+    let (server, events) = start();
+    let mut d = dashboard(&server);
+    assert_eq!(ask(&mut d, "brake release"), "Brake releasing");
+    let start = Instant::now();
+    while ask(&mut d, "robotmode") != "Robotmode: RUNNING" {
+        assert!(start.elapsed() < WAIT);
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    server.with_cell(|cell, now| cell.controller().protective_stop(now));
+    assert_eq!(ask(&mut d, "safetystatus"), "Safetystatus: PROTECTIVE_STOP");
+    let mut primary = TcpStream::connect(server.addr("primary").unwrap()).unwrap();
+    // One write: the command, then a program the stop would refuse.
+    primary
+        .write_all(
+            b"set unlock protective stop\ndef after_unlock():\n  textmsg(\"moving again\")\nend\n",
+        )
+        .unwrap();
+    let message = wait_for(&events, |e| matches!(e, ServerEvent::Message(_)));
+    match message {
+        ServerEvent::Message(m) => assert_eq!(m.text, "moving again"),
+        _ => unreachable!(),
+    }
+    assert_eq!(ask(&mut d, "safetystatus"), "Safetystatus: NORMAL");
+    server.stop();
+}

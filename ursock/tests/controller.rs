@@ -336,3 +336,18 @@ fn the_operator_stops_the_robot_from_standard_input() {
         .ask("power on")
         .starts_with("Command is not allowed due to safety reasons"));
 }
+
+#[test]
+fn remote_control_disabled_accepts_commands_and_answers_false() {
+    // As URSim and a new robot: the setting off, `is in remote control` false, commands
+    // still act (UR's client library's dashboard tests expect both).
+    let server = Server::start(&["--remote-control-disabled"]);
+    let mut c = server.client();
+    assert_eq!(c.ask("is in remote control"), "false");
+    assert_eq!(c.ask("power on"), "Powering on");
+    assert_eq!(
+        c.ask("set operational mode manual"),
+        "Operational mode 'manual' is set"
+    );
+    assert_eq!(c.ask("is in remote control"), "false");
+}

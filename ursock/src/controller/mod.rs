@@ -67,6 +67,11 @@ pub struct ControllerOptions {
     /// stop`, `emergency stop`, `release`, `local`, `remote`, `state`, `help`, ...)
     #[arg(long)]
     pub local: bool,
+    /// The pendant's remote control setting is off, as on a new robot and on URSim:
+    /// every command is accepted, `is in remote control` answers false, and the
+    /// operator's `local`/`remote` change nothing.
+    #[arg(long, conflicts_with = "local")]
+    pub remote_control_disabled: bool,
     /// A URCap's installation preamble, written (as PolyScope does) at the top of every
     /// `.urp` program played; scripts clients send get none. Repeatable, in order.
     #[arg(long, value_name = "FILE")]
@@ -220,6 +225,7 @@ pub fn run(opts: ControllerOptions) -> Result<(), String> {
             polyscope: opts.polyscope.clone(),
             serial: opts.serial.clone(),
             remote_control: !opts.local,
+            remote_control_enabled: !opts.remote_control_disabled,
             ..Config::default()
         },
         programs: opts.programs.clone(),
