@@ -738,36 +738,7 @@ impl Compiler {
             None => stmts,
         };
         // The program itself is function 0.
-        self.funcs.push(Func {
-            name: entry.clone().unwrap_or_else(|| "<program>".into()),
-            params: Vec::new(),
-            ops: Vec::new(),
-            lines: Vec::new(),
-            is_thread: false,
-            program_scope: true,
-        });
-        for d in &defs {
-            let params = d
-                .params
-                .iter()
-                .map(|(n, v)| {
-                    let d = match v {
-                        Some(ParamDefault::Const(v)) => Some(ParamDefault::Const(v.clone())),
-                        Some(ParamDefault::Var(g)) => Some(ParamDefault::Var(self.sym(g))),
-                        None => None,
-                    };
-                    (self.sym(n), d)
-                })
-                .collect::<Vec<_>>();
-            self.funcs.push(Func {
-                name: d.name.clone(),
-                params,
-                ops: Vec::new(),
-                lines: Vec::new(),
-                is_thread: d.is_thread,
-                program_scope: false,
-            });
-        }
+        self.declare(entry.clone().unwrap_or_else(|| "<program>".into()), &defs);
         let unknown_variable = unknown_variable(&main_body, &defs, |n| {
             self.func_ids.contains_key(n) || builtins::lookup(n).is_some()
         });
@@ -816,15 +787,26 @@ impl Compiler {
                 format!("compile_error_name_not_found:{name}: `{name}` is never assigned"),
             ));
         }
+        self.declare("<interpreter>".into(), &defs);
+        self.function(id, &stmts, 1)?;
+        for (i, d) in defs.iter().enumerate() {
+            self.function(id + 1 + i, &d.body, d.line)?;
+        }
+        Ok(id as u32)
+    }
+
+    /// Adds the functions to compile: a body run in the program's scope (`name`: the
+    /// program, or an interpreted line), then each of `defs`, in order, their ids next.
+    fn declare(&mut self, name: String, defs: &[FuncDef]) {
         self.funcs.push(Func {
-            name: "<interpreter>".into(),
+            name,
             params: Vec::new(),
             ops: Vec::new(),
             lines: Vec::new(),
             is_thread: false,
             program_scope: true,
         });
-        for d in &defs {
+        for d in defs {
             let params = d
                 .params
                 .iter()
@@ -846,11 +828,6 @@ impl Compiler {
                 program_scope: false,
             });
         }
-        self.function(id, &stmts, 1)?;
-        for (i, d) in defs.iter().enumerate() {
-            self.function(id + 1 + i, &d.body, d.line)?;
-        }
-        Ok(id as u32)
     }
 
     fn function(&mut self, id: usize, body: &[Stmt], line: u32) -> Result<(), ParseError> {

@@ -3,6 +3,8 @@
 //! `quit` closing, hostile lines, the connection bound, `shutdown` ending the process.
 //! Every wait is bounded.
 
+mod urp_common;
+
 use std::io::{BufRead, BufReader, Read, Write};
 use std::net::TcpStream;
 use std::process::{Child, Command, Stdio};
@@ -118,20 +120,10 @@ impl Client {
 /// A `.urp` (gzip XML, as PolyScope saves it) whose program waits a minute: it runs
 /// until stopped, so the program's state does not depend on how fast it is read.
 fn waiting_urp(name: &str) -> Vec<u8> {
-    let xml = format!(
-        r#"<URProgram name="{name}" installation="default" createdIn="5.21.0">
-  <children>
-    <MainProgram runOnlyOnce="true">
-      <children>
-        <Script type="Line"><expression>sleep(60)</expression></Script>
-      </children>
-    </MainProgram>
-  </children>
-</URProgram>"#
-    );
-    let mut gz = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::default());
-    gz.write_all(xml.as_bytes()).unwrap();
-    gz.finish().unwrap()
+    urp_common::urp(
+        name,
+        r#"<Script type="Line"><expression>sleep(60)</expression></Script>"#,
+    )
 }
 
 fn programs_dir() -> std::path::PathBuf {

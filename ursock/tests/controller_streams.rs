@@ -5,6 +5,7 @@
 //! client that never reads slowing nobody. Every wait is bounded.
 
 mod controller_common;
+mod urp_common;
 
 use std::io::{Read, Write};
 use std::net::TcpStream;
@@ -173,20 +174,11 @@ fn a_program_is_refused_while_the_arm_is_powered_off() {
 
 /// A `.urp` with an External Control node, gzip-compressed as PolyScope saves it.
 fn external_control_urp() -> Vec<u8> {
-    use std::io::Write as _;
-    let xml = r#"<URProgram name="ec" installation="default" createdIn="5.21.0">
-  <children>
-    <MainProgram runOnlyOnce="true">
-      <children>
-        <Script type="Line"><expression>textmsg(&quot;before&quot;)</expression></Script>
-        <Contributed strategyClass="com.fzi.externalcontrol.ExternalControlNode" strategyProgramNodeType="External Control"><dataModel/></Contributed>
-      </children>
-    </MainProgram>
-  </children>
-</URProgram>"#;
-    let mut gz = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::default());
-    gz.write_all(xml.as_bytes()).unwrap();
-    gz.finish().unwrap()
+    urp_common::urp(
+        "ec",
+        r#"<Script type="Line"><expression>textmsg(&quot;before&quot;)</expression></Script>
+        <Contributed strategyClass="com.fzi.externalcontrol.ExternalControlNode" strategyProgramNodeType="External Control"><dataModel/></Contributed>"#,
+    )
 }
 
 #[test]
@@ -235,19 +227,10 @@ fn play_runs_a_urp_whose_external_control_node_fetches_its_script() {
 
 /// A `.urp` whose Script line calls a URCap's function, as PolyScope saves it.
 fn urcap_urp() -> Vec<u8> {
-    use std::io::Write as _;
-    let xml = r#"<URProgram name="pick" installation="default" createdIn="5.21.0">
-  <children>
-    <MainProgram runOnlyOnce="true">
-      <children>
-        <Script type="Line"><expression>gripper_grip(40)</expression></Script>
-      </children>
-    </MainProgram>
-  </children>
-</URProgram>"#;
-    let mut gz = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::default());
-    gz.write_all(xml.as_bytes()).unwrap();
-    gz.finish().unwrap()
+    urp_common::urp(
+        "pick",
+        r#"<Script type="Line"><expression>gripper_grip(40)</expression></Script>"#,
+    )
 }
 
 /// `--preamble`: the installation's URCap preamble runs at the top of each `.urp`

@@ -16,9 +16,7 @@
 //!   clear: the connection looks for such answers every [`POLL`].
 
 use std::io::{ErrorKind, Read, Write};
-use std::net::{TcpListener, TcpStream};
-use std::sync::atomic::{AtomicUsize, Ordering};
-use std::sync::Arc;
+use std::net::TcpStream;
 use std::time::Duration;
 
 use urscript_interp::interpreter::{Discard, Reply, MAX_LINE};
@@ -38,51 +36,8 @@ pub const POLL: Duration = Duration::from_millis(20);
 /// Bytes of a too-long line echoed in its discard.
 const ECHO: usize = 64;
 
-pub(super) fn accept(shared: &Arc<Shared>, listener: &TcpListener) {
-    let active = Arc::new(AtomicUsize::new(0));
-    loop {
-        let accepted = listener.accept();
-        if shared.stopped() {
-            return;
-        }
-        let (stream, peer) = match accepted {
-            Ok(s) => s,
-            Err(e) if e.kind() == ErrorKind::Interrupted => continue,
-            Err(e) => {
-                shared.emit(ServerEvent::Note(format!("interpreter accept failed: {e}")));
-                std::thread::sleep(Duration::from_millis(100));
-                continue;
-            }
-        };
-        if active.load(Ordering::SeqCst) >= MAX_INTERPRETER_CONNECTIONS {
-            shared.emit(ServerEvent::Note(format!(
-                "{peer}: refused, {MAX_INTERPRETER_CONNECTIONS} interpreter connections are already open"
-            )));
-            drop(stream);
-            continue;
-        }
-        active.fetch_add(1, Ordering::SeqCst);
-        let conn = shared.next_conn();
-        let spawned = std::thread::Builder::new()
-            .name(format!("interpreter-{conn}"))
-            .spawn({
-                let shared = Arc::clone(shared);
-                let active = Arc::clone(&active);
-                move || {
-                    serve(stream, conn, peer.to_string(), &shared);
-                    active.fetch_sub(1, Ordering::SeqCst);
-                }
-            });
-        if let Err(e) = spawned {
-            active.fetch_sub(1, Ordering::SeqCst);
-            shared.emit(ServerEvent::Note(format!(
-                "{peer}: cannot start a thread: {e}"
-            )));
-        }
-    }
-}
-
-fn serve(mut stream: TcpStream, conn: u64, peer: String, shared: &Shared) {
+/// One interpreter connection (accepted by [`super::accept_each`]).
+pub(super) fn serve(mut stream: TcpStream, conn: u64, peer: String, shared: &Shared) {
     let _ = stream.set_nodelay(true);
     let _ = stream.set_write_timeout(Some(WRITE_TIMEOUT));
     let _ = stream.set_read_timeout(Some(POLL));

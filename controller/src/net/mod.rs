@@ -317,7 +317,6 @@ pub(crate) struct Shared {
     config: Config,
     /// Controller time: wall time less what the host took from the real-time loop.
     clock: clock::Clock,
-    active: AtomicUsize,
     next_conn: AtomicU64,
     urcap_host: Option<(String, u16)>,
     stop: AtomicBool,
@@ -430,7 +429,6 @@ impl Server {
             cell: Mutex::new(cell),
             config: options.config,
             clock: clock::Clock::new(step),
-            active: AtomicUsize::new(0),
             next_conn: AtomicU64::new(1),
             urcap_host: options.urcap_host,
             stop: AtomicBool::new(false),
@@ -450,18 +448,26 @@ impl Server {
         }
         if let Some(listener) = dashboard {
             let shared = Arc::clone(&shared);
-            threads.push(
-                std::thread::Builder::new()
-                    .name("dashboard".into())
-                    .spawn(move || accept_dashboard(&shared, &listener))?,
-            );
+            threads.push(std::thread::Builder::new().name("dashboard".into()).spawn(
+                move || {
+                    let limits = ("dashboard", "", MAX_CONNECTIONS);
+                    accept_each(&shared, &listener, limits, serve)
+                },
+            )?);
         }
         if let Some(listener) = interpreter {
             let shared = Arc::clone(&shared);
             threads.push(
                 std::thread::Builder::new()
                     .name("interpreter".into())
-                    .spawn(move || interpreter::accept(&shared, &listener))?,
+                    .spawn(move || {
+                        let limits = (
+                            "interpreter",
+                            "interpreter ",
+                            interpreter::MAX_INTERPRETER_CONNECTIONS,
+                        );
+                        accept_each(&shared, &listener, limits, interpreter::serve)
+                    })?,
             );
         }
         Ok(Server {
@@ -525,7 +531,17 @@ impl Drop for Server {
     }
 }
 
-fn accept_dashboard(shared: &Arc<Shared>, listener: &TcpListener) {
+/// Accepts connections on `listener` until the server stops, each served by `serve` in a
+/// thread of its own named `SERVICE-CONN`, at most `max` at once (more are accepted and
+/// closed, so the backlog drains). `label` starts the notes (`""` for the dashboard,
+/// `"interpreter "`).
+pub(super) fn accept_each(
+    shared: &Arc<Shared>,
+    listener: &TcpListener,
+    (service, label, max): (&'static str, &'static str, usize),
+    serve: fn(TcpStream, u64, String, &Shared),
+) {
+    let active = Arc::new(AtomicUsize::new(0));
     loop {
         let accepted = listener.accept();
         if shared.stopped() {
@@ -536,31 +552,32 @@ fn accept_dashboard(shared: &Arc<Shared>, listener: &TcpListener) {
             Err(e) if e.kind() == ErrorKind::Interrupted => continue,
             Err(e) => {
                 // Out of descriptors and the like: say so, wait a little, go on.
-                shared.emit(ServerEvent::Note(format!("accept failed: {e}")));
+                shared.emit(ServerEvent::Note(format!("{label}accept failed: {e}")));
                 std::thread::sleep(Duration::from_millis(100));
                 continue;
             }
         };
-        if shared.active.load(Ordering::SeqCst) >= MAX_CONNECTIONS {
+        if active.load(Ordering::SeqCst) >= max {
             shared.emit(ServerEvent::Note(format!(
-                "{peer}: refused, {MAX_CONNECTIONS} connections are already open"
+                "{peer}: refused, {max} {label}connections are already open"
             )));
             drop(stream);
             continue;
         }
-        shared.active.fetch_add(1, Ordering::SeqCst);
+        active.fetch_add(1, Ordering::SeqCst);
         let conn = shared.next_conn();
         let spawned = std::thread::Builder::new()
-            .name(format!("dashboard-{conn}"))
+            .name(format!("{service}-{conn}"))
             .spawn({
                 let shared = Arc::clone(shared);
+                let active = Arc::clone(&active);
                 move || {
                     serve(stream, conn, peer.to_string(), &shared);
-                    shared.active.fetch_sub(1, Ordering::SeqCst);
+                    active.fetch_sub(1, Ordering::SeqCst);
                 }
             });
         if let Err(e) = spawned {
-            shared.active.fetch_sub(1, Ordering::SeqCst);
+            active.fetch_sub(1, Ordering::SeqCst);
             shared.emit(ServerEvent::Note(format!(
                 "{peer}: cannot start a thread: {e}"
             )));
