@@ -14,7 +14,14 @@
 //! | struct | `<struct>` | any other `<struct>` becomes a struct |
 //!
 //! Anything else (`<nil/>`, `<base64>`, `<dateTime.iso8601>`, `<i8>`) is an error naming
-//! the type, as is a thread handle, `None` or an RPC handle in the arguments.
+//! the type, as is a thread handle, `None` or an RPC handle in the arguments: UR's
+//! XML-RPC article lists only the types above, and a URScript value has no form for
+//! them (no null, no date; an `<i8>` may not fit an int).
+//!
+//! ## HTTP
+//! A reply's body ends at its `Content-Length`, at the end of its chunks
+//! (`Transfer-Encoding: chunked`, as servers that stream their replies send them;
+//! extensions and trailers are dropped), or, with neither, when the server closes.
 //!
 //! ## Bounds
 //! A reply is at most [`MAX_REPLY`] bytes (headers and body), its headers at most
@@ -226,6 +233,7 @@ pub(crate) fn reply(bytes: &[u8], closed: bool) -> Reply {
         return Reply::Error(format!("HTTP status \"{}\"", clip(status)));
     }
     let mut length: Option<usize> = None;
+    let mut chunked = false;
     for line in lines {
         let Some((name, value)) = line.split_once(':') else {
             continue;
@@ -236,34 +244,122 @@ pub(crate) fn reply(bytes: &[u8], closed: bool) -> Reply {
                 Ok(n) => length = Some(n),
                 Err(_) => return Reply::Error(format!("bad Content-Length \"{}\"", clip(value))),
             }
-        } else if name.eq_ignore_ascii_case("transfer-encoding")
-            && !value.eq_ignore_ascii_case("identity")
-        {
-            return Reply::Error(format!(
-                "Transfer-Encoding \"{}\" is not supported (send a Content-Length)",
-                clip(value)
-            ));
+        } else if name.eq_ignore_ascii_case("transfer-encoding") {
+            if value.eq_ignore_ascii_case("chunked") {
+                chunked = true;
+            } else if !value.eq_ignore_ascii_case("identity") {
+                return Reply::Error(format!(
+                    "Transfer-Encoding \"{}\" is not supported (chunked or a Content-Length)",
+                    clip(value)
+                ));
+            }
         }
     }
-    let body = match length {
-        Some(n) if n > MAX_REPLY => {
-            return Reply::Error(format!("the reply's body of {n} bytes is over {MAX_REPLY}"))
+    // HTTP/1.1: a chunked body's own framing wins over any Content-Length.
+    let dechunked;
+    let body = if chunked {
+        match dechunk(body) {
+            Chunks::Body(b) => {
+                dechunked = b;
+                &dechunked[..]
+            }
+            Chunks::Incomplete if closed => {
+                return Reply::Error(format!(
+                    "the server closed the connection inside the reply's chunked body ({} bytes received)",
+                    body.len()
+                ))
+            }
+            Chunks::Incomplete => return Reply::Incomplete,
+            Chunks::Error(e) => return Reply::Error(e),
         }
-        Some(n) if body.len() >= n => &body[..n],
-        Some(n) if closed => {
-            return Reply::Error(format!(
-                "the server closed the connection after {} of the reply's {n} bytes",
-                body.len()
-            ))
+    } else {
+        match length {
+            Some(n) if n > MAX_REPLY => {
+                return Reply::Error(format!("the reply's body of {n} bytes is over {MAX_REPLY}"))
+            }
+            Some(n) if body.len() >= n => &body[..n],
+            Some(n) if closed => {
+                return Reply::Error(format!(
+                    "the server closed the connection after {} of the reply's {n} bytes",
+                    body.len()
+                ))
+            }
+            Some(_) => return Reply::Incomplete,
+            None if closed => body,
+            None => return Reply::Incomplete,
         }
-        Some(_) => return Reply::Incomplete,
-        None if closed => body,
-        None => return Reply::Incomplete,
     };
     match method_response(body) {
         Ok(Ok(v)) => Reply::Value(v),
         Ok(Err(fault)) => Reply::Error(fault),
         Err(e) => Reply::Error(format!("malformed XML-RPC reply: {e}")),
+    }
+}
+
+/// What a chunked body (RFC 9112, section 7.1) received so far makes.
+#[derive(Debug, PartialEq)]
+enum Chunks {
+    /// The whole body, the chunks' data joined (extensions and trailers dropped).
+    Body(Vec<u8>),
+    /// The last chunk or the blank line after the trailers has not come yet.
+    Incomplete,
+    Error(String),
+}
+
+/// Joins the chunks of a chunked body. Bounded: the data is at most [`MAX_REPLY`]
+/// bytes (the bytes received are already under that bound, so it only guards a size
+/// line's claim), a size line or trailer section at most [`MAX_HEADER`] bytes.
+fn dechunk(body: &[u8]) -> Chunks {
+    // The data's places first, copied only once the body is complete (a reply arriving
+    // in many small reads is read again on each; this keeps each reading linear in the
+    // number of chunks, not in the bytes).
+    let mut data: Vec<core::ops::Range<usize>> = Vec::new();
+    let mut total = 0usize;
+    let mut rest = body;
+    loop {
+        let Some(eol) = find(rest, b"\r\n") else {
+            return if rest.len() > MAX_HEADER {
+                Chunks::Error(format!("a chunk size line longer than {MAX_HEADER} bytes"))
+            } else {
+                Chunks::Incomplete
+            };
+        };
+        let line = String::from_utf8_lossy(&rest[..eol]);
+        let size_text = line.split(';').next().unwrap_or_default().trim();
+        let size = match usize::from_str_radix(size_text, 16) {
+            Ok(n) if !size_text.starts_with('+') => n,
+            _ => return Chunks::Error(format!("bad chunk size line \"{}\"", clip(&line))),
+        };
+        rest = &rest[eol + 2..];
+        if size == 0 {
+            // Trailers (ignored) end with a blank line.
+            return if rest.starts_with(b"\r\n") || find(rest, b"\r\n\r\n").is_some() {
+                let mut out = Vec::with_capacity(total);
+                for r in data {
+                    out.extend_from_slice(&body[r]);
+                }
+                Chunks::Body(out)
+            } else if rest.len() > MAX_HEADER {
+                Chunks::Error(format!("chunked trailers longer than {MAX_HEADER} bytes"))
+            } else {
+                Chunks::Incomplete
+            };
+        }
+        if size > MAX_REPLY - total {
+            return Chunks::Error(format!(
+                "the reply's chunked body is over {MAX_REPLY} bytes"
+            ));
+        }
+        if rest.len() < size + 2 {
+            return Chunks::Incomplete;
+        }
+        if &rest[size..size + 2] != b"\r\n" {
+            return Chunks::Error(format!("a chunk of {size} bytes is not followed by CRLF"));
+        }
+        let start = body.len() - rest.len();
+        data.push(start..start + size);
+        total += size;
+        rest = &rest[size + 2..];
     }
 }
 
@@ -778,6 +874,33 @@ mod tests {
     }
 
     #[test]
+    fn chunked_replies() {
+        let body = "<methodResponse><params><param><value><int>7</int></value></param></params></methodResponse>";
+        let (a, b) = body.split_at(40);
+        let whole = format!(
+            "HTTP/1.1 200 OK\r\nTransfer-Encoding: chunked\r\n\r\n{:x};ext=1\r\n{a}\r\n{:X}\r\n{b}\r\n0\r\nX-Trailer: t\r\n\r\n",
+            a.len(),
+            b.len()
+        )
+        .into_bytes();
+        assert_eq!(reply(&whole, false), Reply::Value(Value::Int(7)));
+        // Every cut before the end waits for more, or is an error once the server closed.
+        for n in 0..whole.len() {
+            assert_eq!(reply(&whole[..n], false), Reply::Incomplete, "{n} bytes");
+            assert!(
+                matches!(reply(&whole[..n], true), Reply::Error(_)),
+                "{n} bytes"
+            );
+        }
+        // No trailers; and a Content-Length beside chunked is ignored (RFC 9112).
+        let plain = format!(
+            "HTTP/1.1 200 OK\r\nContent-Length: 3\r\nTransfer-Encoding: chunked\r\n\r\n{:x}\r\n{body}\r\n0\r\n\r\n",
+            body.len()
+        );
+        assert_eq!(reply(plain.as_bytes(), true), Reply::Value(Value::Int(7)));
+    }
+
+    #[test]
     fn hostile_replies() {
         let err = |b: &[u8]| match reply(b, true) {
             Reply::Error(e) => e,
@@ -811,7 +934,14 @@ mod tests {
         assert!(err(huge.as_bytes()).contains("over"));
         let endless = vec![b'a'; MAX_HEADER + 1];
         assert!(matches!(reply(&endless, false), Reply::Error(e) if e.contains("headers")));
+        assert!(err(b"HTTP/1.1 200 OK\r\nTransfer-Encoding: gzip\r\n\r\n").contains("gzip"));
         assert!(err(b"HTTP/1.1 200 OK\r\nTransfer-Encoding: chunked\r\n\r\n").contains("chunked"));
+        let chunked = |s: &str| format!("HTTP/1.1 200 OK\r\nTransfer-Encoding: chunked\r\n\r\n{s}");
+        assert!(err(chunked("zz\r\n").as_bytes()).contains("chunk size"));
+        assert!(err(chunked("+3\r\nabc\r\n0\r\n\r\n").as_bytes()).contains("chunk size"));
+        assert!(err(chunked("3\r\nabcd\r\n0\r\n\r\n").as_bytes()).contains("CRLF"));
+        assert!(err(chunked("FFFFFFFFFFFF\r\n").as_bytes()).contains("over"));
+        assert!(err(chunked(&"1".repeat(MAX_HEADER + 1)).as_bytes()).contains("size line"));
         assert!(err(b"HTTP/1.1 200 OK\r\nContent-Length: -1\r\n\r\n").contains("Content-Length"));
     }
 

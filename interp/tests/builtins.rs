@@ -213,6 +213,11 @@ fn math() {
     assert_eq!(one("acos(1)"), "0");
     assert_eq!(one("atan(1)"), "0.785398");
     assert_eq!(one("atan2(1, 1)"), "0.785398");
+    // The manual: atan2(x, y) is the arc tangent of x/y, the signs of both giving the
+    // quadrant.
+    assert_eq!(one("atan2(1, 0)"), "1.570796");
+    assert_eq!(one("atan2(0, -1)"), "3.141593");
+    assert_eq!(one("atan2(y=-1, x=1)"), "2.356194");
     assert_eq!(one("sqrt(16)"), "4");
     assert_eq!(one("pow(2, 10)"), "1024");
     assert_eq!(one("floor(2.7)"), "2");

@@ -492,3 +492,40 @@ fn a_reply_is_held_to_the_value_bounds() {
     assert!(e.message().contains("more than 50 elements"), "{e}");
     assert_eq!(h.m.global("x"), None);
 }
+
+#[test]
+fn a_chunked_reply_read_in_pieces_returns_its_value() {
+    // Servers that stream their replies (Transfer-Encoding: chunked, no Content-Length)
+    // answer in pieces; the call waits for the last chunk, then returns the value.
+    let src = format!("rpc = rpc_factory(\"xmlrpc\", \"{URL}\")\nx = rpc.f()\n");
+    let mut m = Machine::new(Program::parse(&src).unwrap(), Config::default());
+    let mut now = Duration::ZERO;
+    let mut step = |m: &mut Machine| {
+        m.run_until(now);
+        now += Duration::from_millis(2);
+        std::iter::from_fn(|| m.poll_event()).collect::<Vec<_>>()
+    };
+    step(&mut m);
+    m.handle_connected(SOCKET, Ok(()));
+    step(&mut m);
+    let xml = format!(
+        "<methodResponse><params><param><value>{POSE}</value></param></params></methodResponse>"
+    );
+    let (a, b) = xml.split_at(100);
+    let reply = format!(
+        "HTTP/1.1 200 OK\r\nTransfer-Encoding: chunked\r\n\r\n{:x}\r\n{a}\r\n{:x}\r\n{b}\r\n0\r\n\r\n",
+        a.len(),
+        b.len()
+    );
+    for piece in reply.as_bytes().chunks(37) {
+        assert_eq!(m.state(), &State::Running);
+        assert_eq!(m.global("x"), None);
+        m.handle_received(SOCKET, piece);
+        step(&mut m);
+    }
+    step(&mut m);
+    assert_eq!(
+        m.global("x"),
+        Some(&Value::Pose([0.4, -0.2, 0.3, 0.0, 3.1, 0.0]))
+    );
+}

@@ -22,8 +22,8 @@ pub(super) const TABLE: &[Builtin] = &[
     Builtin::new(
         "atan2",
         D,
-        &[req("y"), req("x")],
-        "The arc tangent of y/x, in the right quadrant.",
+        &[req("x"), req("y")],
+        "The arc tangent of x/y (the manual's names: the first argument over the second), in the right quadrant.",
         atan2,
     ),
     Builtin::new(
