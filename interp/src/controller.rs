@@ -96,6 +96,27 @@ pub struct Arm {
     /// `protective_stop()` ran: a controller that runs the arm acts on it (a protective
     /// stop pauses its program) and clears it.
     pub protective_stop: bool,
+    /// The Flexible EtherNet/IP Adapter's assemblies and the Robot→PLC data the programs
+    /// wrote (see [`crate::eip`] and [`Arm::eip_to_plc`]).
+    pub(crate) eip: crate::eip::Adapter,
+}
+
+impl Arm {
+    /// The Robot→PLC data of EtherNet/IP instance `instance` as the robot's programs last
+    /// wrote it (`eip_writer_factory` handles; `add_configuration` makes it zeros), what
+    /// a scanner would read; `None` if no program or configuration made it.
+    ///
+    /// ```
+    /// use std::time::Duration;
+    /// use urscript_interp::{Config, Machine, Program};
+    /// let src = "w = eip_writer_factory(\"101\", 4)\nw.define_int16(2, \"n\")\nw.write(struct(n=-2))\n";
+    /// let mut m = Machine::new(Program::parse(src).unwrap(), Config::default());
+    /// m.run_until(Duration::ZERO);
+    /// assert_eq!(m.into_arm().eip_to_plc(101), Some(&[0, 0, 0xfe, 0xff][..]));
+    /// ```
+    pub fn eip_to_plc(&self, instance: i32) -> Option<&[u8]> {
+        self.eip.to_plc.get(&instance).map(Vec::as_slice)
+    }
 }
 
 /// A conveyor encoder (`encoder_*`): how it is fed and its tick count.
@@ -173,6 +194,7 @@ impl Default for Arm {
             path_offset: PathOffset::default(),
             world: World::default(),
             protective_stop: false,
+            eip: crate::eip::Adapter::default(),
             force_mode_damping: 0.0,
             force_mode_gain_scaling: 1.0,
             motion_version: 1,
@@ -248,6 +270,15 @@ pub struct World {
     /// this plus the program time. Default zero, 1970-01-01 00:00:00: the machine never
     /// reads a clock (time is an input), so a test or driver that wants the date sets it.
     pub system_time: Duration,
+    /// What the EtherNet/IP scanner (a PLC) last sent to the robot, by PLC→Robot
+    /// instance id: what `eip_reader_factory` handles read (little-endian; bytes past the
+    /// end read as zero). Default: none (every instance reads zeros). At most
+    /// [`crate::eip::MAX_INSTANCES`] instances of [`crate::eip::MAX_DATA_SIZE`] bytes are read.
+    pub eip_from_plc: BTreeMap<i32, Vec<u8>>,
+    /// An EtherNet/IP scanner is connected and sending: it feeds the reader handles'
+    /// watchdogs and `is_instance_connected` is True for configured instances. Default
+    /// False: the virtual cell has no PLC, so a watchdog times out.
+    pub eip_connected: bool,
 }
 
 impl Default for World {
@@ -272,6 +303,8 @@ impl Default for World {
             execution_time: 0.0,
             controller_uptime: Duration::ZERO,
             system_time: Duration::ZERO,
+            eip_from_plc: BTreeMap::new(),
+            eip_connected: false,
         }
     }
 }
@@ -295,9 +328,21 @@ pub(crate) struct Controller {
     pub thread: u32,
     /// The step the arm was last put at by the motion under way.
     pub sampled: Option<u64>,
+    /// The program's EtherNet/IP handles.
+    pub eip: crate::eip::Handles,
 }
 
 impl Controller {
+    /// A protective stop: the arm stops at once and the request is left for the
+    /// controller that runs the arm (`Arm::protective_stop`; a program alone just goes
+    /// on, stopped).
+    pub fn protective_stop(&mut self) {
+        self.halt();
+        self.arm.qd = [0.0; 6];
+        self.arm.tcp_speed = [0.0; 6];
+        self.arm.protective_stop = true;
+    }
+
     /// Starts a motion now (replacing any under way) for the thread running now, and puts
     /// the arm at its start.
     pub fn start_motion(&mut self, kind: Kind, tcp: [f64; 6]) {

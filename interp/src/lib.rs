@@ -89,6 +89,7 @@ pub mod builtins;
 mod compile;
 mod controller;
 pub mod drive;
+pub mod eip;
 mod error;
 pub mod event;
 pub mod interpreter;

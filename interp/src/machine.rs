@@ -385,6 +385,7 @@ impl Machine {
                 motion: None,
                 thread: 0,
                 sampled: None,
+                eip: crate::eip::Handles::default(),
             },
             site_stubs,
             prog: Arc::new(program),
@@ -553,6 +554,15 @@ impl Machine {
             if let Some(at) = at {
                 best = Some(best.map_or(at, |b: u64| b.min(at)));
             }
+        }
+        let step_time = self.ctl.step_time.as_secs_f64();
+        if let Some(at) = self
+            .ctl
+            .eip
+            .next_deadline(self.ctl.arm.world.eip_connected, step_time)
+        {
+            let at = at.max(self.ctl.step);
+            best = Some(best.map_or(at, |b: u64| b.min(at)));
         }
         best
     }
@@ -787,6 +797,18 @@ impl Machine {
         if method == "closeXMLRPCClientConnection" && args.is_empty() {
             return Ok(Some(Value::None));
         }
+        // The controller's own EtherNet/IP adapter service answers in-process.
+        if crate::rpc::parse_url(&url).is_ok_and(|u| crate::eip::is_service(&u)) {
+            let connected = self.ctl.arm.world.eip_connected;
+            return crate::eip::service_call(&mut self.ctl.arm.eip, connected, method, &args)
+                .map(Some)
+                .map_err(|e| {
+                    fail(Fault::new(
+                        K::RemoteCall,
+                        format!("XML-RPC call `{method}` to {url}: {e}"),
+                    ))
+                });
+        }
         let socket = crate::rpc::socket_name(&url);
         if self
             .threads
@@ -879,6 +901,20 @@ impl Machine {
     /// and those started during it.
     fn run_step(&mut self) {
         self.ctl.advance(self.ctl.step);
+        let step_time = self.ctl.step_time.as_secs_f64();
+        match self
+            .ctl
+            .eip
+            .check(self.ctl.arm.world.eip_connected, self.ctl.step, step_time)
+        {
+            Some(crate::eip::Trip::Pause) => self.ctl.protective_stop(),
+            Some(crate::eip::Trip::Stop(why)) => {
+                self.ctl.protective_stop();
+                self.state = State::Error(RuntimeError::at(0, 0, Fault::new(K::Limit, why)));
+                return;
+            }
+            None => {}
+        }
         self.run_threads();
         if self.state == State::Running {
             self.threads.retain(|t| !t.done);
@@ -1207,6 +1243,24 @@ impl Machine {
                         .split_off(th.stack.len().saturating_sub(usize::from(site.argc)));
                     let target = pop(&mut th.stack, line)?;
                     let method = &prog.names[site.name as usize];
+                    if let Value::Eip(id) = target {
+                        let step_time = self.ctl.step_time.as_secs_f64();
+                        let v = self
+                            .ctl
+                            .eip
+                            .call(
+                                &mut self.ctl.arm.eip,
+                                &self.ctl.arm.world.eip_from_plc,
+                                id,
+                                method,
+                                &args,
+                                self.ctl.step,
+                                step_time,
+                            )
+                            .map_err(|f| RuntimeError::at(site.at.line, site.at.col, f))?;
+                        th.stack.push(v);
+                        continue;
+                    }
                     match self.rpc_call(th, target, method, args, site.at)? {
                         Some(v) => th.stack.push(v),
                         None => return Ok(Flow::Blocked),
@@ -1635,6 +1689,9 @@ fn index(b: &Value, i: &Value) -> Result<Value, Fault> {
     match b {
         Value::List(items) => Ok(items[index_of(i, items.len())?].clone()),
         Value::Pose(p) => Ok(Value::Float(p[index_of(i, 6)?])),
+        // A struct's members by position, in the order they were given (UR's own
+        // EtherNet/IP example indexes the struct a `read` returns: `r[fixture]`).
+        Value::Struct(members) => Ok(members[index_of(i, members.len())?].1.clone()),
         other => Err(Fault::new(
             K::Type,
             format!("type error: cannot index a {}", other.type_name()),
@@ -1647,6 +1704,10 @@ fn index_mut<'a>(b: &'a mut Value, i: &Value) -> Result<&'a mut Value, Fault> {
         Value::List(items) => {
             let k = index_of(i, items.len())?;
             Ok(&mut items[k])
+        }
+        Value::Struct(members) => {
+            let k = index_of(i, members.len())?;
+            Ok(&mut members[k].1)
         }
         other => Err(Fault::new(
             K::Type,
@@ -1663,6 +1724,11 @@ fn store_index(b: &mut Value, i: &Value, v: Value) -> Result<(), Fault> {
         Value::List(items) => {
             let k = index_of(i, items.len())?;
             items[k] = v;
+            Ok(())
+        }
+        Value::Struct(members) => {
+            let k = index_of(i, members.len())?;
+            members[k].1 = v;
             Ok(())
         }
         Value::Pose(p) => {

@@ -175,7 +175,7 @@ fn encode(v: &Value, out: &mut Vec<u8>) -> Result<(), String> {
             }
             out.extend_from_slice(b"</struct></value>");
         }
-        Value::Thread(_) | Value::Rpc(_) | Value::None => {
+        Value::Thread(_) | Value::Rpc(_) | Value::Eip(_) | Value::None => {
             return Err(format!("a {} cannot be sent over XML-RPC", v.type_name()))
         }
     }

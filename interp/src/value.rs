@@ -33,6 +33,10 @@ pub enum Value {
     /// The handle `rpc_factory("xmlrpc", url)` gives: the server's URL. Its methods are
     /// called as `handle.name(args...)`.
     Rpc(String),
+    /// A handle of `eip_reader_factory`/`eip_writer_factory` (the program's n-th): its
+    /// methods define the instance's layout and read or write it (see
+    /// [`crate::eip`]).
+    Eip(u32),
     /// What a function without `return value` returns.
     None,
 }
@@ -49,6 +53,7 @@ impl PartialEq for Value {
             (Value::Thread(a), Value::Thread(b)) => a == b,
             (Value::Struct(a), Value::Struct(b)) => a == b,
             (Value::Rpc(a), Value::Rpc(b)) => a == b,
+            (Value::Eip(a), Value::Eip(b)) => a == b,
             (Value::None, Value::None) => true,
             (a, b) => match (a.as_f64(), b.as_f64()) {
                 (Some(x), Some(y)) => x == y,
@@ -163,6 +168,7 @@ impl Value {
             Value::Thread(_) => "thread",
             Value::Struct(_) => "struct",
             Value::Rpc(_) => "rpc handle",
+            Value::Eip(_) => "EtherNet/IP handle",
             Value::None => "none",
         }
     }
@@ -264,6 +270,7 @@ impl Value {
                     out.push(b']');
                 }
                 Value::Thread(id) => out.extend_from_slice(format!("<thread {id}>").as_bytes()),
+                Value::Eip(id) => out.extend_from_slice(format!("<eip handle {id}>").as_bytes()),
                 // The manual gives no text for a struct; this one reads back as the
                 // expression that builds it: `struct(a=1, b=[1, 2])`.
                 Value::Struct(members) => {

@@ -77,6 +77,14 @@ pub const WORLD_SETTINGS: &[(&str, &str)] = &[
         "system_time",
         "seconds since 1970-01-01 GMT when the program starts (time(2))",
     ),
+    (
+        "eip_from_plc",
+        "eip_from_plc[ID]=[bytes 0-255]: what the EtherNet/IP scanner sent on PLC->Robot instance ID",
+    ),
+    (
+        "eip_connected",
+        "bool: an EtherNet/IP scanner is connected (feeds watchdogs; is_instance_connected)",
+    ),
 ];
 
 impl World {
@@ -165,6 +173,43 @@ impl World {
             "system_time" => {
                 scalar_only()?;
                 as_seconds(&value).map(|v| self.system_time = v)
+            }
+            "eip_connected" => {
+                scalar_only()?;
+                as_bool(&value).map(|v| self.eip_connected = v)
+            }
+            "eip_from_plc" => {
+                let Some(id) = index.and_then(|i| i32::try_from(i).ok()) else {
+                    return Err(err("give the instance: eip_from_plc[ID]=[...]".into()));
+                };
+                let Value::List(items) = &value else {
+                    return Err(err("`eip_from_plc` takes a list of bytes (0-255)".into()));
+                };
+                if items.len() > crate::eip::MAX_DATA_SIZE {
+                    return Err(err(format!("at most {} bytes", crate::eip::MAX_DATA_SIZE)));
+                }
+                if !self.eip_from_plc.contains_key(&id)
+                    && self.eip_from_plc.len() >= crate::eip::MAX_INSTANCES
+                {
+                    return Err(err(format!(
+                        "at most {} instances",
+                        crate::eip::MAX_INSTANCES
+                    )));
+                }
+                let bytes: Option<Vec<u8>> = items
+                    .iter()
+                    .map(|v| match v {
+                        Value::Int(b) => u8::try_from(*b).ok(),
+                        _ => None,
+                    })
+                    .collect();
+                match bytes {
+                    Some(b) => {
+                        self.eip_from_plc.insert(id, b);
+                        Ok(())
+                    }
+                    None => Err("a list of bytes (ints 0-255)".to_string()),
+                }
             }
             _ => {
                 let known: Vec<&str> = WORLD_SETTINGS.iter().map(|(n, _)| *n).collect();

@@ -154,3 +154,17 @@ fn a_program_may_define_its_own_struct_function() {
         ["2"]
     );
 }
+
+#[test]
+fn members_by_position() {
+    // UR's own EtherNet/IP example indexes a struct by an int: `clamp[fixture] = True`
+    // and `handle.read([...])[fixture]`; the members count in the order given.
+    let m = messages(
+        "s = struct(a=False, b=False, c=2)\nk = 1\ns[k] = True\ntextmsg(s.b)\ntextmsg(s[2] + s[0])\ns[0] = 5\ntextmsg(s.a)\n",
+    );
+    assert_eq!(m, ["True", "2", "5"]);
+    let (kind, line, _, _) = error("s = struct(a=1)\nx = s[1]\n");
+    assert_eq!((kind, line), (RuntimeErrorKind::Index, 2));
+    let (kind, line, _, _) = error("s = struct(a=1)\ns[\"a\"] = 2\n");
+    assert_eq!((kind, line), (RuntimeErrorKind::Type, 2));
+}

@@ -124,7 +124,7 @@ impl Value {
             V::List(items) => Value::List(items.iter().map(Value::from_interp).collect()),
             V::Pose(p) => Value::Pose(*p),
             V::Thread(id) => Value::Int((*id).into()),
-            V::Struct(_) | V::Rpc(_) => Value::String(v.to_str_bytes()),
+            V::Struct(_) | V::Rpc(_) | V::Eip(_) => Value::String(v.to_str_bytes()),
             V::None => Value::None,
         }
     }

@@ -18,6 +18,7 @@
 //! | [`strings`] | strings, `to_str`/`to_num`, list length, `size`, `make_list` |
 //! | [`poses`] | pose arithmetic, rotation vectors and RPY, wrenches, kinematics |
 //! | [`rpc`] | `rpc_factory`: XML-RPC handles (the Interfaces chapter) |
+//! | [`eip`] | `eip_reader_factory`, `eip_writer_factory`: the Flexible EtherNet/IP Adapter's handles |
 //! | [`messages`] | `textmsg`, `varmsg`, `popup` |
 //! | [`time`] | `sync`, `sleep`, `get_steptime`, `time` |
 //! | [`interpreter`] | `interpreter_mode`, `end_interpreter`, `clear_interpreter` |
@@ -36,6 +37,7 @@ use crate::value::Value;
 
 pub mod conveyor;
 pub mod dynamics;
+pub mod eip;
 pub mod interpreter;
 pub mod io;
 pub mod math;
@@ -249,6 +251,7 @@ pub fn all() -> &'static [Builtin] {
             motion::TABLE,
             conveyor::TABLE,
             dynamics::TABLE,
+            eip::TABLE,
             io::TABLE,
             math::TABLE,
             strings::TABLE,
@@ -546,6 +549,7 @@ mod tests {
             motion: None,
             thread: 0,
             sampled: None,
+            eip: crate::eip::Handles::default(),
         };
         // The documented defaults.
         assert_eq!(

@@ -921,10 +921,7 @@ fn movec(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
 /// `protective_stop()`: the arm stops at once and the request is left for the
 /// controller that runs the arm (a program alone just goes on, stopped).
 fn protective_stop(c: &mut Controller, _: &mut Args) -> Result<Out, Fault> {
-    c.halt();
-    c.arm.qd = [0.0; 6];
-    c.arm.tcp_speed = [0.0; 6];
-    c.arm.protective_stop = true;
+    c.protective_stop();
     Ok(Out::Value(Value::None))
 }
 
