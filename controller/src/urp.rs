@@ -120,6 +120,18 @@ pub const EXTERNAL_CONTROL_DEFAULT_HOST: &str = "192.168.56.1";
 /// The External Control URCap's default port (the ROS driver's script sender).
 pub const EXTERNAL_CONTROL_DEFAULT_PORT: u16 = 50002;
 
+/// The joint angles a Home (`SafeHome`) node moves to: PolyScope's default home
+/// position (the arm upright: shoulder and wrist 1 at -90°), as the translator reads no
+/// installation.
+pub const DEFAULT_HOME_JOINTS: [f64; 6] = [
+    0.0,
+    -std::f64::consts::FRAC_PI_2,
+    0.0,
+    -std::f64::consts::FRAC_PI_2,
+    0.0,
+    0.0,
+];
+
 const MAX_REFERENCE_HOPS: usize = 64;
 const MAX_REFERENCE_LEN: usize = 4096;
 /// The most attributes on one element.
@@ -927,6 +939,8 @@ struct Tx<'a> {
     subprogram_index: HashMap<usize, usize>,
     subprogram_names: std::collections::HashSet<String>,
     loops: usize,
+    /// Timer variables, in the order first met (each at most once).
+    timers: Vec<String>,
 }
 
 fn invalid(doc: &Doc, id: usize, message: impl Into<String>) -> UrpError {
@@ -1014,11 +1028,13 @@ fn translate(doc: &Doc) -> Result<UrpProgram, UrpError> {
         subprogram_index: HashMap::new(),
         subprogram_names: std::collections::HashSet::new(),
         loops: 0,
+        timers: Vec::new(),
     };
 
     let mut init = Vec::new();
     let mut before = Vec::new();
     let mut main = None;
+    let mut threads = Vec::new();
     if let Some(children) = doc.child(0, "children") {
         for &c in &doc.elems[children].children {
             match doc.name(c) {
@@ -1042,13 +1058,19 @@ fn translate(doc: &Doc) -> Result<UrpProgram, UrpError> {
                     let sub = doc.resolve(c)?;
                     tx.subprogram_name(sub)?;
                 }
+                "Thread" => threads.push(c),
                 _ => return Err(unknown(doc, c)),
             }
         }
     }
-    for &c in init.iter().chain(&before) {
+    for &c in &init {
+        tx.init_variables(c)?;
         tx.children_of(c)?;
     }
+    for &c in &before {
+        tx.children_of(c)?;
+    }
+    tx.threads(&threads)?;
     let Some(main) = main else {
         return Err(invalid(doc, 0, "the program has no MainProgram"));
     };
@@ -1081,6 +1103,10 @@ fn translate(doc: &Doc) -> Result<UrpProgram, UrpError> {
 
     let mut segments = vec![Segment::Text(format!("def {}():\n", identifier(&name)))];
     segments.extend(defs);
+    if !tx.timers.is_empty() {
+        tx.timer_thread();
+        segments.append(&mut tx.segments);
+    }
     segments.extend(body);
     segments.push(Segment::Text(String::from("end\n")));
     let segments = merge(segments);
@@ -1408,6 +1434,10 @@ impl Tx<'_> {
                 self.line(&format!("{fname}()"));
             }
             "Contributed" => self.contributed(id)?,
+            "Timer" => self.timer(id)?,
+            "SafeHome" => self.safe_home(id)?,
+            // A node the user suppressed: PolyScope leaves it out of the script.
+            "SuppressedNode" => {}
             _ => return Err(unknown(doc, id)),
         }
         Ok(())
@@ -1784,6 +1814,146 @@ impl Tx<'_> {
             self.indent -= 1;
         }
         self.line("end");
+        Ok(())
+    }
+
+    /// An `InitVariablesNode`'s `<variables>`: each `<variable name>` with its
+    /// `<expression>`, `global NAME = EXPR`.
+    fn init_variables(&mut self, id: usize) -> Result<(), UrpError> {
+        let doc = self.doc;
+        let Some(vars) = doc.child(id, "variables") else {
+            return Ok(());
+        };
+        for &v in &doc.elems[vars].children.clone() {
+            let v = doc.resolve(v)?;
+            if doc.name(v) != "variable" {
+                return Err(unknown(doc, v));
+            }
+            let name = self.named_variable(v)?;
+            let value = self.expression(v)?;
+            self.line(&format!("global {name} = {value}"));
+        }
+        Ok(())
+    }
+
+    /// The program's `Thread` nodes: `thread NAME():`, its nodes in `while (True):`
+    /// unless `runOnlyOnce="true"`, then `threadId_NAME = run NAME()` for each, in
+    /// document order.
+    fn threads(&mut self, threads: &[usize]) -> Result<(), UrpError> {
+        let doc = self.doc;
+        let mut names = std::collections::HashSet::new();
+        let mut started = Vec::new();
+        for (k, &t) in threads.iter().enumerate() {
+            let t = doc.resolve(t)?;
+            let name = match doc.attr(t, "name") {
+                Some(n) if !n.trim().is_empty() => identifier(n.trim()),
+                Some(_) => return Err(invalid(doc, t, "the thread's name is empty")),
+                // PolyScope names its threads Thread_1, Thread_2, ...
+                None => format!("Thread_{}", k + 1),
+            };
+            if !names.insert(name.clone()) || self.subprogram_names.contains(&name) {
+                return Err(invalid(doc, t, format!("two threads or sub programs named {name}")));
+            }
+            let forever = match doc.attr(t, "runOnlyOnce") {
+                None | Some("false") => true,
+                Some("true") => false,
+                Some(other) => {
+                    return Err(invalid(doc, t, format!("runOnlyOnce `{other}` is not true/false")))
+                }
+            };
+            self.block(&format!("thread {name}():"), |tx| {
+                if forever {
+                    tx.block("while (True):", |tx| tx.children_of(t))
+                } else {
+                    tx.children_of(t)
+                }
+            })?;
+            started.push(name);
+        }
+        for name in started {
+            self.line(&format!("threadId_{name} = run {name}()"));
+        }
+        Ok(())
+    }
+
+    /// A `Timer action="Start|Stop|Reset"` on its `<variable>`: the variable counts
+    /// seconds in a thread while `NAME_is_counting` is `True` ([`Tx::timer_thread`]).
+    fn timer(&mut self, id: usize) -> Result<(), UrpError> {
+        let doc = self.doc;
+        let name = self.variable_name(id)?;
+        let line = match doc.attr(id, "action") {
+            Some("Start") => format!("{name}_is_counting = True"),
+            Some("Stop") => format!("{name}_is_counting = False"),
+            Some("Reset") => format!("{name} = 0"),
+            Some(other) => return Err(unsupported(doc, id, format!("timer action {other}"))),
+            None => return Err(invalid(doc, id, "the timer has no action")),
+        };
+        if !self.timers.contains(&name) {
+            self.timers.push(name);
+        }
+        self.line(&line);
+        Ok(())
+    }
+
+    /// The timers' variables and the thread that counts them, as PolyScope writes
+    /// them at the top of the program.
+    fn timer_thread(&mut self) {
+        self.indent = 1;
+        let timers = self.timers.clone();
+        for t in &timers {
+            self.line(&format!("global {t} = 0"));
+            self.line(&format!("global {t}_is_counting = False"));
+        }
+        self.line("thread Timer_Thread():");
+        self.indent += 1;
+        self.line("while (True):");
+        self.indent += 1;
+        for t in &timers {
+            self.line(&format!("if ({t}_is_counting):"));
+            self.line(&format!("  {t} = {t} + get_steptime()"));
+            self.line("end");
+        }
+        self.line("sync()");
+        self.indent -= 1;
+        self.line("end");
+        self.indent -= 1;
+        self.line("end");
+        self.line("run Timer_Thread()");
+    }
+
+    /// PolyScope 5's Home (`SafeHome`) node: a `movej` to the installation's home
+    /// position. The node does not hold the position and the translator reads no
+    /// installation: it is [`DEFAULT_HOME_JOINTS`], PolyScope's default home.
+    fn safe_home(&mut self, id: usize) -> Result<(), UrpError> {
+        let doc = self.doc;
+        match doc.attr(id, "positionOptionType") {
+            None | Some("SPEED_AND_ACCELERATION") => {}
+            Some(other) => {
+                return Err(unsupported(doc, id, format!("a Home move with {other}")))
+            }
+        }
+        let get = |key: &str| -> Result<Option<f64>, UrpError> {
+            match doc.attr(id, key) {
+                Some(v) => {
+                    let v = parse_f64(doc, id, key, v)?;
+                    if v <= 0.0 {
+                        return Err(invalid(doc, id, format!("{key} `{v}` is not positive")));
+                    }
+                    Ok(Some(v))
+                }
+                None => Ok(None),
+            }
+        };
+        let mut call = format!("movej({}", list(&DEFAULT_HOME_JOINTS));
+        if let Some(a) = get("acceleration")? {
+            call.push_str(&format!(", a={}", num(a)));
+        }
+        if let Some(v) = get("speed")? {
+            call.push_str(&format!(", v={}", num(v)));
+        }
+        call.push(')');
+        self.line("# Home");
+        self.line(&call);
         Ok(())
     }
 
