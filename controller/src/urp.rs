@@ -941,6 +941,10 @@ struct Tx<'a> {
     loops: usize,
     /// Timer variables, in the order first met (each at most once).
     timers: Vec<String>,
+    /// Threads of loops checked continuously, written at the program's top level.
+    hoisted: Vec<Segment>,
+    /// How many such threads so far (their names' numbers).
+    watched: usize,
 }
 
 fn invalid(doc: &Doc, id: usize, message: impl Into<String>) -> UrpError {
@@ -1029,6 +1033,8 @@ fn translate(doc: &Doc) -> Result<UrpProgram, UrpError> {
         subprogram_names: std::collections::HashSet::new(),
         loops: 0,
         timers: Vec::new(),
+        hoisted: Vec::new(),
+        watched: 0,
     };
 
     let mut init = Vec::new();
@@ -1103,6 +1109,7 @@ fn translate(doc: &Doc) -> Result<UrpProgram, UrpError> {
 
     let mut segments = vec![Segment::Text(format!("def {}():\n", identifier(&name)))];
     segments.extend(defs);
+    segments.append(&mut tx.hoisted);
     if !tx.timers.is_empty() {
         tx.timer_thread();
         segments.append(&mut tx.segments);
@@ -1345,6 +1352,7 @@ impl Tx<'_> {
                     };
                     out.push_str(&name);
                 }
+                "ExpressionIO" => out.push_str(&self.io_read(t)?),
                 _ => return Err(unknown(doc, t)),
             }
         }
@@ -1415,14 +1423,39 @@ impl Tx<'_> {
             "Move" => self.motion(id)?,
             "Loop" => self.loop_node(id)?,
             "Assignment" => {
-                match doc.attr(id, "valueSource") {
-                    None | Some("Expression") => {}
+                let name = self.variable_name(id)?;
+                let value = match doc.attr(id, "valueSource") {
+                    None | Some("Expression") => self.expression(id)?,
+                    Some("Operator") => {
+                        // The operator answers at play time: PolyScope asks its primary
+                        // client for a value of the assignment's type.
+                        let f = match doc.attr(id, "valueType") {
+                            Some("Boolean") => "request_boolean_from_primary_client",
+                            Some("Integer") => "request_integer_from_primary_client",
+                            Some("Float") => "request_float_from_primary_client",
+                            Some("String") => "request_string_from_primary_client",
+                            Some(other) => {
+                                return Err(unsupported(
+                                    doc,
+                                    id,
+                                    format!("an operator assignment of type {other}"),
+                                ))
+                            }
+                            None => {
+                                return Err(invalid(
+                                    doc,
+                                    id,
+                                    "an operator assignment without valueType",
+                                ))
+                            }
+                        };
+                        let message = doc.attr(id, "message").unwrap_or("");
+                        format!("{f}({})", string_literal(message))
+                    }
                     Some(other) => {
                         return Err(unsupported(doc, id, format!("an assignment from {other}")))
                     }
-                }
-                let name = self.variable_name(id)?;
-                let value = self.expression(id)?;
+                };
                 self.line(&format!("global {name} = {value}"));
             }
             "CallSubProgram" => {
@@ -1481,6 +1514,28 @@ impl Tx<'_> {
             }
         }
         Ok(())
+    }
+
+    /// An `<ExpressionIO>` token: its `<pin>` read. A pin `kind[N]` is read as a Wait
+    /// reads it; any other name is a signal the installation names, which PolyScope
+    /// reads as a Modbus signal: `modbus_get_signal_status("NAME", False)`.
+    fn io_read(&self, id: usize) -> Result<String, UrpError> {
+        let doc = self.doc;
+        let p = doc
+            .child(id, "pin")
+            .ok_or_else(|| invalid(doc, id, "no <pin>"))?;
+        let p = doc.resolve(p)?;
+        let name = doc
+            .attr(p, "referencedName")
+            .or_else(|| doc.attr(p, "name"))
+            .ok_or_else(|| invalid(doc, p, "the pin has no name"))?;
+        if name.contains('[') {
+            return self.input_call(id);
+        }
+        if name.is_empty() || name.contains(['"', '\'', '\n', '\r']) {
+            return Err(invalid(doc, p, format!("`{name}` is not a signal name")));
+        }
+        Ok(format!("modbus_get_signal_status(\"{name}\", False)"))
     }
 
     fn input_call(&self, id: usize) -> Result<String, UrpError> {
@@ -1762,7 +1817,14 @@ impl Tx<'_> {
     fn loop_node(&mut self, id: usize) -> Result<(), UrpError> {
         let doc = self.doc;
         if doc.attr(id, "checkContinuously") == Some("true") {
-            return Err(unsupported(doc, id, "a Loop checked continuously"));
+            return match doc.attr(id, "type").unwrap_or("Forever") {
+                "While" | "Expression" => self.watched_loop(id),
+                other => Err(unsupported(
+                    doc,
+                    id,
+                    format!("a {other} Loop checked continuously"),
+                )),
+            };
         }
         match doc.attr(id, "type").unwrap_or("Forever") {
             "Forever" => self.block("while (True):", |t| t.children_of(id)),
@@ -1789,6 +1851,38 @@ impl Tx<'_> {
             }
             other => Err(unsupported(doc, id, format!("loop type {other}"))),
         }
+    }
+
+    /// A `Loop type="While" checkContinuously="true"`: PolyScope runs its nodes in a
+    /// thread, `Thread_while_K`, looped, while the loop's own thread checks the
+    /// condition every cycle and kills the thread when it turns false. The thread is
+    /// written at the program's top level (a loop inside a thread or a sub program
+    /// would otherwise declare a thread inside a function).
+    fn watched_loop(&mut self, id: usize) -> Result<(), UrpError> {
+        let cond = self.expression(id)?;
+        self.watched += 1;
+        let k = self.watched;
+        let outer = std::mem::take(&mut self.segments);
+        let indent = std::mem::replace(&mut self.indent, 1);
+        let body = self.block(&format!("thread Thread_while_{k}():"), |tx| {
+            tx.block("while (True):", |tx| tx.children_of(id))
+        });
+        let thread = std::mem::replace(&mut self.segments, outer);
+        self.indent = indent;
+        body?;
+        self.hoisted.extend(thread);
+        self.hoisted = merge(std::mem::take(&mut self.hoisted));
+        self.block(&format!("if ({cond}):"), |tx| {
+            tx.line(&format!(
+                "global thread_handler_{k} = run Thread_while_{k}()"
+            ));
+            tx.block(&format!("while ({cond}):"), |tx| {
+                tx.line("sync()");
+                Ok(())
+            })?;
+            tx.line(&format!("kill thread_handler_{k}"));
+            Ok(())
+        })
     }
 
     fn if_chain(&mut self, chain: &[usize]) -> Result<(), UrpError> {
