@@ -1053,3 +1053,83 @@ fn older_waypoints_with_a_stored_pose_and_movep_blends() {
         matches!(read_urp(&urp(five)), Err(UrpError::Invalid { message, .. }) if message.contains("6 values"))
     );
 }
+
+/// `.urp` files from elsewhere (not in the repository): with `URP_DIR` set, every `.urp`
+/// in it translates, parses, and runs 5 s of virtual time without a runtime error (a
+/// popup's wait, a halt, or the end of the program are fine). What the installation
+/// would bring is supplied as found missing, and printed: a function no script defines
+/// (a URCap's) is stubbed to do nothing, a Modbus signal is added (a register input on
+/// 127.0.0.1) before the program's first line. Without `URP_DIR` this test checks
+/// nothing.
+#[test]
+fn urp_files_from_urp_dir_translate_and_run() {
+    let Some(dir) = std::env::var_os("URP_DIR") else {
+        return;
+    };
+    let mut entries: Vec<_> = std::fs::read_dir(dir)
+        .unwrap()
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.extension().is_some_and(|x| x == "urp"))
+        .collect();
+    entries.sort();
+    let mut failures = Vec::new();
+    for path in entries {
+        let bytes = std::fs::read(&path).unwrap();
+        let program = match read_urp(&bytes) {
+            Ok(p) => p,
+            Err(e) => {
+                failures.push(format!("{}: {e}", path.display()));
+                continue;
+            }
+        };
+        if let Err(e) = Program::parse(&program.script) {
+            failures.push(format!("{}: {e:?}", path.display()));
+            continue;
+        }
+        let (mut stubs, mut signals): (Vec<String>, Vec<String>) = (Vec::new(), Vec::new());
+        for _ in 0..64 {
+            let (head, body) = program.script.split_once('\n').unwrap();
+            let mut script = format!("{head}\n");
+            for s in &signals {
+                script.push_str(&format!(
+                    "  modbus_add_signal(\"127.0.0.1\", 255, 0, 2, \"{s}\", False)\n"
+                ));
+            }
+            script.push_str(body);
+            let mut config = Config::default();
+            for s in &stubs {
+                config = config.stub(s, urscript_interp::Stub::NoOp);
+            }
+            let mut m = Machine::new(Program::parse(&script).unwrap(), config);
+            let messages = run(&mut m, Duration::from_secs(5));
+            let unknown = m.unknown_functions();
+            if !unknown.is_empty() {
+                stubs.extend(unknown.into_iter().map(|(n, _)| n));
+                continue;
+            }
+            if let State::Error(e) = m.state() {
+                let missing = e
+                    .message()
+                    .split_once("no Modbus signal \"")
+                    .and_then(|(_, rest)| rest.split_once('"'))
+                    .map(|(name, _)| name.to_string());
+                if let Some(name) = missing.filter(|n| !signals.contains(n)) {
+                    signals.push(name);
+                    continue;
+                }
+            }
+            eprintln!(
+                "{}: {:?} after {:?}; stubbed {stubs:?}; Modbus signals added {signals:?}; messages {:?}",
+                path.display(),
+                m.state(),
+                m.now(),
+                texts(&messages)
+            );
+            if matches!(m.state(), State::Error(_)) {
+                failures.push(format!("{}: {:?}", path.display(), m.state()));
+            }
+            break;
+        }
+    }
+    assert!(failures.is_empty(), "{failures:#?}");
+}
