@@ -1862,16 +1862,11 @@ impl Tx<'_> {
         let cond = self.expression(id)?;
         self.watched += 1;
         let k = self.watched;
-        let outer = std::mem::take(&mut self.segments);
-        let indent = std::mem::replace(&mut self.indent, 1);
-        let body = self.block(&format!("thread Thread_while_{k}():"), |tx| {
-            tx.block("while (True):", |tx| tx.children_of(id))
-        });
-        let thread = std::mem::replace(&mut self.segments, outer);
-        self.indent = indent;
-        body?;
-        self.hoisted.extend(thread);
-        self.hoisted = merge(std::mem::take(&mut self.hoisted));
+        self.hoist(|tx| {
+            tx.block(&format!("thread Thread_while_{k}():"), |tx| {
+                tx.block("while (True):", |tx| tx.children_of(id))
+            })
+        })?;
         self.block(&format!("if ({cond}):"), |tx| {
             tx.line(&format!(
                 "global thread_handler_{k} = run Thread_while_{k}()"
@@ -1885,12 +1880,73 @@ impl Tx<'_> {
         })
     }
 
+    /// Writes what `f` writes at the program's top level ([`Tx::hoisted`]).
+    fn hoist(
+        &mut self,
+        f: impl FnOnce(&mut Self) -> Result<(), UrpError>,
+    ) -> Result<(), UrpError> {
+        let outer = std::mem::take(&mut self.segments);
+        let indent = std::mem::replace(&mut self.indent, 1);
+        let done = f(self);
+        let written = std::mem::replace(&mut self.segments, outer);
+        self.indent = indent;
+        done?;
+        self.hoisted.extend(written);
+        self.hoisted = merge(std::mem::take(&mut self.hoisted));
+        Ok(())
+    }
+
+    /// An `If checkContinuously="true"` (without `ElseIf`/`Else`): PolyScope runs its
+    /// nodes in a thread, `Thread_if_K`, that sets `thread_flag_K` to 1 when they are
+    /// done; the If's own thread checks the condition every cycle until then, and kills
+    /// the thread (flag 2) when it turns false. The thread is written at the program's
+    /// top level, as for a While checked continuously.
+    fn watched_if(&mut self, id: usize) -> Result<(), UrpError> {
+        let cond = self.expression(id)?;
+        self.watched += 1;
+        let k = self.watched;
+        self.hoist(|tx| {
+            tx.block(&format!("thread Thread_if_{k}():"), |tx| {
+                tx.children_of(id)?;
+                tx.line(&format!("thread_flag_{k} = 1"));
+                Ok(())
+            })
+        })?;
+        self.line(&format!("global thread_flag_{k} = 0"));
+        self.line(&format!("if ({cond}):"));
+        self.indent += 1;
+        self.line(&format!("global thread_handler_{k} = run Thread_if_{k}()"));
+        self.block(&format!("while (thread_flag_{k} == 0):"), |tx| {
+            tx.line(&format!("if not({cond}):"));
+            tx.line(&format!("  kill thread_handler_{k}"));
+            tx.line(&format!("  thread_flag_{k} = 2"));
+            tx.line("else:");
+            tx.line("  sync()");
+            tx.line("end");
+            Ok(())
+        })?;
+        self.indent -= 1;
+        self.line("else:");
+        self.line(&format!("  thread_flag_{k} = 2"));
+        self.line("end");
+        Ok(())
+    }
+
     fn if_chain(&mut self, chain: &[usize]) -> Result<(), UrpError> {
         let doc = self.doc;
+        if let [only] = chain {
+            if doc.attr(*only, "checkContinuously") == Some("true") {
+                return self.watched_if(*only);
+            }
+        }
         let mut seen_else = false;
         for (k, &b) in chain.iter().enumerate() {
             if doc.attr(b, "checkContinuously") == Some("true") {
-                return Err(unsupported(doc, b, "an If checked continuously"));
+                return Err(unsupported(
+                    doc,
+                    b,
+                    "an If checked continuously with ElseIf or Else",
+                ));
             }
             let head = match (k, doc.attr(b, "type").unwrap_or("If")) {
                 _ if seen_else => return Err(invalid(doc, b, "a branch after Else")),

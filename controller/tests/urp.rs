@@ -573,7 +573,7 @@ fn unknown_nodes_are_errors_naming_them() {
         Err(UrpError::Unsupported { .. })
     ));
     let continuous = format!(
-        r#"<If type="If" checkContinuously="true">{}<children/></If>"#,
+        r#"<If type="If" checkContinuously="true">{}<children/></If><If type="Else"><children/></If>"#,
         expr("True")
     );
     assert!(
@@ -1452,4 +1452,67 @@ end
     assert_eq!(m.state(), &State::Finished);
     let forever = r#"<Loop type="Forever" checkContinuously="true"><children><Halt/></children></Loop>"#;
     assert!(matches!(read_urp(&urp(forever)), Err(UrpError::Unsupported { .. })));
+}
+
+#[test]
+fn ifs_checked_continuously_stop_their_thread_when_false() {
+    let main = format!(
+        r#"<Assignment><variable name="go"/>{yes}</Assignment>
+<Assignment><variable name="steps"/>{zero}</Assignment>
+<If type="If" checkContinuously="true">{cond}<children>
+  <Loop type="Counting" count="10"><children>
+    <Assignment><variable name="steps"/>{incr}</Assignment>
+    <If type="If">{third}<children><Assignment><variable name="go"/>{no}</Assignment></children></If>
+    <Wait type="Sleep"><waitTime>0.01</waitTime></Wait>
+  </children></Loop>
+</children></If>
+{report}"#,
+        yes = expr("True"),
+        no = expr("False"),
+        zero = expr("0"),
+        cond = expr("go"),
+        incr = expr("steps + 1"),
+        third = expr("steps \u{225f} 3"),
+        report = script_line("textmsg(\"steps = \", steps)"),
+    );
+    let p = read(&main);
+    assert_eq!(
+        p.script,
+        "def test():
+  thread Thread_if_1():
+    Loop_1 = 0
+    while (Loop_1 < 10):
+      global steps = steps + 1
+      if (steps == 3):
+        global go = False
+      end
+      sleep(0.01)
+      Loop_1 = Loop_1 + 1
+    end
+    thread_flag_1 = 1
+  end
+  global go = True
+  global steps = 0
+  global thread_flag_1 = 0
+  if (go):
+    global thread_handler_1 = run Thread_if_1()
+    while (thread_flag_1 == 0):
+      if not(go):
+        kill thread_handler_1
+        thread_flag_1 = 2
+      else:
+        sync()
+      end
+    end
+  else:
+    thread_flag_1 = 2
+  end
+  textmsg(\"steps = \", steps)
+end
+"
+    );
+    let mut m = machine(&p.script);
+    let shown = run(&mut m, Duration::from_secs(1));
+    assert_eq!(texts(&shown), ["steps = 3"]);
+    assert_eq!(m.state(), &State::Finished);
 }
