@@ -960,6 +960,12 @@ fn arb_node() -> impl Strategy<Value = String> {
         )),
         (0..100i32).prop_map(|v| format!("<Assignment><variable name=\"v\"/>{}</Assignment>", expr(&v.to_string()))),
         Just(script_line("textmsg(\"x\")")),
+        (0..3u8).prop_map(|k| format!(
+            "<Timer action=\"{}\"><variable name=\"t\"/></Timer>",
+            ["Start", "Stop", "Reset"][k as usize]
+        )),
+        Just(r#"<SafeHome speed="1.0" acceleration="1.4"/>"#.to_string()),
+        Just("<SuppressedNode><suppressedNode class=\"Halt\"/></SuppressedNode>".to_string()),
     ];
     leaf.prop_recursive(4, 24, 4, move |inner| {
         let kids = proptest::collection::vec(inner, 0..4).prop_map(|v| v.concat());
@@ -976,6 +982,14 @@ fn arb_node() -> impl Strategy<Value = String> {
                 "<If type=\"If\">{}<children>{a}</children></If><If type=\"ElseIf\">{}<children>{b}</children></If><If type=\"Else\"><expression/><children>{c}</children></If>",
                 expr("v \u{225f} 1"),
                 expr("v > 2")
+            )),
+            kids.clone().prop_map(|k| format!(
+                "<Loop type=\"While\" checkContinuously=\"true\">{}<children>{k}</children></Loop>",
+                expr("v < 3")
+            )),
+            kids.clone().prop_map(|k| format!(
+                "<If type=\"If\" checkContinuously=\"true\">{}<children>{k}</children></If>",
+                expr("v < 3")
             )),
             kids.prop_map(|k| format!(
                 "<CallSubProgram><subprogram name=\"Sub\"><children>{k}</children></subprogram></CallSubProgram>"
