@@ -43,7 +43,11 @@
 //! |---|---|
 //! | `MainProgram` | the body of `def NAME():`; `runOnlyOnce="false"` wraps it in `while (True):` |
 //! | `SpecialSequence type="BeforeStart"` | its nodes, before the main program |
-//! | `InitVariablesNode` | its nodes, if any, first |
+//! | `InitVariablesNode` | its `<variables>` (`<variable name>` with `<expression>`: `global NAME = EXPR`) and its nodes, if any, first |
+//! | `Thread name=... runOnlyOnce=...` (the root's) | `thread NAME():` with its nodes in `while (True):` (without it when `runOnlyOnce="true"`), then `threadId_NAME = run NAME()` after the `BeforeStart` nodes, before the main program |
+//! | `Timer action="Start|Stop|Reset"` (`<variable>`) | `NAME_is_counting = True` / `False`, `NAME = 0`; at the program's top `global NAME = 0`, `global NAME_is_counting = False` and `Timer_Thread`, which adds `get_steptime()` to each counting timer every cycle |
+//! | `SafeHome speed acceleration` (PolyScope 5's Home) | `movej(DEFAULT_HOME_JOINTS, a, v)`: the node does not hold the home position and no installation is read, so PolyScope's default home ([`DEFAULT_HOME_JOINTS`]); `positionOptionType` other than `SPEED_AND_ACCELERATION` is refused |
+//! | `SuppressedNode` | nothing (PolyScope leaves a suppressed node out of the script) |
 //! | `Script type="Line"` (`<expression>`) / `type="File"` (`<cachedContents>`) | the line, or the file's lines as PolyScope cached them |
 //! | `Wait type="Sleep"` (`<waitTime>`) | `sleep(t)` |
 //! | `Wait type="DigitalInput"` (`<pin referencedName="digital_in[N]"/>`, `<digitalValue>`) | `while (not(get_standard_digital_in(N) == True)): sync() end` (also `configurable_in[N]`, `tool_in[N]`) |
@@ -60,6 +64,9 @@
 //! | `Loop type="Forever"` / `"Counting"` (`count`) / `"While"` (`<expression>`) | `while (True):` / a counter `Loop_K` / `while (EXPR):` |
 //! | `If type="If|ElseIf|Else"` (`<expression>`) | `if`/`elif`/`else` chains: an `If` and the `ElseIf`/`Else` siblings that follow it |
 //! | `Assignment` (`<variable name>`, `<expression>`) | `global NAME = EXPR` (PolyScope's own form) |
+//! | `Assignment valueSource="Operator" message valueType="Boolean|Integer|Float|String"` | `global NAME = request_boolean_from_primary_client(message)` (`_integer_`, `_float_`, `_string_`) |
+//! | `Loop type="While" checkContinuously="true"` | PolyScope's watched loop: `thread Thread_while_K():` (its nodes in `while (True):`, written at the program's top), and `if (EXPR):` `global thread_handler_K = run Thread_while_K()`, `while (EXPR): sync() end`, `kill thread_handler_K` |
+//! | `If checkContinuously="true"` (no `ElseIf`/`Else`) | PolyScope's watched If: `thread Thread_if_K():` (its nodes, then `thread_flag_K = 1`, at the program's top), started if `EXPR`, killed (`thread_flag_K = 2`) when `EXPR` turns false before it is done |
 //! | `Comment comment=...` | a `#` comment |
 //! | `Folder` | its nodes |
 //! | `Halt` | `halt` |
@@ -70,12 +77,15 @@
 //! (PolyScope's `≟`, `≠`, `≤`, `≥` and `≔` become `==`, `!=`, `<=`, `>=` and `=`),
 //! `<ExpressionToken token=" and "/>`, `<ExpressionVariable>` (the name of the variable
 //! its child refers to, as 5.x saves it: `<ProgramVariable reference=".../variable"/>`;
-//! or its `name`/`referencedName` attribute), or plain text inside `<expression>`.
+//! or its `name`/`referencedName` attribute), `<ExpressionIO><pin referencedName=.../>`
+//! (a pin `kind[N]` read as a Wait reads it, `get_standard_digital_in(N)`; any other
+//! name is a signal the installation defines, read as PolyScope reads a Modbus signal:
+//! `modbus_get_signal_status("NAME", False)`), or plain text inside `<expression>`.
 //!
 //! Any other node is [`UrpError::UnknownNode`], never dropped (other URCaps' nodes
 //! included: `Contributed (Gripper)`); a known node in a form not translated (a
-//! `Relative` waypoint, an `If` or `Loop` checked continuously, an operator-entered
-//! assignment) is [`UrpError::Unsupported`]. Not translated, by choice: `<kinematics>`
+//! `Relative` waypoint, a `Loop type="Forever"` or `"Counting"` checked continuously, an
+//! `If` checked continuously with `ElseIf`/`Else`) is [`UrpError::Unsupported`]. Not translated, by choice: `<kinematics>`
 //! (the calibration the waypoints were taught with: the arm model's own kinematics are
 //! used), a waypoint's `<Kinematics>`, `<BaseToFeature>`, `<outputFlangePose>` and
 //! `<poseInFeatureCoordinates>`, and a Move's `<feature>` and `<tcp>`: waypoints are
@@ -95,6 +105,20 @@
 //! The other forms (`Loop type="Counting"`, `ElseIf`, `Set type="AnalogOutput"|
 //! "Expression"`, `Wait type="AnalogInput"|"Expression"`, `Folder`) follow the same
 //! conventions but were not seen in a saved file.
+//!
+//! From `.urp` files in UR's own public repositories (3.x and 5.x, last saved by up to
+//! 5.21): `Thread` (`name`, `runOnlyOnce`, `trackProgramExecution`, which changes no
+//! script), `Timer action` with its `<variable>`, `SafeHome` (speed and acceleration
+//! only: the position is the installation's), `SuppressedNode`, `InitVariablesNode`'s
+//! `<variables>`, operator assignments, `ExpressionIO` tokens naming Modbus signals, and
+//! `Loop type="While" checkContinuously="true"`. The scripts for them follow the form
+//! PolyScope's exported scripts show (`thread Thread_1():` ... `threadId_Thread_1 = run
+//! Thread_1()`; `Timer_Thread` counting `NAME_is_counting` timers with
+//! `get_steptime()`; `Thread_if_K`/`thread_flag_K`/`thread_handler_K` for a condition
+//! checked continuously); the threads of nodes checked continuously are written at the
+//! program's top level rather than in place (a choice: in place, one inside a `Thread`
+//! or sub program would declare a thread inside a function). Where a `runOnlyOnce="true"`
+//! thread's script was not seen, its nodes run once, unlooped.
 //!
 //! String literals: URScript has no escapes, so a message with `"` is written between
 //! `'`; one with both quote characters has its `"` written as `'`.
@@ -1881,10 +1905,7 @@ impl Tx<'_> {
     }
 
     /// Writes what `f` writes at the program's top level ([`Tx::hoisted`]).
-    fn hoist(
-        &mut self,
-        f: impl FnOnce(&mut Self) -> Result<(), UrpError>,
-    ) -> Result<(), UrpError> {
+    fn hoist(&mut self, f: impl FnOnce(&mut Self) -> Result<(), UrpError>) -> Result<(), UrpError> {
         let outer = std::mem::take(&mut self.segments);
         let indent = std::mem::replace(&mut self.indent, 1);
         let done = f(self);
@@ -2002,13 +2023,21 @@ impl Tx<'_> {
                 None => format!("Thread_{}", k + 1),
             };
             if !names.insert(name.clone()) || self.subprogram_names.contains(&name) {
-                return Err(invalid(doc, t, format!("two threads or sub programs named {name}")));
+                return Err(invalid(
+                    doc,
+                    t,
+                    format!("two threads or sub programs named {name}"),
+                ));
             }
             let forever = match doc.attr(t, "runOnlyOnce") {
                 None | Some("false") => true,
                 Some("true") => false,
                 Some(other) => {
-                    return Err(invalid(doc, t, format!("runOnlyOnce `{other}` is not true/false")))
+                    return Err(invalid(
+                        doc,
+                        t,
+                        format!("runOnlyOnce `{other}` is not true/false"),
+                    ))
                 }
             };
             self.block(&format!("thread {name}():"), |tx| {
@@ -2078,9 +2107,7 @@ impl Tx<'_> {
         let doc = self.doc;
         match doc.attr(id, "positionOptionType") {
             None | Some("SPEED_AND_ACCELERATION") => {}
-            Some(other) => {
-                return Err(unsupported(doc, id, format!("a Home move with {other}")))
-            }
+            Some(other) => return Err(unsupported(doc, id, format!("a Home move with {other}"))),
         }
         let get = |key: &str| -> Result<Option<f64>, UrpError> {
             match doc.attr(id, key) {

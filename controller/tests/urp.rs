@@ -1242,7 +1242,11 @@ fn hostile_threads_are_errors() {
     ));
     // Many threads: each defined and started, the work linear.
     let many: String = (0..2000)
-        .map(|k| format!("<Thread name=\"T{k}\" runOnlyOnce=\"true\"><children><Halt/></children></Thread>"))
+        .map(|k| {
+            format!(
+                "<Thread name=\"T{k}\" runOnlyOnce=\"true\"><children><Halt/></children></Thread>"
+            )
+        })
         .collect();
     let p = read_urp(&root("t", &format!("{main}{many}"))).unwrap();
     assert_eq!(p.script.matches(" = run T").count(), 2000);
@@ -1301,14 +1305,23 @@ end
     assert_eq!(shown[1], "0");
 
     for (timer, bad) in [
-        (r#"<Timer action="Pause"><variable name="t"/></Timer>"#, "timer action Pause"),
+        (
+            r#"<Timer action="Pause"><variable name="t"/></Timer>"#,
+            "timer action Pause",
+        ),
         (r#"<Timer><variable name="t"/></Timer>"#, "no action"),
         (r#"<Timer action="Start"/>"#, "no <variable>"),
-        (r#"<Timer action="Start"><variable name="1t"/></Timer>"#, "not a variable name"),
+        (
+            r#"<Timer action="Start"><variable name="1t"/></Timer>"#,
+            "not a variable name",
+        ),
     ] {
         let err = read_urp(&urp(timer)).unwrap_err();
         assert!(err.to_string().contains(bad), "{timer}: {err}");
-        assert!(err.to_string().contains("MainProgram/children/Timer"), "{err}");
+        assert!(
+            err.to_string().contains("MainProgram/children/Timer"),
+            "{err}"
+        );
     }
 }
 
@@ -1343,11 +1356,18 @@ end
         (r#"<SafeHome speed="-1"/>"#, "not positive"),
         (r#"<SafeHome acceleration="fast"/>"#, "not a number"),
         (r#"<SafeHome speed="1e999"/>"#, "not a number"),
-        (r#"<SafeHome positionOptionType="TIME" speed="1"/>"#, "not supported"),
+        (
+            r#"<SafeHome positionOptionType="TIME" speed="1"/>"#,
+            "not supported",
+        ),
     ] {
         let err = read_urp(&urp(node)).unwrap_err();
         assert!(err.to_string().contains(bad), "{node}: {err}");
-        assert!(err.to_string().starts_with("URProgram/children/MainProgram/children/SafeHome"), "{err}");
+        assert!(
+            err.to_string()
+                .starts_with("URProgram/children/MainProgram/children/SafeHome"),
+            "{err}"
+        );
     }
 }
 
@@ -1410,13 +1430,20 @@ end
     ] {
         let err = read_urp(&urp(node)).unwrap_err();
         assert!(err.to_string().contains(bad), "{node}: {err}");
-        assert!(err.to_string().starts_with("URProgram/children/MainProgram/children/Assignment"), "{err}");
+        assert!(
+            err.to_string()
+                .starts_with("URProgram/children/MainProgram/children/Assignment"),
+            "{err}"
+        );
     }
     let bad_init = root(
         "b",
         r#"<InitVariablesNode><variables><variable name="v"/></variables></InitVariablesNode><MainProgram/>"#,
     );
-    assert!(read_urp(&bad_init).unwrap_err().to_string().contains("no <expression>"));
+    assert!(read_urp(&bad_init)
+        .unwrap_err()
+        .to_string()
+        .contains("no <expression>"));
 }
 
 #[test]
@@ -1464,8 +1491,12 @@ end
     // sleep, before its message.
     assert_eq!(texts(&shown), ["late", "late", "late", "late", "i = 5"]);
     assert_eq!(m.state(), &State::Finished);
-    let forever = r#"<Loop type="Forever" checkContinuously="true"><children><Halt/></children></Loop>"#;
-    assert!(matches!(read_urp(&urp(forever)), Err(UrpError::Unsupported { .. })));
+    let forever =
+        r#"<Loop type="Forever" checkContinuously="true"><children><Halt/></children></Loop>"#;
+    assert!(matches!(
+        read_urp(&urp(forever)),
+        Err(UrpError::Unsupported { .. })
+    ));
 }
 
 #[test]
