@@ -43,7 +43,11 @@
 //! |---|---|
 //! | `MainProgram` | the body of `def NAME():`; `runOnlyOnce="false"` wraps it in `while (True):` |
 //! | `SpecialSequence type="BeforeStart"` | its nodes, before the main program |
-//! | `InitVariablesNode` | its nodes, if any, first |
+//! | `InitVariablesNode` | its `<variables>` (`<variable name>` with `<expression>`: `global NAME = EXPR`) and its nodes, if any, first |
+//! | `Thread name=... runOnlyOnce=...` (the root's) | `thread NAME():` with its nodes in `while (True):` (without it when `runOnlyOnce="true"`), then `threadId_NAME = run NAME()` after the `BeforeStart` nodes, before the main program |
+//! | `Timer action="Start|Stop|Reset"` (`<variable>`) | `NAME_is_counting = True` / `False`, `NAME = 0`; at the program's top `global NAME = 0`, `global NAME_is_counting = False` and `Timer_Thread`, which adds `get_steptime()` to each counting timer every cycle |
+//! | `SafeHome speed acceleration` (PolyScope 5's Home) | `movej(DEFAULT_HOME_JOINTS, a, v)`: the node does not hold the home position and no installation is read, so PolyScope's default home ([`DEFAULT_HOME_JOINTS`]); `positionOptionType` other than `SPEED_AND_ACCELERATION` is refused |
+//! | `SuppressedNode` | nothing (PolyScope leaves a suppressed node out of the script) |
 //! | `Script type="Line"` (`<expression>`) / `type="File"` (`<cachedContents>`) | the line, or the file's lines as PolyScope cached them |
 //! | `Wait type="Sleep"` (`<waitTime>`) | `sleep(t)` |
 //! | `Wait type="DigitalInput"` (`<pin referencedName="digital_in[N]"/>`, `<digitalValue>`) | `while (not(get_standard_digital_in(N) == True)): sync() end` (also `configurable_in[N]`, `tool_in[N]`) |
@@ -60,6 +64,9 @@
 //! | `Loop type="Forever"` / `"Counting"` (`count`) / `"While"` (`<expression>`) | `while (True):` / a counter `Loop_K` / `while (EXPR):` |
 //! | `If type="If|ElseIf|Else"` (`<expression>`) | `if`/`elif`/`else` chains: an `If` and the `ElseIf`/`Else` siblings that follow it |
 //! | `Assignment` (`<variable name>`, `<expression>`) | `global NAME = EXPR` (PolyScope's own form) |
+//! | `Assignment valueSource="Operator" message valueType="Boolean|Integer|Float|String"` | `global NAME = request_boolean_from_primary_client(message)` (`_integer_`, `_float_`, `_string_`) |
+//! | `Loop type="While" checkContinuously="true"` | PolyScope's watched loop: `thread Thread_while_K():` (its nodes in `while (True):`, written at the program's top), and `if (EXPR):` `global thread_handler_K = run Thread_while_K()`, `while (EXPR): sync() end`, `kill thread_handler_K` |
+//! | `If checkContinuously="true"` (no `ElseIf`/`Else`) | PolyScope's watched If: `thread Thread_if_K():` (its nodes, then `thread_flag_K = 1`, at the program's top), started if `EXPR`, killed (`thread_flag_K = 2`) when `EXPR` turns false before it is done |
 //! | `Comment comment=...` | a `#` comment |
 //! | `Folder` | its nodes |
 //! | `Halt` | `halt` |
@@ -70,12 +77,15 @@
 //! (PolyScope's `≟`, `≠`, `≤`, `≥` and `≔` become `==`, `!=`, `<=`, `>=` and `=`),
 //! `<ExpressionToken token=" and "/>`, `<ExpressionVariable>` (the name of the variable
 //! its child refers to, as 5.x saves it: `<ProgramVariable reference=".../variable"/>`;
-//! or its `name`/`referencedName` attribute), or plain text inside `<expression>`.
+//! or its `name`/`referencedName` attribute), `<ExpressionIO><pin referencedName=.../>`
+//! (a pin `kind[N]` read as a Wait reads it, `get_standard_digital_in(N)`; any other
+//! name is a signal the installation defines, read as PolyScope reads a Modbus signal:
+//! `modbus_get_signal_status("NAME", False)`), or plain text inside `<expression>`.
 //!
 //! Any other node is [`UrpError::UnknownNode`], never dropped (other URCaps' nodes
 //! included: `Contributed (Gripper)`); a known node in a form not translated (a
-//! `Relative` waypoint, an `If` or `Loop` checked continuously, an operator-entered
-//! assignment) is [`UrpError::Unsupported`]. Not translated, by choice: `<kinematics>`
+//! `Relative` waypoint, a `Loop type="Forever"` or `"Counting"` checked continuously, an
+//! `If` checked continuously with `ElseIf`/`Else`) is [`UrpError::Unsupported`]. Not translated, by choice: `<kinematics>`
 //! (the calibration the waypoints were taught with: the arm model's own kinematics are
 //! used), a waypoint's `<Kinematics>`, `<BaseToFeature>`, `<outputFlangePose>` and
 //! `<poseInFeatureCoordinates>`, and a Move's `<feature>` and `<tcp>`: waypoints are
@@ -95,6 +105,20 @@
 //! The other forms (`Loop type="Counting"`, `ElseIf`, `Set type="AnalogOutput"|
 //! "Expression"`, `Wait type="AnalogInput"|"Expression"`, `Folder`) follow the same
 //! conventions but were not seen in a saved file.
+//!
+//! From `.urp` files in UR's own public repositories (3.x and 5.x, last saved by up to
+//! 5.21): `Thread` (`name`, `runOnlyOnce`, `trackProgramExecution`, which changes no
+//! script), `Timer action` with its `<variable>`, `SafeHome` (speed and acceleration
+//! only: the position is the installation's), `SuppressedNode`, `InitVariablesNode`'s
+//! `<variables>`, operator assignments, `ExpressionIO` tokens naming Modbus signals, and
+//! `Loop type="While" checkContinuously="true"`. The scripts for them follow the form
+//! PolyScope's exported scripts show (`thread Thread_1():` ... `threadId_Thread_1 = run
+//! Thread_1()`; `Timer_Thread` counting `NAME_is_counting` timers with
+//! `get_steptime()`; `Thread_if_K`/`thread_flag_K`/`thread_handler_K` for a condition
+//! checked continuously); the threads of nodes checked continuously are written at the
+//! program's top level rather than in place (a choice: in place, one inside a `Thread`
+//! or sub program would declare a thread inside a function). Where a `runOnlyOnce="true"`
+//! thread's script was not seen, its nodes run once, unlooped.
 //!
 //! String literals: URScript has no escapes, so a message with `"` is written between
 //! `'`; one with both quote characters has its `"` written as `'`.
@@ -119,6 +143,18 @@ pub const MAX_DEPTH: usize = 128;
 pub const EXTERNAL_CONTROL_DEFAULT_HOST: &str = "192.168.56.1";
 /// The External Control URCap's default port (the ROS driver's script sender).
 pub const EXTERNAL_CONTROL_DEFAULT_PORT: u16 = 50002;
+
+/// The joint angles a Home (`SafeHome`) node moves to: PolyScope's default home
+/// position (the arm upright: shoulder and wrist 1 at -90°), as the translator reads no
+/// installation.
+pub const DEFAULT_HOME_JOINTS: [f64; 6] = [
+    0.0,
+    -std::f64::consts::FRAC_PI_2,
+    0.0,
+    -std::f64::consts::FRAC_PI_2,
+    0.0,
+    0.0,
+];
 
 const MAX_REFERENCE_HOPS: usize = 64;
 const MAX_REFERENCE_LEN: usize = 4096;
@@ -927,6 +963,12 @@ struct Tx<'a> {
     subprogram_index: HashMap<usize, usize>,
     subprogram_names: std::collections::HashSet<String>,
     loops: usize,
+    /// Timer variables, in the order first met (each at most once).
+    timers: Vec<String>,
+    /// Threads of loops checked continuously, written at the program's top level.
+    hoisted: Vec<Segment>,
+    /// How many such threads so far (their names' numbers).
+    watched: usize,
 }
 
 fn invalid(doc: &Doc, id: usize, message: impl Into<String>) -> UrpError {
@@ -1014,11 +1056,15 @@ fn translate(doc: &Doc) -> Result<UrpProgram, UrpError> {
         subprogram_index: HashMap::new(),
         subprogram_names: std::collections::HashSet::new(),
         loops: 0,
+        timers: Vec::new(),
+        hoisted: Vec::new(),
+        watched: 0,
     };
 
     let mut init = Vec::new();
     let mut before = Vec::new();
     let mut main = None;
+    let mut threads = Vec::new();
     if let Some(children) = doc.child(0, "children") {
         for &c in &doc.elems[children].children {
             match doc.name(c) {
@@ -1042,13 +1088,19 @@ fn translate(doc: &Doc) -> Result<UrpProgram, UrpError> {
                     let sub = doc.resolve(c)?;
                     tx.subprogram_name(sub)?;
                 }
+                "Thread" => threads.push(c),
                 _ => return Err(unknown(doc, c)),
             }
         }
     }
-    for &c in init.iter().chain(&before) {
+    for &c in &init {
+        tx.init_variables(c)?;
         tx.children_of(c)?;
     }
+    for &c in &before {
+        tx.children_of(c)?;
+    }
+    tx.threads(&threads)?;
     let Some(main) = main else {
         return Err(invalid(doc, 0, "the program has no MainProgram"));
     };
@@ -1081,6 +1133,11 @@ fn translate(doc: &Doc) -> Result<UrpProgram, UrpError> {
 
     let mut segments = vec![Segment::Text(format!("def {}():\n", identifier(&name)))];
     segments.extend(defs);
+    segments.append(&mut tx.hoisted);
+    if !tx.timers.is_empty() {
+        tx.timer_thread();
+        segments.append(&mut tx.segments);
+    }
     segments.extend(body);
     segments.push(Segment::Text(String::from("end\n")));
     let segments = merge(segments);
@@ -1319,6 +1376,7 @@ impl Tx<'_> {
                     };
                     out.push_str(&name);
                 }
+                "ExpressionIO" => out.push_str(&self.io_read(t)?),
                 _ => return Err(unknown(doc, t)),
             }
         }
@@ -1389,14 +1447,39 @@ impl Tx<'_> {
             "Move" => self.motion(id)?,
             "Loop" => self.loop_node(id)?,
             "Assignment" => {
-                match doc.attr(id, "valueSource") {
-                    None | Some("Expression") => {}
+                let name = self.variable_name(id)?;
+                let value = match doc.attr(id, "valueSource") {
+                    None | Some("Expression") => self.expression(id)?,
+                    Some("Operator") => {
+                        // The operator answers at play time: PolyScope asks its primary
+                        // client for a value of the assignment's type.
+                        let f = match doc.attr(id, "valueType") {
+                            Some("Boolean") => "request_boolean_from_primary_client",
+                            Some("Integer") => "request_integer_from_primary_client",
+                            Some("Float") => "request_float_from_primary_client",
+                            Some("String") => "request_string_from_primary_client",
+                            Some(other) => {
+                                return Err(unsupported(
+                                    doc,
+                                    id,
+                                    format!("an operator assignment of type {other}"),
+                                ))
+                            }
+                            None => {
+                                return Err(invalid(
+                                    doc,
+                                    id,
+                                    "an operator assignment without valueType",
+                                ))
+                            }
+                        };
+                        let message = doc.attr(id, "message").unwrap_or("");
+                        format!("{f}({})", string_literal(message))
+                    }
                     Some(other) => {
                         return Err(unsupported(doc, id, format!("an assignment from {other}")))
                     }
-                }
-                let name = self.variable_name(id)?;
-                let value = self.expression(id)?;
+                };
                 self.line(&format!("global {name} = {value}"));
             }
             "CallSubProgram" => {
@@ -1408,6 +1491,10 @@ impl Tx<'_> {
                 self.line(&format!("{fname}()"));
             }
             "Contributed" => self.contributed(id)?,
+            "Timer" => self.timer(id)?,
+            "SafeHome" => self.safe_home(id)?,
+            // A node the user suppressed: PolyScope leaves it out of the script.
+            "SuppressedNode" => {}
             _ => return Err(unknown(doc, id)),
         }
         Ok(())
@@ -1451,6 +1538,28 @@ impl Tx<'_> {
             }
         }
         Ok(())
+    }
+
+    /// An `<ExpressionIO>` token: its `<pin>` read. A pin `kind[N]` is read as a Wait
+    /// reads it; any other name is a signal the installation names, which PolyScope
+    /// reads as a Modbus signal: `modbus_get_signal_status("NAME", False)`.
+    fn io_read(&self, id: usize) -> Result<String, UrpError> {
+        let doc = self.doc;
+        let p = doc
+            .child(id, "pin")
+            .ok_or_else(|| invalid(doc, id, "no <pin>"))?;
+        let p = doc.resolve(p)?;
+        let name = doc
+            .attr(p, "referencedName")
+            .or_else(|| doc.attr(p, "name"))
+            .ok_or_else(|| invalid(doc, p, "the pin has no name"))?;
+        if name.contains('[') {
+            return self.input_call(id);
+        }
+        if name.is_empty() || name.contains(['"', '\'', '\n', '\r']) {
+            return Err(invalid(doc, p, format!("`{name}` is not a signal name")));
+        }
+        Ok(format!("modbus_get_signal_status(\"{name}\", False)"))
     }
 
     fn input_call(&self, id: usize) -> Result<String, UrpError> {
@@ -1732,7 +1841,14 @@ impl Tx<'_> {
     fn loop_node(&mut self, id: usize) -> Result<(), UrpError> {
         let doc = self.doc;
         if doc.attr(id, "checkContinuously") == Some("true") {
-            return Err(unsupported(doc, id, "a Loop checked continuously"));
+            return match doc.attr(id, "type").unwrap_or("Forever") {
+                "While" | "Expression" => self.watched_loop(id),
+                other => Err(unsupported(
+                    doc,
+                    id,
+                    format!("a {other} Loop checked continuously"),
+                )),
+            };
         }
         match doc.attr(id, "type").unwrap_or("Forever") {
             "Forever" => self.block("while (True):", |t| t.children_of(id)),
@@ -1761,12 +1877,97 @@ impl Tx<'_> {
         }
     }
 
+    /// A `Loop type="While" checkContinuously="true"`: PolyScope runs its nodes in a
+    /// thread, `Thread_while_K`, looped, while the loop's own thread checks the
+    /// condition every cycle and kills the thread when it turns false. The thread is
+    /// written at the program's top level (a loop inside a thread or a sub program
+    /// would otherwise declare a thread inside a function).
+    fn watched_loop(&mut self, id: usize) -> Result<(), UrpError> {
+        let cond = self.expression(id)?;
+        self.watched += 1;
+        let k = self.watched;
+        self.hoist(|tx| {
+            tx.block(&format!("thread Thread_while_{k}():"), |tx| {
+                tx.block("while (True):", |tx| tx.children_of(id))
+            })
+        })?;
+        self.block(&format!("if ({cond}):"), |tx| {
+            tx.line(&format!(
+                "global thread_handler_{k} = run Thread_while_{k}()"
+            ));
+            tx.block(&format!("while ({cond}):"), |tx| {
+                tx.line("sync()");
+                Ok(())
+            })?;
+            tx.line(&format!("kill thread_handler_{k}"));
+            Ok(())
+        })
+    }
+
+    /// Writes what `f` writes at the program's top level ([`Tx::hoisted`]).
+    fn hoist(&mut self, f: impl FnOnce(&mut Self) -> Result<(), UrpError>) -> Result<(), UrpError> {
+        let outer = std::mem::take(&mut self.segments);
+        let indent = std::mem::replace(&mut self.indent, 1);
+        let done = f(self);
+        let written = std::mem::replace(&mut self.segments, outer);
+        self.indent = indent;
+        done?;
+        self.hoisted.extend(written);
+        self.hoisted = merge(std::mem::take(&mut self.hoisted));
+        Ok(())
+    }
+
+    /// An `If checkContinuously="true"` (without `ElseIf`/`Else`): PolyScope runs its
+    /// nodes in a thread, `Thread_if_K`, that sets `thread_flag_K` to 1 when they are
+    /// done; the If's own thread checks the condition every cycle until then, and kills
+    /// the thread (flag 2) when it turns false. The thread is written at the program's
+    /// top level, as for a While checked continuously.
+    fn watched_if(&mut self, id: usize) -> Result<(), UrpError> {
+        let cond = self.expression(id)?;
+        self.watched += 1;
+        let k = self.watched;
+        self.hoist(|tx| {
+            tx.block(&format!("thread Thread_if_{k}():"), |tx| {
+                tx.children_of(id)?;
+                tx.line(&format!("thread_flag_{k} = 1"));
+                Ok(())
+            })
+        })?;
+        self.line(&format!("global thread_flag_{k} = 0"));
+        self.line(&format!("if ({cond}):"));
+        self.indent += 1;
+        self.line(&format!("global thread_handler_{k} = run Thread_if_{k}()"));
+        self.block(&format!("while (thread_flag_{k} == 0):"), |tx| {
+            tx.line(&format!("if not({cond}):"));
+            tx.line(&format!("  kill thread_handler_{k}"));
+            tx.line(&format!("  thread_flag_{k} = 2"));
+            tx.line("else:");
+            tx.line("  sync()");
+            tx.line("end");
+            Ok(())
+        })?;
+        self.indent -= 1;
+        self.line("else:");
+        self.line(&format!("  thread_flag_{k} = 2"));
+        self.line("end");
+        Ok(())
+    }
+
     fn if_chain(&mut self, chain: &[usize]) -> Result<(), UrpError> {
         let doc = self.doc;
+        if let [only] = chain {
+            if doc.attr(*only, "checkContinuously") == Some("true") {
+                return self.watched_if(*only);
+            }
+        }
         let mut seen_else = false;
         for (k, &b) in chain.iter().enumerate() {
             if doc.attr(b, "checkContinuously") == Some("true") {
-                return Err(unsupported(doc, b, "an If checked continuously"));
+                return Err(unsupported(
+                    doc,
+                    b,
+                    "an If checked continuously with ElseIf or Else",
+                ));
             }
             let head = match (k, doc.attr(b, "type").unwrap_or("If")) {
                 _ if seen_else => return Err(invalid(doc, b, "a branch after Else")),
@@ -1784,6 +1985,152 @@ impl Tx<'_> {
             self.indent -= 1;
         }
         self.line("end");
+        Ok(())
+    }
+
+    /// An `InitVariablesNode`'s `<variables>`: each `<variable name>` with its
+    /// `<expression>`, `global NAME = EXPR`.
+    fn init_variables(&mut self, id: usize) -> Result<(), UrpError> {
+        let doc = self.doc;
+        let Some(vars) = doc.child(id, "variables") else {
+            return Ok(());
+        };
+        for &v in &doc.elems[vars].children.clone() {
+            let v = doc.resolve(v)?;
+            if doc.name(v) != "variable" {
+                return Err(unknown(doc, v));
+            }
+            let name = self.named_variable(v)?;
+            let value = self.expression(v)?;
+            self.line(&format!("global {name} = {value}"));
+        }
+        Ok(())
+    }
+
+    /// The program's `Thread` nodes: `thread NAME():`, its nodes in `while (True):`
+    /// unless `runOnlyOnce="true"`, then `threadId_NAME = run NAME()` for each, in
+    /// document order.
+    fn threads(&mut self, threads: &[usize]) -> Result<(), UrpError> {
+        let doc = self.doc;
+        let mut names = std::collections::HashSet::new();
+        let mut started = Vec::new();
+        for (k, &t) in threads.iter().enumerate() {
+            let t = doc.resolve(t)?;
+            let name = match doc.attr(t, "name") {
+                Some(n) if !n.trim().is_empty() => identifier(n.trim()),
+                Some(_) => return Err(invalid(doc, t, "the thread's name is empty")),
+                // PolyScope names its threads Thread_1, Thread_2, ...
+                None => format!("Thread_{}", k + 1),
+            };
+            if !names.insert(name.clone()) || self.subprogram_names.contains(&name) {
+                return Err(invalid(
+                    doc,
+                    t,
+                    format!("two threads or sub programs named {name}"),
+                ));
+            }
+            let forever = match doc.attr(t, "runOnlyOnce") {
+                None | Some("false") => true,
+                Some("true") => false,
+                Some(other) => {
+                    return Err(invalid(
+                        doc,
+                        t,
+                        format!("runOnlyOnce `{other}` is not true/false"),
+                    ))
+                }
+            };
+            self.block(&format!("thread {name}():"), |tx| {
+                if forever {
+                    tx.block("while (True):", |tx| tx.children_of(t))
+                } else {
+                    tx.children_of(t)
+                }
+            })?;
+            started.push(name);
+        }
+        for name in started {
+            self.line(&format!("threadId_{name} = run {name}()"));
+        }
+        Ok(())
+    }
+
+    /// A `Timer action="Start|Stop|Reset"` on its `<variable>`: the variable counts
+    /// seconds in a thread while `NAME_is_counting` is `True` ([`Tx::timer_thread`]).
+    fn timer(&mut self, id: usize) -> Result<(), UrpError> {
+        let doc = self.doc;
+        let name = self.variable_name(id)?;
+        let line = match doc.attr(id, "action") {
+            Some("Start") => format!("{name}_is_counting = True"),
+            Some("Stop") => format!("{name}_is_counting = False"),
+            Some("Reset") => format!("{name} = 0"),
+            Some(other) => return Err(unsupported(doc, id, format!("timer action {other}"))),
+            None => return Err(invalid(doc, id, "the timer has no action")),
+        };
+        if !self.timers.contains(&name) {
+            self.timers.push(name);
+        }
+        self.line(&line);
+        Ok(())
+    }
+
+    /// The timers' variables and the thread that counts them, as PolyScope writes
+    /// them at the top of the program.
+    fn timer_thread(&mut self) {
+        self.indent = 1;
+        let timers = self.timers.clone();
+        for t in &timers {
+            self.line(&format!("global {t} = 0"));
+            self.line(&format!("global {t}_is_counting = False"));
+        }
+        self.line("thread Timer_Thread():");
+        self.indent += 1;
+        self.line("while (True):");
+        self.indent += 1;
+        for t in &timers {
+            self.line(&format!("if ({t}_is_counting):"));
+            self.line(&format!("  {t} = {t} + get_steptime()"));
+            self.line("end");
+        }
+        self.line("sync()");
+        self.indent -= 1;
+        self.line("end");
+        self.indent -= 1;
+        self.line("end");
+        self.line("run Timer_Thread()");
+    }
+
+    /// PolyScope 5's Home (`SafeHome`) node: a `movej` to the installation's home
+    /// position. The node does not hold the position and the translator reads no
+    /// installation: it is [`DEFAULT_HOME_JOINTS`], PolyScope's default home.
+    fn safe_home(&mut self, id: usize) -> Result<(), UrpError> {
+        let doc = self.doc;
+        match doc.attr(id, "positionOptionType") {
+            None | Some("SPEED_AND_ACCELERATION") => {}
+            Some(other) => return Err(unsupported(doc, id, format!("a Home move with {other}"))),
+        }
+        let get = |key: &str| -> Result<Option<f64>, UrpError> {
+            match doc.attr(id, key) {
+                Some(v) => {
+                    let v = parse_f64(doc, id, key, v)?;
+                    if v <= 0.0 {
+                        return Err(invalid(doc, id, format!("{key} `{v}` is not positive")));
+                    }
+                    Ok(Some(v))
+                }
+                None => Ok(None),
+            }
+        };
+        let mut call = format!("movej({}", list(&DEFAULT_HOME_JOINTS));
+        if let Some(a) = get("acceleration")? {
+            call.push_str(&format!(", a={}", num(a)));
+        }
+        if let Some(v) = get("speed")? {
+            call.push_str(&format!(", v={}", num(v)));
+        }
+        call.push(')');
+        self.line("# Home");
+        self.line(&call);
         Ok(())
     }
 

@@ -573,7 +573,7 @@ fn unknown_nodes_are_errors_naming_them() {
         Err(UrpError::Unsupported { .. })
     ));
     let continuous = format!(
-        r#"<Loop type="While" checkContinuously="true">{}<children/></Loop>"#,
+        r#"<If type="If" checkContinuously="true">{}<children/></If><If type="Else"><children/></If>"#,
         expr("True")
     );
     assert!(
@@ -960,6 +960,12 @@ fn arb_node() -> impl Strategy<Value = String> {
         )),
         (0..100i32).prop_map(|v| format!("<Assignment><variable name=\"v\"/>{}</Assignment>", expr(&v.to_string()))),
         Just(script_line("textmsg(\"x\")")),
+        (0..3u8).prop_map(|k| format!(
+            "<Timer action=\"{}\"><variable name=\"t\"/></Timer>",
+            ["Start", "Stop", "Reset"][k as usize]
+        )),
+        Just(r#"<SafeHome speed="1.0" acceleration="1.4"/>"#.to_string()),
+        Just("<SuppressedNode><suppressedNode class=\"Halt\"/></SuppressedNode>".to_string()),
     ];
     leaf.prop_recursive(4, 24, 4, move |inner| {
         let kids = proptest::collection::vec(inner, 0..4).prop_map(|v| v.concat());
@@ -976,6 +982,14 @@ fn arb_node() -> impl Strategy<Value = String> {
                 "<If type=\"If\">{}<children>{a}</children></If><If type=\"ElseIf\">{}<children>{b}</children></If><If type=\"Else\"><expression/><children>{c}</children></If>",
                 expr("v \u{225f} 1"),
                 expr("v > 2")
+            )),
+            kids.clone().prop_map(|k| format!(
+                "<Loop type=\"While\" checkContinuously=\"true\">{}<children>{k}</children></Loop>",
+                expr("v < 3")
+            )),
+            kids.clone().prop_map(|k| format!(
+                "<If type=\"If\" checkContinuously=\"true\">{}<children>{k}</children></If>",
+                expr("v < 3")
             )),
             kids.prop_map(|k| format!(
                 "<CallSubProgram><subprogram name=\"Sub\"><children>{k}</children></subprogram></CallSubProgram>"
@@ -1052,4 +1066,498 @@ fn older_waypoints_with_a_stored_pose_and_movep_blends() {
     assert!(
         matches!(read_urp(&urp(five)), Err(UrpError::Invalid { message, .. }) if message.contains("6 values"))
     );
+}
+
+/// `.urp` files from elsewhere (not in the repository): with `URP_DIR` set, every `.urp`
+/// in it translates, parses, and runs 5 s of virtual time without a runtime error (a
+/// popup's wait, a halt, or the end of the program are fine). What the installation
+/// would bring is supplied as found missing, and printed: a function no script defines
+/// (a URCap's) is stubbed to do nothing, a Modbus signal is added (a register input on
+/// 127.0.0.1) before the program's first line. Without `URP_DIR` this test checks
+/// nothing.
+#[test]
+fn urp_files_from_urp_dir_translate_and_run() {
+    let Some(dir) = std::env::var_os("URP_DIR") else {
+        return;
+    };
+    let mut entries: Vec<_> = std::fs::read_dir(dir)
+        .unwrap()
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.extension().is_some_and(|x| x == "urp"))
+        .collect();
+    entries.sort();
+    let mut failures = Vec::new();
+    for path in entries {
+        let bytes = std::fs::read(&path).unwrap();
+        let program = match read_urp(&bytes) {
+            Ok(p) => p,
+            Err(e) => {
+                failures.push(format!("{}: {e}", path.display()));
+                continue;
+            }
+        };
+        if let Err(e) = Program::parse(&program.script) {
+            failures.push(format!("{}: {e:?}", path.display()));
+            continue;
+        }
+        let (mut stubs, mut signals): (Vec<String>, Vec<String>) = (Vec::new(), Vec::new());
+        for _ in 0..64 {
+            let (head, body) = program.script.split_once('\n').unwrap();
+            let mut script = format!("{head}\n");
+            for s in &signals {
+                script.push_str(&format!(
+                    "  modbus_add_signal(\"127.0.0.1\", 255, 0, 2, \"{s}\", False)\n"
+                ));
+            }
+            script.push_str(body);
+            let mut config = Config::default();
+            for s in &stubs {
+                config = config.stub(s, urscript_interp::Stub::NoOp);
+            }
+            let mut m = Machine::new(Program::parse(&script).unwrap(), config);
+            let messages = run(&mut m, Duration::from_secs(5));
+            let unknown = m.unknown_functions();
+            if !unknown.is_empty() {
+                stubs.extend(unknown.into_iter().map(|(n, _)| n));
+                continue;
+            }
+            if let State::Error(e) = m.state() {
+                let missing = e
+                    .message()
+                    .split_once("no Modbus signal \"")
+                    .and_then(|(_, rest)| rest.split_once('"'))
+                    .map(|(name, _)| name.to_string());
+                if let Some(name) = missing.filter(|n| !signals.contains(n)) {
+                    signals.push(name);
+                    continue;
+                }
+            }
+            eprintln!(
+                "{}: {:?} after {:?}; stubbed {stubs:?}; Modbus signals added {signals:?}; messages {:?}",
+                path.display(),
+                m.state(),
+                m.now(),
+                texts(&messages)
+            );
+            if matches!(m.state(), State::Error(_)) {
+                failures.push(format!("{}: {:?}", path.display(), m.state()));
+            }
+            break;
+        }
+    }
+    assert!(failures.is_empty(), "{failures:#?}");
+}
+
+/// A document with the given root children (the main program's among them).
+fn root(name: &str, children: &str) -> Vec<u8> {
+    gzip(
+        format!(
+            r#"<URProgram name="{name}" installation="default" createdIn="5.11.0"><children>{children}</children></URProgram>"#
+        )
+        .as_bytes(),
+    )
+}
+
+#[test]
+fn threads_are_defined_looped_and_started_after_before_start() {
+    let doc = root(
+        "threads",
+        &format!(
+            r#"<InitVariablesNode/>
+<SpecialSequence type="BeforeStart"><children>
+  <Assignment valueSource="Expression"><variable name="n"/>{zero}</Assignment>
+</children></SpecialSequence>
+<MainProgram runOnlyOnce="true"><children>
+  <Wait type="Sleep"><waitTime>0.1</waitTime></Wait>
+  {report}
+</children></MainProgram>
+<Thread name="Thread_1" runOnlyOnce="false" trackProgramExecution="false"><children>
+  <Assignment valueSource="Expression"><variable reference="../../../../SpecialSequence/children/Assignment/variable"/>{incr}</Assignment>
+  <Wait type="Sleep"><waitTime>0.02</waitTime></Wait>
+</children></Thread>
+<Thread name="Thread_2" runOnlyOnce="true"><children>{once}</children></Thread>"#,
+            zero = expr("0"),
+            incr = expr("n + 1"),
+            report = script_line("textmsg(\"n = \", n)"),
+            once = script_line("textmsg(\"once\")"),
+        ),
+    );
+    let p = read_urp(&doc).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(
+        p.script,
+        "def threads():
+  global n = 0
+  thread Thread_1():
+    while (True):
+      global n = n + 1
+      sleep(0.02)
+    end
+  end
+  thread Thread_2():
+    textmsg(\"once\")
+  end
+  threadId_Thread_1 = run Thread_1()
+  threadId_Thread_2 = run Thread_2()
+  sleep(0.1)
+  textmsg(\"n = \", n)
+end
+"
+    );
+    let mut m = machine(&p.script);
+    let shown = run(&mut m, Duration::from_secs(1));
+    // Thread_1 adds 1 at 0, 20, 40, 60 and 80 ms (and at 100 ms, if it runs first).
+    let shown = texts(&shown);
+    assert_eq!(shown[0], "once", "{shown:?}");
+    assert!(matches!(shown[1], "n = 5" | "n = 6"), "{shown:?}");
+    assert_eq!(m.state(), &State::Finished);
+}
+
+#[test]
+fn hostile_threads_are_errors() {
+    let main = r#"<MainProgram runOnlyOnce="true"><children><Halt/></children></MainProgram>"#;
+    let cases = [
+        (
+            r#"<Thread name="T" runOnlyOnce="maybe"><children><Halt/></children></Thread>"#,
+            "runOnlyOnce",
+        ),
+        (
+            r#"<Thread name="T"><children><Halt/></children></Thread><Thread name="T"/>"#,
+            "two threads",
+        ),
+        (r#"<Thread name=" "/>"#, "name is empty"),
+    ];
+    for (threads, why) in cases {
+        match read_urp(&root("t", &format!("{main}{threads}"))) {
+            Err(UrpError::Invalid { path, message }) => {
+                assert!(path.contains("Thread"), "{path}");
+                assert!(message.contains(why), "{message}");
+            }
+            other => panic!("{threads}: {other:?}"),
+        }
+    }
+    // A thread's nodes are checked as any others.
+    assert!(matches!(
+        read_urp(&root("t", &format!("{main}<Thread name=\"T\"><children><Gripper/></children></Thread>"))),
+        Err(UrpError::UnknownNode { name, path }) if name == "Gripper" && path == "URProgram/children/Thread/children/Gripper"
+    ));
+    // Many threads: each defined and started, the work linear.
+    let many: String = (0..2000)
+        .map(|k| {
+            format!(
+                "<Thread name=\"T{k}\" runOnlyOnce=\"true\"><children><Halt/></children></Thread>"
+            )
+        })
+        .collect();
+    let p = read_urp(&root("t", &format!("{main}{many}"))).unwrap();
+    assert_eq!(p.script.matches(" = run T").count(), 2000);
+    Program::parse(&p.script).unwrap();
+}
+
+#[test]
+fn timers_count_while_started_as_polyscope_counts_them() {
+    let doc = root(
+        "timers",
+        &format!(
+            r#"<SpecialSequence type="BeforeStart"><children>
+  <Timer action="Start"><variable name="timer_1" prefersPersistentValue="false"/></Timer>
+</children></SpecialSequence>
+<MainProgram runOnlyOnce="true"><children>
+  <Wait type="Sleep"><waitTime>0.5</waitTime></Wait>
+  <Timer action="Stop"><variable reference="../../../../SpecialSequence/children/Timer/variable"/></Timer>
+  <Wait type="Sleep"><waitTime>0.2</waitTime></Wait>
+  {report}
+  <Timer action="Reset"><variable reference="../../../../SpecialSequence/children/Timer/variable"/></Timer>
+  {report}
+</children></MainProgram>"#,
+            report = script_line("textmsg(timer_1)"),
+        ),
+    );
+    let p = read_urp(&doc).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(
+        p.script,
+        "def timers():
+  global timer_1 = 0
+  global timer_1_is_counting = False
+  thread Timer_Thread():
+    while (True):
+      if (timer_1_is_counting):
+        timer_1 = timer_1 + get_steptime()
+      end
+      sync()
+    end
+  end
+  run Timer_Thread()
+  timer_1_is_counting = True
+  sleep(0.5)
+  timer_1_is_counting = False
+  sleep(0.2)
+  textmsg(timer_1)
+  timer_1 = 0
+  textmsg(timer_1)
+end
+"
+    );
+    let mut m = machine(&p.script);
+    let shown = run(&mut m, Duration::from_secs(1));
+    let shown = texts(&shown);
+    let counted: f64 = shown[0].parse().unwrap_or_else(|_| panic!("{shown:?}"));
+    assert!((counted - 0.5).abs() <= 0.005, "{shown:?}");
+    assert_eq!(shown[1], "0");
+
+    for (timer, bad) in [
+        (
+            r#"<Timer action="Pause"><variable name="t"/></Timer>"#,
+            "timer action Pause",
+        ),
+        (r#"<Timer><variable name="t"/></Timer>"#, "no action"),
+        (r#"<Timer action="Start"/>"#, "no <variable>"),
+        (
+            r#"<Timer action="Start"><variable name="1t"/></Timer>"#,
+            "not a variable name",
+        ),
+    ] {
+        let err = read_urp(&urp(timer)).unwrap_err();
+        assert!(err.to_string().contains(bad), "{timer}: {err}");
+        assert!(
+            err.to_string().contains("MainProgram/children/Timer"),
+            "{err}"
+        );
+    }
+}
+
+#[test]
+fn home_moves_to_the_default_home_position() {
+    let main = r#"<SafeHome positionOptionType="SPEED_AND_ACCELERATION" speed="1.0471975511965976" acceleration="1.3962634015954636" nextMotionTime="2.0"/>
+<Move motionType="MoveJ" speed="1.0" acceleration="1.4"><children>
+  <SafeHome speed="0.5" acceleration="0.8"/>
+</children></Move>"#;
+    let p = read(main);
+    assert_eq!(
+        p.script,
+        "def test():
+  # Home
+  movej([0.0, -1.5707963267948966, 0.0, -1.5707963267948966, 0.0, 0.0], a=1.3962634015954636, v=1.0471975511965976)
+  # Home
+  movej([0.0, -1.5707963267948966, 0.0, -1.5707963267948966, 0.0, 0.0], a=0.8, v=0.5)
+end
+"
+    );
+    let mut m = machine(&p.script);
+    run(&mut m, Duration::from_secs(20));
+    assert_eq!(m.state(), &State::Finished);
+    for (q, home) in m
+        .joint_positions()
+        .iter()
+        .zip(urscript_controller::urp::DEFAULT_HOME_JOINTS)
+    {
+        assert!((q - home).abs() < 1e-6, "{:?}", m.joint_positions());
+    }
+    for (node, bad) in [
+        (r#"<SafeHome speed="-1"/>"#, "not positive"),
+        (r#"<SafeHome acceleration="fast"/>"#, "not a number"),
+        (r#"<SafeHome speed="1e999"/>"#, "not a number"),
+        (
+            r#"<SafeHome positionOptionType="TIME" speed="1"/>"#,
+            "not supported",
+        ),
+    ] {
+        let err = read_urp(&urp(node)).unwrap_err();
+        assert!(err.to_string().contains(bad), "{node}: {err}");
+        assert!(
+            err.to_string()
+                .starts_with("URProgram/children/MainProgram/children/SafeHome"),
+            "{err}"
+        );
+    }
+}
+
+#[test]
+fn operator_assignments_io_tokens_initial_variables_and_suppressed_nodes() {
+    let doc = root(
+        "misc",
+        &format!(
+            r#"<InitVariablesNode><variables>
+  <variable name="ip">{ip}</variable>
+  <variable name="count">{zero}</variable>
+</variables></InitVariablesNode>
+<MainProgram runOnlyOnce="true"><children>
+  <Assignment valueSource="Operator" message="Mirror mode?" valueType="Boolean"><variable name="mirror"/></Assignment>
+  <Assignment valueSource="Operator" message="How many?" valueType="Integer"><variable name="many"/></Assignment>
+  <SuppressedNode><suppressedNode class="Halt"/></SuppressedNode>
+  <Assignment valueSource="Expression"><variable name="x"/><expression>
+    <ExpressionIO><pin referencedName="base"/></ExpressionIO><ExpressionChar character="+"/>
+    <ExpressionIO><pin referencedName="digital_in[3]"/></ExpressionIO>
+  </expression></Assignment>
+</children></MainProgram>"#,
+            ip = expr("\"10.0.0.2\""),
+            zero = expr("0"),
+        ),
+    );
+    let p = read_urp(&doc).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(
+        p.script,
+        "def misc():
+  global ip = \"10.0.0.2\"
+  global count = 0
+  global mirror = request_boolean_from_primary_client(\"Mirror mode?\")
+  global many = request_integer_from_primary_client(\"How many?\")
+  global x = modbus_get_signal_status(\"base\", False)+get_standard_digital_in(3)
+end
+"
+    );
+    Program::parse(&p.script).unwrap();
+    for (node, bad) in [
+        (
+            r#"<Assignment valueSource="Operator" message="m"><variable name="v"/></Assignment>"#,
+            "without valueType",
+        ),
+        (
+            r#"<Assignment valueSource="Operator" valueType="Pose"><variable name="v"/></Assignment>"#,
+            "of type Pose",
+        ),
+        (
+            r#"<Assignment><variable name="v"/><expression><ExpressionIO/></expression></Assignment>"#,
+            "no <pin>",
+        ),
+        (
+            r#"<Assignment><variable name="v"/><expression><ExpressionIO><pin referencedName="a&quot;b"/></ExpressionIO></expression></Assignment>"#,
+            "not a signal name",
+        ),
+        (
+            r#"<Assignment><variable name="v"/><expression><ExpressionIO><pin referencedName="digital_in[x]"/></ExpressionIO></expression></Assignment>"#,
+            "not of the form",
+        ),
+    ] {
+        let err = read_urp(&urp(node)).unwrap_err();
+        assert!(err.to_string().contains(bad), "{node}: {err}");
+        assert!(
+            err.to_string()
+                .starts_with("URProgram/children/MainProgram/children/Assignment"),
+            "{err}"
+        );
+    }
+    let bad_init = root(
+        "b",
+        r#"<InitVariablesNode><variables><variable name="v"/></variables></InitVariablesNode><MainProgram/>"#,
+    );
+    assert!(read_urp(&bad_init)
+        .unwrap_err()
+        .to_string()
+        .contains("no <expression>"));
+}
+
+#[test]
+fn while_loops_checked_continuously_stop_their_thread_when_false() {
+    let main = format!(
+        r#"<Assignment><variable name="i"/>{zero}</Assignment>
+<Loop type="While" checkContinuously="true">{cond}<children>
+  <Assignment><variable name="i"/>{incr}</Assignment>
+  <Wait type="Sleep"><waitTime>0.01</waitTime></Wait>
+  {never}
+</children></Loop>
+{report}"#,
+        zero = expr("0"),
+        cond = expr("i < 5"),
+        incr = expr("i + 1"),
+        never = script_line("textmsg(\"late\")"),
+        report = script_line("textmsg(\"i = \", i)"),
+    );
+    let p = read(&main);
+    assert_eq!(
+        p.script,
+        "def test():
+  thread Thread_while_1():
+    while (True):
+      global i = i + 1
+      sleep(0.01)
+      textmsg(\"late\")
+    end
+  end
+  global i = 0
+  if (i < 5):
+    global thread_handler_1 = run Thread_while_1()
+    while (i < 5):
+      sync()
+    end
+    kill thread_handler_1
+  end
+  textmsg(\"i = \", i)
+end
+"
+    );
+    let mut m = machine(&p.script);
+    let shown = run(&mut m, Duration::from_secs(1));
+    // The fifth increment makes the condition false: the thread is killed in its
+    // sleep, before its message.
+    assert_eq!(texts(&shown), ["late", "late", "late", "late", "i = 5"]);
+    assert_eq!(m.state(), &State::Finished);
+    let forever =
+        r#"<Loop type="Forever" checkContinuously="true"><children><Halt/></children></Loop>"#;
+    assert!(matches!(
+        read_urp(&urp(forever)),
+        Err(UrpError::Unsupported { .. })
+    ));
+}
+
+#[test]
+fn ifs_checked_continuously_stop_their_thread_when_false() {
+    let main = format!(
+        r#"<Assignment><variable name="go"/>{yes}</Assignment>
+<Assignment><variable name="steps"/>{zero}</Assignment>
+<If type="If" checkContinuously="true">{cond}<children>
+  <Loop type="Counting" count="10"><children>
+    <Assignment><variable name="steps"/>{incr}</Assignment>
+    <If type="If">{third}<children><Assignment><variable name="go"/>{no}</Assignment></children></If>
+    <Wait type="Sleep"><waitTime>0.01</waitTime></Wait>
+  </children></Loop>
+</children></If>
+{report}"#,
+        yes = expr("True"),
+        no = expr("False"),
+        zero = expr("0"),
+        cond = expr("go"),
+        incr = expr("steps + 1"),
+        third = expr("steps \u{225f} 3"),
+        report = script_line("textmsg(\"steps = \", steps)"),
+    );
+    let p = read(&main);
+    assert_eq!(
+        p.script,
+        "def test():
+  thread Thread_if_1():
+    Loop_1 = 0
+    while (Loop_1 < 10):
+      global steps = steps + 1
+      if (steps == 3):
+        global go = False
+      end
+      sleep(0.01)
+      Loop_1 = Loop_1 + 1
+    end
+    thread_flag_1 = 1
+  end
+  global go = True
+  global steps = 0
+  global thread_flag_1 = 0
+  if (go):
+    global thread_handler_1 = run Thread_if_1()
+    while (thread_flag_1 == 0):
+      if not(go):
+        kill thread_handler_1
+        thread_flag_1 = 2
+      else:
+        sync()
+      end
+    end
+  else:
+    thread_flag_1 = 2
+  end
+  textmsg(\"steps = \", steps)
+end
+"
+    );
+    let mut m = machine(&p.script);
+    let shown = run(&mut m, Duration::from_secs(1));
+    assert_eq!(texts(&shown), ["steps = 3"]);
+    assert_eq!(m.state(), &State::Finished);
 }
