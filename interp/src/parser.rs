@@ -744,6 +744,11 @@ impl Parser {
         self.skip_newlines();
         if self.peek().kind == Tok::Minus {
             let t = self.bump();
+            if *self.peek_at(0) == Tok::IntMinMagnitude {
+                // `-2147483648`: `i32::MIN`, whose magnitude alone does not fit 32 bits.
+                self.bump();
+                return Ok((Expr::Lit(Value::Int(i32::MIN)), 1));
+            }
             self.enter()?;
             let (e, he) = self.unary()?;
             self.depth -= 1;
@@ -840,6 +845,9 @@ impl Parser {
             Tok::Int(v) => {
                 self.bump();
                 Ok((Expr::Lit(Value::Int(v)), 1))
+            }
+            Tok::IntMinMagnitude => {
+                Err(self.err_here("integer literal `2147483648` does not fit 32 bits"))
             }
             Tok::Float(v) => {
                 self.bump();

@@ -37,6 +37,27 @@ fn literals() {
 }
 
 #[test]
+fn the_smallest_int_is_written_with_a_minus() {
+    // `-2147483648` is `i32::MIN` (OnRobot's URCap preamble clamps with it), though
+    // `2147483648` alone does not fit 32 bits.
+    assert_eq!(one("-2147483648"), "-2147483648");
+    assert_eq!(one("-2147483648 + 1"), "-2147483647");
+    assert_eq!(one("- 2147483648 < 0"), "True");
+    assert_eq!(
+        parse_err("x = 2147483648\n"),
+        "line 1, column 5: integer literal `2147483648` does not fit 32 bits"
+    );
+    assert_eq!(
+        parse_err("x = -(2147483648)\n"),
+        "line 1, column 7: integer literal `2147483648` does not fit 32 bits"
+    );
+    assert_eq!(
+        parse_err("x = -2147483649\n"),
+        "line 1, column 6: integer literal `2147483649` does not fit 32 bits"
+    );
+}
+
+#[test]
 fn a_number_may_be_the_last_bytes_of_the_program() {
     // No line end after the last literal: the whole number is read, not `2.`.
     for (src, want) in [
