@@ -811,11 +811,7 @@ impl Compiler {
                 .params
                 .iter()
                 .map(|(n, v)| {
-                    let d = match v {
-                        Some(ParamDefault::Const(v)) => Some(ParamDefault::Const(v.clone())),
-                        Some(ParamDefault::Var(g)) => Some(ParamDefault::Var(self.sym(g))),
-                        None => None,
-                    };
+                    let d = v.as_ref().map(|d| d.map_names(&mut |g| self.sym(g)));
                     (self.sym(n), d)
                 })
                 .collect::<Vec<_>>();

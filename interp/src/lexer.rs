@@ -22,6 +22,10 @@ pub(crate) struct Token {
 #[derive(Debug, Clone, PartialEq)]
 pub(crate) enum Tok {
     Int(i32),
+    /// The integer literal `2147483648` (2^31): one more than `i32::MAX`, so only valid
+    /// right after a unary minus, as `-2147483648` (`i32::MIN`; OnRobot's URCap
+    /// preamble writes it). The parser refuses it anywhere else.
+    IntMinMagnitude,
     Float(f64),
     Str(String),
     Ident(String),
@@ -55,6 +59,7 @@ impl Tok {
     pub fn describe(&self) -> String {
         match self {
             Tok::Int(v) => format!("number `{v}`"),
+            Tok::IntMinMagnitude => "number `2147483648`".into(),
             Tok::Float(v) => format!("number `{v}`"),
             Tok::Str(s) => format!("string \"{s}\""),
             Tok::Ident(s) => format!("`{s}`"),
@@ -239,6 +244,9 @@ pub(crate) fn lex(src: &str) -> Result<Vec<Token>, ParseError> {
             let kind = if text.bytes().all(|b| b.is_ascii_digit()) {
                 match text.parse::<i32>() {
                     Ok(v) => Tok::Int(v),
+                    Err(_) if text.trim_start_matches('0') == "2147483648" => {
+                        Tok::IntMinMagnitude
+                    }
                     Err(_) => {
                         return Err(err(format!(
                             "integer literal `{text}` does not fit 32 bits"

@@ -1320,7 +1320,7 @@ impl Machine {
                         .split_off(th.stack.len().saturating_sub(usize::from(site.argc)));
                     let callee = &prog.funcs[fid as usize];
                     let locals =
-                        bind_user(callee, site, args, &self.globals, &prog.names).map_err(fail)?;
+                        bind_user(callee, site, args, &self.globals, &prog.names, self.config.max_value_size).map_err(fail)?;
                     if th.frames.len() >= 256 {
                         return Err(fail(Fault::new(
                             K::Limit,
@@ -2014,6 +2014,7 @@ fn bind_user(
     args: Vec<Value>,
     globals: &[Option<Value>],
     names: &[String],
+    max_size: usize,
 ) -> Result<Vec<(Sym, Option<Value>)>, Fault> {
     let mut out: Vec<(Sym, Option<Value>)> = Vec::with_capacity(callee.params.len());
     let mut given = vec![false; callee.params.len()];
@@ -2026,23 +2027,10 @@ fn bind_user(
         let v = match default {
             _ if *given => None,
             None => None,
-            Some(crate::parser::ParamDefault::Const(v)) => Some(v.clone()),
-            Some(crate::parser::ParamDefault::Var(g)) => {
-                match globals.get(*g as usize).and_then(|v| v.as_ref()) {
-                    Some(v) => Some(v.clone()),
-                    None => {
-                        let name = |s: Sym| names.get(s as usize).map_or("?", |n| n.as_str());
-                        return Err(Fault::new(
-                            K::UnknownVariable,
-                            format!(
-                                "unknown variable `{}`, the default of parameter `{}` of `{}`",
-                                name(*g),
-                                name(*p),
-                                callee.name
-                            ),
-                        ));
-                    }
-                }
+            Some(d) => {
+                let v = default_value(d, globals, names, *p, &callee.name)?;
+                check_value(&v, max_size)?;
+                Some(v)
             }
         };
         out.push((*p, v));
@@ -2053,6 +2041,60 @@ fn bind_user(
         }
     }
     Ok(out)
+}
+
+/// The value of parameter `param`'s default now: names are the globals' values (a
+/// global never assigned is an error), list and pose literals are built from their items
+/// (a pose item must be a number). The result is checked against the value bounds by
+/// the caller.
+fn default_value(
+    d: &crate::parser::ParamDefault<Sym>,
+    globals: &[Option<Value>],
+    names: &[String],
+    param: Sym,
+    func: &str,
+) -> Result<Value, Fault> {
+    use crate::parser::ParamDefault as D;
+    let name = |s: Sym| names.get(s as usize).map_or("?", |n| n.as_str());
+    Ok(match d {
+        D::Const(v) => v.clone(),
+        D::Var(g) => match globals.get(*g as usize).and_then(|v| v.as_ref()) {
+            Some(v) => v.clone(),
+            None => {
+                return Err(Fault::new(
+                    K::UnknownVariable,
+                    format!(
+                        "unknown variable `{}`, the default of parameter `{}` of `{func}`",
+                        name(*g),
+                        name(param),
+                    ),
+                ))
+            }
+        },
+        D::List(items) => Value::List(
+            items
+                .iter()
+                .map(|d| default_value(d, globals, names, param, func))
+                .collect::<Result<_, _>>()?,
+        ),
+        D::Pose(items) => {
+            let mut p = [0.0; 6];
+            for (slot, d) in p.iter_mut().zip(items) {
+                let v = default_value(d, globals, names, param, func)?;
+                *slot = v.as_f64().ok_or_else(|| {
+                    Fault::new(
+                        K::Type,
+                        format!(
+                            "the default of parameter `{}` of `{func}`: a pose item is {}, not a number",
+                            name(param),
+                            v.type_name()
+                        ),
+                    )
+                })?;
+            }
+            Value::Pose(p)
+        }
+    })
 }
 
 impl Machine {

@@ -86,13 +86,57 @@ pub(crate) enum Scope {
 }
 
 /// A parameter's default: a constant, or the name of a variable read when the function
-/// is called without that argument (`def f(hz=DEFAULT_HZ):`, as OnRobot's URCap writes).
-/// UR's manual shows only constant defaults and says nothing of names; a name is taken
-/// here and looked up among the globals at each call (not when the `def` is read).
+/// is called without that argument (`def f(hz=DEFAULT_HZ):`, as OnRobot's URCap writes),
+/// or a list or pose literal whose items are such defaults (`def f(poses=[ZERO_POSE]):`,
+/// OnRobot's FT URCap preamble). UR's manual shows only constant defaults and says
+/// nothing of names; a name is taken here and looked up among the globals at each call
+/// (not when the `def` is read).
 #[derive(Debug, Clone)]
 pub(crate) enum ParamDefault<N = String> {
     Const(Value),
     Var(N),
+    /// A list literal with at least one name among its items (at any depth).
+    List(Vec<ParamDefault<N>>),
+    /// A pose literal with at least one name among its six items.
+    Pose(Vec<ParamDefault<N>>),
+}
+
+impl<N> ParamDefault<N> {
+    /// The same default with its names mapped by `f`.
+    pub(crate) fn map_names<M>(&self, f: &mut impl FnMut(&N) -> M) -> ParamDefault<M> {
+        match self {
+            ParamDefault::Const(v) => ParamDefault::Const(v.clone()),
+            ParamDefault::Var(n) => ParamDefault::Var(f(n)),
+            ParamDefault::List(items) => {
+                ParamDefault::List(items.iter().map(|d| d.map_names(f)).collect())
+            }
+            ParamDefault::Pose(items) => {
+                ParamDefault::Pose(items.iter().map(|d| d.map_names(f)).collect())
+            }
+        }
+    }
+}
+
+/// A parameter default from its expression: a constant, a variable name, or a list or
+/// pose literal of those; `None` for anything else.
+fn param_default(e: &Expr) -> Option<ParamDefault> {
+    if let Some(v) = const_value(e) {
+        return Some(ParamDefault::Const(v));
+    }
+    match e {
+        Expr::Name(var, _) => Some(ParamDefault::Var(var.clone())),
+        Expr::List(items) => items
+            .iter()
+            .map(param_default)
+            .collect::<Option<_>>()
+            .map(ParamDefault::List),
+        Expr::Pose(items) => items
+            .iter()
+            .map(param_default)
+            .collect::<Option<_>>()
+            .map(ParamDefault::Pose),
+        _ => None,
+    }
 }
 
 #[derive(Debug, Clone)]
@@ -594,23 +638,24 @@ impl Parser {
                     seen_default = true;
                     let t = self.peek().clone();
                     let e = self.expr()?;
-                    if let Expr::Name(var, _) = &e {
-                        params.push((p, Some(ParamDefault::Var(var.clone()))));
+                    let d = param_default(&e).ok_or_else(|| {
+                        ParseError::new(
+                            t.line,
+                            t.col,
+                            format!(
+                                "the default of parameter `{p}` must be a constant, a variable name, or a list or pose of those"
+                            ),
+                        )
+                    })?;
+                    let ParamDefault::Const(v) = d else {
+                        // Names are read at each call; the value is checked then.
+                        params.push((p, Some(d)));
                         if self.eat(&Tok::RParen) {
                             break;
                         }
                         self.expect(&Tok::Comma, "`,` or `)` in the parameter list")?;
                         continue;
-                    }
-                    let v = const_value(&e).ok_or_else(|| {
-                        ParseError::new(
-                            t.line,
-                            t.col,
-                            format!(
-                                "the default of parameter `{p}` must be a constant or a variable name"
-                            ),
-                        )
-                    })?;
+                    };
                     // The value bounds hold for defaults too (no list literal in the
                     // program escapes them).
                     let (depth, size) = v.measure(DEFAULT_MAX_VALUE_SIZE);
@@ -744,6 +789,11 @@ impl Parser {
         self.skip_newlines();
         if self.peek().kind == Tok::Minus {
             let t = self.bump();
+            if *self.peek_at(0) == Tok::IntMinMagnitude {
+                // `-2147483648`: `i32::MIN`, whose magnitude alone does not fit 32 bits.
+                self.bump();
+                return Ok((Expr::Lit(Value::Int(i32::MIN)), 1));
+            }
             self.enter()?;
             let (e, he) = self.unary()?;
             self.depth -= 1;
@@ -840,6 +890,9 @@ impl Parser {
             Tok::Int(v) => {
                 self.bump();
                 Ok((Expr::Lit(Value::Int(v)), 1))
+            }
+            Tok::IntMinMagnitude => {
+                Err(self.err_here("integer literal `2147483648` does not fit 32 bits"))
             }
             Tok::Float(v) => {
                 self.bump();

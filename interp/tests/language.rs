@@ -37,6 +37,27 @@ fn literals() {
 }
 
 #[test]
+fn the_smallest_int_is_written_with_a_minus() {
+    // `-2147483648` is `i32::MIN` (OnRobot's URCap preamble clamps with it), though
+    // `2147483648` alone does not fit 32 bits.
+    assert_eq!(one("-2147483648"), "-2147483648");
+    assert_eq!(one("-2147483648 + 1"), "-2147483647");
+    assert_eq!(one("- 2147483648 < 0"), "True");
+    assert_eq!(
+        parse_err("x = 2147483648\n"),
+        "line 1, column 5: integer literal `2147483648` does not fit 32 bits"
+    );
+    assert_eq!(
+        parse_err("x = -(2147483648)\n"),
+        "line 1, column 7: integer literal `2147483648` does not fit 32 bits"
+    );
+    assert_eq!(
+        parse_err("x = -2147483649\n"),
+        "line 1, column 6: integer literal `2147483649` does not fit 32 bits"
+    );
+}
+
+#[test]
 fn a_number_may_be_the_last_bytes_of_the_program() {
     // No line end after the last literal: the whole number is read, not `2.`.
     for (src, want) in [
@@ -148,7 +169,30 @@ fn a_default_may_name_a_global() {
     // Anything else than a constant or a name is still refused.
     assert_eq!(
         parse_err("def f(a=1+2):\nend\n"),
-        "line 1, column 9: the default of parameter `a` must be a constant or a variable name"
+        "line 1, column 9: the default of parameter `a` must be a constant, a variable name, or a list or pose of those"
+    );
+}
+
+#[test]
+fn a_default_may_be_a_list_or_pose_of_globals() {
+    // OnRobot's FT URCap preamble writes `def f(offsets=[ZERO_POSE], ...)`: a list
+    // literal around a global's name, built from the global's value at each call.
+    let src = "def prog():\n  HOME = p[0.1, 0, 0, 0, 0, 0]\n  Z = 0.5\n  def f(ps=[HOME, [Z, 2]], q=p[Z, 0, 0, 0, 0, Z]):\n    return str_cat(ps, q)\n  end\n  textmsg(f())\n  Z = 1\n  textmsg(f(ps=[]))\n  textmsg(f(q=p[0,0,0,0,0,0]))\nend\n";
+    assert_eq!(
+        msgs(src),
+        [
+            "[p[0.1, 0, 0, 0, 0, 0], [0.5, 2]]p[0.5, 0, 0, 0, 0, 0.5]",
+            "[]p[1, 0, 0, 0, 0, 1]",
+            "[p[0.1, 0, 0, 0, 0, 0], [1, 2]]p[0, 0, 0, 0, 0, 0]",
+        ]
+    );
+    // A pose item that is not a number is a type error when the default is needed.
+    let e = runtime_error("S = \"a\"\ndef f(x=p[S, 0, 0, 0, 0, 0]):\n  return x\nend\ntextmsg(f())\n");
+    assert!(e.contains("a pose item is"), "{e}");
+    // Anything but literals and names inside is still refused.
+    assert_eq!(
+        parse_err("def f(a=[A, 1+B]):\nend\n"),
+        "line 1, column 9: the default of parameter `a` must be a constant, a variable name, or a list or pose of those"
     );
 }
 
