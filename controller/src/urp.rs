@@ -1943,8 +1943,8 @@ impl Tx<'_> {
         let written = std::mem::replace(&mut self.segments, outer);
         self.indent = indent;
         done?;
+        // Merged with the rest of the program's segments at the end: linear.
         self.hoisted.extend(written);
-        self.hoisted = merge(std::mem::take(&mut self.hoisted));
         Ok(())
     }
 

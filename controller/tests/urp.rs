@@ -1520,6 +1520,25 @@ end
     // sleep, before its message.
     assert_eq!(texts(&shown), ["late", "late", "late", "late", "i = 5"]);
     assert_eq!(m.state(), &State::Finished);
+    // Many of them, each with an External Control node: one thread each, linear work.
+    let many: String = (0..3000)
+        .map(|_| {
+            format!(
+                r#"<Loop type="While" checkContinuously="true">{}<children>{EC}</children></Loop>"#,
+                expr("i < 5")
+            )
+        })
+        .collect();
+    let started = std::time::Instant::now();
+    let p = read_urp(&urp(&format!(
+        "<Assignment><variable name=\"i\"/>{}</Assignment>{many}",
+        expr("0")
+    )))
+    .unwrap();
+    assert_eq!(p.external_control.len(), 3000);
+    let script = translate_with(&p, |_| Ok(String::from("sync()"))).unwrap();
+    assert_eq!(script.matches("thread Thread_while_").count(), 3000);
+    assert!(started.elapsed() < Duration::from_secs(10));
     let forever =
         r#"<Loop type="Forever" checkContinuously="true"><children><Halt/></children></Loop>"#;
     assert!(matches!(
