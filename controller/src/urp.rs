@@ -969,6 +969,8 @@ struct Tx<'a> {
     hoisted: Vec<Segment>,
     /// How many such threads so far (their names' numbers).
     watched: usize,
+    /// The program's threads: (name, node), to check against the other definitions.
+    thread_names: Vec<(String, usize)>,
 }
 
 fn invalid(doc: &Doc, id: usize, message: impl Into<String>) -> UrpError {
@@ -1059,6 +1061,7 @@ fn translate(doc: &Doc) -> Result<UrpProgram, UrpError> {
         timers: Vec::new(),
         hoisted: Vec::new(),
         watched: 0,
+        thread_names: Vec::new(),
     };
 
     let mut init = Vec::new();
@@ -1133,6 +1136,34 @@ fn translate(doc: &Doc) -> Result<UrpProgram, UrpError> {
 
     let mut segments = vec![Segment::Text(format!("def {}():\n", identifier(&name)))];
     segments.extend(defs);
+    // Every thread's name is its own: not a sub program's, nor one the translation
+    // writes (sub programs met only inside threads are named after the threads are).
+    for (thread, node) in &tx.thread_names {
+        let generated = (thread == "Timer_Thread" && !tx.timers.is_empty())
+            || (1..=tx.watched).any(|k| {
+                *thread == format!("Thread_while_{k}") || *thread == format!("Thread_if_{k}")
+            });
+        if generated || tx.subprogram_names.contains(thread) {
+            return Err(invalid(
+                doc,
+                *node,
+                format!("the thread {thread} has the name of another definition"),
+            ));
+        }
+    }
+    for (sub, fname) in &tx.subprograms {
+        if (fname == "Timer_Thread" && !tx.timers.is_empty())
+            || (1..=tx.watched).any(|k| {
+                *fname == format!("Thread_while_{k}") || *fname == format!("Thread_if_{k}")
+            })
+        {
+            return Err(invalid(
+                doc,
+                *sub,
+                format!("the sub program {fname} has the name of a thread"),
+            ));
+        }
+    }
     segments.append(&mut tx.hoisted);
     if !tx.timers.is_empty() {
         tx.timer_thread();
@@ -1912,8 +1943,8 @@ impl Tx<'_> {
         let written = std::mem::replace(&mut self.segments, outer);
         self.indent = indent;
         done?;
+        // Merged with the rest of the program's segments at the end: linear.
         self.hoisted.extend(written);
-        self.hoisted = merge(std::mem::take(&mut self.hoisted));
         Ok(())
     }
 
@@ -2047,6 +2078,7 @@ impl Tx<'_> {
                     tx.children_of(t)
                 }
             })?;
+            self.thread_names.push((name.clone(), t));
             started.push(name);
         }
         for name in started {

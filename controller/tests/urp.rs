@@ -1235,6 +1235,35 @@ fn hostile_threads_are_errors() {
             other => panic!("{threads}: {other:?}"),
         }
     }
+    // A thread named as a definition the translation writes, or as a sub program.
+    let timer = r#"<MainProgram runOnlyOnce="true"><children><Timer action="Start"><variable name="t"/></Timer></children></MainProgram>"#;
+    let clash = read_urp(&root(
+        "t",
+        &format!("{timer}<Thread name=\"Timer_Thread\"/>"),
+    ))
+    .unwrap_err();
+    assert_eq!(
+        clash.to_string(),
+        "URProgram/children/Thread: the thread Timer_Thread has the name of another definition"
+    );
+    let sub = r#"<Thread name="S"><children><CallSubProgram><subprogram name="S"/></CallSubProgram></children></Thread>"#;
+    let clash = read_urp(&root("t", &format!("{main}{sub}"))).unwrap_err();
+    assert!(
+        clash.to_string().contains("the thread S has the name"),
+        "{clash}"
+    );
+    let watched = format!(
+        r#"<MainProgram runOnlyOnce="true"><children><Loop type="While" checkContinuously="true">{}<children/></Loop>
+<CallSubProgram><subprogram name="Thread_while_1"/></CallSubProgram></children></MainProgram>"#,
+        expr("True")
+    );
+    let clash = read_urp(&root("t", &watched)).unwrap_err();
+    assert!(
+        clash
+            .to_string()
+            .contains("the sub program Thread_while_1 has the name of a thread"),
+        "{clash}"
+    );
     // A thread's nodes are checked as any others.
     assert!(matches!(
         read_urp(&root("t", &format!("{main}<Thread name=\"T\"><children><Gripper/></children></Thread>"))),
@@ -1491,6 +1520,25 @@ end
     // sleep, before its message.
     assert_eq!(texts(&shown), ["late", "late", "late", "late", "i = 5"]);
     assert_eq!(m.state(), &State::Finished);
+    // Many of them, each with an External Control node: one thread each, linear work.
+    let many: String = (0..3000)
+        .map(|_| {
+            format!(
+                r#"<Loop type="While" checkContinuously="true">{}<children>{EC}</children></Loop>"#,
+                expr("i < 5")
+            )
+        })
+        .collect();
+    let started = std::time::Instant::now();
+    let p = read_urp(&urp(&format!(
+        "<Assignment><variable name=\"i\"/>{}</Assignment>{many}",
+        expr("0")
+    )))
+    .unwrap();
+    assert_eq!(p.external_control.len(), 3000);
+    let script = translate_with(&p, |_| Ok(String::from("sync()"))).unwrap();
+    assert_eq!(script.matches("thread Thread_while_").count(), 3000);
+    assert!(started.elapsed() < Duration::from_secs(10));
     let forever =
         r#"<Loop type="Forever" checkContinuously="true"><children><Halt/></children></Loop>"#;
     assert!(matches!(
