@@ -99,6 +99,9 @@ pub struct Arm {
     /// The Flexible EtherNet/IP Adapter's assemblies and the Robot→PLC data the programs
     /// wrote (see [`crate::eip`] and [`Arm::eip_to_plc`]).
     pub(crate) eip: crate::eip::Adapter,
+    /// The world model's frames (`add_frame`...; see [`crate::world_model`]): kept
+    /// across programs until `reset_world_model()`.
+    pub(crate) world_model: crate::world_model::WorldModel,
 }
 
 impl Arm {
@@ -195,6 +198,7 @@ impl Default for Arm {
             world: World::default(),
             protective_stop: false,
             eip: crate::eip::Adapter::default(),
+            world_model: crate::world_model::WorldModel::default(),
             force_mode_damping: 0.0,
             force_mode_gain_scaling: 1.0,
             motion_version: 1,

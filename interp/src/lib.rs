@@ -103,6 +103,7 @@ mod rpc;
 mod sockets;
 mod trajectory;
 mod value;
+pub mod world_model;
 mod world_set;
 
 pub use compile::{Preamble, Program};

@@ -22,6 +22,7 @@
 //! | [`messages`] | `textmsg`, `varmsg`, `popup` |
 //! | [`time`] | `sync`, `sleep`, `get_steptime`, `time` |
 //! | [`interpreter`] | `interpreter_mode`, `end_interpreter`, `clear_interpreter` |
+//! | [`world_model`] | named frames: `add_frame`, `attach_frame`, `get_pose`, `convert_pose`, ... |
 //!
 //! ## The virtual arm
 //! The arm follows each motion command step by step (kinematics and speed profiles, not
@@ -49,6 +50,7 @@ pub mod rtde;
 pub mod sockets;
 pub mod strings;
 pub mod time;
+pub mod world_model;
 
 pub use strings::MAX_STRING_LEN;
 
@@ -261,6 +263,7 @@ pub fn all() -> &'static [Builtin] {
             messages::TABLE,
             time::TABLE,
             interpreter::TABLE,
+            world_model::TABLE,
         ]
         .concat();
         v.sort_by(|a, b| a.name.cmp(b.name));
