@@ -694,7 +694,12 @@ fn every_added_function_is_in_the_table_with_the_manuals_parameters() {
     // machine's socket events, see tests/rpc.rs).
     assert_eq!(sig("time"), "time(mode=0)");
     assert_eq!(sig("estimate_payload"), "estimate_payload(poses, wrenches)");
-    for name in ["rq_activate", "add_frame", "get_pose", "convert_pose"] {
+    assert_eq!(
+        sig("add_frame"),
+        "add_frame(name, pose, ref_frame=\"base\")"
+    );
+    assert_eq!(sig("get_pose"), "get_pose(name, rel_frame, ref_frame=None)");
+    for name in ["rq_activate", "rq_open"] {
         assert!(lookup(name).is_none(), "{name}");
     }
 }
