@@ -157,10 +157,13 @@ impl Cell {
     /// A cell around `controller`; programs run with `interp` (its model and step time
     /// should be the controller's: [`Cell::interp_config`] makes one).
     pub fn new(controller: Controller, interp: urscript_interp::Config) -> Self {
+        let mut arm = Arm::default();
+        // The controller has an RTDE server: the programs' RTDE watchdogs act.
+        arm.world.rtde_watchdogs = true;
         Cell {
             controller,
             interp,
-            arm: Arm::default(),
+            arm,
             running: None,
             events: VecDeque::new(),
             speed_fraction: 1.0,
@@ -504,6 +507,11 @@ impl Cell {
             self.controller.protective_stop(now);
             r.paused_at = Some(now);
         }
+        if std::mem::take(&mut r.machine.arm_mut().pause_requested) {
+            // An RTDE watchdog with the action "pause": the program pauses.
+            self.controller.pause_program(now);
+            r.paused_at.get_or_insert(now);
+        }
         let mut out = Vec::new();
         while let Some(e) = r.machine.poll_event() {
             out.push(e);
@@ -563,6 +571,48 @@ impl Cell {
             }
         }
         let arm = self.arm_mut();
+        // Each field written counts as an update for the programs' RTDE watchdogs (the
+        // registers that exist only: the keys stay RTDE's bounded set of names).
+        let (bits, ints, doubles) = (
+            arm.world.input_bool_regs.len(),
+            arm.world.input_int_regs.len(),
+            arm.world.input_float_regs.len(),
+        );
+        let mut updated = |name: String| {
+            *arm.world.rtde_input_updates.entry(name).or_default() += 1;
+        };
+        if inputs.speed_slider_fraction.is_some() {
+            updated("speed_slider_fraction".into());
+        }
+        for (set, name) in [
+            (
+                inputs.standard_digital_outputs.is_some(),
+                "standard_digital_output",
+            ),
+            (
+                inputs.configurable_digital_outputs.is_some(),
+                "configurable_digital_output",
+            ),
+            (inputs.tool_digital_outputs.is_some(), "tool_digital_output"),
+            (
+                inputs.standard_analog_outputs.is_some(),
+                "standard_analog_output_0",
+            ),
+            (inputs.payload.is_some(), "payload"),
+        ] {
+            if set {
+                updated(name.into());
+            }
+        }
+        for &(i, _) in inputs.bool_registers.iter().filter(|(i, _)| *i < bits) {
+            updated(format!("input_bit_register_{i}"));
+        }
+        for &(i, _) in inputs.int_registers.iter().filter(|(i, _)| *i < ints) {
+            updated(format!("input_int_register_{i}"));
+        }
+        for &(i, _) in inputs.double_registers.iter().filter(|(i, _)| *i < doubles) {
+            updated(format!("input_double_register_{i}"));
+        }
         let masked = |out: &mut [bool], (mask, values): (u8, u8)| {
             for (i, o) in out.iter_mut().enumerate().take(8) {
                 if mask & (1 << i) != 0 {

@@ -830,6 +830,15 @@ impl Controller {
         Ok(())
     }
 
+    /// The program itself asks for a pause (an RTDE watchdog with the action "pause"):
+    /// PLAYING -> PAUSED, whoever has control.
+    pub fn pause_program(&mut self, now: Duration) {
+        self.handle_timeout(now);
+        if self.program_state == ProgramState::Playing {
+            self.program_state = ProgramState::Paused;
+        }
+    }
+
     /// `stop`: PLAYING or PAUSED -> STOPPED; a stopped program stays stopped (Ok).
     /// Refused with no program loaded.
     pub fn stop(&mut self, now: Duration) -> Result<(), Refused> {

@@ -335,3 +335,27 @@ fn protective_stop_in_a_secondary_program_stops_the_arm() {
         SafetyStatus::ProtectiveStop
     );
 }
+
+#[test]
+fn an_rtde_watchdog_pauses_the_program_when_its_client_stops_writing() {
+    let (mut cell, _) = ready_cell();
+    let prog = "def fed():\n  rtde_set_watchdog(\"input_int_register_0\", 10, \"PAUSE\")\n  while True:\n    sync()\n  end\nend\n";
+    cell.submit(Submitted::Program(prog.into()), ms(2000));
+    // A client writes the register every 40 ms for half a second: the program plays.
+    let mut t = 2000;
+    while t < 2500 {
+        t += 40;
+        cell.apply(&Inputs {
+            int_registers: vec![(0, 1)],
+            ..Inputs::default()
+        });
+        cell.advance(ms(t));
+    }
+    assert_eq!(cell.controller().program_state(), ProgramState::Playing);
+    // The client goes away: its last write was applied before the last advance, so the
+    // program saw it in the first step after t - 40 ms; 0.1 s later it is paused.
+    cell.advance(ms(t + 50));
+    assert_eq!(cell.controller().program_state(), ProgramState::Playing);
+    cell.advance(ms(t + 70));
+    assert_eq!(cell.controller().program_state(), ProgramState::Paused);
+}

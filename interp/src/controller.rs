@@ -96,6 +96,9 @@ pub struct Arm {
     /// `protective_stop()` ran: a controller that runs the arm acts on it (a protective
     /// stop pauses its program) and clears it.
     pub protective_stop: bool,
+    /// An RTDE watchdog with the action "pause" fired: a controller that runs the
+    /// program pauses it and clears this.
+    pub pause_requested: bool,
     /// The Flexible EtherNet/IP Adapter's assemblies and the Robot→PLC data the programs
     /// wrote (see [`crate::eip`] and [`Arm::eip_to_plc`]).
     pub(crate) eip: crate::eip::Adapter,
@@ -197,6 +200,7 @@ impl Default for Arm {
             path_offset: PathOffset::default(),
             world: World::default(),
             protective_stop: false,
+            pause_requested: false,
             eip: crate::eip::Adapter::default(),
             world_model: crate::world_model::WorldModel::default(),
             force_mode_damping: 0.0,
@@ -283,6 +287,15 @@ pub struct World {
     /// watchdogs and `is_instance_connected` is True for configured instances. Default
     /// False: the virtual cell has no PLC, so a watchdog times out.
     pub eip_connected: bool,
+    /// The RTDE watchdogs act (`rtde_set_watchdog`): a controller with an RTDE server
+    /// sets it and counts its clients' writes in [`World::rtde_input_updates`]. Default
+    /// False: no RTDE client is modelled, so a watchdog is recorded and never fires.
+    pub rtde_watchdogs: bool,
+    /// How many times RTDE clients wrote each input field, by its RTDE name
+    /// (`input_int_register_0`, `speed_slider_fraction`, ...): a watchdog fires when
+    /// its field's count has not changed for `1 / min_frequency` s. The controller
+    /// writes it; its keys are RTDE's input field names (a bounded set).
+    pub rtde_input_updates: BTreeMap<String, u64>,
 }
 
 impl Default for World {
@@ -309,6 +322,8 @@ impl Default for World {
             system_time: Duration::ZERO,
             eip_from_plc: BTreeMap::new(),
             eip_connected: false,
+            rtde_watchdogs: false,
+            rtde_input_updates: BTreeMap::new(),
         }
     }
 }
@@ -334,6 +349,84 @@ pub(crate) struct Controller {
     pub sampled: Option<u64>,
     /// The program's EtherNet/IP handles.
     pub eip: crate::eip::Handles,
+    /// The program's RTDE watchdogs (`rtde_set_watchdog`).
+    pub rtde_watchdogs: Vec<RtdeWatchdog>,
+}
+
+/// The most RTDE watchdogs a program sets (one per input field; RTDE has fewer input
+/// fields than this).
+pub const MAX_RTDE_WATCHDOGS: usize = 256;
+
+/// One `rtde_set_watchdog(variable_name, min_frequency, action)`.
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct RtdeWatchdog {
+    pub variable: String,
+    /// Steps without an update before it fires.
+    pub period: u64,
+    /// 0 ignore, 1 pause, 2 stop.
+    pub action: u8,
+    /// The field's update count last seen, and the step it was seen to change.
+    pub seen: u64,
+    pub since: u64,
+    pub fired: bool,
+}
+
+/// What a fired RTDE watchdog asks.
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) enum WatchdogTrip {
+    Pause,
+    Stop(String),
+}
+
+impl Controller {
+    /// Checks the RTDE watchdogs at this step (see [`World::rtde_watchdogs`]).
+    pub fn check_rtde_watchdogs(&mut self) -> Option<WatchdogTrip> {
+        if !self.arm.world.rtde_watchdogs {
+            return None;
+        }
+        let step = self.step;
+        let mut trip = None;
+        for w in &mut self.rtde_watchdogs {
+            let count = self
+                .arm
+                .world
+                .rtde_input_updates
+                .get(&w.variable)
+                .copied()
+                .unwrap_or(0);
+            if count != w.seen {
+                w.seen = count;
+                w.since = step;
+                w.fired = false;
+                continue;
+            }
+            if w.fired || step < w.since.saturating_add(w.period) {
+                continue;
+            }
+            w.fired = true;
+            match w.action {
+                1 => trip = trip.or(Some(WatchdogTrip::Pause)),
+                2 => trip = Some(WatchdogTrip::Stop(format!(
+                    "RTDE watchdog: no update of input \"{}\" within its period: program stopped",
+                    w.variable
+                ))),
+                _ => {}
+            }
+        }
+        trip
+    }
+
+    /// The first step a running RTDE watchdog may fire at (the machine wakes for it).
+    pub fn next_rtde_watchdog(&self) -> Option<u64> {
+        if !self.arm.world.rtde_watchdogs {
+            return None;
+        }
+        self.rtde_watchdogs
+            .iter()
+            .filter(|w| !w.fired)
+            .map(|w| w.since.saturating_add(w.period))
+            .min()
+    }
 }
 
 impl Controller {

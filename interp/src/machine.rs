@@ -386,6 +386,7 @@ impl Machine {
                 thread: 0,
                 sampled: None,
                 eip: crate::eip::Handles::default(),
+                rtde_watchdogs: Vec::new(),
             },
             site_stubs,
             prog: Arc::new(program),
@@ -561,6 +562,10 @@ impl Machine {
             .eip
             .next_deadline(self.ctl.arm.world.eip_connected, step_time)
         {
+            let at = at.max(self.ctl.step);
+            best = Some(best.map_or(at, |b: u64| b.min(at)));
+        }
+        if let Some(at) = self.ctl.next_rtde_watchdog() {
             let at = at.max(self.ctl.step);
             best = Some(best.map_or(at, |b: u64| b.min(at)));
         }
@@ -910,6 +915,14 @@ impl Machine {
             Some(crate::eip::Trip::Pause) => self.ctl.protective_stop(),
             Some(crate::eip::Trip::Stop(why)) => {
                 self.ctl.protective_stop();
+                self.state = State::Error(RuntimeError::at(0, 0, Fault::new(K::Limit, why)));
+                return;
+            }
+            None => {}
+        }
+        match self.ctl.check_rtde_watchdogs() {
+            Some(crate::controller::WatchdogTrip::Pause) => self.ctl.arm.pause_requested = true,
+            Some(crate::controller::WatchdogTrip::Stop(why)) => {
                 self.state = State::Error(RuntimeError::at(0, 0, Fault::new(K::Limit, why)));
                 return;
             }

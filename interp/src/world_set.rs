@@ -82,6 +82,10 @@ pub const WORLD_SETTINGS: &[(&str, &str)] = &[
         "eip_from_plc[ID]=[bytes 0-255]: what the EtherNet/IP scanner sent on PLC->Robot instance ID",
     ),
     (
+        "rtde_watchdogs",
+        "bool: rtde_set_watchdog's watchdogs act (no RTDE client writes inputs here, so they fire)",
+    ),
+    (
         "eip_connected",
         "bool: an EtherNet/IP scanner is connected (feeds watchdogs; is_instance_connected)",
     ),
@@ -173,6 +177,10 @@ impl World {
             "system_time" => {
                 scalar_only()?;
                 as_seconds(&value).map(|v| self.system_time = v)
+            }
+            "rtde_watchdogs" => {
+                scalar_only()?;
+                as_bool(&value).map(|v| self.rtde_watchdogs = v)
             }
             "eip_connected" => {
                 scalar_only()?;

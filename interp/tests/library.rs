@@ -1118,3 +1118,58 @@ fn the_struct_returning_built_ins_survive_hostile_arguments() {
         );
     }
 }
+
+fn watchdog_machine(action: &str, enforced: bool) -> urscript_interp::Machine {
+    let src = format!(
+        "rtde_set_watchdog(\"input_int_register_0\", 10, \"{action}\")\nsleep(1)\ntextmsg(\"after\")\n"
+    );
+    let mut m = urscript_interp::Machine::new(
+        urscript_interp::Program::parse(&src).unwrap(),
+        urscript_interp::Config::default(),
+    );
+    m.world_mut().rtde_watchdogs = enforced;
+    m
+}
+
+#[test]
+fn rtde_watchdogs_fire_without_updates_and_stay_quiet_with_them() {
+    use std::time::Duration;
+    use urscript_interp::State;
+    // 10 Hz: 0.1 s without an update of the field.
+    let mut m = watchdog_machine("STOP", true);
+    m.run_until(Duration::from_millis(98));
+    assert_eq!(m.state(), &State::Running);
+    m.run_until(Duration::from_millis(102));
+    let State::Error(e) = m.state() else {
+        panic!("{:?}", m.state())
+    };
+    assert!(e.message().contains("input_int_register_0"), "{e}");
+    // A client writing the field every 50 ms keeps it quiet.
+    let mut m = watchdog_machine("stop", true);
+    for k in 1..=25u64 {
+        *m.world_mut()
+            .rtde_input_updates
+            .entry("input_int_register_0".into())
+            .or_default() += 1;
+        m.run_until(Duration::from_millis(50 * k));
+    }
+    assert_eq!(m.state(), &State::Finished);
+    // "pause" asks the controller to pause the program; the program itself goes on.
+    let mut m = watchdog_machine("pause", true);
+    m.run_until(Duration::from_millis(150));
+    assert!(m.arm().pause_requested);
+    // Without an RTDE server modelled (the default) nothing fires.
+    let mut m = watchdog_machine("stop", false);
+    m.run_until(Duration::from_secs(2));
+    assert_eq!(m.state(), &State::Finished);
+    // A bad action is refused.
+    let mut m = urscript_interp::Machine::new(
+        urscript_interp::Program::parse(
+            "rtde_set_watchdog(\"input_int_register_0\", 1, \"halt\")\n",
+        )
+        .unwrap(),
+        urscript_interp::Config::default(),
+    );
+    m.run_until(Duration::from_millis(10));
+    assert!(matches!(m.state(), State::Error(e) if e.message().contains("action")));
+}

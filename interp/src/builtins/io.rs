@@ -399,8 +399,8 @@ pub(super) const TABLE: &[Builtin] = &[
             req("min_frequency"),
             opt("action", Default::Str("pause")),
         ],
-        "Accepted, not enforced: no RTDE client is modelled.",
-        accept,
+        "Watches an RTDE input field: no update within 1/min_frequency s and the action (ignore, pause, stop) is taken (World::rtde_watchdogs).",
+        rtde_set_watchdog,
     ),
     Builtin::new(
         "modbus_add_signal",
@@ -895,4 +895,68 @@ fn register(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
         Value::Bool(arm.bool_regs[k])
     };
     Ok(Out::Value(if write { Value::None } else { v }))
+}
+
+/// `rtde_set_watchdog(variable_name, min_frequency, action="pause")`: a watchdog on one
+/// RTDE input field, replacing any on the same field; the action is taken when the
+/// field has no update for `1 / min_frequency` s (checked each step, once per time-out).
+/// The action's case does not matter (PolyScope writes `"PAUSE"`). A frequency of 0
+/// removes the field's watchdog (our reading; the manual gives no way to remove one but
+/// the program's end). The watchdogs end with the program.
+fn rtde_set_watchdog(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+    let variable = a.text(0)?;
+    let f = a.num(1)?;
+    let action = match a.text(2)?.to_ascii_lowercase().as_str() {
+        "ignore" => 0,
+        "pause" => 1,
+        "stop" => 2,
+        other => {
+            return Err(format!(
+                "`rtde_set_watchdog`: action must be \"ignore\", \"pause\" or \"stop\", got \"{other}\""
+            )
+            .into())
+        }
+    };
+    if !(f.is_finite() && f >= 0.0) {
+        return Err(
+            format!("`rtde_set_watchdog`: min_frequency must be at least 0, got {f}").into(),
+        );
+    }
+    c.rtde_watchdogs.retain(|w| w.variable != variable);
+    if f == 0.0 {
+        return Ok(Out::Value(Value::None));
+    }
+    if c.rtde_watchdogs.len() >= crate::controller::MAX_RTDE_WATCHDOGS {
+        return Err(Fault::new(
+            crate::error::RuntimeErrorKind::Limit,
+            format!(
+                "`rtde_set_watchdog`: at most {} watchdogs",
+                crate::controller::MAX_RTDE_WATCHDOGS
+            ),
+        ));
+    }
+    let st = c.step_time.as_secs_f64().max(1e-9);
+    let steps = (1.0 / f / st).ceil();
+    let period = if steps.is_finite() && steps < 1e15 {
+        (steps as u64).max(1)
+    } else {
+        u64::MAX / 2
+    };
+    let seen = c
+        .arm
+        .world
+        .rtde_input_updates
+        .get(&variable)
+        .copied()
+        .unwrap_or(0);
+    let since = c.step;
+    c.rtde_watchdogs.push(crate::controller::RtdeWatchdog {
+        variable,
+        period,
+        action,
+        seen,
+        since,
+        fired: false,
+    });
+    Ok(Out::Value(Value::None))
 }

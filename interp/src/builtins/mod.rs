@@ -553,6 +553,7 @@ mod tests {
             thread: 0,
             sampled: None,
             eip: crate::eip::Handles::default(),
+            rtde_watchdogs: Vec::new(),
         };
         // The documented defaults.
         assert_eq!(
