@@ -69,6 +69,10 @@ pub struct Arm {
     pub analog_out_domain: [i32; 2],
     /// Flags 0-31 (`set_flag`).
     pub(crate) flags: [bool; 32],
+    /// Euromap67 output signals 0-31 (`set_euromap_output`).
+    pub(crate) euromap_out: [bool; 32],
+    /// Their run-state choices (`set_euromap_runstate_dependent_choice`).
+    pub(crate) euromap_runstate: [u8; 32],
     /// The Modbus server's ports as last written (`write_port_bit`/`_register`); a port
     /// never written reads False / 0.
     pub(crate) port_bits: BTreeMap<i32, bool>,
@@ -192,6 +196,8 @@ impl Default for Arm {
             base_acceleration: [0.0; 3],
             analog_out_domain: [1; 2],
             flags: [false; 32],
+            euromap_out: [false; 32],
+            euromap_runstate: [0; 32],
             port_bits: BTreeMap::new(),
             port_registers: BTreeMap::new(),
             modbus: BTreeMap::new(),
@@ -291,6 +297,8 @@ pub struct World {
     /// sets it and counts its clients' writes in [`World::rtde_input_updates`]. Default
     /// False: no RTDE client is modelled, so a watchdog is recorded and never fires.
     pub rtde_watchdogs: bool,
+    /// Euromap67 input signals 0-31 (`get_euromap_input`). Default all False.
+    pub euromap_in: [bool; 32],
     /// How many times RTDE clients wrote each input field, by its RTDE name
     /// (`input_int_register_0`, `speed_slider_fraction`, ...): a watchdog fires when
     /// its field's count has not changed for `1 / min_frequency` s. The controller
@@ -323,6 +331,7 @@ impl Default for World {
             eip_from_plc: BTreeMap::new(),
             eip_connected: false,
             rtde_watchdogs: false,
+            euromap_in: [false; 32],
             rtde_input_updates: BTreeMap::new(),
         }
     }
@@ -406,10 +415,12 @@ impl Controller {
             w.fired = true;
             match w.action {
                 1 => trip = trip.or(Some(WatchdogTrip::Pause)),
-                2 => trip = Some(WatchdogTrip::Stop(format!(
+                2 => {
+                    trip = Some(WatchdogTrip::Stop(format!(
                     "RTDE watchdog: no update of input \"{}\" within its period: program stopped",
                     w.variable
-                ))),
+                )))
+                }
                 _ => {}
             }
         }

@@ -81,6 +81,7 @@ pub const WORLD_SETTINGS: &[(&str, &str)] = &[
         "eip_from_plc",
         "eip_from_plc[ID]=[bytes 0-255]: what the EtherNet/IP scanner sent on PLC->Robot instance ID",
     ),
+    ("euromap_in", "32 bools: Euromap67 input signals"),
     (
         "rtde_watchdogs",
         "bool: rtde_set_watchdog's watchdogs act (no RTDE client writes inputs here, so they fire)",
@@ -178,6 +179,7 @@ impl World {
                 scalar_only()?;
                 as_seconds(&value).map(|v| self.system_time = v)
             }
+            "euromap_in" => fill(&mut self.euromap_in, slot(32)?, &value, as_bool),
             "rtde_watchdogs" => {
                 scalar_only()?;
                 as_bool(&value).map(|v| self.rtde_watchdogs = v)

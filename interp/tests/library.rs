@@ -1173,3 +1173,37 @@ fn rtde_watchdogs_fire_without_updates_and_stay_quiet_with_them() {
     m.run_until(Duration::from_millis(10));
     assert!(matches!(m.state(), State::Error(e) if e.message().contains("action")));
 }
+
+#[test]
+fn euromap67_signals_on_the_virtual_interface() {
+    use std::time::Duration;
+    let src = "set_euromap_output(3, True)\nset_euromap_runstate_dependent_choice(3, 1)\ntextmsg(get_euromap_output(3), get_euromap_output(4))\ntextmsg(get_euromap_input(7))\n";
+    let mut m = urscript_interp::Machine::new(
+        urscript_interp::Program::parse(src).unwrap(),
+        urscript_interp::Config::default(),
+    );
+    m.world_mut().set("euromap_in[7]=True").unwrap();
+    m.run_until(Duration::from_millis(10));
+    assert_eq!(m.state(), &urscript_interp::State::Finished);
+    let texts: Vec<String> = std::iter::from_fn(|| m.poll_event())
+        .filter_map(|e| match e {
+            urscript_interp::Event::Message(msg) => Some(msg.text),
+            _ => None,
+        })
+        .collect();
+    assert_eq!(texts, ["TrueFalse", "True"]);
+    for bad in [
+        "x = get_euromap_input(32)\n",
+        "set_euromap_runstate_dependent_choice(0, 3)\n",
+    ] {
+        let mut m = urscript_interp::Machine::new(
+            urscript_interp::Program::parse(bad).unwrap(),
+            urscript_interp::Config::default(),
+        );
+        m.run_until(Duration::from_millis(10));
+        assert!(
+            matches!(m.state(), urscript_interp::State::Error(_)),
+            "{bad}"
+        );
+    }
+}

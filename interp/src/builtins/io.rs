@@ -133,6 +133,34 @@ pub(super) const TABLE: &[Builtin] = &[
         "Deprecated: analog output n (0-1) as last set.",
         get_analog_out,
     ),
+    Builtin::new(
+        "get_euromap_input",
+        D,
+        &[req("port_number")],
+        "Euromap67 input signal port_number (0-31; World::euromap_in, False unless a test sets it).",
+        euromap,
+    ),
+    Builtin::new(
+        "get_euromap_output",
+        D,
+        &[req("port_number")],
+        "Euromap67 output signal port_number (0-31) as last set.",
+        euromap,
+    ),
+    Builtin::new(
+        "set_euromap_output",
+        D,
+        &[req("port_number"), req("signal_value")],
+        "Sets Euromap67 output signal port_number (0-31).",
+        euromap,
+    ),
+    Builtin::new(
+        "set_euromap_runstate_dependent_choice",
+        D,
+        &[req("port_number"), req("runstate_choice")],
+        "How Euromap67 output port_number behaves when no program runs (0 preserve, 1 low, 2 high); recorded.",
+        euromap,
+    ),
     Builtin::new("set_flag", D, N_B, "Sets flag n (0-31).", flag),
     Builtin::new("get_flag", D, N, "Flag n (0-31) as last set.", flag),
     Builtin::new(
@@ -959,4 +987,33 @@ fn rtde_set_watchdog(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
         fired: false,
     });
     Ok(Out::Value(Value::None))
+}
+
+/// The Euromap67 functions of the CB3 3.x manual, on a virtual Euromap67 interface: 32
+/// input and 32 output signals (our bound: the manual names the signals by number only).
+/// Inputs read [`World::euromap_in`](crate::World::euromap_in); outputs read back what
+/// was set; the run-state choice (0: preserve, 1: low, 2: high when no program runs) is
+/// recorded (no program runs on the virtual arm between programs to apply it).
+fn euromap(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+    let n = a.index(0, 32, "Euromap67 signal")?;
+    Ok(Out::Value(match a.name {
+        "get_euromap_input" => Value::Bool(c.arm.world.euromap_in[n]),
+        "get_euromap_output" => Value::Bool(c.arm.euromap_out[n]),
+        "set_euromap_output" => {
+            c.arm.euromap_out[n] = a.boolean(1)?;
+            Value::None
+        }
+        _ => {
+            let choice = a.int(1)?;
+            if !(0..=2).contains(&choice) {
+                return Err(format!(
+                    "`{}`: runstate_choice must be 0, 1 or 2, got {choice}",
+                    a.name
+                )
+                .into());
+            }
+            c.arm.euromap_runstate[n] = choice as u8;
+            Value::None
+        }
+    }))
 }
