@@ -520,6 +520,7 @@ impl Cell {
         while let Some(reply) = r.machine.poll_interpreter_reply() {
             replies.push(reply);
         }
+        let powerdown = std::mem::take(&mut r.machine.arm_mut().powerdown);
         let end = match r.machine.state() {
             State::Running => None,
             State::Finished => Some(Ended::Finished),
@@ -537,6 +538,11 @@ impl Cell {
         if let Some(how) = end {
             self.end_running(how);
             self.controller.program_ended();
+        }
+        if powerdown {
+            // `powerdown()`: the arm powers off (the virtual controller itself stays up
+            // for its clients).
+            self.controller.powerdown(now);
         }
     }
 

@@ -830,6 +830,18 @@ impl Controller {
         Ok(())
     }
 
+    /// The program ran `powerdown()`: POWER_OFF, the program stopped, whoever has
+    /// control.
+    pub fn powerdown(&mut self, now: Duration) {
+        self.handle_timeout(now);
+        if !matches!(self.pending, Some(Pending::SafetyRestarted { .. })) {
+            self.pending = None;
+            self.robot_mode = RobotMode::PowerOff;
+        }
+        self.program_state = ProgramState::Stopped;
+        self.script = false;
+    }
+
     /// The program itself asks for a pause (an RTDE watchdog with the action "pause"):
     /// PLAYING -> PAUSED, whoever has control.
     pub fn pause_program(&mut self, now: Duration) {

@@ -359,3 +359,22 @@ fn an_rtde_watchdog_pauses_the_program_when_its_client_stops_writing() {
     cell.advance(ms(t + 70));
     assert_eq!(cell.controller().program_state(), ProgramState::Paused);
 }
+
+#[test]
+fn powerdown_ends_the_program_and_powers_the_arm_off() {
+    let (mut cell, mut dash) = ready_cell();
+    cell.submit(
+        Submitted::Program(
+            "def off():\n  textmsg(\"bye\")\n  powerdown()\n  textmsg(\"never\")\nend\n".into(),
+        ),
+        ms(2000),
+    );
+    cell.advance(ms(2010));
+    assert_eq!(texts(&events(&mut cell)), ["bye"]);
+    assert_eq!(cell.controller().program_state(), ProgramState::Stopped);
+    assert_eq!(
+        dash.handle_line(cell.controller(), "robotmode", ms(2010))
+            .lines,
+        ["Robotmode: POWER_OFF"]
+    );
+}

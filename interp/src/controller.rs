@@ -103,6 +103,9 @@ pub struct Arm {
     /// An RTDE watchdog with the action "pause" fired: a controller that runs the
     /// program pauses it and clears this.
     pub pause_requested: bool,
+    /// `powerdown()` ran: the program halted there, and a controller that runs it powers
+    /// the arm off (and clears this).
+    pub powerdown: bool,
     /// The Flexible EtherNet/IP Adapter's assemblies and the Robot→PLC data the programs
     /// wrote (see [`crate::eip`] and [`Arm::eip_to_plc`]).
     pub(crate) eip: crate::eip::Adapter,
@@ -207,6 +210,7 @@ impl Default for Arm {
             world: World::default(),
             protective_stop: false,
             pause_requested: false,
+            powerdown: false,
             eip: crate::eip::Adapter::default(),
             world_model: crate::world_model::WorldModel::default(),
             force_mode_damping: 0.0,

@@ -1363,6 +1363,8 @@ impl Machine {
                         .split_off(th.stack.len().saturating_sub(usize::from(site.argc)));
                     let stub = self.site_stubs.get(id).copied().flatten();
                     match self.call_native(prog, site, stub, args).map_err(fail)? {
+                        // `powerdown()`: the program ends there, as `halt` ends it.
+                        Called::Value(_) if self.ctl.arm.powerdown => return Ok(Flow::Halt),
                         Called::Value(v) => {
                             check_value(&v, self.config.max_value_size).map_err(fail)?;
                             th.stack.push(v)

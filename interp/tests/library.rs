@@ -1207,3 +1207,16 @@ fn euromap67_signals_on_the_virtual_interface() {
         );
     }
 }
+
+#[test]
+fn powerdown_halts_the_program_and_asks_for_power_off() {
+    use std::time::Duration;
+    let mut m = urscript_interp::Machine::new(
+        urscript_interp::Program::parse("x = 1\npowerdown()\nx = 2\n").unwrap(),
+        urscript_interp::Config::default(),
+    );
+    m.run_until(Duration::from_millis(10));
+    assert_eq!(m.state(), &urscript_interp::State::Halted);
+    assert_eq!(m.global("x"), Some(&urscript_interp::Value::Int(1)));
+    assert!(m.arm().powerdown);
+}

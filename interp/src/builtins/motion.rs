@@ -129,6 +129,13 @@ pub(super) const TABLE: &[Builtin] = &[
         movej,
     ),
     Builtin::new(
+        "powerdown",
+        D,
+        &[],
+        "Shuts the robot down: the program halts and the controller running it powers the arm off (Arm::powerdown).",
+        powerdown,
+    ),
+    Builtin::new(
         "protective_stop",
         D,
         NONE,
@@ -920,6 +927,17 @@ fn movec(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
 
 /// `protective_stop()`: the arm stops at once and the request is left for the
 /// controller that runs the arm (a program alone just goes on, stopped).
+/// `powerdown()`: the arm stops, the program halts at the call and the request is left
+/// for the controller that runs it (`Arm::powerdown`: it powers the arm off; a real
+/// controller also shuts itself down, which a virtual one serving its clients does not).
+fn powerdown(c: &mut Controller, _: &mut Args) -> Result<Out, Fault> {
+    c.halt();
+    c.arm.qd = [0.0; 6];
+    c.arm.tcp_speed = [0.0; 6];
+    c.arm.powerdown = true;
+    Ok(Out::Value(Value::None))
+}
+
 fn protective_stop(c: &mut Controller, _: &mut Args) -> Result<Out, Fault> {
     c.protective_stop();
     Ok(Out::Value(Value::None))
