@@ -99,6 +99,11 @@ pub enum Outcome {
     Halted,
     /// [`Options::max_time`] passed first.
     MaxTime,
+    /// The arm made a protective stop (a `movel`/`movep`/`movec` whose path left the
+    /// arm's reach, or `protective_stop()`; [`Arm::protective_stop`](crate::Arm)). A
+    /// controller pauses the program there until an operator resumes it; with no
+    /// operator, the driver stops running it.
+    ProtectiveStop,
 }
 
 /// One open connection of the program.
@@ -240,6 +245,9 @@ impl Driver {
                 State::Finished => return Ok(Outcome::Finished),
                 State::Halted => return Ok(Outcome::Halted),
                 State::Error(e) => return Err(e.clone()),
+            }
+            if machine.arm().protective_stop {
+                return Ok(Outcome::ProtectiveStop);
             }
             let busy = self.service_sockets(machine, &mut on_activity);
             if !busy {
