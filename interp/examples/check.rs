@@ -47,7 +47,10 @@ fn main() {
         if m.arm().protective_stop {
             // A controller pauses the program here (a move left the reach, or
             // `protective_stop()` ran); nobody resumes it.
-            println!("{:>8.3}s protective stop: the program is paused", now.as_secs_f64());
+            println!(
+                "{:>8.3}s protective stop: the program is paused",
+                now.as_secs_f64()
+            );
             break;
         }
         now = match m.poll_timeout() {

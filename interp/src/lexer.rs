@@ -244,9 +244,7 @@ pub(crate) fn lex(src: &str) -> Result<Vec<Token>, ParseError> {
             let kind = if text.bytes().all(|b| b.is_ascii_digit()) {
                 match text.parse::<i32>() {
                     Ok(v) => Tok::Int(v),
-                    Err(_) if text.trim_start_matches('0') == "2147483648" => {
-                        Tok::IntMinMagnitude
-                    }
+                    Err(_) if text.trim_start_matches('0') == "2147483648" => Tok::IntMinMagnitude,
                     Err(_) => {
                         return Err(err(format!(
                             "integer literal `{text}` does not fit 32 bits"

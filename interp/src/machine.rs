@@ -1265,8 +1265,15 @@ impl Machine {
                         .stack
                         .split_off(th.stack.len().saturating_sub(usize::from(site.argc)));
                     let callee = &prog.funcs[fid as usize];
-                    let locals =
-                        bind_user(callee, site, args, &self.globals, &prog.names, self.config.max_value_size).map_err(fail)?;
+                    let locals = bind_user(
+                        callee,
+                        site,
+                        args,
+                        &self.globals,
+                        &prog.names,
+                        self.config.max_value_size,
+                    )
+                    .map_err(fail)?;
                     if th.frames.len() >= 256 {
                         return Err(fail(Fault::new(
                             K::Limit,

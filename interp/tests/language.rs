@@ -187,7 +187,8 @@ fn a_default_may_be_a_list_or_pose_of_globals() {
         ]
     );
     // A pose item that is not a number is a type error when the default is needed.
-    let e = runtime_error("S = \"a\"\ndef f(x=p[S, 0, 0, 0, 0, 0]):\n  return x\nend\ntextmsg(f())\n");
+    let e =
+        runtime_error("S = \"a\"\ndef f(x=p[S, 0, 0, 0, 0, 0]):\n  return x\nend\ntextmsg(f())\n");
     assert!(e.contains("a pose item is"), "{e}");
     // Anything but literals and names inside is still refused.
     assert_eq!(

@@ -193,9 +193,7 @@ fn send_byte(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
 /// silent); a float outside the int32 range, or not finite, is a type error.
 fn send_int(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
     let v = match a.v[0] {
-        Value::Float(x)
-            if (f64::from(i32::MIN)..=f64::from(i32::MAX)).contains(&x.trunc()) =>
-        {
+        Value::Float(x) if (f64::from(i32::MIN)..=f64::from(i32::MAX)).contains(&x.trunc()) => {
             x.trunc() as i32
         }
         _ => a.int(0)?,
