@@ -240,14 +240,14 @@ impl Driver {
             if overrun > slack {
                 lag += overrun;
             }
+            if machine.arm().protective_stop && !matches!(machine.state(), State::Error(_)) {
+                return Ok(Outcome::ProtectiveStop);
+            }
             match machine.state() {
                 State::Running => {}
                 State::Finished => return Ok(Outcome::Finished),
                 State::Halted => return Ok(Outcome::Halted),
                 State::Error(e) => return Err(e.clone()),
-            }
-            if machine.arm().protective_stop {
-                return Ok(Outcome::ProtectiveStop);
             }
             let busy = self.service_sockets(machine, &mut on_activity);
             if !busy {

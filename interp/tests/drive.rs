@@ -106,7 +106,7 @@ fn a_protective_stop_ends_the_run_where_the_arm_stopped() {
     // statement after the move never runs, and the driver does not wait out the move.
     for src in [
         "textmsg(\"before\")\nmovel(p[1.5, 0, 0.3, 0, 3.14, 0], a=0.5, v=0.2)\ntextmsg(\"after\")\n",
-        "textmsg(\"before\")\nprotective_stop()\nsleep(0.5)\ntextmsg(\"after\")\n",
+        "textmsg(\"before\")\nprotective_stop()\ntextmsg(\"after\")\n",
     ] {
         let p = Program::parse(src).unwrap();
         let options = Options {

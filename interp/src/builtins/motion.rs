@@ -132,7 +132,7 @@ pub(super) const TABLE: &[Builtin] = &[
         "protective_stop",
         D,
         NONE,
-        "Triggers a protective stop: the arm stops, and the controller running it pauses the program (Arm::protective_stop).",
+        "Triggers a protective stop: the arm stops and the call takes one step, so the controller running it pauses the program before the next statement (Arm::protective_stop).",
         protective_stop,
     ),
     Builtin::new(
@@ -925,7 +925,10 @@ fn protective_stop(c: &mut Controller, _: &mut Args) -> Result<Out, Fault> {
     c.arm.qd = [0.0; 6];
     c.arm.tcp_speed = [0.0; 6];
     c.arm.protective_stop = true;
-    Ok(Out::Value(Value::None))
+    // One step: the statements after it do not run in the step the stop happened, so a
+    // controller acting on `Arm::protective_stop` after the step pauses the program
+    // before them, as the real one stops it at once.
+    Ok(Out::Wait(c.step_time, Value::None))
 }
 
 /// `servoj`: straight to `q` in joint space at constant speed over `t` (`a`, `v`,
