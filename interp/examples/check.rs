@@ -1,6 +1,7 @@
 //! Parses a URScript file, lists the functions it calls that are not built in, and runs
 //! it for a few seconds of virtual time with every `socket_open` succeeding and no server
-//! ever answering (reads time out to their sentinels). Prints every event.
+//! ever answering (reads time out to their sentinels). Prints every event; a protective
+//! stop (a move beyond the reach, `protective_stop()`) pauses the program there.
 //!
 //! Run: `cargo run -p urscript-interp --example check -- FILE [SECONDS]`
 
@@ -43,14 +44,24 @@ fn main() {
                 m.handle_connected(&socket_name, Ok(()));
             }
         }
+        if m.arm().protective_stop {
+            // A controller pauses the program here (a move left the reach, or
+            // `protective_stop()` ran); nobody resumes it.
+            println!(
+                "{:>8.3}s protective stop: the program is paused",
+                now.as_secs_f64()
+            );
+            break;
+        }
         now = match m.poll_timeout() {
-            Some(t) if t > now => t,
+            // One step at a time, so a protective stop is seen where it happens.
+            Some(t) if t > now => t.min(now + Duration::from_millis(2)),
             Some(_) => now + Duration::from_millis(2),
             None => break,
         };
     }
     println!("{:?} at {:.3}s", m.state(), now.as_secs_f64());
-    if let State::Error(_) = m.state() {
+    if m.arm().protective_stop || matches!(m.state(), State::Error(_)) {
         std::process::exit(1);
     }
 }

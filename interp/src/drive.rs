@@ -99,6 +99,11 @@ pub enum Outcome {
     Halted,
     /// [`Options::max_time`] passed first.
     MaxTime,
+    /// The arm made a protective stop (a `movel`/`movep`/`movec` whose path left the
+    /// arm's reach, or `protective_stop()`; [`Arm::protective_stop`](crate::Arm)). A
+    /// controller pauses the program there until an operator resumes it; with no
+    /// operator, the driver stops running it.
+    ProtectiveStop,
 }
 
 /// One open connection of the program.
@@ -234,6 +239,9 @@ impl Driver {
             let overrun = start.elapsed().saturating_sub(lag).saturating_sub(due);
             if overrun > slack {
                 lag += overrun;
+            }
+            if machine.arm().protective_stop && !matches!(machine.state(), State::Error(_)) {
+                return Ok(Outcome::ProtectiveStop);
             }
             match machine.state() {
                 State::Running => {}

@@ -56,6 +56,23 @@ fn socket_sends() {
 }
 
 #[test]
+fn socket_send_int_truncates_a_float() {
+    // Drivers send scaled floats (`socket_send_int(10000.0 * pose[0])`): truncated
+    // toward zero (our choice; the manual is silent), so -0.9 and 0.9 both send 0.
+    let h = preloaded(
+        "socket_send_int(2.9)\nsocket_send_int(-2.9)\nsocket_send_int(-0.9)\nsocket_send_int(10000.0 * 0.12345678)\nsocket_send_int(-2147483648.5)\n",
+        b"",
+    );
+    assert_eq!(
+        h.sent("socket_0"),
+        b"\x00\x00\x00\x02\xFF\xFF\xFF\xFE\x00\x00\x00\x00\x00\x00\x04\xD2\x80\x00\x00\x00"
+    );
+    // Outside the int32 range it is an error, as an int literal there is.
+    let e = runtime_error("socket_send_int(2147483648.0)\n");
+    assert!(e.contains("needs an int"), "{e}");
+}
+
+#[test]
 fn socket_reads_from_the_spec_vectors() {
     let h = preloaded(
         "textmsg(socket_read_ascii_float(4))\ntextmsg(socket_read_binary_integer(3))\ntextmsg(socket_read_byte_list(3))\ntextmsg(socket_read_line())\ntextmsg(socket_read_string(prefix=\">\", suffix=\"<\"))\ntextmsg(socket_read_string(\"socket_0\", \">\", \"<\"))\n",

@@ -100,6 +100,34 @@ fn external_control_like_program_against_a_tcp_reverse_server() {
 }
 
 #[test]
+fn a_protective_stop_ends_the_run_where_the_arm_stopped() {
+    // A movel far beyond the reach (the tool sets off, the path leaves the reach at
+    // once from the upright start): a controller pauses the program at the stop, so the
+    // statement after the move never runs, and the driver does not wait out the move.
+    for src in [
+        "textmsg(\"before\")\nmovel(p[1.5, 0, 0.3, 0, 3.14, 0], a=0.5, v=0.2)\ntextmsg(\"after\")\n",
+        "textmsg(\"before\")\nprotective_stop()\ntextmsg(\"after\")\n",
+    ] {
+        let p = Program::parse(src).unwrap();
+        let options = Options {
+            max_time: Some(Duration::from_secs(20)),
+            ..Options::default()
+        };
+        let t = std::time::Instant::now();
+        let mut texts = Vec::new();
+        let outcome = run_tcp(&mut Machine::new(p, Config::default()), &options, |a| {
+            if let Activity::Event(Event::Message(m)) = a {
+                texts.push(m.text.clone());
+            }
+        })
+        .unwrap();
+        assert_eq!(outcome, Outcome::ProtectiveStop, "{src}");
+        assert_eq!(texts, ["before"], "{src}");
+        assert!(t.elapsed() < Duration::from_secs(5), "{:?}", t.elapsed());
+    }
+}
+
+#[test]
 fn max_time_ends_a_program_that_loops_forever() {
     let p = Program::parse("while True:\n  sync()\nend\n").unwrap();
     let t = std::time::Instant::now();

@@ -55,8 +55,9 @@ enum Command {
     /// prints each socket call and what it returned, and textmsg/popup text.
     ///
     /// Exits 0 when the program ends or halts (or --max-time passes), non-zero with
-    /// `line N:` on a runtime error; a parse error names line and column and nothing is
-    /// sent.
+    /// `line N:` on a runtime error, and non-zero at a protective stop (a move beyond the
+    /// arm's reach, `protective_stop()`: a controller pauses the program there); a parse
+    /// error names line and column and nothing is sent.
     Robot {
         /// Open `socket_0` to HOST:PORT before the program runs.
         #[arg(long)]

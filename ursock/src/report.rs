@@ -443,6 +443,8 @@ pub enum EndOutcome {
     Finished,
     Halted,
     MaxTime,
+    /// The arm made a protective stop: the program was paused there, and not resumed.
+    ProtectiveStop,
     Error,
 }
 

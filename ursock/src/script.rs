@@ -407,6 +407,14 @@ pub fn run(script: &str, connect_to: Option<&str>, opts: Options) -> Result<(), 
             }
             Ok(())
         }
+        Ok(drive::Outcome::ProtectiveStop) => {
+            let why = "protective stop: the arm stopped (a move's path left the arm's reach, or protective_stop() ran); a controller pauses the program here until an operator resumes it";
+            if opts.json {
+                printer.emit(report::Event::error(None, None, why));
+                printer.emit(end(report::EndOutcome::ProtectiveStop));
+            }
+            Err(why.into())
+        }
         Ok(o) => {
             if opts.json {
                 printer.emit(end(if o == drive::Outcome::Halted {

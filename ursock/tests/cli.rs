@@ -237,6 +237,37 @@ fn argument_errors_are_one_line_and_non_zero() {
 }
 
 #[test]
+fn robot_stops_at_a_protective_stop_and_exits_non_zero() {
+    // A movel far beyond the reach: the arm stops at once with a protective stop, which
+    // pauses a controller's program; the statement after it never runs.
+    let (success, out, err) = run(
+        &[
+            "robot",
+            "--max-time",
+            "20",
+            "-e",
+            "movel(p[1.5, 0, 0.3, 0, 3.14, 0], a=0.5, v=0.2)\ntextmsg(\"after\")",
+        ],
+        b"",
+    );
+    assert!(!success, "{out}");
+    assert!(err.contains("protective stop"), "{err}");
+    assert!(!out.contains("after"), "{out}");
+    let (success, out, _) = run(
+        &[
+            "robot",
+            "--json",
+            "-e",
+            "protective_stop()\ntextmsg(\"after\")",
+        ],
+        b"",
+    );
+    assert!(!success);
+    assert!(out.contains(r#""outcome":"protective_stop""#), "{out}");
+    assert!(!out.contains(r#""text":"after""#), "{out}");
+}
+
+#[test]
 fn demo_transcript_covers_every_function() {
     let out = ok(&["demo"], b"");
     for needle in [

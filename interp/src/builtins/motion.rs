@@ -139,7 +139,7 @@ pub(super) const TABLE: &[Builtin] = &[
         "protective_stop",
         D,
         NONE,
-        "Triggers a protective stop: the arm stops, and the controller running it pauses the program (Arm::protective_stop).",
+        "Triggers a protective stop: the arm stops and the call takes one step, so the controller running it pauses the program before the next statement (Arm::protective_stop).",
         protective_stop,
     ),
     Builtin::new(
@@ -925,8 +925,6 @@ fn movec(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
     Ok(Out::Wait(back, Value::None))
 }
 
-/// `protective_stop()`: the arm stops at once and the request is left for the
-/// controller that runs the arm (a program alone just goes on, stopped).
 /// `powerdown()`: the arm stops, the program halts at the call and the request is left
 /// for the controller that runs it (`Arm::powerdown`: it powers the arm off; a real
 /// controller also shuts itself down, which a virtual one serving its clients does not).
@@ -938,9 +936,14 @@ fn powerdown(c: &mut Controller, _: &mut Args) -> Result<Out, Fault> {
     Ok(Out::Value(Value::None))
 }
 
+/// `protective_stop()`: the arm stops at once and the request is left for the
+/// controller that runs the arm (`Arm::protective_stop`).
 fn protective_stop(c: &mut Controller, _: &mut Args) -> Result<Out, Fault> {
     c.protective_stop();
-    Ok(Out::Value(Value::None))
+    // One step: the statements after it do not run in the step the stop happened, so a
+    // controller acting on `Arm::protective_stop` after the step pauses the program
+    // before them, as the real one stops it at once.
+    Ok(Out::Wait(c.step_time, Value::None))
 }
 
 /// `servoj`: straight to `q` in joint space at constant speed over `t` (`a`, `v`,

@@ -61,7 +61,7 @@ pub(super) const TABLE: &[Builtin] = &[
         "socket_send_int",
         D,
         &[req("value"), SOCKET_NAME],
-        "Sends a big-endian int32.",
+        "Sends a big-endian int32 (a float is truncated toward zero; outside the int32 range an error).",
         send_int,
     ),
     Builtin::new(
@@ -186,8 +186,18 @@ fn send_byte(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
     sent(c, a, &socket, ok)
 }
 
+/// `socket_send_int(value)`: an int, or a float truncated toward zero. UR's manual says
+/// only "the int to send"; drivers send scaled floats without conversion (Machina's UR
+/// driver, "works with SW3.0 and above", sends `socket_send_int(10000.0 * pose[0])`),
+/// so the controller takes a float here. Truncation is our choice (the manuals are
+/// silent); a float outside the int32 range, or not finite, is a type error.
 fn send_int(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
-    let v = a.int(0)?;
+    let v = match a.v[0] {
+        Value::Float(x) if (f64::from(i32::MIN)..=f64::from(i32::MAX)).contains(&x.trunc()) => {
+            x.trunc() as i32
+        }
+        _ => a.int(0)?,
+    };
     let socket = a.text(1)?;
     let ok = c.sockets.send_int(&socket, v);
     sent(c, a, &socket, ok)

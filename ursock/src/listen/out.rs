@@ -442,6 +442,7 @@ pub fn human(event: &Event, show_max: usize) -> Vec<String> {
                 EndOutcome::Finished => "finished",
                 EndOutcome::Halted => "halted",
                 EndOutcome::MaxTime => "--max-time passed",
+                EndOutcome::ProtectiveStop => "protective stop",
                 EndOutcome::Error => "error",
             }
         )),
