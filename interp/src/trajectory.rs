@@ -322,6 +322,26 @@ impl Path {
         }
     }
 
+    /// What is left of the path from fraction `f` of the way on.
+    fn rest_from(&self, f: f64) -> Path {
+        match *self {
+            Path::Line { to, .. } => Path::Line {
+                from: self.at(f).0,
+                to,
+            },
+            Path::Arc { c, r, u, w, angle } => {
+                let (s, co) = (angle * f).sin_cos();
+                Path::Arc {
+                    c,
+                    r,
+                    u: std::array::from_fn(|k| co * u[k] + s * w[k]),
+                    w: std::array::from_fn(|k| -s * u[k] + co * w[k]),
+                    angle: angle * (1.0 - f),
+                }
+            }
+        }
+    }
+
     /// The point at fraction `f` of the way, and the unit tangent there.
     fn at(&self, f: f64) -> ([f64; 3], [f64; 3]) {
         match *self {
@@ -896,9 +916,9 @@ pub(crate) fn blend_start(dh: &Dh, tcp: [f64; 6], kind: &Kind, r: f64) -> Option
 ///   at the same distance after it along `b`, at the constant tool speed the tool has
 ///   now (movep's "blend circular ... constant tool speed"); it lies within `r` of the
 ///   waypoint. The orientation turns from `a`'s to `b`'s at those two points.
-/// - A joint move into a straight tool move or one into the other: a cubic Bézier in
-///   joint space ([`mixed_blend`]).
-/// - Not blended: `movec` either side, `b` shorter than
+/// - A joint move into a tool move or one into the other, and any blend with a circular
+///   move (`movec`) on either side: a cubic Bézier in joint space ([`mixed_blend`]).
+/// - Not blended: `b` shorter than
 ///   the radius (its target inside the sphere: the blends would overlap), a turn back
 ///   along the same line, an arm at rest, and a blend that would take longer than
 ///   stopping at the waypoint and starting again (it begins so early, for a radius close
@@ -1088,12 +1108,7 @@ fn move_point(
             let q = lerp6(*q0, *q1, f);
             Some((q, xyz(kinematics::forward(dh, q, tcp))))
         }
-        Kind::Tool {
-            path: path @ Path::Line { .. },
-            r0,
-            turn,
-            ..
-        } => {
+        Kind::Tool { path, r0, turn, .. } => {
             let p = path.at(f).0;
             let pose = with_rot(p, mul(to_matrix(scale3(*turn, f)), *r0));
             Some((nearest_ik(dh, pose, tcp, near)?, p))
@@ -1102,9 +1117,10 @@ fn move_point(
     }
 }
 
-/// The joint speeds of a joint move or a straight tool move at joints `q`, fraction `f`
-/// of its way, moving at `s` along its profile (rad/s of its leading joint, or m/s).
-fn move_joint_speed(dh: &Dh, tcp: [f64; 6], k: &Kind, q: [f64; 6], s: f64) -> [f64; 6] {
+/// The joint speeds of a joint move or a tool move (straight or circular) at joints `q`,
+/// fraction `f` of its way, moving at `s` along its profile (rad/s of its leading joint,
+/// or m/s).
+fn move_joint_speed(dh: &Dh, tcp: [f64; 6], k: &Kind, (q, f): ([f64; 6], f64), s: f64) -> [f64; 6] {
     match k {
         Kind::Joint { q0, q1, profile } => {
             let d = profile.distance();
@@ -1119,7 +1135,7 @@ fn move_joint_speed(dh: &Dh, tcp: [f64; 6], k: &Kind, q: [f64; 6], s: f64) -> [f
         Kind::Tool {
             path, turn, dist, ..
         } if *dist > 0.0 => {
-            let (_, tangent) = path.at(0.0);
+            let (_, tangent) = path.at(f);
             let v = scale3(tangent, s * path.length() / dist);
             let w = scale3(*turn, s / dist);
             joint_speed(dh, q, tcp, [v[0], v[1], v[2], w[0], w[1], w[2]])
@@ -1133,8 +1149,8 @@ fn move_joint_speed(dh: &Dh, tcp: [f64; 6], k: &Kind, q: [f64; 6], s: f64) -> [f
 /// before the blend is not made.
 const MIXED_STRAY: f64 = 1.25;
 
-/// A joint move into a straight tool move, or one into the other: a cubic Bézier in joint
-/// space from the joints now, at their speeds now, to the point of `b` where the tool
+/// A joint move into a tool move, or one into the other, or a blend into or out of a
+/// circular move: a cubic Bézier in joint space from the joints now, at their speeds now, to the point of `b` where the tool
 /// leaves the sphere it entered, at `b`'s speeds there (the tool's speed where the blend
 /// began, at most `b`'s `v`), over the time the tool takes across the sphere's diameter
 /// at that speed. Not made if the tool would stray more than [`MIXED_STRAY`] times the
@@ -1146,17 +1162,8 @@ fn mixed_blend(
     b: &Kind,
     q_now: [f64; 6],
 ) -> Option<Kind> {
-    let straight = |k: &Kind| {
-        matches!(
-            k,
-            Kind::Joint { .. }
-                | Kind::Tool {
-                    path: Path::Line { .. },
-                    ..
-                }
-        )
-    };
-    if !(straight(la) && straight(b)) {
+    let blendable = |k: &Kind| matches!(k, Kind::Joint { .. } | Kind::Tool { .. });
+    if !(blendable(la) && blendable(b)) {
         return None;
     }
     let now = la.sample(dh, tcp, tl, q_now);
@@ -1180,7 +1187,7 @@ fn mixed_blend(
     if !(g > 0.0 && g < 1.0) {
         return None;
     }
-    let (q2, p2) = move_point(dh, tcp, b, g, qw)?;
+    let (q2, _) = move_point(dh, tcp, b, g, qw)?;
     let (pb, db) = match b {
         Kind::Joint { profile, .. } => (*profile, profile.distance()),
         Kind::Tool { profile, dist, .. } => (*profile, *dist),
@@ -1205,7 +1212,7 @@ fn mixed_blend(
     {
         return None;
     }
-    let v2 = move_joint_speed(dh, tcp, b, q2, s2);
+    let v2 = move_joint_speed(dh, tcp, b, (q2, g), s2);
     let c1: [f64; 6] = std::array::from_fn(|j| q_now[j] + now.qd[j] * dur / 3.0);
     let c2: [f64; 6] = std::array::from_fn(|j| q2[j] - v2[j] * dur / 3.0);
     let strays = (1..32).any(|i| {
@@ -1222,7 +1229,7 @@ fn mixed_blend(
             profile: Profile::with_start_speed((1.0 - g) * db, s2, vb, ab),
         },
         Kind::Tool {
-            path: Path::Line { to: c, .. },
+            path,
             r0,
             turn,
             to,
@@ -1230,7 +1237,7 @@ fn mixed_blend(
             given,
             ..
         } => Kind::Tool {
-            path: Path::Line { from: p2, to: *c },
+            path: path.rest_from(g),
             r0: mul(to_matrix(scale3(*turn, g)), *r0),
             turn: scale3(*turn, 1.0 - g),
             profile: Profile::with_start_speed((1.0 - g) * db, s2, vb, ab),

@@ -643,3 +643,59 @@ fn during_a_blend_a_thread_sees_the_next_moves_waypoint_and_an_unsteady_arm() {
     assert!(rest.iter().all(|s| (s.0 - x2).abs() < 1e-4));
     assert!(samples.iter().all(|s| !s.1));
 }
+
+/// A PolyScope MoveP with a circle move: `movep` to the arc's start, `movec` through a
+/// via point, `movep` on, each with a blend radius.
+fn movep_movec_movep(r: f64) -> (Vec<At>, P3, P3, P3) {
+    let p0 = forward(&Model::Ur5e.dh(), Q0, [0.0; 6]);
+    let rot = [p0[3], p0[4], p0[5]];
+    // Right-angle corners: the line comes in along +y, the half circle leaves `a` along
+    // +x and reaches `b` along -x, the last line leaves along -y.
+    let a = [p0[0], p0[1] + 0.1, p0[2]];
+    let via = [a[0] + 0.05, a[1] - 0.05, a[2]];
+    let b = [a[0], a[1] - 0.1, a[2]];
+    let c = [b[0], b[1] - 0.1, b[2]];
+    let src = format!(
+        "set_pos({Q0:?})\nmovep({}, a=1.2, v=0.1, r={r})\nmovec({}, {}, a=1.2, v=0.1, r={r}, mode=0)\nmovep({}, a=1.2, v=0.1)\n",
+        pose(a, rot),
+        pose(via, rot),
+        pose(b, rot),
+        pose(c, rot)
+    );
+    let (s, m) = run(&src);
+    let end = m.tcp_pose();
+    assert!(dist([end[0], end[1], end[2]], c) < 1e-9);
+    (s, a, b, c)
+}
+
+#[test]
+fn blends_into_and_out_of_a_circle_move_never_stop_the_arm() {
+    let (plain, _, _, _) = movep_movec_movep(0.0);
+    let (blended, a, b, _) = movep_movec_movep(0.02);
+    eprintln!(
+        "movep-movec-movep: {} steps unblended, {} blended",
+        plain.len(),
+        blended.len()
+    );
+    assert!(blended.len() + 20 < plain.len());
+    // Unblended the arm stops at both corners; blended it never stops on the way.
+    let (f, l) = moving_span(&plain);
+    assert!(!plain[f..=l].iter().all(moving));
+    let (f, l) = moving_span(&blended);
+    assert!(blended[f..=l].iter().all(moving));
+    // Both corners are cut, within a documented tolerance of r (the blend is a curve in
+    // joint space: MIXED_STRAY, 1.25 r).
+    // (b is where the arm starts: look from the first blend on.)
+    let near = |p: [f64; 3]| {
+        blended[300..]
+            .iter()
+            .map(|s| dist(s.p, p))
+            .fold(1.0, f64::min)
+    };
+    assert!(near(a) > 1e-4 && near(a) < 0.02 * 1.25, "{}", near(a));
+    assert!(near(b) > 1e-4 && near(b) < 0.02 * 1.25, "{}", near(b));
+    // Joint speeds change gradually through the blends.
+    let dv = largest_speed_step(&blended);
+    eprintln!("largest joint speed change in a step: {dv} rad/s");
+    assert!(dv < 0.05, "{dv}");
+}
