@@ -230,3 +230,42 @@ fn rtde_inputs_of_a_started_client_that_stopped_reading_are_freed_when_it_closes
     }
     server.stop();
 }
+
+/// UR's `dashboard_client_g5_tests` in UR's CI order (a process per test, one URSim):
+/// `non_expected_result_returns_correctly` ends with `power off` and `brake release`,
+/// and `clear_protective_stop` sends `protective_stop()` on the primary interface 0.6 s
+/// later (measured against `ursock controller`; the library's fixed 100 ms waits) and
+/// wants the safety status PROTECTIVE_STOP within 1 s. The arm must be RUNNING by then:
+/// [`Timing`](urscript_controller::Timing)'s defaults take it from POWER_OFF to RUNNING
+/// in 0.4 s.
+#[test]
+fn a_program_sent_0_6_s_after_a_brake_release_from_power_off_runs() {
+    let server = start();
+    let s = connect(&server, "dashboard");
+    let mut r = BufReader::new(s.try_clone().unwrap());
+    let mut w = s;
+    let mut greeting = String::new();
+    r.read_line(&mut greeting).unwrap();
+    let mut ask = |cmd: &str| {
+        w.write_all(format!("{cmd}\n").as_bytes()).unwrap();
+        let mut line = String::new();
+        r.read_line(&mut line).unwrap();
+        line.trim_end().to_string()
+    };
+    assert_eq!(ask("power off"), "Powering off");
+    assert_eq!(ask("brake release"), "Brake releasing");
+    let released = Instant::now();
+    let mut primary = connect(&server, "primary");
+    std::thread::sleep(Duration::from_millis(600).saturating_sub(released.elapsed()));
+    primary.write_all(b"protective_stop()\n").unwrap();
+    let start = Instant::now();
+    while ask("safetystatus") != "Safetystatus: PROTECTIVE_STOP" {
+        assert!(
+            start.elapsed() < Duration::from_secs(1),
+            "no protective stop: {}",
+            ask("robotmode")
+        );
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    server.stop();
+}
