@@ -28,10 +28,10 @@
 //!
 //! # Transitions and their timing ([`Timing`])
 //!
-//! - `power on`: POWER_OFF -> BOOTING -> POWER_ON -> IDLE (0.3 s + 0.3 s by default).
+//! - `power on`: POWER_OFF -> BOOTING -> POWER_ON -> IDLE (0.1 s + 0.1 s by default).
 //!   Under an emergency stop, a violation or a fault the command is answered but power
 //!   stays off.
-//! - `brake release`: IDLE -> RUNNING after 0.5 s; from POWER_OFF it powers on first
+//! - `brake release`: IDLE -> RUNNING after 0.2 s; from POWER_OFF it powers on first
 //!   (as UR's ROS driver documents: "if the robot is currently powered off, it will get
 //!   powered on on the fly").
 //! - A protective stop ([`Controller::protective_stop`]) pauses a playing program and

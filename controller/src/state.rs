@@ -233,7 +233,13 @@ impl OperationalMode {
 
 /// How long the timed transitions take. The defaults are short (a simulator's, not a
 /// real arm's, whose power-on takes several seconds) except the protective-stop hold,
-/// which is the controller's documented 5 s.
+/// which is the controller's documented 5 s. UR documents no times; the defaults take
+/// the arm from POWER_OFF to RUNNING in 0.4 s (`brake release` alone, or `power on`
+/// and `brake release` at once) because the clients UR tests against URSim expect it
+/// there that fast: UR's client library's `dashboard_client_g5_tests`, in UR's CI order,
+/// send a program 0.6 s after a `brake release` from POWER_OFF and want it to run (a
+/// program sent before RUNNING is refused), and UR's ROS 2 driver's integration tests
+/// (`start_robot`) wanted RUNNING 1 s after `power on` and `brake release`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Timing {
     /// `power on`: time in BOOTING before POWER_ON.
@@ -251,9 +257,9 @@ pub struct Timing {
 impl Default for Timing {
     fn default() -> Self {
         Timing {
-            booting: Duration::from_millis(300),
-            power_on: Duration::from_millis(300),
-            brake_release: Duration::from_millis(500),
+            booting: Duration::from_millis(100),
+            power_on: Duration::from_millis(100),
+            brake_release: Duration::from_millis(200),
             protective_stop_hold: Duration::from_secs(5),
             restart_safety: Duration::from_millis(500),
         }

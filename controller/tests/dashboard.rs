@@ -58,17 +58,18 @@ fn power_on_idle_brake_release_running() {
     assert_eq!(s.ask("robotmode", ms(0)), "Robotmode: POWER_OFF");
     assert_eq!(s.ask("power on", ms(0)), "Powering on");
     assert_eq!(s.ask("robotmode", ms(0)), "Robotmode: BOOTING");
-    assert_eq!(s.c.poll_timeout(), Some(ms(300)));
-    assert_eq!(s.ask("robotmode", ms(299)), "Robotmode: BOOTING");
-    assert_eq!(s.ask("robotmode", ms(300)), "Robotmode: POWER_ON");
-    assert_eq!(s.ask("robotmode", ms(600)), "Robotmode: IDLE");
+    assert_eq!(s.c.poll_timeout(), Some(ms(100)));
+    assert_eq!(s.ask("robotmode", ms(99)), "Robotmode: BOOTING");
+    assert_eq!(s.ask("robotmode", ms(100)), "Robotmode: POWER_ON");
+    assert_eq!(s.ask("robotmode", ms(199)), "Robotmode: POWER_ON");
+    assert_eq!(s.ask("robotmode", ms(200)), "Robotmode: IDLE");
     assert_eq!(s.c.poll_timeout(), None);
     // power on again: nothing changes
     assert_eq!(s.ask("power on", ms(700)), "Powering on");
     assert_eq!(s.ask("robotmode", ms(700)), "Robotmode: IDLE");
     assert_eq!(s.ask("brake release", ms(1000)), "Brake releasing");
-    assert_eq!(s.ask("robotmode", ms(1499)), "Robotmode: IDLE");
-    assert_eq!(s.ask("robotmode", ms(1500)), "Robotmode: RUNNING");
+    assert_eq!(s.ask("robotmode", ms(1199)), "Robotmode: IDLE");
+    assert_eq!(s.ask("robotmode", ms(1200)), "Robotmode: RUNNING");
     assert_eq!(s.ask("power off", ms(2000)), "Powering off");
     assert_eq!(s.ask("robotmode", ms(2000)), "Robotmode: POWER_OFF");
 }
@@ -77,9 +78,20 @@ fn power_on_idle_brake_release_running() {
 fn brake_release_from_power_off_powers_on() {
     let mut s = Session::new(Config::default());
     assert_eq!(s.ask("brake release", ms(0)), "Brake releasing");
-    assert_eq!(s.ask("robotmode", ms(100)), "Robotmode: BOOTING");
-    assert_eq!(s.ask("robotmode", ms(600)), "Robotmode: IDLE");
-    assert_eq!(s.ask("robotmode", ms(1100)), "Robotmode: RUNNING");
+    assert_eq!(s.ask("robotmode", ms(50)), "Robotmode: BOOTING");
+    assert_eq!(s.ask("robotmode", ms(150)), "Robotmode: POWER_ON");
+    assert_eq!(s.ask("robotmode", ms(300)), "Robotmode: IDLE");
+    // RUNNING 0.4 s after a brake release from POWER_OFF: UR's client library's tests,
+    // in UR's CI order, send a program 0.6 s after one and want it to run.
+    assert_eq!(s.ask("robotmode", ms(399)), "Robotmode: IDLE");
+    assert_eq!(s.ask("robotmode", ms(400)), "Robotmode: RUNNING");
+    // power on and brake release at once: the same 0.4 s (UR's ROS 2 driver's tests
+    // wanted RUNNING within 1 s)
+    let mut s = Session::new(Config::default());
+    s.ask("power on", ms(0));
+    s.ask("brake release", ms(0));
+    assert_eq!(s.ask("robotmode", ms(399)), "Robotmode: IDLE");
+    assert_eq!(s.ask("robotmode", ms(400)), "Robotmode: RUNNING");
     // a long jump settles every step at once
     let mut s = Session::new(Config::default());
     s.ask("brake release", ms(0));
