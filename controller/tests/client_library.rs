@@ -1,6 +1,7 @@
 //! What UR's client library (the C++ library under the ROS 2 driver) needs of the
 //! controller, over TCP on 127.0.0.1, each test one behaviour its integration tests
-//! (`ur_driver_tests`, `external_control_program_tests`) rely on:
+//! (`ur_driver_tests`, `external_control_program_tests`, `dashboard_client_g5_tests`)
+//! rely on:
 //!
 //! - `read_error_code` sends `protective_stop()` in a `sec` program on the primary
 //!   interface and waits for a robot message of type error code (6) with code 209,
@@ -8,7 +9,8 @@
 //! - the driver claims RTDE inputs (speed slider, digital outputs...); a second driver
 //!   gets `IN_USE` while the first one's RTDE connection is open (started, paused or not
 //!   reading) and the fields once it is closed (the RTDE guide: "only one RTDE client can
-//!   control a specific variable at any time").
+//!   control a specific variable at any time");
+//! - in UR's CI order, a program sent 0.6 s after a `brake release` from POWER_OFF runs.
 
 use std::io::{BufRead, BufReader, Read, Write};
 use std::net::TcpStream;
