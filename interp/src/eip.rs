@@ -325,8 +325,7 @@ impl Handles {
     }
 
     /// `handle.method(args)`. `from_plc`: what the PLC last sent, by instance;
-    /// `connected`: a scanner is connected; `step`: the step now.
-    #[allow(clippy::too_many_arguments)]
+    /// `step`: the step now.
     pub fn call(
         &mut self,
         adapter: &mut Adapter,
@@ -335,7 +334,6 @@ impl Handles {
         method: &str,
         args: &[Value],
         step: u64,
-        step_time: f64,
     ) -> Result<Value, Fault> {
         let Some(h) = self.list.get_mut(id as usize) else {
             return Err(Fault::new(
@@ -601,7 +599,6 @@ impl Handles {
                         )))
                     }
                 };
-                let _ = step_time;
                 h.watchdog = Some(Watchdog {
                     frequency,
                     action,
@@ -932,7 +929,7 @@ mod tests {
             ],
         )]
         .into();
-        let mut call = |m: &str, args: &[Value]| h.call(&mut a, &plc, id, m, args, 0, 0.002);
+        let mut call = |m: &str, args: &[Value]| h.call(&mut a, &plc, id, m, args, 0);
         call("define_uint16", &[Value::Int(0), s("u")]).unwrap();
         call("define_int16", &[Value::Int(2), s("i")]).unwrap();
         call("define_float32", &[Value::Int(4), s("f")]).unwrap();
@@ -977,7 +974,7 @@ mod tests {
             panic!()
         };
         let plc = BTreeMap::new();
-        let mut call = |m: &str, args: &[Value]| h.call(&mut a, &plc, id, m, args, 0, 0.002);
+        let mut call = |m: &str, args: &[Value]| h.call(&mut a, &plc, id, m, args, 0);
         call(
             "define_uint8_array",
             &[Value::Int(0), Value::Int(4), s("work")],
@@ -1009,7 +1006,7 @@ mod tests {
             vec![1, 2, 0, 0, 1, 0, 0xfe, 0xff, b'a', b'b', b'c', 0]
         );
         let before = a.to_plc[&101].clone();
-        let mut call = |m: &str, args: &[Value]| h.call(&mut a, &plc, id, m, args, 0, 0.002);
+        let mut call = |m: &str, args: &[Value]| h.call(&mut a, &plc, id, m, args, 0);
         // 300 does not fit a uint8: nothing of this write lands.
         assert!(call(
             "write",
@@ -1024,7 +1021,7 @@ mod tests {
         assert!(call("write", &[w(vec![("nope", Value::Int(1))])]).is_err());
         assert!(call("read", &[s("n")]).is_err()); // a writer
         assert_eq!(a.to_plc[&101], before);
-        let mut call = |m: &str, args: &[Value]| h.call(&mut a, &plc, id, m, args, 0, 0.002);
+        let mut call = |m: &str, args: &[Value]| h.call(&mut a, &plc, id, m, args, 0);
         call("clear", &[]).unwrap();
         call("close", &[]).unwrap();
         assert!(call("clear", &[]).is_err());
@@ -1039,9 +1036,7 @@ mod tests {
             panic!()
         };
         let plc = BTreeMap::new();
-        assert!(h
-            .call(&mut a, &plc, id, "start_watchdog", &[], 0, 0.002)
-            .is_err());
+        assert!(h.call(&mut a, &plc, id, "start_watchdog", &[], 0).is_err());
         assert!(h
             .call(
                 &mut a,
@@ -1049,8 +1044,7 @@ mod tests {
                 id,
                 "set_watchdog",
                 &[Value::Float(11.0), Value::Int(1)],
-                0,
-                0.002
+                0
             )
             .is_err());
         h.call(
@@ -1060,7 +1054,6 @@ mod tests {
             "set_watchdog",
             &[Value::Float(2.5), Value::Int(2)],
             10,
-            0.002,
         )
         .unwrap();
         // 1 / 2.5 Hz = 0.4 s = 200 steps.
@@ -1072,8 +1065,7 @@ mod tests {
                                                       // A scanner feeds it.
         assert_eq!(h.check(true, 300, 0.002), None);
         assert_eq!(h.next_deadline(false, 0.002), Some(500));
-        h.call(&mut a, &plc, id, "stop_watchdog", &[], 301, 0.002)
-            .unwrap();
+        h.call(&mut a, &plc, id, "stop_watchdog", &[], 301).unwrap();
         assert_eq!(h.next_deadline(false, 0.002), None);
         assert_eq!(h.check(false, 900, 0.002), None);
     }

@@ -1257,7 +1257,6 @@ impl Machine {
                     let target = pop(&mut th.stack, line)?;
                     let method = &prog.names[site.name as usize];
                     if let Value::Eip(id) = target {
-                        let step_time = self.ctl.step_time.as_secs_f64();
                         let v = self
                             .ctl
                             .eip
@@ -1268,7 +1267,6 @@ impl Machine {
                                 method,
                                 &args,
                                 self.ctl.step,
-                                step_time,
                             )
                             .map_err(|f| RuntimeError::at(site.at.line, site.at.col, f))?;
                         th.stack.push(v);
