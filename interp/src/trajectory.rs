@@ -845,7 +845,47 @@ fn with_rot(p: [f64; 3], r: M) -> [f64; 6] {
 /// blend's waypoint to this target less the previous radius (for a move not blended
 /// into, to the move's own length). `None`: no blend (`r` not positive, or nothing left
 /// of the move to blend over).
-pub(crate) fn blend_start(dh: &Dh, tcp: [f64; 6], kind: &Kind, r: f64) -> Option<BlendStart> {
+///
+/// Also returns the radius it was limited to when that is less than `r` (the blends
+/// would overlap, or the move is shorter than `r`): the controller warns of it.
+pub(crate) fn blend_start(
+    dh: &Dh,
+    tcp: [f64; 6],
+    kind: &Kind,
+    r: f64,
+) -> (Option<BlendStart>, Option<f64>) {
+    if !(r.is_finite() && r > 0.0) {
+        return (None, None);
+    }
+    let cap = radius_cap(dh, tcp, kind);
+    let reduced = cap.filter(|c| *c < r).map(|c| c.max(0.0));
+    (blend_start_inner(dh, tcp, kind, r), reduced)
+}
+
+/// The most a blend radius at the end of `kind` may be (see [`blend_start`]); `None`
+/// for a motion that does not blend.
+fn radius_cap(dh: &Dh, tcp: [f64; 6], kind: &Kind) -> Option<f64> {
+    let (last, _) = kind.last_with_offset();
+    match last {
+        Kind::Tool { path, .. } => Some(path.length()),
+        Kind::Joint { q0, q1, .. } => {
+            let fk = |q: [f64; 6]| xyz(kinematics::forward(dh, q, tcp));
+            let target = fk(*q1);
+            Some(match kind {
+                Kind::Then { first, .. } => match **first {
+                    Kind::JointBlend { p1, w, .. } => {
+                        norm(sub3(target, fk(w))) - norm(sub3(fk(p1), fk(w)))
+                    }
+                    _ => norm(sub3(target, fk(*q0))),
+                },
+                _ => norm(sub3(target, fk(*q0))),
+            })
+        }
+        _ => None,
+    }
+}
+
+fn blend_start_inner(dh: &Dh, tcp: [f64; 6], kind: &Kind, r: f64) -> Option<BlendStart> {
     if !(r.is_finite() && r > 0.0) {
         return None;
     }
@@ -1281,6 +1321,21 @@ pub(crate) fn turn_between(p0: [f64; 6], p1: [f64; 6]) -> ([[f64; 3]; 3], [f64; 
     (r0, to_rotvec(mul(r1, transpose(r0))))
 }
 
+/// `movec` in fixed mode (`mode=1`): the orientation keeps its relation to the path's
+/// tangent, starting from `p0`'s, so it turns about the circle's axis by the angle the
+/// arc sweeps (a line: not at all). Returns the turn (a rotation vector in the base frame,
+/// its length the swept angle, which may exceed π) and the end pose: `to`'s position with
+/// that orientation (the manual: only `pose_to`'s position is used in fixed mode).
+pub(crate) fn fixed_turn(path: &Path, p0: [f64; 6], to: [f64; 6]) -> ([f64; 3], [f64; 6]) {
+    let turn = match *path {
+        Path::Arc { u, w, angle, .. } => scale3(cross(u, w), angle),
+        Path::Line { .. } => [0.0; 3],
+    };
+    let end = mul(to_matrix(turn), rot(p0));
+    let v = to_rotvec(end);
+    (turn, [to[0], to[1], to[2], v[0], v[1], v[2]])
+}
+
 /// The tool speed (base frame: linear m/s, angular rad/s) of joints `q` moving at `qd`.
 pub(crate) fn tcp_speed(dh: &Dh, q: [f64; 6], qd: [f64; 6], tcp: [f64; 6]) -> [f64; 6] {
     if qd.iter().all(|v| *v == 0.0) {
@@ -1409,7 +1464,7 @@ mod tests {
         };
         let a = line(p0, w, q0);
         let r = 0.05;
-        let start = blend_start(&dh, tcp, &a, r).unwrap();
+        let start = blend_start(&dh, tcp, &a, r).0.unwrap();
         let Kind::Tool { q1: qw, .. } = a else {
             unreachable!()
         };

@@ -6,7 +6,7 @@
 use std::time::Duration;
 
 use urscript_interp::kinematics::{forward, Model};
-use urscript_interp::{Config, Machine, Program, State, Value};
+use urscript_interp::{Config, Event, Machine, MessageKind, Program, State, Value};
 
 const STEP: Duration = Duration::from_millis(2);
 const Q0: [f64; 6] = [0.3, -1.4, 1.6, -1.8, -1.57, 0.2];
@@ -698,4 +698,129 @@ fn blends_into_and_out_of_a_circle_move_never_stop_the_arm() {
     let dv = largest_speed_step(&blended);
     eprintln!("largest joint speed change in a step: {dv} rad/s");
     assert!(dv < 0.05, "{dv}");
+}
+
+/// The blend-radius warnings a finished run left in the machine's events: (line,
+/// requested, reduced).
+fn radius_warnings(m: &mut Machine) -> Vec<(u32, f64, f64)> {
+    let mut out = Vec::new();
+    while let Some(e) = m.poll_event() {
+        if let Event::Message(msg) = e {
+            if let MessageKind::BlendRadiusReduced { requested, reduced } = msg.kind {
+                assert!(msg.text.contains("blend radius reduced"), "{}", msg.text);
+                out.push((msg.line, requested, reduced));
+            }
+        }
+    }
+    out
+}
+
+#[test]
+fn a_reduced_radius_is_reported_as_a_warning_with_its_line() {
+    // As in the overlap test above: the second move's 0.08 m leaves 0.02 m.
+    let (_, b, c, d, rot) = corners(0.15, 0.1, 0.15);
+    let src = format!(
+        "set_pos({Q0:?})\nmovel({}, v=0.1, r=0.08)\nmovel({}, v=0.1, r=0.08)\nmovel({}, v=0.1)\n",
+        pose(b, rot),
+        pose(c, rot),
+        pose(d, rot)
+    );
+    let (_, mut m) = run(&src);
+    let w = radius_warnings(&mut m);
+    assert_eq!(w.len(), 1, "{w:?}");
+    assert_eq!(w[0].0, 3);
+    assert_eq!(w[0].1, 0.08);
+    // (The rest of the middle leg after the first blend, as the arm follows it: 0.02 m
+    // to within the blend's exit point found by bisection.)
+    assert!((w[0].2 - 0.02).abs() < 1e-4, "{w:?}");
+    // Radii with room to spare: no warning.
+    let src = format!(
+        "set_pos({Q0:?})\nmovel({}, v=0.1, r=0.02)\nmovel({}, v=0.1, r=0.02)\nmovel({}, v=0.1)\n",
+        pose(b, rot),
+        pose(c, rot),
+        pose(d, rot)
+    );
+    let (_, mut m) = run(&src);
+    assert!(radius_warnings(&mut m).is_empty());
+}
+
+#[test]
+fn a_radius_longer_than_the_first_move_is_reported() {
+    let (_, b, _, _, rot) = corners(0.05, 0.1, 0.15);
+    let src = format!("set_pos({Q0:?})\nmovel({}, v=0.1, r=0.2)\n", pose(b, rot));
+    let (_, mut m) = run(&src);
+    let w = radius_warnings(&mut m);
+    assert_eq!(w.len(), 1, "{w:?}");
+    assert_eq!(w[0].0, 2);
+    assert!((w[0].2 - 0.05).abs() < 1e-6, "{w:?}");
+}
+
+#[test]
+fn movec_in_fixed_mode_turns_the_tool_with_the_arc() {
+    // A half circle in the base's xy plane: mode=1 turns the tool by pi about the
+    // circle's axis (z), whatever pose_to's orientation; mode=0 ends in pose_to's.
+    let p0 = forward(&Model::Ur5e.dh(), Q0, [0.0; 6]);
+    let rot = [p0[3], p0[4], p0[5]];
+    let a = [p0[0], p0[1], p0[2]];
+    let via = [a[0] + 0.05, a[1] - 0.05, a[2]];
+    let b = [a[0], a[1] - 0.1, a[2]];
+    let run_mode = |mode: u32| {
+        let src = format!(
+            "set_pos({Q0:?})\nmovec({}, {}, a=1.2, v=0.1, mode={mode})\n",
+            pose(via, rot),
+            pose(b, rot)
+        );
+        run(&src).1.tcp_pose()
+    };
+    let end0 = run_mode(0);
+    assert!(dist([end0[3], end0[4], end0[5]], rot) < 1e-6, "{end0:?}");
+    let end1 = run_mode(1);
+    assert!(dist([end1[0], end1[1], end1[2]], b) < 1e-6);
+    // The turn from the start's orientation to the end's: pi about z (either sign).
+    let r0 = matrix(rot);
+    let r1 = matrix([end1[3], end1[4], end1[5]]);
+    // r1 = Rz(pi) r0: r1 r0^T has z axis fixed and x, y flipped.
+    let m: [[f64; 3]; 3] =
+        std::array::from_fn(|i| std::array::from_fn(|j| (0..3).map(|k| r1[i][k] * r0[j][k]).sum()));
+    let want = [[-1.0, 0.0, 0.0], [0.0, -1.0, 0.0], [0.0, 0.0, 1.0]];
+    for i in 0..3 {
+        for j in 0..3 {
+            assert!((m[i][j] - want[i][j]).abs() < 1e-6, "{m:?}");
+        }
+    }
+}
+
+#[test]
+fn movec_with_an_unknown_mode_is_a_runtime_error() {
+    let p0 = forward(&Model::Ur5e.dh(), Q0, [0.0; 6]);
+    let rot = [p0[3], p0[4], p0[5]];
+    let a = [p0[0], p0[1], p0[2]];
+    let src = format!(
+        "set_pos({Q0:?})\nmovec({}, {}, mode=2)\n",
+        pose([a[0] + 0.05, a[1] - 0.05, a[2]], rot),
+        pose([a[0], a[1] - 0.1, a[2]], rot)
+    );
+    let mut m = Machine::new(Program::parse(&src).unwrap(), Config::default());
+    m.run_until(Duration::from_secs(5));
+    match m.state() {
+        State::Error(e) => assert!(e.to_string().contains("mode=2"), "{e}"),
+        s => panic!("{s:?}"),
+    }
+}
+
+/// The rotation matrix of a rotation vector (Rodrigues).
+fn matrix(v: [f64; 3]) -> [[f64; 3]; 3] {
+    let th = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
+    if th < 1e-12 {
+        return [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+    }
+    let k = [v[0] / th, v[1] / th, v[2] / th];
+    let (s, c) = th.sin_cos();
+    std::array::from_fn(|i| {
+        std::array::from_fn(|j| {
+            let id = if i == j { 1.0 } else { 0.0 };
+            let kx = [[0.0, -k[2], k[1]], [k[2], 0.0, -k[0]], [-k[1], k[0], 0.0]];
+            id * c + (1.0 - c) * k[i] * k[j] + s * kx[i][j]
+        })
+    })
 }
