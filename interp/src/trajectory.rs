@@ -22,7 +22,9 @@
 //!   sphere of radius `r` around its target; the next move, commanded then, is planned
 //!   from that target and joined by a blend: for two joint moves a quadratic Bézier in
 //!   joint space (control point: the waypoint), for two straight tool moves a circular
-//!   arc tangent to both lines at constant tool speed; the rest of the next move starts
+//!   arc tangent to both lines at constant tool speed, for two tool moves of which one is
+//!   circular (`movec`) a cubic Bézier in tool space tangent to both paths, inside the
+//!   sphere, at constant tool speed; the rest of the next move starts
 //!   at the speed the blend hands over ([`Profile::with_start_speed`]); a joint move with
 //!   a tool move, a cubic Bézier in joint space between the two moves' joint speeds. A move that
 //!   cannot blend waits, queued ([`Motion::next`], at most one), until the first ends at
@@ -237,6 +239,9 @@ impl Profile {
 
 /// The tool's path in space: a line, or an arc of a circle.
 #[derive(Debug, Clone, Copy, PartialEq)]
+// The Bézier's length table keeps it `Copy` and its sampling free of allocation; a path
+// lives in a motion or two at a time.
+#[allow(clippy::large_enum_variant)]
 pub(crate) enum Path {
     Line {
         from: [f64; 3],
@@ -301,7 +306,7 @@ impl Path {
     /// A Bézier's curve parameter at fraction `f` of its length.
     fn bezier_param(len: &[f64; BEZIER_CHORDS + 1], f: f64) -> f64 {
         let total = len[BEZIER_CHORDS];
-        if !(total > 0.0) {
+        if total.is_nan() || total <= 0.0 {
             return f.clamp(0.0, 1.0);
         }
         let s = (f * total).clamp(0.0, total);
@@ -1030,8 +1035,11 @@ fn blend_start_inner(dh: &Dh, tcp: [f64; 6], kind: &Kind, r: f64) -> Option<Blen
 ///   at the same distance after it along `b`, at the constant tool speed the tool has
 ///   now (movep's "blend circular ... constant tool speed"); it lies within `r` of the
 ///   waypoint. The orientation turns from `a`'s to `b`'s at those two points.
-/// - A joint move into a tool move or one into the other, and any blend with a circular
-///   move (`movec`) on either side: a cubic Bézier in joint space ([`mixed_blend`]).
+/// - Two tool moves of which one at least is circular (`movec`): a cubic Bézier in tool
+///   space tangent to both paths, inside the sphere, at constant tool speed
+///   ([`curve_blend`]; where none fits, the joint-space blend below).
+/// - A joint move into a tool move or one into the other: a cubic Bézier in joint space
+///   ([`mixed_blend`]).
 /// - Not blended: `b` shorter than
 ///   the radius (its target inside the sphere: the blends would overlap), a turn back
 ///   along the same line, an arm at rest, and a blend that would take longer than
@@ -1265,7 +1273,7 @@ fn curve_blend(
     let (p1, t1) = pa.at(fa);
     let wp = pa.at(1.0).0;
     let r1 = norm(sub3(p1, wp));
-    if !(r1 > 1e-9) {
+    if r1.is_nan() || r1 <= 1e-9 {
         return None;
     }
     let g = crossing(|f| norm(sub3(pbp.at(f).0, wp)), r1, false)?;
@@ -1387,8 +1395,8 @@ fn move_joint_speed(dh: &Dh, tcp: [f64; 6], k: &Kind, (q, f): ([f64; 6], f64), s
 /// before the blend is not made.
 const MIXED_STRAY: f64 = 1.25;
 
-/// A joint move into a tool move, or one into the other, or a blend into or out of a
-/// circular move: a cubic Bézier in joint space from the joints now, at their speeds now, to the point of `b` where the tool
+/// A joint move into a tool move, or one into the other, or a blend between tool moves
+/// that [`curve_blend`] could not make: a cubic Bézier in joint space from the joints now, at their speeds now, to the point of `b` where the tool
 /// leaves the sphere it entered, at `b`'s speeds there (the tool's speed where the blend
 /// began, at most `b`'s `v`), over the time the tool takes across the sphere's diameter
 /// at that speed. Not made if the tool would stray more than [`MIXED_STRAY`] times the
