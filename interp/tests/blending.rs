@@ -960,3 +960,35 @@ fn straight_and_circular_moves_blend_in_tool_space_at_constant_speed() {
         assert!(dv < 0.05, "{name}: {dv}");
     }
 }
+
+#[test]
+fn movej_into_movec_and_back_blends_in_joint_space() {
+    let p0 = forward(&Model::Ur5e.dh(), Q0, [0.0; 6]);
+    let rot = [p0[3], p0[4], p0[5]];
+    let w = [p0[0], p0[1] + 0.1, p0[2]];
+    let via = [w[0] + 0.05, w[1] + 0.05, w[2]];
+    let e = [w[0], w[1] + 0.1, w[2]];
+    let last = [e[0] - 0.1, e[1], e[2]];
+    let src = |r: f64| {
+        format!(
+            "set_pos({Q0:?})\nmovej(get_inverse_kin({}), a=1.4, v=0.3, r={r})\nmovec({}, {}, a=1.2, v=0.1, r={r})\nmovej(get_inverse_kin({}), a=1.4, v=0.3)\n",
+            pose(w, rot),
+            pose(via, rot),
+            pose(e, rot),
+            pose(last, rot)
+        )
+    };
+    let (plain, _) = run(&src(0.0));
+    let (s, _) = run(&src(0.02));
+    eprintln!(
+        "movej-movec-movej: {} steps unblended, {} blended",
+        plain.len(),
+        s.len()
+    );
+    assert!(s.len() + 20 < plain.len());
+    let (f, l) = moving_span(&s);
+    assert!(s[f..=l].iter().all(moving));
+    let dv = largest_speed_step(&s);
+    eprintln!("movej-movec-movej: largest joint speed change in a step {dv} rad/s");
+    assert!(dv < 0.05, "{dv}");
+}
