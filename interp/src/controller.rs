@@ -10,7 +10,7 @@ use urscript_socket::robot::ReadCall;
 
 use crate::builtins::{Args, Out};
 use crate::error::Fault;
-use crate::event::{Event, ReadRecord, MAX_READ_INPUT};
+use crate::event::{Event, Message, MessageKind, ReadRecord, MAX_READ_INPUT};
 use crate::kinematics::{self, Dh};
 use crate::sockets::Sockets;
 use crate::trajectory::{self, Kind, Motion};
@@ -497,7 +497,11 @@ impl Controller {
     /// blends from it ([`trajectory::blend`]); later (a `sleep`, a socket read, ... in
     /// between), or if the two cannot blend, the arm stops at that move's target and the
     /// new move starts there when it ends: the controller's lookahead of one move.
-    pub fn start_move(&mut self, kind: Kind, tcp: [f64; 6], r: f64) -> Duration {
+    ///
+    /// A radius limited because the blends would overlap (or the move is shorter than
+    /// `r`) is reported as a [`MessageKind::BlendRadiusReduced`] message for `line`, as
+    /// the controller logs a warning.
+    pub fn start_move(&mut self, kind: Kind, tcp: [f64; 6], r: f64, line: u32) -> Duration {
         let dt = self.step_time.as_secs_f64();
         let steps = |secs: f64| {
             if dt > 0.0 && secs.is_finite() {
@@ -521,7 +525,22 @@ impl Controller {
                 None => start = m.start.saturating_add(steps(m.duration())).max(self.step),
             }
         }
-        let mut blend = trajectory::blend_start(&self.dh, tcp, &kind, r);
+        let (mut blend, reduced) = trajectory::blend_start(&self.dh, tcp, &kind, r);
+        if let Some(reduced) = reduced {
+            self.events.push_back(Event::Message(Message {
+                line,
+                kind: MessageKind::BlendRadiusReduced {
+                    requested: r,
+                    reduced,
+                },
+                text: format!(
+                    "blend radius reduced from {} m to {} m: blends may not overlap",
+                    crate::value::Value::Float(r).to_str(),
+                    crate::value::Value::Float(reduced).to_str()
+                ),
+                args: Vec::new(),
+            }));
+        }
         let back = blend.map_or(kind.duration(), |b| b.at);
         let wait = self
             .step_time

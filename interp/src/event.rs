@@ -65,6 +65,16 @@ pub enum MessageKind {
         /// once).
         blocking: bool,
     },
+    /// Not a function: the controller's warning that a move's blend radius `r` was
+    /// reduced, because its blend would overlap the previous one (UR: blends may not
+    /// overlap; the controller logs a warning) or the move is shorter than `r`. The line
+    /// is the move's; `args` is empty.
+    BlendRadiusReduced {
+        /// The radius the move asked for (m).
+        requested: f64,
+        /// The radius it blends with (m); 0: it does not blend.
+        reduced: f64,
+    },
 }
 
 /// A message the program showed (PolyScope's log or a popup).

@@ -22,7 +22,9 @@
 //!   sphere of radius `r` around its target; the next move, commanded then, is planned
 //!   from that target and joined by a blend: for two joint moves a quadratic Bézier in
 //!   joint space (control point: the waypoint), for two straight tool moves a circular
-//!   arc tangent to both lines at constant tool speed; the rest of the next move starts
+//!   arc tangent to both lines at constant tool speed, for two tool moves of which one is
+//!   circular (`movec`) a cubic Bézier in tool space tangent to both paths, inside the
+//!   sphere, at constant tool speed; the rest of the next move starts
 //!   at the speed the blend hands over ([`Profile::with_start_speed`]); a joint move with
 //!   a tool move, a cubic Bézier in joint space between the two moves' joint speeds. A move that
 //!   cannot blend waits, queued ([`Motion::next`], at most one), until the first ends at
@@ -237,6 +239,9 @@ impl Profile {
 
 /// The tool's path in space: a line, or an arc of a circle.
 #[derive(Debug, Clone, Copy, PartialEq)]
+// The Bézier's length table keeps it `Copy` and its sampling free of allocation; a path
+// lives in a motion or two at a time.
+#[allow(clippy::large_enum_variant)]
 pub(crate) enum Path {
     Line {
         from: [f64; 3],
@@ -251,6 +256,65 @@ pub(crate) enum Path {
         w: [f64; 3],
         angle: f64,
     },
+    /// A cubic Bézier curve (a blend between a straight and a circular move, or two
+    /// circular ones) by its control points, parameterised by arc length: `len[i]` is
+    /// the length of the polyline through its points at `t = j / BEZIER_CHORDS`, `j <= i`.
+    Bezier {
+        p: [[f64; 3]; 4],
+        len: [f64; BEZIER_CHORDS + 1],
+    },
+}
+
+/// The chords that measure a [`Path::Bezier`]'s length: bounds the work per sample.
+pub(crate) const BEZIER_CHORDS: usize = 64;
+
+fn bezier_point(p: &[[f64; 3]; 4], t: f64) -> [f64; 3] {
+    let m = 1.0 - t;
+    let (b0, b1, b2, b3) = (m * m * m, 3.0 * m * m * t, 3.0 * m * t * t, t * t * t);
+    std::array::from_fn(|k| b0 * p[0][k] + b1 * p[1][k] + b2 * p[2][k] + b3 * p[3][k])
+}
+
+fn bezier_tangent(p: &[[f64; 3]; 4], t: f64) -> [f64; 3] {
+    let m = 1.0 - t;
+    let d: [f64; 3] = std::array::from_fn(|k| {
+        3.0 * m * m * (p[1][k] - p[0][k])
+            + 6.0 * m * t * (p[2][k] - p[1][k])
+            + 3.0 * t * t * (p[3][k] - p[2][k])
+    });
+    let n = norm(d);
+    if n > 0.0 && n.is_finite() {
+        scale3(d, 1.0 / n)
+    } else {
+        [0.0; 3]
+    }
+}
+
+impl Path {
+    /// The cubic Bézier through control points `p`, measured on [`BEZIER_CHORDS`] chords.
+    fn bezier(p: [[f64; 3]; 4]) -> Path {
+        let mut len = [0.0; BEZIER_CHORDS + 1];
+        let n = BEZIER_CHORDS as f64;
+        let mut prev = p[0];
+        for i in 1..=BEZIER_CHORDS {
+            let q = bezier_point(&p, i as f64 / n);
+            len[i] = len[i - 1] + norm(sub3(q, prev));
+            prev = q;
+        }
+        Path::Bezier { p, len }
+    }
+
+    /// A Bézier's curve parameter at fraction `f` of its length.
+    fn bezier_param(len: &[f64; BEZIER_CHORDS + 1], f: f64) -> f64 {
+        let total = len[BEZIER_CHORDS];
+        if total.is_nan() || total <= 0.0 {
+            return f.clamp(0.0, 1.0);
+        }
+        let s = (f * total).clamp(0.0, total);
+        let i = len.partition_point(|x| *x <= s).clamp(1, BEZIER_CHORDS) - 1;
+        let seg = len[i + 1] - len[i];
+        let frac = if seg > 0.0 { (s - len[i]) / seg } else { 0.0 };
+        (i as f64 + frac.clamp(0.0, 1.0)) / BEZIER_CHORDS as f64
+    }
 }
 
 fn sub3(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
@@ -319,6 +383,7 @@ impl Path {
         match *self {
             Path::Line { from, to } => norm(sub3(to, from)),
             Path::Arc { r, angle, .. } => r * angle,
+            Path::Bezier { len, .. } => len[BEZIER_CHORDS],
         }
     }
 
@@ -338,6 +403,16 @@ impl Path {
                     w: std::array::from_fn(|k| -s * u[k] + co * w[k]),
                     angle: angle * (1.0 - f),
                 }
+            }
+            Path::Bezier { p, len } => {
+                // De Casteljau's split at the curve parameter: the second half.
+                let t = Path::bezier_param(&len, f);
+                let l = |a: [f64; 3], b: [f64; 3]| -> [f64; 3] {
+                    std::array::from_fn(|k| a[k] + (b[k] - a[k]) * t)
+                };
+                let (a, b, c) = (l(p[0], p[1]), l(p[1], p[2]), l(p[2], p[3]));
+                let (d, e) = (l(a, b), l(b, c));
+                Path::bezier([l(d, e), e, c, p[3]])
             }
         }
     }
@@ -371,6 +446,10 @@ impl Path {
                     -s * u[2] + co * w[2],
                 ];
                 (p, t)
+            }
+            Path::Bezier { p, len } => {
+                let t = Path::bezier_param(&len, f);
+                (bezier_point(&p, t), bezier_tangent(&p, t))
             }
         }
     }
@@ -845,7 +924,47 @@ fn with_rot(p: [f64; 3], r: M) -> [f64; 6] {
 /// blend's waypoint to this target less the previous radius (for a move not blended
 /// into, to the move's own length). `None`: no blend (`r` not positive, or nothing left
 /// of the move to blend over).
-pub(crate) fn blend_start(dh: &Dh, tcp: [f64; 6], kind: &Kind, r: f64) -> Option<BlendStart> {
+///
+/// Also returns the radius it was limited to when that is less than `r` (the blends
+/// would overlap, or the move is shorter than `r`): the controller warns of it.
+pub(crate) fn blend_start(
+    dh: &Dh,
+    tcp: [f64; 6],
+    kind: &Kind,
+    r: f64,
+) -> (Option<BlendStart>, Option<f64>) {
+    if !(r.is_finite() && r > 0.0) {
+        return (None, None);
+    }
+    let cap = radius_cap(dh, tcp, kind);
+    let reduced = cap.filter(|c| *c < r).map(|c| c.max(0.0));
+    (blend_start_inner(dh, tcp, kind, r), reduced)
+}
+
+/// The most a blend radius at the end of `kind` may be (see [`blend_start`]); `None`
+/// for a motion that does not blend.
+fn radius_cap(dh: &Dh, tcp: [f64; 6], kind: &Kind) -> Option<f64> {
+    let (last, _) = kind.last_with_offset();
+    match last {
+        Kind::Tool { path, .. } => Some(path.length()),
+        Kind::Joint { q0, q1, .. } => {
+            let fk = |q: [f64; 6]| xyz(kinematics::forward(dh, q, tcp));
+            let target = fk(*q1);
+            Some(match kind {
+                Kind::Then { first, .. } => match **first {
+                    Kind::JointBlend { p1, w, .. } => {
+                        norm(sub3(target, fk(w))) - norm(sub3(fk(p1), fk(w)))
+                    }
+                    _ => norm(sub3(target, fk(*q0))),
+                },
+                _ => norm(sub3(target, fk(*q0))),
+            })
+        }
+        _ => None,
+    }
+}
+
+fn blend_start_inner(dh: &Dh, tcp: [f64; 6], kind: &Kind, r: f64) -> Option<BlendStart> {
     if !(r.is_finite() && r > 0.0) {
         return None;
     }
@@ -916,8 +1035,11 @@ pub(crate) fn blend_start(dh: &Dh, tcp: [f64; 6], kind: &Kind, r: f64) -> Option
 ///   at the same distance after it along `b`, at the constant tool speed the tool has
 ///   now (movep's "blend circular ... constant tool speed"); it lies within `r` of the
 ///   waypoint. The orientation turns from `a`'s to `b`'s at those two points.
-/// - A joint move into a tool move or one into the other, and any blend with a circular
-///   move (`movec`) on either side: a cubic Bézier in joint space ([`mixed_blend`]).
+/// - Two tool moves of which one at least is circular (`movec`): a cubic Bézier in tool
+///   space tangent to both paths, inside the sphere, at constant tool speed
+///   ([`curve_blend`]; where none fits, the joint-space blend below).
+/// - A joint move into a tool move or one into the other: a cubic Bézier in joint space
+///   ([`mixed_blend`]).
 /// - Not blended: `b` shorter than
 ///   the radius (its target inside the sphere: the blends would overlap), a turn back
 ///   along the same line, an arm at rest, and a blend that would take longer than
@@ -1090,8 +1212,132 @@ pub(crate) fn blend(
                 rest: Box::new(rest),
             })
         }
+        (Kind::Tool { .. }, Kind::Tool { .. }) => curve_blend(dh, tcp, (la, tl), b, q_now)
+            .or_else(|| mixed_blend(dh, tcp, (la, tl), b, q_now)),
         _ => mixed_blend(dh, tcp, (la, tl), b, q_now),
     }
+}
+
+/// How many times [`curve_blend`] halves its tangent length to keep the curve inside the
+/// sphere before it gives up (then the blend is made in joint space).
+const CURVE_TRIES: u32 = 6;
+
+/// A tool-space blend between two tool moves of which one at least is circular (`movec`
+/// into a straight move, a straight move into `movec`, `movec` into `movec`): the cubic
+/// Bézier from where the tool is now (`a` at distance `r1` before the waypoint) to where
+/// `b`'s path leaves the sphere of radius `r1` around it, tangent to both paths there
+/// (its control points on the tangents, half of `r1` from its ends, or less until all four
+/// lie in the sphere: the curve, inside their convex hull, then stays within `r1` of the
+/// waypoint), travelled at the constant tool speed the tool has now (parameterised by
+/// arc length); the orientation turns from `a`'s to `b`'s over it, as between two lines.
+/// `None` where the line-to-line blend would refuse (a turn straight back, slower than
+/// stopping, too little of `b` left to stop in) or no such curve fits.
+fn curve_blend(
+    dh: &Dh,
+    tcp: [f64; 6],
+    (la, tl): (&Kind, f64),
+    b: &Kind,
+    q_now: [f64; 6],
+) -> Option<Kind> {
+    let Kind::Tool {
+        path: pa,
+        r0: ra,
+        turn: ta,
+        profile,
+        dist,
+        q1: qa1,
+        ..
+    } = la
+    else {
+        return None;
+    };
+    let Kind::Tool {
+        path: pbp,
+        r0: rb,
+        turn: tb,
+        profile: pb,
+        dist: db,
+        to: cto,
+        q1: qb1,
+        given,
+        ..
+    } = b
+    else {
+        return None;
+    };
+    let (s, sd) = profile.at(tl);
+    if !(pa.length() > 1e-9 && pbp.length() > 1e-9 && *dist > 0.0 && *db > 0.0 && sd > 1e-9) {
+        return None;
+    }
+    let fa = (s / dist).clamp(0.0, 1.0);
+    let (p1, t1) = pa.at(fa);
+    let wp = pa.at(1.0).0;
+    let r1 = norm(sub3(p1, wp));
+    if r1.is_nan() || r1 <= 1e-9 {
+        return None;
+    }
+    let g = crossing(|f| norm(sub3(pbp.at(f).0, wp)), r1, false)?;
+    if !(g > 0.0 && g < 1.0 - 1e-9) {
+        return None;
+    }
+    let (p2, t2) = pbp.at(g);
+    if dot(t1, t2) < -1.0 + 1e-6 {
+        return None;
+    }
+    let inside = |q: [f64; 3]| norm(sub3(q, wp)) <= r1 * (1.0 + 1e-9);
+    let mut k = 0.5 * r1;
+    let mut curve = None;
+    for _ in 0..CURVE_TRIES {
+        let c1 = [p1[0] + k * t1[0], p1[1] + k * t1[1], p1[2] + k * t1[2]];
+        let c2 = [p2[0] - k * t2[0], p2[1] - k * t2[1], p2[2] - k * t2[2]];
+        if inside(c1) && inside(c2) {
+            curve = Some(Path::bezier([p1, c1, c2, p2]));
+            break;
+        }
+        k *= 0.5;
+    }
+    let curve = curve?;
+    let len = curve.length();
+    let dur = len / sd;
+    let rest_d = db * (1.0 - g);
+    if !(dur > 0.0 && dur.is_finite()) || dur > profile.total - tl + pb.time_at(db * g) {
+        return None;
+    }
+    let (vb, ab) = pb.speed_and_acceleration();
+    if !can_stop(sd, rest_d, ab) {
+        return None;
+    }
+    let r_in = mul(to_matrix(scale3(*ta, fa)), *ra);
+    let r_out = mul(to_matrix(scale3(*tb, g)), *rb);
+    let pose_out = with_rot(p2, r_out);
+    let q_out = nearest_ik(dh, pose_out, tcp, *qa1).unwrap_or(*qa1);
+    let first = Kind::Tool {
+        path: curve,
+        r0: r_in,
+        turn: to_rotvec(mul(r_out, transpose(r_in))),
+        profile: Profile::constant(len, sd),
+        dist: len,
+        to: pose_out,
+        q0: q_now,
+        q1: q_out,
+        given: false,
+    };
+    let rest = Kind::Tool {
+        path: pbp.rest_from(g),
+        r0: r_out,
+        turn: scale3(*tb, 1.0 - g),
+        profile: Profile::with_start_speed(rest_d, sd, vb, ab),
+        dist: rest_d,
+        to: *cto,
+        q0: q_out,
+        q1: *qb1,
+        given: *given,
+    };
+    Some(Kind::Then {
+        first: Box::new(first),
+        dur,
+        rest: Box::new(rest),
+    })
 }
 
 /// Where a joint move or a straight tool move is at fraction `f` of its way: joints (the
@@ -1149,8 +1395,8 @@ fn move_joint_speed(dh: &Dh, tcp: [f64; 6], k: &Kind, (q, f): ([f64; 6], f64), s
 /// before the blend is not made.
 const MIXED_STRAY: f64 = 1.25;
 
-/// A joint move into a tool move, or one into the other, or a blend into or out of a
-/// circular move: a cubic Bézier in joint space from the joints now, at their speeds now, to the point of `b` where the tool
+/// A joint move into a tool move, or one into the other, or a blend between tool moves
+/// that [`curve_blend`] could not make: a cubic Bézier in joint space from the joints now, at their speeds now, to the point of `b` where the tool
 /// leaves the sphere it entered, at `b`'s speeds there (the tool's speed where the blend
 /// began, at most `b`'s `v`), over the time the tool takes across the sphere's diameter
 /// at that speed. Not made if the tool would stray more than [`MIXED_STRAY`] times the
@@ -1281,6 +1527,21 @@ pub(crate) fn turn_between(p0: [f64; 6], p1: [f64; 6]) -> ([[f64; 3]; 3], [f64; 
     (r0, to_rotvec(mul(r1, transpose(r0))))
 }
 
+/// `movec` in fixed mode (`mode=1`): the orientation keeps its relation to the path's
+/// tangent, starting from `p0`'s, so it turns about the circle's axis by the angle the
+/// arc sweeps (a line: not at all). Returns the turn (a rotation vector in the base frame,
+/// its length the swept angle, which may exceed π) and the end pose: `to`'s position with
+/// that orientation (the manual: only `pose_to`'s position is used in fixed mode).
+pub(crate) fn fixed_turn(path: &Path, p0: [f64; 6], to: [f64; 6]) -> ([f64; 3], [f64; 6]) {
+    let turn = match *path {
+        Path::Arc { u, w, angle, .. } => scale3(cross(u, w), angle),
+        Path::Line { .. } | Path::Bezier { .. } => [0.0; 3],
+    };
+    let end = mul(to_matrix(turn), rot(p0));
+    let v = to_rotvec(end);
+    (turn, [to[0], to[1], to[2], v[0], v[1], v[2]])
+}
+
 /// The tool speed (base frame: linear m/s, angular rad/s) of joints `q` moving at `qd`.
 pub(crate) fn tcp_speed(dh: &Dh, q: [f64; 6], qd: [f64; 6], tcp: [f64; 6]) -> [f64; 6] {
     if qd.iter().all(|v| *v == 0.0) {
@@ -1409,7 +1670,7 @@ mod tests {
         };
         let a = line(p0, w, q0);
         let r = 0.05;
-        let start = blend_start(&dh, tcp, &a, r).unwrap();
+        let start = blend_start(&dh, tcp, &a, r).0.unwrap();
         let Kind::Tool { q1: qw, .. } = a else {
             unreachable!()
         };

@@ -848,10 +848,21 @@ fn tool_move(
     pose: [f64; 6],
     (q1, given): ([f64; 6], bool),
     (accel, speed, t, r): (f64, f64, f64, f64),
+    (line, fixed): (u32, bool),
 ) -> std::time::Duration {
     let (q0, p0) = c.move_start();
     let path = Path::new(p0, via, pose);
-    let (r0, turn) = trajectory::turn_between(p0, pose);
+    let (r0, mut turn) = trajectory::turn_between(p0, pose);
+    let (mut pose, mut q1, mut given) = (pose, q1, given);
+    if fixed {
+        // movec mode 1: the orientation follows the arc's tangent; only pose_to's position
+        // counts, and the target joints are those of the pose the arc ends in.
+        let (t, end) = trajectory::fixed_turn(&path, p0, pose);
+        turn = t;
+        pose = end;
+        q1 = c.inverse(end, q1, c.arm.tcp).unwrap_or(q0);
+        given = false;
+    }
     let length = path.length();
     // A move that only turns the tool is timed on its angle.
     let dist = if length > 1e-9 {
@@ -875,6 +886,7 @@ fn tool_move(
         },
         tcp,
         r,
+        line,
     )
 }
 
@@ -898,17 +910,26 @@ fn movej(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
         let q0 = c.move_start().0;
         let profile = Profile::new(joint_distance(q0, q1), speed, accel, t);
         let tcp = c.arm.tcp;
-        c.start_move(Kind::Joint { q0, q1, profile }, tcp, r)
+        c.start_move(Kind::Joint { q0, q1, profile }, tcp, r, a.line)
     } else {
         let given = !matches!(a.v[0], Value::Pose(_));
-        tool_move(c, None, pose, (q1, given), (accel, speed, t, r))
+        tool_move(
+            c,
+            None,
+            pose,
+            (q1, given),
+            (accel, speed, t, r),
+            (a.line, false),
+        )
     };
     Ok(Out::Wait(back, Value::None))
 }
 
 /// `movec`: along the arc from the tool's position through `pose_via`'s to `pose_to`'s
-/// (a line if the three are on one), the orientation turning from the start's to
-/// `pose_to`'s (mode 0; mode 1, orientation fixed to the arc, is not modelled).
+/// (a line if the three are on one). `mode=0` (unconstrained): the orientation turns
+/// from the start's to `pose_to`'s; `mode=1` (fixed): it keeps its relation to the
+/// arc's tangent from the start's, turning about the circle's axis by the angle swept
+/// (`pose_to`'s orientation is not used); another mode is a runtime error.
 fn movec(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
     let via_six = a.six(0)?;
     let via = if matches!(a.v[0], Value::Pose(_)) {
@@ -920,8 +941,26 @@ fn movec(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
     let (accel, speed) = (a.num(2)?, a.num(3)?);
     let r = radius(a, 4)?;
     let (q1, pose) = tool_target(c, a.name, &a.v[1], six)?;
+    let mode = a.num(5)?;
+    let fixed = if mode == 0.0 {
+        false
+    } else if mode == 1.0 {
+        true
+    } else {
+        return Err(Fault::from(format!(
+            "`movec`: mode={} is neither 0 (unconstrained) nor 1 (fixed)",
+            a.v[5].to_str()
+        )));
+    };
     let given = !matches!(a.v[1], Value::Pose(_));
-    let back = tool_move(c, Some(via), pose, (q1, given), (accel, speed, 0.0, r));
+    let back = tool_move(
+        c,
+        Some(via),
+        pose,
+        (q1, given),
+        (accel, speed, 0.0, r),
+        (a.line, fixed),
+    );
     Ok(Out::Wait(back, Value::None))
 }
 
