@@ -366,6 +366,8 @@ pub enum MessageKind {
     Textmsg,
     Popup,
     Varmsg,
+    /// The controller's own warning in the program's log (a blend radius reduced).
+    Warning,
 }
 
 /// `robot`: `textmsg`, `popup` or `varmsg` text.

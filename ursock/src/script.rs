@@ -278,6 +278,7 @@ pub(crate) fn message_event(m: &Message) -> report::Event {
     let (kind, name) = match m.kind {
         MessageKind::Textmsg => (report::MessageKind::Textmsg, "textmsg"),
         MessageKind::Varmsg => (report::MessageKind::Varmsg, "varmsg"),
+        MessageKind::BlendRadiusReduced { .. } => (report::MessageKind::Warning, "warning"),
         _ => (report::MessageKind::Popup, "popup"),
     };
     let args: Vec<String> = m.args.iter().map(|v| v.to_source()).collect();

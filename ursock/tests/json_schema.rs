@@ -543,6 +543,24 @@ fn robot_json_lines_match_the_schema() {
     for k in ["call", "message", "tx", "rx", "end"] {
         assert!(kinds.iter().any(|x| x == k), "{k} missing: {kinds:?}");
     }
+    // The controller's own warning (a blend radius reduced: blends may not overlap).
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_ursock"))
+        .args([
+            "robot",
+            "--json",
+            "-e",
+            "movel(p[-0.4, -0.2, 0.4, 0, 3.14, 0])\nmovel(p[-0.3, -0.2, 0.4, 0, 3.14, 0], r=0.08)\nmovel(p[-0.3, -0.18, 0.4, 0, 3.14, 0], r=0.08)\nmovel(p[-0.2, -0.18, 0.4, 0, 3.14, 0])",
+        ])
+        .stdin(std::process::Stdio::null())
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&out.stdout);
+    let events: Vec<Value> = text.lines().map(|l| check_event(&root, l)).collect();
+    let warning = events
+        .iter()
+        .find(|e| e["event"] == "message" && e["kind"] == "warning")
+        .unwrap_or_else(|| panic!("no warning: {text}"));
+    assert_eq!(warning["line"].as_u64(), Some(3));
     // A program error is an `error` event with its line and column, then `end`.
     let out = std::process::Command::new(env!("CARGO_BIN_EXE_ursock"))
         .args(["robot", "--json", "-e", "x = [1]\ny = x[2]"])
