@@ -654,13 +654,7 @@ impl Controller {
     /// `power off`: POWER_OFF at once; a playing or paused program stops.
     pub fn power_off(&mut self, now: Duration) -> Result<(), Refused> {
         self.remote()?;
-        self.handle_timeout(now);
-        if !matches!(self.pending, Some(Pending::SafetyRestarted { .. })) {
-            self.pending = None;
-            self.robot_mode = RobotMode::PowerOff;
-        }
-        self.program_state = ProgramState::Stopped;
-        self.script = false;
+        self.powerdown(now);
         Ok(())
     }
 
@@ -836,8 +830,8 @@ impl Controller {
         Ok(())
     }
 
-    /// The program ran `powerdown()`: POWER_OFF, the program stopped, whoever has
-    /// control.
+    /// The program ran `powerdown()` (or `power off` was accepted): POWER_OFF, the
+    /// program stopped, whoever has control.
     pub fn powerdown(&mut self, now: Duration) {
         self.handle_timeout(now);
         if !matches!(self.pending, Some(Pending::SafetyRestarted { .. })) {

@@ -1249,8 +1249,8 @@ fn list(v: &[f64; 6]) -> String {
     format!("[{}]", items.join(", "))
 }
 
-/// A pin reference `digital_out[3]`: (`digital_out`, 3).
-fn pin(doc: &Doc, id: usize) -> Result<(String, u32), UrpError> {
+/// The `<pin>` of node `id`, resolved, and its name.
+fn pin_name(doc: &Doc, id: usize) -> Result<(usize, &str), UrpError> {
     let p = doc
         .child(id, "pin")
         .ok_or_else(|| invalid(doc, id, "no <pin>"))?;
@@ -1259,6 +1259,12 @@ fn pin(doc: &Doc, id: usize) -> Result<(String, u32), UrpError> {
         .attr(p, "referencedName")
         .or_else(|| doc.attr(p, "name"))
         .ok_or_else(|| invalid(doc, p, "the pin has no name"))?;
+    Ok((p, name))
+}
+
+/// A pin reference `digital_out[3]`: (`digital_out`, 3).
+fn pin(doc: &Doc, id: usize) -> Result<(String, u32), UrpError> {
+    let (p, name) = pin_name(doc, id)?;
     let bad = || invalid(doc, p, format!("pin `{name}` is not of the form kind[N]"));
     let (kind, rest) = name.split_once('[').ok_or_else(bad)?;
     let n = rest
@@ -1576,14 +1582,7 @@ impl Tx<'_> {
     /// reads as a Modbus signal: `modbus_get_signal_status("NAME", False)`.
     fn io_read(&self, id: usize) -> Result<String, UrpError> {
         let doc = self.doc;
-        let p = doc
-            .child(id, "pin")
-            .ok_or_else(|| invalid(doc, id, "no <pin>"))?;
-        let p = doc.resolve(p)?;
-        let name = doc
-            .attr(p, "referencedName")
-            .or_else(|| doc.attr(p, "name"))
-            .ok_or_else(|| invalid(doc, p, "the pin has no name"))?;
+        let (p, name) = pin_name(doc, id)?;
         if name.contains('[') {
             return self.input_call(id);
         }

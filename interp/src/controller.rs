@@ -449,10 +449,15 @@ impl Controller {
     /// controller that runs the arm (`Arm::protective_stop`; a program alone just goes
     /// on, stopped).
     pub fn protective_stop(&mut self) {
+        self.stop_at_once();
+        self.arm.protective_stop = true;
+    }
+
+    /// The arm stops where it is, at once (no ramp): no motion, no speed.
+    pub fn stop_at_once(&mut self) {
         self.halt();
         self.arm.qd = [0.0; 6];
         self.arm.tcp_speed = [0.0; 6];
-        self.arm.protective_stop = true;
     }
 
     /// Starts a motion now (replacing any under way) for the thread running now, and puts

@@ -1396,8 +1396,9 @@ fn move_joint_speed(dh: &Dh, tcp: [f64; 6], k: &Kind, (q, f): ([f64; 6], f64), s
 const MIXED_STRAY: f64 = 1.25;
 
 /// A joint move into a tool move, or one into the other, or a blend between tool moves
-/// that [`curve_blend`] could not make: a cubic Bézier in joint space from the joints now, at their speeds now, to the point of `b` where the tool
-/// leaves the sphere it entered, at `b`'s speeds there (the tool's speed where the blend
+/// that [`curve_blend`] could not make: a cubic Bézier in joint space from the joints
+/// now, at their speeds now, to the point of `b` where the tool leaves the sphere it
+/// entered, at `b`'s speeds there (the tool's speed where the blend
 /// began, at most `b`'s `v`), over the time the tool takes across the sphere's diameter
 /// at that speed. Not made if the tool would stray more than [`MIXED_STRAY`] times the
 /// radius from the waypoint (checked at 32 points), or if slower than stopping.

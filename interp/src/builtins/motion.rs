@@ -968,9 +968,7 @@ fn movec(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
 /// for the controller that runs it (`Arm::powerdown`: it powers the arm off; a real
 /// controller also shuts itself down, which a virtual one serving its clients does not).
 fn powerdown(c: &mut Controller, _: &mut Args) -> Result<Out, Fault> {
-    c.halt();
-    c.arm.qd = [0.0; 6];
-    c.arm.tcp_speed = [0.0; 6];
+    c.stop_at_once();
     c.arm.powerdown = true;
     Ok(Out::Value(Value::None))
 }
