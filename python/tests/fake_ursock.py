@@ -4,7 +4,8 @@ options its ``--help`` lists and reads every port the ``listening`` events repor
 
 ``FAKE_URSOCK_STYLE``: ``named`` (one event per server, with ``"server"``) or
 ``unnamed`` (one event per server, in option order, without a name). The command line
-is written to ``FAKE_URSOCK_ARGV``.
+is written to ``FAKE_URSOCK_ARGV``. ``FAKE_URSOCK_FLOOD=N``: after listening, N events
+of kind ``rtde`` and N lines on stderr, then one event of kind ``done``.
 """
 
 import json
@@ -45,6 +46,12 @@ def main() -> None:
         if named and name != "dashboard":
             event["server"] = name
         print(json.dumps(event), flush=True)
+    flood = int(os.environ.get("FAKE_URSOCK_FLOOD", "0"))
+    for i in range(flood):
+        sys.stdout.write(json.dumps({"event": "rtde", "t": 0.0, "i": i, "pad": "x" * 200}) + "\n")
+        sys.stderr.write("noise %d %s\n" % (i, "y" * 200))
+    if flood:
+        print(json.dumps({"event": "done", "t": 0.0}), flush=True)
     while True:
         time.sleep(1)
 

@@ -154,3 +154,36 @@ def test_the_port_options_help_lists_are_passed_and_their_ports_exposed(
         for port in (ur.dashboard_port, ur.primary_port, ur.rtde_port):
             assert port is not None
             socket.create_connection((ur.host, port), timeout=5).close()
+
+
+def test_events_kept_are_bounded_and_nothing_is_queued_after_start(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    import sys
+
+    from ursock.controller import MAX_STDERR
+
+    fake = tmp_path / "ursock"
+    fake.write_text(f"#!{sys.executable}\n" + (Path(__file__).parent / "fake_ursock.py").read_text())
+    fake.chmod(0o755)
+    monkeypatch.setenv("FAKE_URSOCK_ARGV", str(tmp_path / "argv.json"))
+    monkeypatch.setenv("FAKE_URSOCK_FLOOD", "30000")
+    with UrController(ursock=fake, startup_timeout=10, max_events=1000) as ur:
+        ur.wait_for_event("done", timeout=60)
+        assert ur.event_count("rtde") == 30000
+        events = ur.events
+        assert len(events) == 1000
+        assert events[-1]["event"] == "done" and events[-2]["i"] == 29999
+        assert ur.events_dropped == 30000 + 3 + 1 - 1000
+        # The start-up queue holds nothing once start() returned.
+        assert ur._queue.qsize() == 0
+        deadline = time.monotonic() + 30
+        while "noise 29999" not in ur.stderr and time.monotonic() < deadline:
+            time.sleep(0.05)
+        assert "noise 29999" in ur.stderr and "noise 0 " not in ur.stderr
+        assert len(ur.stderr) <= MAX_STDERR
+
+
+def test_max_events_must_be_positive() -> None:
+    with pytest.raises(ValueError):
+        UrController(max_events=0)

@@ -1,12 +1,14 @@
 """``ursock controller``, the virtual UR controller, as a Python object.
 
 :class:`UrController` starts ``ursock controller --json`` on free ports, reads the
-addresses it bound from its ``listening`` events, keeps every event it prints, and
+addresses it bound from its ``listening`` events, keeps the newest events it prints
+(``max_events``, 10 000 by default; older ones are counted, not kept), and
 talks to its dashboard server (:meth:`UrController.dashboard`).
 """
 
 from __future__ import annotations
 
+import collections
 import json
 import os
 import queue
@@ -39,6 +41,22 @@ def _has_interpreter_mode(polyscope: str) -> bool:
     parts = [int(p) if p.isdigit() else 0 for p in polyscope.split(".")[:2]]
     parts += [0] * (2 - len(parts))
     return (parts[0], parts[1]) >= (5, 10)
+
+
+#: How many events a :class:`UrController` keeps by default (its ``max_events``).
+MAX_EVENTS = 10_000
+#: How many distinct event kinds :meth:`UrController.event_count` counts.
+MAX_KINDS = 256
+#: How many characters of the controller's stderr are kept (the newest).
+MAX_STDERR = 256 * 1024
+
+
+def _drain(q: "queue.Queue[Any]") -> None:
+    while True:
+        try:
+            q.get_nowait()
+        except queue.Empty:
+            return
 
 
 _ADDR = re.compile(r"^\[?(?P<host>[^\]]*)\]?:(?P<port>\d+)$")
@@ -172,6 +190,9 @@ class UrController:
     :param all_servers: also start every other server (primary, secondary, real-time,
         RTDE) that this ``ursock`` has, each on a free port.
     :param startup_timeout: seconds to wait for the servers to listen.
+    :param max_events: how many of the newest events :attr:`events` keeps (older ones
+        are counted in :attr:`events_dropped`); a controller with a busy client prints
+        thousands of events a second, and a test process must not grow with them.
     """
 
     def __init__(
@@ -188,7 +209,10 @@ class UrController:
         all_servers: bool = True,
         startup_timeout: float = 20.0,
         ursock: Optional[Union[str, "os.PathLike[str]"]] = None,
+        max_events: int = MAX_EVENTS,
     ) -> None:
+        if max_events < 1:
+            raise ValueError(f"max_events must be at least 1, not {max_events}")
         self.host = host
         self._model = model
         self._polyscope = polyscope
@@ -206,10 +230,15 @@ class UrController:
         #: The command that was run.
         self.command: List[str] = []
         self._proc: Optional[subprocess.Popen[str]] = None
-        self._events: List[Dict[str, Any]] = []
+        self._events: "collections.deque[Dict[str, Any]]" = collections.deque(maxlen=max_events)
+        self._dropped = 0
+        self._counts: Dict[str, int] = {}
         self._lock = threading.Lock()
+        # The `listening` events, for start() only: nothing is queued once it returns.
         self._queue: "queue.Queue[Optional[Dict[str, Any]]]" = queue.Queue()
-        self._stderr: List[str] = []
+        self._starting = False
+        self._stderr: "collections.deque[str]" = collections.deque()
+        self._stderr_chars = 0
         self._threads: List[threading.Thread] = []
         self._client: Optional[DashboardClient] = None
 
@@ -250,6 +279,7 @@ class UrController:
             cmd += ["--set", f"{name}={urscript_constant(value)}"]
         cmd += self._extra_args
         self.command = cmd
+        self._starting = True
         self._proc = subprocess.Popen(
             cmd,
             stdin=subprocess.PIPE,
@@ -267,6 +297,10 @@ class UrController:
         except BaseException:
             self.stop()
             raise
+        finally:
+            with self._lock:
+                self._starting = False
+            _drain(self._queue)
         return self
 
     def _spawn(self, target: Any) -> None:
@@ -281,17 +315,30 @@ class UrController:
                 event = json.loads(line)
             except ValueError:
                 continue
-            if isinstance(event, dict):
-                with self._lock:
-                    self._events.append(event)
-                self._queue.put(event)
-        self._queue.put(None)
+            if not isinstance(event, dict):
+                continue
+            with self._lock:
+                if len(self._events) == self._events.maxlen:
+                    self._dropped += 1
+                self._events.append(event)
+                kind = event.get("event")
+                if isinstance(kind, str) and (kind in self._counts or len(self._counts) < MAX_KINDS):
+                    self._counts[kind] = self._counts.get(kind, 0) + 1
+                if self._starting and kind == "listening":
+                    self._queue.put(event)
+        with self._lock:
+            if self._starting:
+                self._queue.put(None)
 
     def _read_stderr(self) -> None:
         assert self._proc is not None and self._proc.stderr is not None
         for line in self._proc.stderr:
+            line = line[-MAX_STDERR:]
             with self._lock:
                 self._stderr.append(line)
+                self._stderr_chars += len(line)
+                while self._stderr_chars > MAX_STDERR:
+                    self._stderr_chars -= len(self._stderr.popleft())
 
     def _await_listening(self, started: List[str]) -> None:
         expected = len(started)
@@ -453,25 +500,38 @@ class UrController:
 
     @property
     def events(self) -> List[Dict[str, Any]]:
-        """Every JSON event printed so far (``listening``, ``connect``,
-        ``dashboard``, ``close``...)."""
+        """The JSON events printed so far (``listening``, ``connect``, ``dashboard``,
+        ``close``...): the newest ``max_events`` of them."""
         with self._lock:
             return list(self._events)
 
+    @property
+    def events_dropped(self) -> int:
+        """How many of the oldest events :attr:`events` no longer holds."""
+        with self._lock:
+            return self._dropped
+
+    def event_count(self, kind: str) -> int:
+        """How many events named ``kind`` were printed, kept or not (counted for the
+        first 256 kinds seen)."""
+        with self._lock:
+            return self._counts.get(kind, 0)
+
     def events_of(self, kind: str) -> List[Dict[str, Any]]:
-        """The events named ``kind`` printed so far."""
+        """The events named ``kind`` that :attr:`events` holds."""
         return [e for e in self.events if e.get("event") == kind]
 
     def wait_for_event(self, kind: str, count: int = 1, timeout: float = 5.0) -> List[Dict[str, Any]]:
-        """Wait until at least ``count`` events named ``kind`` were printed; return them.
+        """Wait until at least ``count`` events named ``kind`` were printed; return those
+        :attr:`events` still holds.
 
         :raises TimeoutError: when they do not come in time.
         """
         deadline = time.monotonic() + timeout
         while True:
-            found = self.events_of(kind)
-            if len(found) >= count:
-                return found
+            if self.event_count(kind) >= count:
+                return self.events_of(kind)
             if time.monotonic() >= deadline:
-                raise TimeoutError(f"{len(found)} {kind!r} events after {timeout} s, expected {count}")
+                seen = self.event_count(kind)
+                raise TimeoutError(f"{seen} {kind!r} events after {timeout} s, expected {count}")
             time.sleep(0.01)
