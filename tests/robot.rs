@@ -41,7 +41,7 @@ fn policy_defaults_are_the_spec_defaults() {
     assert!(p.float.allow_exponent);
     assert_eq!(p.float.extra_values, ExtraValues::Fail);
     assert_eq!(p.float.missing_values, MissingValues::Count);
-    assert_eq!(p.short_read, ShortRead::Sentinel);
+    assert_eq!(p.short_read, ShortRead::WholeValues);
 }
 
 #[test]
@@ -112,12 +112,13 @@ fn missing_values_count_and_fail() {
 fn short_reads_sentinel_and_whole_values() {
     let input = [0, 0, 0, 7, 0, 0];
     let call = ReadCall::BinaryInteger { number: 3 };
-    let (r, rest) = read_now(Policy::default(), &input, call.clone());
-    assert_eq!((r.as_str(), rest.len()), ("[0, -1, -1, -1]", 6));
-    let whole = Policy {
-        short_read: ShortRead::WholeValues,
+    let sentinel = Policy {
+        short_read: ShortRead::Sentinel,
         ..Policy::default()
     };
+    let (r, rest) = read_now(sentinel, &input, call.clone());
+    assert_eq!((r.as_str(), rest.len()), ("[0, -1, -1, -1]", 6));
+    let whole = Policy::default();
     let (r, rest) = read_now(whole, &input, call);
     assert_eq!(
         (r.as_str(), rest.as_slice()),

@@ -99,8 +99,6 @@ pub enum RuntimeErrorKind {
     UnknownFunction,
     /// A built-in refused an argument's value (a port out of range, `asin(2)`...).
     Argument,
-    /// A thread ran too long in one step without consuming time.
-    TooMuchTime,
     /// A bound of the machine: threads, call depth.
     Limit,
     /// A struct has no member of that name (`s.c` of `struct(a=1, b=2)`).

@@ -39,7 +39,7 @@
 //! | threads running at once | [`MAX_THREADS`](machine::MAX_THREADS) (64) | runtime, `Limit` |
 //! | sockets open at once (`socket_open` of a new name past it) | [`MAX_SOCKETS`](builtins::sockets::MAX_SOCKETS) (64) | runtime, `Limit` |
 //! | EtherNet/IP handles per program; instances; bytes per instance; labels per handle | [`eip::MAX_HANDLES`] (64); [`eip::MAX_INSTANCES`] (64); [`eip::MAX_DATA_SIZE`] (4096); [`eip::MAX_LABELS`] (256) | runtime, `Limit` or `Argument` |
-//! | statements per thread per step without consuming time | [`Config::max_statements_per_step`] (100 000) | runtime, [`RuntimeErrorKind::TooMuchTime`] |
+//! | statements per thread per step without consuming time (its time slice) | [`Config::max_statements_per_step`] (10 000) | the thread goes on in the next step |
 //!
 //! Everything recursive (parsing, compiling, cloning, comparing, writing and dropping
 //! trees and values) is bounded by the depth bounds. Together they bound a running

@@ -12,12 +12,15 @@
 //! an XML-RPC call `handle.name(...)` (until its reply is complete, at most 10 s), `join`
 //! of a thread that still runs. This is the manual's "Thread scheduling": 2 ms
 //! frames, each runnable thread scheduled round robin, a thread that has used its frame
-//! waits for the next. A thread that runs more than
-//! [`Config::max_statements_per_step`] statements in one step without consuming time is a
-//! runtime error, as the controller stops a thread that "used too much time" (a loop
-//! without `sync()`).
+//! waits for the next. A thread that computes without consuming time (a loop without
+//! `sync()`) uses its slice up after [`Config::max_statements_per_step`] statements and
+//! waits for the next step, where it goes on: the manual's "computational heavy
+//! instructions (such as an infinite loop that do not control the robot)" that place a
+//! thread "in a non-runnable state" until the next frame. (The manual adds that such a
+//! loop may raise "Lost communication with Controller" on the arm; that depends on the
+//! controller's load and is not modelled.)
 //!
-//! Threads only switch where time is consumed, so `enter_critical`/`exit_critical` never
+//! Threads only switch where time is consumed or a slice is used up, so `enter_critical`/`exit_critical` never
 //! needs to hold the others back: a thread inside a critical section already runs alone
 //! until it consumes time, and when it does (as UR's External Control program does inside
 //! one) the others run, as on the controller.
@@ -77,7 +80,10 @@ pub struct Config {
     /// Functions replaced by stubs, by name. A stub wins over a built-in of that name,
     /// but not over a function the program defines.
     pub stubs: Vec<(String, Stub)>,
-    /// Statements a thread may run in one step without consuming time (default 100 000).
+    /// A thread's time slice in statements: after this many in one step without
+    /// consuming time it waits for the next step, where it goes on (default 10 000, a
+    /// fraction of a millisecond of this interpreter's time, so one busy thread never
+    /// holds the 2 ms step up).
     pub max_statements_per_step: u32,
     /// Emit an [`Event::Call`] for every socket call (default true). Off, the machine
     /// does not record the calls at all.
@@ -99,7 +105,7 @@ impl Default for Config {
             model: crate::kinematics::Model::Ur5e,
             policy: Policy::default(),
             stubs: Vec::new(),
-            max_statements_per_step: 100_000,
+            max_statements_per_step: 10_000,
             trace_socket_calls: true,
             trace_all_calls: false,
             max_value_size: crate::value::DEFAULT_MAX_VALUE_SIZE,
@@ -173,6 +179,9 @@ pub(crate) enum Wait {
     None,
     /// Resumes at step `until`, with `result` as the value of the call.
     Steps { until: u64, result: Value },
+    /// Used its time slice computing: resumes at step `until` (the next frame), where
+    /// it left off.
+    Slice(u64),
     /// Resumes at the next step with this value (a read completed by received bytes).
     Resume(Value),
     /// A socket read waiting for bytes, with its call's record and what the read has
@@ -541,7 +550,7 @@ impl Machine {
             }
             let at = match &t.wait {
                 Wait::None | Wait::Resume(_) => Some(self.ctl.step),
-                Wait::Steps { until, .. } => Some((*until).max(self.ctl.step)),
+                Wait::Steps { until, .. } | Wait::Slice(until) => Some((*until).max(self.ctl.step)),
                 Wait::Read { .. } => None,
                 Wait::Connect { .. } => None,
                 Wait::Rpc(p) => Some(p.deadline.max(self.ctl.step)),
@@ -956,6 +965,7 @@ impl Machine {
                     self.threads[i].stack.push(result);
                     (true, Wait::None)
                 }
+                Wait::Slice(until) if until <= self.ctl.step => (true, Wait::None),
                 Wait::Read {
                     socket,
                     call,
@@ -1067,13 +1077,13 @@ impl Machine {
             let fail = |f: Fault| RuntimeError::at(line, col, f);
             match op {
                 Op::Stmt => {
-                    self.budget += 1;
-                    if self.budget > self.config.max_statements_per_step {
-                        return Err(fail(Fault::new(K::TooMuchTime, format!(
-                            "thread `{}` used too much time: {} statements in one step without consuming time (a loop needs `sync()`, `sleep()` or another call that takes time)",
-                            th.name, self.config.max_statements_per_step
-                        ))));
+                    if self.budget >= self.config.max_statements_per_step {
+                        // The time slice is used: this statement runs in the next frame.
+                        frame.pc -= 1;
+                        th.wait = Wait::Slice(self.ctl.step.saturating_add(1));
+                        return Ok(Flow::Blocked);
                     }
+                    self.budget += 1;
                 }
                 Op::Const(c) => th.stack.push(prog.consts[c as usize].clone()),
                 Op::Load(s) => {

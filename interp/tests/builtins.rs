@@ -120,6 +120,29 @@ fn socket_read_with_zero_timeout_waits_forever() {
 }
 
 #[test]
+fn a_byte_read_that_times_out_counts_the_bytes_that_arrived() {
+    // Robotiq's gripper URCap: `GET SID` answered with a few bytes, read with a byte
+    // list of 17 that times out; the count says how many arrived.
+    let h = with_server(
+        "socket_send_line(\"GET SID\")\nsid = socket_read_byte_list(17, timeout=0.1)\ntextmsg(sid[0])\ntextmsg(sid)\nn = socket_read_binary_integer(2, timeout=0.1)\ntextmsg(n)\n",
+        |i| match i {
+            Input::Received(_, b"GET SID\n") => {
+                vec![("socket_0".into(), b"[9]\n".to_vec())]
+            }
+            _ => Vec::new(),
+        },
+    );
+    assert_eq!(
+        h.messages,
+        [
+            "4",
+            "[4, 91, 57, 93, 10, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1]",
+            "[0, -1, -1]"
+        ]
+    );
+}
+
+#[test]
 fn socket_get_var() {
     let h = with_server("textmsg(socket_get_var(\"POS_X\"))\n", |i| match i {
         Input::Received(_, b"GET POS_X\n") => vec![("socket_0".into(), b"POS_X 0077\n".to_vec())],

@@ -100,8 +100,11 @@ fn statement_bound_is_configurable() {
             ..Config::default()
         },
     );
-    m.run_until(Duration::ZERO);
-    assert!(matches!(m.state(), State::Error(e) if e.line() == 3));
+    // 1000 iterations of two statements: five slices of 500, one step each.
+    m.run_until(Duration::from_millis(6));
+    assert_eq!(m.state(), &State::Running);
+    m.run_until(Duration::from_millis(8));
+    assert_eq!(m.state(), &State::Finished);
     let mut m = Machine::new(p, Config::default());
     m.run_until(Duration::ZERO);
     assert_eq!(m.state(), &State::Finished);

@@ -13,18 +13,23 @@ use crate::to_str::{write_list, Scalar};
 use super::DEFAULT_RECEIVE_CAPACITY;
 
 /// What an int or byte read returns when it times out with some but not all of its bytes
-/// buffered. Spec section 6.
+/// buffered. Spec section 6 left this open; the default follows UR's text and the
+/// programs that run on real arms: the manual says the first element is "the number of
+/// bytes read" (of integers read), and Robotiq's gripper URCap asks
+/// `socket_read_byte_list(17)` for a reply of a few bytes and uses that count.
 ///
 /// ```
 /// use urscript_socket::robot::ShortRead;
-/// assert_eq!(ShortRead::default(), ShortRead::Sentinel);
+/// assert_eq!(ShortRead::default(), ShortRead::WholeValues);
 /// ```
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum ShortRead {
-    /// `[0, -1, ...]`; the bytes stay buffered for the next read (default).
-    #[default]
+    /// `[0, -1, ...]`; the bytes stay buffered for the next read.
     Sentinel,
-    /// `[k, v1..vk, -1, ...]` with the k whole values that arrived, which are consumed.
+    /// `[k, v1..vk, -1, ...]` with the k whole values that arrived, which are consumed
+    /// (default); an int32 read leaves a trailing part of a value buffered; with nothing
+    /// at all, `[0, -1, ...]`.
+    #[default]
     WholeValues,
 }
 
@@ -37,7 +42,7 @@ pub enum ShortRead {
 /// | `float.allow_exponent` | `1e-3` accepted | refused |
 /// | `float.extra_values` | more values than `number`: failure | first `number` |
 /// | `float.missing_values` | fewer: `[count, values, nan...]` | failure |
-/// | `short_read` | int/byte timeout with a partial message: `[0, -1...]`, bytes kept | whole values |
+/// | `short_read` | int/byte timeout with a partial message: the whole values that arrived, counted | `[0, -1...]`, bytes kept |
 /// | `receive_capacity` | 64 KiB per connection | any bound |
 ///
 /// Fixed rules (not options): `number` outside 1..=30 is an error before any byte is
@@ -48,7 +53,7 @@ pub enum ShortRead {
 ///
 /// ```
 /// use urscript_socket::robot::{Policy, ShortRead};
-/// let p = Policy { short_read: ShortRead::WholeValues, ..Policy::default() };
+/// let p = Policy { short_read: ShortRead::Sentinel, ..Policy::default() };
 /// assert_eq!(p.receive_capacity, 64 * 1024);
 /// ```
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -66,7 +71,7 @@ impl Default for Policy {
     fn default() -> Self {
         Policy {
             float: FloatReadPolicy::default(),
-            short_read: ShortRead::Sentinel,
+            short_read: ShortRead::WholeValues,
             receive_capacity: DEFAULT_RECEIVE_CAPACITY,
         }
     }

@@ -301,8 +301,9 @@ impl SocketConnection {
 
     /// Time passed: if the pending read's deadline is at or before `now`, the read ends
     /// with its sentinel (`[0, nan...]`, `[0, -1...]`, `""`, `0`), or, for int/byte reads
-    /// under [`ShortRead::WholeValues`], with the whole values that arrived. A string read
-    /// leaves the buffer unchanged. `None` if no read was pending or its time has not come.
+    /// under [`ShortRead::WholeValues`] (the default), with the whole values that arrived.
+    /// A string read leaves the buffer unchanged. `None` if no read was pending or its time
+    /// has not come.
     ///
     /// ```
     /// # use std::time::Duration;
@@ -312,8 +313,9 @@ impl SocketConnection {
     /// s.start_read(ReadCall::BinaryInteger { number: 2 }, Timeout::default(), Duration::ZERO).unwrap();
     /// assert!(s.poll_read().is_none());
     /// assert!(s.handle_timeout(Duration::from_millis(1999)).is_none());
-    /// assert_eq!(s.handle_timeout(Duration::from_secs(2)).unwrap().to_urscript(), "[0, -1, -1]");
-    /// assert_eq!(s.buffered().len(), 5); // the bytes stay for the next read
+    /// // One whole value arrived: it is counted and consumed; the partial one stays.
+    /// assert_eq!(s.handle_timeout(Duration::from_secs(2)).unwrap().to_urscript(), "[1, 7, -1]");
+    /// assert_eq!(s.buffered(), &[0][..]);
     /// ```
     pub fn handle_timeout(&mut self, now: Duration) -> Option<ReadResult> {
         match self.pending.as_ref()?.deadline {
