@@ -351,6 +351,24 @@ impl Cell {
                 return;
             }
         };
+        // A program that does not compile (a name neither defined nor built in) is
+        // refused before it replaces anything: the running program goes on. A driver that
+        // sends `def f(): ... end` and then `f()` gets its program run to the end and the
+        // call refused.
+        let entry = program.entry_name().map(str::to_string);
+        let mut machine = Machine::with_arm(program, self.interp.clone(), Arm::default());
+        if let State::Error(e) = machine.state() {
+            if file.is_some() {
+                self.controller.program_ended();
+            }
+            let refused = CellEvent::Refused {
+                line: e.line(),
+                column: e.column(),
+                text: e.message().to_string(),
+            };
+            self.push(refused);
+            return;
+        }
         if !self.controller.ready_for_program(now) {
             if file.is_some() {
                 self.controller.program_ended();
@@ -367,9 +385,8 @@ impl Cell {
             return;
         }
         self.end_running(Ended::Stopped);
-        let name = file.unwrap_or_else(|| program.entry_name().unwrap_or("<script>").to_string());
-        let arm = std::mem::take(&mut self.arm);
-        let machine = Machine::with_arm(program, self.interp.clone(), arm);
+        let name = file.or(entry).unwrap_or_else(|| "<script>".to_string());
+        *machine.arm_mut() = std::mem::take(&mut self.arm);
         if self.controller.loaded_program().is_none() || !self.awaiting_or_playing_file(&name) {
             self.controller.script_started();
         }

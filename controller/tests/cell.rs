@@ -186,6 +186,30 @@ fn a_new_program_replaces_the_running_one_and_a_secondary_runs_beside_it() {
 }
 
 #[test]
+fn a_program_that_does_not_compile_leaves_the_running_one_alone() {
+    // A driver sends `def move(): ... end` and then `move()`: the line after the
+    // program's end comes as a one-line program of its own that calls a name it does
+    // not define. It is refused; the program it came after runs to its end.
+    let (mut cell, _) = ready_cell();
+    cell.submit(
+        Submitted::Program("def move():\n  sleep(0.1)\n  textmsg(\"moved\")\nend\n".into()),
+        ms(2000),
+    );
+    cell.submit(Submitted::Program("move()\n".into()), ms(2000));
+    assert_eq!(cell.program(), Some("move"));
+    cell.advance(ms(2200));
+    let ev = events(&mut cell);
+    assert!(ev.iter().any(|e| matches!(
+        e,
+        CellEvent::Refused { line: 1, text, .. } if text.starts_with("compile_error_name_not_found:move:")
+    )));
+    assert_eq!(texts(&ev), ["moved"]);
+    assert!(ev.iter().any(
+        |e| matches!(e, CellEvent::ProgramEnded { name, how: Ended::Finished } if name == "move")
+    ));
+}
+
+#[test]
 fn client_inputs_reach_the_program_and_the_status() {
     let (mut cell, _) = ready_cell();
     cell.apply(&Inputs {

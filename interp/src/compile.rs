@@ -52,6 +52,10 @@ pub(crate) enum PathStep {
     Member(Sym),
 }
 
+/// The longest method name of a call `h.a.b.m(...)`, dots included: 1 KiB, far past any
+/// XML-RPC method a URCap calls, and a bound on what the members before the call add.
+pub(crate) const MAX_METHOD_NAME: usize = 1024;
+
 /// A remote procedure call `handle.name(args...)`, resolved by the compiler.
 #[derive(Debug, Clone)]
 pub(crate) struct MethodSite {
@@ -1168,6 +1172,22 @@ impl Compiler {
                 if args.len() > 255 {
                     return Err(err(at, format!("too many arguments to `.{method}`")));
                 }
+                // `h.server.getTCP(x)`: the members before the call join the method's
+                // name (`server.getTCP`, an XML-RPC method with dots, as URCaps call
+                // them); a struct on the way is entered at run time.
+                let mut target = &**target;
+                let mut dotted = method.clone();
+                while let Expr::Member(inner, name, _) = target {
+                    if dotted.len() + name.len() + 1 > MAX_METHOD_NAME {
+                        return Err(err(
+                            at,
+                            format!("a method name over {MAX_METHOD_NAME} bytes"),
+                        ));
+                    }
+                    dotted = format!("{name}.{dotted}");
+                    target = inner;
+                }
+                let method = &dotted;
                 self.expr(target)?;
                 for a in args {
                     self.expr(a)?;

@@ -221,7 +221,6 @@ pub(crate) struct Thread {
     /// The handle `run` gave (0: the program itself): unique for the machine's life,
     /// never reused, though the thread's slot is once it has finished.
     id: u32,
-    name: String,
     frames: Vec<Frame>,
     stack: Vec<Value>,
     wait: Wait,
@@ -316,7 +315,6 @@ impl Machine {
         let globals = vec![None; program.names.len()];
         let main = Thread {
             id: 0,
-            name: program.funcs[0].name.clone(),
             frames: vec![Frame {
                 func: 0,
                 pc: 0,
@@ -1029,7 +1027,6 @@ impl Machine {
                 self.budget = 0;
                 let placeholder = Thread {
                     id: u32::MAX,
-                    name: String::new(),
                     frames: Vec::new(),
                     stack: Vec::new(),
                     wait: Wait::None,
@@ -1265,7 +1262,9 @@ impl Machine {
                         .stack
                         .split_off(th.stack.len().saturating_sub(usize::from(site.argc)));
                     let target = pop(&mut th.stack, line)?;
-                    let method = &prog.names[site.name as usize];
+                    let (target, method) =
+                        method_target(target, &prog.names[site.name as usize])
+                            .map_err(|f| RuntimeError::at(site.at.line, site.at.col, f))?;
                     if let Value::Eip(id) = target {
                         let v = self
                             .ctl
@@ -1430,7 +1429,6 @@ impl Machine {
                     })?;
                     self.threads.push(Thread {
                         id,
-                        name: prog.funcs[fid as usize].name.clone(),
                         frames: vec![Frame {
                             func: fid,
                             pc: 0,
@@ -1588,6 +1586,18 @@ fn rpc_done(
             Fault::new(K::RemoteCall, msg),
         ))),
     }
+}
+
+/// The value a method call `v.a.b.m(...)` calls on, and the method's name: a struct's
+/// members are entered while the name has dots (`s.h.get()` calls `get` on member `h`);
+/// what is left is called on whatever comes, so `h.server.getTCP()` on an `rpc_factory`
+/// handle calls the XML-RPC method `server.getTCP`.
+fn method_target(mut v: Value, mut method: &str) -> Result<(Value, &str), Fault> {
+    while let (Value::Struct(_), Some((first, rest))) = (&v, method.split_once('.')) {
+        v = member(&v, first)?;
+        method = rest;
+    }
+    Ok((v, method))
 }
 
 /// `v.name`: a member of a struct.

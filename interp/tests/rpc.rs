@@ -148,6 +148,29 @@ fn arguments_and_results_of_every_type() {
     assert_eq!(h.closed.len(), 3);
 }
 
+#[test]
+fn method_names_with_dots_call_the_dotted_method() {
+    // As a URCap preamble writes it: `h.server.getTCP(id)` is the XML-RPC method
+    // `server.getTCP`; a handle kept in a struct is reached through its member first.
+    let src = format!(
+        "h = rpc_factory(\"xmlrpc\", \"{URL}\")\nt = h.server.getTCP(\"uuid\")\ns = struct(cam=h)\nn = s.cam.system.listMethods()\ntextmsg(t, n)\n"
+    );
+    let mut h = Harness::new(&src, Config::default());
+    let mut names = Vec::new();
+    let state = serve(&mut h, Duration::ZERO, |body| {
+        let start = body.find("<methodName>").unwrap() + "<methodName>".len();
+        let end = body.find("</methodName>").unwrap();
+        names.push(body[start..end].to_string());
+        response("<int>7</int>")
+    });
+    assert_eq!(state, State::Finished, "{:?}", h.messages);
+    assert_eq!(names, ["server.getTCP", "system.listMethods"]);
+    assert_eq!(h.messages, ["77"]);
+    // A struct member that is not there is still an error at the call.
+    let (_, e) = failed("s = struct(a=1)\ns.b.get()\n", None);
+    assert!(e.message().contains("no member `b`"), "{e}");
+}
+
 fn failed(src: &str, answer: Option<Vec<u8>>) -> (Harness, urscript_interp::RuntimeError) {
     let mut h = Harness::new(src, Config::default());
     let state = match answer {
