@@ -100,7 +100,8 @@ fn a_test_starts_a_controller_drives_it_and_stops_it() {
     // The operator (or the cell around the robot) acts through the cell.
     server.with_cell(|cell, now| cell.controller().protective_stop(now));
     assert_eq!(ask(&mut d, "safetystatus"), "Safetystatus: PROTECTIVE_STOP");
-    assert_eq!(ask(&mut d, "programState"), "PAUSED <unnamed>");
+    // A program a client sent ends there (a loaded one would pause).
+    assert_eq!(ask(&mut d, "programState"), "STOPPED <unnamed>");
     let status = server.with_cell(|cell, _| cell.status());
     assert_eq!(status.safety, SafetyStatus::ProtectiveStop);
     // Stopping closes every listener.
