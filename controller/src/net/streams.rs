@@ -574,7 +574,10 @@ impl Loop {
                         let spawned = std::thread::Builder::new()
                             .name("load-program".into())
                             .spawn(move || {
-                                let result = super::fetch::load(&shared, &path);
+                                let result = super::fetch::load(
+                                    &shared,
+                                    &shared.program_file(&path).to_string_lossy(),
+                                );
                                 let now = shared.now();
                                 let mut cell = shared.lock_cell();
                                 match result {
