@@ -293,3 +293,176 @@ fn a_line_whose_rest_never_comes_is_the_urcaps_timeout_popup() {
     );
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// The refusal the play of a program ends in, within the hang guard.
+fn refused(setup: &Setup) -> String {
+    match setup.wait_for(
+        "the refusal",
+        |e| matches!(e, ServerEvent::Program { what, .. } if *what != "started"),
+    ) {
+        ServerEvent::Program {
+            what: "refused",
+            text: Some(text),
+            ..
+        } => text,
+        other => panic!("not refused: {other:?}"),
+    }
+}
+
+/// An installation whose External Control settings name `port` on 127.0.0.1.
+fn installation(port: u16) -> String {
+    format!(
+        r#"<Installation><Contributions><URCaps><Contributed ownerId="com.fzi.externalcontrol" id="com.fzi.externalcontrol.impl.ExternalControlInstallationNodeService"><data key="host_ip" value="127.0.0.1"/><data key="port_nr" value="{port}"/></Contributed></URCaps></Contributions></Installation>"#
+    )
+}
+
+/// A listener that must not be contacted: whether anyone connected.
+fn bait() -> (TcpListener, u16) {
+    let l = TcpListener::bind("127.0.0.1:0").unwrap();
+    l.set_nonblocking(true).unwrap();
+    let port = l.local_addr().unwrap().port();
+    (l, port)
+}
+
+fn contacted(l: &TcpListener) -> bool {
+    l.accept().is_ok()
+}
+
+#[test]
+fn an_installation_outside_the_programs_folder_is_not_read() {
+    let dir = temp_dir("outside");
+    let programs = dir.join("programs");
+    let outside = dir.join("outside");
+    std::fs::create_dir_all(&programs).unwrap();
+    std::fs::create_dir_all(&outside).unwrap();
+    let (listener, port) = bait();
+    std::fs::write(outside.join("x.installation"), installation(port)).unwrap();
+    let absolute = outside.join("x");
+    for (name, saved_with) in [
+        ("relative.urp", "../outside/x".to_string()),
+        ("absolute.urp", absolute.display().to_string()),
+    ] {
+        std::fs::write(
+            programs.join(name),
+            urp_xml("ec", &saved_with, EXTERNAL_CONTROL),
+        )
+        .unwrap();
+    }
+    let mut setup = start(&programs, None);
+    for name in ["relative.urp", "absolute.urp"] {
+        play(&mut setup, name);
+        let why = refused(&setup);
+        assert!(
+            why.contains("x.installation") && why.contains("outside the programs folder"),
+            "{name}: {why}"
+        );
+    }
+    assert!(!contacted(&listener), "the host of an outside installation");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn an_installation_elsewhere_inside_the_programs_folder_is_read() {
+    let dir = temp_dir("inside");
+    std::fs::create_dir_all(dir.join("sub")).unwrap();
+    let (port, requests) = driver(|s| {
+        s.write_all(b"textmsg(\"driven\")\n").unwrap();
+    });
+    std::fs::write(dir.join("cell.installation"), installation(port)).unwrap();
+    std::fs::write(
+        dir.join("sub/ec.urp"),
+        urp_xml("ec", "../cell", EXTERNAL_CONTROL),
+    )
+    .unwrap();
+    let mut setup = start(&dir, None);
+    play(&mut setup, "sub/ec.urp");
+    let (texts, how, why) = setup.messages_until_end();
+    assert_eq!(texts, ["driven"], "{how}: {why:?}");
+    assert_eq!(requests.recv_timeout(WAIT).unwrap(), b"request_program\n");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// A program swapped for a FIFO after `load` is refused at `play`, at once: opening it
+/// for reading would wait for a writer forever.
+#[cfg(unix)]
+#[test]
+fn a_program_swapped_for_a_fifo_is_refused_not_waited_on() {
+    let dir = temp_dir("fifo");
+    let path = dir.join("p.urp");
+    std::fs::write(&path, urp_xml("p", "default", "<Halt/>")).unwrap();
+    let mut setup = start(&dir, None);
+    assert_eq!(setup.ask("load p.urp"), "Loading program: p.urp");
+    std::fs::remove_file(&path).unwrap();
+    let made = std::process::Command::new("mkfifo")
+        .arg(&path)
+        .status()
+        .expect("mkfifo");
+    assert!(made.success());
+    assert_eq!(setup.ask("play"), "Starting program");
+    let why = refused(&setup);
+    assert!(why.contains("not a regular file"), "{why}");
+    assert_eq!(setup.ask("programState"), "STOPPED p.urp");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// A program swapped for a link to a file outside the programs folder after `load` is
+/// refused at `play`.
+#[cfg(unix)]
+#[test]
+fn a_program_swapped_for_a_link_out_of_the_folder_is_refused() {
+    let dir = temp_dir("link");
+    let programs = dir.join("programs");
+    std::fs::create_dir_all(&programs).unwrap();
+    let path = programs.join("p.urp");
+    std::fs::write(&path, urp_xml("p", "default", "<Halt/>")).unwrap();
+    let secret = dir.join("secret.urp");
+    std::fs::write(&secret, urp_xml("secret", "default", "<Halt/>")).unwrap();
+    let mut setup = start(&programs, None);
+    assert_eq!(setup.ask("load p.urp"), "Loading program: p.urp");
+    std::fs::remove_file(&path).unwrap();
+    std::os::unix::fs::symlink(&secret, &path).unwrap();
+    assert_eq!(setup.ask("play"), "Starting program");
+    let why = refused(&setup);
+    assert!(why.contains("outside the programs folder"), "{why}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// A program that cannot be read is read and reported once.
+#[test]
+fn a_program_refused_is_reported_once() {
+    let dir = temp_dir("once");
+    std::fs::write(dir.join("bad.urp"), "not a program").unwrap();
+    let mut setup = start(&dir, None);
+    play(&mut setup, "bad.urp");
+    let why = refused(&setup);
+    assert!(why.starts_with("bad.urp: "), "{why}");
+    // Another program run after it: every event of the refused one came before.
+    std::fs::write(
+        dir.join("good.urp"),
+        urp_xml(
+            "good",
+            "default",
+            r#"<Script type="Line"><expression>textmsg("ok")</expression></Script>"#,
+        ),
+    )
+    .unwrap();
+    play(&mut setup, "good.urp");
+    let mut refusals = 0;
+    loop {
+        match setup.wait_for(
+            "the good program's end",
+            |e| matches!(e, ServerEvent::Program { what, .. } if *what != "started"),
+        ) {
+            ServerEvent::Program {
+                what: "refused", ..
+            } => refusals += 1,
+            ServerEvent::Program { what, .. } => {
+                assert_eq!(what, "finished");
+                break;
+            }
+            _ => unreachable!(),
+        }
+    }
+    assert_eq!(refusals, 0, "the bad program reported again");
+    let _ = std::fs::remove_dir_all(&dir);
+}

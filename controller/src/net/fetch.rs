@@ -61,8 +61,66 @@ pub fn parse_host(text: &str) -> Result<(String, u16), String> {
     }
 }
 
-fn read_bounded(path: &Path) -> Result<Vec<u8>, String> {
-    let file = std::fs::File::open(path).map_err(|e| format!("cannot open it: {e}"))?;
+/// Reads the regular file at `path` if it is inside the programs folder `root` (a
+/// canonical path): symbolic links and `..` resolved first, anything else (a FIFO, a
+/// device, a directory) refused before it is opened, and checked again on the opened
+/// handle, which is opened without blocking (`O_NONBLOCK`: a FIFO swapped in meanwhile
+/// cannot hold the open) and without following a link swapped in for the file
+/// (`O_NOFOLLOW`). At most [`MAX_FILE`] bytes; a regular file's reads do not wait.
+fn read_inside(root: &Path, path: &Path) -> Result<Vec<u8>, String> {
+    let real = path
+        .canonicalize()
+        .map_err(|e| format!("cannot open it: {e}"))?;
+    if !real.starts_with(root) {
+        return Err(format!(
+            "{} is outside the programs folder {}",
+            real.display(),
+            root.display()
+        ));
+    }
+    let before = std::fs::symlink_metadata(&real).map_err(|e| format!("cannot open it: {e}"))?;
+    if !before.is_file() {
+        return Err(format!("{} is not a regular file", real.display()));
+    }
+    let mut options = std::fs::OpenOptions::new();
+    options.read(true);
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::OpenOptionsExt;
+        options.custom_flags(libc::O_NONBLOCK | libc::O_NOFOLLOW);
+    }
+    let file = options
+        .open(&real)
+        .map_err(|e| format!("cannot open it: {e}"))?;
+    let meta = file
+        .metadata()
+        .map_err(|e| format!("cannot read it: {e}"))?;
+    if !meta.is_file() {
+        return Err(format!("{} is not a regular file", real.display()));
+    }
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::MetadataExt;
+        if (meta.dev(), meta.ino()) != (before.dev(), before.ino()) {
+            return Err(format!("{} changed while it was opened", real.display()));
+        }
+    }
+    #[cfg(target_os = "linux")]
+    {
+        // Where the handle really is (a directory on the way swapped for a link would
+        // have led elsewhere).
+        use std::os::fd::AsRawFd;
+        let fd = format!("/proc/self/fd/{}", file.as_raw_fd());
+        if let Ok(opened) = std::fs::read_link(fd) {
+            if !opened.starts_with(root) {
+                return Err(format!(
+                    "{} is outside the programs folder {}",
+                    opened.display(),
+                    root.display()
+                ));
+            }
+        }
+    }
     let mut bytes = Vec::new();
     file.take(MAX_FILE + 1)
         .read_to_end(&mut bytes)
@@ -73,21 +131,28 @@ fn read_bounded(path: &Path) -> Result<Vec<u8>, String> {
     Ok(bytes)
 }
 
-/// The URScript of the program file at `path`.
+/// The URScript of the program file at `path`, which must be a regular file inside the
+/// programs folder, as must the installation it names (when it exists).
 pub(crate) fn load(shared: &Shared, path: &str) -> Result<String, String> {
+    let Some(root) = shared.programs.as_deref() else {
+        return Err("no programs folder".into());
+    };
     let path = Path::new(path);
-    let bytes = read_bounded(path)?;
+    let bytes = read_inside(root, path)?;
     let mut program = read_urp(&bytes).map_err(|e| e.to_string())?;
     if !program.external_control.is_empty() {
         let (host, port) = match &shared.urcap_host {
             Some((h, p)) => (h.clone(), *p),
             None => {
-                // The installation the program was saved with, beside it.
+                // The installation the program was saved with, beside it (a relative
+                // name may reach elsewhere in the programs folder, never out of it).
                 let name = format!("{}.installation", program.installation);
                 let installation = path.parent().map(|d| d.join(&name));
-                match installation.filter(|p| p.is_file()) {
+                match installation.filter(|p| std::fs::symlink_metadata(p).is_ok()) {
                     Some(p) => {
-                        let s = read_external_control_settings(&read_bounded(&p)?)
+                        let bytes = read_inside(root, &p)
+                            .map_err(|e| format!("the installation {name}: {e}"))?;
+                        let s = read_external_control_settings(&bytes)
                             .map_err(|e| format!("{name}: {e}"))?;
                         (s.host, s.port)
                     }

@@ -319,6 +319,9 @@ pub(crate) struct Shared {
     clock: clock::Clock,
     next_conn: AtomicU64,
     urcap_host: Option<(String, u16)>,
+    /// The programs folder, canonical: a played program and its installation are read
+    /// only inside it.
+    programs: Option<PathBuf>,
     stop: AtomicBool,
     sink: Box<Sink>,
 }
@@ -374,8 +377,11 @@ impl Server {
         on_event: impl Fn(ServerEvent) + Send + Sync + 'static,
     ) -> std::io::Result<Server> {
         let mut controller = Controller::new(options.config.clone());
+        let mut programs = None;
         if let Some(dir) = &options.programs {
-            controller = controller.with_programs(Box::new(DirPrograms::new(dir)?));
+            let found = DirPrograms::new(dir)?;
+            programs = Some(found.root.clone());
+            controller = controller.with_programs(Box::new(found));
         }
         let bind = |port: u16, service: &str| -> std::io::Result<(TcpListener, SocketAddr)> {
             let l = TcpListener::bind((options.bind.as_str(), port)).map_err(|e| {
@@ -431,6 +437,7 @@ impl Server {
             clock: clock::Clock::new(step),
             next_conn: AtomicU64::new(1),
             urcap_host: options.urcap_host,
+            programs,
             stop: AtomicBool::new(false),
             sink: Box::new(on_event),
         });
