@@ -325,8 +325,10 @@ impl Cell {
 
     /// The loaded program could not be read or translated: it does not play.
     pub fn refuse_loaded(&mut self, why: String, now: Duration) {
-        self.awaiting_load = false;
+        // Time runs to `now` while the answer is still awaited: the program that is
+        // PLAYING without its text must not ask for it again.
         self.advance(now);
+        self.awaiting_load = false;
         if self.running.is_none() {
             self.controller.program_ended();
         }

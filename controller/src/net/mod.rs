@@ -390,8 +390,11 @@ pub(crate) struct Shared {
     clock: clock::Clock,
     next_conn: AtomicU64,
     urcap_host: Option<(String, u16)>,
-    /// Where loaded programs are read from.
-    programs: Option<DirPrograms>,
+    /// The programs folder, canonical: a played program and its installation are read
+    /// only inside it.
+    programs: Option<PathBuf>,
+    /// How loaded programs' paths name files in it.
+    program_names: Option<DirPrograms>,
     stop: AtomicBool,
     sink: Box<Sink>,
 }
@@ -407,7 +410,7 @@ impl Shared {
 
     /// The file a loaded program's path names.
     pub(crate) fn program_file(&self, path: &str) -> PathBuf {
-        match &self.programs {
+        match &self.program_names {
             Some(p) => p.file(path),
             None => PathBuf::from(path),
         }
@@ -460,12 +463,13 @@ impl Server {
             config.serial = URSIM_SERIAL.to_string();
         }
         let mut controller = Controller::new(config.clone());
-        let programs = match &options.programs {
-            Some(dir) => Some(DirPrograms::with_profile(dir, options.profile)?),
-            None => None,
-        };
-        if let Some(p) = &programs {
-            controller = controller.with_programs(Box::new(p.clone()));
+        let mut programs = None;
+        let mut program_names = None;
+        if let Some(dir) = &options.programs {
+            let found = DirPrograms::with_profile(dir, options.profile)?;
+            programs = Some(found.root.clone());
+            program_names = Some(found.clone());
+            controller = controller.with_programs(Box::new(found));
         }
         let bind = |port: u16, service: &str| -> std::io::Result<(TcpListener, SocketAddr)> {
             let l = TcpListener::bind((options.bind.as_str(), port)).map_err(|e| {
@@ -516,9 +520,10 @@ impl Server {
             cell: Mutex::new(cell),
             config,
             clock: clock::Clock::new(step),
-            programs,
+            program_names,
             next_conn: AtomicU64::new(1),
             urcap_host: options.urcap_host,
+            programs,
             stop: AtomicBool::new(false),
             sink: Box::new(on_event),
         });
