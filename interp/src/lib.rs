@@ -97,6 +97,7 @@ pub mod interpreter;
 pub mod kinematics;
 mod lexer;
 pub mod machine;
+mod memory;
 mod parser;
 mod pose;
 mod rpc;
