@@ -1110,13 +1110,20 @@ impl Machine {
                     th.stack.push(v.clone());
                 }
                 Op::Load(s) => {
-                    // The copy is counted before it is made.
-                    let Some(bytes) = lookup(frame, &self.globals, s).map(Value::held_bytes) else {
+                    let Some(v) = lookup(frame, &self.globals, s) else {
                         return Err(fail(Fault::new(
                             K::UnknownVariable,
                             format!("unknown variable `{}`", prog.names[s as usize]),
                         )));
                     };
+                    if !v.is_container() {
+                        let v = v.clone();
+                        self.charge(Some(&*th), SLOT_BYTES).map_err(fail)?;
+                        th.stack.push(v);
+                        continue;
+                    }
+                    // A list, struct or string: the copy is counted before it is made.
+                    let bytes = v.held_bytes();
                     self.charge(Some(&*th), bytes).map_err(fail)?;
                     let v = th
                         .frames
@@ -1646,6 +1653,7 @@ impl Machine {
 
     /// Counts `bytes` the program is about to allocate, or refuses them (a recount
     /// first, if the count says they do not fit) with the budget's error.
+    #[inline]
     fn charge(&mut self, current: Option<&Thread>, bytes: usize) -> Result<(), Fault> {
         self.reserve(current, bytes)?;
         self.ctl.mem.add(bytes);
@@ -1654,6 +1662,7 @@ impl Machine {
 
     /// Whether `bytes` more fit in the budget (a recount first, if the count says they
     /// do not), without counting them.
+    #[inline]
     fn reserve(&mut self, current: Option<&Thread>, bytes: usize) -> Result<(), Fault> {
         let events = self.ctl.events.bytes();
         if !self.ctl.mem.fits(events, bytes) {

@@ -95,6 +95,7 @@ impl Events {
     }
 
     /// The bytes the waiting events hold.
+    #[inline]
     pub fn bytes(&self) -> usize {
         self.bytes
     }
@@ -122,16 +123,19 @@ impl Memory {
     }
 
     /// Adds bytes that need no check (a few, where a check follows soon).
+    #[inline]
     pub fn add(&mut self, bytes: usize) {
         self.held = self.held.saturating_add(bytes);
     }
 
     /// Bytes dropped.
+    #[inline]
     pub fn credit(&mut self, bytes: usize) {
         self.held = self.held.saturating_sub(bytes);
     }
 
     /// Whether `bytes` more fit, with `events` bytes of events waiting.
+    #[inline]
     pub fn fits(&self, events: usize, bytes: usize) -> bool {
         self.held.saturating_add(events).saturating_add(bytes) <= self.limit
     }

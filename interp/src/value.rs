@@ -141,10 +141,22 @@ impl Value {
     /// element, a string's bytes, [`MEMBER_BYTES`] plus the name per struct member, at
     /// every depth; 0 for a number, bool, pose or handle. Iterative; the cost is linear
     /// in the value's size.
+    #[inline]
     pub(crate) fn content_bytes(&self) -> usize {
-        if !self.is_container() {
-            return 0;
+        match self {
+            Value::Str(s) => s.len(),
+            Value::Rpc(url) => url.len(),
+            // A flat list (the common case: joints, poses as lists) without a walk.
+            Value::List(items) if !items.iter().any(Value::is_container) => {
+                items.len().saturating_mul(VALUE_BYTES)
+            }
+            Value::List(_) | Value::Struct(_) => self.nested_content_bytes(),
+            _ => 0,
         }
+    }
+
+    /// [`content_bytes`](Self::content_bytes) of a list or struct that may hold others.
+    fn nested_content_bytes(&self) -> usize {
         let mut bytes = 0usize;
         let mut todo: Vec<&Value> = vec![self];
         while let Some(v) = todo.pop() {
@@ -171,11 +183,13 @@ impl Value {
 
     /// The bytes the value takes on a stack or as a list element: [`VALUE_BYTES`] plus
     /// its [`content_bytes`](Self::content_bytes).
+    #[inline]
     pub(crate) fn held_bytes(&self) -> usize {
         VALUE_BYTES.saturating_add(self.content_bytes())
     }
 
     /// A list, struct or string: what [`measure`](Self::measure) looks into.
+    #[inline]
     pub(crate) fn is_container(&self) -> bool {
         matches!(
             self,
