@@ -1106,7 +1106,12 @@ impl Machine {
                 }
                 Op::Const(c) => {
                     let v = &prog.consts[c as usize];
-                    self.charge(Some(&*th), v.held_bytes()).map_err(fail)?;
+                    let bytes = if v.is_container() {
+                        v.held_bytes()
+                    } else {
+                        SLOT_BYTES
+                    };
+                    self.charge(Some(&*th), bytes).map_err(fail)?;
                     th.stack.push(v.clone());
                 }
                 Op::Load(s) => {
@@ -1655,6 +1660,20 @@ impl Machine {
     /// first, if the count says they do not fit) with the budget's error.
     #[inline]
     fn charge(&mut self, current: Option<&Thread>, bytes: usize) -> Result<(), Fault> {
+        if self.ctl.mem.try_add(self.ctl.events.bytes(), bytes) {
+            return Ok(());
+        }
+        self.charge_after_recount(current, bytes)
+    }
+
+    /// [`charge`](Self::charge) when the count says the bytes do not fit.
+    #[cold]
+    #[inline(never)]
+    fn charge_after_recount(
+        &mut self,
+        current: Option<&Thread>,
+        bytes: usize,
+    ) -> Result<(), Fault> {
         self.reserve(current, bytes)?;
         self.ctl.mem.add(bytes);
         Ok(())

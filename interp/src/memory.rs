@@ -128,6 +128,16 @@ impl Memory {
         self.held = self.held.saturating_add(bytes);
     }
 
+    /// Adds `bytes` if they fit with `events` bytes of events waiting.
+    #[inline]
+    pub fn try_add(&mut self, events: usize, bytes: usize) -> bool {
+        let fits = self.fits(events, bytes);
+        if fits {
+            self.held += bytes;
+        }
+        fits
+    }
+
     /// Bytes dropped.
     #[inline]
     pub fn credit(&mut self, bytes: usize) {
