@@ -22,6 +22,29 @@
 //! until it consumes time, and when it does (as UR's External Control program does inside
 //! one) the others run, as on the controller.
 //!
+//! ## Memory
+//! The program's memory is one budget, [`Config::max_memory`] (256 MiB by default),
+//! counted in bytes as the program allocates: each value where it sits (a stack slot or
+//! a list element: the size of a [`Value`], 56 bytes on 64-bit targets) plus what it
+//! owns (list elements, string bytes, struct members, at every depth); each local
+//! variable's entry; each call frame; each thread; and the events the driver has not
+//! taken yet (bytes to send, messages and call records, with their copies of values).
+//! A value is counted before it is made or copied (a list copied on assignment, a
+//! `make_list`, list arithmetic and matrix products by an upper bound of their result,
+//! the copies a built-in's call record and message keep), so no single step allocates
+//! far past the budget; drops are credited where they happen. When a charge would pass
+//! the budget the machine recounts what the program holds (the count never errs low)
+//! and, if the recount confirms it, stops the program with a
+//! [`Limit`](crate::RuntimeErrorKind::Limit) runtime error at that line:
+//! `memory budget exceeded: the program holds N bytes and needs M more, over its budget
+//! of B bytes (...)`. The counts are of contents, not of the allocator's overhead or a
+//! vector's spare capacity: the process's own use is higher by a small factor.
+//! Separately bounded and not counted: the robot model's receive buffers (64 KiB per
+//! socket, 64 sockets), an XML-RPC reply being read (1 MiB), the interpreter-mode queue
+//! ([`interpreter::MAX_UNEXECUTED`](crate::interpreter::MAX_UNEXECUTED) lines of at most
+//! [`interpreter::MAX_LINE`](crate::interpreter::MAX_LINE) bytes), and the program's
+//! code.
+//!
 //! ## Driving it
 //! Call [`Machine::run_until`] with the time since the program started; it runs every
 //! step due. Take the [`Event`]s with [`Machine::poll_event`]: connections to open, bytes
@@ -105,7 +128,7 @@ pub struct Config {
     /// before it allocates. Each value, call depth and thread count has its own bound;
     /// this one bounds them together (64 threads 256 calls deep, each frame holding a
     /// list of [`max_value_size`](Self::max_value_size) elements, would be terabytes).
-    /// See [`memory`](crate::machine#memory) for what is counted and how.
+    /// See the [`machine`](crate::machine) module's "Memory" for what is counted and how.
     pub max_memory: usize,
 }
 
