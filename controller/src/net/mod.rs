@@ -73,7 +73,7 @@ mod streams;
 use std::io::{ErrorKind, Read, Write};
 use std::net::{SocketAddr, TcpListener, TcpStream};
 use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicBool, AtomicU64, AtomicUsize, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::{Arc, Mutex, MutexGuard};
 use std::thread::JoinHandle;
 use std::time::Duration;
@@ -85,7 +85,8 @@ use crate::{Cell, Config, Controller, Dashboard, Programs, Reply, MAX_LINE};
 pub use fetch::{parse_host, MAX_FETCHED, MAX_FILE};
 pub use interpreter::{MAX_INTERPRETER_CONNECTIONS, POLL as INTERPRETER_POLL};
 pub use streams::{
-    MAX_BACKLOG, MAX_CLIENTS, MAX_CONNECTING, MAX_QUEUE, MAX_READS_PER_STEP, MAX_STALL, READ_CHUNK,
+    EVENT_INTERVAL, MAX_BACKLOG, MAX_CLIENTS, MAX_CONNECTING, MAX_EVENTS_PER_INTERVAL, MAX_QUEUE,
+    MAX_STALL, MIN_ITEM_SHARE, MIN_READ_SHARE, READ_CHUNK, STEP_ITEM_BUDGET, STEP_READ_BUDGET,
 };
 
 /// Dashboard connections served at once; more are accepted and closed at once. Each is
@@ -99,6 +100,22 @@ pub const MAX_CONNECTIONS: usize = 16;
 /// a played `.urp` program.
 pub const MAX_SERVER_THREADS: usize =
     3 + MAX_CONNECTIONS + MAX_INTERPRETER_CONNECTIONS + MAX_CONNECTING + 1;
+
+/// How long a connection must have been idle to be evicted for a newcomer when its
+/// interface's limit ([`MAX_CONNECTIONS`], [`MAX_INTERPRETER_CONNECTIONS`],
+/// [`MAX_CLIENTS`]) is reached: the newcomer evicts the connection idle longest if it
+/// has been idle this long, else it is closed at once. Idle means nothing received from
+/// it (a dashboard or interpreter client), nothing received from it and nothing written
+/// to it (a stream client: a reader taking its packages is active). Two seconds is more
+/// than the pause between a working client's commands or packages (primary and
+/// secondary state comes at 10 Hz) and short enough that silent sockets lock nobody
+/// out for long.
+pub const EVICT_IDLE: Duration = Duration::from_secs(2);
+
+/// How long a `shutdown` waits for the real-time loop and the other connections to
+/// close before the server stops anyway (a thread stuck in a write ends within
+/// [`WRITE_TIMEOUT`] regardless).
+pub const SHUTDOWN_WAIT: Duration = Duration::from_secs(2);
 
 /// A dashboard or interpreter reply that cannot be written in this time (a client that
 /// stopped reading) ends the connection: long enough for a client that is merely slow,
@@ -167,6 +184,9 @@ pub struct ServerOptions {
     /// Where External Control URCap nodes fetch their script; `None`: the installation's
     /// URCap settings, else the URCap's default.
     pub urcap_host: Option<(String, u16)>,
+    /// Whether the dashboard's `shutdown` is obeyed (default); when not, it is answered
+    /// as a controller that may not shut down answers it, and nothing else changes.
+    pub allow_shutdown: bool,
 }
 
 impl Default for ServerOptions {
@@ -177,6 +197,7 @@ impl Default for ServerOptions {
             config: Config::default(),
             programs: None,
             urcap_host: None,
+            allow_shutdown: true,
         }
     }
 }
@@ -269,7 +290,18 @@ pub enum ServerEvent {
     },
     /// Something to say (an accept that failed, a peer that closed the program's socket).
     Note(String),
-    /// A dashboard client said `shutdown`: the server has stopped.
+    /// Events not reported: past [`MAX_EVENTS_PER_INTERVAL`] in one [`EVENT_INTERVAL`]
+    /// (a flood), or a program or `set speed` superseded by a later one of the same step.
+    Suppressed {
+        /// The client whose events they were; `None`: the running program's.
+        conn: Option<u64>,
+        /// How many.
+        count: u64,
+        /// Over how long (from the interval's start to its report).
+        interval: Duration,
+    },
+    /// A dashboard client said `shutdown`: its program has ended and every client has
+    /// been closed (their events came first); the server has stopped. The last event.
     Shutdown,
 }
 
@@ -320,7 +352,62 @@ pub(crate) struct Shared {
     next_conn: AtomicU64,
     urcap_host: Option<(String, u16)>,
     stop: AtomicBool,
+    /// A `shutdown` was obeyed: the loop closes its clients and ends.
+    shutting_down: AtomicBool,
+    /// The real-time loop has ended (after a `shutdown`).
+    loop_done: AtomicBool,
+    allow_shutdown: bool,
+    /// The dashboard and interpreter connections open.
+    conns: Mutex<Vec<Slot>>,
     sink: Box<Sink>,
+}
+
+/// A dashboard or interpreter connection, for eviction and shutdown.
+struct Slot {
+    conn: u64,
+    service: &'static str,
+    /// A handle to close it with.
+    stream: TcpStream,
+    activity: Arc<Activity>,
+}
+
+/// What a connection's thread tells the accepting thread: when it last received a byte;
+/// and why another thread closed it.
+pub(crate) struct Activity {
+    /// Controller time of the last byte received, in nanoseconds.
+    last_rx: AtomicU64,
+    closed_by: Mutex<Option<&'static str>>,
+}
+
+impl Activity {
+    fn new(now: Duration) -> Self {
+        Activity {
+            last_rx: AtomicU64::new(nanos(now)),
+            closed_by: Mutex::new(None),
+        }
+    }
+
+    /// Bytes came from the client.
+    pub(crate) fn touch(&self, shared: &Shared) {
+        self.last_rx.store(nanos(shared.now()), Ordering::SeqCst);
+    }
+
+    fn idle(&self, now: Duration) -> Duration {
+        now.saturating_sub(Duration::from_nanos(self.last_rx.load(Ordering::SeqCst)))
+    }
+
+    fn close_for(&self, reason: &'static str) {
+        *self.closed_by.lock().unwrap_or_else(|p| p.into_inner()) = Some(reason);
+    }
+
+    /// Why another thread closed the connection, if it did.
+    pub(crate) fn closed_by(&self) -> Option<&'static str> {
+        *self.closed_by.lock().unwrap_or_else(|p| p.into_inner())
+    }
+}
+
+fn nanos(d: Duration) -> u64 {
+    u64::try_from(d.as_nanos()).unwrap_or(u64::MAX)
 }
 
 impl Shared {
@@ -346,6 +433,36 @@ impl Shared {
 
     pub(crate) fn stopped(&self) -> bool {
         self.stop.load(Ordering::SeqCst)
+    }
+
+    pub(crate) fn shutting_down(&self) -> bool {
+        self.shutting_down.load(Ordering::SeqCst)
+    }
+
+    pub(crate) fn loop_ended(&self) {
+        self.loop_done.store(true, Ordering::SeqCst);
+    }
+
+    fn lock_conns(&self) -> MutexGuard<'_, Vec<Slot>> {
+        self.conns.lock().unwrap_or_else(|p| p.into_inner())
+    }
+
+    /// After a `shutdown` from connection `conn`: waits (at most [`SHUTDOWN_WAIT`]) for
+    /// the real-time loop to end its program and close its clients, then closes every
+    /// other dashboard and interpreter connection and waits for them to go.
+    fn close_all_for_shutdown(&self, conn: u64) {
+        let start = std::time::Instant::now();
+        while !self.loop_done.load(Ordering::SeqCst) && start.elapsed() < SHUTDOWN_WAIT {
+            std::thread::sleep(Duration::from_millis(1));
+        }
+        for slot in self.lock_conns().iter().filter(|s| s.conn != conn) {
+            slot.activity.close_for("the controller shut down");
+            let _ = slot.stream.shutdown(std::net::Shutdown::Both);
+        }
+        while self.lock_conns().iter().any(|s| s.conn != conn) && start.elapsed() < SHUTDOWN_WAIT
+        {
+            std::thread::sleep(Duration::from_millis(1));
+        }
     }
 }
 
@@ -432,6 +549,10 @@ impl Server {
             next_conn: AtomicU64::new(1),
             urcap_host: options.urcap_host,
             stop: AtomicBool::new(false),
+            shutting_down: AtomicBool::new(false),
+            loop_done: AtomicBool::new(false),
+            allow_shutdown: options.allow_shutdown,
+            conns: Mutex::new(Vec::new()),
             sink: Box::new(on_event),
         });
         for &(service, addr) in &addrs {
@@ -531,20 +652,23 @@ impl Drop for Server {
     }
 }
 
+/// A connection's server: its stream, number, peer and what it tells of its activity.
+type Serve = fn(TcpStream, u64, String, &Shared, &Activity);
+
 /// Accepts connections on `listener` until the server stops, each served by `serve` in a
-/// thread of its own named `SERVICE-CONN`, at most `max` at once (more are accepted and
-/// closed, so the backlog drains). `label` starts the notes (`""` for the dashboard,
-/// `"interpreter "`).
+/// thread of its own named `SERVICE-CONN`, at most `max` at once: past it a newcomer
+/// evicts the connection idle longest if it has been idle [`EVICT_IDLE`], else it is
+/// accepted and closed (so the backlog drains). `label` starts the notes (`""` for the
+/// dashboard, `"interpreter "`).
 pub(super) fn accept_each(
     shared: &Arc<Shared>,
     listener: &TcpListener,
     (service, label, max): (&'static str, &'static str, usize),
-    serve: fn(TcpStream, u64, String, &Shared),
+    serve: Serve,
 ) {
-    let active = Arc::new(AtomicUsize::new(0));
     loop {
         let accepted = listener.accept();
-        if shared.stopped() {
+        if shared.stopped() || shared.shutting_down() {
             return;
         }
         let (stream, peer) = match accepted {
@@ -557,27 +681,35 @@ pub(super) fn accept_each(
                 continue;
             }
         };
-        if active.load(Ordering::SeqCst) >= max {
+        if !make_room(shared, service, label, max) {
             shared.emit(ServerEvent::Note(format!(
                 "{peer}: refused, {max} {label}connections are already open"
             )));
             drop(stream);
             continue;
         }
-        active.fetch_add(1, Ordering::SeqCst);
+        let Ok(handle) = stream.try_clone() else {
+            shared.emit(ServerEvent::Note(format!("{peer}: cannot serve it")));
+            continue;
+        };
         let conn = shared.next_conn();
+        let activity = Arc::new(Activity::new(shared.now()));
+        shared.lock_conns().push(Slot {
+            conn,
+            service,
+            stream: handle,
+            activity: Arc::clone(&activity),
+        });
         let spawned = std::thread::Builder::new()
             .name(format!("{service}-{conn}"))
             .spawn({
                 let shared = Arc::clone(shared);
-                let active = Arc::clone(&active);
                 move || {
-                    serve(stream, conn, peer.to_string(), &shared);
-                    active.fetch_sub(1, Ordering::SeqCst);
+                    serve(stream, conn, peer.to_string(), &shared, &activity);
                 }
             });
         if let Err(e) = spawned {
-            active.fetch_sub(1, Ordering::SeqCst);
+            shared.lock_conns().retain(|s| s.conn != conn);
             shared.emit(ServerEvent::Note(format!(
                 "{peer}: cannot start a thread: {e}"
             )));
@@ -585,10 +717,58 @@ pub(super) fn accept_each(
     }
 }
 
+/// Whether a newcomer on `service` may be served: fewer than `max` are open, or the one
+/// idle longest had been idle [`EVICT_IDLE`] and has been closed (its thread waited for,
+/// at most [`SHUTDOWN_WAIT`], so the thread bound holds).
+fn make_room(shared: &Shared, service: &'static str, label: &str, max: usize) -> bool {
+    let open = |shared: &Shared| {
+        shared
+            .lock_conns()
+            .iter()
+            .filter(|s| s.service == service)
+            .count()
+    };
+    if open(shared) < max {
+        return true;
+    }
+    let now = shared.now();
+    let evicted = {
+        let conns = shared.lock_conns();
+        let idlest = conns
+            .iter()
+            .filter(|s| s.service == service && s.activity.closed_by().is_none())
+            .max_by_key(|s| s.activity.idle(now));
+        match idlest {
+            Some(s) if s.activity.idle(now) >= EVICT_IDLE => {
+                s.activity
+                    .close_for("evicted: every slot was taken and it was idle longest");
+                let _ = s.stream.shutdown(std::net::Shutdown::Both);
+                Some((s.conn, s.activity.idle(now)))
+            }
+            _ => None,
+        }
+    };
+    let Some((conn, idle)) = evicted else {
+        return false;
+    };
+    shared.emit(ServerEvent::Note(format!(
+        "conn {conn}: {label}connection evicted for a new one after {:.1} s idle",
+        idle.as_secs_f64()
+    )));
+    let start = std::time::Instant::now();
+    while open(shared) >= max {
+        if start.elapsed() > SHUTDOWN_WAIT {
+            return false;
+        }
+        std::thread::sleep(Duration::from_millis(1));
+    }
+    true
+}
+
 /// What one connection counted.
-struct Counts {
-    rx: u64,
-    tx: u64,
+pub(crate) struct Counts {
+    pub(crate) rx: u64,
+    pub(crate) tx: u64,
 }
 
 fn send(stream: &mut TcpStream, reply: &Reply, counts: &mut Counts) -> bool {
@@ -603,7 +783,7 @@ fn send(stream: &mut TcpStream, reply: &Reply, counts: &mut Counts) -> bool {
     ok
 }
 
-fn serve(mut stream: TcpStream, conn: u64, peer: String, shared: &Shared) {
+fn serve(mut stream: TcpStream, conn: u64, peer: String, shared: &Shared, activity: &Activity) {
     let _ = stream.set_nodelay(true);
     let _ = stream.set_write_timeout(Some(WRITE_TIMEOUT));
     shared.emit(ServerEvent::Connect {
@@ -612,13 +792,38 @@ fn serve(mut stream: TcpStream, conn: u64, peer: String, shared: &Shared) {
         peer,
     });
     let mut counts = Counts { rx: 0, tx: 0 };
-    let reason = session(&mut stream, conn, shared, &mut counts);
+    let reason = session(&mut stream, conn, shared, activity, &mut counts);
+    let shut_down = reason == SHUT_DOWN;
+    if shut_down {
+        shared.close_all_for_shutdown(conn);
+    }
+    closed(shared, conn, activity.closed_by().unwrap_or(reason), &counts);
+    if shut_down {
+        shared.stop.store(true, Ordering::SeqCst);
+        shared.emit(ServerEvent::Shutdown);
+    }
+}
+
+/// How a dashboard connection that said `shutdown` ends.
+const SHUT_DOWN: &str = "shutdown";
+
+/// A dashboard or interpreter connection has ended: its slot is freed, its close said.
+pub(crate) fn closed(shared: &Shared, conn: u64, reason: &str, counts: &Counts) {
+    shared.lock_conns().retain(|s| s.conn != conn);
     shared.emit(ServerEvent::Close {
         conn,
         reason: reason.to_string(),
         rx: counts.rx,
         tx: counts.tx,
     });
+}
+
+/// A reply of one line that keeps the connection open.
+fn one_line(text: &str) -> Reply {
+    Reply {
+        lines: vec![text.to_string()],
+        close: false,
+    }
 }
 
 /// Answer one command line; `Err(reason)` when the connection ends.
@@ -640,10 +845,19 @@ fn answer(
         let c = cell.controller();
         let reply = if too_long {
             dashboard.line_too_long(text)
+        } else if !shared.allow_shutdown && text.trim().eq_ignore_ascii_case("shutdown") {
+            // Refused as the controller refuses it: in local control its one reply to
+            // every command that acts, else the failure UR's commands answer.
+            if c.config().remote_control_enabled && !c.remote_control() {
+                one_line(crate::dashboard::LOCAL_CONTROL)
+            } else {
+                one_line("Failed to execute: shutdown")
+            }
         } else {
             dashboard.handle_line(c, text, now)
         };
-        (reply, c.is_shut_down())
+        let shut_down = c.is_shut_down() && !shared.shutting_down.swap(true, Ordering::SeqCst);
+        (reply, shut_down)
     };
     let shown = if too_long {
         format!("{}...", text.chars().take(40).collect::<String>())
@@ -660,9 +874,7 @@ fn answer(
     }
     if shut_down {
         let _ = stream.shutdown(std::net::Shutdown::Both);
-        shared.stop.store(true, Ordering::SeqCst);
-        shared.emit(ServerEvent::Shutdown);
-        return Err("shutdown");
+        return Err(SHUT_DOWN);
     }
     if reply.close {
         return Err("quit");
@@ -674,6 +886,7 @@ fn session(
     stream: &mut TcpStream,
     conn: u64,
     shared: &Shared,
+    activity: &Activity,
     counts: &mut Counts,
 ) -> &'static str {
     if !send(stream, &Dashboard::greeting(), counts) {
@@ -699,6 +912,7 @@ fn session(
         if shared.stopped() {
             return "the server stopped";
         }
+        activity.touch(shared);
         counts.rx += n as u64;
         let mut rest = &chunk[..n];
         while !rest.is_empty() {
