@@ -17,7 +17,8 @@ use std::thread;
 use std::time::{Duration, Instant};
 
 use urscript_controller::net::{
-    Ports, Server, ServerEvent, ServerOptions, MAX_CLIENTS,
+    Ports, Server, ServerEvent, ServerOptions, EVICT_IDLE, MAX_CLIENTS, MAX_CONNECTIONS,
+    MAX_INTERPRETER_CONNECTIONS,
 };
 
 /// The longest any wait lasts before the test fails.
@@ -44,6 +45,8 @@ struct Log {
     closes: Vec<(u64, String)>,
     connects: Vec<(u64, &'static str)>,
     notes: Vec<String>,
+    /// Program ends, closes and the shutdown, in order (the first 10 000).
+    order: Vec<String>,
 }
 
 struct Fixture {
@@ -52,16 +55,29 @@ struct Fixture {
 }
 
 fn start() -> Fixture {
+    start_with(ServerOptions {
+        ports: Ports::any(),
+        ..ServerOptions::default()
+    })
+}
+
+fn start_with(options: ServerOptions) -> Fixture {
     let log = Arc::new(Mutex::new(Log::default()));
     let sink = Arc::clone(&log);
     let server = Server::start(
-        ServerOptions {
-            ports: Ports::any(),
-            ..ServerOptions::default()
-        },
+        options,
         move |e| {
             let mut l = sink.lock().unwrap_or_else(|p| p.into_inner());
             l.events += 1;
+            let said = match &e {
+                ServerEvent::Program { what, .. } => Some(format!("program {what}")),
+                ServerEvent::Close { conn, .. } => Some(format!("close {conn}")),
+                ServerEvent::Shutdown => Some("shutdown".to_string()),
+                _ => None,
+            };
+            if let Some(said) = said.filter(|_| l.order.len() < 10_000) {
+                l.order.push(said);
+            }
             match e {
                 ServerEvent::Close { conn, reason, .. } => l.closes.push((conn, reason)),
                 ServerEvent::Connect { conn, service, .. } => l.connects.push((conn, service)),
@@ -82,6 +98,57 @@ impl Fixture {
     fn log(&self) -> MutexGuard<'_, Log> {
         self.log.lock().unwrap_or_else(|p| p.into_inner())
     }
+
+    /// Waits (at most [`WAIT`]) until `f` finds something in the log.
+    fn wait_log<T>(&self, what: &str, f: impl Fn(&Log) -> Option<T>) -> T {
+        let start = Instant::now();
+        loop {
+            if let Some(t) = f(&self.log()) {
+                return t;
+            }
+            assert!(start.elapsed() < WAIT, "never saw {what}");
+            thread::sleep(Duration::from_millis(10));
+        }
+    }
+
+    /// The connection numbers of `service`'s clients, in the order they came.
+    fn conns(&self, service: &str) -> Vec<u64> {
+        self.log()
+            .connects
+            .iter()
+            .filter(|(_, s)| *s == service)
+            .map(|(c, _)| *c)
+            .collect()
+    }
+}
+
+/// Reads one line (bounded by [`WAIT`] per read and by 64 KiB).
+fn read_line(s: &mut TcpStream) -> std::io::Result<String> {
+    let mut line = Vec::new();
+    let mut b = [0u8; 1];
+    while line.len() < 64 * 1024 {
+        match s.read(&mut b)? {
+            0 => return Err(ErrorKind::UnexpectedEof.into()),
+            _ if b[0] == b'\n' => return Ok(String::from_utf8_lossy(&line).into_owned()),
+            _ => line.push(b[0]),
+        }
+    }
+    Err(ErrorKind::InvalidData.into())
+}
+
+/// A dashboard client past its greeting.
+fn dashboard(addr: SocketAddr) -> std::io::Result<TcpStream> {
+    let mut s = connect(addr)?;
+    let greeting = read_line(&mut s)?;
+    if !greeting.starts_with("Connected") {
+        return Err(std::io::Error::other(format!("greeting {greeting:?}")));
+    }
+    Ok(s)
+}
+
+fn ask(s: &mut TcpStream, command: &str) -> std::io::Result<String> {
+    s.write_all(format!("{command}\n").as_bytes())?;
+    read_line(s)
 }
 
 fn connect(addr: SocketAddr) -> std::io::Result<TcpStream> {
@@ -294,12 +361,15 @@ fn good_rate_under(what: &str, f: &Fixture, attack: impl FnOnce(&Fixture, &mut A
     drop(good);
 }
 
+/// Brakes released, the arm running (programs run).
 fn brake_release(f: &Fixture) {
-    let mut s = connect(f.addr("dashboard")).expect("dashboard");
-    let mut buf = [0u8; 256];
-    let _ = s.read(&mut buf);
-    s.write_all(b"brake release\n").expect("write");
-    let _ = s.read(&mut buf);
+    let mut d = dashboard(f.addr("dashboard")).expect("dashboard");
+    let _ = ask(&mut d, "brake release");
+    let start = Instant::now();
+    while ask(&mut d, "robotmode").ok().as_deref() != Some("Robotmode: RUNNING") {
+        assert!(start.elapsed() < WAIT, "the arm never runs");
+        thread::sleep(Duration::from_millis(20));
+    }
 }
 
 #[test]
@@ -383,4 +453,171 @@ fn many_clients_with_many_large_recipes_leave_the_good_client_its_rate() {
             a.drain(s);
         }
     });
+}
+
+/// Tries `f` until it succeeds (at most [`WAIT`]).
+fn eventually<T>(what: &str, mut f: impl FnMut() -> std::io::Result<T>) -> T {
+    let start = Instant::now();
+    loop {
+        match f() {
+            Ok(t) => return t,
+            Err(e) => assert!(start.elapsed() < WAIT, "{what}: {e}"),
+        }
+        thread::sleep(Duration::from_millis(20));
+    }
+}
+
+#[test]
+fn silent_rtde_sockets_are_evicted_for_newcomers_and_a_reader_is_not() {
+    let _turn = serial();
+    let f = start();
+    let good = Good::start(f.addr("rtde"));
+    let good_conn = f.conns("rtde")[0];
+    // Every other slot taken by sockets that neither send nor read.
+    let silent: Vec<TcpStream> = (1..MAX_CLIENTS)
+        .map(|_| connect(f.addr("rtde")).expect("connect"))
+        .collect();
+    f.wait_log("every slot taken", |l| {
+        (l.connects.len() >= MAX_CLIENTS).then_some(())
+    });
+    thread::sleep(EVICT_IDLE + Duration::from_millis(500));
+    // Newcomers on every stream port are served, each in place of a silent one.
+    let mut newcomers = Vec::new();
+    for _ in 0..4 {
+        let mut s = eventually("a newcomer on RTDE", || rtde_session(f.addr("rtde")));
+        let mut setup = 125.0f64.to_be_bytes().to_vec();
+        setup.extend_from_slice(b"timestamp");
+        s.write_all(&rtde_packet(b'O', &setup)).expect("setup");
+        s.write_all(&rtde_packet(b'S', &[])).expect("start");
+        rtde_expect(&mut s, b'U').expect("the newcomer's data");
+        newcomers.push(s);
+    }
+    for service in ["primary", "secondary", "realtime"] {
+        let mut s = connect(f.addr(service)).expect("connect");
+        let mut buf = [0u8; 64];
+        let n = s.read(&mut buf).expect("a newcomer's first bytes");
+        assert!(n > 0, "{service}: the newcomer was closed");
+        newcomers.push(s);
+    }
+    let log = f.log();
+    let evicted = log
+        .closes
+        .iter()
+        .filter(|(_, r)| r.starts_with("evicted"))
+        .count();
+    assert_eq!(evicted, 7, "closes: {:?}", log.closes);
+    assert!(
+        !log.closes.iter().any(|(c, _)| *c == good_conn),
+        "the reader was closed: {:?}",
+        log.closes
+    );
+    drop(log);
+    assert!(
+        good.best_rate() >= MIN_SHARE * HZ,
+        "the reader lost its rate"
+    );
+    drop(silent);
+}
+
+#[test]
+fn idle_dashboard_and_interpreter_connections_are_evicted_for_newcomers() {
+    let _turn = serial();
+    let f = start();
+    for (service, limit) in [
+        ("dashboard", MAX_CONNECTIONS),
+        ("interpreter", MAX_INTERPRETER_CONNECTIONS),
+    ] {
+        let idle: Vec<TcpStream> = (0..limit)
+            .map(|_| connect(f.addr(service)).expect("connect"))
+            .collect();
+        f.wait_log("every slot taken", |l| {
+            (l.connects.iter().filter(|(_, s)| *s == service).count() >= limit).then_some(())
+        });
+        // At once, the limit holds: a newcomer is closed.
+        let mut extra = connect(f.addr(service)).expect("connect");
+        let mut buf = [0u8; 64];
+        assert!(
+            matches!(extra.read(&mut buf), Ok(0) | Err(_)),
+            "{service}: a connection past the limit was served while none was idle"
+        );
+        thread::sleep(EVICT_IDLE + Duration::from_millis(500));
+        let mut s = eventually(service, || {
+            let mut s = connect(f.addr(service))?;
+            if service == "dashboard" {
+                let greeting = read_line(&mut s)?;
+                assert!(greeting.starts_with("Connected"), "{greeting:?}");
+                let mode = ask(&mut s, "robotmode")?;
+                assert!(mode.starts_with("Robotmode: "), "{mode:?}");
+            } else {
+                let reply = ask(&mut s, "statelastexecuted")?;
+                assert!(reply.starts_with("state: "), "{reply:?}");
+            }
+            Ok(s)
+        });
+        let _ = ask(&mut s, "x");
+        let evicted = f
+            .log()
+            .closes
+            .iter()
+            .filter(|(_, r)| r.starts_with("evicted"))
+            .count();
+        assert!(evicted >= 1, "{service}: nothing was evicted");
+        drop(idle);
+    }
+}
+
+#[test]
+fn shutdown_ends_the_program_and_closes_every_client_before_its_last_event() {
+    let _turn = serial();
+    let f = start();
+    brake_release(&f);
+    let mut p = connect(f.addr("primary")).expect("connect");
+    p.write_all(b"def waits():\n  while True:\n    sync()\n  end\nend\n")
+        .expect("send");
+    f.wait_log("the program started", |l| {
+        l.order.iter().any(|e| e == "program started").then_some(())
+    });
+    let _rtde = Good::start(f.addr("rtde"));
+    let _idle = dashboard(f.addr("dashboard")).expect("an idle dashboard client");
+    let _interp = connect(f.addr("interpreter")).expect("an interpreter client");
+    let mut d = dashboard(f.addr("dashboard")).expect("dashboard");
+    assert_eq!(ask(&mut d, "shutdown").expect("reply"), "Shutting down");
+    f.wait_log("the shutdown", |l| l.order.last().filter(|e| *e == "shutdown").map(|_| ()));
+    let log = f.log();
+    let clients: Vec<u64> = log.connects.iter().map(|(c, _)| *c).collect();
+    let end = log.order.iter().position(|e| e == "shutdown").expect("the shutdown");
+    assert_eq!(end, log.order.len() - 1, "the shutdown is the last event");
+    assert!(
+        log.order[..end].iter().any(|e| e == "program stopped"),
+        "no program end before the shutdown: {:?}",
+        log.order
+    );
+    for c in clients {
+        assert!(
+            log.order[..end].contains(&format!("close {c}")),
+            "client {c} not closed before the shutdown: {:?}",
+            log.order
+        );
+    }
+    drop(log);
+    assert!(f.server.is_stopped());
+}
+
+#[test]
+fn a_refused_shutdown_changes_nothing() {
+    let _turn = serial();
+    let f = start_with(ServerOptions {
+        ports: Ports::any(),
+        allow_shutdown: false,
+        ..ServerOptions::default()
+    });
+    let mut d = dashboard(f.addr("dashboard")).expect("dashboard");
+    assert_eq!(
+        ask(&mut d, "shutdown").expect("reply"),
+        "Failed to execute: shutdown"
+    );
+    assert!(ask(&mut d, "robotmode").expect("reply").starts_with("Robotmode: "));
+    assert_eq!(ask(&mut d, "power on").expect("reply"), "Powering on");
+    assert!(!f.server.is_stopped());
+    assert!(!f.log().order.iter().any(|e| e == "shutdown"));
 }
