@@ -13,9 +13,30 @@
 //! (realtime, secondary, RTDE data: packages are skipped, and after [`MAX_STALL`] of
 //! taking nothing it is dropped), or at most [`MAX_QUEUE`] bytes and one message
 //! before it is dropped (what it must get: the primary's robot messages and version
-//! message, RTDE replies). What a client sends is read [`READ_CHUNK`] bytes at a time into one buffer
-//! of the loop, at most [`MAX_READS_PER_STEP`] reads a step, and kept only as far as its
-//! intake or RTDE session bounds allow.
+//! message, RTDE replies).
+//!
+//! The work of one step is budgeted, so that no client's flood holds the loop past its
+//! step: a client's bytes are read at most once a step, at most its fair share of
+//! [`STEP_READ_BUDGET`] (at least [`MIN_READ_SHARE`]), and kept only as far as its
+//! intake or RTDE session bounds allow; the script items they complete (lines,
+//! commands, programs) wait in the client's queue and at most its fair share of
+//! [`STEP_ITEM_BUDGET`] (at least [`MIN_ITEM_SHARE`]) of them are done a step, the
+//! client not read again until its queue is empty. Within one step's items of one
+//! client only the last program (or bare line) starts, as the others would be stopped
+//! before their first step, and only the last `set speed` is applied; of one step's
+//! RTDE input packages of one recipe only the last is applied. A client's RTDE data
+//! packages are made within its fair share of [`STEP_OUTPUT_BUDGET`] (at least
+//! [`MIN_OUTPUT_SHARE`]), and not at all while its queue is past [`MAX_BACKLOG`]. The
+//! fair shares are over the clients that sent something the step before (reads), over
+//! the clients (items), over the RTDE clients (output). Events are
+//! reported at most [`MAX_EVENTS_PER_INTERVAL`] per client (and for the running
+//! program) per [`EVENT_INTERVAL`]; the others are counted and reported as one
+//! [`ServerEvent::Suppressed`](super::ServerEvent::Suppressed) at the interval's end.
+//!
+//! When [`MAX_CLIENTS`] are connected, a newcomer evicts the longest idle client if it
+//! has been idle at least [`EVICT_IDLE`](super::EVICT_IDLE): idle means no byte received
+//! from it and no byte written to it (taken by it). A reader that takes its packages is
+//! active; a socket that neither sends nor reads is idle.
 
 use std::collections::VecDeque;
 use std::io::{ErrorKind, Read, Write};
