@@ -16,7 +16,12 @@
 //!   thread of their own when they play.
 //!
 //! What happens is reported as [`ServerEvent`]s to the callback given to
-//! [`Server::start`], from the server's threads.
+//! [`Server::start`], from the server's threads, the real-time loop among them: the
+//! callback must not block (queue the event, as `ursock controller` does). A dashboard
+//! `shutdown` (unless [`ServerOptions::allow_shutdown`] is off: then it is refused as
+//! the controller refuses a command, `Failed to execute: shutdown`) ends the running
+//! program, closes every client (each with its [`ServerEvent::Close`]) and stops the
+//! server; [`ServerEvent::Shutdown`] is the last event.
 //!
 //! # Bounds
 //!
@@ -29,13 +34,18 @@
 //!   of the running program in progress ([`MAX_CONNECTING`]: a connect never blocks the
 //!   real-time loop), and one reading a played `.urp` program (the cell asks for one
 //!   program at a time).
-//! - Connections past a limit are accepted and closed at once, so the kernel's listen
-//!   backlog (the standard library's 128, capped by the system) drains however many
-//!   peers knock; the stream listeners are drained every step.
+//! - Connections past a limit ([`MAX_CONNECTIONS`], [`MAX_INTERPRETER_CONNECTIONS`],
+//!   [`MAX_CLIENTS`]): a newcomer evicts the connection of that limit idle longest if it
+//!   has been idle [`EVICT_IDLE`], else it is accepted and closed at once, so the
+//!   kernel's listen backlog (the standard library's 128, capped by the system) drains
+//!   however many peers knock; the stream listeners are drained every step. Idle: no
+//!   byte received from it (dashboard, interpreter); no byte received from it and none
+//!   written to it (stream clients: a reader that takes its packages is active; a
+//!   socket that neither sends nor reads is idle).
 //! - Dashboard connection: the line read so far, at most [`MAX_LINE`] bytes (a longer
 //!   one is answered and skipped to its newline); a reply not taken within
-//!   [`WRITE_TIMEOUT`] ends it. An idle client holds its slot until it leaves, as on
-//!   the robot, where a dashboard client may stay connected for hours.
+//!   [`WRITE_TIMEOUT`] ends it. An idle client holds its slot while there is room (on
+//!   the robot a dashboard client may stay connected for hours).
 //! - Interpreter connection: the line so far, at most 64 KiB
 //!   ([`urscript_interp::interpreter::MAX_LINE`]); the same write timeout; the lines
 //!   the program holds are bounded by [`urscript_interp::interpreter::MAX_UNEXECUTED`].
@@ -45,6 +55,18 @@
 //!   or its RTDE session ([`crate::rtde::RTDE_MAX_PACKET_SIZE`],
 //!   [`crate::rtde::RTDE_MAX_OUTBOX`], [`crate::rtde::RTDE_MAX_EVENTS`], the recipe
 //!   counts). See [`streams`](self) for who is dropped when.
+//! - The work of one step of the real-time loop: each stream client's fair share of
+//!   [`STEP_READ_BUDGET`] bytes read (at least [`MIN_READ_SHARE`]), of
+//!   [`STEP_ITEM_BUDGET`] script items done (at least [`MIN_ITEM_SHARE`]; the rest wait
+//!   in its queue, at most what one read completed, and it is not read meanwhile), of
+//!   [`STEP_OUTPUT_BUDGET`] bytes of RTDE data packages made (at least
+//!   [`MIN_OUTPUT_SHARE`]); superseded programs, speeds and RTDE inputs of one step
+//!   coalesced. So floods on any port leave a well-behaved 500 Hz RTDE client its rate
+//!   (`tests/hostile_load.rs`).
+//! - Events: at most [`MAX_EVENTS_PER_INTERVAL`] per client and for the running program
+//!   per [`EVENT_INTERVAL`], the rest counted in one [`ServerEvent::Suppressed`].
+//! - A `shutdown` waits at most [`SHUTDOWN_WAIT`] for the loop and for the connections
+//!   it closes.
 //! - The running program: the interpreter's bounds (value size, call depth, threads,
 //!   statements per step, sockets open: see `urscript_interp`'s crate documentation),
 //!   each a runtime error reported to the primary clients; what its sockets leave
