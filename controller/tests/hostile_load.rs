@@ -64,28 +64,25 @@ fn start() -> Fixture {
 fn start_with(options: ServerOptions) -> Fixture {
     let log = Arc::new(Mutex::new(Log::default()));
     let sink = Arc::clone(&log);
-    let server = Server::start(
-        options,
-        move |e| {
-            let mut l = sink.lock().unwrap_or_else(|p| p.into_inner());
-            l.events += 1;
-            let said = match &e {
-                ServerEvent::Program { what, .. } => Some(format!("program {what}")),
-                ServerEvent::Close { conn, .. } => Some(format!("close {conn}")),
-                ServerEvent::Shutdown => Some("shutdown".to_string()),
-                _ => None,
-            };
-            if let Some(said) = said.filter(|_| l.order.len() < 10_000) {
-                l.order.push(said);
-            }
-            match e {
-                ServerEvent::Close { conn, reason, .. } => l.closes.push((conn, reason)),
-                ServerEvent::Connect { conn, service, .. } => l.connects.push((conn, service)),
-                ServerEvent::Note(n) if l.notes.len() < 10_000 => l.notes.push(n),
-                _ => {}
-            }
-        },
-    )
+    let server = Server::start(options, move |e| {
+        let mut l = sink.lock().unwrap_or_else(|p| p.into_inner());
+        l.events += 1;
+        let said = match &e {
+            ServerEvent::Program { what, .. } => Some(format!("program {what}")),
+            ServerEvent::Close { conn, .. } => Some(format!("close {conn}")),
+            ServerEvent::Shutdown => Some("shutdown".to_string()),
+            _ => None,
+        };
+        if let Some(said) = said.filter(|_| l.order.len() < 10_000) {
+            l.order.push(said);
+        }
+        match e {
+            ServerEvent::Close { conn, reason, .. } => l.closes.push((conn, reason)),
+            ServerEvent::Connect { conn, service, .. } => l.connects.push((conn, service)),
+            ServerEvent::Note(n) if l.notes.len() < 10_000 => l.notes.push(n),
+            _ => {}
+        }
+    })
     .expect("the server starts");
     Fixture { server, log }
 }
@@ -301,9 +298,7 @@ impl Attack {
         self.threads.push(thread::spawn(move || {
             let mut buf = vec![0u8; 64 * 1024];
             while !stop.load(Ordering::SeqCst) {
-                if s.write_all(&bytes).is_err()
-                    && s.peer_addr().is_err()
-                {
+                if s.write_all(&bytes).is_err() && s.peer_addr().is_err() {
                     return;
                 }
                 let _ = r.set_nonblocking(true);
@@ -401,8 +396,11 @@ fn an_rtde_input_flood_leaves_the_good_client_its_rate() {
     let f = start();
     good_rate_under("an RTDE input flood", &f, |f, a| {
         let mut s = rtde_session(f.addr("rtde")).expect("session");
-        s.write_all(&rtde_packet(b'I', b"input_int_register_0,input_double_register_0"))
-            .expect("setup");
+        s.write_all(&rtde_packet(
+            b'I',
+            b"input_int_register_0,input_double_register_0",
+        ))
+        .expect("setup");
         let reply = rtde_expect(&mut s, b'I').expect("the input setup's reply");
         let id = reply[0];
         s.write_all(&rtde_packet(b'S', &[])).expect("start");
@@ -582,10 +580,16 @@ fn shutdown_ends_the_program_and_closes_every_client_before_its_last_event() {
     let _interp = connect(f.addr("interpreter")).expect("an interpreter client");
     let mut d = dashboard(f.addr("dashboard")).expect("dashboard");
     assert_eq!(ask(&mut d, "shutdown").expect("reply"), "Shutting down");
-    f.wait_log("the shutdown", |l| l.order.last().filter(|e| *e == "shutdown").map(|_| ()));
+    f.wait_log("the shutdown", |l| {
+        l.order.last().filter(|e| *e == "shutdown").map(|_| ())
+    });
     let log = f.log();
     let clients: Vec<u64> = log.connects.iter().map(|(c, _)| *c).collect();
-    let end = log.order.iter().position(|e| e == "shutdown").expect("the shutdown");
+    let end = log
+        .order
+        .iter()
+        .position(|e| e == "shutdown")
+        .expect("the shutdown");
     assert_eq!(end, log.order.len() - 1, "the shutdown is the last event");
     assert!(
         log.order[..end].iter().any(|e| e == "program stopped"),
@@ -616,7 +620,9 @@ fn a_refused_shutdown_changes_nothing() {
         ask(&mut d, "shutdown").expect("reply"),
         "Failed to execute: shutdown"
     );
-    assert!(ask(&mut d, "robotmode").expect("reply").starts_with("Robotmode: "));
+    assert!(ask(&mut d, "robotmode")
+        .expect("reply")
+        .starts_with("Robotmode: "));
     assert_eq!(ask(&mut d, "power on").expect("reply"), "Powering on");
     assert!(!f.server.is_stopped());
     assert!(!f.log().order.iter().any(|e| e == "shutdown"));

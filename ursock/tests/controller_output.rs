@@ -40,8 +40,22 @@ fn rtde_expect(s: &mut TcpStream, kind: u8) -> Vec<u8> {
 #[test]
 fn a_controller_whose_output_nobody_reads_serves_on_and_says_what_it_dropped() {
     let mut child = Command::new(env!("CARGO_BIN_EXE_ursock"))
-        .args(["controller", "--json", "--dashboard-port", "0", "--primary-port", "0"])
-        .args(["--secondary-port", "0", "--realtime-port", "0", "--rtde-port", "0"])
+        .args([
+            "controller",
+            "--json",
+            "--dashboard-port",
+            "0",
+            "--primary-port",
+            "0",
+        ])
+        .args([
+            "--secondary-port",
+            "0",
+            "--realtime-port",
+            "0",
+            "--rtde-port",
+            "0",
+        ])
         .args(["--interpreter-port", "0"])
         .stdin(Stdio::null())
         .stdout(Stdio::piped())
@@ -61,7 +75,8 @@ fn a_controller_whose_output_nobody_reads_serves_on_and_says_what_it_dropped() {
     // events).
     let mut rtde = TcpStream::connect(&ports["rtde"]).expect("rtde");
     rtde.set_read_timeout(Some(WAIT)).unwrap();
-    rtde.write_all(&rtde_packet(b'V', &2u16.to_be_bytes())).unwrap();
+    rtde.write_all(&rtde_packet(b'V', &2u16.to_be_bytes()))
+        .unwrap();
     let mut setup = 125.0f64.to_be_bytes().to_vec();
     setup.extend_from_slice(b"timestamp");
     rtde.write_all(&rtde_packet(b'O', &setup)).unwrap();
@@ -121,7 +136,8 @@ fn shutdown_ends_the_program_and_closes_every_client_then_says_stopped() {
         v["event"] == "program" && v["what"] == "started"
     });
     let mut rtde = c.connect("rtde");
-    rtde.write_all(&rtde_packet(b'V', &2u16.to_be_bytes())).unwrap();
+    rtde.write_all(&rtde_packet(b'V', &2u16.to_be_bytes()))
+        .unwrap();
     rtde_expect(&mut rtde, b'V');
     let _idle = c.dashboard();
     let mut d = c.dashboard();

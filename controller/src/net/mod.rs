@@ -482,8 +482,7 @@ impl Shared {
             slot.activity.close_for("the controller shut down");
             let _ = slot.stream.shutdown(std::net::Shutdown::Both);
         }
-        while self.lock_conns().iter().any(|s| s.conn != conn) && start.elapsed() < SHUTDOWN_WAIT
-        {
+        while self.lock_conns().iter().any(|s| s.conn != conn) && start.elapsed() < SHUTDOWN_WAIT {
             std::thread::sleep(Duration::from_millis(1));
         }
     }
@@ -820,7 +819,12 @@ fn serve(mut stream: TcpStream, conn: u64, peer: String, shared: &Shared, activi
     if shut_down {
         shared.close_all_for_shutdown(conn);
     }
-    closed(shared, conn, activity.closed_by().unwrap_or(reason), &counts);
+    closed(
+        shared,
+        conn,
+        activity.closed_by().unwrap_or(reason),
+        &counts,
+    );
     if shut_down {
         shared.stop.store(true, Ordering::SeqCst);
         shared.emit(ServerEvent::Shutdown);

@@ -514,7 +514,8 @@ impl Loop {
             .map(|(i, c)| (i, now.saturating_sub(c.last_active)));
         match idlest {
             Some((i, idle)) if idle >= EVICT_IDLE => {
-                self.clients[i].gone = Some("evicted: every slot was taken and it was idle longest");
+                self.clients[i].gone =
+                    Some("evicted: every slot was taken and it was idle longest");
                 shared.emit(Event::Note(format!(
                     "conn {}: evicted for a new client after {:.1} s idle",
                     self.clients[i].conn,
@@ -597,7 +598,9 @@ impl Loop {
         while let Some(e) = session.poll_event() {
             match e {
                 RtdeEvent::Inputs {
-                    recipe, inputs: set, ..
+                    recipe,
+                    inputs: set,
+                    ..
                 } => match inputs.iter_mut().find(|(r, _)| *r == recipe) {
                     Some(slot) => slot.1 = set,
                     None => inputs.push((recipe, set)),
@@ -641,8 +644,7 @@ impl Loop {
         let last_speed = batch.iter().rposition(speed);
         let (conn, service) = (c.conn, c.service);
         for (j, item) in batch.into_iter().enumerate() {
-            if (starts(&item) && Some(j) != last_start) || (speed(&item) && Some(j) != last_speed)
-            {
+            if (starts(&item) && Some(j) != last_start) || (speed(&item) && Some(j) != last_speed) {
                 c.events.skip(1);
                 continue;
             }
@@ -736,10 +738,9 @@ impl Loop {
                                     });
                                 }
                             }
-                            Some(m) => {
-                                self.driver
-                                    .handle_event(m, e, &mut |a| show(&emit_program, a))
-                            }
+                            Some(m) => self
+                                .driver
+                                .handle_event(m, e, &mut |a| show(&emit_program, a)),
                             // The program has ended: what it sent last still goes
                             // out, then its sockets close.
                             None => self.driver.handle_event_after_end(e),
@@ -912,8 +913,8 @@ impl Loop {
             .filter(|c| c.service == Service::Rtde)
             .count()
             .max(1);
-        let share = i64::try_from((STEP_OUTPUT_BUDGET / rtde).max(MIN_OUTPUT_SHARE))
-            .unwrap_or(i64::MAX);
+        let share =
+            i64::try_from((STEP_OUTPUT_BUDGET / rtde).max(MIN_OUTPUT_SHARE)).unwrap_or(i64::MAX);
         for c in self
             .clients
             .iter_mut()
