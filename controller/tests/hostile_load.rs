@@ -4,9 +4,10 @@
 //! newcomer out.
 //!
 //! A rate is counted over windows of [`WINDOW`] and the best of [`WINDOWS`] windows is
-//! compared with [`MIN_SHARE`] of the rate asked for: a loaded machine may lose a window
+//! compared with [`MIN_SHARE`] of the rate asked for (or of the rate the client got
+//! alone, on a machine too loaded to give it that): a loaded machine may lose a window
 //! to another process, not all of them. The attacks of this file took the rate to a
-//! tenth of that or less before the loop budgeted each client's work per step.
+//! fifth of that or less before the loop budgeted each client's work per step.
 //! Every wait is bounded; the tests take turns ([`SERIAL`]).
 
 use std::io::{ErrorKind, Read, Write};
@@ -253,10 +254,10 @@ impl Good {
         }
     }
 
-    /// The best rate (packages per second) over [`WINDOWS`] windows.
-    fn best_rate(&self) -> f64 {
+    /// The best rate (packages per second) over `windows` windows.
+    fn best_rate(&self, windows: usize) -> f64 {
         let mut best = 0.0f64;
-        for _ in 0..WINDOWS {
+        for _ in 0..windows {
             let (c0, t0) = (self.count.load(Ordering::SeqCst), Instant::now());
             thread::sleep(WINDOW);
             let (c1, t1) = (self.count.load(Ordering::SeqCst), Instant::now());
@@ -340,18 +341,23 @@ impl Drop for Attack {
 }
 
 /// Starts the good client, runs `attack`, and checks the good client's best rate.
+/// Starts the good client, measures its rate alone, runs `attack`, and checks the good
+/// client's best rate under it: at least [`MIN_SHARE`] of [`HZ`], or of the rate it got
+/// alone on a machine too loaded to give it [`HZ`] (the attacks of this file took it to
+/// a fifth or less of that).
 fn good_rate_under(what: &str, f: &Fixture, attack: impl FnOnce(&Fixture, &mut Attack)) {
     let good = Good::start(f.addr("rtde"));
+    let alone = good.best_rate(2);
     let mut a = Attack::new();
     attack(f, &mut a);
     // Let the flood build up.
     thread::sleep(Duration::from_millis(300));
-    let rate = good.best_rate();
+    let rate = good.best_rate(WINDOWS);
     drop(a);
-    eprintln!("{what}: the good client got {rate:.0} packages/s");
+    eprintln!("{what}: the good client got {rate:.0} packages/s ({alone:.0} alone)");
     assert!(
-        rate >= MIN_SHARE * HZ,
-        "{what}: the good 500 Hz client got {rate:.0} packages/s at best"
+        rate >= MIN_SHARE * alone.min(HZ),
+        "{what}: the good 500 Hz client got {rate:.0} packages/s at best ({alone:.0} alone)"
     );
     drop(good);
 }
@@ -511,7 +517,7 @@ fn silent_rtde_sockets_are_evicted_for_newcomers_and_a_reader_is_not() {
     );
     drop(log);
     assert!(
-        good.best_rate() >= MIN_SHARE * HZ,
+        good.best_rate(WINDOWS) >= MIN_SHARE * HZ,
         "the reader lost its rate"
     );
     drop(silent);
