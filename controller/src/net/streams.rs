@@ -697,15 +697,18 @@ impl Loop {
     /// stream gets what is due.
     fn step(&mut self, shared: &Arc<Shared>, now: Duration) {
         let mut messages: Vec<RobotMessage> = Vec::new();
+        // The step's events, reported once the cell is unlocked (at most the cell's
+        // MAX_EVENTS and what the program's sockets did in one step).
+        let deferred = std::cell::RefCell::new(Vec::new());
         let status = {
             let mut cell = shared.lock_cell();
             cell.advance(now);
-            let emit = |e: Event| shared.emit(e);
+            let emit = |e: Event| deferred.borrow_mut().push(e);
             // The program's messages, calls and socket bytes, within their budget.
             let budget = std::cell::RefCell::new(&mut self.program_events);
             let emit_program = |e: Event| {
                 if budget.borrow_mut().allow() {
-                    shared.emit(e);
+                    deferred.borrow_mut().push(e);
                 }
             };
             while let Some(event) = cell.poll_event() {
@@ -825,6 +828,9 @@ impl Loop {
             status.time = now.as_secs_f64();
             status
         };
+        for e in deferred.into_inner() {
+            shared.emit(e);
+        }
         // A change of the safety status reaches the primary clients as the controller's
         // safety mode message; a protective stop also as an error code of level
         // WARNING (2), which UR's client library treats as a failed script unless told
