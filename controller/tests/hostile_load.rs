@@ -397,6 +397,21 @@ fn bare_line_floods_from_two_peers_leave_the_good_client_its_rate() {
 }
 
 #[test]
+fn bare_line_floods_from_many_peers_leave_the_good_client_its_rate() {
+    let _turn = serial();
+    let f = start();
+    brake_release(&f);
+    good_rate_under("bare-line floods from 48 peers", &f, |f, a| {
+        for service in ["primary", "secondary", "realtime"] {
+            for _ in 0..16 {
+                let s = connect(f.addr(service)).expect("connect");
+                a.flood(s, b"x = 1\n".repeat(4096));
+            }
+        }
+    });
+}
+
+#[test]
 fn an_rtde_input_flood_leaves_the_good_client_its_rate() {
     let _turn = serial();
     let f = start();

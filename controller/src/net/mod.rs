@@ -58,7 +58,8 @@
 //! - The work of one step of the real-time loop: each stream client's fair share of
 //!   [`STEP_READ_BUDGET`] bytes read (at least [`MIN_READ_SHARE`]), of
 //!   [`STEP_ITEM_BUDGET`] script items done (at least [`MIN_ITEM_SHARE`]; the rest wait
-//!   in its queue, at most what one read completed, and it is not read meanwhile), of
+//!   in its queue, at most what one read completed, and it is not read meanwhile; at
+//!   most [`STEP_START_BUDGET`] programs of all clients started), of
 //!   [`STEP_OUTPUT_BUDGET`] bytes of RTDE data packages made (at least
 //!   [`MIN_OUTPUT_SHARE`]); superseded programs, speeds and RTDE inputs of one step
 //!   coalesced. So floods on any port leave a well-behaved 500 Hz RTDE client its rate
@@ -109,7 +110,7 @@ pub use interpreter::{MAX_INTERPRETER_CONNECTIONS, POLL as INTERPRETER_POLL};
 pub use streams::{
     EVENT_INTERVAL, MAX_BACKLOG, MAX_CLIENTS, MAX_CONNECTING, MAX_EVENTS_PER_INTERVAL, MAX_QUEUE,
     MAX_STALL, MIN_ITEM_SHARE, MIN_OUTPUT_SHARE, MIN_READ_SHARE, READ_CHUNK, STEP_ITEM_BUDGET,
-    STEP_OUTPUT_BUDGET, STEP_READ_BUDGET,
+    STEP_OUTPUT_BUDGET, STEP_READ_BUDGET, STEP_START_BUDGET,
 };
 
 /// Dashboard connections served at once; more are accepted and closed at once. Each is

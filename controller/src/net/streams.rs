@@ -21,7 +21,8 @@
 //! intake or RTDE session bounds allow; the script items they complete (lines,
 //! commands, programs) wait in the client's queue and at most its fair share of
 //! [`STEP_ITEM_BUDGET`] (at least [`MIN_ITEM_SHARE`]) of them are done a step, the
-//! client not read again until its queue is empty. Within one step's items of one
+//! client not read again until its queue is empty, and at most [`STEP_START_BUDGET`]
+//! programs of all clients start a step (the clients take turns being first). Within one step's items of one
 //! client only the last program (or bare line) starts, as the others would be stopped
 //! before their first step, and only the last `set speed` is applied; of one step's
 //! RTDE input packages of one recipe only the last is applied. A client's RTDE data
@@ -82,12 +83,12 @@ pub const READ_CHUNK: usize = 64 * 1024;
 pub const MAX_CONNECTING: usize = 8;
 /// Bytes read from the stream clients in one step, each client reading at most its
 /// fair share (this over the number of clients that sent something the step before, at
-/// least [`MIN_READ_SHARE`]) in one read: 4 MB/s at 2 ms steps (1 MB/s at CB3's 8 ms),
-/// more than clients send (a 100 KiB driver script comes in 25 ms, the largest program,
-/// 4 MiB, in one second), while a flood of small RTDE packages or script lines cannot
-/// keep the loop parsing instead of stepping. The rest waits in the kernel for the
-/// next step.
-pub const STEP_READ_BUDGET: usize = 8 * 1024;
+/// least [`MIN_READ_SHARE`]) in one read: 2 MB/s at 2 ms steps (0.5 MB/s at CB3's
+/// 8 ms), more than clients send (a 100 KiB driver script comes in 50 ms, the largest
+/// program, 4 MiB, in two seconds), while a flood of small RTDE packages or script
+/// lines cannot keep the loop parsing instead of stepping (a slow host's debug build
+/// included). The rest waits in the kernel for the next step.
+pub const STEP_READ_BUDGET: usize = 4 * 1024;
 /// The least a client may read in one step however many clients send: 512 bytes, 256
 /// KB/s at 2 ms steps, more than a client streaming a large RTDE input recipe at 500 Hz
 /// sends; with [`MAX_CLIENTS`] flooding the loop reads at most 32 KiB a step.
@@ -110,6 +111,12 @@ pub const MIN_OUTPUT_SHARE: usize = 1024;
 pub const STEP_ITEM_BUDGET: usize = 64;
 /// The least number of script items a client may have done in one step.
 pub const MIN_ITEM_SHARE: usize = 2;
+/// Programs (and secondary programs) of the stream clients compiled and started in one
+/// step, all clients together: 1000 a second at 2 ms steps, more than a controller
+/// compiles, while many clients' floods of lines cannot keep the loop compiling. A
+/// program past it waits in its client's queue for the next step; the clients take
+/// turns being first.
+pub const STEP_START_BUDGET: usize = 2;
 /// The interval over which events are counted for [`MAX_EVENTS_PER_INTERVAL`].
 pub const EVENT_INTERVAL: Duration = Duration::from_secs(1);
 /// Events reported per client (and for the running program: its messages, socket calls
@@ -286,6 +293,8 @@ pub(crate) fn run(shared: &Arc<Shared>, listeners: Listeners) {
         frame: Vec::new(),
         program_events: EventBudget::new(shared.now()),
         senders: 0,
+        starts_left: 0,
+        turn: 0,
     };
     let listeners = [
         (listeners.primary, Service::Primary),
@@ -450,6 +459,10 @@ struct Loop {
     program_events: EventBudget,
     /// Clients that sent something in the last step (the read budget's shares).
     senders: usize,
+    /// Programs that may still start this step ([`STEP_START_BUDGET`]).
+    starts_left: usize,
+    /// Counts the steps: the client served first.
+    turn: usize,
 }
 
 impl Loop {
@@ -539,7 +552,11 @@ impl Loop {
         // The buffer is lent out while `received` (which needs `&mut self`) runs: no
         // copy of the bytes per read.
         let mut buf = std::mem::take(&mut self.buf);
-        for i in 0..self.clients.len() {
+        self.starts_left = STEP_START_BUDGET;
+        let count = self.clients.len();
+        self.turn = self.turn.wrapping_add(1);
+        let first = self.turn % count.max(1);
+        for i in (first..count).chain(0..first) {
             if !self.clients[i].pending.is_empty() {
                 self.do_items(shared, i, item_share, now);
                 continue;
@@ -629,14 +646,31 @@ impl Loop {
     /// superseded within the step and counted as suppressed events).
     fn do_items(&mut self, shared: &Shared, i: usize, max: usize, now: Duration) {
         let c = &mut self.clients[i];
-        let k = c.pending.len().min(max);
+        let starts = |it: &Result<Intake, IntakeError>| {
+            matches!(it, Ok(Intake::Program { .. } | Intake::Line(_)))
+        };
+        let secondary =
+            |it: &Result<Intake, IntakeError>| matches!(it, Ok(Intake::Secondary { .. }));
+        let mut k = c.pending.len().min(max);
+        // At most one secondary program a batch; its programs within the step's budget
+        // (the rest wait for the next step).
+        if let Some(s) = c.pending.iter().take(k).position(secondary) {
+            k = s + 1;
+        }
+        let head = || c.pending.iter().take(k);
+        let mut compiles =
+            usize::from(head().any(starts)) + head().filter(|it| secondary(it)).count();
+        if compiles > self.starts_left {
+            k = head()
+                .position(|it| starts(it) || secondary(it))
+                .unwrap_or(0);
+            compiles = 0;
+        }
+        self.starts_left -= compiles;
         if k == 0 {
             return;
         }
         let batch: Vec<_> = c.pending.drain(..k).collect();
-        let starts = |it: &Result<Intake, IntakeError>| {
-            matches!(it, Ok(Intake::Program { .. } | Intake::Line(_)))
-        };
         let speed = |it: &Result<Intake, IntakeError>| {
             matches!(it, Ok(Intake::Command(Command::SetSpeed(_))))
         };
