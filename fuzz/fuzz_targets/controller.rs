@@ -14,13 +14,13 @@ use std::time::Duration;
 
 use arbitrary::Arbitrary;
 use libfuzzer_sys::fuzz_target;
-use urscript_controller::script_intake::{Intake, ScriptIntake};
 use std::io::Write;
+use urscript_controller::script_intake::{Intake, ScriptIntake};
 
 use urscript_controller::urp::MAX_SCRIPT_BYTES;
 use urscript_controller::{
-    read_external_control_settings, read_urp, translate_with, Cell, Config, Controller,
-    Dashboard, FetchError, InputRegistry, RtdeSession, Submitted, RTDE_MAX_OUTBOX,
+    read_external_control_settings, read_urp, translate_with, Cell, Config, Controller, Dashboard,
+    FetchError, InputRegistry, RtdeSession, Submitted, RTDE_MAX_OUTBOX,
 };
 
 #[derive(Arbitrary, Debug)]
@@ -114,10 +114,7 @@ fn build(nodes: &[Node<'_>]) -> String {
             Node::Open(kind) => {
                 let (head, tail) = match kind % 3 {
                     0 => ("<Folder><children>", "</children></Folder>"),
-                    1 => (
-                        r#"<Loop type="Forever"><children>"#,
-                        "</children></Loop>",
-                    ),
+                    1 => (r#"<Loop type="Forever"><children>"#, "</children></Loop>"),
                     _ => (
                         r#"<Move motionType="MoveJ"><children>"#,
                         "</children></Move>",
@@ -245,6 +242,10 @@ fuzz_target!(|actions: Vec<Action<'_>>| {
         }
         while cell.poll_event().is_some() {}
         // The RTDE client's replies are bounded even when nobody takes them.
-        assert!(rtde.outbox().len() <= RTDE_MAX_OUTBOX, "{}", rtde.outbox().len());
+        assert!(
+            rtde.outbox().len() <= RTDE_MAX_OUTBOX,
+            "{}",
+            rtde.outbox().len()
+        );
     }
 });
