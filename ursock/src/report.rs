@@ -702,6 +702,24 @@ pub struct Dropped {
     pub count: u64,
 }
 
+/// `controller`: the real-time loop fell behind its steps (at most once a second, and at
+/// once when it held a stall back). Every step was still computed and every package
+/// sent, late; only `held_seconds` of controller time did not pass.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Late {
+    pub t: f64,
+    /// Steps computed a whole step or more after their time.
+    pub late_steps: u64,
+    /// The most a step was computed after its time, in milliseconds.
+    pub worst_ms: f64,
+    /// Stalls past the catch-up bound, held back.
+    pub holds: u64,
+    /// Controller time held back by them, in seconds (no step computed for it).
+    pub held_seconds: f64,
+    /// Over how many seconds.
+    pub seconds: f64,
+}
+
 /// `controller`: the controller stopped (the last event).
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Stopped {
@@ -749,6 +767,7 @@ pub enum Event {
     Program(Program),
     Client(Client),
     Suppressed(Suppressed),
+    Late(Late),
     Dropped(Dropped),
     Stopped(Stopped),
 }
@@ -846,6 +865,7 @@ impl Event {
             Event::RefusedAddress(e) => e.t,
             Event::Evicted(e) => e.t,
             Event::Suppressed(e) => e.t,
+            Event::Late(e) => e.t,
             Event::Dropped(e) => e.t,
             Event::Stopped(e) => e.t,
         }

@@ -360,3 +360,52 @@ fn a_host_stall_does_not_expire_a_read_whose_reply_came_in_time() {
     }
     assert_eq!(String::from_utf8_lossy(&got), "[1, 7]");
 }
+
+/// Reads realtime packages until `n` have come, checking that each one's time is one
+/// 2 ms step after the one before.
+fn consecutive_packages(s: &mut TcpStream, last: &mut f64, n: usize) {
+    for i in 0..n {
+        let t = f64_at(&realtime_package(s), 4);
+        assert!(
+            (t - *last - 0.002).abs() < 1e-9,
+            "package {i}: time {t} after {last}: a step was skipped"
+        );
+        *last = t;
+    }
+}
+
+#[test]
+#[cfg(unix)]
+fn a_stalled_controller_sends_every_package_late_and_says_so() {
+    let c = Controller::start();
+    let mut rt = c.connect("realtime");
+    let mut last = f64_at(&realtime_package(&mut rt), 4);
+    consecutive_packages(&mut rt, &mut last, 20);
+    // A stall within the catch-up bound (1 s): every step is computed, late.
+    signal(&c, "-STOP");
+    std::thread::sleep(Duration::from_millis(300));
+    signal(&c, "-CONT");
+    consecutive_packages(&mut rt, &mut last, 400);
+    let late = c.wait_event("late", |v| v["event"] == "late");
+    let steps = late["late_steps"].as_u64().expect("late_steps");
+    assert!(steps >= 100, "300 ms stalled is 150 steps late: {late}");
+    assert!(
+        late["worst_ms"].as_f64().expect("worst_ms") >= 250.0,
+        "{late}"
+    );
+    assert_eq!(late["holds"], 0, "{late}");
+    // A stall past the bound: it is held back whole, loudly (no burst of steps); the
+    // timestamps go on from the step that was due.
+    signal(&c, "-STOP");
+    std::thread::sleep(Duration::from_millis(1600));
+    signal(&c, "-CONT");
+    consecutive_packages(&mut rt, &mut last, 600);
+    let held = c.wait_event("late with a hold", |v| {
+        v["event"] == "late" && v["holds"].as_u64() > Some(0)
+    });
+    let seconds = held["held_seconds"].as_f64().expect("held_seconds");
+    assert!(
+        (1.0..20.0).contains(&seconds),
+        "held back {seconds} s: {held}"
+    );
+}

@@ -89,6 +89,7 @@
 //! ```
 
 mod clock;
+pub use clock::MAX_CATCH_UP;
 mod fetch;
 mod interpreter;
 mod streams;
@@ -354,6 +355,15 @@ pub enum ServerEvent {
         /// Over how long (from the interval's start to its report).
         interval: Duration,
     },
+    /// The real-time loop fell behind its steps (at most one report per
+    /// [`EVENT_INTERVAL`], and at once when it held time back): every step was still
+    /// computed and every package sent, late, except the time `lateness.held`.
+    Late {
+        /// The lateness over the interval.
+        lateness: Lateness,
+        /// Over how long (from the interval's start to its report, controller time).
+        interval: Duration,
+    },
     /// A dashboard client said `shutdown`: its program has ended and every client has
     /// been closed (their events came first); the server has stopped. The last event.
     Shutdown,
@@ -438,12 +448,40 @@ impl Programs for DirPrograms {
 
 type Sink = dyn Fn(ServerEvent) + Send + Sync;
 
+/// How far the real-time loop fell behind its steps. It computes every step and sends
+/// every package, late if it must (a loaded or stalled host), and holds back only a
+/// stall longer than [`MAX_CATCH_UP`] (see the controller's README, "Bounds").
+#[derive(Debug, Default, Clone, Copy, PartialEq, Eq)]
+pub struct Lateness {
+    /// Steps computed a whole step or more after their time.
+    pub late_steps: u64,
+    /// The most a step was computed after its time.
+    pub worst: Duration,
+    /// Stalls past [`MAX_CATCH_UP`]: controller time that did not pass (no step
+    /// computed, no package sent for it; the controller's time lags the wall clock by it).
+    pub held: Duration,
+    /// How many such stalls.
+    pub holds: u64,
+}
+
+impl Lateness {
+    /// Adds `other` to the totals.
+    pub(crate) fn add(&mut self, other: &Lateness) {
+        self.late_steps = self.late_steps.saturating_add(other.late_steps);
+        self.worst = self.worst.max(other.worst);
+        self.held = self.held.saturating_add(other.held);
+        self.holds = self.holds.saturating_add(other.holds);
+    }
+}
+
 /// What the server's threads share.
 pub(crate) struct Shared {
     cell: Mutex<Cell>,
     config: Config,
     /// Controller time: wall time less what the host took from the real-time loop.
     clock: clock::Clock,
+    /// The real-time loop's lateness since the start.
+    lateness: Mutex<Lateness>,
     next_conn: AtomicU64,
     urcap_host: Option<(String, u16)>,
     /// The programs folder, canonical: a played program and its installation are read
@@ -655,11 +693,11 @@ impl Server {
         };
         let interp = Cell::interp_config(&controller);
         let cell = Cell::new(controller, interp);
-        let step = cell.step_time();
         let shared = Arc::new(Shared {
             cell: Mutex::new(cell),
             config,
-            clock: clock::Clock::new(step),
+            clock: clock::Clock::new(),
+            lateness: Mutex::new(Lateness::default()),
             program_names,
             next_conn: AtomicU64::new(1),
             urcap_host: options.urcap_host,
@@ -735,6 +773,16 @@ impl Server {
         let mut cell = self.shared.lock_cell();
         cell.advance(now);
         f(&mut cell, now)
+    }
+
+    /// How late the real-time loop has been since the start (as of the end of the last
+    /// [`EVENT_INTERVAL`]).
+    pub fn lateness(&self) -> Lateness {
+        *self
+            .shared
+            .lateness
+            .lock()
+            .unwrap_or_else(|p| p.into_inner())
     }
 
     /// Whether the server has stopped (a dashboard `shutdown`, or [`Server::stop`]).

@@ -48,7 +48,7 @@ use std::time::Duration;
 use urscript_interp::drive::{connect_stream, describe_connect_error, Activity, Driver, Options};
 use urscript_interp::{Event as ProgramEvent, MessageKind};
 
-use super::{ServerEvent as Event, Shared, EVICT_IDLE};
+use super::{Lateness, ServerEvent as Event, Shared, EVICT_IDLE};
 use crate::primary::{self, RobotMessage};
 use crate::realtime;
 use crate::rtde::{InputRegistry, RtdeEvent, RtdeSession};
@@ -311,20 +311,26 @@ pub(crate) fn run(shared: &Arc<Shared>, listeners: Listeners) {
         let cell = shared.cell.lock().unwrap_or_else(|p| p.into_inner());
         cell.step_time()
     };
-    // The controller's clock counts whole steps: each round runs at the last step
-    // boundary at or before the controller's time, so that the streams' timestamps are
-    // whole steps and RTDE's schedule (kept in the same steps) sends at every step that
-    // is due however late the thread woke. A stall of the host is held back, not run
-    // through (see `clock`): what the clients sent meanwhile is read at the step after
-    // the last one.
+    // Every step is computed, at its own time (a multiple of the step), however late
+    // the thread woke: late steps run back to back until the loop is on time, so the
+    // streams' timestamps are consecutive and RTDE's schedule (kept in the same steps)
+    // sends every package that is due. Only a stall past `MAX_CATCH_UP` is held back
+    // (see `clock`); lateness is counted and reported.
     let mut last: Option<Duration> = None;
+    let mut late = LateReport::new(shared.now());
     while !shared.stopped() {
-        let tick = step_boundary(shared.clock.tick(), step);
-        if let Some(last) = last.filter(|l| tick <= *l) {
-            // Woke before the next boundary (a spurious wake-up): sleep on.
-            std::thread::sleep((last + step).saturating_sub(shared.now()).min(step));
+        let due = match last {
+            Some(l) => l + step,
+            None => step_boundary(shared.now(), step),
+        };
+        let (now, held) = shared.clock.catch_up(due);
+        if now < due {
+            // Woke before the step's time: sleep on.
+            std::thread::sleep((due - now).min(step));
             continue;
         }
+        let tick = due;
+        late.record(now - tick, held, step);
         for (l, service) in &listeners {
             if let Some(l) = l {
                 lp.accept(shared, l, *service);
@@ -337,6 +343,7 @@ pub(crate) fn run(shared: &Arc<Shared>, listeners: Listeners) {
         }
         lp.drop_gone(shared);
         lp.report_suppressed(shared, tick);
+        late.report(shared, tick);
         if shared.shutting_down() {
             // The controller shut down: the step above ended its program; every
             // client is closed, then the loop ends.
@@ -354,6 +361,57 @@ pub(crate) fn run(shared: &Arc<Shared>, listeners: Listeners) {
         if next > now {
             std::thread::sleep((next - now).min(step));
         }
+    }
+}
+
+/// The loop's lateness over the current report interval.
+struct LateReport {
+    /// The interval's lateness.
+    now: Lateness,
+    /// The interval's start (controller time).
+    since: Duration,
+}
+
+impl LateReport {
+    fn new(now: Duration) -> Self {
+        LateReport {
+            now: Lateness::default(),
+            since: now,
+        }
+    }
+
+    /// A step computed `late` after its time, after `held` was held back.
+    fn record(&mut self, late: Duration, held: Duration, step: Duration) {
+        if late >= step {
+            self.now.late_steps += 1;
+        }
+        self.now.worst = self.now.worst.max(late);
+        if !held.is_zero() {
+            self.now.held = self.now.held.saturating_add(held);
+            self.now.holds += 1;
+        }
+    }
+
+    /// Adds the interval's lateness to the totals ([`super::Server::lateness`]) at the
+    /// end of each [`EVENT_INTERVAL`], and reports it as an event when it had late
+    /// steps, at once after a stall was held back.
+    fn report(&mut self, shared: &Shared, now: Duration) {
+        let interval = now.saturating_sub(self.since);
+        if self.now.holds == 0 && interval < EVENT_INTERVAL {
+            return;
+        }
+        shared
+            .lateness
+            .lock()
+            .unwrap_or_else(|p| p.into_inner())
+            .add(&self.now);
+        if self.now.late_steps > 0 || self.now.holds > 0 {
+            shared.emit(Event::Late {
+                lateness: self.now,
+                interval,
+            });
+        }
+        *self = LateReport::new(now);
     }
 }
 

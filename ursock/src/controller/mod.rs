@@ -248,6 +248,14 @@ fn report_event(e: ServerEvent) -> Option<Event> {
             count,
             seconds: (interval.as_secs_f64() * 1e3).round() / 1e3,
         }),
+        ServerEvent::Late { lateness, interval } => Event::Late(report::Late {
+            t,
+            late_steps: lateness.late_steps,
+            worst_ms: (lateness.worst.as_secs_f64() * 1e6).round() / 1e3,
+            holds: lateness.holds,
+            held_seconds: (lateness.held.as_secs_f64() * 1e3).round() / 1e3,
+            seconds: (interval.as_secs_f64() * 1e3).round() / 1e3,
+        }),
         _ => return None,
     })
 }
@@ -495,7 +503,14 @@ fn operator(server: &Server, json: bool) {
             )
         });
         if !json {
-            crate::out::line(&said);
+            let l = server.lateness();
+            crate::out::line(&format!(
+                "{said}; loop: {} steps late (worst {:.1} ms), {:.3} s held back in {} stalls",
+                l.late_steps,
+                l.worst.as_secs_f64() * 1e3,
+                l.held.as_secs_f64(),
+                l.holds
+            ));
         }
     }
 }

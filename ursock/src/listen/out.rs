@@ -415,6 +415,17 @@ pub fn human(event: &Event, show_max: usize) -> Vec<String> {
             "{} events not reported in {:.1} s (a flood, or superseded within a step)",
             e.count, e.seconds
         )),
+        Event::Late(e) => one(if e.holds > 0 {
+            format!(
+                "controller LATE: {} steps late in {:.1} s (worst {:.1} ms); {} stall(s) past the catch-up bound held back {:.3} s (no steps computed for it)",
+                e.late_steps, e.seconds, e.worst_ms, e.holds, e.held_seconds
+            )
+        } else {
+            format!(
+                "controller late: {} steps computed late in {:.1} s (worst {:.1} ms); every package sent",
+                e.late_steps, e.seconds, e.worst_ms
+            )
+        }),
         Event::Dropped(e) => one(format!(
             "{} events not written: standard output did not keep up",
             e.count
