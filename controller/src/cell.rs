@@ -264,6 +264,17 @@ impl Cell {
         self.running.as_ref().map(|r| r.name.as_str())
     }
 
+    /// Whether nothing in the cell needs time to pass step by step: no program running,
+    /// paused, playing or being loaded, and no event waiting. What the controller's
+    /// state machine does with time alone (power-on, brake release, a stop's hold) is
+    /// worked out from the time at the next [`Cell::advance`], however far it jumps.
+    pub fn is_idle(&self) -> bool {
+        self.running.is_none()
+            && !self.awaiting_load
+            && self.events.is_empty()
+            && self.controller.program_state() == ProgramState::Stopped
+    }
+
     /// The step length.
     pub fn step_time(&self) -> Duration {
         self.interp.step_time

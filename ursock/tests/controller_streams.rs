@@ -409,3 +409,28 @@ fn a_stalled_controller_sends_every_package_late_and_says_so() {
         "held back {seconds} s: {held}"
     );
 }
+
+#[test]
+fn a_client_of_an_idle_controller_gets_the_time_of_now_step_by_step() {
+    let c = Controller::start();
+    // Idle (no client, no program): the loop sleeps; the steps start when a client comes.
+    std::thread::sleep(Duration::from_millis(1500));
+    let mut rt = c.connect("realtime");
+    let mut last = f64_at(&realtime_package(&mut rt), 4);
+    assert!(
+        last >= 1.4,
+        "the controller's time went on while idle: {last}"
+    );
+    consecutive_packages(&mut rt, &mut last, 50);
+    // The dashboard wakes it too: power-on and brake release take their time meanwhile.
+    c.ready();
+    let mut d = c.dashboard();
+    d.ask("shutdown");
+    let events = c.events_to_the_end();
+    assert!(
+        !events
+            .iter()
+            .any(|v| v["event"] == "late" && v["holds"].as_u64() > Some(0)),
+        "the idle time was not a stall: {events:?}"
+    );
+}

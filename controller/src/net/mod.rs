@@ -109,9 +109,9 @@ use crate::{Cell, Config, Controller, Dashboard, Programs, Reply, MAX_LINE};
 pub use fetch::{parse_host, MAX_FETCHED, MAX_FILE};
 pub use interpreter::{MAX_INTERPRETER_CONNECTIONS, POLL as INTERPRETER_POLL};
 pub use streams::{
-    EVENT_INTERVAL, MAX_BACKLOG, MAX_CLIENTS, MAX_CONNECTING, MAX_EVENTS_PER_INTERVAL, MAX_QUEUE,
-    MAX_STALL, MIN_ITEM_SHARE, MIN_OUTPUT_SHARE, MIN_READ_SHARE, READ_CHUNK, STEP_ITEM_BUDGET,
-    STEP_OUTPUT_BUDGET, STEP_READ_BUDGET, STEP_START_BUDGET,
+    EVENT_INTERVAL, IDLE_POLL, MAX_BACKLOG, MAX_CLIENTS, MAX_CONNECTING, MAX_EVENTS_PER_INTERVAL,
+    MAX_QUEUE, MAX_STALL, MIN_ITEM_SHARE, MIN_OUTPUT_SHARE, MIN_READ_SHARE, READ_CHUNK,
+    STEP_ITEM_BUDGET, STEP_OUTPUT_BUDGET, STEP_READ_BUDGET, STEP_START_BUDGET,
 };
 
 /// Dashboard connections served at once; more are accepted and closed at once. Each is
@@ -482,6 +482,8 @@ pub(crate) struct Shared {
     clock: clock::Clock,
     /// The real-time loop's lateness since the start.
     lateness: Mutex<Lateness>,
+    /// The real-time loop's thread, to wake it when it sleeps idle.
+    loop_thread: Mutex<Option<std::thread::Thread>>,
     next_conn: AtomicU64,
     urcap_host: Option<(String, u16)>,
     /// The programs folder, canonical: a played program and its installation are read
@@ -565,8 +567,28 @@ impl Shared {
         }
     }
 
+    /// The cell, for any thread but the real-time loop: the loop, if it sleeps idle,
+    /// wakes to look at what the caller did.
     pub(crate) fn lock_cell(&self) -> MutexGuard<'_, Cell> {
+        self.wake_loop();
+        self.loop_cell()
+    }
+
+    /// The cell, for the real-time loop.
+    pub(crate) fn loop_cell(&self) -> MutexGuard<'_, Cell> {
         self.cell.lock().unwrap_or_else(|p| p.into_inner())
+    }
+
+    /// Wakes the real-time loop if it sleeps idle.
+    pub(crate) fn wake_loop(&self) {
+        if let Some(t) = self
+            .loop_thread
+            .lock()
+            .unwrap_or_else(|p| p.into_inner())
+            .as_ref()
+        {
+            t.unpark();
+        }
     }
 
     pub(crate) fn next_conn(&self) -> u64 {
@@ -698,6 +720,7 @@ impl Server {
             config,
             clock: clock::Clock::new(),
             lateness: Mutex::new(Lateness::default()),
+            loop_thread: Mutex::new(None),
             program_names,
             next_conn: AtomicU64::new(1),
             urcap_host: options.urcap_host,

@@ -318,7 +318,22 @@ pub(crate) fn run(shared: &Arc<Shared>, listeners: Listeners) {
     // (see `clock`); lateness is counted and reported.
     let mut last: Option<Duration> = None;
     let mut late = LateReport::new(shared.now());
+    *shared.loop_thread.lock().unwrap_or_else(|p| p.into_inner()) = Some(std::thread::current());
     while !shared.stopped() {
+        if lp.is_idle(shared) {
+            for (l, service) in &listeners {
+                if let Some(l) = l {
+                    lp.accept(shared, l, *service);
+                }
+            }
+            if lp.clients.is_empty() {
+                // Idle: no steps until a client comes or another thread acts on the
+                // cell (it wakes the loop); the steps start again from then.
+                last = None;
+                std::thread::park_timeout(IDLE_POLL);
+                continue;
+            }
+        }
         let due = match last {
             Some(l) => l + step,
             None => step_boundary(shared.now(), step),
@@ -363,6 +378,13 @@ pub(crate) fn run(shared: &Arc<Shared>, listeners: Listeners) {
         }
     }
 }
+
+/// How long the idle loop (no stream client, nothing in the cell that needs steps)
+/// sleeps between looks for a new stream client: a client that connects to an idle
+/// controller waits at most this for its first package, and an idle controller wakes
+/// 50 times a second (a dashboard or interpreter command, or the operator, wakes it at
+/// once).
+pub const IDLE_POLL: Duration = Duration::from_millis(20);
 
 /// The loop's lateness over the current report interval.
 struct LateReport {
@@ -524,6 +546,16 @@ struct Loop {
 }
 
 impl Loop {
+    /// Whether the loop may sleep: no stream client, no program connect pending, no
+    /// shutdown to carry out, and nothing in the cell that needs steps.
+    fn is_idle(&self, shared: &Shared) -> bool {
+        self.clients.is_empty()
+            && self.connects.waiting.is_empty()
+            && self.connects.in_flight == 0
+            && !shared.shutting_down()
+            && shared.loop_cell().is_idle()
+    }
+
     fn accept(&mut self, shared: &Shared, listener: &TcpListener, service: Service) {
         loop {
             let (stream, peer) = match listener.accept() {
@@ -692,7 +724,7 @@ impl Loop {
         c.push(&out);
         let _ = now;
         if !inputs.is_empty() {
-            let mut cell = shared.lock_cell();
+            let mut cell = shared.loop_cell();
             for (_, set) in &inputs {
                 cell.apply(set);
             }
@@ -749,21 +781,21 @@ impl Loop {
             match item {
                 Ok(Intake::Program { name, source }) => {
                     emit("program", &|| name.clone());
-                    shared.lock_cell().submit(Submitted::Program(source), now);
+                    shared.loop_cell().submit(Submitted::Program(source), now);
                 }
                 Ok(Intake::Secondary { name, source }) => {
                     emit("secondary", &|| name.clone());
-                    shared.lock_cell().submit(Submitted::Secondary(source), now);
+                    shared.loop_cell().submit(Submitted::Secondary(source), now);
                 }
                 Ok(Intake::Line(line)) => {
                     emit("line", &|| line.clone());
                     shared
-                        .lock_cell()
+                        .loop_cell()
                         .submit(Submitted::Program(format!("{line}\n")), now);
                 }
                 Ok(Intake::Command(cmd)) => {
                     emit("command", &|| format!("{cmd:?}"));
-                    let mut cell = shared.lock_cell();
+                    let mut cell = shared.loop_cell();
                     let c = cell.controller();
                     let _ = match cmd {
                         Command::PowerOn => c.power_on(now),
@@ -793,7 +825,7 @@ impl Loop {
         // MAX_EVENTS and what the program's sockets did in one step).
         let deferred = std::cell::RefCell::new(Vec::new());
         let status = {
-            let mut cell = shared.lock_cell();
+            let mut cell = shared.loop_cell();
             cell.advance(now);
             let emit = |e: Event| deferred.borrow_mut().push(e);
             // The program's messages, calls and socket bytes, within their budget.
