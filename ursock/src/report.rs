@@ -702,6 +702,18 @@ pub struct Dropped {
     pub count: u64,
 }
 
+/// `controller`: the scheduling the real-time loop's thread got (once, at the start).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Scheduling {
+    pub t: f64,
+    /// `SCHED_FIFO 10`, `nice -10` or `normal`.
+    pub policy: String,
+    /// Whether the process's memory is locked in RAM (as touched).
+    pub memory_locked: bool,
+    /// What was refused, with the system's error.
+    pub refused: Vec<String>,
+}
+
 /// `controller`: the real-time loop fell behind its steps (at most once a second, and at
 /// once when it held a stall back). Every step was still computed and every package
 /// sent, late; only `held_seconds` of controller time did not pass.
@@ -768,6 +780,7 @@ pub enum Event {
     Client(Client),
     Suppressed(Suppressed),
     Late(Late),
+    Scheduling(Scheduling),
     Dropped(Dropped),
     Stopped(Stopped),
 }
@@ -866,6 +879,7 @@ impl Event {
             Event::Evicted(e) => e.t,
             Event::Suppressed(e) => e.t,
             Event::Late(e) => e.t,
+            Event::Scheduling(e) => e.t,
             Event::Dropped(e) => e.t,
             Event::Stopped(e) => e.t,
         }

@@ -434,3 +434,22 @@ fn a_client_of_an_idle_controller_gets_the_time_of_now_step_by_step() {
         "the idle time was not a stall: {events:?}"
     );
 }
+
+#[test]
+fn the_loop_says_once_what_scheduling_it_got() {
+    let c = Controller::start_with(&["--realtime", "off"]);
+    let s = c.wait_event("scheduling", |v| v["event"] == "scheduling");
+    assert_eq!(s["policy"], "normal", "{s}");
+    assert_eq!(s["memory_locked"], false, "{s}");
+    assert_eq!(s["refused"], serde_json::json!([]), "{s}");
+    let c = Controller::start();
+    let s = c.wait_event("scheduling", |v| v["event"] == "scheduling");
+    let policy = s["policy"].as_str().expect("policy");
+    assert!(
+        ["SCHED_FIFO 10", "nice -10", "normal"].contains(&policy),
+        "{s}"
+    );
+    // What was not granted is said, with the reason.
+    let refused = s["refused"].as_array().expect("refused").len();
+    assert_eq!(policy == "SCHED_FIFO 10", refused <= 1, "{s}");
+}

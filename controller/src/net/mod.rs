@@ -89,7 +89,9 @@
 //! ```
 
 mod clock;
+mod priority;
 pub use clock::MAX_CATCH_UP;
+pub use priority::{Realtime, Scheduling, FIFO_PRIORITY, NICE};
 mod fetch;
 mod interpreter;
 mod streams;
@@ -241,6 +243,8 @@ pub struct ServerOptions {
     /// Whether the dashboard's `shutdown` is obeyed (default); when not, it is answered
     /// as a controller that may not shut down answers it, and nothing else changes.
     pub allow_shutdown: bool,
+    /// Whether the real-time loop asks for real-time scheduling ([`Realtime::Auto`]).
+    pub realtime: Realtime,
 }
 
 impl Default for ServerOptions {
@@ -253,6 +257,7 @@ impl Default for ServerOptions {
             urcap_host: None,
             profile: Profile::Robot,
             allow_shutdown: true,
+            realtime: Realtime::Auto,
         }
     }
 }
@@ -355,6 +360,8 @@ pub enum ServerEvent {
         /// Over how long (from the interval's start to its report).
         interval: Duration,
     },
+    /// What scheduling the real-time loop's thread got (once, when it starts).
+    Scheduling(Scheduling),
     /// The real-time loop fell behind its steps (at most one report per
     /// [`EVENT_INTERVAL`], and at once when it held time back): every step was still
     /// computed and every package sent, late, except the time `lateness.held`.
@@ -738,10 +745,14 @@ impl Server {
         let mut threads = Vec::new();
         {
             let shared = Arc::clone(&shared);
+            let realtime = options.realtime;
             threads.push(
                 std::thread::Builder::new()
                     .name("controller".into())
-                    .spawn(move || streams::run(&shared, listeners))?,
+                    .spawn(move || {
+                        shared.emit(ServerEvent::Scheduling(priority::apply(realtime)));
+                        streams::run(&shared, listeners)
+                    })?,
             );
         }
         if let Some(listener) = dashboard {

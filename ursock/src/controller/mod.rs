@@ -15,7 +15,9 @@ use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::{mpsc, Arc};
 use std::time::Duration;
 
-use urscript_controller::net::{parse_host, Ports, Profile, Server, ServerEvent, ServerOptions};
+use urscript_controller::net::{
+    parse_host, Ports, Profile, Realtime, Server, ServerEvent, ServerOptions,
+};
 use urscript_controller::{Config, Model, SafetyStatus, MAX_LINE};
 
 use crate::report::{self, Event};
@@ -104,6 +106,11 @@ pub struct ControllerOptions {
     /// command is served as before.
     #[arg(long)]
     pub no_shutdown: bool,
+    /// Real-time scheduling of the stepping thread: `auto` asks for SCHED_FIFO (priority
+    /// 10), else nice -10, and for memory locked as touched (mlockall), and runs with
+    /// whatever the host grants (said once: the `scheduling` event); `off` asks nothing.
+    #[arg(long, default_value = "auto", value_parser = ["auto", "off"])]
+    pub realtime: String,
 }
 
 /// Events waiting for standard output, at most: a second or so of a busy controller's
@@ -248,6 +255,12 @@ fn report_event(e: ServerEvent) -> Option<Event> {
             count,
             seconds: (interval.as_secs_f64() * 1e3).round() / 1e3,
         }),
+        ServerEvent::Scheduling(s) => Event::Scheduling(report::Scheduling {
+            t,
+            policy: s.policy,
+            memory_locked: s.memory_locked,
+            refused: s.refused,
+        }),
         ServerEvent::Late { lateness, interval } => Event::Late(report::Late {
             t,
             late_steps: lateness.late_steps,
@@ -324,6 +337,11 @@ pub fn run(opts: ControllerOptions) -> Result<(), String> {
             Profile::Robot
         },
         allow_shutdown: !opts.no_shutdown,
+        realtime: if opts.realtime == "off" {
+            Realtime::Off
+        } else {
+            Realtime::Auto
+        },
     };
     let json = opts.json;
     let (shutdown_tx, shutdown) = mpsc::channel::<()>();

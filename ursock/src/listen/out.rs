@@ -415,6 +415,19 @@ pub fn human(event: &Event, show_max: usize) -> Vec<String> {
             "{} events not reported in {:.1} s (a flood, or superseded within a step)",
             e.count, e.seconds
         )),
+        Event::Scheduling(e) => one(if e.refused.is_empty() {
+            format!(
+                "real-time loop: {}, memory locked: {}",
+                e.policy, e.memory_locked
+            )
+        } else {
+            format!(
+                "real-time loop: {}, memory locked: {} (refused: {})",
+                e.policy,
+                e.memory_locked,
+                e.refused.join("; ")
+            )
+        }),
         Event::Late(e) => one(if e.holds > 0 {
             format!(
                 "controller LATE: {} steps late in {:.1} s (worst {:.1} ms); {} stall(s) past the catch-up bound held back {:.3} s (no steps computed for it)",
