@@ -92,6 +92,7 @@ mod controller;
 pub mod drive;
 pub mod eip;
 mod error;
+mod force;
 pub mod event;
 pub mod interpreter;
 pub mod kinematics;
