@@ -847,17 +847,18 @@ impl Controller {
             }
         }
         if self.arm.force_mode.is_some() {
-            self.force_step(dt, moved, before);
+            self.force_step(step, moved, before);
         }
         if self.arm.world.contact_stiffness > 0.0 {
             self.track_contact(step);
         }
     }
 
-    /// Force mode over the last `dt` seconds, from joints `before` (speeds `qd_before`):
-    /// the program's pose (the motion's, when one was sampled this step, else the last)
-    /// moved by what force mode adds (see [`crate::force`]).
-    fn force_step(&mut self, dt: f64, sampled: bool, (before, qd_before): ([f64; 6], [f64; 6])) {
+    /// Force mode up to step `step` (from the last step it ran to), from joints `before`
+    /// (speeds `qd_before`): the program's pose (the motion's, when one was sampled this
+    /// step, else the last) moved by what force mode adds (see [`crate::force`]).
+    fn force_step(&mut self, step: u64, sampled: bool, (before, qd_before): ([f64; 6], [f64; 6])) {
+        let step_time = self.step_time.as_secs_f64();
         let tcp = self.arm.tcp;
         let programmed_q = self.arm.q;
         let v = [
@@ -874,6 +875,10 @@ impl Controller {
         if sampled {
             fm.programmed = kinematics::forward(&self.dh, programmed_q, tcp);
         }
+        // Each step moves force mode once (a motion started in a step already run only
+        // takes up the offset).
+        let dt = step.saturating_sub(fm.at) as f64 * step_time;
+        fm.at = fm.at.max(step);
         let kept = fm.offset;
         fm.step(actual, v, dt, plane, stiffness);
         let mut q = crate::force::joints_at(
@@ -893,6 +898,10 @@ impl Controller {
             );
         }
         let q = q.unwrap_or(before);
+        if dt <= 0.0 {
+            self.arm.q = q;
+            return;
+        }
         let qd: [f64; 6] = if dt > 0.0 {
             std::array::from_fn(|k| (q[k] - before[k]) / dt)
         } else {

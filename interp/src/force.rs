@@ -47,6 +47,8 @@ pub(crate) struct ForceMode {
     pub offset: [f64; 6],
     /// The tool pose the program last put the arm at (the motion's, without the offset).
     pub programmed: [f64; 6],
+    /// The last step force mode moved the arm in.
+    pub at: u64,
 }
 
 fn rot(p: [f64; 6]) -> M {

@@ -44,17 +44,27 @@
 //!   (mid-move and mid-blend too); `get_actual_tcp_pose()`, `get_target_tcp_pose()`: the
 //!   tool pose now; `get_target_waypoint()`: the target of the move under way (from the
 //!   start of a blend, the next move's), the tool pose at rest; speeds the speeds now;
-//!   `tool_contact()`: 0; `is_steady()`: False while a motion (a blend too) is under way
-//!   or a speed is held.
+//!   `tool_contact()`: the steps since the TCP touched the contact plane (0 without
+//!   contact; see `crate::force`); `is_steady()`: False while a motion (a blend too) is
+//!   under way, a speed is held, the joints move, or the arm is in teach/freedrive mode.
+//! - The speed slider (`Arm::speed_fraction`): every motion above runs on the motion
+//!   clock, which advances by the slider's fraction each step; moves and `stopj`/`stopl`
+//!   return when their motion ends on it; `servoj`, `speedj`, `speedl` return after `t`
+//!   of program time (the arm gets only as far as the slider lets it).
+//! - `force_mode`/`end_force_mode`: see `crate::force`. `teach_mode`/`freedrive_mode`:
+//!   the arm stops and the operator moves the joints (`Arm::move_by_hand`) until the
+//!   `end_` call or the program's end.
+//! - `is_within_safety_limits(pose, qnear)`: reachable by the inverse kinematics with
+//!   every joint within ±2π (joints given: each within ±2π).
 //! - Settings read back by their getters: payload (`set_target_payload`, `set_payload*`
 //!   -> `get_target_payload*`), TCP (`set_tcp` -> `get_tcp_offset`), gravity, base
 //!   acceleration, path offset (`path_offset_*`), `set_pos` (the joints).
 //! - What the robot measures of the world returns the documented fixed value of its
 //!   field of the virtual arm (`crate::controller::Arm`): `get_tcp_force()` and `force()`
-//!   0, `get_joint_torques()` 0, `get_joint_temp(j)` 35.0 °C, `get_controller_temp()`
+//!   `World::tcp_force` (0) plus the contact plane's push, `get_joint_torques()` 0, `get_joint_temp(j)` 35.0 °C, `get_controller_temp()`
 //!   30.0 °C, `get_tool_temp()` 32.0 °C, `get_tool_current()` 0.0 A;
 //!   `get_tool_accelerometer_reading()` is the gravity vector seen from the flange.
-//! - Settings the virtual arm has no use for (`force_mode`, `zero_ftsensor`,
+//! - Settings the virtual arm has no use for (`zero_ftsensor`,
 //!   `screw_driving`, ...) are accepted with their manual signatures and do nothing.
 
 use super::{accept, float_list, floats, opt, req, secs, Args, Builtin, Default, Domain, Out};
@@ -1468,6 +1478,7 @@ fn force_mode(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
         limits,
         offset: [0.0; 6],
         programmed,
+        at: c.step,
     });
     // The arm moves from this step's pose on.
     c.sampled = Some(c.step);
