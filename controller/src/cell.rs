@@ -296,9 +296,11 @@ impl Cell {
     /// outside their range.
     pub fn move_by_hand(&mut self, q: [f64; 6]) -> Result<(), String> {
         if self.running.is_some() && !self.arm().hand_guided() {
-            return Err("the arm moves by hand only in teach or freedrive mode: the running \
+            return Err(
+                "the arm moves by hand only in teach or freedrive mode: the running \
                  program is in neither (teach_mode(), freedrive_mode())"
-                .to_string());
+                    .to_string(),
+            );
         }
         self.arm_mut().move_by_hand(q)
     }

@@ -413,7 +413,10 @@ fn the_speed_slider_scales_the_programs_motion() {
     let prog = "movej([0.5, -1.2, 0.8, -1.9, 0.3, 0.4], t=1.5)\ntextmsg(\"done\")\n";
     cell.submit(Submitted::Program(prog.into()), ms(2000));
     cell.advance(ms(2000 + 1600));
-    assert!(texts(&events(&mut cell)).is_empty(), "at half speed a 1.5 s move is not over at 1.6 s");
+    assert!(
+        texts(&events(&mut cell)).is_empty(),
+        "at half speed a 1.5 s move is not over at 1.6 s"
+    );
     let s = cell.status();
     assert_eq!((s.speed_fraction, s.speed_scaling), (0.5, 0.5));
     assert!(s.actual_qd.iter().any(|v| *v != 0.0), "still moving");
@@ -438,12 +441,22 @@ fn force_mode_against_a_surface_shows_in_the_tcp_force_and_the_control_mode() {
     cell.advance(ms(2000 + 100));
     let s = cell.status();
     assert_eq!(s.control_mode, 2, "force");
-    assert_eq!(s.actual_tcp_force, [0.0; 6], "free space: the sensor reads nothing");
-    assert!((s.actual_tcp_pose[2] - (z - 0.01)).abs() < 0.001, "0.1 m/s down");
+    assert_eq!(
+        s.actual_tcp_force, [0.0; 6],
+        "free space: the sensor reads nothing"
+    );
+    assert!(
+        (s.actual_tcp_pose[2] - (z - 0.01)).abs() < 0.001,
+        "0.1 m/s down"
+    );
     cell.advance(ms(2000 + 1000));
     let s = cell.status();
     // 30 mm to the surface, then 20 N / 10000 N/m = 2 mm into it.
-    assert!((s.actual_tcp_force[2] - 20.0).abs() < 0.01, "{:?}", s.actual_tcp_force);
+    assert!(
+        (s.actual_tcp_force[2] - 20.0).abs() < 0.01,
+        "{:?}",
+        s.actual_tcp_force
+    );
     assert!((s.actual_tcp_pose[2] - (z - 0.032)).abs() < 1e-5);
     cell.advance(ms(2000 + 2100));
     assert_eq!(cell.status().control_mode, 0, "the program ended");
@@ -456,7 +469,9 @@ fn in_teach_mode_the_operator_moves_the_joints_and_the_streams_follow() {
     let q = [0.2, -1.3, 1.1, -1.4, -1.5, 0.3];
     assert!(cell.move_by_hand(q).is_err(), "not in teach mode");
     cell.submit(
-        Submitted::Program("teach_mode()\nsleep(5)\ntextmsg(get_actual_joint_positions())\n".into()),
+        Submitted::Program(
+            "teach_mode()\nsleep(5)\ntextmsg(get_actual_joint_positions())\n".into(),
+        ),
         ms(2100),
     );
     cell.advance(ms(2200));
@@ -468,7 +483,10 @@ fn in_teach_mode_the_operator_moves_the_joints_and_the_streams_follow() {
     assert_eq!(s.actual_q, q);
     assert_eq!(s.target_q, q);
     cell.advance(ms(7200));
-    assert_eq!(texts(&events(&mut cell)), ["[0.2, -1.3, 1.1, -1.4, -1.5, 0.3]"]);
+    assert_eq!(
+        texts(&events(&mut cell)),
+        ["[0.2, -1.3, 1.1, -1.4, -1.5, 0.3]"]
+    );
     assert_eq!(cell.status().control_mode, 0);
     // With no program running, the operator's freedrive moves the arm too.
     cell.move_by_hand([0.0; 6]).unwrap();

@@ -155,7 +155,14 @@ impl ForceMode {
 
     /// Moves the force mode's offset on by `dt` seconds for a tool now at `actual`
     /// (moving at `v`), against the contact plane (`stiffness` 0: none).
-    pub fn step(&mut self, actual: [f64; 6], v: [f64; 3], dt: f64, plane: [f64; 6], stiffness: f64) {
+    pub fn step(
+        &mut self,
+        actual: [f64; 6],
+        v: [f64; 3],
+        dt: f64,
+        plane: [f64; 6],
+        stiffness: f64,
+    ) {
         if !(dt > 0.0 && dt.is_finite()) {
             return;
         }
@@ -210,6 +217,11 @@ impl ForceMode {
 }
 
 /// The joints nearest `near` that put the tool (offset `tcp`) at `pose`.
-pub(crate) fn joints_at(dh: &Dh, pose: [f64; 6], tcp: [f64; 6], near: [f64; 6]) -> Option<[f64; 6]> {
+pub(crate) fn joints_at(
+    dh: &Dh,
+    pose: [f64; 6],
+    tcp: [f64; 6],
+    near: [f64; 6],
+) -> Option<[f64; 6]> {
     kinematics::nearest(&kinematics::inverse(dh, pose, tcp, near), near)
 }

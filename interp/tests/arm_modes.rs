@@ -64,9 +64,17 @@ fn force_mode_in_free_space_moves_along_the_compliant_axis_at_its_speed_limit() 
         assert!(moved[k].abs() < 1e-6, "axis {k} held: {moved:?}");
     }
     // Nothing resists in free space: the sensor reads nothing.
-    assert!(floats(&msgs[2]).iter().all(|f| f.abs() < 1e-9), "{}", msgs[2]);
+    assert!(
+        floats(&msgs[2]).iter().all(|f| f.abs() < 1e-9),
+        "{}",
+        msgs[2]
+    );
     // end_force_mode: the arm stays where force mode left it.
-    assert!(floats(&msgs[3]).iter().all(|f| f.abs() < 1e-9), "{}", msgs[3]);
+    assert!(
+        floats(&msgs[3]).iter().all(|f| f.abs() < 1e-9),
+        "{}",
+        msgs[3]
+    );
 }
 
 #[test]
@@ -84,7 +92,10 @@ fn force_mode_presses_against_a_plane_until_the_spring_balances_the_wrench() {
     let start = m.tcp_pose();
     // A table 50 mm below the tool, 5000 N/m.
     m.world_mut()
-        .set(&format!("contact_plane=p[0, 0, {}, 0, 0, 0]", start[2] - 0.05))
+        .set(&format!(
+            "contact_plane=p[0, 0, {}, 0, 0, 0]",
+            start[2] - 0.05
+        ))
         .unwrap();
     m.world_mut().set("contact_stiffness=5000").unwrap();
     let end = run(&mut m, 2000);
@@ -124,7 +135,11 @@ fn speedl_until_tool_contact_stops_at_the_surface() {
     let msgs = messages(&mut m);
     let at = floats(&msgs[0]);
     // Stopped just past the surface (a step of travel and the ramp down).
-    assert!(at[2] < table && at[2] > table - 0.002, "{} vs {table}", at[2]);
+    assert!(
+        at[2] < table && at[2] > table - 0.002,
+        "{} vs {table}",
+        at[2]
+    );
     // Contact against the motion only: none seen looking the other way.
     assert_eq!(msgs[1], "0");
     assert_eq!(msgs[2], "True");
@@ -144,7 +159,10 @@ fn teach_mode_is_not_steady_and_the_joints_follow_the_operator() {
     assert_eq!(m.arm().control_mode(), 1);
     let q = [0.1, -1.2, 1.3, -1.5, -1.6, 0.2];
     m.arm_mut().move_by_hand(q).unwrap();
-    assert!(m.arm_mut().move_by_hand([7.0, 0.0, 0.0, 0.0, 0.0, 0.0]).is_err());
+    assert!(m
+        .arm_mut()
+        .move_by_hand([7.0, 0.0, 0.0, 0.0, 0.0, 0.0])
+        .is_err());
     run(&mut m, 200);
     assert_eq!(m.state(), &State::Finished);
     let msgs = messages(&mut m);
@@ -197,7 +215,8 @@ fn the_speed_slider_scales_a_move_and_a_change_mid_move_takes_effect_then() {
 
 #[test]
 fn the_speed_slider_scales_the_arm_speeds_and_stops_the_arm_at_zero() {
-    let mut m = machine("speedj([0.2, 0, 0, 0, 0, 0], 100, 1.0)\ntextmsg(get_actual_joint_speeds())\n");
+    let mut m =
+        machine("speedj([0.2, 0, 0, 0, 0, 0], 100, 1.0)\ntextmsg(get_actual_joint_speeds())\n");
     m.arm_mut().speed_fraction = 0.5;
     run(&mut m, 1000);
     let msgs = messages(&mut m);
@@ -221,7 +240,11 @@ fn the_speed_slider_scales_the_arm_speeds_and_stops_the_arm_at_zero() {
 #[test]
 fn is_within_safety_limits_is_reach_and_joint_range() {
     let home = Arm::default().q;
-    let reachable = forward(&Model::Ur5e.dh(), [0.3, -1.2, 1.4, -1.8, -1.5, 0.2], [0.0; 6]);
+    let reachable = forward(
+        &Model::Ur5e.dh(),
+        [0.3, -1.2, 1.4, -1.8, -1.5, 0.2],
+        [0.0; 6],
+    );
     let src = format!(
         "textmsg(is_within_safety_limits(p[3.0, 0, 0.4, 0, 3.14, 0]))\n\
          textmsg(is_within_safety_limits(p{reachable:?}))\n\

@@ -1364,11 +1364,7 @@ fn set_tcp(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
 /// (base frame, its first three elements) only a contact against it counts: the plane's
 /// normal opposes the direction.
 fn tool_contact(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
-    let direction = if a.is_absent(0) {
-        [0.0; 6]
-    } else {
-        a.six(0)?
-    };
+    let direction = if a.is_absent(0) { [0.0; 6] } else { a.six(0)? };
     let f = c.measured_contact();
     let touching = f.iter().any(|x| *x != 0.0);
     let against = direction[..3].iter().all(|x| *x == 0.0)
@@ -1378,12 +1374,13 @@ fn tool_contact(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
     }
     let since = c.contact_since.unwrap_or(c.step);
     let steps = c.step.saturating_sub(since).saturating_add(1);
-    Ok(Out::Value(Value::Int(i32::try_from(steps).unwrap_or(i32::MAX))))
+    Ok(Out::Value(Value::Int(
+        i32::try_from(steps).unwrap_or(i32::MAX),
+    )))
 }
 
 fn is_steady(c: &mut Controller, _: &mut Args) -> Result<Out, Fault> {
-    let still =
-        c.motion.is_none() && c.arm.qd.iter().all(|v| *v == 0.0) && !c.arm.hand_guided();
+    let still = c.motion.is_none() && c.arm.qd.iter().all(|v| *v == 0.0) && !c.arm.hand_guided();
     Ok(Out::Value(Value::Bool(still)))
 }
 
@@ -1463,7 +1460,12 @@ fn force_mode(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
             )))
         }
     };
-    if frame.iter().chain(&wrench).chain(&limits).any(|x| !x.is_finite()) {
+    if frame
+        .iter()
+        .chain(&wrench)
+        .chain(&limits)
+        .any(|x| !x.is_finite())
+    {
         return Err(Fault::from(
             "`force_mode`: task_frame, wrench and limits must be finite numbers",
         ));

@@ -64,7 +64,8 @@ pub struct ControllerOptions {
     pub programs: Option<PathBuf>,
     /// Start in local control: every command that acts is refused, as on a pendant not
     /// switched to remote control. (Standard input takes operator commands: `protective
-    /// stop`, `emergency stop`, `release`, `local`, `remote`, `state`, `help`, ...)
+    /// stop`, `emergency stop`, `release`, `local`, `remote`, `speed F`, `freedrive
+    /// [q...]`, `state`, `help`, ...)
     #[arg(long)]
     pub local: bool,
     /// The pendant's remote control setting is off, as on a new robot and on URSim:
