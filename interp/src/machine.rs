@@ -1036,6 +1036,7 @@ impl Machine {
                     after,
                     result,
                 } if after <= self.ctl.step && self.ctl.clock_now() >= until => {
+                    self.ctl.mem.add(result.held_bytes());
                     self.threads[i].stack.push(result);
                     (true, Wait::None)
                 }
