@@ -225,3 +225,87 @@ pub(crate) fn joints_at(
 ) -> Option<[f64; 6]> {
     kinematics::nearest(&kinematics::inverse(dh, pose, tcp, near), near)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn mode(kind: u8, selection: [bool; 6], wrench: [f64; 6]) -> ForceMode {
+        ForceMode {
+            frame: [0.5, 0.0, 0.2, 0.0, 0.0, 0.0],
+            selection,
+            wrench,
+            kind,
+            limits: [0.1; 6],
+            offset: [0.0; 6],
+            programmed: [0.0; 6],
+            at: 0,
+        }
+    }
+
+    #[test]
+    fn type_1_turns_y_toward_the_frames_origin_and_type_3_x_along_the_velocity() {
+        // The TCP 0.5 m from the origin along -x: y points to +x.
+        let tcp = [0.0, 0.0, 0.2, 0.0, 0.0, 0.0];
+        let mut m = mode(
+            1,
+            [false, true, false, false, false, false],
+            [0.0, 5.0, 0.0, 0.0, 0.0, 0.0],
+        );
+        m.step(tcp, [0.0; 3], 1.0, [0.0; 6], 0.0);
+        assert!(
+            (m.offset[0] - 0.1).abs() < 1e-12 && m.offset[1].abs() < 1e-12,
+            "{:?}",
+            m.offset
+        );
+        // Moving along base y: x is that direction.
+        let mut m = mode(
+            3,
+            [true, false, false, false, false, false],
+            [5.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+        );
+        m.step(tcp, [0.0, 0.3, 0.0], 1.0, [0.0; 6], 0.0);
+        assert!(
+            (m.offset[1] - 0.1).abs() < 1e-12 && m.offset[0].abs() < 1e-12,
+            "{:?}",
+            m.offset
+        );
+        // Type 2: the frame as given.
+        let mut m = mode(
+            2,
+            [true, false, false, false, false, false],
+            [-5.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+        );
+        m.step(tcp, [0.0, 0.3, 0.0], 1.0, [0.0; 6], 0.0);
+        assert!((m.offset[0] + 0.1).abs() < 1e-12, "{:?}", m.offset);
+    }
+
+    #[test]
+    fn a_wrench_away_from_the_plane_leaves_it_and_a_zero_wrench_only_comes_out_of_it() {
+        let plane = [0.0, 0.0, 0.0, 0.0, 0.0, 0.0];
+        // 1 mm into the plane.
+        let tcp = [0.3, 0.0, -0.001, 0.0, 0.0, 0.0];
+        let mut m = mode(
+            2,
+            [false, false, true, false, false, false],
+            [0.0, 0.0, 10.0, 0.0, 0.0, 0.0],
+        );
+        m.frame = [0.0; 6];
+        m.step(tcp, [0.0; 3], 0.002, plane, 1000.0);
+        assert!(
+            (m.offset[2] - 0.0002).abs() < 1e-12,
+            "pulls up at the limit: {:?}",
+            m.offset
+        );
+        let mut m = mode(2, [false, false, true, false, false, false], [0.0; 6]);
+        m.frame = [0.0; 6];
+        m.step(tcp, [0.0; 3], 1.0, plane, 1000.0);
+        assert!(
+            (m.offset[2] - 0.001).abs() < 1e-12,
+            "out to the surface: {:?}",
+            m.offset
+        );
+        assert_eq!(contact_force(plane, 1000.0, tcp)[2], 1.0);
+        assert_eq!(contact_force(plane, 0.0, tcp), [0.0; 6]);
+    }
+}
