@@ -133,7 +133,8 @@ pub struct Config {
     /// [`Limit`](crate::RuntimeErrorKind::Limit) error naming the budget and the bytes,
     /// before it allocates. Each value, call depth and thread count has its own bound;
     /// this one bounds them together (64 threads 256 calls deep, each frame holding a
-    /// list of [`max_value_size`](Self::max_value_size) elements, would be terabytes).
+    /// list of [`max_value_size`](Self::max_value_size) elements, would be nearly a
+    /// terabyte).
     /// See the [`machine`](crate::machine) module's "Memory" for what is counted and how.
     pub max_memory: usize,
 }

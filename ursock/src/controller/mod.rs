@@ -61,7 +61,7 @@ pub struct ControllerOptions {
     pub model: String,
     /// The PolyScope version the controller reports (`5.21.0`, or with its build number
     /// `5.21.0.1234567`; a 3.x version answers CB3's user-role commands).
-    #[arg(long, default_value = "5.21.0")]
+    #[arg(long, default_value = "5.23.0")]
     pub polyscope: String,
     /// The serial number `get serial number` answers.
     #[arg(long, default_value = "20235500001", conflicts_with = "ursim")]
