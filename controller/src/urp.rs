@@ -95,7 +95,12 @@
 //! or its `name`/`referencedName` attribute), `<ExpressionIO><pin referencedName=.../>`
 //! (a pin `kind[N]` read as a Wait reads it, `get_standard_digital_in(N)`; any other
 //! name is a signal the installation defines, read as PolyScope reads a Modbus signal:
-//! `modbus_get_signal_status("NAME", False)`), or plain text inside `<expression>`.
+//! `modbus_get_signal_status("NAME", False)`), `<ExpressionGeomFeature><feature
+//! referencedName="Plane_1"/>` (a feature used as a value: its name, the pose variable
+//! PolyScope defines from the installation's features; the installation's features are
+//! not read, so a program using one needs it defined, e.g. by `--preamble` with `global
+//! Plane_1 = p[...]`, else it stops with `compile_error_name_not_found:Plane_1`), or plain
+//! text inside `<expression>`.
 //!
 //! Any other node is [`UrpError::UnknownNode`], never dropped (other URCaps' nodes
 //! included: `Contributed (Gripper)`); a known node in a form not translated (a
@@ -1639,6 +1644,7 @@ impl Tx<'_> {
                     out.push_str(&name);
                 }
                 "ExpressionIO" => out.push_str(&self.io_read(t)?),
+                "ExpressionGeomFeature" => out.push_str(&self.feature_name(t)?),
                 _ => return Err(unknown(doc, t)),
             }
         }
@@ -1658,6 +1664,18 @@ impl Tx<'_> {
             .child(id, "variable")
             .ok_or_else(|| invalid(doc, id, "no <variable>"))?;
         self.named_variable(v)
+    }
+
+    /// An `<ExpressionGeomFeature>` token: the feature it names (`<feature
+    /// referencedName="Plane_1"/>`, or a reference to the feature's element), which
+    /// PolyScope defines as a pose variable of that name from the installation.
+    fn feature_name(&self, id: usize) -> Result<String, UrpError> {
+        let doc = self.doc;
+        let f = doc
+            .child(id, "feature")
+            .or_else(|| doc.elems[id].children.first().copied())
+            .ok_or_else(|| invalid(doc, id, "a feature token names no feature"))?;
+        self.named_variable(f)
     }
 
     /// The name of a variable element (references followed).
