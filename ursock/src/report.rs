@@ -702,6 +702,14 @@ pub struct Dropped {
     pub count: u64,
 }
 
+/// `controller`: every port listens (after every `listening` event): each service's
+/// address, by service name.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Ready {
+    pub t: f64,
+    pub addrs: std::collections::BTreeMap<&'static str, String>,
+}
+
 /// `controller`: the controller stopped (the last event).
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Stopped {
@@ -750,6 +758,7 @@ pub enum Event {
     Client(Client),
     Suppressed(Suppressed),
     Dropped(Dropped),
+    Ready(Ready),
     Stopped(Stopped),
 }
 
@@ -847,6 +856,7 @@ impl Event {
             Event::Evicted(e) => e.t,
             Event::Suppressed(e) => e.t,
             Event::Dropped(e) => e.t,
+            Event::Ready(e) => e.t,
             Event::Stopped(e) => e.t,
         }
     }

@@ -616,9 +616,9 @@ fn controller_json_lines_match_the_schema() {
             r.read_line(&mut line).unwrap();
         }
     }
-    // connect, 4 dashboard events, close: read them as they come (bounded).
+    // ready, connect, 4 dashboard events, close: read them as they come (bounded).
     let mut kinds = Vec::new();
-    while kinds.len() < 6 {
+    while kinds.len() < 7 {
         let mut l = String::new();
         if out.read_line(&mut l).unwrap() == 0 {
             break;
@@ -634,6 +634,7 @@ fn controller_json_lines_match_the_schema() {
     assert_eq!(
         kinds,
         [
+            "ready",
             "connect",
             "dashboard",
             "dashboard",
