@@ -87,7 +87,10 @@ pub struct ControllerOptions {
     /// Answer as URSim does, as UR's client libraries' CI runs it: programs are also
     /// found at `/ursim/programs/NAME` (NAME in `--programs DIR`), `default.installation`
     /// always loads, the remote control setting is off (as `--remote-control-disabled`)
-    /// and `get serial number` answers 20175599999.
+    /// and `get serial number` answers 20175599999. Without `--programs`, the programs
+    /// shipped with ursock: `default.installation`, `external_control.urp` (the External
+    /// Control URCap's node; its host is `--urcap-host`, else 192.168.56.1:50002) and
+    /// `wait.urp` (waits a second, over and over).
     #[arg(long, conflicts_with = "local")]
     pub ursim: bool,
     /// A URCap's installation preamble, written (as PolyScope does) at the top of every
@@ -151,6 +154,47 @@ impl Failure {
             message,
         }
     }
+}
+
+/// The URSim profile's programs folder, shipped with `ursock` (`ursock/ursim/programs`,
+/// plain XML there): `--ursim` without `--programs` writes them, gzip-compressed as
+/// PolyScope saves them, into a folder of its own under the temporary directory, removed
+/// when the controller stops.
+pub const URSIM_PROGRAM_FILES: [(&str, &[u8]); 3] = [
+    (
+        "default.installation",
+        include_bytes!("../../ursim/programs/default.installation"),
+    ),
+    (
+        "external_control.urp",
+        include_bytes!("../../ursim/programs/external_control.urp"),
+    ),
+    ("wait.urp", include_bytes!("../../ursim/programs/wait.urp")),
+];
+
+/// A programs folder written for this process, removed when dropped.
+struct TempPrograms(PathBuf);
+
+impl Drop for TempPrograms {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.0);
+    }
+}
+
+/// Writes [`URSIM_PROGRAM_FILES`], gzip-compressed, into a new folder under the
+/// temporary directory.
+fn write_ursim_programs() -> std::io::Result<TempPrograms> {
+    use std::io::Write;
+    let dir = std::env::temp_dir().join(format!("ursock-ursim-programs-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir)?;
+    let folder = TempPrograms(dir);
+    for (name, xml) in URSIM_PROGRAM_FILES {
+        let mut gz = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::default());
+        gz.write_all(xml)?;
+        std::fs::write(folder.0.join(name), gz.finish()?)?;
+    }
+    Ok(folder)
 }
 
 /// Events waiting for standard output, at most: a second or so of a busy controller's
@@ -354,6 +398,17 @@ pub fn run(opts: ControllerOptions) -> Result<(), Failure> {
         return Ok(());
     };
     let stream = |port: u16| (!opts.no_streams).then_some(port);
+    // URSim's programs folder: the one given, else (with --ursim) the shipped one.
+    let ursim_programs = match (&opts.programs, opts.ursim) {
+        (None, true) => Some(write_ursim_programs().map_err(|e| {
+            Failure::failed(format!("cannot write the URSim programs folder: {e}"))
+        })?),
+        _ => None,
+    };
+    let programs = match &ursim_programs {
+        Some(t) => Some(t.0.clone()),
+        None => opts.programs.clone(),
+    };
     let options = ServerOptions {
         bind: opts.bind.clone(),
         ports: Ports {
@@ -373,7 +428,7 @@ pub fn run(opts: ControllerOptions) -> Result<(), Failure> {
             remote_control_enabled: !opts.remote_control_disabled,
             ..Config::default()
         },
-        programs: opts.programs.clone(),
+        programs,
         urcap_host,
         profile: if opts.ursim {
             Profile::Ursim
@@ -500,6 +555,7 @@ pub fn run(opts: ControllerOptions) -> Result<(), Failure> {
             Err(_) => {}
         }
     }
+    drop(ursim_programs);
     std::process::exit(exit::STOPPED);
 }
 
