@@ -458,7 +458,7 @@ fn version_message_bytes() {
     assert_eq!(r.u8(), 3);
     let n = r.u8() as usize;
     assert_eq!(r.take(n), b"URControl");
-    assert_eq!((r.u8(), r.u8(), r.i32(), r.i32()), (5, 21, 0, 0));
+    assert_eq!((r.u8(), r.u8(), r.i32(), r.i32()), (5, 23, 0, 0));
     assert_eq!(r.rest(), b"Jan 01 2025");
 }
 
@@ -676,4 +676,24 @@ fn ports_and_what_they_carry() {
     assert_eq!(scripts, [true, true, false, false]);
     assert_eq!(STATE_RATE_HZ, 10);
     assert_eq!(STATE_PERIOD.as_millis(), 100);
+}
+
+#[test]
+fn robot_mode_data_carries_the_control_mode() {
+    for (mode, layout) in [
+        (0u8, Layout::ESeries),
+        (1, Layout::ESeries),
+        (2, Layout::Cb3),
+    ] {
+        let mut s = Status::default();
+        s.control_mode = mode;
+        let mut out = Vec::new();
+        encode_package(&mut out, &s, layout, Package::RobotModeData);
+        // Header (4-byte length, type), timestamp, seven flags, robot mode, control mode.
+        assert_eq!(out[4], 0);
+        assert_eq!(out[5 + 8 + 7 + 1], mode);
+        // The speed fraction follows it.
+        let f = f64::from_be_bytes(out[22..30].try_into().unwrap());
+        assert_eq!(f, s.speed_fraction);
+    }
 }

@@ -44,8 +44,8 @@
 //!
 //! Everything recursive (parsing, compiling, cloning, comparing, writing and dropping
 //! trees and values) is bounded by the depth bounds. Each value, call depth and thread
-//! count has its own bound, but together they would allow terabytes (64 threads, 256
-//! calls deep, a list of a million elements in every frame); the memory budget bounds
+//! count has its own bound, but together they would allow nearly a terabyte (64
+//! threads, 256 calls deep, a list of a million elements in every frame); the budget bounds
 //! them together, counted as the program allocates and checked before a large
 //! allocation (see [`machine`], "Memory"). A finished thread's slot is freed: handles
 //! are never reused, so `join`/`kill` of an old handle does nothing. A step visits the
@@ -94,6 +94,7 @@ pub mod drive;
 pub mod eip;
 mod error;
 pub mod event;
+mod force;
 pub mod interpreter;
 pub mod kinematics;
 mod lexer;

@@ -49,6 +49,8 @@ fn run_steps(src: &str, config: Config, steps: u64) -> State {
         if m.state() != &State::Running {
             break;
         }
+        let (counted, recounted) = m.memory_audit();
+        assert!(counted >= recounted, "memory count {counted} < {recounted}");
     }
     m.state().clone()
 }
@@ -487,6 +489,7 @@ fn fuzz_seeds_replay() {
         let config = Config {
             max_statements_per_step: 1_000,
             max_value_size: 1_000,
+            max_memory: 1 << 20,
             trace_all_calls: true,
             ..Config::default()
         };
@@ -526,6 +529,12 @@ fn fuzz_seeds_replay() {
             if m.state() != &State::Running {
                 break;
             }
+            let (counted, recounted) = m.memory_audit();
+            assert!(
+                counted >= recounted,
+                "{}: {counted} < {recounted}",
+                path.display()
+            );
         }
     }
 }
