@@ -53,7 +53,10 @@ fn every_option_the_document_names_exists() {
     }) {
         for opt in options(line) {
             named += 1;
-            assert!(known.contains(&opt), "{opt} in {line:?} is no option of ursock");
+            assert!(
+                known.contains(&opt),
+                "{opt} in {line:?} is no option of ursock"
+            );
         }
     }
     assert!(named >= 15, "only {named} options named");
