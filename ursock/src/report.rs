@@ -710,6 +710,15 @@ pub struct Ready {
     pub addrs: std::collections::BTreeMap<&'static str, String>,
 }
 
+/// `controller`: an operator command from standard input and the controller's state
+/// after it (or why it was refused).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Operator {
+    pub t: f64,
+    pub command: String,
+    pub text: String,
+}
+
 /// `controller`: the controller stopped (the last event).
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Stopped {
@@ -759,6 +768,7 @@ pub enum Event {
     Suppressed(Suppressed),
     Dropped(Dropped),
     Ready(Ready),
+    Operator(Operator),
     Stopped(Stopped),
 }
 
@@ -857,6 +867,7 @@ impl Event {
             Event::Suppressed(e) => e.t,
             Event::Dropped(e) => e.t,
             Event::Ready(e) => e.t,
+            Event::Operator(e) => e.t,
             Event::Stopped(e) => e.t,
         }
     }

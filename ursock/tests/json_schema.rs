@@ -722,3 +722,51 @@ fn listen_snippet_all_and_periodic_events_match_the_schema() {
     assert!(out.contains("$2 ack = text OK"), "{out}");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn controller_operator_commands_are_events_that_match_the_schema() {
+    use std::io::{BufRead, BufReader, Write};
+    let root = schema();
+    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_ursock"))
+        .args([
+            "controller",
+            "--dashboard-port",
+            "0",
+            "--no-streams",
+            "--json",
+        ])
+        .stdin(std::process::Stdio::piped())
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .unwrap();
+    let mut stdin = child.stdin.take().unwrap();
+    stdin
+        .write_all(b"protective stop\nspeed 7\nstate\n")
+        .unwrap();
+    let mut out = BufReader::new(child.stdout.take().unwrap());
+    let mut operator = Vec::new();
+    while operator.len() < 3 {
+        let mut l = String::new();
+        if out.read_line(&mut l).unwrap() == 0 {
+            break;
+        }
+        let v = check_event(&root, l.trim_end());
+        if v["event"] == "operator" {
+            operator.push(v);
+        }
+    }
+    let _ = child.kill();
+    let _ = child.wait();
+    assert_eq!(operator.len(), 3, "{operator:?}");
+    assert_eq!(operator[0]["command"], "protective stop");
+    assert!(operator[0]["text"]
+        .as_str()
+        .unwrap()
+        .contains("safety PROTECTIVE_STOP"));
+    assert!(operator[1]["text"]
+        .as_str()
+        .unwrap()
+        .starts_with("refused: "));
+    assert_eq!(operator[2]["command"], "state");
+}

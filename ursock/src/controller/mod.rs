@@ -523,9 +523,10 @@ pub fn run(opts: ControllerOptions) -> Result<(), Failure> {
     let server = std::sync::Arc::new(server);
     {
         let server = std::sync::Arc::clone(&server);
+        let out = queue.clone();
         let _ = std::thread::Builder::new()
             .name("operator".into())
-            .spawn(move || operator(&server, json));
+            .spawn(move || operator(&server, json, &out));
     }
     let reason = match shutdown.recv() {
         Ok(Stop::Signal(name)) => {
@@ -598,7 +599,7 @@ fn parse_joints(text: &str) -> Result<[f64; 6], String> {
 
 /// Reads operator commands from standard input until its end (lines bounded at
 /// `MAX_LINE` bytes).
-fn operator(server: &Server, json: bool) {
+fn operator(server: &Server, json: bool, out: &mpsc::SyncSender<Out>) {
     let stdin = std::io::stdin();
     let mut input = stdin.lock();
     let mut line = Vec::new();
@@ -700,7 +701,7 @@ fn operator(server: &Server, json: bool) {
                 Ok(())
             };
             if let Err(why) = by_hand {
-                return format!("operator: {cmd}: refused: {why}");
+                return format!("refused: {why}");
             }
             let c = cell.controller();
             if let Some(status) = status {
@@ -714,12 +715,15 @@ fn operator(server: &Server, json: bool) {
             } else {
                 "local"
             };
-            format!(
-                "operator: {cmd}: robot mode {mode}, safety {safety}, program {program}, {remote} control"
-            )
+            format!("robot mode {mode}, safety {safety}, program {program}, {remote} control")
         });
-        if !json {
-            crate::out::line(&said);
-        }
+        let event = Event::Operator(report::Operator {
+            t: report::now(),
+            command: cmd.clone(),
+            text: said,
+        });
+        // In order with the server's events; the operator's thread may wait for the
+        // output.
+        let _ = out.send(Out::Event(event));
     }
 }

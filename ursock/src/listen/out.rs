@@ -427,6 +427,7 @@ pub fn human(event: &Event, show_max: usize) -> Vec<String> {
                 .collect::<Vec<_>>()
                 .join(", ")
         )),
+        Event::Operator(e) => one(format!("operator: {}: {}", e.command, e.text)),
         Event::Stopped(e) => one(format!("stopped: {}", e.reason)),
         Event::Dashboard(e) => std::iter::once(format!("<- {:?}", e.command))
             .chain(e.reply.iter().map(|l| format!("-> {l:?}")))
