@@ -740,6 +740,14 @@ fn controller_operator_commands_are_events_that_match_the_schema() {
         .stderr(std::process::Stdio::null())
         .spawn()
         .unwrap();
+    // Hang guard: the process ends after 20 s whatever happens, closing its output.
+    let pid = child.id().to_string();
+    std::thread::spawn(move || {
+        std::thread::sleep(std::time::Duration::from_secs(20));
+        let _ = std::process::Command::new("kill")
+            .args(["-KILL", &pid])
+            .status();
+    });
     let mut stdin = child.stdin.take().unwrap();
     stdin
         .write_all(b"protective stop\nspeed 7\nstate\n")
