@@ -719,6 +719,15 @@ pub struct Operator {
     pub text: String,
 }
 
+/// `controller`: the robot mode, safety status or program state changed.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct State {
+    pub t: f64,
+    pub robot_mode: String,
+    pub safety: String,
+    pub program: String,
+}
+
 /// `controller`: the controller stopped (the last event).
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Stopped {
@@ -769,6 +778,7 @@ pub enum Event {
     Dropped(Dropped),
     Ready(Ready),
     Operator(Operator),
+    State(State),
     Stopped(Stopped),
 }
 
@@ -868,6 +878,7 @@ impl Event {
             Event::Dropped(e) => e.t,
             Event::Ready(e) => e.t,
             Event::Operator(e) => e.t,
+            Event::State(e) => e.t,
             Event::Stopped(e) => e.t,
         }
     }

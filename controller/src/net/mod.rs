@@ -354,6 +354,16 @@ pub enum ServerEvent {
         /// Over how long (from the interval's start to its report).
         interval: Duration,
     },
+    /// The robot mode, the safety status or the program state changed (seen at the
+    /// end of a real-time step; not said for the state the controller starts in).
+    State {
+        /// The robot mode now.
+        robot_mode: crate::RobotMode,
+        /// The safety status now.
+        safety: crate::SafetyStatus,
+        /// The program state now.
+        program: crate::ProgramState,
+    },
     /// A dashboard client said `shutdown`: its program has ended and every client has
     /// been closed (their events came first); the server has stopped. The last event.
     Shutdown,

@@ -947,6 +947,13 @@ impl Loop {
         let key = (status.robot_mode, status.safety, status.program_state);
         let changed = self.state_key.is_some_and(|k| k != key);
         self.state_key = Some(key);
+        if changed {
+            shared.emit(super::ServerEvent::State {
+                robot_mode: status.robot_mode,
+                safety: status.safety,
+                program: status.program_state,
+            });
+        }
         if now >= self.next_state || changed {
             self.next_state = now + primary::STATE_PERIOD;
             self.frame.clear();

@@ -330,6 +330,16 @@ fn report_event(e: ServerEvent) -> Option<Event> {
         ServerEvent::Tx { socket, bytes } => Event::tx(&socket, &bytes),
         ServerEvent::Rx { socket, bytes } => Event::rx(&socket, &bytes),
         ServerEvent::Note(text) => Event::note(text),
+        ServerEvent::State {
+            robot_mode,
+            safety,
+            program,
+        } => Event::State(report::State {
+            t,
+            robot_mode: robot_mode.to_string(),
+            safety: safety.to_string(),
+            program: program.to_string(),
+        }),
         ServerEvent::Suppressed {
             conn,
             count,
