@@ -317,26 +317,21 @@ pub(crate) fn run(shared: &Arc<Shared>, listeners: Listeners) {
     // sends every package that is due. Only a stall past `MAX_CATCH_UP` is held back
     // (see `clock`); lateness is counted and reported.
     let mut last: Option<Duration> = None;
+    // The last step computed (kept while idle).
+    let mut prev: Option<Duration> = None;
     let mut late = LateReport::new(shared.now());
     *shared.loop_thread.lock().unwrap_or_else(|p| p.into_inner()) = Some(std::thread::current());
     while !shared.stopped() {
-        if lp.is_idle(shared) {
-            for (l, service) in &listeners {
-                if let Some(l) = l {
-                    lp.accept(shared, l, *service);
-                }
-            }
-            if lp.clients.is_empty() {
-                // Idle: no steps until a client comes or another thread acts on the
-                // cell (it wakes the loop); the steps start again from then.
-                last = None;
-                std::thread::park_timeout(IDLE_POLL);
-                continue;
-            }
-        }
+        // Idle (no stream client, nothing in the cell that needs steps): one step every
+        // `IDLE_POLL` (to accept clients and say state changes), or at once when another
+        // thread acts on the cell (it wakes the loop); the steps start again from then.
+        let idle = lp.is_idle(shared);
         let due = match last {
             Some(l) => l + step,
-            None => step_boundary(shared.now(), step),
+            None => {
+                let b = step_boundary(shared.now(), step);
+                prev.map_or(b, |p| b.max(p + step))
+            }
         };
         let (now, held) = shared.clock.catch_up(due);
         if now < due {
@@ -352,6 +347,9 @@ pub(crate) fn run(shared: &Arc<Shared>, listeners: Listeners) {
             }
         }
         lp.read_clients(shared, tick);
+        // Read before the step: the shutdown stopped the program under the cell's lock
+        // before it set the flag, so this step ends the program and reports it.
+        let closing = shared.shutting_down();
         lp.step(shared, tick);
         for c in &mut lp.clients {
             c.flush(tick);
@@ -359,7 +357,7 @@ pub(crate) fn run(shared: &Arc<Shared>, listeners: Listeners) {
         lp.drop_gone(shared);
         lp.report_suppressed(shared, tick);
         late.report(shared, tick);
-        if shared.shutting_down() {
+        if closing {
             // The controller shut down: the step above ended its program; every
             // client is closed, then the loop ends.
             for c in &mut lp.clients {
@@ -369,6 +367,12 @@ pub(crate) fn run(shared: &Arc<Shared>, listeners: Listeners) {
             lp.driver.close_all();
             shared.loop_ended();
             return;
+        }
+        prev = Some(tick);
+        if idle && lp.clients.is_empty() {
+            last = None;
+            std::thread::park_timeout(IDLE_POLL);
+            continue;
         }
         last = Some(tick);
         let next = tick + step;
@@ -380,9 +384,10 @@ pub(crate) fn run(shared: &Arc<Shared>, listeners: Listeners) {
 }
 
 /// How long the idle loop (no stream client, nothing in the cell that needs steps)
-/// sleeps between looks for a new stream client: a client that connects to an idle
-/// controller waits at most this for its first package, and an idle controller wakes
-/// 50 times a second (a dashboard or interpreter command, or the operator, wakes it at
+/// sleeps between its steps: a client that connects to an idle controller waits at most
+/// this for its first package, a change of state with time alone (power-on, brake
+/// release) is said at most this late, and an idle controller steps 50 times a second
+/// instead of 500 (a dashboard or interpreter command, or the operator, wakes it at
 /// once).
 pub const IDLE_POLL: Duration = Duration::from_millis(20);
 
@@ -1034,6 +1039,13 @@ impl Loop {
         let key = (status.robot_mode, status.safety, status.program_state);
         let changed = self.state_key.is_some_and(|k| k != key);
         self.state_key = Some(key);
+        if changed {
+            shared.emit(super::ServerEvent::State {
+                robot_mode: status.robot_mode,
+                safety: status.safety,
+                program: status.program_state,
+            });
+        }
         if now >= self.next_state || changed {
             self.next_state = now + primary::STATE_PERIOD;
             self.frame.clear();
