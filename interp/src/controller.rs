@@ -10,7 +10,9 @@ use urscript_socket::robot::ReadCall;
 
 use crate::builtins::{Args, Out};
 use crate::error::Fault;
-use crate::event::{Event, Message, MessageKind, ReadRecord, MAX_READ_INPUT};
+use crate::event::{
+    Event, Message, MessageKind, MoveEnd, MoveOutcome, MoveStart, ReadRecord, MAX_READ_INPUT,
+};
 use crate::kinematics::{self, Dh};
 use crate::sockets::Sockets;
 use crate::trajectory::{self, Kind, Motion};
@@ -364,6 +366,24 @@ pub(crate) struct Controller {
     pub eip: crate::eip::Handles,
     /// The program's RTDE watchdogs (`rtde_set_watchdog`).
     pub rtde_watchdogs: Vec<RtdeWatchdog>,
+    /// The move or stream whose start was reported and whose end was not.
+    pub tracked: Option<Tracked>,
+    /// The start of the move queued behind a blending one (reported when it starts).
+    pub queued: Option<Box<MoveStart>>,
+}
+
+/// A move or stream under way, as reported ([`Event::MoveStart`]).
+#[derive(Debug)]
+pub(crate) struct Tracked {
+    pub start: Box<MoveStart>,
+    /// The step it started in.
+    pub step: u64,
+    /// Commands so far (a stream's `servoj` calls...).
+    pub samples: u64,
+    /// A stream of `servoj`/`speedj`... commands (its end is the next other command).
+    pub stream: bool,
+    /// A stream whose last command's motion has ended: the step it ended in.
+    pub ended: Option<u64>,
 }
 
 /// The most RTDE watchdogs a program sets (one per input field; RTDE has fewer input
@@ -449,6 +469,7 @@ impl Controller {
     /// controller that runs the arm (`Arm::protective_stop`; a program alone just goes
     /// on, stopped).
     pub fn protective_stop(&mut self) {
+        self.end_move(MoveOutcome::ProtectiveStop, self.step);
         self.stop_at_once();
         self.arm.protective_stop = true;
     }
@@ -461,8 +482,29 @@ impl Controller {
     }
 
     /// Starts a motion now (replacing any under way) for the thread running now, and puts
-    /// the arm at its start.
-    pub fn start_motion(&mut self, kind: Kind, tcp: [f64; 6]) {
+    /// the arm at its start. `stream`: the command of a servo or speed stream (reported
+    /// once per stream: a command of the same function continues the one under way);
+    /// `None`: `stopj`/`stopl`, which stop what is under way.
+    pub fn start_motion(&mut self, kind: Kind, tcp: [f64; 6], stream: Option<MoveStart>) {
+        match stream {
+            None => self.end_move(MoveOutcome::Stopped, self.step),
+            Some(info) => {
+                let same = self
+                    .tracked
+                    .as_ref()
+                    .is_some_and(|t| t.stream && t.start.function == info.function);
+                if same {
+                    if let Some(t) = self.tracked.as_mut() {
+                        t.samples = t.samples.saturating_add(1);
+                        t.ended = None;
+                    }
+                } else {
+                    self.supersede();
+                    self.begin_move(info, true, self.step);
+                }
+            }
+        }
+        self.queued = None;
         self.motion = Some(Motion {
             kind,
             start: self.step,
@@ -506,7 +548,11 @@ impl Controller {
     /// A radius limited because the blends would overlap (or the move is shorter than
     /// `r`) is reported as a [`MessageKind::BlendRadiusReduced`] message for `line`, as
     /// the controller logs a warning.
-    pub fn start_move(&mut self, kind: Kind, tcp: [f64; 6], r: f64, line: u32) -> Duration {
+    ///
+    /// The move is reported ([`Event::MoveStart`]) when the arm sets off with it; the one
+    /// it blends from ends `Blended` then.
+    pub fn start_move(&mut self, kind: Kind, tcp: [f64; 6], r: f64, info: MoveStart) -> Duration {
+        let line = info.line;
         let dt = self.step_time.as_secs_f64();
         let steps = |secs: f64| {
             if dt > 0.0 && secs.is_finite() {
@@ -526,7 +572,10 @@ impl Controller {
                 None
             };
             match blended {
-                Some(k) => kind = k,
+                Some(k) => {
+                    kind = k;
+                    self.end_move(MoveOutcome::Blended, self.step);
+                }
                 None => start = m.start.saturating_add(steps(m.duration())).max(self.step),
             }
         }
@@ -572,8 +621,12 @@ impl Controller {
         if start > self.step {
             if let Some(m) = self.motion.as_mut() {
                 m.next = Some(Box::new(motion));
+                self.queued = Some(Box::new(info));
             }
         } else {
+            self.supersede();
+            self.begin_move(info, false, self.step);
+            self.queued = None;
             self.motion = Some(motion);
             self.sampled = None;
             self.advance(self.step);
@@ -587,8 +640,17 @@ impl Controller {
         if let Some(m) = self.motion.as_mut() {
             if m.next.as_ref().is_some_and(|n| step >= n.start) {
                 if let Some(n) = m.next.take() {
+                    let at = n.start;
+                    // The move before it ended at its target.
+                    if let Some((q, _)) = m.kind.end(&self.dh, m.tcp) {
+                        self.arm.q = q;
+                    }
                     self.motion = Some(*n);
                     self.sampled = None;
+                    self.end_move(MoveOutcome::Reached, at);
+                    if let Some(info) = self.queued.take() {
+                        self.begin_move(*info, false, at);
+                    }
                 }
             }
         }
@@ -620,20 +682,84 @@ impl Controller {
             // The path left the arm's reach: it stops here (nothing queued goes on) and
             // the controller running it makes that a protective stop.
             self.motion = None;
+            self.queued = None;
+            self.end_move(MoveOutcome::ProtectiveStop, step);
             self.arm.qd = [0.0; 6];
             self.arm.qdd = [0.0; 6];
             self.arm.tcp_speed = [0.0; 6];
             self.arm.protective_stop = true;
         } else if s.done {
             // A move queued behind this one starts now (at rest, where this one ended).
+            let end = end_step(self.step_time, m).min(step);
             let next = m.next.take();
+            let queued = next.is_some();
             self.motion = next.map(|n| *n);
             self.arm.qdd = [0.0; 6];
+            match self.tracked.as_mut() {
+                Some(t) if t.stream => t.ended = Some(end),
+                _ => self.end_move(MoveOutcome::Reached, end),
+            }
+            if queued {
+                if let Some(info) = self.queued.take() {
+                    self.begin_move(*info, false, end);
+                }
+            }
         }
+    }
+
+    /// Reports the start of a move or stream at step `step` and tracks it.
+    fn begin_move(&mut self, mut info: MoveStart, stream: bool, step: u64) {
+        info.at = self.time_of(step);
+        let start = Box::new(info);
+        self.events.push_back(Event::MoveStart(start.clone()));
+        self.tracked = Some(Tracked {
+            start,
+            step,
+            samples: 1,
+            stream,
+            ended: None,
+        });
+    }
+
+    /// Ends what is tracked because another command takes over now: a stream whose last
+    /// command's motion had ended reached its target then; anything else is replaced.
+    fn supersede(&mut self) {
+        match self.tracked.as_ref().and_then(|t| t.ended) {
+            Some(at) => self.end_move(MoveOutcome::Reached, at),
+            None => self.end_move(MoveOutcome::Replaced, self.step),
+        }
+    }
+
+    /// Reports the end of the tracked move or stream (if any) at step `step`, the arm
+    /// where it is now.
+    fn end_move(&mut self, outcome: MoveOutcome, step: u64) {
+        let Some(t) = self.tracked.take() else {
+            return;
+        };
+        // A stream whose last command had ended reached its target then.
+        let (outcome, step) = match t.ended {
+            Some(at) if outcome != MoveOutcome::ProtectiveStop => (MoveOutcome::Reached, at),
+            _ => (outcome, step),
+        };
+        let step = step.max(t.step);
+        let at = self.time_of(step);
+        let pose = self.tcp_pose();
+        self.events.push_back(Event::MoveEnd(Box::new(MoveEnd {
+            line: t.start.line,
+            function: t.start.function,
+            outcome,
+            at,
+            took: at.saturating_sub(t.start.at),
+            samples: t.samples,
+            q: self.arm.q,
+            pose,
+        })));
     }
 
     /// Stops the arm where it is (its thread was killed, the program stopped).
     pub fn halt(&mut self) {
+        self.queued = None;
+        self.end_move(MoveOutcome::Halted, self.step);
         if self.motion.take().is_some() {
             self.arm.qd = [0.0; 6];
             self.arm.qdd = [0.0; 6];
@@ -747,4 +873,16 @@ impl Controller {
             },
         })
     }
+}
+
+/// The step a motion's profile ends in.
+fn end_step(step_time: Duration, m: &Motion) -> u64 {
+    let dt = step_time.as_secs_f64();
+    let d = m.kind.duration();
+    let n = if dt > 0.0 && d.is_finite() {
+        (d.max(0.0) / dt).ceil() as u64
+    } else {
+        0
+    };
+    m.start.saturating_add(n)
 }

@@ -319,7 +319,11 @@ impl Driver {
                     let _ = c.stream.shutdown(Shutdown::Both);
                 }
             }
-            Event::Message(_) | Event::Call(_) => {}
+            Event::Message(_)
+            | Event::Call(_)
+            | Event::MoveStart(_)
+            | Event::MoveEnd(_)
+            | Event::Output(_) => {}
         }
     }
 
@@ -346,7 +350,12 @@ impl Driver {
                     let _ = c.stream.shutdown(Shutdown::Both);
                 }
             }
-            Event::Connect { .. } | Event::Message(_) | Event::Call(_) => {}
+            Event::Connect { .. }
+            | Event::Message(_)
+            | Event::Call(_)
+            | Event::MoveStart(_)
+            | Event::MoveEnd(_)
+            | Event::Output(_) => {}
         }
     }
 

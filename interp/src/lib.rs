@@ -109,7 +109,10 @@ mod world_set;
 pub use compile::{Preamble, Program};
 pub use controller::{Arm, World};
 pub use error::{ParseError, ParseErrorKind, RuntimeError, RuntimeErrorKind};
-pub use event::{CallRecord, Event, Message, MessageKind, Outcome, ReadRecord};
+pub use event::{
+    CallRecord, Event, Message, MessageKind, MoveEnd, MoveOutcome, MoveStart, Outcome, OutputValue,
+    OutputWrite, ReadRecord,
+};
 pub use machine::{Config, Machine, State, Stub};
 pub use sockets::{Policy, Timeout};
 pub use value::{Value, MAX_STRUCT_MEMBERS, MAX_VALUE_DEPTH};

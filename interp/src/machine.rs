@@ -394,6 +394,8 @@ impl Machine {
                 sampled: None,
                 eip: crate::eip::Handles::default(),
                 rtde_watchdogs: Vec::new(),
+                tracked: None,
+                queued: None,
             },
             site_stubs,
             prog: Arc::new(program),

@@ -554,6 +554,8 @@ mod tests {
             sampled: None,
             eip: crate::eip::Handles::default(),
             rtde_watchdogs: Vec::new(),
+            tracked: None,
+            queued: None,
         };
         // The documented defaults.
         assert_eq!(
