@@ -457,6 +457,88 @@ pub struct End {
     pub outcome: EndOutcome,
 }
 
+/// `robot`, `controller`: a move (or a servo/speed stream) started.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct MoveStart {
+    pub t: f64,
+    /// Program time it started (s).
+    #[serde(serialize_with = "secs")]
+    pub at: f64,
+    pub line: u32,
+    /// `movej`, `movel`, `servoj`...
+    pub function: String,
+    /// Target joints (rad); `None` for a speed stream.
+    #[serde(serialize_with = "opt_array")]
+    pub target_joints: Option<[f64; 6]>,
+    /// Target tool pose (base frame); `None` for a speed stream.
+    #[serde(serialize_with = "opt_array")]
+    pub target_pose: Option<[f64; 6]>,
+    /// The speeds a speed stream started with.
+    #[serde(serialize_with = "opt_array")]
+    pub speed: Option<[f64; 6]>,
+    #[serde(serialize_with = "num")]
+    pub acceleration: f64,
+    #[serde(serialize_with = "num")]
+    pub velocity: f64,
+    /// The time argument `t` (s), 0 if not given.
+    #[serde(serialize_with = "num")]
+    pub time: f64,
+    #[serde(serialize_with = "num")]
+    pub blend_radius: f64,
+}
+
+/// `robot`, `controller`: the move a `move_start` reported ended.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct MoveEnd {
+    pub t: f64,
+    /// Program time it ended (s).
+    #[serde(serialize_with = "secs")]
+    pub at: f64,
+    pub line: u32,
+    pub function: String,
+    /// `reached`, `blended`, `stopped`, `protective_stop`, `replaced`, `halted`.
+    pub outcome: String,
+    /// How long it took (s, program time).
+    #[serde(serialize_with = "secs")]
+    pub took: f64,
+    /// Commands it was (a stream's sample count; 1 for a move).
+    pub samples: u64,
+    /// Where the arm ended: joints (rad) and tool pose.
+    #[serde(serialize_with = "pose_array")]
+    pub joints: [f64; 6],
+    #[serde(serialize_with = "pose_array")]
+    pub pose: [f64; 6],
+    /// For people: the move's target as its start gave it.
+    #[serde(skip)]
+    pub target: Option<String>,
+}
+
+/// `robot`, `controller`: a program changed an output.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Output {
+    pub t: f64,
+    pub line: u32,
+    pub function: String,
+    pub pin: i64,
+    /// `true`/`false` for a digital output, a number for an analog one.
+    pub value: Value,
+}
+
+fn num<S: Serializer>(v: &f64, s: S) -> Result<S::Ok, S::Error> {
+    float(*v, s)
+}
+
+fn secs<S: Serializer>(v: &f64, s: S) -> Result<S::Ok, S::Error> {
+    float((v * 1e6).round() / 1e6, s)
+}
+
+fn opt_array<S: Serializer>(v: &Option<[f64; 6]>, s: S) -> Result<S::Ok, S::Error> {
+    match v {
+        Some(a) => Floats(a).serialize(s),
+        None => s.serialize_none(),
+    }
+}
+
 // ---- read ----
 
 /// `read`: one read's result.
@@ -696,6 +778,9 @@ pub enum Event {
     Note(Note),
     Error(Error),
     End(End),
+    MoveStart(MoveStart),
+    MoveEnd(MoveEnd),
+    Output(Output),
     // read
     Read(Read),
     // listen
@@ -794,6 +879,9 @@ impl Event {
             Event::Note(e) | Event::Help(e) => e.t,
             Event::Error(e) => e.t,
             Event::End(e) => e.t,
+            Event::MoveStart(e) => e.t,
+            Event::MoveEnd(e) => e.t,
+            Event::Output(e) => e.t,
             Event::Read(e) => e.t,
             Event::Listening(e) => e.t,
             Event::Connect(e) => e.t,

@@ -165,8 +165,117 @@ impl Printer {
                 );
             }
             report::Event::Note(n) => out::note(&n.text),
+            report::Event::MoveEnd(m) => outln!("{}", move_end_line(m)),
+            report::Event::Output(o) => outln!("{}", output_line(o)),
             _ => {}
         }
+    }
+}
+
+/// A move's end for people: `line 3: movel -> p[...]: reached after 1.2 s`, with the
+/// sample count of a stream (` x250`) and where the arm stopped if it did not arrive.
+pub(crate) fn move_end_line(m: &report::MoveEnd) -> String {
+    let mut line = format!("line {}: {}", m.line, m.function);
+    if m.samples > 1 {
+        line.push_str(&format!(" x{}", m.samples));
+    }
+    // A stream's first target says little: where it ended is shown instead.
+    let stream = m.samples > 1;
+    if let Some(target) = m.target.as_ref().filter(|_| !stream) {
+        line.push_str(&format!(" -> {target}"));
+    }
+    line.push_str(&format!(
+        ": {} after {} s",
+        m.outcome.replace('_', " "),
+        short(m.took)
+    ));
+    if stream || m.target.is_none() || !matches!(m.outcome.as_str(), "reached" | "blended") {
+        line.push_str(&format!(" at {}", six("", &m.joints)));
+    }
+    line
+}
+
+/// An output change for people: `line 4: set_standard_digital_out(1, True)`.
+pub(crate) fn output_line(o: &report::Output) -> String {
+    format!("line {}: {}({}, {})", o.line, o.function, o.pin, o.value)
+}
+
+/// A number for people: at most 4 decimals, no trailing zeros (`1.5`, `0.0003`, `2`).
+fn short(x: f64) -> String {
+    let s = format!("{x:.4}");
+    let s = s.trim_end_matches('0').trim_end_matches('.');
+    if s == "-0" {
+        "0".into()
+    } else {
+        s.into()
+    }
+}
+
+/// Six numbers as URScript writes them: `[a, b, ...]`, `p[...]` with `prefix` "p".
+fn six(prefix: &str, v: &[f64; 6]) -> String {
+    let parts: Vec<String> = v.iter().map(|x| short(*x)).collect();
+    format!("{prefix}[{}]", parts.join(", "))
+}
+
+/// A move's start as a report event.
+pub(crate) fn move_start_event(s: &urscript_interp::MoveStart) -> report::MoveStart {
+    report::MoveStart {
+        t: report::now(),
+        at: s.at.as_secs_f64(),
+        line: s.line,
+        function: s.function.to_string(),
+        target_joints: s.target_q,
+        target_pose: s.target_pose,
+        speed: s.speed,
+        acceleration: s.a,
+        velocity: s.v,
+        time: s.t,
+        blend_radius: s.r,
+    }
+}
+
+/// A move's target for people: the pose of a tool move, the joints of a joint move,
+/// the speeds of a speed stream.
+pub(crate) fn move_target(s: &urscript_interp::MoveStart) -> Option<String> {
+    let tool = !matches!(s.function, "movej" | "optimovej" | "servoj" | "speedj");
+    match (s.target_q, s.target_pose, s.speed) {
+        (_, Some(p), _) if tool => Some(six("p", &p)),
+        (Some(q), _, _) => Some(six("", &q)),
+        (_, _, Some(v)) => Some(format!("speed {}", six("", &v))),
+        _ => None,
+    }
+}
+
+/// A move's end as a report event (`target`: [`move_target`] of its start).
+pub(crate) fn move_end_event(
+    e: &urscript_interp::MoveEnd,
+    target: Option<String>,
+) -> report::MoveEnd {
+    report::MoveEnd {
+        t: report::now(),
+        at: e.at.as_secs_f64(),
+        line: e.line,
+        function: e.function.to_string(),
+        outcome: e.outcome.as_str().replace('-', "_"),
+        took: e.took.as_secs_f64(),
+        samples: e.samples,
+        joints: e.q,
+        pose: e.pose,
+        target,
+    }
+}
+
+/// An output change as a report event.
+pub(crate) fn output_event(o: &urscript_interp::OutputWrite) -> report::Output {
+    report::Output {
+        t: report::now(),
+        line: o.line,
+        function: o.function.to_string(),
+        pin: o.pin,
+        value: match o.value {
+            urscript_interp::OutputValue::Digital(b) => report::Value::Bool(b),
+            urscript_interp::OutputValue::Analog(x) => report::Value::Float(x),
+        },
     }
 }
 
@@ -365,6 +474,8 @@ pub fn run(script: &str, connect_to: Option<&str>, opts: Options) -> Result<(), 
     }
     let mut seen: HashMap<String, Seen> = HashMap::new();
     let trace = opts.trace;
+    // The target of the move under way, for its end's line.
+    let mut target: Option<String> = None;
     let result = driver.run(&mut machine, |activity| match activity {
         Activity::Event(Event::Call(c)) => {
             let why = c
@@ -375,6 +486,18 @@ pub fn run(script: &str, connect_to: Option<&str>, opts: Options) -> Result<(), 
         }
         Activity::Event(Event::Message(m)) => {
             printer.emit(message_event(m));
+        }
+        Activity::Event(Event::MoveStart(s)) => {
+            target = move_target(s);
+            if opts.json {
+                printer.emit(report::Event::MoveStart(move_start_event(s)));
+            }
+        }
+        Activity::Event(Event::MoveEnd(e)) => {
+            printer.emit(report::Event::MoveEnd(move_end_event(e, target.take())));
+        }
+        Activity::Event(Event::Output(o)) => {
+            printer.emit(report::Event::Output(output_event(o)));
         }
         Activity::Event(Event::Transmit { socket_name, bytes }) => {
             if let Some(t) = seen.get_mut(socket_name).and_then(|s| s.timed_out.as_mut()) {

@@ -561,6 +561,52 @@ fn robot_json_lines_match_the_schema() {
         .find(|e| e["event"] == "message" && e["kind"] == "warning")
         .unwrap_or_else(|| panic!("no warning: {text}"));
     assert_eq!(warning["line"].as_u64(), Some(3));
+    // Issue 30: every move is a move_start and a move_end (where the arm went, how the
+    // move ended), every output change an output event.
+    for e in &events {
+        if e["event"] == "move_start" {
+            assert_eq!(e["function"], "movel");
+        }
+    }
+    let ends: Vec<&Value> = events.iter().filter(|e| e["event"] == "move_end").collect();
+    assert_eq!(ends.len(), 4, "{text}");
+    assert_eq!(ends[3]["outcome"], "reached");
+    let pose = ends[3]["pose"].as_array().unwrap();
+    assert!((pose[0].as_f64().unwrap() + 0.2).abs() < 1e-9, "{pose:?}");
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_ursock"))
+        .args([
+            "robot",
+            "--json",
+            "-e",
+            "set_tool_digital_out(0, True)\nset_standard_analog_out(1, 0.5)\nspeedj([0.1, 0, 0, 0, 0, 0], 1, 0.1)\nservoj([0, -1.5, 0, -1.5, 0, 0], t=0.1)\nmovej([0, -1.5, 0, -1.5, 0, 0.1])\nprotective_stop()",
+        ])
+        .stdin(std::process::Stdio::null())
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&out.stdout);
+    let events: Vec<Value> = text.lines().map(|l| check_event(&root, l)).collect();
+    let names: Vec<&str> = events.iter().filter_map(|e| e["event"].as_str()).collect();
+    assert_eq!(
+        names,
+        [
+            "output",
+            "output",
+            "move_start",
+            "move_end",
+            "move_start",
+            "move_end",
+            "move_start",
+            "move_end",
+            "error",
+            "end"
+        ],
+        "{text}"
+    );
+    assert_eq!(events[0]["value"], true);
+    assert_eq!(events[1]["value"], 0.5);
+    assert_eq!(events[3]["outcome"], "replaced");
+    assert_eq!(events[5]["outcome"], "reached");
+    assert_eq!(events[9]["outcome"], "protective_stop");
     // A program error is an `error` event with its line and column, then `end`.
     let out = std::process::Command::new(env!("CARGO_BIN_EXE_ursock"))
         .args(["robot", "--json", "-e", "x = [1]\ny = x[2]"])

@@ -130,3 +130,39 @@ fn the_arm_model_sets_the_kinematics() {
     assert_ne!(code, 0);
     assert!(err.contains("unknown model `ur99`"), "{err}");
 }
+
+/// Issue 30: a move is one line for people (where it went, how it ended, how long it
+/// took), a servo stream one line with its sample count, an output change one line.
+#[test]
+fn moves_and_outputs_are_one_line_each() {
+    let (code, out, err) = robot(&[
+        "-e",
+        "movej([0.5, -1.5, 1, -1, 0.2, 0], a=3, v=3)",
+        "-e",
+        "set_standard_digital_out(1, True)",
+        "-e",
+        "set_standard_digital_out(1, True)",
+        "-e",
+        "q = get_actual_joint_positions()",
+        "-e",
+        "i = 0",
+        "-e",
+        "while i < 20:\n q[0] = q[0] + 0.01\n servoj(q, t=0.004)\n i = i + 1\nend",
+        "-e",
+        "speedj([0.1, 0, 0, 0, 0, 0], 1, 0.1)",
+        "-e",
+        "stopj(2)",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let lines: Vec<&str> = out.lines().collect();
+    assert_eq!(
+        lines,
+        [
+            "line 1: movej -> [0.5, -1.5, 1, -1, 0.2, 0]: reached after 1.156 s",
+            "line 2: set_standard_digital_out(1, True)",
+            "line 8: servoj x20: reached after 0.08 s at [0.7, -1.5, 1, -1, 0.2, 0]",
+            "line 11: speedj -> speed [0.1, 0, 0, 0, 0, 0]: stopped after 0.1 s at [0.705, -1.5, 1, -1, 0.2, 0]",
+        ],
+        "{out}"
+    );
+}
