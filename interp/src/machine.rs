@@ -348,13 +348,14 @@ impl Machine {
             .find(|(site, stub)| !site.user && site.builtin.is_none() && stub.is_none())
             .map(|(site, _)| {
                 let name = &program.names[site.name as usize];
+                let hint = suggestion(name, &program);
                 RuntimeError::at(
                     site.at.line,
                     site.at.col,
                     Fault::new(
                         K::UnknownFunction,
                         format!(
-                            "compile_error_name_not_found:{name}: `{name}` is neither defined in the program nor a built-in of the controller (a URCap's function? stub it)"
+                            "compile_error_name_not_found:{name}: `{name}` is neither defined in the program nor a built-in of the controller{hint} (a URCap's function? stub it)"
                         ),
                     ),
                 )
@@ -362,13 +363,14 @@ impl Machine {
         // A variable read that nothing can have given a value is the same compile error;
         // the controller names the first one in the text.
         let unknown_variable = program.unknown_variable.as_ref().map(|(name, at)| {
+            let hint = suggestion(name, &program);
             RuntimeError::at(
                 at.line,
                 at.col,
                 Fault::new(
                     K::UnknownVariable,
                     format!(
-                        "compile_error_name_not_found:{name}: `{name}` is never assigned in its scope (not a global the program assigns, not a parameter or variable of its function)"
+                        "compile_error_name_not_found:{name}: `{name}` is never assigned in its scope (not a global the program assigns, not a parameter or variable of its function){hint}"
                     ),
                 ),
             )
@@ -2651,6 +2653,15 @@ impl Machine {
             }
         }
     }
+}
+
+/// `: did you mean `NAME`?` for the built-in or program name (function, variable)
+/// nearest `name` (a typo), else nothing.
+fn suggestion(name: &str, program: &Program) -> String {
+    let funcs = program.funcs.iter().map(|f| f.name.as_str());
+    crate::builtins::nearest_name(name, funcs.chain(program.names.iter().map(String::as_str)))
+        .map(|n| format!(": did you mean `{n}`?"))
+        .unwrap_or_default()
 }
 
 #[cfg(test)]

@@ -436,6 +436,10 @@ pub struct Error {
     pub line: Option<u32>,
     pub column: Option<u32>,
     pub text: String,
+    /// The controller's error code when the error has one (`compile_error_name_not_found`);
+    /// `text` is then the message without it.
+    #[serde(skip_serializing_if = "is_none")]
+    pub code: Option<String>,
 }
 
 /// How a robot program ended.
@@ -825,6 +829,7 @@ impl Event {
             line,
             column,
             text: text.into(),
+            code: None,
         })
     }
 

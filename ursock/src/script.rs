@@ -40,6 +40,68 @@ pub struct Options {
     pub preamble: urscript_interp::Preamble,
     /// The arm at the start: its joints and what it senses (`--set NAME=VALUE`).
     pub arm: urscript_interp::Arm,
+    /// What else fails the run (`--fail-on`).
+    pub fail_on: FailOn,
+}
+
+/// What makes `ursock robot` exit 1 besides a compile or runtime error and a protective
+/// stop, which always do (`--fail-on halt,error-popup,popup`).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct FailOn {
+    /// The program ran `halt`.
+    pub halt: bool,
+    /// The program showed a popup with `error=True`.
+    pub error_popup: bool,
+    /// The program showed any popup.
+    pub popup: bool,
+}
+
+impl FailOn {
+    /// The union of `--fail-on` values: comma-separated `halt`, `error-popup`, `popup`,
+    /// `protective-stop` (always on; accepted to say so).
+    pub fn parse(args: &[String]) -> Result<Self, String> {
+        let mut f = FailOn::default();
+        for word in args.iter().flat_map(|a| a.split(',')).map(str::trim) {
+            match word {
+                "halt" => f.halt = true,
+                "error-popup" => f.error_popup = true,
+                "popup" => f.popup = true,
+                "protective-stop" | "error" => {}
+                other => {
+                    return Err(format!(
+                        "--fail-on {other:?}: give halt, error-popup, popup or protective-stop (comma-separated)"
+                    ))
+                }
+            }
+        }
+        Ok(f)
+    }
+}
+
+/// A runtime error's message for people, and the controller's code in front of it if it
+/// has one: `compile_error_name_not_found:x: text` is (`compile_error_name_not_found`,
+/// `text`).
+pub(crate) fn split_code(message: &str) -> (Option<String>, String) {
+    let Some((code, rest)) = message.split_once(':') else {
+        return (None, message.to_string());
+    };
+    let is_code = code.contains('_')
+        && code
+            .bytes()
+            .all(|b| b.is_ascii_lowercase() || b.is_ascii_digit() || b == b'_');
+    if !is_code {
+        return (None, message.to_string());
+    }
+    // `compile_error_name_not_found:NAME: ...`: the name is in the text too.
+    let rest = match rest.split_once(':') {
+        Some((name, text))
+            if !name.is_empty() && name.bytes().all(|b| b.is_ascii_alphanumeric() || b == b'_') =>
+        {
+            text
+        }
+        _ => rest,
+    };
+    (Some(code.to_string()), rest.trim_start().to_string())
 }
 
 /// The URCap preambles of `--preamble FILE...`, in order; an error names the file and
@@ -476,6 +538,8 @@ pub fn run(script: &str, connect_to: Option<&str>, opts: Options) -> Result<(), 
     let trace = opts.trace;
     // The target of the move under way, for its end's line.
     let mut target: Option<String> = None;
+    // The first popup that fails the run (`--fail-on`).
+    let mut failing_popup: Option<(u32, String)> = None;
     let result = driver.run(&mut machine, |activity| match activity {
         Activity::Event(Event::Call(c)) => {
             let why = c
@@ -485,6 +549,20 @@ pub fn run(script: &str, connect_to: Option<&str>, opts: Options) -> Result<(), 
             printer.emit(report::Event::Call(call_event(c, why)));
         }
         Activity::Event(Event::Message(m)) => {
+            if let MessageKind::Popup { error, title, .. } = &m.kind {
+                if failing_popup.is_none()
+                    && (opts.fail_on.popup || (*error && opts.fail_on.error_popup))
+                {
+                    let what = if *error { "an error popup" } else { "a popup" };
+                    failing_popup = Some((
+                        m.line,
+                        format!(
+                            "the program showed {what} {title:?}: {} (--fail-on)",
+                            m.text
+                        ),
+                    ));
+                }
+            }
             printer.emit(message_event(m));
         }
         Activity::Event(Event::MoveStart(s)) => {
@@ -540,25 +618,46 @@ pub fn run(script: &str, connect_to: Option<&str>, opts: Options) -> Result<(), 
             Err(why.into())
         }
         Ok(o) => {
+            let halted = o == drive::Outcome::Halted;
+            let failure = match failing_popup {
+                Some((line, why)) => Some((Some(line), why)),
+                None if halted && opts.fail_on.halt => {
+                    Some((None, "the program halted (--fail-on halt)".to_string()))
+                }
+                None => None,
+            };
             if opts.json {
-                printer.emit(end(if o == drive::Outcome::Halted {
+                if let Some((line, why)) = &failure {
+                    printer.emit(report::Event::error(*line, None, why.clone()));
+                }
+                printer.emit(end(if halted {
                     report::EndOutcome::Halted
                 } else {
                     report::EndOutcome::Finished
                 }));
             }
-            Ok(())
+            match failure {
+                Some((Some(line), why)) => Err(format!("line {line}: {why}")),
+                Some((None, why)) => Err(why),
+                None => Ok(()),
+            }
         }
         Err(e) => {
+            let (code, text) = split_code(e.message());
             if opts.json {
-                printer.emit(report::Event::error(
-                    Some(e.line()),
-                    Some(e.column()),
-                    e.message(),
-                ));
+                let mut event =
+                    report::Event::error(Some(e.line()), Some(e.column()), text.clone());
+                if let report::Event::Error(err) = &mut event {
+                    err.code = code;
+                }
+                printer.emit(event);
                 printer.emit(end(report::EndOutcome::Error));
             }
-            Err(e.to_string())
+            Err(if e.line() > 0 {
+                format!("line {}: {text}", e.line())
+            } else {
+                text
+            })
         }
     }
 }

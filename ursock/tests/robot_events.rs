@@ -166,3 +166,54 @@ fn moves_and_outputs_are_one_line_each() {
         "{out}"
     );
 }
+
+/// Issue 30: `--fail-on` makes a halt or an error popup fail the run (exit 1) so a CI
+/// step fails with the program; without it they exit 0.
+#[test]
+fn fail_on_makes_a_halt_or_an_error_popup_exit_1() {
+    let popup = "popup(\"gripper lost the part\", \"Gripper\", error=True)";
+    assert_eq!(robot(&["-e", popup]).0, 0);
+    let (code, _, err) = robot(&["--fail-on", "error-popup", "-e", popup]);
+    assert_eq!(code, 1);
+    assert!(
+        err.contains(
+            "line 1: the program showed an error popup \"Gripper\": gripper lost the part"
+        ),
+        "{err}"
+    );
+    // A popup that is no error fails only with `popup`.
+    let info = "popup(\"done\", \"Info\")";
+    assert_eq!(robot(&["--fail-on", "error-popup", "-e", info]).0, 0);
+    assert_eq!(robot(&["--fail-on", "popup", "-e", info]).0, 1);
+    assert_eq!(robot(&["-e", "halt"]).0, 0);
+    let (code, _, err) = robot(&["--fail-on", "halt,protective-stop", "-e", "halt"]);
+    assert_eq!(code, 1);
+    assert!(err.contains("the program halted"), "{err}");
+    let (code, _, err) = robot(&["--fail-on", "hlt", "-e", "halt"]);
+    assert_eq!(code, 1);
+    assert!(err.contains("--fail-on \"hlt\""), "{err}");
+    // A protective stop always fails.
+    assert_eq!(robot(&["-e", "protective_stop()"]).0, 1);
+}
+
+/// Issue 30: a name that is not found is said without the controller's code (it stays
+/// in --json's `code`), with the nearest name when it looks like a typo.
+#[test]
+fn an_unknown_name_is_said_plainly_with_the_nearest_name() {
+    let (code, _, err) = robot(&["-e", "x = 1", "-e", "movjj([0, 0, 0, 0, 0, 0])"]);
+    assert_eq!(code, 1);
+    assert!(!err.contains("compile_error"), "{err}");
+    assert!(err.contains("line 2: `movjj` is neither defined"), "{err}");
+    assert!(err.contains("did you mean `movej`?"), "{err}");
+    let (_, _, err) = robot(&["-e", "def pick():\n sleep(0.01)\nend\npikc()"]);
+    assert!(err.contains("did you mean `pick`?"), "{err}");
+    let (_, _, err) = robot(&["-e", "count = 1\ny = cuont + 1"]);
+    assert!(err.contains("did you mean `count`?"), "{err}");
+    let (_, out, _) = robot(&["--json", "-e", "movjj(1)"]);
+    let first = out.lines().next().unwrap();
+    assert!(
+        first.contains("\"code\":\"compile_error_name_not_found\""),
+        "{first}"
+    );
+    assert!(first.contains("\"text\":\"`movjj` is neither"), "{first}");
+}
