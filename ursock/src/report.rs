@@ -459,6 +459,26 @@ pub enum EndOutcome {
 pub struct End {
     pub t: f64,
     pub outcome: EndOutcome,
+    /// `robot`: the arm when the program ended.
+    #[serde(skip_serializing_if = "is_none")]
+    pub arm: Option<ArmState>,
+}
+
+/// The arm's state: where it is and its outputs.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ArmState {
+    /// Joints (rad).
+    #[serde(serialize_with = "pose_array")]
+    pub joints: [f64; 6],
+    /// Tool pose (base frame).
+    #[serde(serialize_with = "pose_array")]
+    pub pose: [f64; 6],
+    /// Digital outputs: standard 0-7, then configurable 0-7.
+    pub digital_out: Vec<bool>,
+    /// Tool digital outputs 0-1.
+    pub tool_out: [bool; 2],
+    /// Standard analog outputs 0-1.
+    pub analog_out: Vec<Value>,
 }
 
 /// `robot`, `controller`: a move (or a servo/speed stream) started.
@@ -864,7 +884,11 @@ impl Event {
 
     /// `end`.
     pub fn end(outcome: EndOutcome) -> Self {
-        Event::End(End { t: now(), outcome })
+        Event::End(End {
+            t: now(),
+            outcome,
+            arm: None,
+        })
     }
 }
 

@@ -597,7 +597,27 @@ pub fn run(script: &str, connect_to: Option<&str>, opts: Options) -> Result<(), 
         }
         _ => {}
     });
-    let end = report::Event::end;
+    let arm = {
+        let a = machine.arm();
+        report::ArmState {
+            joints: a.q,
+            pose: urscript_interp::kinematics::forward(&opts.model.dh(), a.q, a.tcp),
+            digital_out: a.digital_out[..16].to_vec(),
+            tool_out: a.tool_out,
+            analog_out: a
+                .analog_out
+                .iter()
+                .map(|x| report::Value::Float(*x))
+                .collect(),
+        }
+    };
+    let end = |outcome| {
+        report::Event::End(report::End {
+            t: report::now(),
+            outcome,
+            arm: Some(arm.clone()),
+        })
+    };
     match result {
         Ok(drive::Outcome::MaxTime) => {
             printer.emit(report::Event::note(format!(
