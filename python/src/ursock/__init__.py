@@ -16,19 +16,26 @@ from __future__ import annotations
 from ._binary import ENV_VAR, BinaryNotFound, binary
 from .controller import SERVERS, ControllerError, DashboardClient, UrController
 from .robot import (
+    ArmState,
     CallRecord,
     Message,
+    Move,
+    OutputChange,
     Pose,
     ReadResult,
     RobotRun,
     RobotRunError,
     ScriptSource,
     decode_value,
+    moves_of,
     parse_events,
     run_robot,
 )
 
 __all__ = [
+    "ArmState",
+    "Move",
+    "OutputChange",
     "ENV_VAR",
     "SERVERS",
     "BinaryNotFound",
@@ -45,5 +52,6 @@ __all__ = [
     "binary",
     "decode_value",
     "parse_events",
+    "moves_of",
     "run_robot",
 ]
