@@ -6,7 +6,9 @@ typed API over its JSON output, and a pytest plugin.
   and returns a :class:`RobotRun` (its :class:`CallRecord` list, its :class:`Message`
   list, every raw event).
 * :class:`UrController` runs the virtual controller (its dashboard server and, when
-  this ``ursock`` has them, the other servers).
+  this ``ursock`` has them, the other servers) and reads the arm as a client does
+  (:meth:`UrController.state`, :meth:`UrController.wait_until`, over RTDE with
+  :class:`RtdeReader`).
 * The pytest plugin (:mod:`ursock.pytest_plugin`, loaded by pytest on its own) gives
   the fixtures ``virtual_robot`` and ``ur_controller``.
 """
@@ -14,7 +16,8 @@ typed API over its JSON output, and a pytest plugin.
 from __future__ import annotations
 
 from ._binary import ENV_VAR, BinaryNotFound, binary
-from .controller import SERVERS, ControllerError, DashboardClient, UrController
+from .controller import SERVERS, ControllerError, DashboardClient, UrController, free_loopback_address
+from .rtde import ROBOT_MODES, RUNTIME_STATES, SAFETY_MODES, RobotState, RtdeError, RtdeReader
 from .robot import (
     ArmState,
     CallRecord,
@@ -33,6 +36,13 @@ from .robot import (
 )
 
 __all__ = [
+    "ROBOT_MODES",
+    "RUNTIME_STATES",
+    "SAFETY_MODES",
+    "RobotState",
+    "RtdeError",
+    "RtdeReader",
+    "free_loopback_address",
     "ArmState",
     "Move",
     "OutputChange",

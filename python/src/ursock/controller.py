@@ -564,6 +564,21 @@ class UrController:
         """The events named ``kind`` that :attr:`events` holds."""
         return [e for e in self.events if e.get("event") == kind]
 
+    def log(self, last: int = 200) -> str:
+        """What the controller said: its command, its stderr and its ``last`` newest
+        events as JSON lines (what the pytest plugin shows when a test fails)."""
+        with self._lock:
+            err = "".join(self._stderr).strip()
+            events = list(self._events)[-last:] if last > 0 else []
+            dropped = self._dropped + max(0, len(self._events) - len(events))
+        parts = ["command: " + " ".join(self.command)]
+        if err:
+            parts.append("stderr:\n" + err)
+        if events:
+            head = f"last {len(events)} events" + (f" ({dropped} older not shown)" if dropped else "")
+            parts.append(head + ":\n" + "\n".join(json.dumps(e, separators=(",", ":")) for e in events))
+        return "\n".join(parts)
+
     # -- the arm, as a client sees it ---------------------------------------------------
 
     def rtde(self) -> RtdeReader:

@@ -123,7 +123,8 @@ class RobotState:
     digital_out: List[bool]
     #: Digital inputs, numbered the same way.
     digital_in: List[bool]
-    #: Standard analog outputs 0-1.
+    #: Standard analog outputs 0-1, in their domain's unit (V, or A for current) as
+    #: RTDE gives them.
     analog_out: List[float]
     #: ``"RUNNING"``, ``"POWER_OFF"``... (:data:`ROBOT_MODES`).
     robot_mode: str
