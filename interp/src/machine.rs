@@ -593,17 +593,34 @@ impl Machine {
         while self.state == State::Running && self.ctl.step < target {
             match self.next_wake_step() {
                 Some(s) if s < target => {
+                    self.sample_motion_until(s);
                     self.ctl.step = self.ctl.step.max(s);
                     self.run_step();
                     self.ctl.step += 1;
                 }
-                _ => self.ctl.step = target,
+                _ => {
+                    self.sample_motion_until(target);
+                    self.ctl.step = target;
+                }
             }
         }
         // Steps where no thread ran still move the arm: it is where the motion has it at
         // the last step due.
         if self.state == State::Running && self.ctl.motion.is_some() {
             self.ctl.advance(self.ctl.step.saturating_sub(1));
+        }
+    }
+
+    /// Puts the arm through every step from the next one up to (not including) `end`
+    /// while a motion is under way, as the controller computes each step: a tool move's
+    /// joints follow its path step by step (each step's inverse kinematics nearest the
+    /// last), so where the arm goes does not depend on how often the driver calls
+    /// [`run_until`](Self::run_until) (real time, or virtual time's jumps).
+    fn sample_motion_until(&mut self, end: u64) {
+        let mut step = self.ctl.step;
+        while step < end && self.ctl.motion.is_some() {
+            self.ctl.advance(step);
+            step += 1;
         }
     }
 

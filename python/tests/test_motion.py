@@ -97,3 +97,19 @@ def test_a_failure_without_a_line_says_no_line(virtual_robot: VirtualRobot) -> N
     text = run.describe_failure()
     assert "line None" not in text
     assert "the program halted" in text
+
+
+def test_virtual_time_gives_the_same_moves_without_waiting(virtual_robot: VirtualRobot) -> None:
+    real = virtual_robot(PICK)
+    fast = virtual_robot(PICK, virtual_time=True)
+    assert fast.moves() == real.moves()
+    assert fast.final_joints() == real.final_joints()
+    # An hour of sleep ends at once (the fixture's max_time counts program time here).
+    hour = virtual_robot(lines=["sleep(3600)", 'textmsg("later")'], virtual_time=True, max_time=7200, timeout=120)
+    assert hour.texts == ["later"]
+
+
+def test_fail_on_an_error_popup(virtual_robot: VirtualRobot) -> None:
+    run = virtual_robot(lines=['popup("no part", "Gripper", error=True)'], fail_on=["error-popup"], check=False)
+    assert run.returncode == 1
+    assert "error popup" in run.describe_failure()

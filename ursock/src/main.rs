@@ -110,6 +110,12 @@ enum Command {
         /// runtime error and a protective stop always exit 1. Comma-separated, repeatable.
         #[arg(long, value_name = "WHAT,...")]
         fail_on: Vec<String>,
+        /// Run in virtual time while the program has no connection open: a sleep or a
+        /// move ends at once instead of lasting its real length, with the same results
+        /// (the same program times). While a connection is open, time is real.
+        /// --max-time then counts program time.
+        #[arg(long)]
+        virtual_time: bool,
     },
     /// A virtual UR controller that unmodified clients drive: the dashboard server
     /// (port 29999) with its state machine (power, brakes, safety, programs).
@@ -206,6 +212,7 @@ fn run(cli: Cli) -> Result<(), String> {
             preamble,
             set,
             fail_on,
+            virtual_time,
         } => {
             let fail_on = script::FailOn::parse(&fail_on)?;
             let Some(arm) = script::arm_from_settings(&set)? else {
@@ -261,6 +268,7 @@ fn run(cli: Cli) -> Result<(), String> {
                     preamble: urcaps,
                     arm,
                     fail_on,
+                    virtual_time,
                 },
             )
         }

@@ -42,6 +42,8 @@ pub struct Options {
     pub arm: urscript_interp::Arm,
     /// What else fails the run (`--fail-on`).
     pub fail_on: FailOn,
+    /// Virtual time while no connection is open (`--virtual-time`).
+    pub virtual_time: bool,
 }
 
 /// What makes `ursock robot` exit 1 besides a compile or runtime error and a protective
@@ -500,6 +502,7 @@ pub fn run(script: &str, connect_to: Option<&str>, opts: Options) -> Result<(), 
     let mut driver = Driver::new(drive::Options {
         max_time: opts.max_time,
         connect_timeout: CONNECT_TIMEOUT,
+        virtual_time: opts.virtual_time,
         ..drive::Options::default()
     });
     let mut printer = Printer {

@@ -217,3 +217,86 @@ fn an_unknown_name_is_said_plainly_with_the_nearest_name() {
     );
     assert!(first.contains("\"text\":\"`movjj` is neither"), "{first}");
 }
+
+/// The JSON events of a run without their wall-clock `t`.
+fn program_events(args: &[&str]) -> Vec<serde_json::Value> {
+    let (code, out, err) = robot(args);
+    assert_eq!(code, 0, "{err}");
+    out.lines()
+        .map(|l| {
+            let mut v: serde_json::Value = serde_json::from_str(l).unwrap();
+            v.as_object_mut().unwrap().remove("t");
+            v
+        })
+        .collect()
+}
+
+/// Issue 30: a program with no peers runs in virtual time with the same results as in
+/// real time: the same events at the same program times.
+#[test]
+fn virtual_time_gives_the_same_results_as_real_time() {
+    let program = [
+        "--json",
+        "-e",
+        "movej([0.5, -1.5, 1, -1, 0.2, 0], a=3, v=3, r=0.05)",
+        "-e",
+        "movej([0.6, -1.5, 1, -1, 0.2, 0], a=3, v=3)",
+        "-e",
+        "sleep(0.25)",
+        "-e",
+        "set_standard_digital_out(3, True)",
+        "-e",
+        "movel(p[0.3, -0.2, 0.4, 0, 3.14, 0], a=1.2, v=0.5)",
+        "-e",
+        "textmsg(\"at \", get_actual_joint_positions())",
+    ];
+    let real = program_events(&program);
+    let mut virtual_args = vec!["--virtual-time"];
+    virtual_args.extend(program);
+    let virtual_run = program_events(&virtual_args);
+    assert_eq!(real, virtual_run);
+    assert!(real.iter().filter(|e| e["event"] == "move_end").count() == 3);
+}
+
+/// Issue 30: an hour of `sleep` ends at once in virtual time; `--max-time` counts program
+/// time there.
+#[test]
+fn virtual_time_does_not_wait_in_real_time() {
+    let mut child = Command::new(env!("CARGO_BIN_EXE_ursock"))
+        .args([
+            "robot",
+            "--virtual-time",
+            "-e",
+            "sleep(3600)",
+            "-e",
+            "textmsg(\"an hour later\")",
+        ])
+        .stdin(Stdio::null())
+        .stdout(Stdio::piped())
+        .spawn()
+        .unwrap();
+    // A hang guard, not a speed measure: in real time this would take an hour.
+    let deadline = std::time::Instant::now() + std::time::Duration::from_secs(120);
+    while child.try_wait().unwrap().is_none() {
+        if std::time::Instant::now() > deadline {
+            let _ = child.kill();
+            panic!("--virtual-time still sleeping after 120 s");
+        }
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+    let out = child.wait_with_output().unwrap();
+    assert!(out.status.success());
+    assert_eq!(
+        String::from_utf8_lossy(&out.stdout),
+        "textmsg(\"an hour later\") -> an hour later\n"
+    );
+    let (code, _, err) = robot(&[
+        "--virtual-time",
+        "--max-time",
+        "1000",
+        "-e",
+        "while True:\n sleep(1)\nend",
+    ]);
+    assert_eq!(code, 0);
+    assert!(err.contains("--max-time 1000s reached"), "{err}");
+}

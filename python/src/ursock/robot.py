@@ -583,6 +583,8 @@ def robot_command(
     trace: bool = False,
     extra_args: Sequence[str] = (),
     ursock: Optional[Union[str, "os.PathLike[str]"]] = None,
+    virtual_time: bool = False,
+    fail_on: Sequence[str] = (),
 ) -> List[str]:
     """The ``ursock robot ... --json`` command line for these options."""
     cmd = [str(ursock or binary()), "robot", "--json"]
@@ -606,6 +608,10 @@ def robot_command(
         cmd += ["--model", model]
     if trace:
         cmd.append("--trace")
+    if virtual_time:
+        cmd.append("--virtual-time")
+    if fail_on:
+        cmd += ["--fail-on", ",".join(fail_on)]
     cmd += list(extra_args)
     return cmd
 
@@ -628,6 +634,8 @@ def run_robot(
     cwd: Optional[Union[str, "os.PathLike[str]"]] = None,
     env: Optional[Mapping[str, str]] = None,
     ursock: Optional[Union[str, "os.PathLike[str]"]] = None,
+    virtual_time: bool = False,
+    fail_on: Sequence[str] = (),
 ) -> RobotRun:
     """Run a URScript program on ``ursock``'s virtual robot, in real time, against
     real servers, and return what it did.
@@ -648,6 +656,11 @@ def run_robot(
     :param step_time: the controller's step (0.002 e-Series, 0.008 CB3).
     :param model: the arm (``ur5e``, ``ur10e``, ...).
     :param trace: also record the bytes both ways (``tx``/``rx`` events).
+    :param virtual_time: run in virtual time while the program has no connection open
+        (``--virtual-time``): a ``sleep`` or a move ends at once, with the same results
+        (program times); ``max_time`` then counts program time.
+    :param fail_on: what else makes the run fail (``--fail-on``): ``"halt"``,
+        ``"error-popup"``, ``"popup"``.
     :param extra_args: more ``ursock robot`` options, passed as they are.
     :param timeout: kill ursock after this many seconds (default: ``max_time`` + 30,
         or 300 without ``max_time``); raises ``subprocess.TimeoutExpired``.
@@ -687,6 +700,8 @@ def run_robot(
             trace=trace,
             extra_args=extra_args,
             ursock=ursock,
+            virtual_time=virtual_time,
+            fail_on=fail_on,
         )
         done = subprocess.run(
             cmd,
