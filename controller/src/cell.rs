@@ -325,8 +325,10 @@ impl Cell {
 
     /// The loaded program could not be read or translated: it does not play.
     pub fn refuse_loaded(&mut self, why: String, now: Duration) {
-        self.awaiting_load = false;
+        // Time runs to `now` while the answer is still awaited: the program that is
+        // PLAYING without its text must not ask for it again.
         self.advance(now);
+        self.awaiting_load = false;
         if self.running.is_none() {
             self.controller.program_ended();
         }
@@ -445,7 +447,10 @@ impl Cell {
         // client library's driver test sends one and waits for the stop's error code).
         if std::mem::take(&mut arm.protective_stop) {
             self.controller.protective_stop(now);
-            if let Some(r) = &mut self.running {
+            if self.controller.program_state() == ProgramState::Stopped {
+                // The program a client sent ends (`Controller::protective_stop`).
+                self.end_running(Ended::Stopped);
+            } else if let Some(r) = &mut self.running {
                 r.paused_at.get_or_insert(now);
             }
         }
@@ -519,10 +524,13 @@ impl Cell {
     fn run_program(&mut self, now: Duration) {
         let Some(r) = &mut self.running else { return };
         r.machine.run_until(now.saturating_sub(r.origin));
+        let mut stopped = false;
         if std::mem::take(&mut r.machine.arm_mut().protective_stop) {
-            // `protective_stop()`: the program pauses, as a protective stop pauses it.
+            // `protective_stop()`: a loaded program pauses, one a client sent ends
+            // (`Controller::protective_stop`).
             self.controller.protective_stop(now);
             r.paused_at = Some(now);
+            stopped = self.controller.program_state() == ProgramState::Stopped;
         }
         if std::mem::take(&mut r.machine.arm_mut().pause_requested) {
             // An RTDE watchdog with the action "pause": the program pauses.
@@ -539,6 +547,7 @@ impl Cell {
         }
         let powerdown = std::mem::take(&mut r.machine.arm_mut().powerdown);
         let end = match r.machine.state() {
+            State::Running if stopped => Some(Ended::Stopped),
             State::Running => None,
             State::Finished => Some(Ended::Finished),
             State::Halted => Some(Ended::Halted),

@@ -108,8 +108,8 @@
 //! - Output and input recipe ids count separately from 1 in each session (v2). In v1
 //!   there is one output recipe: a new setup replaces it. At most
 //!   [`RTDE_MAX_OUTPUT_RECIPES`] output and [`RTDE_MAX_INPUT_RECIPES`] input recipes per session,
-//!   [`RTDE_MAX_FIELDS`] fields per recipe, [`RTDE_MAX_NAMES`] bytes of names: beyond, recipe id 0
-//!   (an empty type list for a names list too long or a payload not UTF-8).
+//!   [`RTDE_MAX_FIELDS`] fields per recipe, a data package within [`RTDE_MAX_PACKET_SIZE`]:
+//!   beyond, recipe id 0 (an empty type list for too many names or a payload not UTF-8).
 //! - Setups are accepted while started as well. START answers 1 when the session has
 //!   at least one recipe (output or input), else 0; PAUSE always answers 1.
 //! - Input DATA_PACKAGEs are accepted whether started or not (`ur_rtde`'s
@@ -130,7 +130,7 @@
 //!
 //! # Errors and bounds
 //!
-//! A packet whose size is below 3 or above [`RTDE_MAX_PACKET_SIZE`] cannot be framed past:
+//! A packet whose size is below 3 (the header's own) cannot be framed past:
 //! [`RtdeSession::handle_received`] returns the error and the caller should close the
 //! connection (every later call returns the same error). Other faults (an unknown type,
 //! a payload of the wrong length, a data package for no recipe) skip that one packet,
@@ -148,14 +148,16 @@ use std::time::Duration;
 use crate::state::{Config, ProgramState, RobotMode, SafetyStatus};
 use crate::status::{Inputs, Status};
 
-/// The largest packet a client may send, in bytes, the header included. The guide
-/// bounds the names of a setup to 2048 bytes; input data packages are bounded by
-/// refusing input recipes whose package would be larger.
-pub const RTDE_MAX_PACKET_SIZE: usize = 8192;
-/// The most bytes of names in one setup (the guide's limit).
-pub const RTDE_MAX_NAMES: usize = 2048;
-/// The most fields in one recipe.
-pub const RTDE_MAX_FIELDS: usize = 256;
+/// The largest packet, in bytes, the header included: every size the header's `uint16`
+/// can give. A controller takes setups this large (UR's Client Library sets up all 406
+/// PolyScope 5 outputs in one 9184-byte packet), so none is refused for its size; the
+/// session buffers at most one such packet. Replies and data packages are bounded to
+/// it by refusing recipes whose package would be larger.
+pub const RTDE_MAX_PACKET_SIZE: usize = u16::MAX as usize;
+/// The most fields in one recipe: five times the 406 outputs PolyScope 5 names, so any
+/// recipe of real names fits; it bounds the per-field tables of a setup (its type list
+/// reply stays within a packet: 2048 `NOT_FOUND,` are 20 KiB).
+pub const RTDE_MAX_FIELDS: usize = 2048;
 /// The most output recipes one session may set up.
 pub const RTDE_MAX_OUTPUT_RECIPES: usize = 16;
 /// The most input recipes one session may set up.
@@ -396,19 +398,14 @@ impl RtdeTextLevel {
     }
 }
 
-/// A fault in what the client sent. The framing errors ([`RtdeError::SizeTooSmall`],
-/// [`RtdeError::SizeTooLarge`]) and [`RtdeError::OutboxFull`] and [`RtdeError::Closed`]
+/// A fault in what the client sent. The framing error [`RtdeError::SizeTooSmall`]
+/// and [`RtdeError::OutboxFull`] and [`RtdeError::Closed`]
 /// are fatal: [`RtdeSession::handle_received`] returns them. The others skip one packet
 /// and are reported as [`RtdeEvent::Error`].
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub enum RtdeError {
     /// A packet header gave a size below 3 (the header's own size).
     SizeTooSmall {
-        /// The size given.
-        size: u16,
-    },
-    /// A packet header gave a size above [`RTDE_MAX_PACKET_SIZE`].
-    SizeTooLarge {
         /// The size given.
         size: u16,
     },
@@ -424,14 +421,8 @@ pub enum RtdeError {
         /// What was wrong.
         reason: &'static str,
     },
-    /// A setup's names were more than [`RTDE_MAX_NAMES`] bytes.
-    NamesTooLong {
-        /// Their length.
-        len: usize,
-    },
-    /// A setup listed more than [`RTDE_MAX_FIELDS`] fields, or an input recipe's data
-    /// package would be larger than [`RTDE_MAX_PACKET_SIZE`] (a guard: within
-    /// [`RTDE_MAX_NAMES`] bytes of names the largest is 6 KiB).
+    /// A setup listed more than [`RTDE_MAX_FIELDS`] fields, or a recipe's data package
+    /// would be larger than [`RTDE_MAX_PACKET_SIZE`] (2048 fields of six doubles are).
     TooManyFields {
         /// How many.
         count: usize,
@@ -473,10 +464,7 @@ impl RtdeError {
     pub fn is_fatal(&self) -> bool {
         matches!(
             self,
-            RtdeError::SizeTooSmall { .. }
-                | RtdeError::SizeTooLarge { .. }
-                | RtdeError::OutboxFull
-                | RtdeError::Closed
+            RtdeError::SizeTooSmall { .. } | RtdeError::OutboxFull | RtdeError::Closed
         )
     }
 }
@@ -487,9 +475,6 @@ impl fmt::Display for RtdeError {
             RtdeError::SizeTooSmall { size } => {
                 write!(f, "packet size {size} is below the 3-byte header")
             }
-            RtdeError::SizeTooLarge { size } => {
-                write!(f, "packet size {size} is above {RTDE_MAX_PACKET_SIZE}")
-            }
             RtdeError::UnknownType { packet_type } => {
                 write!(f, "unknown package type {packet_type}")
             }
@@ -497,9 +482,6 @@ impl fmt::Display for RtdeError {
                 packet_type,
                 reason,
             } => write!(f, "bad payload for package type {packet_type}: {reason}"),
-            RtdeError::NamesTooLong { len } => {
-                write!(f, "setup names are {len} bytes, at most {RTDE_MAX_NAMES}")
-            }
             RtdeError::TooManyFields { count } => {
                 write!(f, "a recipe of {count} fields is too large")
             }
@@ -1619,14 +1601,8 @@ impl RtdeSession {
             bytes = rest;
             if self.inbuf.len() == 3 {
                 let size = self.header_size();
-                let err = if size < 3 {
-                    Some(RtdeError::SizeTooSmall { size: size as u16 })
-                } else if size > RTDE_MAX_PACKET_SIZE {
-                    Some(RtdeError::SizeTooLarge { size: size as u16 })
-                } else {
-                    None
-                };
-                if let Some(e) = err {
+                if size < 3 {
+                    let e = RtdeError::SizeTooSmall { size: size as u16 };
                     return Err(self.die(e));
                 }
             }
@@ -1756,9 +1732,6 @@ impl RtdeSession {
 
     /// Split a setup's names, or the error that refuses it.
     fn names(payload: &[u8]) -> Result<Vec<String>, RtdeError> {
-        if payload.len() > RTDE_MAX_NAMES {
-            return Err(RtdeError::NamesTooLong { len: payload.len() });
-        }
         let text = std::str::from_utf8(payload).map_err(|_| RtdeError::BadPayload {
             packet_type: RTDE_SETUP_OUTPUTS,
             reason: "names are not UTF-8",
@@ -1766,11 +1739,11 @@ impl RtdeSession {
         // A trailing comma ends the list (ur_rtde sends `a,b,c,`); an empty list or an
         // empty name elsewhere stays a name, NOT_FOUND.
         let text = text.strip_suffix(',').unwrap_or(text);
-        let names: Vec<String> = text.split(',').map(str::to_string).collect();
-        if names.len() > RTDE_MAX_FIELDS {
-            return Err(RtdeError::TooManyFields { count: names.len() });
+        let count = text.split(',').count();
+        if count > RTDE_MAX_FIELDS {
+            return Err(RtdeError::TooManyFields { count });
         }
-        Ok(names)
+        Ok(text.split(',').map(str::to_string).collect())
     }
 
     fn setup_outputs(&mut self, payload: &[u8]) -> Result<(), RtdeError> {
@@ -1798,9 +1771,12 @@ impl RtdeSession {
         };
         let mut fields = Vec::with_capacity(names.len());
         let mut types = Vec::with_capacity(names.len());
+        // The data package: its recipe id, then the fields.
+        let mut len = 1usize;
         for n in &names {
             match lookup_output(n).filter(|(_, _, s)| s.allows(self.version)) {
                 Some((out, ty, _)) => {
+                    len += ty.size();
                     fields.push(out);
                     types.push(ty.name().to_string());
                 }
@@ -1808,6 +1784,10 @@ impl RtdeSession {
             }
         }
         let mut ok = fields.len() == names.len();
+        if ok && len + 3 > RTDE_MAX_PACKET_SIZE {
+            self.fault(RtdeError::TooManyFields { count: names.len() });
+            ok = false;
+        }
         let max = f64::from(self.max_hz);
         if ok && !(frequency > 0.0 && frequency <= max) {
             self.fault(RtdeError::Frequency {

@@ -684,7 +684,10 @@ impl Controller {
     }
 
     /// A protective stop happens (a collision, a limit, `protective_stop()`): the safety
-    /// status is PROTECTIVE_STOP, a playing program pauses; the robot mode stays.
+    /// status is PROTECTIVE_STOP; the robot mode stays. A playing loaded program pauses; a
+    /// playing program a client sent (primary, secondary, realtime) ends: STOPPED, as
+    /// URSim ends it (UR's client library waits for its `PROGRAM_XXX_STOPPED` after
+    /// sending `protective_stop()`, and UR's ROS 2 driver has its script sent again).
     pub fn protective_stop(&mut self, now: Duration) {
         self.handle_timeout(now);
         if self.safety.cuts_power() {
@@ -692,8 +695,17 @@ impl Controller {
         }
         self.safety = SafetyStatus::ProtectiveStop;
         self.protective_since = Some(now);
+        self.program_protective_stopped();
+    }
+
+    fn program_protective_stopped(&mut self) {
         if self.program_state == ProgramState::Playing {
-            self.program_state = ProgramState::Paused;
+            if self.script {
+                self.program_state = ProgramState::Stopped;
+                self.script = false;
+            } else {
+                self.program_state = ProgramState::Paused;
+            }
         }
     }
 
@@ -736,6 +748,7 @@ impl Controller {
         self.safety = status;
         if status == SafetyStatus::ProtectiveStop {
             self.protective_since = Some(now);
+            self.program_protective_stopped();
         }
         if status.cuts_power() {
             self.pending = None;

@@ -243,9 +243,15 @@ pub enum FetchError {
     /// No connection (refused, unreachable, the URCap's 5 s connect timeout), with the
     /// reason as the popup shows it.
     Connect(String),
-    /// Connected, but the first line of the reply did not come within the URCap's
-    /// 500 ms read timeout.
+    /// Connected, but a read of the reply (its first line, or the rest of a line that
+    /// started) did not come within the URCap's 500 ms read timeout.
     Timeout,
+    /// The reply is longer than the fetcher reads (`limit` bytes): the play fails
+    /// ([`UrpError::TooLarge`]), where the URCap has no bound.
+    TooLarge {
+        /// The bound in bytes.
+        limit: usize,
+    },
 }
 
 /// Why a `.urp` could not be read or translated.
@@ -503,8 +509,15 @@ pub fn translate_with(
                 if fetched.is_none() {
                     let reply = match fetch(node) {
                         Ok(text) => urcap_lines(&text),
+                        Err(FetchError::TooLarge { limit }) => {
+                            return Err(UrpError::TooLarge {
+                                what: "External Control reply",
+                                limit,
+                            })
+                        }
                         Err(why) => {
                             let text = match why {
+                                FetchError::TooLarge { .. } => String::new(),
                                 FetchError::Timeout => format!(
                                     "Timeout while reading requested program from {}:{}",
                                     node.host, node.port

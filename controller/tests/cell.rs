@@ -261,6 +261,27 @@ fn play_of_a_loaded_program_asks_for_its_text() {
     assert_eq!(cell.controller().program_state(), ProgramState::Stopped);
 }
 
+/// A loaded program that cannot be read is refused once: the refusal does not ask for
+/// its text again (which would read the file and report it a second time).
+#[test]
+fn a_loaded_program_refused_is_asked_for_and_reported_once() {
+    let (mut cell, mut dash) = ready_cell();
+    dash.handle_line(cell.controller(), "load pick.urp", ms(2000));
+    dash.handle_line(cell.controller(), "play", ms(2000));
+    cell.advance(ms(2002));
+    let ev = events(&mut cell);
+    assert!(matches!(&ev[..], [CellEvent::NeedProgram { .. }]), "{ev:?}");
+    cell.refuse_loaded("pick.urp: not a .urp".into(), ms(2010));
+    let ev = events(&mut cell);
+    assert!(
+        matches!(&ev[..], [CellEvent::Refused { text, .. }] if text == "pick.urp: not a .urp"),
+        "{ev:?}"
+    );
+    cell.advance(ms(2020));
+    assert!(events(&mut cell).is_empty());
+    assert_eq!(cell.controller().program_state(), ProgramState::Stopped);
+}
+
 #[test]
 fn the_primary_interfaces_unlock_releases_at_once_the_dashboards_is_held() {
     use urscript_controller::SafetyStatus;

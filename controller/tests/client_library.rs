@@ -271,3 +271,108 @@ fn a_program_sent_0_6_s_after_a_brake_release_from_power_off_runs() {
     }
     server.stop();
 }
+
+/// What a robot message (primary package type 20) says, as the library reads it.
+#[derive(Debug, PartialEq)]
+enum Said {
+    /// A key message: title and text.
+    Key(String, String),
+    /// An error code: code, argument, report level.
+    Code(i32, i32, i32),
+    /// A safety mode message: the mode.
+    Safety(u8),
+    /// Another robot message type.
+    Other(u8),
+}
+
+/// The robot messages received on `s` until one satisfies `until` (within `WAIT`).
+fn said_until(s: &mut TcpStream, until: impl Fn(&Said) -> bool) -> Vec<Said> {
+    let start = Instant::now();
+    let mut said = Vec::new();
+    while start.elapsed() < WAIT {
+        let (kind, body) = primary_package(s);
+        if kind != 20 || body.len() < 10 {
+            continue;
+        }
+        // Timestamp (8), source (1), robot message type (1), then its fields.
+        let rest = &body[10..];
+        let s = match body[9] {
+            7 if rest.len() >= 9 => {
+                let len = usize::from(rest[8]);
+                let title = String::from_utf8_lossy(&rest[9..9 + len]).into_owned();
+                let text = String::from_utf8_lossy(&rest[9 + len..]).into_owned();
+                Said::Key(title, text)
+            }
+            6 if rest.len() >= 12 => {
+                Said::Code(be_i32(rest), be_i32(&rest[4..]), be_i32(&rest[8..]))
+            }
+            5 if rest.len() >= 9 => Said::Safety(rest[8]),
+            other => Said::Other(other),
+        };
+        let done = until(&s);
+        said.push(s);
+        if done {
+            return said;
+        }
+    }
+    panic!("not within {WAIT:?}: {said:?}");
+}
+
+/// The library's `test_send_script_blocking_ignore_warnings`: `power off`, `set
+/// robotmode run` and, once RUNNING, `protective_stop()` wrapped in a named function
+/// (`sendScriptBlocking`), which returns on that name's `PROGRAM_XXX_STOPPED` only. The
+/// stop's safety mode and error code come before it; `set unlock protective stop` then
+/// frees the arm and the next program runs.
+#[test]
+fn a_script_stopped_by_protective_stop_reports_program_stopped() {
+    let server = start();
+    let mut primary = connect(&server, "primary");
+    assert_eq!(primary_package(&mut primary).0, 20);
+    primary.write_all(b"power off\n").unwrap();
+    primary.write_all(b"set robotmode run\n").unwrap();
+    let begin = Instant::now();
+    while server.with_cell(|cell, _| cell.status().robot_mode)
+        != urscript_controller::RobotMode::Running
+    {
+        assert!(begin.elapsed() < WAIT, "the arm never ran");
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    primary
+        .write_all(b"def script_1764250000000():\n  protective_stop()\nend\n")
+        .unwrap();
+    let name = "script_1764250000000".to_string();
+    let stopped = Said::Key("PROGRAM_XXX_STOPPED".into(), name.clone());
+    let said = said_until(&mut primary, |s| *s == stopped);
+    let at = |want: &Said| said.iter().position(|s| s == want);
+    let started = at(&Said::Key("PROGRAM_XXX_STARTED".into(), name.clone()));
+    let safety = at(&Said::Safety(3));
+    let code = at(&Said::Code(209, 0, 2));
+    assert!(
+        started.is_some() && safety.is_some() && code.is_some(),
+        "{said:?}"
+    );
+    assert!(started < safety && safety < code, "{said:?}");
+    let status = server.with_cell(|cell, _| cell.status());
+    assert_eq!(
+        status.safety,
+        urscript_controller::SafetyStatus::ProtectiveStop
+    );
+    assert_eq!(
+        status.program_state,
+        urscript_controller::ProgramState::Stopped
+    );
+    // The library's commandUnlockProtectiveStop, then its next test's program.
+    primary.write_all(b"set unlock protective stop\n").unwrap();
+    said_until(&mut primary, |s| *s == Said::Safety(1));
+    primary
+        .write_all(b"def next_one():\n  textmsg(\"ran\")\nend\n")
+        .unwrap();
+    let said = said_until(&mut primary, |s| {
+        *s == Said::Key("PROGRAM_XXX_STOPPED".into(), "next_one".into())
+    });
+    assert!(
+        said.contains(&Said::Key("PROGRAM_XXX_STARTED".into(), "next_one".into())),
+        "{said:?}"
+    );
+    server.stop();
+}

@@ -100,7 +100,8 @@ fn a_test_starts_a_controller_drives_it_and_stops_it() {
     // The operator (or the cell around the robot) acts through the cell.
     server.with_cell(|cell, now| cell.controller().protective_stop(now));
     assert_eq!(ask(&mut d, "safetystatus"), "Safetystatus: PROTECTIVE_STOP");
-    assert_eq!(ask(&mut d, "programState"), "PAUSED <unnamed>");
+    // A program a client sent ends there (a loaded one would pause).
+    assert_eq!(ask(&mut d, "programState"), "STOPPED <unnamed>");
     let status = server.with_cell(|cell, _| cell.status());
     assert_eq!(status.safety, SafetyStatus::ProtectiveStop);
     // Stopping closes every listener.
@@ -151,4 +152,113 @@ fn the_primary_interfaces_unlock_lets_the_next_program_run() {
     }
     assert_eq!(ask(&mut d, "safetystatus"), "Safetystatus: NORMAL");
     server.stop();
+}
+
+/// A `.urp` file as PolyScope saves it (gzip-compressed XML) with one script line:
+/// `textmsg("TEXT")`, each character an `<ExpressionChar>`.
+fn textmsg_urp(text: &str) -> Vec<u8> {
+    let chars: String = format!("textmsg(\"{text}\")")
+        .chars()
+        .map(|c| match c {
+            '"' => "<ExpressionChar character=\"&quot;\"/>".to_string(),
+            c => format!("<ExpressionChar character=\"{c}\"/>"),
+        })
+        .collect();
+    let xml = format!(
+        r#"<URProgram name="hello" installation="default" directory="/ursim/programs" createdIn="5.21.0" lastSavedIn="5.21.0">
+  <children>
+    <MainProgram runOnlyOnce="true">
+      <children>
+        <Script type="Line"><expression>{chars}</expression></Script>
+      </children>
+    </MainProgram>
+  </children>
+</URProgram>"#
+    );
+    let mut gz = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::default());
+    std::io::Write::write_all(&mut gz, xml.as_bytes()).unwrap();
+    gz.finish().unwrap()
+}
+
+/// `Profile::Ursim` answers as URSim does in UR's client library's CI: programs by
+/// `/ursim/programs/NAME` (read from the programs directory when played),
+/// `default.installation` always there, remote control off, URSim's serial number. A
+/// robot (the default profile) knows none of that path.
+#[test]
+fn the_ursim_profile_answers_as_ursim() {
+    use urscript_controller::net::{Profile, URSIM_SERIAL};
+    let dir = std::env::temp_dir().join(format!("ursock-ursim-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::write(dir.join("hello.urp"), textmsg_urp("hello from ursim")).unwrap();
+    let serve = |profile: Profile| {
+        let (tx, rx) = mpsc::channel();
+        let tx = std::sync::Mutex::new(tx);
+        let server = Server::start(
+            ServerOptions {
+                ports: Ports::any(),
+                programs: Some(dir.clone()),
+                profile,
+                ..ServerOptions::default()
+            },
+            move |e| {
+                let _ = tx.lock().unwrap().send(e);
+            },
+        )
+        .expect("start");
+        (server, rx)
+    };
+
+    let (server, events) = serve(Profile::Ursim);
+    let mut d = dashboard(&server);
+    assert_eq!(ask(&mut d, "is in remote control"), "false");
+    assert_eq!(ask(&mut d, "get serial number"), URSIM_SERIAL);
+    assert_eq!(
+        ask(&mut d, "load installation default.installation"),
+        "Loading installation: default.installation"
+    );
+    assert_eq!(
+        ask(&mut d, "load /ursim/programs/hello.urp"),
+        "Loading program: /ursim/programs/hello.urp"
+    );
+    assert_eq!(
+        ask(&mut d, "get loaded program"),
+        "Loaded program: /ursim/programs/hello.urp"
+    );
+    assert_eq!(
+        ask(&mut d, "load /ursim/programs/../hello.urp"),
+        "File not found: /ursim/programs/../hello.urp"
+    );
+    assert_eq!(ask(&mut d, "load hello.urp"), "Loading program: hello.urp");
+    assert_eq!(
+        ask(&mut d, "get loaded program"),
+        "Loaded program: /ursim/programs/hello.urp"
+    );
+    // Played, it is read from the programs directory.
+    assert_eq!(ask(&mut d, "brake release"), "Brake releasing");
+    let start = Instant::now();
+    while ask(&mut d, "robotmode") != "Robotmode: RUNNING" {
+        assert!(start.elapsed() < WAIT);
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    assert_eq!(ask(&mut d, "play"), "Starting program");
+    match wait_for(&events, |e| matches!(e, ServerEvent::Message(_))) {
+        ServerEvent::Message(m) => assert_eq!(m.text, "hello from ursim"),
+        _ => unreachable!(),
+    }
+    server.stop();
+
+    let (server, _events) = serve(Profile::Robot);
+    let mut d = dashboard(&server);
+    assert_eq!(ask(&mut d, "is in remote control"), "true");
+    assert_ne!(ask(&mut d, "get serial number"), URSIM_SERIAL);
+    assert_eq!(
+        ask(&mut d, "load /ursim/programs/hello.urp"),
+        "File not found: /ursim/programs/hello.urp"
+    );
+    assert_eq!(
+        ask(&mut d, "load installation default.installation"),
+        "File not found: default.installation"
+    );
+    server.stop();
+    let _ = std::fs::remove_dir_all(&dir);
 }

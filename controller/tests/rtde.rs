@@ -8,7 +8,7 @@ use proptest::prelude::*;
 use urscript_controller::{
     rtde_input_type, rtde_output_type, Config, InputRegistry, ProgramState, RobotMode, RtdeError,
     RtdeEvent, RtdeSession, RtdeTextLevel, RtdeType, RtdeValue, SafetyStatus, Status,
-    RTDE_MAX_NAMES, RTDE_MAX_PACKET_SIZE,
+    RTDE_MAX_PACKET_SIZE,
 };
 
 fn ms(n: u64) -> Duration {
@@ -977,13 +977,9 @@ fn text_messages_both_ways_in_each_layout() {
 
 #[test]
 fn framing_errors_are_fatal_and_typed() {
-    let too_large = (RTDE_MAX_PACKET_SIZE + 1) as u16;
-    let [hi, lo] = too_large.to_be_bytes();
     for (header, want) in [
         ([0u8, 0, b'V'], RtdeError::SizeTooSmall { size: 0 }),
         ([0, 2, b'V'], RtdeError::SizeTooSmall { size: 2 }),
-        ([0xff, 0xff, b'U'], RtdeError::SizeTooLarge { size: 65535 }),
-        ([hi, lo, b'U'], RtdeError::SizeTooLarge { size: too_large }),
     ] {
         let mut reg = InputRegistry::new();
         let mut s = RtdeSession::new(&Config::default(), &mut reg);
@@ -1001,7 +997,8 @@ fn framing_errors_are_fatal_and_typed() {
         let events: Vec<_> = std::iter::from_fn(|| s.poll_event()).collect();
         assert_eq!(events, vec![RtdeEvent::Error(want.clone())]);
     }
-    // The largest size allowed is read whole.
+    // The largest size the header can give is read whole.
+    assert_eq!(RTDE_MAX_PACKET_SIZE, usize::from(u16::MAX));
     let mut c = Client::new(&Config::default());
     let mut text = vec![3u8];
     text.resize(RTDE_MAX_PACKET_SIZE - 3, b'x');
@@ -1058,14 +1055,14 @@ fn skipped_packets_are_typed_errors_and_the_stream_goes_on() {
             ..
         }]
     ));
-    // Names longer than the guide's 2048 bytes.
-    let long = vec![b'a'; RTDE_MAX_NAMES + 1];
-    let r = c.ask(&packet(b'I', &long));
+    // More names than a recipe holds.
+    let many = vec!["a"; urscript_controller::RTDE_MAX_FIELDS + 1].join(",");
+    let r = c.ask(&packet(b'I', many.as_bytes()));
     assert_eq!(r.last(), Some(&(b'I', vec![0])));
     assert_eq!(
         c.errors(),
-        vec![RtdeError::NamesTooLong {
-            len: RTDE_MAX_NAMES + 1
+        vec![RtdeError::TooManyFields {
+            count: urscript_controller::RTDE_MAX_FIELDS + 1
         }]
     );
     // And the session still works.
@@ -1221,7 +1218,7 @@ fn recipes_and_fields_are_bounded() {
     }
     assert_eq!(c.inputs("input_int_register_24"), (0, "INT32".into()));
     assert_eq!(c.errors(), vec![RtdeError::TooManyRecipes]);
-    // More fields than a recipe holds (short names, within the 2048 bytes).
+    // More fields than a recipe holds.
     let many = vec!["a"; RTDE_MAX_FIELDS + 1].join(",");
     assert_eq!(c.outputs(125.0, &many), (0, String::new()));
     assert_eq!(
@@ -1233,11 +1230,124 @@ fn recipes_and_fields_are_bounded() {
     // Exactly the most fields is fine.
     let mut c = Client::v2(&Config::default());
     let most = vec!["payload"; RTDE_MAX_FIELDS].join(",");
-    assert!(most.len() <= RTDE_MAX_NAMES);
     assert_eq!(c.outputs(125.0, &most).0, 1);
     c.start();
     let data = c.run(&Status::default(), 0, 2);
     assert_eq!(data[0].len(), 1 + 8 * RTDE_MAX_FIELDS);
+    // As many fields whose package would not fit in a packet (48 bytes each).
+    let wide = vec!["actual_q"; RTDE_MAX_FIELDS].join(",");
+    assert_eq!(c.outputs(125.0, &wide).0, 0);
+    assert_eq!(
+        c.errors(),
+        vec![RtdeError::TooManyFields {
+            count: RTDE_MAX_FIELDS
+        }]
+    );
+}
+
+/// Every output name of the RTDE guide's table for PolyScope 5 that this test lists,
+/// and the 48 integer and double registers and 64 upper bit registers each way: a
+/// recipe of them all is a setup packet far above 8 KiB, as a client that checks every
+/// output sends it. The packet size is the header's `uint16`: such a setup is answered
+/// with a recipe, and a name the controller does not know with `NOT_FOUND` at its place.
+#[test]
+fn a_setup_of_every_output_is_read_whole() {
+    let mut names: Vec<String> = [
+        "timestamp",
+        "target_q",
+        "target_qd",
+        "target_qdd",
+        "target_current",
+        "target_moment",
+        "actual_q",
+        "actual_qd",
+        "actual_current",
+        "joint_control_output",
+        "actual_TCP_pose",
+        "actual_TCP_speed",
+        "actual_TCP_force",
+        "target_TCP_pose",
+        "target_TCP_speed",
+        "actual_digital_input_bits",
+        "joint_temperatures",
+        "actual_execution_time",
+        "robot_mode",
+        "joint_mode",
+        "safety_mode",
+        "safety_status",
+        "actual_tool_accelerometer",
+        "speed_scaling",
+        "target_speed_fraction",
+        "actual_momentum",
+        "actual_main_voltage",
+        "actual_robot_voltage",
+        "actual_robot_current",
+        "actual_joint_voltage",
+        "actual_digital_output_bits",
+        "runtime_state",
+        "elbow_position",
+        "elbow_velocity",
+        "robot_status_bits",
+        "safety_status_bits",
+        "analog_io_types",
+        "standard_analog_input0",
+        "standard_analog_input1",
+        "standard_analog_output0",
+        "standard_analog_output1",
+        "io_current",
+        "euromap67_input_bits",
+        "euromap67_output_bits",
+        "tool_mode",
+        "tool_analog_input_types",
+        "tool_analog_input0",
+        "tool_analog_input1",
+        "tool_output_voltage",
+        "tool_output_current",
+        "tool_temperature",
+        "tcp_force_scalar",
+        "output_bit_registers0_to_31",
+        "output_bit_registers32_to_63",
+        "input_bit_registers0_to_31",
+        "input_bit_registers32_to_63",
+    ]
+    .iter()
+    .map(|n| n.to_string())
+    .collect();
+    for side in ["input", "output"] {
+        for kind in ["int", "double"] {
+            names.extend((0..48).map(|i| format!("{side}_{kind}_register_{i}")));
+        }
+        names.extend((64..128).map(|i| format!("{side}_bit_register_{i}")));
+    }
+    let mut c = Client::v2(&Config::default());
+    let all = names.join(",");
+    let setup = v2_output_setup(125.0, &all);
+    assert!(setup.len() > 8192, "{} bytes", setup.len());
+    let (id, types) = c.outputs(125.0, &all);
+    assert_eq!(id, 1, "{types}");
+    let types: Vec<&str> = types.split(',').collect();
+    assert_eq!(types.len(), names.len());
+    assert!(!types.contains(&"NOT_FOUND"));
+    c.start();
+    let data = c.run(&Status::default(), 0, 2);
+    let mut size = 0;
+    for (n, t) in names.iter().zip(&types) {
+        let ty = rtde_output_type(n, &Config::default()).expect("known");
+        assert_eq!(ty.name(), *t);
+        size += ty.size();
+    }
+    assert_eq!(data[0].len(), 1 + size);
+    // The same with a name no controller has: NOT_FOUND there, no recipe.
+    let mut c = Client::v2(&Config::default());
+    names.insert(100, "no_such_output".into());
+    let (id, types) = c.outputs(125.0, &names.join(","));
+    assert_eq!(id, 0);
+    let types: Vec<&str> = types.split(',').collect();
+    assert_eq!(types.len(), names.len());
+    assert_eq!(types[100], "NOT_FOUND");
+    assert_eq!(types.iter().filter(|t| **t == "NOT_FOUND").count(), 1);
+    // And the session goes on.
+    assert_eq!(c.outputs(125.0, "timestamp"), (1, "DOUBLE".into()));
 }
 
 #[test]

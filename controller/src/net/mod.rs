@@ -153,6 +153,33 @@ impl Default for Ports {
     }
 }
 
+/// Whom the server answers as where a robot and UR's simulator differ.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Profile {
+    /// A robot: what [`ServerOptions::config`] says, programs named relative to the
+    /// programs directory or by their path on this machine.
+    #[default]
+    Robot,
+    /// URSim, as UR's client libraries' CI runs it (`ursock controller --ursim`):
+    /// - programs are also named by URSim's paths, [`URSIM_PROGRAMS`]`/NAME` for
+    ///   `NAME` in the programs directory, and `get loaded program` shows that path;
+    /// - `default.installation`, the installation PolyScope starts with, is always
+    ///   there to load, a file of that name in the programs directory or not;
+    /// - the remote control setting is off: every command is accepted and `is in remote
+    ///   control` answers false ([`Config::remote_control_enabled`]);
+    /// - `get serial number` answers [`URSIM_SERIAL`].
+    Ursim,
+}
+
+/// Where URSim keeps its programs (the directory UR's client library's CI mounts its
+/// test programs on, and the path its tests load by).
+pub const URSIM_PROGRAMS: &str = "/ursim/programs";
+
+/// The serial number [`Profile::Ursim`] answers: the example of UR's dashboard server
+/// page ("Serial number like 20175599999"); it begins with `20` as UR's client library
+/// requires of every serial number.
+pub const URSIM_SERIAL: &str = "20175599999";
+
 /// How a [`Server`] runs.
 #[derive(Debug, Clone)]
 pub struct ServerOptions {
@@ -167,6 +194,8 @@ pub struct ServerOptions {
     /// Where External Control URCap nodes fetch their script; `None`: the installation's
     /// URCap settings, else the URCap's default.
     pub urcap_host: Option<(String, u16)>,
+    /// A robot's answers or URSim's ([`Profile`]).
+    pub profile: Profile,
 }
 
 impl Default for ServerOptions {
@@ -177,6 +206,7 @@ impl Default for ServerOptions {
             config: Config::default(),
             programs: None,
             urcap_host: None,
+            profile: Profile::Robot,
         }
     }
 }
@@ -280,14 +310,25 @@ pub enum ServerEvent {
 }
 
 /// Programs in a directory of this machine: a name is found when it names a file inside
-/// the directory (after resolving `..` and links).
+/// the directory (after resolving `..` and links). With [`Profile::Ursim`], also by
+/// [`URSIM_PROGRAMS`]`/NAME`, shown so, and `default.installation` is always found.
+#[derive(Debug, Clone)]
 pub struct DirPrograms {
     root: PathBuf,
+    profile: Profile,
 }
+
+/// The installation PolyScope starts with.
+const DEFAULT_INSTALLATION: &str = "default.installation";
 
 impl DirPrograms {
     /// Programs under `dir` (which must exist).
     pub fn new(dir: &Path) -> std::io::Result<Self> {
+        Self::with_profile(dir, Profile::Robot)
+    }
+
+    /// Programs under `dir` (which must exist), named and shown as `profile` does.
+    pub fn with_profile(dir: &Path, profile: Profile) -> std::io::Result<Self> {
         let root = dir.canonicalize()?;
         if !root.is_dir() {
             return Err(std::io::Error::new(
@@ -295,7 +336,23 @@ impl DirPrograms {
                 format!("{} is not a directory", dir.display()),
             ));
         }
-        Ok(DirPrograms { root })
+        Ok(DirPrograms { root, profile })
+    }
+
+    /// The file on this machine a path [`Programs::find`] gave names.
+    pub fn file(&self, shown: &str) -> PathBuf {
+        match self.ursim_relative(shown) {
+            Some(rest) => self.root.join(rest),
+            None => PathBuf::from(shown),
+        }
+    }
+
+    /// `NAME` of `/ursim/programs/NAME`, with the URSim profile.
+    fn ursim_relative<'a>(&self, name: &'a str) -> Option<&'a str> {
+        if self.profile != Profile::Ursim {
+            return None;
+        }
+        name.strip_prefix(URSIM_PROGRAMS)?.strip_prefix('/')
     }
 }
 
@@ -304,14 +361,28 @@ impl Programs for DirPrograms {
         if name.is_empty() || name.contains('\0') {
             return None;
         }
-        let path = Path::new(name);
+        let relative = self.ursim_relative(name);
+        let path = Path::new(relative.unwrap_or(name));
         let candidate = if path.is_absolute() {
             path.to_path_buf()
         } else {
             self.root.join(path)
         };
-        let real = candidate.canonicalize().ok()?;
-        (real.starts_with(&self.root) && real.is_file()).then(|| real.display().to_string())
+        let found = candidate
+            .canonicalize()
+            .ok()
+            .filter(|real| real.starts_with(&self.root) && real.is_file());
+        if self.profile == Profile::Ursim {
+            let inside = match &found {
+                Some(real) => real.strip_prefix(&self.root).ok()?.to_path_buf(),
+                None if relative.unwrap_or(name) == DEFAULT_INSTALLATION => {
+                    PathBuf::from(DEFAULT_INSTALLATION)
+                }
+                None => return None,
+            };
+            return Some(format!("{URSIM_PROGRAMS}/{}", inside.display()));
+        }
+        found.map(|real| real.display().to_string())
     }
 }
 
@@ -325,6 +396,11 @@ pub(crate) struct Shared {
     clock: clock::Clock,
     next_conn: AtomicU64,
     urcap_host: Option<(String, u16)>,
+    /// The programs folder, canonical: a played program and its installation are read
+    /// only inside it.
+    programs: Option<PathBuf>,
+    /// How loaded programs' paths name files in it.
+    program_names: Option<DirPrograms>,
     stop: AtomicBool,
     sink: Box<Sink>,
 }
@@ -336,6 +412,14 @@ impl Shared {
 
     pub(crate) fn config(&self) -> &Config {
         &self.config
+    }
+
+    /// The file a loaded program's path names.
+    pub(crate) fn program_file(&self, path: &str) -> PathBuf {
+        match &self.program_names {
+            Some(p) => p.file(path),
+            None => PathBuf::from(path),
+        }
     }
 
     pub(crate) fn lock_cell(&self) -> MutexGuard<'_, Cell> {
@@ -379,9 +463,19 @@ impl Server {
         options: ServerOptions,
         on_event: impl Fn(ServerEvent) + Send + Sync + 'static,
     ) -> std::io::Result<Server> {
-        let mut controller = Controller::new(options.config.clone());
+        let mut config = options.config.clone();
+        if options.profile == Profile::Ursim {
+            config.remote_control_enabled = false;
+            config.serial = URSIM_SERIAL.to_string();
+        }
+        let mut controller = Controller::new(config.clone());
+        let mut programs = None;
+        let mut program_names = None;
         if let Some(dir) = &options.programs {
-            controller = controller.with_programs(Box::new(DirPrograms::new(dir)?));
+            let found = DirPrograms::with_profile(dir, options.profile)?;
+            programs = Some(found.root.clone());
+            program_names = Some(found.clone());
+            controller = controller.with_programs(Box::new(found));
         }
         let bind = |port: u16, service: &str| -> std::io::Result<(TcpListener, SocketAddr)> {
             let l = TcpListener::bind((options.bind.as_str(), port)).map_err(|e| {
@@ -417,10 +511,7 @@ impl Server {
             realtime: stream(p.realtime, "realtime")?,
             rtde: stream(p.rtde, "rtde")?,
         };
-        let interpreter = match p
-            .interpreter
-            .filter(|_| options.config.has_interpreter_mode())
-        {
+        let interpreter = match p.interpreter.filter(|_| config.has_interpreter_mode()) {
             Some(port) => {
                 let (l, a) = bind(port, "interpreter")?;
                 addrs.push(("interpreter", a));
@@ -433,10 +524,12 @@ impl Server {
         let step = cell.step_time();
         let shared = Arc::new(Shared {
             cell: Mutex::new(cell),
-            config: options.config,
+            config,
             clock: clock::Clock::new(step),
+            program_names,
             next_conn: AtomicU64::new(1),
             urcap_host: options.urcap_host,
+            programs,
             stop: AtomicBool::new(false),
             sink: Box::new(on_event),
         });

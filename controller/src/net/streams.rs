@@ -577,7 +577,10 @@ impl Loop {
                         let spawned = std::thread::Builder::new()
                             .name("load-program".into())
                             .spawn(move || {
-                                let result = super::fetch::load(&shared, &path);
+                                let result = super::fetch::load(
+                                    &shared,
+                                    &shared.program_file(&path).to_string_lossy(),
+                                );
                                 let now = shared.now();
                                 let mut cell = shared.lock_cell();
                                 match result {
@@ -606,16 +609,17 @@ impl Loop {
         // WARNING (2), which UR's client library treats as a failed script unless told
         // to ignore warnings. The code (209, argument 0) is our choice: UR does not
         // document the code a protective stop reports.
+        // They go before the `PROGRAM_XXX_STOPPED` of a program the stop ended this step.
         if self.safety.is_some_and(|s| s != status.safety) {
-            messages.push(RobotMessage::SafetyMode {
+            let mut safety = vec![RobotMessage::SafetyMode {
                 code: 0,
                 argument: 0,
                 safety: status.safety,
                 report_data_type: 0,
                 report_data: 0,
-            });
+            }];
             if status.safety == crate::SafetyStatus::ProtectiveStop {
-                messages.push(RobotMessage::ErrorCode {
+                safety.push(RobotMessage::ErrorCode {
                     code: 209,
                     argument: 0,
                     report_level: 2,
@@ -624,6 +628,13 @@ impl Loop {
                     text: "Protective stop".into(),
                 });
             }
+            let at = messages
+                .iter()
+                .position(|m| {
+                    matches!(m, RobotMessage::Key { title, .. } if title == primary::PROGRAM_STOPPED)
+                })
+                .unwrap_or(messages.len());
+            messages.splice(at..at, safety);
         }
         self.safety = Some(status.safety);
         self.stream(shared, &status, &messages, now);

@@ -7,7 +7,7 @@ use std::io::{BufRead, Read};
 use std::path::PathBuf;
 use std::sync::mpsc;
 
-use urscript_controller::net::{parse_host, Ports, Server, ServerEvent, ServerOptions};
+use urscript_controller::net::{parse_host, Ports, Profile, Server, ServerEvent, ServerOptions};
 use urscript_controller::{Config, Model, SafetyStatus, MAX_LINE};
 
 use crate::report::{self, Event};
@@ -56,7 +56,7 @@ pub struct ControllerOptions {
     #[arg(long, default_value = "5.21.0")]
     pub polyscope: String,
     /// The serial number `get serial number` answers.
-    #[arg(long, default_value = "20235500001")]
+    #[arg(long, default_value = "20235500001", conflicts_with = "ursim")]
     pub serial: String,
     /// Where `load NAME.urp` and `load installation NAME` find files (NAME relative to
     /// DIR, or absolute inside it). Without it every load answers `File not found`.
@@ -72,6 +72,12 @@ pub struct ControllerOptions {
     /// operator's `local`/`remote` change nothing.
     #[arg(long, conflicts_with = "local")]
     pub remote_control_disabled: bool,
+    /// Answer as URSim does, as UR's client libraries' CI runs it: programs are also
+    /// found at `/ursim/programs/NAME` (NAME in `--programs DIR`), `default.installation`
+    /// always loads, the remote control setting is off (as `--remote-control-disabled`)
+    /// and `get serial number` answers 20175599999.
+    #[arg(long, conflicts_with = "local")]
+    pub ursim: bool,
     /// A URCap's installation preamble, written (as PolyScope does) at the top of every
     /// `.urp` program played; scripts clients send get none. Repeatable, in order.
     #[arg(long, value_name = "FILE")]
@@ -233,6 +239,11 @@ pub fn run(opts: ControllerOptions) -> Result<(), String> {
         },
         programs: opts.programs.clone(),
         urcap_host,
+        profile: if opts.ursim {
+            Profile::Ursim
+        } else {
+            Profile::Robot
+        },
     };
     let json = opts.json;
     let (shutdown_tx, shutdown) = mpsc::channel::<()>();
