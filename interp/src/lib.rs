@@ -40,6 +40,8 @@
 //! | sockets open at once (`socket_open` of a new name past it) | [`MAX_SOCKETS`](builtins::sockets::MAX_SOCKETS) (64) | runtime, `Limit` |
 //! | EtherNet/IP handles per program; instances; bytes per instance; labels per handle | [`eip::MAX_HANDLES`] (64); [`eip::MAX_INSTANCES`] (64); [`eip::MAX_DATA_SIZE`] (4096); [`eip::MAX_LABELS`] (256) | runtime, `Limit` or `Argument` |
 //! | statements per thread per step without consuming time (its time slice) | [`Config::max_statements_per_step`] (10 000) | the thread goes on in the next step |
+//! | steps of a motion one `run_until` puts the arm through one by one | [`MAX_MOTION_SAMPLES`](machine::MAX_MOTION_SAMPLES) (2^22) | past it the arm jumps to where the motion has it |
+//! | motion events | two per move or servo/speed stream ([`Event::MoveStart`], [`Event::MoveEnd`]), one per output change ([`Event::Output`]) | a write of the value already there is not reported |
 //!
 //! Everything recursive (parsing, compiling, cloning, comparing, writing and dropping
 //! trees and values) is bounded by the depth bounds. Together they bound a running

@@ -616,8 +616,12 @@ impl Machine {
     /// joints follow its path step by step (each step's inverse kinematics nearest the
     /// last), so where the arm goes does not depend on how often the driver calls
     /// [`run_until`](Self::run_until) (real time, or virtual time's jumps).
+    ///
+    /// At most [`MAX_MOTION_SAMPLES`] steps per call: a caller that jumps further (hours
+    /// of a held `speedl` in one call) gets the arm where the motion has it at the end.
     fn sample_motion_until(&mut self, end: u64) {
         let mut step = self.ctl.step;
+        let end = end.min(step.saturating_add(MAX_MOTION_SAMPLES));
         while step < end && self.ctl.motion.is_some() {
             self.ctl.advance(step);
             step += 1;
@@ -2671,6 +2675,10 @@ impl Machine {
         }
     }
 }
+
+/// The most steps of a motion one [`Machine::run_until`] call puts the arm through one by
+/// one: 2^22, over two hours of 2 ms steps, a few seconds of computing at most.
+pub const MAX_MOTION_SAMPLES: u64 = 1 << 22;
 
 /// `: did you mean `NAME`?` for the built-in or program name (function, variable)
 /// nearest `name` (a typo), else nothing.

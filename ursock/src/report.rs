@@ -1024,6 +1024,7 @@ mod tests {
         let e = Event::End(End {
             t: 1.0,
             outcome: EndOutcome::MaxTime,
+            arm: None,
         });
         assert_eq!(
             e.to_json(),

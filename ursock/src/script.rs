@@ -236,7 +236,7 @@ impl Printer {
     }
 }
 
-/// A move's end for people: `line 3: movel -> p[...]: reached after 1.2 s`, with the
+/// A move's end for people: `line 3: movel -> p[...]: reached in 1.2 s`, with the
 /// sample count of a stream (` x250`) and where the arm stopped if it did not arrive.
 pub(crate) fn move_end_line(m: &report::MoveEnd) -> String {
     let mut line = format!("line {}: {}", m.line, m.function);
@@ -249,7 +249,7 @@ pub(crate) fn move_end_line(m: &report::MoveEnd) -> String {
         line.push_str(&format!(" -> {target}"));
     }
     line.push_str(&format!(
-        ": {} after {} s",
+        ": {} in {} s",
         m.outcome.replace('_', " "),
         short(m.took)
     ));

@@ -158,10 +158,10 @@ fn moves_and_outputs_are_one_line_each() {
     assert_eq!(
         lines,
         [
-            "line 1: movej -> [0.5, -1.5, 1, -1, 0.2, 0]: reached after 1.156 s",
+            "line 1: movej -> [0.5, -1.5, 1, -1, 0.2, 0]: reached in 1.156 s",
             "line 2: set_standard_digital_out(1, True)",
-            "line 8: servoj x20: reached after 0.08 s at [0.7, -1.5, 1, -1, 0.2, 0]",
-            "line 11: speedj -> speed [0.1, 0, 0, 0, 0, 0]: stopped after 0.1 s at [0.705, -1.5, 1, -1, 0.2, 0]",
+            "line 8: servoj x20: reached in 0.08 s at [0.7, -1.5, 1, -1, 0.2, 0]",
+            "line 11: speedj -> speed [0.1, 0, 0, 0, 0, 0]: stopped in 0.1 s at [0.705, -1.5, 1, -1, 0.2, 0]",
         ],
         "{out}"
     );
