@@ -783,6 +783,14 @@ fn controller_json_move_events_match_the_schema() {
             "0",
             "--primary-port",
             "0",
+            "--secondary-port",
+            "0",
+            "--realtime-port",
+            "0",
+            "--rtde-port",
+            "0",
+            "--interpreter-port",
+            "0",
             "--json",
         ])
         .stdin(std::process::Stdio::null())
