@@ -34,8 +34,9 @@
 //! - `brake release`: IDLE -> RUNNING after 0.2 s; from POWER_OFF it powers on first
 //!   (as UR's ROS driver documents: "if the robot is currently powered off, it will get
 //!   powered on on the fly").
-//! - A protective stop ([`Controller::protective_stop`]) pauses a playing program and
-//!   holds 5 s: `unlock protective stop` before that gets the controller's refusal text.
+//! - A protective stop ([`Controller::protective_stop`]) pauses a playing loaded program,
+//!   ends one a client sent (URSim does: UR's client library waits for its
+//!   `PROGRAM_XXX_STOPPED`), and holds 5 s: `unlock protective stop` before that gets the controller's refusal text.
 //!   The primary interface's `set unlock protective stop` releases it at once: UR
 //!   documents the hold for the dashboard command, and UR's client library, tested
 //!   against URSim, unlocks through the primary interface right after a stop and

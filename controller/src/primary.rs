@@ -20,7 +20,7 @@
 //! use urscript_controller::primary::{encode_robot_state, encode_version, Layout};
 //! use urscript_controller::{Config, Status};
 //!
-//! let config = Config::default(); // PolyScope 5.21.0, a UR5e
+//! let config = Config::default(); // PolyScope 5.23.0, a UR5e
 //! let mut out = Vec::new();
 //! encode_version(&mut out, &config);
 //! let version_len = out.len();

@@ -1353,7 +1353,7 @@ struct Latched {
 /// use std::time::Duration;
 /// use urscript_controller::{Config, InputRegistry, RtdeEvent, RtdeSession, Status};
 ///
-/// let config = Config::default(); // PolyScope 5.21: e-Series, 500 Hz
+/// let config = Config::default(); // PolyScope 5.23: e-Series, 500 Hz
 /// let mut registry = InputRegistry::new();
 /// let mut session = RtdeSession::new(&config, &mut registry);
 ///

@@ -327,7 +327,7 @@ impl Default for Config {
     fn default() -> Self {
         Config {
             model: Model::Ur5e,
-            polyscope: "5.21.0".into(),
+            polyscope: "5.23.0".into(),
             build_date: "Jan 01 2025".into(),
             serial: "20235500001".into(),
             remote_control: true,

@@ -27,15 +27,30 @@
 //! | nesting of XML elements (each program level is about two: the node and its `<children>`) | [`MAX_DEPTH`] (128) | [`UrpError::TooDeep`] |
 //! | attributes on one element | [`MAX_ATTRIBUTES`] (256) | [`UrpError::Xml`] |
 //! | an XStream `reference="..."` attribute; chains of them | 4096 bytes; 64 hops | [`UrpError::Invalid`] |
+//! | an element or attribute name | [`MAX_NAME_BYTES`] (256) | [`UrpError::Xml`] |
+//! | the parsed document's memory (estimated as it is read) | [`MAX_TREE_BYTES`] (128 MiB) | [`UrpError::TooLarge`] |
+//! | program nodes translated (each use of a referenced node counts) | [`MAX_NODES_TRANSLATED`] (250 000) | [`UrpError::Invalid`] |
+//! | nesting of program nodes as translated (references followed) | [`MAX_DEPTH`] (128) | [`UrpError::Invalid`] |
+//! | the translated script, with the External Control nodes' records; and the script with their fetched scripts ([`translate_with`]) | [`MAX_SCRIPT_BYTES`] (16 MiB, the interpreter's program limit) | [`UrpError::TooLarge`] |
+//! | External Control nodes | [`MAX_EXTERNAL_CONTROL_NODES`] (10 000) | [`UrpError::Invalid`] |
+//! | a host name in a node's data or an installation | [`MAX_HOST_BYTES`] (255) | [`UrpError::Invalid`] |
 //!
 //! The work is linear in the document: each reference is read once, siblings are
-//! indexed by name, sub programs by node.
+//! indexed by name, sub programs by node. The decompressed XML is dropped before the
+//! translation; at most [`MAX_URP_BYTES`] + [`MAX_XML_BYTES`] + [`MAX_TREE_BYTES`] are
+//! held while reading, then the tree and at most twice [`MAX_SCRIPT_BYTES`] (the script
+//! and its parts) while translating. The tree's bound is an estimate that leaves out the
+//! allocator's own overhead: a file of 256-attribute elements stopped at it peaked at
+//! 265 MB resident. A reply spliced in
+//! by [`translate_with`] is split without a record per line; its header and control loop
+//! (each at most [`MAX_SCRIPT_BYTES`]) are written at each node until the script is over
+//! its bound.
 //!
-//! The translation recurses once per program level, so its depth is bounded by
-//! [`MAX_DEPTH`]; sub programs are translated from a work list, not recursively. The
-//! script is at most a small multiple of the document; `urscript_interp` has its own
-//! bounds (16 MiB of program text, 64 nested blocks), which a program near these bounds
-//! can pass: `Program::parse` then refuses it with a syntax error.
+//! The translation recurses once per program level, bounded by [`MAX_DEPTH`] (a
+//! reference back to an enclosing node is caught there); sub programs are translated
+//! from a work list, not recursively. `urscript_interp` has its own bounds (16 MiB of
+//! program text, 64 nested blocks), which a program near these bounds can pass:
+//! `Program::parse` then refuses it with a syntax error.
 //!
 //! # Node types translated
 //!
@@ -80,7 +95,12 @@
 //! or its `name`/`referencedName` attribute), `<ExpressionIO><pin referencedName=.../>`
 //! (a pin `kind[N]` read as a Wait reads it, `get_standard_digital_in(N)`; any other
 //! name is a signal the installation defines, read as PolyScope reads a Modbus signal:
-//! `modbus_get_signal_status("NAME", False)`), or plain text inside `<expression>`.
+//! `modbus_get_signal_status("NAME", False)`), `<ExpressionGeomFeature><feature
+//! referencedName="Plane_1"/>` (a feature used as a value: its name, the pose variable
+//! PolyScope defines from the installation's features; the installation's features are
+//! not read, so a program using one needs it defined, e.g. by `--preamble` with `global
+//! Plane_1 = p[...]`, else it stops with `compile_error_name_not_found:Plane_1`), or plain
+//! text inside `<expression>`.
 //!
 //! Any other node is [`UrpError::UnknownNode`], never dropped (other URCaps' nodes
 //! included: `Contributed (Gripper)`); a known node in a form not translated (a
@@ -137,8 +157,32 @@ pub const MAX_XML_BYTES: usize = 64 << 20;
 /// The most XML elements in one document (a waypoint is about 15): with the document
 /// size bound, this bounds the parsed tree's memory to some tens of MiB.
 pub const MAX_ELEMENTS: usize = 250_000;
-/// The deepest nesting of XML elements.
+/// The deepest nesting of XML elements, and of program nodes as translated (a node
+/// reached through a reference counts where it is used).
 pub const MAX_DEPTH: usize = 128;
+/// The most memory the parsed document may take, as estimated while it is read: each
+/// element's record, name and index entries, each attribute's record, name and value,
+/// text. About twice what [`MAX_ELEMENTS`] elements of a saved program's shape take, so
+/// that only a document built to be large reaches it.
+pub const MAX_TREE_BYTES: usize = 128 << 20;
+/// The longest element or attribute name (PolyScope's are under 40 bytes); with
+/// [`MAX_DEPTH`] it bounds a node's path, which errors and records carry.
+pub const MAX_NAME_BYTES: usize = 256;
+/// The largest translated script: the interpreter's own program text limit (16 MiB),
+/// which a longer script could not pass. It bounds [`read_urp`]'s script (with the
+/// External Control nodes' records) and [`translate_with`]'s, where each External
+/// Control node gets its own copy of the fetched control loop.
+pub const MAX_SCRIPT_BYTES: usize = 16 << 20;
+/// The most External Control nodes in one program (each place it is used, references
+/// included): far more than a program uses (once or a few times); with
+/// [`MAX_HOST_BYTES`] it bounds the copies of the host the nodes keep to 2.5 MB.
+pub const MAX_EXTERNAL_CONTROL_NODES: usize = 10_000;
+/// The most program nodes translated: each place a node is used counts, so references
+/// that repeat nodes cannot multiply the work.
+pub const MAX_NODES_TRANSLATED: usize = MAX_ELEMENTS;
+/// The longest host name taken from a program or an installation (a DNS name is at most
+/// 253 bytes).
+pub const MAX_HOST_BYTES: usize = 255;
 /// The External Control URCap's default host when the installation sets none.
 pub const EXTERNAL_CONTROL_DEFAULT_HOST: &str = "192.168.56.1";
 /// The External Control URCap's default port (the ROS driver's script sender).
@@ -219,7 +263,9 @@ pub fn read_external_control_settings(
         settings.installed = true;
         for &d in &doc.elems[id].children {
             match (doc.attr(d, "key"), doc.attr(d, "value")) {
-                (Some("host_ip"), Some(v)) if !v.is_empty() => settings.host = v.to_string(),
+                (Some("host_ip"), Some(v)) if !v.is_empty() => {
+                    settings.host = host_name(v).map_err(|m| invalid(&doc, d, m))?
+                }
                 (Some("port_nr"), Some(v)) if !v.is_empty() => {
                     settings.port = v
                         .trim()
@@ -446,8 +492,7 @@ impl UrpProgram {
 /// ));
 /// ```
 pub fn read_urp(bytes: &[u8]) -> Result<UrpProgram, UrpError> {
-    let xml = inflate(bytes)?;
-    let doc = parse_xml(&xml)?;
+    let doc = parse_xml(&inflate(bytes)?)?;
     translate(&doc)
 }
 
@@ -491,12 +536,12 @@ pub fn translate_with(
     program: &UrpProgram,
     mut fetch: impl FnMut(&ExternalControlNode) -> Result<String, FetchError>,
 ) -> Result<String, UrpError> {
-    let mut fetched: Option<(String, String)> = None;
+    let mut fetched: Option<Split> = None;
     let mut header_written = false;
     let mut out = String::new();
     for segment in &program.segments {
         match segment {
-            Segment::Text(text) => out.push_str(text),
+            Segment::Text(text) => push_bounded(&mut out, text, 0, 0)?,
             Segment::External { index, indent } => {
                 let node =
                     program
@@ -507,113 +552,173 @@ pub fn translate_with(
                             message: format!("External Control node {index} is not listed"),
                         })?;
                 if fetched.is_none() {
-                    let reply = match fetch(node) {
-                        Ok(text) => urcap_lines(&text),
+                    let split = match fetch(node) {
+                        Ok(text) => Split::new(&text)?,
                         Err(FetchError::TooLarge { limit }) => {
                             return Err(UrpError::TooLarge {
                                 what: "External Control reply",
                                 limit,
                             })
                         }
-                        Err(why) => {
-                            let text = match why {
-                                FetchError::TooLarge { .. } => String::new(),
-                                FetchError::Timeout => format!(
-                                    "Timeout while reading requested program from {}:{}",
-                                    node.host, node.port
-                                ),
-                                FetchError::Connect(reason) => format!(
-                                    "The connection to the remote PC at {}:{} could not be established. Reason: {}",
-                                    node.host, node.port, reason
-                                ),
-                            };
-                            vec![
-                                format!(
-                                    "popup({}, \"Receive program failed\", False, True, blocking=True)",
-                                    string_literal(&text)
-                                ),
-                                String::from("sync()"),
-                            ]
-                        }
+                        Err(FetchError::Timeout) => Split::popup(&format!(
+                            "Timeout while reading requested program from {}:{}",
+                            node.host, node.port
+                        ))?,
+                        Err(FetchError::Connect(reason)) => Split::popup(&format!(
+                            "The connection to the remote PC at {}:{} could not be established. Reason: {}",
+                            node.host, node.port, reason
+                        ))?,
                     };
-                    fetched = Some(split_header(&reply));
+                    fetched = Some(split);
                 }
-                let (header, control) = fetched
-                    .as_ref()
-                    .map(|(h, c)| (h.as_str(), c.as_str()))
-                    .unwrap_or(("", ""));
+                let Some(split) = &fetched else { continue };
                 if !header_written {
-                    push_indented(&mut out, header, *indent);
+                    push_bounded(&mut out, &split.header, split.header_lines, *indent)?;
                     header_written = true;
                 }
-                push_indented(&mut out, control, *indent);
+                push_bounded(&mut out, &split.control, split.control_lines, *indent)?;
             }
         }
     }
     Ok(out)
 }
 
-/// The reply as the URCap reads it: one line at a time, each prefixed with a space.
-fn urcap_lines(reply: &str) -> Vec<String> {
-    let mut lines = Vec::new();
-    let mut rest = reply;
-    while !rest.is_empty() {
+/// The fetched reply as the URCap splits it: header and control loop, each line
+/// prefixed with a space and ended with `\n`, and how many lines each has.
+struct Split {
+    header: String,
+    header_lines: usize,
+    control: String,
+    control_lines: usize,
+}
+
+impl Split {
+    /// Splits `reply` as the URCap does: read one line at a time (ended by `\n`, `\r`
+    /// or `\r\n`) and prefixed with a space; the lines from `# HEADER_BEGIN` to
+    /// `# HEADER_END` are the header, those after it the control loop; without
+    /// `# HEADER_END` all of it is control loop. An empty reply is the URCap's `null`.
+    fn new(reply: &str) -> Result<Split, UrpError> {
+        Split::with_prefix(reply, " ")
+    }
+
+    /// What the URCap writes when the fetch failed: a blocking error popup, `sync()`
+    /// (its own lines, not prefixed).
+    fn popup(text: &str) -> Result<Split, UrpError> {
+        Split::with_prefix(
+            &format!(
+                "popup({}, \"Receive program failed\", False, True, blocking=True)\nsync()",
+                string_literal(text)
+            ),
+            "",
+        )
+    }
+
+    fn with_prefix(reply: &str, prefix: &str) -> Result<Split, UrpError> {
+        // The URCap matches `\p{Zs}*# HEADER_BEGIN\p{Zs}*`: only space separators around.
+        let zs = |c: char| {
+            matches!(
+                c,
+                ' ' | '\u{a0}' | '\u{1680}' | '\u{2000}'
+                    ..='\u{200a}' | '\u{202f}' | '\u{205f}' | '\u{3000}'
+            )
+        };
+        let marker = |line: &str, name: &str| line.trim_matches(zs) == name;
+        // First pass: does a header end?
+        let mut in_header = false;
+        let mut header_end = false;
+        for line in reply_lines(reply) {
+            if marker(line, "# HEADER_BEGIN") {
+                in_header = true;
+            } else if marker(line, "# HEADER_END") && in_header {
+                header_end = true;
+                break;
+            }
+        }
+        let mut split = Split {
+            header: String::new(),
+            header_lines: 0,
+            control: String::new(),
+            control_lines: 0,
+        };
+        let mut in_header = false;
+        let mut after_header = false;
+        for line in reply_lines(reply) {
+            let to_header = if !header_end {
+                false
+            } else if marker(line, "# HEADER_BEGIN") {
+                in_header = true;
+                true
+            } else if marker(line, "# HEADER_END") && in_header {
+                in_header = false;
+                after_header = true;
+                true
+            } else if in_header {
+                true
+            } else if after_header {
+                false
+            } else {
+                continue; // before the header: the URCap drops it
+            };
+            let (text, lines) = if to_header {
+                (&mut split.header, &mut split.header_lines)
+            } else {
+                (&mut split.control, &mut split.control_lines)
+            };
+            if text.len() + prefix.len() + line.len() + 1 > MAX_SCRIPT_BYTES {
+                return Err(script_too_large());
+            }
+            text.push_str(prefix);
+            text.push_str(line);
+            text.push('\n');
+            *lines += 1;
+        }
+        Ok(split)
+    }
+}
+
+/// The reply's lines as the URCap reads them (ended by `\n`, `\r` or `\r\n`); an empty
+/// reply is the one line `null` (the URCap's `readLine` of a connection closed at once).
+fn reply_lines(reply: &str) -> impl Iterator<Item = &str> {
+    let mut rest = if reply.is_empty() { "null" } else { reply };
+    std::iter::from_fn(move || {
+        if rest.is_empty() {
+            return None;
+        }
         let end = rest.find(['\n', '\r']).unwrap_or(rest.len());
-        lines.push(format!(" {}", &rest[..end]));
+        let line = &rest[..end];
         rest = &rest[end..];
         if rest.starts_with("\r\n") {
             rest = &rest[2..];
         } else if !rest.is_empty() {
             rest = &rest[1..];
         }
-    }
-    if lines.is_empty() {
-        // The URCap's first readLine of a closed, empty connection gives "null".
-        lines.push(String::from(" null"));
-    }
-    lines
+        Some(line)
+    })
 }
 
-/// Splits the reply's lines into header and control loop, as the URCap does.
-fn split_header(lines: &[String]) -> (String, String) {
-    // The URCap matches `\p{Zs}*# HEADER_BEGIN\p{Zs}*`: only space separators around.
-    let zs = |c: char| {
-        matches!(
-            c,
-            ' ' | '\u{a0}' | '\u{1680}' | '\u{2000}'
-                ..='\u{200a}' | '\u{202f}' | '\u{205f}' | '\u{3000}'
-        )
-    };
-    let marker = |line: &str, name: &str| line.trim_matches(zs) == name;
-    let (mut header, mut control) = (String::new(), String::new());
-    let (mut in_header, mut header_end) = (false, false);
-    for line in lines {
-        if marker(line, "# HEADER_BEGIN") {
-            in_header = true;
-            header.push_str(line);
-            header.push('\n');
-        } else if marker(line, "# HEADER_END") && in_header {
-            header_end = true;
-            in_header = false;
-            header.push_str(line);
-            header.push('\n');
-        } else if in_header {
-            header.push_str(line);
-            header.push('\n');
-        } else if header_end {
-            control.push_str(line);
-            control.push('\n');
-        }
+fn script_too_large() -> UrpError {
+    UrpError::TooLarge {
+        what: "translated script",
+        limit: MAX_SCRIPT_BYTES,
     }
-    if !header_end {
-        header.clear();
-        control.clear();
-        for line in lines {
-            control.push_str(line);
-            control.push('\n');
-        }
+}
+
+/// Appends `text` (`lines` lines, each ended by `\n`) to `out`, each line indented
+/// `indent` levels of two spaces, if the result stays within [`MAX_SCRIPT_BYTES`].
+fn push_bounded(out: &mut String, text: &str, lines: usize, indent: usize) -> Result<(), UrpError> {
+    let grown = lines
+        .checked_mul(2 * indent)
+        .and_then(|pad| pad.checked_add(text.len()))
+        .and_then(|n| n.checked_add(out.len()));
+    if grown.is_none_or(|n| n > MAX_SCRIPT_BYTES) {
+        return Err(script_too_large());
     }
-    (header, control)
+    if indent == 0 {
+        out.push_str(text);
+    } else {
+        push_indented(out, text, indent);
+    }
+    Ok(())
 }
 
 fn push_indented(out: &mut String, text: &str, indent: usize) {
@@ -624,6 +729,17 @@ fn push_indented(out: &mut String, text: &str, indent: usize) {
         out.push_str(line);
         out.push('\n');
     }
+}
+
+/// `text` as a host name: at most [`MAX_HOST_BYTES`] bytes.
+fn host_name(text: &str) -> Result<String, String> {
+    if text.len() > MAX_HOST_BYTES {
+        return Err(format!(
+            "a host name of {} bytes (at most {MAX_HOST_BYTES})",
+            text.len()
+        ));
+    }
+    Ok(text.to_string())
 }
 
 // ---------------------------------------------------------------------------------------
@@ -691,7 +807,35 @@ fn xml_err(offset: u64, message: impl Into<String>) -> UrpError {
     }
 }
 
+/// What the parsed tree costs besides its strings' bytes, as [`MAX_TREE_BYTES`] counts
+/// it: an element's record, its entry in its parent's children and in the sibling index
+/// (a hash map entry, counted twice for the map's spare room).
+const ELEMENT_COST: usize = std::mem::size_of::<Elem>()
+    + std::mem::size_of::<usize>()
+    + 2 * std::mem::size_of::<((usize, u32, u32), usize)>();
+/// An attribute's record (its name and value are counted by their length).
+const ATTRIBUTE_COST: usize = std::mem::size_of::<(String, String)>();
+
+/// The estimated memory of the tree being built, checked against [`MAX_TREE_BYTES`].
+struct TreeBudget {
+    used: usize,
+}
+
+impl TreeBudget {
+    fn charge(&mut self, bytes: usize) -> Result<(), UrpError> {
+        self.used = self.used.saturating_add(bytes);
+        if self.used > MAX_TREE_BYTES {
+            return Err(UrpError::TooLarge {
+                what: "parsed document (estimated memory)",
+                limit: MAX_TREE_BYTES,
+            });
+        }
+        Ok(())
+    }
+}
+
 fn parse_xml(xml: &[u8]) -> Result<Doc, UrpError> {
+    let mut budget = TreeBudget { used: 0 };
     let mut reader = Reader::from_reader(xml);
     let mut elems: Vec<Elem> = Vec::new();
     let mut named = HashMap::new();
@@ -722,9 +866,16 @@ fn parse_xml(xml: &[u8]) -> Result<Doc, UrpError> {
                         offset: at,
                     });
                 }
+                if e.name().as_ref().len() > MAX_NAME_BYTES {
+                    return Err(xml_err(
+                        at,
+                        format!("an element name longer than {MAX_NAME_BYTES} bytes"),
+                    ));
+                }
                 let name = std::str::from_utf8(e.name().as_ref())
                     .map_err(|_| xml_err(at, "an element name is not UTF-8"))?
                     .to_string();
+                budget.charge(ELEMENT_COST + name.len())?;
                 let mut attrs = Vec::new();
                 for attr in e.attributes() {
                     if attrs.len() >= MAX_ATTRIBUTES {
@@ -734,6 +885,12 @@ fn parse_xml(xml: &[u8]) -> Result<Doc, UrpError> {
                         ));
                     }
                     let attr = attr.map_err(|err| xml_err(at, err.to_string()))?;
+                    if attr.key.as_ref().len() > MAX_NAME_BYTES {
+                        return Err(xml_err(
+                            at,
+                            format!("an attribute name longer than {MAX_NAME_BYTES} bytes"),
+                        ));
+                    }
                     let key = std::str::from_utf8(attr.key.as_ref())
                         .map_err(|_| xml_err(at, "an attribute name is not UTF-8"))?
                         .to_string();
@@ -741,6 +898,7 @@ fn parse_xml(xml: &[u8]) -> Result<Doc, UrpError> {
                         .normalized_value(quick_xml::XmlVersion::Implicit1_0)
                         .map_err(|err| xml_err(at, format!("attribute `{key}`: {err}")))?
                         .into_owned();
+                    budget.charge(ATTRIBUTE_COST + key.len() + value.len())?;
                     attrs.push((key, value));
                 }
                 let id = elems.len();
@@ -748,6 +906,7 @@ fn parse_xml(xml: &[u8]) -> Result<Doc, UrpError> {
                 let name_id = match name_ids.get(name.as_str()) {
                     Some(&n) => n,
                     None => {
+                        budget.charge(name.len() + ELEMENT_COST)?;
                         // At most one name per element: fits, as MAX_ELEMENTS does.
                         let n = u32::try_from(name_ids.len()).unwrap_or(u32::MAX);
                         name_ids.insert(name.clone(), n);
@@ -790,10 +949,12 @@ fn parse_xml(xml: &[u8]) -> Result<Doc, UrpError> {
             }
             Event::Text(t) => {
                 let text = t.decode().map_err(|e| xml_err(at, e.to_string()))?;
+                budget.charge(text.len())?;
                 push_text(&mut elems, &stack, &text, at)?;
             }
             Event::CData(t) => {
                 let text = t.decode().map_err(|e| xml_err(at, e.to_string()))?;
+                budget.charge(text.len())?;
                 push_text(&mut elems, &stack, &text, at)?;
             }
             Event::GeneralRef(r) => {
@@ -816,6 +977,7 @@ fn parse_xml(xml: &[u8]) -> Result<Doc, UrpError> {
                         }
                     },
                 };
+                budget.charge(4)?;
                 push_text(&mut elems, &stack, ch.encode_utf8(&mut [0; 4]), at)?;
             }
             Event::Eof => {
@@ -984,6 +1146,13 @@ struct Tx<'a> {
     watched: usize,
     /// The program's threads: (name, node), to check against the other definitions.
     thread_names: Vec<(String, usize)>,
+    /// Bytes of script written, with the External Control nodes' records: at most
+    /// [`MAX_SCRIPT_BYTES`]; past it nothing more is kept and the translation fails.
+    written: usize,
+    /// Program nodes translated so far (at most [`MAX_NODES_TRANSLATED`]).
+    visited: usize,
+    /// Program nodes being translated, one inside the other (at most [`MAX_DEPTH`]).
+    nesting: usize,
 }
 
 fn invalid(doc: &Doc, id: usize, message: impl Into<String>) -> UrpError {
@@ -1075,6 +1244,9 @@ fn translate(doc: &Doc) -> Result<UrpProgram, UrpError> {
         hoisted: Vec::new(),
         watched: 0,
         thread_names: Vec::new(),
+        written: 0,
+        visited: 0,
+        nesting: 0,
     };
 
     let mut init = Vec::new();
@@ -1184,21 +1356,19 @@ fn translate(doc: &Doc) -> Result<UrpProgram, UrpError> {
     }
     segments.extend(body);
     segments.push(Segment::Text(String::from("end\n")));
+    tx.within_bounds()?;
     let segments = merge(segments);
     let mut script = String::new();
     for s in &segments {
         match s {
-            Segment::Text(t) => script.push_str(t),
+            Segment::Text(t) => push_bounded(&mut script, t, 0, 0)?,
             Segment::External { index, indent } => {
                 let node = &tx.externals[*index];
-                push_indented(
-                    &mut script,
-                    &format!(
-                        "# External Control node {index}: the script from {}:{} goes here",
-                        node.host, node.port
-                    ),
-                    *indent,
+                let comment = format!(
+                    "# External Control node {index}: the script from {}:{} goes here\n",
+                    node.host, node.port
                 );
+                push_bounded(&mut script, &comment, 1, *indent)?;
             }
         }
     }
@@ -1296,8 +1466,16 @@ fn bool_text(doc: &Doc, id: usize, what: &str, text: &str) -> Result<&'static st
 }
 
 impl Tx<'_> {
+    /// Writes one line at the current indentation; past [`MAX_SCRIPT_BYTES`] in all it
+    /// is not kept, and the translation fails at the next node ([`Tx::nodes`]) or at
+    /// its end.
     fn line(&mut self, text: &str) {
-        let mut s = String::with_capacity(text.len() + 2 * self.indent + 1);
+        let size = text.len() + 2 * self.indent + 1;
+        self.written = self.written.saturating_add(size);
+        if self.written > MAX_SCRIPT_BYTES {
+            return;
+        }
+        let mut s = String::with_capacity(size);
         for _ in 0..self.indent {
             s.push_str("  ");
         }
@@ -1349,14 +1527,53 @@ impl Tx<'_> {
         let Some(children) = self.doc.child(id, "children") else {
             return Ok(());
         };
-        let list = self.doc.elems[children].children.clone();
-        self.nodes(&list)
+        self.nodes(&self.doc.elems[children].children)
     }
 
+    /// Whether what was written so far is within [`MAX_SCRIPT_BYTES`].
+    fn within_bounds(&self) -> Result<(), UrpError> {
+        if self.written > MAX_SCRIPT_BYTES {
+            return Err(script_too_large());
+        }
+        Ok(())
+    }
+
+    /// Translates the nodes of `list` (one program level: the recursion goes through
+    /// here, so its depth is bounded by [`MAX_DEPTH`], references followed or not).
     fn nodes(&mut self, list: &[usize]) -> Result<(), UrpError> {
+        let Some(&first) = list.first() else {
+            return Ok(());
+        };
+        if self.nesting >= MAX_DEPTH {
+            return Err(invalid(
+                self.doc,
+                first,
+                format!(
+                    "program nodes nested deeper than {MAX_DEPTH} (a reference to an enclosing node?)"
+                ),
+            ));
+        }
+        self.nesting += 1;
+        let done = self.level(list);
+        self.nesting -= 1;
+        done
+    }
+
+    fn level(&mut self, list: &[usize]) -> Result<(), UrpError> {
         let doc = self.doc;
         let mut i = 0;
         while i < list.len() {
+            self.within_bounds()?;
+            self.visited += 1;
+            if self.visited > MAX_NODES_TRANSLATED {
+                return Err(invalid(
+                    doc,
+                    list[i],
+                    format!(
+                        "more than {MAX_NODES_TRANSLATED} program nodes to translate (references repeat nodes)"
+                    ),
+                ));
+            }
             let id = doc.resolve(list[i])?;
             if doc.name(id) == "If" {
                 // An If and the ElseIf/Else siblings that follow it.
@@ -1427,6 +1644,7 @@ impl Tx<'_> {
                     out.push_str(&name);
                 }
                 "ExpressionIO" => out.push_str(&self.io_read(t)?),
+                "ExpressionGeomFeature" => out.push_str(&self.feature_name(t)?),
                 _ => return Err(unknown(doc, t)),
             }
         }
@@ -1446,6 +1664,18 @@ impl Tx<'_> {
             .child(id, "variable")
             .ok_or_else(|| invalid(doc, id, "no <variable>"))?;
         self.named_variable(v)
+    }
+
+    /// An `<ExpressionGeomFeature>` token: the feature it names (`<feature
+    /// referencedName="Plane_1"/>`, or a reference to the feature's element), which
+    /// PolyScope defines as a pose variable of that name from the installation.
+    fn feature_name(&self, id: usize) -> Result<String, UrpError> {
+        let doc = self.doc;
+        let f = doc
+            .child(id, "feature")
+            .or_else(|| doc.elems[id].children.first().copied())
+            .ok_or_else(|| invalid(doc, id, "a feature token names no feature"))?;
+        self.named_variable(f)
     }
 
     /// The name of a variable element (references followed).
@@ -2197,19 +2427,35 @@ impl Tx<'_> {
                 }
             }
         }
-        let get = |key: &str| data.iter().find(|(k, _)| k == key).map(|(_, v)| v.clone());
-        let host = get("host_ip").unwrap_or_else(|| EXTERNAL_CONTROL_DEFAULT_HOST.to_string());
+        let get = |key: &str| data.iter().find(|(k, _)| k == key).map(|(_, v)| v.as_str());
+        let host = match get("host_ip") {
+            Some(h) => host_name(h).map_err(|m| invalid(doc, id, m))?,
+            None => EXTERNAL_CONTROL_DEFAULT_HOST.to_string(),
+        };
         let port = match get("port_nr") {
-            Some(p) => p
-                .trim()
-                .parse::<u16>()
-                .map_err(|_| invalid(doc, id, format!("port_nr `{p}` is not a port")))?,
+            Some(p) => p.trim().parse::<u16>().map_err(|_| {
+                let p: String = p.chars().take(64).collect();
+                invalid(doc, id, format!("port_nr `{p}` is not a port"))
+            })?,
             None => EXTERNAL_CONTROL_DEFAULT_PORT,
         };
         let index = self.externals.len();
+        if index >= MAX_EXTERNAL_CONTROL_NODES {
+            return Err(invalid(
+                doc,
+                id,
+                format!("more than {MAX_EXTERNAL_CONTROL_NODES} External Control nodes"),
+            ));
+        }
+        let path = doc.path(id);
+        // The record counts with the script.
+        let record =
+            path.len() + host.len() + data.iter().map(|(k, v)| k.len() + v.len()).sum::<usize>();
+        self.written = self.written.saturating_add(record);
+        self.within_bounds()?;
         self.externals.push(ExternalControlNode {
             index,
-            path: doc.path(id),
+            path,
             host,
             port,
             data,

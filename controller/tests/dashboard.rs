@@ -284,13 +284,13 @@ fn operational_mode_remote_control_and_identity() {
     assert_eq!(s.ask("get robot model", t), "UR5");
     assert_eq!(
         s.ask("PolyscopeVersion", t),
-        "URSoftware 5.21.0.0 (Jan 01 2025)"
+        "URSoftware 5.23.0.0 (Jan 01 2025)"
     );
     assert_eq!(
         s.ask("polyscopeversion", t),
-        "URSoftware 5.21.0.0 (Jan 01 2025)"
+        "URSoftware 5.23.0.0 (Jan 01 2025)"
     );
-    assert_eq!(s.ask("version", t), "5.21.0.0");
+    assert_eq!(s.ask("version", t), "5.23.0.0");
 
     let mut s = Session::new(Config {
         model: Model::Ur16e,

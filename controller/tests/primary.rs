@@ -458,7 +458,7 @@ fn version_message_bytes() {
     assert_eq!(r.u8(), 3);
     let n = r.u8() as usize;
     assert_eq!(r.take(n), b"URControl");
-    assert_eq!((r.u8(), r.u8(), r.i32(), r.i32()), (5, 21, 0, 0));
+    assert_eq!((r.u8(), r.u8(), r.i32(), r.i32()), (5, 23, 0, 0));
     assert_eq!(r.rest(), b"Jan 01 2025");
 }
 

@@ -1609,3 +1609,41 @@ end
     assert_eq!(texts(&shown), ["steps = 3"]);
     assert_eq!(m.state(), &State::Finished);
 }
+
+#[test]
+fn a_feature_in_an_expression_is_the_features_pose_variable() {
+    // PolyScope writes a feature used as a value as an `<ExpressionGeomFeature>` token;
+    // the script names the feature's pose variable, which the installation defines (here
+    // a preamble does, as a test would with `--preamble`).
+    let p = read(
+        r#"<Assignment valueSource="Expression"><variable name="above"/><expression>
+  <ExpressionChar character="p"/><ExpressionChar character="o"/><ExpressionChar character="s"/><ExpressionChar character="e"/><ExpressionChar character="_"/><ExpressionChar character="t"/><ExpressionChar character="r"/><ExpressionChar character="a"/><ExpressionChar character="n"/><ExpressionChar character="s"/><ExpressionChar character="("/>
+  <ExpressionGeomFeature><feature referencedName="Plane_1"/></ExpressionGeomFeature>
+  <ExpressionChar character=","/><ExpressionChar character=" "/><ExpressionChar character="p"/><ExpressionChar character="["/><ExpressionChar character="0"/><ExpressionChar character=","/><ExpressionChar character="0"/><ExpressionChar character=","/><ExpressionChar character="0"/><ExpressionChar character="."/><ExpressionChar character="1"/><ExpressionChar character=","/><ExpressionChar character="0"/><ExpressionChar character=","/><ExpressionChar character="0"/><ExpressionChar character=","/><ExpressionChar character="0"/><ExpressionChar character="]"/><ExpressionChar character=")"/>
+</expression></Assignment>"#,
+    );
+    assert!(
+        p.script
+            .contains("global above = pose_trans(Plane_1, p[0,0,0.1,0,0,0])"),
+        "{}",
+        p.script
+    );
+    let mut preamble = urscript_interp::Preamble::default();
+    preamble
+        .add("global Plane_1 = p[0.4, 0, 0.2, 0, 0, 0]\n")
+        .unwrap();
+    let program = Program::parse_with_preamble(&preamble, &p.script).unwrap();
+    let mut m = Machine::new(program, Config::default());
+    m.run_until(Duration::from_millis(10));
+    assert_eq!(m.state(), &State::Finished);
+    let Some(urscript_interp::Value::Pose(above)) = m.global("above") else {
+        panic!("{:?}", m.global("above"))
+    };
+    assert!((above[2] - 0.3).abs() < 1e-12, "{above:?}");
+    // A feature token that names nothing is refused, with where it is.
+    let err = read_urp(&urp(
+        r#"<Assignment><variable name="v"/><expression><ExpressionGeomFeature/></expression></Assignment>"#,
+    ))
+    .unwrap_err();
+    assert!(err.to_string().contains("names no feature"), "{err}");
+}

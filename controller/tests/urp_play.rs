@@ -466,3 +466,28 @@ fn a_program_refused_is_reported_once() {
     assert_eq!(refusals, 0, "the bad program reported again");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// A reply over `net::MAX_FETCHED` fails the play with the bound named. (One line, so
+/// that the reader waits for all of it: lines after a pause would not be read.)
+#[test]
+fn a_reply_over_the_fetch_bound_fails_the_play() {
+    use urscript_controller::net::MAX_FETCHED;
+    let dir = temp_dir("huge");
+    std::fs::write(
+        dir.join("ec.urp"),
+        urp_xml("ec", "default", EXTERNAL_CONTROL),
+    )
+    .unwrap();
+    let (port, _requests) = driver(|s| {
+        let _ = s.write_all(b"textmsg(\"");
+        let _ = s.write_all(&vec![b'x'; MAX_FETCHED]);
+    });
+    let mut setup = start(&dir, Some(port));
+    play(&mut setup, "ec.urp");
+    let why = refused(&setup);
+    assert_eq!(
+        why,
+        format!("ec.urp: the External Control reply is larger than {MAX_FETCHED} bytes")
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -6,7 +6,9 @@
 //! refused), every `Transmit` answered with the next chunk of the input, and each step
 //! feeds a chunk to every open socket; at the end the peers close. Nothing may panic,
 //! hang (statements per step and steps are bounded) or grow without bound (values are
-//! bounded by `Config::max_value_size`, events drained each step).
+//! bounded by `Config::max_value_size`, all the program holds by a small
+//! `Config::max_memory`, events drained each step), and the machine's count of its memory
+//! is never below what a recount finds.
 use libfuzzer_sys::fuzz_target;
 use urscript_interp::{Config, Event, Machine, Program, State};
 
@@ -42,6 +44,7 @@ fuzz_target!(|data: &[u8]| {
     let config = Config {
         max_statements_per_step: 1_000,
         max_value_size: 1_000,
+        max_memory: 1 << 20,
         trace_all_calls: true,
         ..Config::default()
     };
@@ -83,6 +86,8 @@ fuzz_target!(|data: &[u8]| {
         if m.state() != &State::Running {
             break;
         }
+        let (counted, recounted) = m.memory_audit();
+        assert!(counted >= recounted, "memory count {counted} < {recounted}");
         // The next wake-up is never in the past.
         if let Some(t) = m.poll_timeout() {
             assert!(t >= step * k, "poll_timeout {t:?} before step {k}");

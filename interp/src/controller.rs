@@ -2,7 +2,7 @@
 //! program time, and the events for the driver. The scheduler ([`crate::machine`]) owns
 //! one and lends it to each built-in call; built-ins see nothing of threads.
 
-use std::collections::{BTreeMap, VecDeque};
+use std::collections::BTreeMap;
 use std::f64::consts::FRAC_PI_2;
 use std::time::Duration;
 
@@ -355,7 +355,9 @@ pub(crate) struct Controller {
     pub arm: Arm,
     pub sockets: Sockets,
     /// What the driver must do or show, oldest first.
-    pub events: VecDeque<Event>,
+    pub events: crate::memory::Events,
+    /// The count of the program's memory against its budget.
+    pub mem: crate::memory::Memory,
     /// The motion under way, if the arm moves.
     pub motion: Option<Motion>,
     /// The handle of the thread running now (the owner of a motion it commands).
@@ -754,6 +756,18 @@ impl Controller {
             q: self.arm.q,
             pose,
         })));
+    }
+
+    /// A built-in about to allocate `bytes` (more than a few) checks they fit in the
+    /// program's memory budget first. A refusal must come before the built-in changes
+    /// anything: the machine recounts and runs it once more if the count was high.
+    pub fn reserve(&mut self, bytes: usize) -> Result<(), Fault> {
+        let events = self.events.bytes();
+        if self.mem.fits(events, bytes) {
+            return Ok(());
+        }
+        self.mem.refused = true;
+        Err(self.mem.over(events, bytes))
     }
 
     /// Stops the arm where it is (its thread was killed, the program stopped).

@@ -42,15 +42,16 @@
 //! | statements per thread per step without consuming time (its time slice) | [`Config::max_statements_per_step`] (10 000) | the thread goes on in the next step |
 //! | steps of a motion one `run_until` puts the arm through one by one | [`MAX_MOTION_SAMPLES`](machine::MAX_MOTION_SAMPLES) (2^22) | past it the arm jumps to where the motion has it |
 //! | motion events | two per move or servo/speed stream ([`Event::MoveStart`], [`Event::MoveEnd`]), one per output change ([`Event::Output`]) | a write of the value already there is not reported |
+//! | memory the program holds at once: values of every variable of every frame of every thread and the globals, temporaries, call frames, threads, events not yet taken by the driver | [`Config::max_memory`] (256 MiB) | runtime, `Limit`: `memory budget exceeded: the program holds N bytes and needs M more, over its budget of B bytes (...)` |
 //!
 //! Everything recursive (parsing, compiling, cloning, comparing, writing and dropping
-//! trees and values) is bounded by the depth bounds. Together they bound a running
-//! program's memory: each value is at most `max_value_size` elements; the variables are
-//! bounded by the program's names (globals, and the locals of each frame), the frames by
-//! the call-depth bound, each frame's value stack by the program's expressions, and the
-//! threads by [`MAX_THREADS`](machine::MAX_THREADS) (a finished thread's slot is freed:
-//! handles are never reused, so `join`/`kill` of an old handle does nothing). A step
-//! visits the live threads only.
+//! trees and values) is bounded by the depth bounds. Each value, call depth and thread
+//! count has its own bound, but together they would allow nearly a terabyte (64
+//! threads, 256 calls deep, a list of a million elements in every frame); the budget bounds
+//! them together, counted as the program allocates and checked before a large
+//! allocation (see [`machine`], "Memory"). A finished thread's slot is freed: handles
+//! are never reused, so `join`/`kill` of an old handle does nothing. A step visits the
+//! live threads only.
 //!
 //! ```
 //! use std::time::Duration;
@@ -99,6 +100,7 @@ pub mod interpreter;
 pub mod kinematics;
 mod lexer;
 pub mod machine;
+mod memory;
 mod parser;
 mod pose;
 mod rpc;

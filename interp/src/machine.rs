@@ -25,6 +25,29 @@
 //! until it consumes time, and when it does (as UR's External Control program does inside
 //! one) the others run, as on the controller.
 //!
+//! ## Memory
+//! The program's memory is one budget, [`Config::max_memory`] (256 MiB by default),
+//! counted in bytes as the program allocates: each value where it sits (a stack slot or
+//! a list element: the size of a [`Value`], 56 bytes on 64-bit targets) plus what it
+//! owns (list elements, string bytes, struct members, at every depth); each local
+//! variable's entry; each call frame; each thread; and the events the driver has not
+//! taken yet (bytes to send, messages and call records, with their copies of values).
+//! A value is counted before it is made or copied (a list copied on assignment, a
+//! `make_list`, list arithmetic and matrix products by an upper bound of their result,
+//! the copies a built-in's call record and message keep), so no single step allocates
+//! far past the budget; drops are credited where they happen. When a charge would pass
+//! the budget the machine recounts what the program holds (the count never errs low)
+//! and, if the recount confirms it, stops the program with a
+//! [`Limit`](crate::RuntimeErrorKind::Limit) runtime error at that line:
+//! `memory budget exceeded: the program holds N bytes and needs M more, over its budget
+//! of B bytes (...)`. The counts are of contents, not of the allocator's overhead or a
+//! vector's spare capacity: the process's own use is higher by a small factor.
+//! Separately bounded and not counted: the robot model's receive buffers (64 KiB per
+//! socket, 64 sockets), an XML-RPC reply being read (1 MiB), the interpreter-mode queue
+//! ([`interpreter::MAX_UNEXECUTED`](crate::interpreter::MAX_UNEXECUTED) lines of at most
+//! [`interpreter::MAX_LINE`](crate::interpreter::MAX_LINE) bytes), and the program's
+//! code.
+//!
 //! ## Driving it
 //! Call [`Machine::run_until`] with the time since the program started; it runs every
 //! step due. Take the [`Event`]s with [`Machine::poll_event`]: connections to open, bytes
@@ -32,7 +55,6 @@
 //! ([`Machine::handle_received`]) and closed peers. [`Machine::poll_timeout`] says when
 //! the machine next has something to do (`None`: only an input can wake it).
 
-use std::collections::VecDeque;
 use std::sync::Arc;
 use std::time::Duration;
 
@@ -44,9 +66,16 @@ use crate::controller::{Arm, Controller};
 use crate::error::{Fault, RuntimeError, RuntimeErrorKind as K};
 pub use crate::event::Event;
 use crate::event::{CallRecord, Outcome, ReadRecord, MAX_READ_INPUT};
+use crate::memory::{ENTRY_BYTES, FRAME_BYTES, SLOT_BYTES, THREAD_BYTES};
 use crate::parser::{BinOp, Scope};
 use crate::sockets::{Policy, Sockets};
-use crate::value::{Value, MAX_VALUE_DEPTH};
+use crate::value::{Value, MAX_VALUE_DEPTH, MEMBER_BYTES, VALUE_BYTES};
+
+/// How many copies of a built-in's arguments (their content) must fit in the memory
+/// budget before it runs: a call record's copy, a message's copy, and the message's
+/// text (at most about the content's size: a list element writes as fewer than
+/// [`VALUE_BYTES`](crate::value::VALUE_BYTES) characters).
+const NATIVE_COPIES: usize = 3;
 
 /// The most threads that may run at once (the program's own included).
 pub const MAX_THREADS: usize = 64;
@@ -96,6 +125,18 @@ pub struct Config {
     /// [`Limit`](crate::RuntimeErrorKind::Limit) error, so a program that doubles a list
     /// in a loop fails instead of taking all memory.
     pub max_value_size: usize,
+    /// The program's memory budget in bytes (default 256 MiB): everything it holds at
+    /// once, counted as it allocates: the values of every variable of every frame of
+    /// every thread and the globals, the temporaries being built, call frames, threads,
+    /// and the events not yet taken by the driver (bytes to send, messages, call
+    /// records). A step that would pass it stops the program with a
+    /// [`Limit`](crate::RuntimeErrorKind::Limit) error naming the budget and the bytes,
+    /// before it allocates. Each value, call depth and thread count has its own bound;
+    /// this one bounds them together (64 threads 256 calls deep, each frame holding a
+    /// list of [`max_value_size`](Self::max_value_size) elements, would be nearly a
+    /// terabyte).
+    /// See the [`machine`](crate::machine) module's "Memory" for what is counted and how.
+    pub max_memory: usize,
 }
 
 impl Default for Config {
@@ -109,6 +150,7 @@ impl Default for Config {
             trace_socket_calls: true,
             trace_all_calls: false,
             max_value_size: crate::value::DEFAULT_MAX_VALUE_SIZE,
+            max_memory: crate::memory::DEFAULT_MAX_MEMORY,
         }
     }
 }
@@ -383,14 +425,16 @@ impl Machine {
             }),
             (f, v) => f.or(v),
         };
-        Machine {
+        let main_bytes = thread_bytes(&main);
+        let mut m = Machine {
             ctl: Controller {
                 dh: config.model.dh(),
                 step_time: config.step_time,
                 step: 0,
                 arm,
                 sockets: Sockets::new(config.policy),
-                events: VecDeque::new(),
+                events: crate::memory::Events::default(),
+                mem: crate::memory::Memory::new(config.max_memory),
                 motion: None,
                 thread: 0,
                 sampled: None,
@@ -412,7 +456,9 @@ impl Machine {
             current: 0,
             next_thread_id: 1,
             interp: crate::interpreter::Interpreter::default(),
-        }
+        };
+        m.ctl.mem.add(main_bytes);
+        m
     }
 
     /// The functions the program calls that are neither defined by it, built in, nor
@@ -980,11 +1026,16 @@ impl Machine {
             let wait = std::mem::replace(&mut self.threads[i].wait, Wait::None);
             let (runnable, wait) = match wait {
                 Wait::None => (true, Wait::None),
+                // A call's result comes onto the stack: counted (its size is bounded
+                // by the call: a socket read, a checked XML-RPC reply), and checked with
+                // the thread's next allocation.
                 Wait::Resume(v) => {
+                    self.ctl.mem.add(v.held_bytes());
                     self.threads[i].stack.push(v);
                     (true, Wait::None)
                 }
                 Wait::Steps { until, result } if until <= self.ctl.step => {
+                    self.ctl.mem.add(result.held_bytes());
                     self.threads[i].stack.push(result);
                     (true, Wait::None)
                 }
@@ -1009,6 +1060,7 @@ impl Machine {
                             });
                             self.ctl.events.push_back(Event::Call(rec));
                         }
+                        self.ctl.mem.add(v.held_bytes());
                         self.threads[i].stack.push(v);
                         (true, Wait::None)
                     }
@@ -1067,6 +1119,7 @@ impl Machine {
                     Ok(Flow::Blocked) => {}
                     Ok(Flow::Finished) => {
                         let t = &mut self.threads[i];
+                        self.ctl.mem.credit(thread_bytes(t));
                         t.done = true;
                         t.frames = Vec::new();
                         t.stack = Vec::new();
@@ -1107,29 +1160,57 @@ impl Machine {
                     }
                     self.budget += 1;
                 }
-                Op::Const(c) => th.stack.push(prog.consts[c as usize].clone()),
+                Op::Const(c) => {
+                    let v = &prog.consts[c as usize];
+                    let bytes = if v.is_container() {
+                        v.held_bytes()
+                    } else {
+                        SLOT_BYTES
+                    };
+                    self.charge(Some(&*th), bytes).map_err(fail)?;
+                    th.stack.push(v.clone());
+                }
                 Op::Load(s) => {
-                    let v = frame
-                        .locals
-                        .iter()
-                        .rev()
-                        .find(|(n, _)| *n == s)
-                        .and_then(|(_, v)| v.as_ref())
-                        .or_else(|| self.globals[s as usize].as_ref());
-                    match v {
-                        Some(v) => th.stack.push(v.clone()),
-                        None => {
-                            return Err(fail(Fault::new(
-                                K::UnknownVariable,
-                                format!("unknown variable `{}`", prog.names[s as usize]),
-                            )))
-                        }
+                    let Some(v) = lookup(frame, &self.globals, s) else {
+                        return Err(fail(Fault::new(
+                            K::UnknownVariable,
+                            format!("unknown variable `{}`", prog.names[s as usize]),
+                        )));
+                    };
+                    if !v.is_container() {
+                        let v = v.clone();
+                        self.charge(Some(&*th), SLOT_BYTES).map_err(fail)?;
+                        th.stack.push(v);
+                        continue;
                     }
+                    // A list, struct or string: the copy is counted before it is made.
+                    let bytes = v.held_bytes();
+                    self.charge(Some(&*th), bytes).map_err(fail)?;
+                    let v = th
+                        .frames
+                        .last()
+                        .and_then(|f| lookup(f, &self.globals, s))
+                        .cloned()
+                        .unwrap_or(Value::None);
+                    th.stack.push(v);
                 }
                 Op::Store(s, scope) => {
                     let v = pop(&mut th.stack, line)?;
                     let program_scope = func.program_scope;
-                    *self.slot(frame, s, scope, program_scope, true, prog, line)? = Some(v);
+                    let entries = frame.locals.len();
+                    let slot = self.slot(frame, s, scope, program_scope, true, prog, line)?;
+                    let old = slot.replace(v);
+                    // The value leaves its stack slot for the variable's; the old value
+                    // and a new local's entry change the count.
+                    let added = if frame.locals.len() > entries {
+                        ENTRY_BYTES
+                    } else {
+                        0
+                    };
+                    self.ctl.mem.add(added);
+                    self.ctl
+                        .mem
+                        .credit(SLOT_BYTES + old.as_ref().map_or(0, Value::content_bytes));
                 }
                 Op::StoreIndex(s, scope, n) => {
                     let v = pop(&mut th.stack, line)?;
@@ -1151,46 +1232,58 @@ impl Machine {
                     };
                     // A list or string stored into a list may make it deeper or larger.
                     let grows = matches!(v, Value::List(_) | Value::Str(_));
-                    match j {
+                    // The value takes the element's place; the element (or, into a
+                    // pose, the number) is dropped, and so are the indices.
+                    let indices = if j.is_some() { 2 } else { 1 };
+                    let dropped = match j {
                         None => store_index(target, &i, v).map_err(fail)?,
                         Some(j) => {
                             let inner = index_mut(target, &i).map_err(fail)?;
-                            store_index(inner, &j, v).map_err(fail)?;
+                            store_index(inner, &j, v).map_err(fail)?
                         }
-                    }
+                    };
+                    let mut freed = dropped.held_bytes() + indices * SLOT_BYTES;
                     if grows {
                         if let Err(f) = check_value(target, max_size) {
                             // The variable keeps no value over the bounds.
+                            freed = freed.saturating_add(target.content_bytes());
                             *slot = None;
+                            self.ctl.mem.credit(freed);
                             return Err(fail(f));
                         }
                     }
+                    self.ctl.mem.credit(freed);
                 }
                 Op::LoadIndex(s) => {
+                    let Some(base) = lookup(frame, &self.globals, s) else {
+                        return Err(fail(Fault::new(
+                            K::UnknownVariable,
+                            format!("unknown variable `{}`", prog.names[s as usize]),
+                        )));
+                    };
+                    // The element's copy takes the index's stack slot.
+                    let bytes = th.stack.last().map_or(0, |i| element_bytes(base, i));
+                    self.charge(Some(&*th), bytes).map_err(fail)?;
                     let i = pop(&mut th.stack, line)?;
-                    let base = frame
-                        .locals
-                        .iter()
-                        .rev()
-                        .find(|(n, _)| *n == s)
-                        .and_then(|(_, v)| v.as_ref())
-                        .or_else(|| self.globals[s as usize].as_ref());
-                    match base {
-                        Some(b) => th.stack.push(index(b, &i).map_err(fail)?),
-                        None => {
-                            return Err(fail(Fault::new(
-                                K::UnknownVariable,
-                                format!("unknown variable `{}`", prog.names[s as usize]),
-                            )))
-                        }
-                    }
+                    let base = th.frames.last().and_then(|f| lookup(f, &self.globals, s));
+                    let v = base.map(|b| index(b, &i)).unwrap_or(Ok(Value::None));
+                    th.stack.push(v.map_err(fail)?);
                 }
                 Op::Index => {
+                    let bytes = match th.stack.as_slice() {
+                        [.., b, i] => element_bytes(b, i),
+                        _ => 0,
+                    };
+                    self.charge(Some(&*th), bytes).map_err(fail)?;
                     let i = pop(&mut th.stack, line)?;
                     let b = pop(&mut th.stack, line)?;
                     th.stack.push(index(&b, &i).map_err(fail)?);
+                    // The list leaves the stack; the element's copy takes its index's slot.
+                    self.ctl.mem.credit(b.held_bytes());
                 }
                 Op::MakeList(n) => {
+                    // The items move into the list: one more stack slot, the list's.
+                    self.charge(Some(&*th), SLOT_BYTES).map_err(fail)?;
                     let at = th.stack.len().saturating_sub(n as usize);
                     let items = th.stack.split_off(at);
                     let list = Value::List(items);
@@ -1200,6 +1293,10 @@ impl Machine {
                 Op::MakePose(n) => {
                     let at = th.stack.len().saturating_sub(n as usize);
                     let items = th.stack.split_off(at);
+                    // Numbers into a pose: the items' slots but one are free.
+                    self.ctl
+                        .mem
+                        .credit(held_all(&items).saturating_sub(SLOT_BYTES));
                     let mut p = [0.0; 6];
                     for (k, (slot, v)) in p.iter_mut().zip(&items).enumerate() {
                         *slot = v.as_f64().ok_or_else(|| {
@@ -1216,6 +1313,13 @@ impl Machine {
                 }
                 Op::MakeStruct(shape) => {
                     let names = prog.shapes.get(shape as usize).map_or(&[][..], |v| v);
+                    // The values become members (a name and a larger slot each), and the
+                    // struct takes a stack slot.
+                    let bytes = names
+                        .iter()
+                        .map(|n| MEMBER_BYTES - VALUE_BYTES + prog.names[*n as usize].len())
+                        .fold(SLOT_BYTES, usize::saturating_add);
+                    self.charge(Some(&*th), bytes).map_err(fail)?;
                     let at = th.stack.len().saturating_sub(names.len());
                     let values = th.stack.split_off(at);
                     let members = names
@@ -1228,26 +1332,27 @@ impl Machine {
                     th.stack.push(v);
                 }
                 Op::Member(m) => {
-                    let v = pop(&mut th.stack, line)?;
                     let name = &prog.names[m as usize];
+                    let bytes = th.stack.last().map_or(0, |v| member_bytes(v, name));
+                    self.charge(Some(&*th), SLOT_BYTES + bytes).map_err(fail)?;
+                    let v = pop(&mut th.stack, line)?;
                     th.stack.push(member(&v, name).map_err(fail)?);
+                    self.ctl.mem.credit(v.held_bytes());
                 }
                 Op::LoadMember(s, m) => {
-                    let v = frame
-                        .locals
-                        .iter()
-                        .rev()
-                        .find(|(n, _)| *n == s)
-                        .and_then(|(_, v)| v.as_ref())
-                        .or_else(|| self.globals[s as usize].as_ref());
-                    let Some(v) = v else {
+                    let name = &prog.names[m as usize];
+                    let Some(bytes) =
+                        lookup(frame, &self.globals, s).map(|v| member_bytes(v, name))
+                    else {
                         return Err(fail(Fault::new(
                             K::UnknownVariable,
                             format!("unknown variable `{}`", prog.names[s as usize]),
                         )));
                     };
-                    let name = &prog.names[m as usize];
-                    th.stack.push(member(v, name).map_err(fail)?);
+                    self.charge(Some(&*th), SLOT_BYTES + bytes).map_err(fail)?;
+                    let v = th.frames.last().and_then(|f| lookup(f, &self.globals, s));
+                    let v = v.map(|v| member(v, name)).unwrap_or(Ok(Value::None));
+                    th.stack.push(v.map_err(fail)?);
                 }
                 Op::StorePath(s, path) => {
                     let steps = prog.paths.get(path as usize).map_or(&[][..], |v| v);
@@ -1272,14 +1377,21 @@ impl Machine {
                     // A list, struct or string stored may make the value deeper or
                     // larger; a number or pose cannot.
                     let grows = v.is_container();
-                    store_path(target, steps, indices, v, prog).map_err(fail)?;
+                    // The indices leave the stack; the value takes the place of what it
+                    // replaces (dropped).
+                    let mut freed = held_all(&indices);
+                    let dropped = store_path(target, steps, indices, v, prog).map_err(fail)?;
+                    freed = freed.saturating_add(dropped.held_bytes());
                     if grows {
                         if let Err(f) = check_value(target, max_size) {
                             // The variable keeps no value over the bounds.
+                            freed = freed.saturating_add(target.content_bytes());
                             *slot = None;
+                            self.ctl.mem.credit(freed);
                             return Err(fail(f));
                         }
                     }
+                    self.ctl.mem.credit(freed);
                 }
                 Op::Method(id) => {
                     let site = &prog.methods[id as usize];
@@ -1287,6 +1399,9 @@ impl Machine {
                         .stack
                         .split_off(th.stack.len().saturating_sub(usize::from(site.argc)));
                     let target = pop(&mut th.stack, line)?;
+                    // The handle and the arguments leave the stack; the result (now,
+                    // or when the call resumes) is counted as it comes.
+                    let freed = held_all(&args).saturating_add(target.held_bytes());
                     let (target, method) =
                         method_target(target, &prog.names[site.name as usize])
                             .map_err(|f| RuntimeError::at(site.at.line, site.at.col, f))?;
@@ -1303,11 +1418,18 @@ impl Machine {
                                 self.ctl.step,
                             )
                             .map_err(|f| RuntimeError::at(site.at.line, site.at.col, f))?;
+                        self.ctl.mem.credit(freed);
+                        self.charge(Some(&*th), v.held_bytes()).map_err(fail)?;
                         th.stack.push(v);
                         continue;
                     }
-                    match self.rpc_call(th, target, method, args, site.at)? {
-                        Some(v) => th.stack.push(v),
+                    let called = self.rpc_call(th, target, method, args, site.at)?;
+                    self.ctl.mem.credit(freed);
+                    match called {
+                        Some(v) => {
+                            self.charge(Some(&*th), v.held_bytes()).map_err(fail)?;
+                            th.stack.push(v)
+                        }
                         None => return Ok(Flow::Blocked),
                     }
                 }
@@ -1333,9 +1455,29 @@ impl Machine {
                 Op::Bin(op) => {
                     let r = pop(&mut th.stack, line)?;
                     let l = pop(&mut th.stack, line)?;
-                    let v = binary(op, l, r).map_err(fail)?;
-                    check_value(&v, self.config.max_value_size).map_err(fail)?;
-                    th.stack.push(v);
+                    // Numbers in, a number out: nothing changes. A list or string
+                    // result is bounded before it is made, then counted exactly.
+                    if l.is_container() || r.is_container() {
+                        th.stack.push(l);
+                        th.stack.push(r);
+                        let bytes = match th.stack.as_slice() {
+                            [.., l, r] => binary_bytes(op, l, r),
+                            _ => 0,
+                        };
+                        self.reserve(Some(&*th), bytes).map_err(fail)?;
+                        let r = pop(&mut th.stack, line)?;
+                        let l = pop(&mut th.stack, line)?;
+                        let freed = l.held_bytes().saturating_add(r.held_bytes());
+                        let v = binary(op, l, r).map_err(fail)?;
+                        check_value(&v, self.config.max_value_size).map_err(fail)?;
+                        self.ctl.mem.credit(freed);
+                        self.charge(Some(&*th), v.held_bytes()).map_err(fail)?;
+                        th.stack.push(v);
+                    } else {
+                        let v = binary(op, l, r).map_err(fail)?;
+                        self.ctl.mem.credit(SLOT_BYTES);
+                        th.stack.push(v);
+                    }
                 }
                 Op::Jump(t) => frame.pc = t,
                 Op::JumpIfFalse(t) => {
@@ -1343,6 +1485,7 @@ impl Machine {
                     if !as_bool(&v, "condition").map_err(fail)? {
                         frame.pc = t;
                     }
+                    self.ctl.mem.credit(SLOT_BYTES);
                 }
                 Op::JumpIfFalseKeep(t) | Op::JumpIfTrueKeep(t) => {
                     let want = matches!(op, Op::JumpIfTrueKeep(_));
@@ -1352,6 +1495,7 @@ impl Machine {
                         frame.pc = t;
                     } else {
                         th.stack.pop();
+                        self.ctl.mem.credit(SLOT_BYTES);
                     }
                 }
                 Op::CheckBool => {
@@ -1364,6 +1508,8 @@ impl Machine {
                         .stack
                         .split_off(th.stack.len().saturating_sub(usize::from(site.argc)));
                     let callee = &prog.funcs[fid as usize];
+                    // The arguments leave the stack for the new frame's locals.
+                    let freed = held_all(&args);
                     let locals = bind_user(
                         callee,
                         site,
@@ -1379,13 +1525,15 @@ impl Machine {
                             format!("calls nested too deeply (256) calling `{}`", callee.name),
                         )));
                     }
-                    let base = th.stack.len();
-                    th.frames.push(Frame {
+                    let frame = Frame {
                         func: fid,
                         pc: 0,
                         locals,
-                        base,
-                    });
+                        base: th.stack.len(),
+                    };
+                    self.ctl.mem.credit(freed);
+                    self.charge(Some(&*th), frame_bytes(&frame)).map_err(fail)?;
+                    th.frames.push(frame);
                 }
                 Op::Native(site) => {
                     let id = site as usize;
@@ -1394,11 +1542,22 @@ impl Machine {
                         .stack
                         .split_off(th.stack.len().saturating_sub(usize::from(site.argc)));
                     let stub = self.site_stubs.get(id).copied().flatten();
-                    match self.call_native(prog, site, stub, args).map_err(fail)? {
+                    // The arguments leave the stack; a call record or a message may keep
+                    // copies of them and their text while the driver has not taken them.
+                    let freed = held_all(&args);
+                    let copies = freed.saturating_sub(args.len() * SLOT_BYTES);
+                    self.reserve(Some(&*th), copies.saturating_mul(NATIVE_COPIES))
+                        .map_err(fail)?;
+                    let called = self
+                        .call_native(prog, site, stub, args, &*th)
+                        .map_err(fail)?;
+                    self.ctl.mem.credit(freed);
+                    match called {
                         // `powerdown()`: the program ends there, as `halt` ends it.
                         Called::Value(_) if self.ctl.arm.powerdown => return Ok(Flow::Halt),
                         Called::Value(v) => {
                             check_value(&v, self.config.max_value_size).map_err(fail)?;
+                            self.charge(Some(&*th), v.held_bytes()).map_err(fail)?;
                             th.stack.push(v)
                         }
                         Called::Block(w) => {
@@ -1413,27 +1572,44 @@ impl Machine {
                     } else {
                         Value::None
                     };
+                    // A returned value was counted on the stack; `None` is counted when
+                    // it is pushed.
+                    let returned = if matches!(op, Op::Return) {
+                        v.held_bytes()
+                    } else {
+                        0
+                    };
                     let base = frame.base;
                     let popped = th.frames.pop();
+                    let left = th.stack.get(base..).map_or(0, held_all);
                     th.stack.truncate(base);
+                    self.ctl.mem.credit(left);
                     if th.id == 0 && self.interp.executing == Some(th.frames.len()) {
                         // An interpreted statement ended: back to interpreter mode; the
                         // locals it borrowed go back to the function that called
                         // `interpreter_mode()`.
                         self.interp.executing = None;
+                        self.ctl.mem.credit(FRAME_BYTES.saturating_add(returned));
                         if let (Some(p), Some(caller)) = (popped, th.frames.last_mut()) {
                             caller.locals = p.locals;
                         }
                         th.wait = Wait::Interpreter;
                         return Ok(Flow::Blocked);
                     }
+                    self.ctl.mem.credit(popped.as_ref().map_or(0, frame_bytes));
                     if th.frames.is_empty() {
+                        self.ctl.mem.credit(returned);
                         return Ok(Flow::Finished);
+                    }
+                    if returned == 0 {
+                        self.ctl.mem.add(SLOT_BYTES);
                     }
                     th.stack.push(v);
                 }
                 Op::Pop => {
-                    th.stack.pop();
+                    if let Some(v) = th.stack.pop() {
+                        self.ctl.mem.credit(v.held_bytes());
+                    }
                 }
                 Op::Halt => return Ok(Flow::Halt),
                 Op::Run(fid) => {
@@ -1452,7 +1628,7 @@ impl Machine {
                     self.next_thread_id = id.checked_add(1).ok_or_else(|| {
                         fail(Fault::new(K::Limit, "more than 4294967295 threads started"))
                     })?;
-                    self.threads.push(Thread {
+                    let new = Thread {
                         id,
                         frames: vec![Frame {
                             func: fid,
@@ -1464,11 +1640,16 @@ impl Machine {
                         wait: Wait::None,
                         done: false,
                         critical: 0,
-                    });
+                    };
+                    // The thread and its handle on the stack.
+                    self.charge(Some(&*th), thread_bytes(&new).saturating_add(SLOT_BYTES))
+                        .map_err(fail)?;
+                    self.threads.push(new);
                     th.stack.push(Value::Thread(id));
                 }
                 Op::Join => {
                     let v = pop(&mut th.stack, line)?;
+                    self.ctl.mem.credit(v.held_bytes());
                     if let Value::Thread(id) = v {
                         if id == th.id {
                             return Err(fail(Fault::from("a thread cannot join itself")));
@@ -1482,6 +1663,7 @@ impl Machine {
                 }
                 Op::Kill => {
                     let v = pop(&mut th.stack, line)?;
+                    self.ctl.mem.credit(v.held_bytes());
                     if let Value::Thread(id) = v {
                         if id == th.id {
                             return Ok(Flow::Finished);
@@ -1491,6 +1673,7 @@ impl Machine {
                             if self.ctl.motion.as_ref().is_some_and(|m| m.owner == id) {
                                 self.ctl.halt();
                             }
+                            self.ctl.mem.credit(thread_bytes(t));
                             t.done = true;
                             t.frames = Vec::new();
                             t.stack = Vec::new();
@@ -1509,6 +1692,73 @@ impl Machine {
                 Op::ExitCritical => th.critical = th.critical.saturating_sub(1),
             }
         }
+    }
+
+    /// Sets the count to what the program holds now: the globals and every live thread,
+    /// with `current` (the thread running, out of the list while it runs).
+    fn recount(&mut self, current: Option<&Thread>) {
+        let globals = self
+            .globals
+            .iter()
+            .filter_map(Option::as_ref)
+            .map(Value::content_bytes)
+            .fold(0, usize::saturating_add);
+        let threads = self
+            .threads
+            .iter()
+            .filter(|t| !t.done)
+            .chain(current)
+            .map(thread_bytes)
+            .fold(0, usize::saturating_add);
+        self.ctl.mem.held = globals.saturating_add(threads);
+    }
+
+    /// Counts `bytes` the program is about to allocate, or refuses them (a recount
+    /// first, if the count says they do not fit) with the budget's error.
+    #[inline]
+    fn charge(&mut self, current: Option<&Thread>, bytes: usize) -> Result<(), Fault> {
+        if self.ctl.mem.try_add(self.ctl.events.bytes(), bytes) {
+            return Ok(());
+        }
+        self.charge_after_recount(current, bytes)
+    }
+
+    /// [`charge`](Self::charge) when the count says the bytes do not fit.
+    #[cold]
+    #[inline(never)]
+    fn charge_after_recount(
+        &mut self,
+        current: Option<&Thread>,
+        bytes: usize,
+    ) -> Result<(), Fault> {
+        self.reserve(current, bytes)?;
+        self.ctl.mem.add(bytes);
+        Ok(())
+    }
+
+    /// Whether `bytes` more fit in the budget (a recount first, if the count says they
+    /// do not), without counting them.
+    #[inline]
+    fn reserve(&mut self, current: Option<&Thread>, bytes: usize) -> Result<(), Fault> {
+        let events = self.ctl.events.bytes();
+        if !self.ctl.mem.fits(events, bytes) {
+            self.recount(current);
+            if !self.ctl.mem.fits(events, bytes) {
+                return Err(self.ctl.mem.over(events, bytes));
+            }
+        }
+        Ok(())
+    }
+
+    /// The count of the program's memory and a recount of it now, for tests of the
+    /// accounting (the count must never be below the recount). Not for drivers.
+    #[doc(hidden)]
+    pub fn memory_audit(&mut self) -> (usize, usize) {
+        let counted = self.ctl.mem.held;
+        self.recount(None);
+        let recounted = self.ctl.mem.held;
+        self.ctl.mem.held = counted;
+        (counted, recounted)
     }
 
     /// The variable `s` an assignment writes: a local of the frame, or a global.
@@ -1555,6 +1805,92 @@ impl Machine {
     }
 }
 
+/// The value of variable `s` as a frame reads it: its local, else the global.
+fn lookup<'a>(frame: &'a Frame, globals: &'a [Option<Value>], s: Sym) -> Option<&'a Value> {
+    frame
+        .locals
+        .iter()
+        .rev()
+        .find(|(n, _)| *n == s)
+        .and_then(|(_, v)| v.as_ref())
+        .or_else(|| globals.get(s as usize).and_then(Option::as_ref))
+}
+
+/// The bytes a frame holds: the frame, its locals' entries and their values' content.
+fn frame_bytes(f: &Frame) -> usize {
+    let values: usize = f
+        .locals
+        .iter()
+        .filter_map(|(_, v)| v.as_ref())
+        .map(Value::content_bytes)
+        .fold(0, usize::saturating_add);
+    FRAME_BYTES
+        .saturating_add(f.locals.len().saturating_mul(ENTRY_BYTES))
+        .saturating_add(values)
+}
+
+/// The bytes values on a stack hold.
+fn held_all(values: &[Value]) -> usize {
+    values
+        .iter()
+        .map(Value::held_bytes)
+        .fold(0, usize::saturating_add)
+}
+
+/// The bytes a thread holds: itself, its name, its frames and its stack.
+fn thread_bytes(t: &Thread) -> usize {
+    t.frames
+        .iter()
+        .map(frame_bytes)
+        .fold(THREAD_BYTES, usize::saturating_add)
+        .saturating_add(held_all(&t.stack))
+}
+
+/// The content of the value at `i` in `b` (0 if there is none: indexing fails then).
+fn element_bytes(b: &Value, i: &Value) -> usize {
+    let Value::Int(k) = i else { return 0 };
+    let Ok(k) = usize::try_from(*k) else { return 0 };
+    match b {
+        Value::List(items) => items.get(k).map_or(0, Value::content_bytes),
+        Value::Struct(members) => members.get(k).map_or(0, |(_, v)| v.content_bytes()),
+        _ => 0,
+    }
+}
+
+/// The content of member `name` of `v` (0 if there is none).
+fn member_bytes(v: &Value, name: &str) -> usize {
+    match v {
+        Value::Struct(members) => members
+            .iter()
+            .find(|(n, _)| n == name)
+            .map_or(0, |(_, v)| v.content_bytes()),
+        _ => 0,
+    }
+}
+
+/// An upper bound of the bytes `binary(op, l, r)` allocates for its result, before it
+/// runs: a list result has as many elements as its list operand (a matrix product: rows
+/// times columns, plus the rows). Numbers, bools and poses make nothing; a string join
+/// is at most [`MAX_STRING_LEN`](crate::builtins::MAX_STRING_LEN) bytes.
+fn binary_bytes(op: BinOp, l: &Value, r: &Value) -> usize {
+    use Value::List;
+    match (l, r) {
+        (List(a), List(b)) if op == BinOp::Mul && is_matrix(a) => {
+            let cols = match b.first() {
+                Some(List(row)) => row.len(),
+                _ => 1,
+            };
+            let cells = a.len().saturating_mul(cols.saturating_add(1));
+            VALUE_BYTES.saturating_add(cells.saturating_mul(VALUE_BYTES))
+        }
+        (List(_), _) | (_, List(_)) => {
+            VALUE_BYTES.saturating_add(l.content_bytes().max(r.content_bytes()))
+        }
+        (Value::Str(_), Value::Str(_)) => VALUE_BYTES + crate::builtins::MAX_STRING_LEN,
+        _ => VALUE_BYTES,
+    }
+}
+
 /// A list, struct or string the program built, checked against [`MAX_VALUE_DEPTH`] and
 /// [`Config::max_value_size`] (numbers and poses need no check).
 fn check_value(v: &Value, max_size: usize) -> Result<(), Fault> {
@@ -1582,7 +1918,7 @@ fn check_value(v: &Value, max_size: usize) -> Result<(), Fault> {
 /// The end of an XML-RPC call: its connection closes, its record (if traced) is
 /// emitted, and the thread resumes with the value or stops with the error.
 fn rpc_done(
-    events: &mut VecDeque<Event>,
+    events: &mut crate::memory::Events,
     p: &mut crate::rpc::Pending,
     outcome: Result<Value, String>,
     max_size: usize,
@@ -1648,20 +1984,20 @@ fn member(v: &Value, name: &str) -> Result<Value, Fault> {
     }
 }
 
-/// Assigns `v` at `steps` (members and indices) inside `target`. A struct's members are
-/// fixed when it is made: assigning one it does not have is an error, as reading one is.
+/// Assigns `v` at `steps` (members and indices) inside `target`; the value it drops
+/// (see [`store_index`]). A struct's members are fixed when it is made: assigning one it
+/// does not have is an error, as reading one is.
 fn store_path(
     target: &mut Value,
     steps: &[PathStep],
     indices: Vec<Value>,
     v: Value,
     prog: &Program,
-) -> Result<(), Fault> {
+) -> Result<Value, Fault> {
     let mut indices = indices.into_iter();
     let mut at = target;
     let Some((last, inner)) = steps.split_last() else {
-        *at = v;
-        return Ok(());
+        return Ok(std::mem::replace(at, v));
     };
     for step in inner {
         at = match step {
@@ -1673,13 +2009,15 @@ fn store_path(
         };
     }
     match last {
-        PathStep::Member(m) => *member_mut(at, &prog.names[*m as usize])? = v,
+        PathStep::Member(m) => Ok(std::mem::replace(
+            member_mut(at, &prog.names[*m as usize])?,
+            v,
+        )),
         PathStep::Index => {
             let i = indices.next().unwrap_or(Value::None);
-            store_index(at, &i, v)?
+            store_index(at, &i, v)
         }
     }
-    Ok(())
 }
 
 fn member_mut<'a>(v: &'a mut Value, name: &str) -> Result<&'a mut Value, Fault> {
@@ -1784,17 +2122,17 @@ fn index_mut<'a>(b: &'a mut Value, i: &Value) -> Result<&'a mut Value, Fault> {
     }
 }
 
-fn store_index(b: &mut Value, i: &Value, v: Value) -> Result<(), Fault> {
+/// Stores `v` at `i` in `b`; the value it drops: the element replaced, or `v` itself
+/// when its number went into a pose.
+fn store_index(b: &mut Value, i: &Value, v: Value) -> Result<Value, Fault> {
     match b {
         Value::List(items) => {
             let k = index_of(i, items.len())?;
-            items[k] = v;
-            Ok(())
+            Ok(std::mem::replace(&mut items[k], v))
         }
         Value::Struct(members) => {
             let k = index_of(i, members.len())?;
-            members[k].1 = v;
-            Ok(())
+            Ok(std::mem::replace(&mut members[k].1, v))
         }
         Value::Pose(p) => {
             let k = index_of(i, 6)?;
@@ -1804,7 +2142,7 @@ fn store_index(b: &mut Value, i: &Value, v: Value) -> Result<(), Fault> {
                     v.type_name()
                 ))
             })?;
-            Ok(())
+            Ok(v)
         }
         other => Err(Fault::new(
             K::Type,
@@ -2170,6 +2508,7 @@ impl Machine {
         site: &CallSite,
         stub: Option<u32>,
         args: Vec<Value>,
+        current: &Thread,
     ) -> Result<Called, Fault> {
         let name = &prog.names[site.name as usize];
         let traced = match site.builtin {
@@ -2251,7 +2590,17 @@ impl Machine {
                 r.socket = a.text(k).ok();
             }
         }
-        let out = (builtin.run)(&mut self.ctl, &mut a)?;
+        // A built-in refuses to allocate past the count before it changes anything: the
+        // count may be high (drops not credited), so a recount decides, once.
+        let out = match (builtin.run)(&mut self.ctl, &mut a) {
+            Err(_) if std::mem::take(&mut self.ctl.mem.refused) => {
+                self.recount(Some(current));
+                (builtin.run)(&mut self.ctl, &mut a)
+            }
+            out => out,
+        };
+        self.ctl.mem.refused = false;
+        let out = out?;
         if let Some(r) = record.as_mut() {
             r.read = a.read.take();
             if let Some(why) = a.failure.take() {
@@ -2508,6 +2857,7 @@ impl Machine {
             }
             self.release_held();
             // `interpreter_mode()` returns.
+            self.ctl.mem.add(SLOT_BYTES);
             self.threads[i].stack.push(Value::None);
             return (true, Wait::None);
         }
@@ -2525,6 +2875,8 @@ impl Machine {
                     .last_mut()
                     .map(|f| std::mem::take(&mut f.locals))
                     .unwrap_or_default();
+                // The frame is counted; its locals were counted in the caller's.
+                self.ctl.mem.add(FRAME_BYTES);
                 th.frames.push(Frame {
                     func: q.func,
                     pc: 0,

@@ -75,6 +75,13 @@ pub const MAX_STRUCT_MEMBERS: usize = 64;
 /// The default of [`Config::max_value_size`](crate::Config::max_value_size).
 pub(crate) const DEFAULT_MAX_VALUE_SIZE: usize = 1_000_000;
 
+/// The bytes one value takes where it sits: a list element, a stack slot (the enum
+/// itself; what it owns outside is its [`content_bytes`](Value::content_bytes)).
+pub(crate) const VALUE_BYTES: usize = std::mem::size_of::<Value>();
+
+/// The bytes one struct member takes besides its name's text and its value's content.
+pub(crate) const MEMBER_BYTES: usize = std::mem::size_of::<(String, Value)>();
+
 impl Value {
     /// The depth (levels of lists) and the size of the value: every list element counts
     /// one, at any depth, and a string its bytes. Counting stops, without recursion,
@@ -129,7 +136,60 @@ impl Value {
         (depth, size)
     }
 
+    /// The bytes the value owns outside its own slot, as the memory budget counts them
+    /// ([`Config::max_memory`](crate::Config::max_memory)): [`VALUE_BYTES`] per list
+    /// element, a string's bytes, [`MEMBER_BYTES`] plus the name per struct member, at
+    /// every depth; 0 for a number, bool, pose or handle. Iterative; the cost is linear
+    /// in the value's size.
+    #[inline]
+    pub(crate) fn content_bytes(&self) -> usize {
+        match self {
+            Value::Str(s) => s.len(),
+            Value::Rpc(url) => url.len(),
+            // A flat list (the common case: joints, poses as lists) without a walk.
+            Value::List(items) if !items.iter().any(Value::is_container) => {
+                items.len().saturating_mul(VALUE_BYTES)
+            }
+            Value::List(_) | Value::Struct(_) => self.nested_content_bytes(),
+            _ => 0,
+        }
+    }
+
+    /// [`content_bytes`](Self::content_bytes) of a list or struct that may hold others.
+    fn nested_content_bytes(&self) -> usize {
+        let mut bytes = 0usize;
+        let mut todo: Vec<&Value> = vec![self];
+        while let Some(v) = todo.pop() {
+            match v {
+                Value::List(items) => {
+                    bytes = bytes.saturating_add(items.len().saturating_mul(VALUE_BYTES));
+                    todo.extend(items.iter().filter(|i| i.is_container()));
+                }
+                Value::Struct(members) => {
+                    for (name, m) in members {
+                        bytes = bytes.saturating_add(MEMBER_BYTES + name.len());
+                        if m.is_container() {
+                            todo.push(m);
+                        }
+                    }
+                }
+                Value::Str(s) => bytes = bytes.saturating_add(s.len()),
+                Value::Rpc(url) => bytes = bytes.saturating_add(url.len()),
+                _ => {}
+            }
+        }
+        bytes
+    }
+
+    /// The bytes the value takes on a stack or as a list element: [`VALUE_BYTES`] plus
+    /// its [`content_bytes`](Self::content_bytes).
+    #[inline]
+    pub(crate) fn held_bytes(&self) -> usize {
+        VALUE_BYTES.saturating_add(self.content_bytes())
+    }
+
     /// A list, struct or string: what [`measure`](Self::measure) looks into.
+    #[inline]
     pub(crate) fn is_container(&self) -> bool {
         matches!(
             self,

@@ -49,6 +49,8 @@ fn run_steps(src: &str, config: Config, steps: u64) -> State {
         if m.state() != &State::Running {
             break;
         }
+        let (counted, recounted) = m.memory_audit();
+        assert!(counted >= recounted, "memory count {counted} < {recounted}");
     }
     m.state().clone()
 }
@@ -199,6 +201,180 @@ fn a_doubling_list_is_a_limit_error_not_a_memory_bomb() {
 }
 
 // ---------------------------------------------------------------------------------------
+// 4. Memory budget: every value, call depth and thread count within its own bound, but
+// together more than the program may hold.
+
+/// The attack found on the controller's port 30001: `threads` threads, each `depth` calls
+/// deep with a list of `len` elements in every frame.
+fn many_frames_holding_lists(threads: u32, depth: u32, len: u32) -> String {
+    format!(
+        "def attack():
+  def deep(n):
+    big = make_list({len}, 0)
+    if n > 0:
+      deep(n - 1)
+    end
+    sleep(100)
+  end
+  thread t():
+    deep({depth})
+  end
+  i = 0
+  while i < {threads}:
+    run t()
+    i = i + 1
+  end
+  sleep(100)
+end
+"
+    )
+}
+
+fn budget_error(state: State) -> String {
+    let e = limit_error(state);
+    assert!(e.contains("memory budget exceeded"), "{e}");
+    e
+}
+
+#[test]
+fn frames_of_many_threads_holding_lists_are_a_budget_error() {
+    // 8 threads 20 calls deep, 20 000 elements a frame: about 180 MB, each bound kept.
+    let src = many_frames_holding_lists(8, 19, 20_000);
+    let config = Config {
+        max_memory: 8 << 20,
+        ..Config::default()
+    };
+    let e = budget_error(run_steps(&src, config, 100));
+    assert!(e.starts_with("line 3: "), "{e}");
+    assert!(e.contains("over its budget of 8388608 bytes"), "{e}");
+}
+
+/// The attack at its real size with the default budget ends with the budget's error,
+/// in a child process whose address space is capped at 2 GB (without the budget it
+/// aborts there: allocation failure).
+#[test]
+fn the_attack_at_full_size_ends_with_the_budget_error_under_a_2_gb_cap() {
+    const CHILD: &str = "URSCRIPT_INTERP_BUDGET_CHILD";
+    if std::env::var_os(CHILD).is_some() {
+        let src = many_frames_holding_lists(63, 249, 999_000);
+        let e = budget_error(run_steps(&src, Config::default(), 1_000));
+        assert!(e.contains("over its budget of 268435456 bytes"), "{e}");
+        return;
+    }
+    let exe = std::env::current_exe().expect("test binary");
+    let out = std::process::Command::new("sh")
+        .arg("-c")
+        .arg("ulimit -v 2000000 && exec \"$0\" \"$@\"")
+        .arg(exe)
+        .args([
+            "--exact",
+            "the_attack_at_full_size_ends_with_the_budget_error_under_a_2_gb_cap",
+            "--test-threads=1",
+            "--nocapture",
+        ])
+        .env(CHILD, "1")
+        .output()
+        .expect("run sh");
+    let text =
+        String::from_utf8_lossy(&out.stdout).into_owned() + &String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "child: {:?}\n{text}", out.status);
+    assert!(text.contains("1 passed"), "{text}");
+}
+
+#[test]
+fn one_operation_is_refused_before_it_allocates_past_the_budget() {
+    let small = |bytes: usize| Config {
+        max_memory: bytes,
+        ..Config::default()
+    };
+    // make_list of long strings: a gigabyte asked for at once.
+    let s = "a".repeat(1023);
+    let src = format!("x = make_list(1000000, \"{s}\")\n");
+    let e = budget_error(run_steps(&src, Config::default(), 10));
+    assert!(e.starts_with("line 1: "), "{e}");
+    // A list copied on assignment.
+    let src = "x = make_list(20000, 0)\ny = x\n";
+    let e = budget_error(run_steps(src, small(2 << 20), 10));
+    assert!(e.starts_with("line 2: "), "{e}");
+    // List arithmetic.
+    let src = "x = make_list(20000, 1.0) * 2\n";
+    let e = budget_error(run_steps(src, small(2 << 20), 10));
+    assert!(e.starts_with("line 1: "), "{e}");
+    // A matrix product far larger than its operands: 2000 x 1 times 1 x 2000.
+    let src = "col = make_list(2000, 0)\ni = 0\nwhile i < 2000:\n  col[i] = [1.0]\n  i = i + 1\nend\nrow = [make_list(2000, 1.0)]\nm = col * row\n";
+    let e = budget_error(run_steps(src, small(16 << 20), 10));
+    assert!(e.starts_with("line 8: "), "{e}");
+    // Messages the driver has not taken yet hold copies of their arguments.
+    let src = "x = make_list(10000, 1.0)\ni = 0\nwhile i < 50:\n  textmsg(x)\n  i = i + 1\nend\n";
+    let config = small(4 << 20);
+    let mut m = Machine::new(Program::parse(src).unwrap(), config);
+    m.run_until(Duration::ZERO);
+    let e = budget_error(m.state().clone());
+    assert!(e.starts_with("line 4: "), "{e}");
+    // Taken as they come (a step each), they hold nothing.
+    let src = "x = make_list(10000, 1.0)\ni = 0\nwhile i < 50:\n  textmsg(x)\n  sync()\n  i = i + 1\nend\n";
+    let mut h = Harness::new(src, small(4 << 20));
+    h.run_silent(Duration::from_secs(1));
+    assert_eq!(h.m.state(), &State::Finished);
+}
+
+/// A program that makes and drops far more than its budget, in variables, list
+/// elements, struct members, frames and threads, runs on; the count follows every drop
+/// (it equals a recount after every step), so no step needs a recount.
+#[test]
+fn making_and_dropping_within_the_budget_runs_on_with_an_exact_count() {
+    let src = "def f(n, a):
+  local l = a + a
+  if n > 0:
+    return f(n - 1, l)
+  end
+  return length(l)
+end
+thread t():
+  y = make_list(500, \"abc\")
+  sleep(0.004)
+end
+k = 0
+while k < 400:
+  x = make_list(1000, 0)
+  x[3] = [1, 2, \"ab\"]
+  s = struct(a=x, b=[x[3], x[3]])
+  s.b[0] = \"cd\"
+  z = s.a
+  n = f(3, [1.0, 2.0])
+  h = run t()
+  if k % 10 == 0:
+    textmsg(str_cat(\"k \", k))
+    sync()
+  end
+  k = k + 1
+end
+join h
+textmsg(\"done \", n)
+";
+    // About 40 KB live; 400 rounds make and drop about 40 MB.
+    let mut h = Harness::new(
+        src,
+        Config {
+            max_memory: 1 << 20,
+            ..Config::default()
+        },
+    );
+    loop {
+        h.now += h.step;
+        h.m.run_until(h.now);
+        while h.m.poll_event().is_some() {}
+        if h.m.state() != &State::Running {
+            break;
+        }
+        let (counted, recounted) = h.m.memory_audit();
+        assert_eq!(counted, recounted, "at {:?}", h.now);
+        assert!(h.now < Duration::from_secs(10), "still running");
+    }
+    assert_eq!(h.m.state(), &State::Finished);
+}
+
+// ---------------------------------------------------------------------------------------
 // 7. Short-lived threads
 
 #[test]
@@ -313,6 +489,7 @@ fn fuzz_seeds_replay() {
         let config = Config {
             max_statements_per_step: 1_000,
             max_value_size: 1_000,
+            max_memory: 1 << 20,
             trace_all_calls: true,
             ..Config::default()
         };
@@ -352,6 +529,12 @@ fn fuzz_seeds_replay() {
             if m.state() != &State::Running {
                 break;
             }
+            let (counted, recounted) = m.memory_audit();
+            assert!(
+                counted >= recounted,
+                "{}: {counted} < {recounted}",
+                path.display()
+            );
         }
     }
 }

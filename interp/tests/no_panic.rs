@@ -34,8 +34,17 @@ fn fragment() -> impl Strategy<Value = String> {
         Just("x.c.d[1] = x.a\n".to_string()),
         Just("r = rpc_factory(\"xmlrpc\", \"http://h:1/\")\n".to_string()),
         Just("y = r.m(x, 1.5, \"s\")\n".to_string()),
+        Just("y = make_list(4, \"ab\")\nz = [1.0, 2.0] * 2 + [x[0], 1]\n".to_string()),
         "[ -~\n]{0,12}",
     ]
+}
+
+/// The machine's count of the program's memory is never below a recount of it.
+fn audit(m: &mut Machine) {
+    if m.state() == &urscript_interp::State::Running {
+        let (counted, recounted) = m.memory_audit();
+        assert!(counted >= recounted, "memory count {counted} < {recounted}");
+    }
 }
 
 proptest! {
@@ -53,12 +62,14 @@ proptest! {
             let config = Config { max_statements_per_step: 2000, ..Config::default() };
             let mut m = Machine::new(p, config);
             m.run_until(Duration::from_millis(20));
+            audit(&mut m);
             m.handle_connected("s", Ok(()));
             m.handle_received("s", b"(1,2,3)\n");
             m.handle_connected("rpc:http://h:1/", Ok(()));
             m.handle_received("rpc:http://h:1/", b"HTTP/1.1 200 OK\r\n\r\n<methodResponse><params><param><value><int>1</int>");
             m.handle_peer_closed("rpc:http://h:1/");
             m.run_until(Duration::from_millis(40));
+            audit(&mut m);
             while m.poll_event().is_some() {}
         }
     }

@@ -788,6 +788,33 @@ pub struct VarInvalid {
     pub text: String,
 }
 
+/// `controller`: events of a client (or, `conn` null, of the running program) that were
+/// not reported: more than the server reports a second (a flood), or a program or
+/// speed superseded by a later one of the same step.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Suppressed {
+    pub t: f64,
+    pub conn: Option<u64>,
+    pub count: u64,
+    /// Over how many seconds.
+    pub seconds: f64,
+}
+
+/// `controller`: events not written because standard output did not keep up (its queue
+/// was full); said when output resumes.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Dropped {
+    pub t: f64,
+    pub count: u64,
+}
+
+/// `controller`: the controller stopped (the last event).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Stopped {
+    pub t: f64,
+    pub reason: String,
+}
+
 /// Every event `ursock` reports. Serialised with `"event"` naming the variant in
 /// snake_case, then the variant's fields.
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -830,6 +857,9 @@ pub enum Event {
     Dashboard(Dashboard),
     Program(Program),
     Client(Client),
+    Suppressed(Suppressed),
+    Dropped(Dropped),
+    Stopped(Stopped),
 }
 
 /// Constructors stamped with [`now`], for the common events.
@@ -932,6 +962,9 @@ impl Event {
             Event::Client(e) => e.t,
             Event::RefusedAddress(e) => e.t,
             Event::Evicted(e) => e.t,
+            Event::Suppressed(e) => e.t,
+            Event::Dropped(e) => e.t,
+            Event::Stopped(e) => e.t,
         }
     }
 
@@ -951,6 +984,7 @@ impl Event {
             Event::Dashboard(e) => Some(e.conn),
             Event::Client(e) => Some(e.conn),
             Event::Evicted(e) => Some(e.conn),
+            Event::Suppressed(e) => e.conn,
             _ => None,
         }
     }

@@ -143,7 +143,7 @@ fn a_client_drives_the_controller() {
     assert_eq!(c.ask("get robot model"), "UR10");
     assert_eq!(
         c.ask("PolyscopeVersion"),
-        "URSoftware 5.21.0.0 (Jan 01 2025)"
+        "URSoftware 5.23.0.0 (Jan 01 2025)"
     );
     assert_eq!(c.ask("is in remote control"), "true");
     assert_eq!(c.ask("load nothing.urp"), "File not found: nothing.urp");
@@ -222,7 +222,7 @@ fn hostile_lines_and_pipelined_commands() {
     c.stream
         .write_all(b"version\nget robot model\nrob")
         .unwrap();
-    assert_eq!(c.line(), "5.21.0.0");
+    assert_eq!(c.line(), "5.23.0.0");
     assert_eq!(c.line(), "UR5");
     c.stream.write_all(b"otmode\n").unwrap();
     assert_eq!(c.line(), "Robotmode: POWER_OFF");

@@ -59,7 +59,7 @@ fn primary_and_secondary_send_the_version_then_robot_state() {
         let name_len = body[10] as usize;
         assert_eq!(&body[11..11 + name_len], b"URControl");
         let (major, minor) = (body[11 + name_len], body[12 + name_len]);
-        assert_eq!((major, minor), (5, 21), "the version --polyscope gives");
+        assert_eq!((major, minor), (5, 23), "the default version");
         let mut states = 0;
         while states < 3 {
             let (ty, body) = message(&mut s);

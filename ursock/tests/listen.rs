@@ -574,6 +574,18 @@ fn one_address_cannot_take_every_slot() {
 }
 
 #[test]
+fn silent_peers_from_one_address_are_evicted_for_a_newcomer_from_it() {
+    let l = Listener::start(&["--max-per-address", "4", "--evict-idle", "0.5", "-q"]);
+    let silent: Vec<_> = (0..4).map(|_| robot(&l.addr)).collect();
+    l.wait_for("[#4]", false);
+    std::thread::sleep(Duration::from_millis(800));
+    // The robot at that address is served, in place of the silent peer idle longest.
+    assert_eq!(ask(&l.addr, "GET Z\n"), "Z 0\n");
+    l.wait_for("evicted", true);
+    drop(silent);
+}
+
+#[test]
 fn a_log_that_cannot_be_written_is_said_once_and_the_session_goes_on() {
     if !std::path::Path::new("/dev/full").exists() {
         eprintln!("no /dev/full here: skipped");

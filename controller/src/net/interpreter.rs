@@ -21,7 +21,7 @@ use std::time::Duration;
 
 use urscript_interp::interpreter::{Discard, Reply, MAX_LINE};
 
-use super::{ServerEvent, Shared, WRITE_TIMEOUT};
+use super::{Activity, Counts, ServerEvent, Shared, WRITE_TIMEOUT};
 
 /// Interpreter connections served at once; more are accepted and closed at once. Each
 /// is a thread; a program in interpreter mode has one client as a rule, so 16 is ample
@@ -37,7 +37,13 @@ pub const POLL: Duration = Duration::from_millis(20);
 const ECHO: usize = 64;
 
 /// One interpreter connection (accepted by [`super::accept_each`]).
-pub(super) fn serve(mut stream: TcpStream, conn: u64, peer: String, shared: &Shared) {
+pub(super) fn serve(
+    mut stream: TcpStream,
+    conn: u64,
+    peer: String,
+    shared: &Shared,
+    activity: &Activity,
+) {
     let _ = stream.set_nodelay(true);
     let _ = stream.set_write_timeout(Some(WRITE_TIMEOUT));
     let _ = stream.set_read_timeout(Some(POLL));
@@ -47,13 +53,9 @@ pub(super) fn serve(mut stream: TcpStream, conn: u64, peer: String, shared: &Sha
         peer,
     });
     let (mut rx, mut tx) = (0u64, 0u64);
-    let reason = session(&mut stream, conn, shared, &mut rx, &mut tx);
-    shared.emit(ServerEvent::Close {
-        conn,
-        reason: reason.to_string(),
-        rx,
-        tx,
-    });
+    let reason = session(&mut stream, conn, shared, activity, &mut rx, &mut tx);
+    let reason = activity.closed_by().unwrap_or(reason);
+    super::closed(shared, conn, reason, &Counts { rx, tx });
 }
 
 /// Writes one reply line; false when the client does not take it.
@@ -107,6 +109,7 @@ fn session(
     stream: &mut TcpStream,
     conn: u64,
     shared: &Shared,
+    activity: &Activity,
     rx: &mut u64,
     tx: &mut u64,
 ) -> &'static str {
@@ -142,6 +145,7 @@ fn session(
             }
             Err(_) => return "read failed",
         };
+        activity.touch(shared);
         *rx += n as u64;
         let mut rest = &chunk[..n];
         while !rest.is_empty() {

@@ -16,7 +16,12 @@
 //!   thread of their own when they play.
 //!
 //! What happens is reported as [`ServerEvent`]s to the callback given to
-//! [`Server::start`], from the server's threads.
+//! [`Server::start`], from the server's threads, the real-time loop among them: the
+//! callback must not block (queue the event, as `ursock controller` does). A dashboard
+//! `shutdown` (unless [`ServerOptions::allow_shutdown`] is off: then it is refused as
+//! the controller refuses a command, `Failed to execute: shutdown`) ends the running
+//! program, closes every client (each with its [`ServerEvent::Close`]) and stops the
+//! server; [`ServerEvent::Shutdown`] is the last event.
 //!
 //! # Bounds
 //!
@@ -29,13 +34,18 @@
 //!   of the running program in progress ([`MAX_CONNECTING`]: a connect never blocks the
 //!   real-time loop), and one reading a played `.urp` program (the cell asks for one
 //!   program at a time).
-//! - Connections past a limit are accepted and closed at once, so the kernel's listen
-//!   backlog (the standard library's 128, capped by the system) drains however many
-//!   peers knock; the stream listeners are drained every step.
+//! - Connections past a limit ([`MAX_CONNECTIONS`], [`MAX_INTERPRETER_CONNECTIONS`],
+//!   [`MAX_CLIENTS`]): a newcomer evicts the connection of that limit idle longest if it
+//!   has been idle [`EVICT_IDLE`], else it is accepted and closed at once, so the
+//!   kernel's listen backlog (the standard library's 128, capped by the system) drains
+//!   however many peers knock; the stream listeners are drained every step. Idle: no
+//!   byte received from it (dashboard, interpreter); no byte received from it and none
+//!   written to it (stream clients: a reader that takes its packages is active; a
+//!   socket that neither sends nor reads is idle).
 //! - Dashboard connection: the line read so far, at most [`MAX_LINE`] bytes (a longer
 //!   one is answered and skipped to its newline); a reply not taken within
-//!   [`WRITE_TIMEOUT`] ends it. An idle client holds its slot until it leaves, as on
-//!   the robot, where a dashboard client may stay connected for hours.
+//!   [`WRITE_TIMEOUT`] ends it. An idle client holds its slot while there is room (on
+//!   the robot a dashboard client may stay connected for hours).
 //! - Interpreter connection: the line so far, at most 64 KiB
 //!   ([`urscript_interp::interpreter::MAX_LINE`]); the same write timeout; the lines
 //!   the program holds are bounded by [`urscript_interp::interpreter::MAX_UNEXECUTED`].
@@ -45,6 +55,19 @@
 //!   or its RTDE session ([`crate::rtde::RTDE_MAX_PACKET_SIZE`],
 //!   [`crate::rtde::RTDE_MAX_OUTBOX`], [`crate::rtde::RTDE_MAX_EVENTS`], the recipe
 //!   counts). See [`streams`](self) for who is dropped when.
+//! - The work of one step of the real-time loop: each stream client's fair share of
+//!   [`STEP_READ_BUDGET`] bytes read (at least [`MIN_READ_SHARE`]), of
+//!   [`STEP_ITEM_BUDGET`] script items done (at least [`MIN_ITEM_SHARE`]; the rest wait
+//!   in its queue, at most what one read completed, and it is not read meanwhile; at
+//!   most [`STEP_START_BUDGET`] programs of all clients started), of
+//!   [`STEP_OUTPUT_BUDGET`] bytes of RTDE data packages made (at least
+//!   [`MIN_OUTPUT_SHARE`]); superseded programs, speeds and RTDE inputs of one step
+//!   coalesced. So floods on any port leave a well-behaved 500 Hz RTDE client its rate
+//!   (`tests/hostile_load.rs`).
+//! - Events: at most [`MAX_EVENTS_PER_INTERVAL`] per client and for the running program
+//!   per [`EVENT_INTERVAL`], the rest counted in one [`ServerEvent::Suppressed`].
+//! - A `shutdown` waits at most [`SHUTDOWN_WAIT`] for the loop and for the connections
+//!   it closes.
 //! - The running program: the interpreter's bounds (value size, call depth, threads,
 //!   statements per step, sockets open: see `urscript_interp`'s crate documentation),
 //!   each a runtime error reported to the primary clients; what its sockets leave
@@ -73,7 +96,7 @@ mod streams;
 use std::io::{ErrorKind, Read, Write};
 use std::net::{SocketAddr, TcpListener, TcpStream};
 use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicBool, AtomicU64, AtomicUsize, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::{Arc, Mutex, MutexGuard};
 use std::thread::JoinHandle;
 use std::time::Duration;
@@ -85,7 +108,9 @@ use crate::{Cell, Config, Controller, Dashboard, Programs, Reply, MAX_LINE};
 pub use fetch::{parse_host, MAX_FETCHED, MAX_FILE};
 pub use interpreter::{MAX_INTERPRETER_CONNECTIONS, POLL as INTERPRETER_POLL};
 pub use streams::{
-    MAX_BACKLOG, MAX_CLIENTS, MAX_CONNECTING, MAX_QUEUE, MAX_READS_PER_STEP, MAX_STALL, READ_CHUNK,
+    EVENT_INTERVAL, MAX_BACKLOG, MAX_CLIENTS, MAX_CONNECTING, MAX_EVENTS_PER_INTERVAL, MAX_QUEUE,
+    MAX_STALL, MIN_ITEM_SHARE, MIN_OUTPUT_SHARE, MIN_READ_SHARE, READ_CHUNK, STEP_ITEM_BUDGET,
+    STEP_OUTPUT_BUDGET, STEP_READ_BUDGET, STEP_START_BUDGET,
 };
 
 /// Dashboard connections served at once; more are accepted and closed at once. Each is
@@ -99,6 +124,22 @@ pub const MAX_CONNECTIONS: usize = 16;
 /// a played `.urp` program.
 pub const MAX_SERVER_THREADS: usize =
     3 + MAX_CONNECTIONS + MAX_INTERPRETER_CONNECTIONS + MAX_CONNECTING + 1;
+
+/// How long a connection must have been idle to be evicted for a newcomer when its
+/// interface's limit ([`MAX_CONNECTIONS`], [`MAX_INTERPRETER_CONNECTIONS`],
+/// [`MAX_CLIENTS`]) is reached: the newcomer evicts the connection idle longest if it
+/// has been idle this long, else it is closed at once. Idle means nothing received from
+/// it (a dashboard or interpreter client), nothing received from it and nothing written
+/// to it (a stream client: a reader taking its packages is active). Two seconds is more
+/// than the pause between a working client's commands or packages (primary and
+/// secondary state comes at 10 Hz) and short enough that silent sockets lock nobody
+/// out for long.
+pub const EVICT_IDLE: Duration = Duration::from_secs(2);
+
+/// How long a `shutdown` waits for the real-time loop and the other connections to
+/// close before the server stops anyway (a thread stuck in a write ends within
+/// [`WRITE_TIMEOUT`] regardless).
+pub const SHUTDOWN_WAIT: Duration = Duration::from_secs(2);
 
 /// A dashboard or interpreter reply that cannot be written in this time (a client that
 /// stopped reading) ends the connection: long enough for a client that is merely slow,
@@ -196,6 +237,9 @@ pub struct ServerOptions {
     pub urcap_host: Option<(String, u16)>,
     /// A robot's answers or URSim's ([`Profile`]).
     pub profile: Profile,
+    /// Whether the dashboard's `shutdown` is obeyed (default); when not, it is answered
+    /// as a controller that may not shut down answers it, and nothing else changes.
+    pub allow_shutdown: bool,
 }
 
 impl Default for ServerOptions {
@@ -207,6 +251,7 @@ impl Default for ServerOptions {
             programs: None,
             urcap_host: None,
             profile: Profile::Robot,
+            allow_shutdown: true,
         }
     }
 }
@@ -305,7 +350,18 @@ pub enum ServerEvent {
     },
     /// Something to say (an accept that failed, a peer that closed the program's socket).
     Note(String),
-    /// A dashboard client said `shutdown`: the server has stopped.
+    /// Events not reported: past [`MAX_EVENTS_PER_INTERVAL`] in one [`EVENT_INTERVAL`]
+    /// (a flood), or a program or `set speed` superseded by a later one of the same step.
+    Suppressed {
+        /// The client whose events they were; `None`: the running program's.
+        conn: Option<u64>,
+        /// How many.
+        count: u64,
+        /// Over how long (from the interval's start to its report).
+        interval: Duration,
+    },
+    /// A dashboard client said `shutdown`: its program has ended and every client has
+    /// been closed (their events came first); the server has stopped. The last event.
     Shutdown,
 }
 
@@ -402,7 +458,62 @@ pub(crate) struct Shared {
     /// How loaded programs' paths name files in it.
     program_names: Option<DirPrograms>,
     stop: AtomicBool,
+    /// A `shutdown` was obeyed: the loop closes its clients and ends.
+    shutting_down: AtomicBool,
+    /// The real-time loop has ended (after a `shutdown`).
+    loop_done: AtomicBool,
+    allow_shutdown: bool,
+    /// The dashboard and interpreter connections open.
+    conns: Mutex<Vec<Slot>>,
     sink: Box<Sink>,
+}
+
+/// A dashboard or interpreter connection, for eviction and shutdown.
+struct Slot {
+    conn: u64,
+    service: &'static str,
+    /// A handle to close it with.
+    stream: TcpStream,
+    activity: Arc<Activity>,
+}
+
+/// What a connection's thread tells the accepting thread: when it last received a byte;
+/// and why another thread closed it.
+pub(crate) struct Activity {
+    /// Controller time of the last byte received, in nanoseconds.
+    last_rx: AtomicU64,
+    closed_by: Mutex<Option<&'static str>>,
+}
+
+impl Activity {
+    fn new(now: Duration) -> Self {
+        Activity {
+            last_rx: AtomicU64::new(nanos(now)),
+            closed_by: Mutex::new(None),
+        }
+    }
+
+    /// Bytes came from the client.
+    pub(crate) fn touch(&self, shared: &Shared) {
+        self.last_rx.store(nanos(shared.now()), Ordering::SeqCst);
+    }
+
+    fn idle(&self, now: Duration) -> Duration {
+        now.saturating_sub(Duration::from_nanos(self.last_rx.load(Ordering::SeqCst)))
+    }
+
+    fn close_for(&self, reason: &'static str) {
+        *self.closed_by.lock().unwrap_or_else(|p| p.into_inner()) = Some(reason);
+    }
+
+    /// Why another thread closed the connection, if it did.
+    pub(crate) fn closed_by(&self) -> Option<&'static str> {
+        *self.closed_by.lock().unwrap_or_else(|p| p.into_inner())
+    }
+}
+
+fn nanos(d: Duration) -> u64 {
+    u64::try_from(d.as_nanos()).unwrap_or(u64::MAX)
 }
 
 impl Shared {
@@ -436,6 +547,35 @@ impl Shared {
 
     pub(crate) fn stopped(&self) -> bool {
         self.stop.load(Ordering::SeqCst)
+    }
+
+    pub(crate) fn shutting_down(&self) -> bool {
+        self.shutting_down.load(Ordering::SeqCst)
+    }
+
+    pub(crate) fn loop_ended(&self) {
+        self.loop_done.store(true, Ordering::SeqCst);
+    }
+
+    fn lock_conns(&self) -> MutexGuard<'_, Vec<Slot>> {
+        self.conns.lock().unwrap_or_else(|p| p.into_inner())
+    }
+
+    /// After a `shutdown` from connection `conn`: waits (at most [`SHUTDOWN_WAIT`]) for
+    /// the real-time loop to end its program and close its clients, then closes every
+    /// other dashboard and interpreter connection and waits for them to go.
+    fn close_all_for_shutdown(&self, conn: u64) {
+        let start = std::time::Instant::now();
+        while !self.loop_done.load(Ordering::SeqCst) && start.elapsed() < SHUTDOWN_WAIT {
+            std::thread::sleep(Duration::from_millis(1));
+        }
+        for slot in self.lock_conns().iter().filter(|s| s.conn != conn) {
+            slot.activity.close_for("the controller shut down");
+            let _ = slot.stream.shutdown(std::net::Shutdown::Both);
+        }
+        while self.lock_conns().iter().any(|s| s.conn != conn) && start.elapsed() < SHUTDOWN_WAIT {
+            std::thread::sleep(Duration::from_millis(1));
+        }
     }
 }
 
@@ -531,6 +671,10 @@ impl Server {
             urcap_host: options.urcap_host,
             programs,
             stop: AtomicBool::new(false),
+            shutting_down: AtomicBool::new(false),
+            loop_done: AtomicBool::new(false),
+            allow_shutdown: options.allow_shutdown,
+            conns: Mutex::new(Vec::new()),
             sink: Box::new(on_event),
         });
         for &(service, addr) in &addrs {
@@ -630,20 +774,23 @@ impl Drop for Server {
     }
 }
 
+/// A connection's server: its stream, number, peer and what it tells of its activity.
+type Serve = fn(TcpStream, u64, String, &Shared, &Activity);
+
 /// Accepts connections on `listener` until the server stops, each served by `serve` in a
-/// thread of its own named `SERVICE-CONN`, at most `max` at once (more are accepted and
-/// closed, so the backlog drains). `label` starts the notes (`""` for the dashboard,
-/// `"interpreter "`).
+/// thread of its own named `SERVICE-CONN`, at most `max` at once: past it a newcomer
+/// evicts the connection idle longest if it has been idle [`EVICT_IDLE`], else it is
+/// accepted and closed (so the backlog drains). `label` starts the notes (`""` for the
+/// dashboard, `"interpreter "`).
 pub(super) fn accept_each(
     shared: &Arc<Shared>,
     listener: &TcpListener,
     (service, label, max): (&'static str, &'static str, usize),
-    serve: fn(TcpStream, u64, String, &Shared),
+    serve: Serve,
 ) {
-    let active = Arc::new(AtomicUsize::new(0));
     loop {
         let accepted = listener.accept();
-        if shared.stopped() {
+        if shared.stopped() || shared.shutting_down() {
             return;
         }
         let (stream, peer) = match accepted {
@@ -656,27 +803,35 @@ pub(super) fn accept_each(
                 continue;
             }
         };
-        if active.load(Ordering::SeqCst) >= max {
+        if !make_room(shared, service, label, max) {
             shared.emit(ServerEvent::Note(format!(
                 "{peer}: refused, {max} {label}connections are already open"
             )));
             drop(stream);
             continue;
         }
-        active.fetch_add(1, Ordering::SeqCst);
+        let Ok(handle) = stream.try_clone() else {
+            shared.emit(ServerEvent::Note(format!("{peer}: cannot serve it")));
+            continue;
+        };
         let conn = shared.next_conn();
+        let activity = Arc::new(Activity::new(shared.now()));
+        shared.lock_conns().push(Slot {
+            conn,
+            service,
+            stream: handle,
+            activity: Arc::clone(&activity),
+        });
         let spawned = std::thread::Builder::new()
             .name(format!("{service}-{conn}"))
             .spawn({
                 let shared = Arc::clone(shared);
-                let active = Arc::clone(&active);
                 move || {
-                    serve(stream, conn, peer.to_string(), &shared);
-                    active.fetch_sub(1, Ordering::SeqCst);
+                    serve(stream, conn, peer.to_string(), &shared, &activity);
                 }
             });
         if let Err(e) = spawned {
-            active.fetch_sub(1, Ordering::SeqCst);
+            shared.lock_conns().retain(|s| s.conn != conn);
             shared.emit(ServerEvent::Note(format!(
                 "{peer}: cannot start a thread: {e}"
             )));
@@ -684,10 +839,58 @@ pub(super) fn accept_each(
     }
 }
 
+/// Whether a newcomer on `service` may be served: fewer than `max` are open, or the one
+/// idle longest had been idle [`EVICT_IDLE`] and has been closed (its thread waited for,
+/// at most [`SHUTDOWN_WAIT`], so the thread bound holds).
+fn make_room(shared: &Shared, service: &'static str, label: &str, max: usize) -> bool {
+    let open = |shared: &Shared| {
+        shared
+            .lock_conns()
+            .iter()
+            .filter(|s| s.service == service)
+            .count()
+    };
+    if open(shared) < max {
+        return true;
+    }
+    let now = shared.now();
+    let evicted = {
+        let conns = shared.lock_conns();
+        let idlest = conns
+            .iter()
+            .filter(|s| s.service == service && s.activity.closed_by().is_none())
+            .max_by_key(|s| s.activity.idle(now));
+        match idlest {
+            Some(s) if s.activity.idle(now) >= EVICT_IDLE => {
+                s.activity
+                    .close_for("evicted: every slot was taken and it was idle longest");
+                let _ = s.stream.shutdown(std::net::Shutdown::Both);
+                Some((s.conn, s.activity.idle(now)))
+            }
+            _ => None,
+        }
+    };
+    let Some((conn, idle)) = evicted else {
+        return false;
+    };
+    shared.emit(ServerEvent::Note(format!(
+        "conn {conn}: {label}connection evicted for a new one after {:.1} s idle",
+        idle.as_secs_f64()
+    )));
+    let start = std::time::Instant::now();
+    while open(shared) >= max {
+        if start.elapsed() > SHUTDOWN_WAIT {
+            return false;
+        }
+        std::thread::sleep(Duration::from_millis(1));
+    }
+    true
+}
+
 /// What one connection counted.
-struct Counts {
-    rx: u64,
-    tx: u64,
+pub(crate) struct Counts {
+    pub(crate) rx: u64,
+    pub(crate) tx: u64,
 }
 
 fn send(stream: &mut TcpStream, reply: &Reply, counts: &mut Counts) -> bool {
@@ -702,7 +905,7 @@ fn send(stream: &mut TcpStream, reply: &Reply, counts: &mut Counts) -> bool {
     ok
 }
 
-fn serve(mut stream: TcpStream, conn: u64, peer: String, shared: &Shared) {
+fn serve(mut stream: TcpStream, conn: u64, peer: String, shared: &Shared, activity: &Activity) {
     let _ = stream.set_nodelay(true);
     let _ = stream.set_write_timeout(Some(WRITE_TIMEOUT));
     shared.emit(ServerEvent::Connect {
@@ -711,13 +914,43 @@ fn serve(mut stream: TcpStream, conn: u64, peer: String, shared: &Shared) {
         peer,
     });
     let mut counts = Counts { rx: 0, tx: 0 };
-    let reason = session(&mut stream, conn, shared, &mut counts);
+    let reason = session(&mut stream, conn, shared, activity, &mut counts);
+    let shut_down = reason == SHUT_DOWN;
+    if shut_down {
+        shared.close_all_for_shutdown(conn);
+    }
+    closed(
+        shared,
+        conn,
+        activity.closed_by().unwrap_or(reason),
+        &counts,
+    );
+    if shut_down {
+        shared.stop.store(true, Ordering::SeqCst);
+        shared.emit(ServerEvent::Shutdown);
+    }
+}
+
+/// How a dashboard connection that said `shutdown` ends.
+const SHUT_DOWN: &str = "shutdown";
+
+/// A dashboard or interpreter connection has ended: its slot is freed, its close said.
+pub(crate) fn closed(shared: &Shared, conn: u64, reason: &str, counts: &Counts) {
+    shared.lock_conns().retain(|s| s.conn != conn);
     shared.emit(ServerEvent::Close {
         conn,
         reason: reason.to_string(),
         rx: counts.rx,
         tx: counts.tx,
     });
+}
+
+/// A reply of one line that keeps the connection open.
+fn one_line(text: &str) -> Reply {
+    Reply {
+        lines: vec![text.to_string()],
+        close: false,
+    }
 }
 
 /// Answer one command line; `Err(reason)` when the connection ends.
@@ -739,10 +972,19 @@ fn answer(
         let c = cell.controller();
         let reply = if too_long {
             dashboard.line_too_long(text)
+        } else if !shared.allow_shutdown && text.trim().eq_ignore_ascii_case("shutdown") {
+            // Refused as the controller refuses it: in local control its one reply to
+            // every command that acts, else the failure UR's commands answer.
+            if c.config().remote_control_enabled && !c.remote_control() {
+                one_line(crate::dashboard::LOCAL_CONTROL)
+            } else {
+                one_line("Failed to execute: shutdown")
+            }
         } else {
             dashboard.handle_line(c, text, now)
         };
-        (reply, c.is_shut_down())
+        let shut_down = c.is_shut_down() && !shared.shutting_down.swap(true, Ordering::SeqCst);
+        (reply, shut_down)
     };
     let shown = if too_long {
         format!("{}...", text.chars().take(40).collect::<String>())
@@ -759,9 +1001,7 @@ fn answer(
     }
     if shut_down {
         let _ = stream.shutdown(std::net::Shutdown::Both);
-        shared.stop.store(true, Ordering::SeqCst);
-        shared.emit(ServerEvent::Shutdown);
-        return Err("shutdown");
+        return Err(SHUT_DOWN);
     }
     if reply.close {
         return Err("quit");
@@ -773,6 +1013,7 @@ fn session(
     stream: &mut TcpStream,
     conn: u64,
     shared: &Shared,
+    activity: &Activity,
     counts: &mut Counts,
 ) -> &'static str {
     if !send(stream, &Dashboard::greeting(), counts) {
@@ -798,6 +1039,7 @@ fn session(
         if shared.stopped() {
             return "the server stopped";
         }
+        activity.touch(shared);
         counts.rx += n as u64;
         let mut rest = &chunk[..n];
         while !rest.is_empty() {

@@ -13,9 +13,31 @@
 //! (realtime, secondary, RTDE data: packages are skipped, and after [`MAX_STALL`] of
 //! taking nothing it is dropped), or at most [`MAX_QUEUE`] bytes and one message
 //! before it is dropped (what it must get: the primary's robot messages and version
-//! message, RTDE replies). What a client sends is read [`READ_CHUNK`] bytes at a time into one buffer
-//! of the loop, at most [`MAX_READS_PER_STEP`] reads a step, and kept only as far as its
-//! intake or RTDE session bounds allow.
+//! message, RTDE replies).
+//!
+//! The work of one step is budgeted, so that no client's flood holds the loop past its
+//! step: a client's bytes are read at most once a step, at most its fair share of
+//! [`STEP_READ_BUDGET`] (at least [`MIN_READ_SHARE`]), and kept only as far as its
+//! intake or RTDE session bounds allow; the script items they complete (lines,
+//! commands, programs) wait in the client's queue and at most its fair share of
+//! [`STEP_ITEM_BUDGET`] (at least [`MIN_ITEM_SHARE`]) of them are done a step, the
+//! client not read again until its queue is empty, and at most [`STEP_START_BUDGET`]
+//! programs of all clients start a step (the clients take turns being first). Within one step's items of one
+//! client only the last program (or bare line) starts, as the others would be stopped
+//! before their first step, and only the last `set speed` is applied; of one step's
+//! RTDE input packages of one recipe only the last is applied. A client's RTDE data
+//! packages are made within its fair share of [`STEP_OUTPUT_BUDGET`] (at least
+//! [`MIN_OUTPUT_SHARE`]), and not at all while its queue is past [`MAX_BACKLOG`]. The
+//! fair shares are over the clients that sent something the step before (reads), over
+//! the clients (items), over the RTDE clients (output). Events are
+//! reported at most [`MAX_EVENTS_PER_INTERVAL`] per client (and for the running
+//! program) per [`EVENT_INTERVAL`]; the others are counted and reported as one
+//! [`ServerEvent::Suppressed`](super::ServerEvent::Suppressed) at the interval's end.
+//!
+//! When [`MAX_CLIENTS`] are connected, a newcomer evicts the longest idle client if it
+//! has been idle at least [`EVICT_IDLE`](super::EVICT_IDLE): idle means no byte received
+//! from it and no byte written to it (taken by it). A reader that takes its packages is
+//! active; a socket that neither sends nor reads is idle.
 
 use std::collections::VecDeque;
 use std::io::{ErrorKind, Read, Write};
@@ -26,11 +48,11 @@ use std::time::Duration;
 use urscript_interp::drive::{connect_stream, describe_connect_error, Activity, Driver, Options};
 use urscript_interp::{Event as ProgramEvent, MessageKind};
 
-use super::{ServerEvent as Event, Shared};
+use super::{ServerEvent as Event, Shared, EVICT_IDLE};
 use crate::primary::{self, RobotMessage};
 use crate::realtime;
 use crate::rtde::{InputRegistry, RtdeEvent, RtdeSession};
-use crate::script_intake::{Command, Intake, ScriptIntake};
+use crate::script_intake::{Command, Intake, IntakeError, ScriptIntake};
 use crate::{CellEvent, Ended, Status, Submitted};
 
 /// Clients of the streaming interfaces served at once (all four together); more are
@@ -59,11 +81,50 @@ pub const READ_CHUNK: usize = 64 * 1024;
 /// dashboard. More wait their turn (at most one per program thread); those of a program
 /// that ended are dropped. Eight is more than programs open at once.
 pub const MAX_CONNECTING: usize = 8;
-/// Reads of one client in one step, at most: 1 MiB a step (500 MiB/s at 2 ms steps) is
-/// more than any client sends, and a peer that floods faster than the loop reads cannot
-/// keep the loop reading instead of stepping. The rest waits in the kernel for the next
-/// step.
-pub const MAX_READS_PER_STEP: usize = 16;
+/// Bytes read from the stream clients in one step, each client reading at most its
+/// fair share (this over the number of clients that sent something the step before, at
+/// least [`MIN_READ_SHARE`]) in one read: 2 MB/s at 2 ms steps (0.5 MB/s at CB3's
+/// 8 ms), more than clients send (a 100 KiB driver script comes in 50 ms, the largest
+/// program, 4 MiB, in two seconds), while a flood of small RTDE packages or script
+/// lines cannot keep the loop parsing instead of stepping (a slow host's debug build
+/// included). The rest waits in the kernel for the next step.
+pub const STEP_READ_BUDGET: usize = 4 * 1024;
+/// The least a client may read in one step however many clients send: 512 bytes, 256
+/// KB/s at 2 ms steps, more than a client streaming a large RTDE input recipe at 500 Hz
+/// sends; with [`MAX_CLIENTS`] flooding the loop reads at most 32 KiB a step.
+pub const MIN_READ_SHARE: usize = 512;
+/// Bytes of RTDE data packages made for the RTDE clients in one step, each client's
+/// fair share this over their number, at least [`MIN_OUTPUT_SHARE`]: a client whose
+/// packages of one step took more than its share gets none until its share has paid
+/// for them (it sees a gap, as a client that falls behind does). 128 KiB a step is
+/// 64 MB/s at 2 ms steps, ten times what one client of the largest recipe at 500 Hz
+/// takes, while many clients of many large recipes cannot keep the loop encoding.
+pub const STEP_OUTPUT_BUDGET: usize = 128 * 1024;
+/// The least share of [`STEP_OUTPUT_BUDGET`] an RTDE client gets a step: 1 KiB, a
+/// recipe of some 100 doubles every step.
+pub const MIN_OUTPUT_SHARE: usize = 1024;
+/// Script items (lines, commands, programs) of all stream clients done in one step,
+/// each client doing at most its fair share (this over the number of clients, at least
+/// [`MIN_ITEM_SHARE`]); the others wait in its queue, which holds at most what one read
+/// completed. 64 a step is 32 000 a second at 2 ms steps, while at most one program
+/// per client a step starts.
+pub const STEP_ITEM_BUDGET: usize = 64;
+/// The least number of script items a client may have done in one step.
+pub const MIN_ITEM_SHARE: usize = 2;
+/// Programs (and secondary programs) of the stream clients compiled and started in one
+/// step, all clients together: 1000 a second at 2 ms steps, more than a controller
+/// compiles, while many clients' floods of lines cannot keep the loop compiling. A
+/// program past it waits in its client's queue for the next step; the clients take
+/// turns being first.
+pub const STEP_START_BUDGET: usize = 2;
+/// The interval over which events are counted for [`MAX_EVENTS_PER_INTERVAL`].
+pub const EVENT_INTERVAL: Duration = Duration::from_secs(1);
+/// Events reported per client (and for the running program: its messages, socket calls
+/// and bytes) per [`EVENT_INTERVAL`]; the others are counted and reported as one
+/// [`ServerEvent::Suppressed`](super::ServerEvent::Suppressed). 5000 a second is ten a
+/// step at 2 ms: a client or program that speaks every step is reported in full, while
+/// a flood costs the log (and whoever reads it) 5000 lines a second, not a million.
+pub const MAX_EVENTS_PER_INTERVAL: u64 = 5000;
 
 /// Which interface a client is on.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -98,6 +159,61 @@ struct Client {
     /// Controller time of the last flush that wrote something (or found nothing to
     /// write).
     last_write: Duration,
+    /// Controller time of the last byte received from it or written to it.
+    last_active: Duration,
+    /// Script items read and not done yet (at most what one read completed).
+    pending: VecDeque<Result<Intake, IntakeError>>,
+    /// Its events this interval.
+    events: EventBudget,
+    /// Bytes of RTDE data packages it may still be given (its share of
+    /// [`STEP_OUTPUT_BUDGET`] each step, less what it was given; at most one share).
+    credit: i64,
+}
+
+/// Events reported in the current [`EVENT_INTERVAL`] and those suppressed.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct EventBudget {
+    since: Duration,
+    reported: u64,
+    suppressed: u64,
+}
+
+impl EventBudget {
+    pub(crate) fn new(now: Duration) -> Self {
+        EventBudget {
+            since: now,
+            reported: 0,
+            suppressed: 0,
+        }
+    }
+
+    /// Whether one more event may be reported now (else it is counted as suppressed).
+    pub(crate) fn allow(&mut self) -> bool {
+        if self.reported < MAX_EVENTS_PER_INTERVAL {
+            self.reported += 1;
+            true
+        } else {
+            self.suppressed += 1;
+            false
+        }
+    }
+
+    /// Counts events not reported for another reason (superseded within a step).
+    fn skip(&mut self, n: u64) {
+        self.suppressed += n;
+    }
+
+    /// At an interval's end: the count of events suppressed in it, and its length.
+    pub(crate) fn roll(&mut self, now: Duration) -> Option<(u64, Duration)> {
+        let took = now.saturating_sub(self.since);
+        if took < EVENT_INTERVAL {
+            return None;
+        }
+        let suppressed = std::mem::take(&mut self.suppressed);
+        self.since = now;
+        self.reported = 0;
+        (suppressed > 0).then_some((suppressed, took))
+    }
 }
 
 impl Client {
@@ -141,6 +257,9 @@ impl Client {
         if written > 0 || self.queue.is_empty() {
             self.last_write = now;
         }
+        if written > 0 {
+            self.last_active = now;
+        }
     }
 }
 
@@ -172,6 +291,10 @@ pub(crate) fn run(shared: &Arc<Shared>, listeners: Listeners) {
         state_key: None,
         buf: vec![0u8; READ_CHUNK],
         frame: Vec::new(),
+        program_events: EventBudget::new(shared.now()),
+        senders: 0,
+        starts_left: 0,
+        turn: 0,
     };
     let listeners = [
         (listeners.primary, Service::Primary),
@@ -207,12 +330,24 @@ pub(crate) fn run(shared: &Arc<Shared>, listeners: Listeners) {
                 lp.accept(shared, l, *service);
             }
         }
-        lp.read_clients(shared);
+        lp.read_clients(shared, tick);
         lp.step(shared, tick);
         for c in &mut lp.clients {
             c.flush(tick);
         }
         lp.drop_gone(shared);
+        lp.report_suppressed(shared, tick);
+        if shared.shutting_down() {
+            // The controller shut down: the step above ended its program; every
+            // client is closed, then the loop ends.
+            for c in &mut lp.clients {
+                c.gone = Some("the controller shut down");
+            }
+            lp.drop_gone(shared);
+            lp.driver.close_all();
+            shared.loop_ended();
+            return;
+        }
         last = Some(tick);
         let next = tick + step;
         let now = shared.now();
@@ -320,6 +455,14 @@ struct Loop {
     state_key: Option<(crate::RobotMode, crate::SafetyStatus, crate::ProgramState)>,
     buf: Vec<u8>,
     frame: Vec<u8>,
+    /// The running program's events (messages, socket calls and bytes) this interval.
+    program_events: EventBudget,
+    /// Clients that sent something in the last step (the read budget's shares).
+    senders: usize,
+    /// Programs that may still start this step ([`STEP_START_BUDGET`]).
+    starts_left: usize,
+    /// Counts the steps: the client served first.
+    turn: usize,
 }
 
 impl Loop {
@@ -330,7 +473,8 @@ impl Loop {
                 Err(e) if e.kind() == ErrorKind::Interrupted => continue,
                 Err(_) => return, // WouldBlock, or out of descriptors: next round
             };
-            if self.clients.len() >= MAX_CLIENTS {
+            let now = shared.now();
+            if self.clients.len() >= MAX_CLIENTS && !self.evict_idlest(shared, now) {
                 shared.emit(Event::Note(format!(
                     "{peer}: {} refused, {MAX_CLIENTS} stream clients are already connected",
                     service.name()
@@ -356,7 +500,11 @@ impl Loop {
                 rx: 0,
                 tx: 0,
                 gone: None,
-                last_write: shared.now(),
+                last_write: now,
+                last_active: now,
+                pending: VecDeque::new(),
+                events: EventBudget::new(now),
+                credit: 0,
             };
             if matches!(service, Service::Primary | Service::Secondary) {
                 self.frame.clear();
@@ -367,92 +515,196 @@ impl Loop {
         }
     }
 
-    fn read_clients(&mut self, shared: &Shared) {
+    /// Every slot is taken: closes the client idle longest, if it has been idle at
+    /// least [`EVICT_IDLE`]; false if none may go.
+    fn evict_idlest(&mut self, shared: &Shared, now: Duration) -> bool {
+        let idlest = self
+            .clients
+            .iter()
+            .enumerate()
+            .filter(|(_, c)| c.gone.is_none())
+            .min_by_key(|(_, c)| c.last_active)
+            .map(|(i, c)| (i, now.saturating_sub(c.last_active)));
+        match idlest {
+            Some((i, idle)) if idle >= EVICT_IDLE => {
+                self.clients[i].gone =
+                    Some("evicted: every slot was taken and it was idle longest");
+                shared.emit(Event::Note(format!(
+                    "conn {}: evicted for a new client after {:.1} s idle",
+                    self.clients[i].conn,
+                    idle.as_secs_f64()
+                )));
+                self.drop_gone(shared);
+                true
+            }
+            _ => false,
+        }
+    }
+
+    /// Each client's turn: its waiting script items first (its share of
+    /// [`STEP_ITEM_BUDGET`]); with none waiting, one read of at most its share of
+    /// [`STEP_READ_BUDGET`].
+    fn read_clients(&mut self, shared: &Shared, now: Duration) {
+        let n = self.senders.max(1);
+        self.senders = 0;
+        let read_share = (STEP_READ_BUDGET / n).clamp(MIN_READ_SHARE, READ_CHUNK);
+        let item_share = (STEP_ITEM_BUDGET / n).max(MIN_ITEM_SHARE);
         // The buffer is lent out while `received` (which needs `&mut self`) runs: no
         // copy of the bytes per read.
         let mut buf = std::mem::take(&mut self.buf);
-        for i in 0..self.clients.len() {
-            for _ in 0..MAX_READS_PER_STEP {
-                let c = &mut self.clients[i];
-                if c.gone.is_some() {
-                    break;
-                }
-                let n = match c.stream.read(&mut buf) {
-                    Ok(0) => {
-                        c.gone = Some("client closed");
-                        break;
-                    }
-                    Ok(n) => n,
-                    Err(e) if e.kind() == ErrorKind::Interrupted => continue,
-                    Err(e) if e.kind() == ErrorKind::WouldBlock => break,
+        self.starts_left = STEP_START_BUDGET;
+        let count = self.clients.len();
+        self.turn = self.turn.wrapping_add(1);
+        let first = self.turn % count.max(1);
+        for i in (first..count).chain(0..first) {
+            if !self.clients[i].pending.is_empty() {
+                self.do_items(shared, i, item_share, now);
+                continue;
+            }
+            let c = &mut self.clients[i];
+            if c.gone.is_some() {
+                continue;
+            }
+            let Some(into) = buf.get_mut(..read_share) else {
+                continue;
+            };
+            let n = loop {
+                match c.stream.read(into) {
+                    Ok(n) => break n,
+                    Err(e) if e.kind() == ErrorKind::Interrupted => {}
+                    Err(e) if e.kind() == ErrorKind::WouldBlock => break usize::MAX,
                     Err(_) => {
                         c.gone = Some("read failed");
-                        break;
+                        break usize::MAX;
                     }
-                };
-                c.rx += n as u64;
-                self.received(shared, i, &buf[..n]);
-                if n < buf.len() {
-                    break;
                 }
+            };
+            if n == 0 {
+                c.gone = Some("client closed");
             }
+            if n == 0 || n == usize::MAX {
+                continue;
+            }
+            c.rx += n as u64;
+            c.last_active = now;
+            self.senders += 1;
+            if let Some(bytes) = buf.get(..n) {
+                self.received(shared, i, bytes, now);
+            }
+            self.do_items(shared, i, item_share, now);
         }
         self.buf = buf;
     }
 
-    /// Bytes from client `i`.
-    fn received(&mut self, shared: &Shared, i: usize, bytes: &[u8]) {
-        let now = shared.now();
-        let (conn, service) = (self.clients[i].conn, self.clients[i].service);
-        if service == Service::Rtde {
-            let c = &mut self.clients[i];
-            let Some(session) = c.rtde.as_mut() else {
-                return;
-            };
-            if let Err(e) = session.handle_received(&mut self.registry, bytes) {
-                if e.is_fatal() {
-                    c.gone = Some("RTDE protocol error");
-                }
+    /// Bytes from client `i`: an RTDE session's packets handled, a script client's
+    /// items queued.
+    fn received(&mut self, shared: &Shared, i: usize, bytes: &[u8], now: Duration) {
+        let c = &mut self.clients[i];
+        let (conn, service) = (c.conn, c.service);
+        let Some(session) = c.rtde.as_mut() else {
+            c.pending.extend(c.intake.push(bytes));
+            return;
+        };
+        if let Err(e) = session.handle_received(&mut self.registry, bytes) {
+            if e.is_fatal() {
+                c.gone = Some("RTDE protocol error");
             }
-            let mut inputs = Vec::new();
-            while let Some(e) = session.poll_event() {
-                match e {
-                    RtdeEvent::Inputs { inputs: set, .. } => inputs.push(set),
-                    other => {
+        }
+        // Of one recipe's input packages only the last matters.
+        let mut inputs: Vec<(u8, crate::Inputs)> = Vec::new();
+        while let Some(e) = session.poll_event() {
+            match e {
+                RtdeEvent::Inputs {
+                    recipe,
+                    inputs: set,
+                    ..
+                } => match inputs.iter_mut().find(|(r, _)| *r == recipe) {
+                    Some(slot) => slot.1 = set,
+                    None => inputs.push((recipe, set)),
+                },
+                other => {
+                    if c.events.allow() {
                         let (what, text) = rtde_event(&other);
                         shared.emit(client_event(conn, service, what, text));
                     }
                 }
             }
-            let out = session.take_outbox();
-            c.push(&out);
-            if !inputs.is_empty() {
-                let mut cell = shared.lock_cell();
-                for set in &inputs {
-                    cell.apply(set);
-                }
+        }
+        let out = session.take_outbox();
+        c.push(&out);
+        let _ = now;
+        if !inputs.is_empty() {
+            let mut cell = shared.lock_cell();
+            for (_, set) in &inputs {
+                cell.apply(set);
             }
+        }
+    }
+
+    /// Does at most `max` of client `i`'s waiting script items: of them, only the last
+    /// program or line starts and only the last `set speed` is applied (the others are
+    /// superseded within the step and counted as suppressed events).
+    fn do_items(&mut self, shared: &Shared, i: usize, max: usize, now: Duration) {
+        let c = &mut self.clients[i];
+        let starts = |it: &Result<Intake, IntakeError>| {
+            matches!(it, Ok(Intake::Program { .. } | Intake::Line(_)))
+        };
+        let secondary =
+            |it: &Result<Intake, IntakeError>| matches!(it, Ok(Intake::Secondary { .. }));
+        let mut k = c.pending.len().min(max);
+        // At most one secondary program a batch; its programs within the step's budget
+        // (the rest wait for the next step).
+        if let Some(s) = c.pending.iter().take(k).position(secondary) {
+            k = s + 1;
+        }
+        let head = || c.pending.iter().take(k);
+        let mut compiles =
+            usize::from(head().any(starts)) + head().filter(|it| secondary(it)).count();
+        if compiles > self.starts_left {
+            k = head()
+                .position(|it| starts(it) || secondary(it))
+                .unwrap_or(0);
+            compiles = 0;
+        }
+        self.starts_left -= compiles;
+        if k == 0 {
             return;
         }
-        let items = self.clients[i].intake.push(bytes);
-        for item in items {
+        let batch: Vec<_> = c.pending.drain(..k).collect();
+        let speed = |it: &Result<Intake, IntakeError>| {
+            matches!(it, Ok(Intake::Command(Command::SetSpeed(_))))
+        };
+        let last_start = batch.iter().rposition(starts);
+        let last_speed = batch.iter().rposition(speed);
+        let (conn, service) = (c.conn, c.service);
+        for (j, item) in batch.into_iter().enumerate() {
+            if (starts(&item) && Some(j) != last_start) || (speed(&item) && Some(j) != last_speed) {
+                c.events.skip(1);
+                continue;
+            }
+            let report = c.events.allow();
+            let emit = |what: &'static str, text: &dyn Fn() -> String| {
+                if report {
+                    shared.emit(client_event(conn, service, what, text()));
+                }
+            };
             match item {
                 Ok(Intake::Program { name, source }) => {
-                    shared.emit(client_event(conn, service, "program", name));
+                    emit("program", &|| name.clone());
                     shared.lock_cell().submit(Submitted::Program(source), now);
                 }
                 Ok(Intake::Secondary { name, source }) => {
-                    shared.emit(client_event(conn, service, "secondary", name));
+                    emit("secondary", &|| name.clone());
                     shared.lock_cell().submit(Submitted::Secondary(source), now);
                 }
                 Ok(Intake::Line(line)) => {
-                    shared.emit(client_event(conn, service, "line", line.clone()));
+                    emit("line", &|| line.clone());
                     shared
                         .lock_cell()
                         .submit(Submitted::Program(format!("{line}\n")), now);
                 }
                 Ok(Intake::Command(cmd)) => {
-                    shared.emit(client_event(conn, service, "command", format!("{cmd:?}")));
+                    emit("command", &|| format!("{cmd:?}"));
                     let mut cell = shared.lock_cell();
                     let c = cell.controller();
                     let _ = match cmd {
@@ -470,7 +722,7 @@ impl Loop {
                         }
                     };
                 }
-                Err(e) => shared.emit(client_event(conn, service, "refused", e.to_string())),
+                Err(e) => emit("refused", &|| e.to_string()),
             }
         }
     }
@@ -479,20 +731,30 @@ impl Loop {
     /// stream gets what is due.
     fn step(&mut self, shared: &Arc<Shared>, now: Duration) {
         let mut messages: Vec<RobotMessage> = Vec::new();
+        // The step's events, reported once the cell is unlocked (at most the cell's
+        // MAX_EVENTS and what the program's sockets did in one step).
+        let deferred = std::cell::RefCell::new(Vec::new());
         let status = {
             let mut cell = shared.lock_cell();
             cell.advance(now);
-            let emit = |e: Event| shared.emit(e);
+            let emit = |e: Event| deferred.borrow_mut().push(e);
+            // The program's messages, calls and socket bytes, within their budget.
+            let budget = std::cell::RefCell::new(&mut self.program_events);
+            let emit_program = |e: Event| {
+                if budget.borrow_mut().allow() {
+                    deferred.borrow_mut().push(e);
+                }
+            };
             while let Some(event) = cell.poll_event() {
                 match event {
                     CellEvent::Program(e) => {
                         match &e {
                             ProgramEvent::Message(m) => {
-                                emit(Event::Message(m.clone()));
+                                emit_program(Event::Message(m.clone()));
                                 messages.push(robot_message(m));
                             }
                             ProgramEvent::Call(c) => {
-                                emit(Event::Call(c.clone()));
+                                emit_program(Event::Call(c.clone()));
                             }
                             ProgramEvent::MoveStart(m) => emit(Event::MoveStart(m.clone())),
                             ProgramEvent::MoveEnd(m) => emit(Event::MoveEnd(m.clone())),
@@ -516,7 +778,9 @@ impl Loop {
                                     });
                                 }
                             }
-                            Some(m) => self.driver.handle_event(m, e, &mut |a| show(&emit, a)),
+                            Some(m) => self
+                                .driver
+                                .handle_event(m, e, &mut |a| show(&emit_program, a)),
                             // The program has ended: what it sent last still goes
                             // out, then its sockets close.
                             None => self.driver.handle_event_after_end(e),
@@ -596,7 +860,7 @@ impl Loop {
             }
             self.connects.service(&mut self.driver, cell.machine_mut());
             if let Some(m) = cell.machine_mut() {
-                self.driver.poll_sockets(m, &mut |a| show(&emit, a));
+                self.driver.poll_sockets(m, &mut |a| show(&emit_program, a));
             }
             let mut status = cell.status();
             // The step's time (the dashboard's thread may have advanced the cell to the
@@ -604,6 +868,9 @@ impl Loop {
             status.time = now.as_secs_f64();
             status
         };
+        for e in deferred.into_inner() {
+            shared.emit(e);
+        }
         // A change of the safety status reaches the primary clients as the controller's
         // safety mode message; a protective stop also as an error code of level
         // WARNING (2), which UR's client library treats as a failed script unless told
@@ -693,17 +960,54 @@ impl Loop {
             }
         }
         // RTDE: each session at its own frequency (the session skips packages itself
-        // while its outbox is full).
+        // while its outbox is full), within its share of the step's output budget.
+        let rtde = self
+            .clients
+            .iter()
+            .filter(|c| c.service == Service::Rtde)
+            .count()
+            .max(1);
+        let share =
+            i64::try_from((STEP_OUTPUT_BUDGET / rtde).max(MIN_OUTPUT_SHARE)).unwrap_or(i64::MAX);
         for c in self
             .clients
             .iter_mut()
             .filter(|c| c.service == Service::Rtde)
         {
-            if let Some(s) = c.rtde.as_mut() {
+            c.credit = c.credit.saturating_add(share).min(share);
+            if c.queue.len() > MAX_BACKLOG || c.credit <= 0 {
+                // The package would be skipped, or the client had its share: it is
+                // not even made.
+                c.offer(&[], now);
+            } else if let Some(s) = c.rtde.as_mut() {
                 s.on_step(status, now);
                 let out = s.take_outbox();
+                c.credit = c
+                    .credit
+                    .saturating_sub(i64::try_from(out.len()).unwrap_or(i64::MAX));
                 c.offer(&out, now);
             }
+        }
+    }
+
+    /// At the end of each client's (and the program's) event interval: how many of its
+    /// events were not reported.
+    fn report_suppressed(&mut self, shared: &Shared, now: Duration) {
+        for c in &mut self.clients {
+            if let Some((count, interval)) = c.events.roll(now) {
+                shared.emit(Event::Suppressed {
+                    conn: Some(c.conn),
+                    count,
+                    interval,
+                });
+            }
+        }
+        if let Some((count, interval)) = self.program_events.roll(now) {
+            shared.emit(Event::Suppressed {
+                conn: None,
+                count,
+                interval,
+            });
         }
     }
 
@@ -712,6 +1016,13 @@ impl Loop {
         while i < self.clients.len() {
             if let Some(reason) = self.clients[i].gone {
                 let mut c = self.clients.swap_remove(i);
+                if c.events.suppressed > 0 {
+                    shared.emit(Event::Suppressed {
+                        conn: Some(c.conn),
+                        count: c.events.suppressed,
+                        interval: shared.now().saturating_sub(c.events.since),
+                    });
+                }
                 if let Some(s) = c.rtde.as_mut() {
                     s.close(&mut self.registry);
                 }

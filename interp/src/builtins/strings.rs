@@ -214,7 +214,7 @@ fn size(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
 /// The longest list `make_list` makes (a guard, not the controller's limit).
 const MAX_LIST_LEN: i32 = 1 << 20;
 
-fn make_list(_: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+fn make_list(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
     let n = a.int(0)?;
     let cap = if a.is_absent(2) { n } else { a.int(2)? };
     if !(0..=MAX_LIST_LEN).contains(&n) || cap < n {
@@ -227,5 +227,9 @@ fn make_list(_: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
             "`make_list`: a list of lists is a matrix, not made by make_list",
         ));
     }
-    Ok(Out::Value(Value::List(vec![a.v[1].clone(); n as usize])))
+    // The list's elements, each a copy of the value, counted before they are made.
+    let n = n as usize;
+    let bytes = n.saturating_mul(a.v[1].held_bytes());
+    c.reserve(bytes)?;
+    Ok(Out::Value(Value::List(vec![a.v[1].clone(); n])))
 }

@@ -66,6 +66,7 @@ impl Harness {
                 self.m.handle_received(&name, &bytes);
             }
             self.m.run_until(self.now);
+            self.audit_memory();
             while let Some(e) = self.m.poll_event() {
                 let replies = match e {
                     Event::Connect {
@@ -118,6 +119,23 @@ impl Harness {
             }
             self.now += self.step;
         }
+    }
+
+    /// The machine's count of the program's memory is never below what it holds (a
+    /// recount): the budget can only err on the safe side. Checked after every step of
+    /// every program the harness runs.
+    pub fn audit_memory(&mut self) {
+        if self.m.state() != &State::Running {
+            return;
+        }
+        let (counted, recounted) = self.m.memory_audit();
+        if std::env::var_os("AUDIT_DEBUG").is_some() && counted != recounted {
+            eprintln!("memory audit: counted {counted}, recounted {recounted}");
+        }
+        assert!(
+            counted >= recounted,
+            "memory count {counted} below the {recounted} bytes the program holds"
+        );
     }
 
     /// Runs with no server answering.

@@ -2,10 +2,18 @@
 //! server is the library's ([`urscript_controller::net::Server`]): this module reads the
 //! options, prints its events (human lines or `--json`), and takes the operator's
 //! commands on standard input.
+//!
+//! The server's threads (its real-time loop among them) never wait for standard output:
+//! each event is queued (at most [`OUTPUT_QUEUE`]) for a writer thread; when the queue
+//! is full (nobody reads the output) the event is dropped and counted, and a `dropped`
+//! event says how many once output resumes. A dashboard `shutdown` ends the process
+//! with status 0 after the `stopped` event, the last one.
 
 use std::io::{BufRead, Read};
 use std::path::PathBuf;
-use std::sync::mpsc;
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::{mpsc, Arc};
+use std::time::Duration;
 
 use urscript_controller::net::{parse_host, Ports, Profile, Server, ServerEvent, ServerOptions};
 use urscript_controller::{Config, Model, SafetyStatus, MAX_LINE};
@@ -53,7 +61,7 @@ pub struct ControllerOptions {
     pub model: String,
     /// The PolyScope version the controller reports (`5.21.0`, or with its build number
     /// `5.21.0.1234567`; a 3.x version answers CB3's user-role commands).
-    #[arg(long, default_value = "5.21.0")]
+    #[arg(long, default_value = "5.23.0")]
     pub polyscope: String,
     /// The serial number `get serial number` answers.
     #[arg(long, default_value = "20235500001", conflicts_with = "ursim")]
@@ -91,6 +99,62 @@ pub struct ControllerOptions {
     /// `dashboard` (each command and its reply) and `close` for every client.
     #[arg(long)]
     pub json: bool,
+    /// Refuse the dashboard's `shutdown` (answered `Failed to execute: shutdown`, or the
+    /// local-control reply in local control) instead of ending the process; every other
+    /// command is served as before.
+    #[arg(long)]
+    pub no_shutdown: bool,
+}
+
+/// Events waiting for standard output, at most: a second or so of a busy controller's
+/// events (the server reports at most 5000 a second per client and for the program),
+/// while a reader that stopped holds no thread of the server and costs at most this
+/// many events of memory (each bounded by what it reports: a dashboard line 4 KiB, a
+/// client's line 64 KiB, a program's socket bytes as the interpreter bounds them).
+pub const OUTPUT_QUEUE: usize = 4096;
+
+/// How long the `stopped` event may wait for standard output before the process ends
+/// without it.
+const FINAL_WAIT: Duration = Duration::from_secs(2);
+
+/// What the writer thread prints.
+enum Out {
+    Event(Event),
+    /// The last event: printed, then `done` is told.
+    Last(Event, mpsc::Sender<()>),
+}
+
+/// The writer thread: prints each queued event; before the next one after events were
+/// dropped (or after a pause of 100 ms), a `dropped` event with their count.
+fn writer(json: bool, queue: mpsc::Receiver<Out>, dropped: Arc<AtomicU64>) {
+    let say_dropped = || {
+        let count = dropped.swap(0, Ordering::SeqCst);
+        if count > 0 {
+            print(
+                json,
+                &Event::Dropped(report::Dropped {
+                    t: report::now(),
+                    count,
+                }),
+            );
+        }
+    };
+    loop {
+        match queue.recv_timeout(Duration::from_millis(100)) {
+            Ok(Out::Event(e)) => {
+                say_dropped();
+                print(json, &e);
+            }
+            Ok(Out::Last(e, done)) => {
+                say_dropped();
+                print(json, &e);
+                let _ = done.send(());
+                return;
+            }
+            Err(mpsc::RecvTimeoutError::Timeout) => say_dropped(),
+            Err(mpsc::RecvTimeoutError::Disconnected) => return,
+        }
+    }
 }
 
 fn valid_version(v: &str) -> bool {
@@ -177,6 +241,16 @@ fn report_event(e: ServerEvent) -> Option<Event> {
         ServerEvent::Tx { socket, bytes } => Event::tx(&socket, &bytes),
         ServerEvent::Rx { socket, bytes } => Event::rx(&socket, &bytes),
         ServerEvent::Note(text) => Event::note(text),
+        ServerEvent::Suppressed {
+            conn,
+            count,
+            interval,
+        } => Event::Suppressed(report::Suppressed {
+            t,
+            conn,
+            count,
+            seconds: (interval.as_secs_f64() * 1e3).round() / 1e3,
+        }),
         _ => return None,
     })
 }
@@ -244,21 +318,32 @@ pub fn run(opts: ControllerOptions) -> Result<(), String> {
         } else {
             Profile::Robot
         },
+        allow_shutdown: !opts.no_shutdown,
     };
     let json = opts.json;
     let (shutdown_tx, shutdown) = mpsc::channel::<()>();
     let shutdown_tx = std::sync::Mutex::new(shutdown_tx);
+    let (queue, queued) = mpsc::sync_channel::<Out>(OUTPUT_QUEUE);
+    let dropped = Arc::new(AtomicU64::new(0));
+    {
+        let dropped = Arc::clone(&dropped);
+        std::thread::Builder::new()
+            .name("output".into())
+            .spawn(move || writer(json, queued, dropped))
+            .map_err(|e| format!("cannot start the output thread: {e}"))?;
+    }
+    let sink = queue.clone();
     let server = Server::start(options, move |e| {
         if e == ServerEvent::Shutdown {
-            if !json {
-                crate::out::line("shutdown: the controller turned off");
-            }
             let tx = shutdown_tx.lock().unwrap_or_else(|p| p.into_inner());
             let _ = tx.send(());
             return;
         }
         if let Some(event) = report_event(e) {
-            print(json, &event);
+            // Never wait for the output: a full queue drops the event, counted.
+            if sink.try_send(Out::Event(event)).is_err() {
+                dropped.fetch_add(1, Ordering::SeqCst);
+            }
         }
     })
     .map_err(|e| {
@@ -281,6 +366,27 @@ pub fn run(opts: ControllerOptions) -> Result<(), String> {
             .spawn(move || operator(&server, json));
     }
     let _ = shutdown.recv();
+    // The last event, after everything the shutdown closed; the process ends with
+    // status 0 once it is out (or after FINAL_WAIT if standard output is stuck).
+    let (done_tx, done) = mpsc::channel();
+    let last = Event::Stopped(report::Stopped {
+        t: report::now(),
+        reason: "shutdown: a dashboard client said shutdown".into(),
+    });
+    let mut last = Some(Out::Last(last, done_tx));
+    let start = std::time::Instant::now();
+    while let Some(out) = last.take() {
+        match queue.try_send(out) {
+            Ok(()) => {
+                let _ = done.recv_timeout(FINAL_WAIT);
+            }
+            Err(mpsc::TrySendError::Full(out)) if start.elapsed() < FINAL_WAIT => {
+                last = Some(out);
+                std::thread::sleep(Duration::from_millis(1));
+            }
+            Err(_) => {}
+        }
+    }
     std::process::exit(0);
 }
 

@@ -105,8 +105,10 @@ pub struct ListenOptions {
     /// every slot is taken (0: never evict; refuse the new one instead).
     #[arg(long, value_name = "SECONDS", default_value_t = DEFAULT_EVICT_IDLE_SECS)]
     pub evict_idle: f64,
-    /// Connections from one address at once (0: no limit): more from it are accepted and
-    /// closed at once, so one host cannot take every slot.
+    /// Connections from one address at once (0: no limit), so one host cannot take every
+    /// slot: a new one from an address at its limit evicts that address's connection idle
+    /// longest if it has been idle at least --evict-idle seconds, else it is accepted and
+    /// closed at once.
     #[arg(long, default_value_t = DEFAULT_MAX_PER_ADDRESS)]
     pub max_per_address: usize,
     /// Variables the server keeps (names at most 128 bytes); SET of a new name beyond
@@ -538,7 +540,10 @@ async fn run(
                         .get(&ip)
                         .copied()
                         .unwrap_or(0);
-                    if shared.max_per_address > 0 && from_ip >= shared.max_per_address {
+                    // At the address's limit, its connection idle longest may make room.
+                    let at_address_limit =
+                        shared.max_per_address > 0 && from_ip >= shared.max_per_address;
+                    if at_address_limit && !evict_idlest(&shared, Some(ip)) {
                         shared.out.emit(Kind::Warn, Event::RefusedAddress(report::RefusedAddress {
                             t: now(),
                             peer: peer.to_string(),
@@ -549,7 +554,10 @@ async fn run(
                         continue;
                     }
                     let open = shared.open.load(Ordering::Relaxed);
-                    if open >= shared.max_connections && !evict_idlest(&shared) {
+                    if open >= shared.max_connections
+                        && !at_address_limit
+                        && !evict_idlest(&shared, None)
+                    {
                         if refused == 0 {
                             shared.out.emit(Kind::Warn, Event::Refused(report::Refused {
                                 t: now(),
@@ -610,7 +618,7 @@ async fn run(
 
 /// Every slot is taken: evicts the connection idle longest, if it has been idle at least
 /// `evict_idle`, and says so; false if none may go (the new connection is refused).
-fn evict_idlest(shared: &Shared) -> bool {
+fn evict_idlest(shared: &Shared, from: Option<std::net::IpAddr>) -> bool {
     let Some(min_idle) = shared.evict_idle else {
         return false;
     };
@@ -620,6 +628,11 @@ fn evict_idlest(shared: &Shared) -> bool {
         .unwrap_or_else(|p| p.into_inner())
         .values()
         .filter(|c| c.stats.reason().is_none())
+        .filter(|c| {
+            from.is_none_or(|ip| {
+                c.peer.parse::<std::net::SocketAddr>().ok().map(|a| a.ip()) == Some(ip)
+            })
+        })
         .map(|c| {
             let last = *c.stats.last_rx.lock().unwrap_or_else(|p| p.into_inner());
             (last.elapsed(), Arc::clone(c))

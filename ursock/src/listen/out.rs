@@ -411,6 +411,15 @@ pub fn human(event: &Event, show_max: usize) -> Vec<String> {
             "evicted (every slot taken, idle longest: {:.1} s without a byte) to make room",
             e.idle
         )),
+        Event::Suppressed(e) => one(format!(
+            "{} events not reported in {:.1} s (a flood, or superseded within a step)",
+            e.count, e.seconds
+        )),
+        Event::Dropped(e) => one(format!(
+            "{} events not written: standard output did not keep up",
+            e.count
+        )),
+        Event::Stopped(e) => one(format!("stopped: {}", e.reason)),
         Event::Dashboard(e) => std::iter::once(format!("<- {:?}", e.command))
             .chain(e.reply.iter().map(|l| format!("-> {l:?}")))
             .collect(),

@@ -122,6 +122,20 @@ impl Controller {
         }
     }
 
+    /// Every event until the process closes its output (at most [`WAIT`]).
+    pub fn events_to_the_end(&self) -> Vec<serde_json::Value> {
+        let start = Instant::now();
+        let mut all = Vec::new();
+        loop {
+            let left = WAIT.saturating_sub(start.elapsed());
+            match self.events.recv_timeout(left) {
+                Ok(v) => all.push(v),
+                Err(mpsc::RecvTimeoutError::Disconnected) => return all,
+                Err(mpsc::RecvTimeoutError::Timeout) => panic!("the output never ended"),
+            }
+        }
+    }
+
     /// Waits for the first event for which `want` holds.
     pub fn wait_event(
         &self,
