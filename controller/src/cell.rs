@@ -288,6 +288,23 @@ impl Cell {
         }
     }
 
+    /// The operator moves the arm by hand to joints `q` (rad, each within ±2π), as in
+    /// freedrive: while the running program is in `teach_mode()` or `freedrive_mode()`,
+    /// or while no program runs (the operator holds the freedrive button). The arm is at
+    /// rest there; the program and every stream see the new joints at its next step.
+    /// Refused (with the reason) while a program runs outside those modes, or for joints
+    /// outside their range.
+    pub fn move_by_hand(&mut self, q: [f64; 6]) -> Result<(), String> {
+        if self.running.is_some() && !self.arm().hand_guided() {
+            return Err(
+                "the arm moves by hand only in teach or freedrive mode: the running \
+                 program is in neither (teach_mode(), freedrive_mode())"
+                    .to_string(),
+            );
+        }
+        self.arm_mut().move_by_hand(q)
+    }
+
     fn push(&mut self, e: CellEvent) {
         if self.events.len() >= MAX_EVENTS {
             self.events.pop_front();
@@ -522,7 +539,10 @@ impl Cell {
     }
 
     fn run_program(&mut self, now: Duration) {
+        let speed_fraction = self.speed_fraction;
         let Some(r) = &mut self.running else { return };
+        // The speed slider scales the program's motion from the step it changed in.
+        r.machine.arm_mut().speed_fraction = speed_fraction;
         r.machine.run_until(now.saturating_sub(r.origin));
         let mut stopped = false;
         if std::mem::take(&mut r.machine.arm_mut().protective_stop) {
@@ -602,7 +622,9 @@ impl Cell {
                 self.speed_fraction = f.clamp(0.0, 1.0);
             }
         }
+        let speed_fraction = self.speed_fraction;
         let arm = self.arm_mut();
+        arm.speed_fraction = speed_fraction;
         // Each field written counts as an update for the programs' RTDE watchdogs (the
         // registers that exist only: the keys stay RTDE's bounded set of names).
         let (bits, ints, doubles) = (
@@ -759,13 +781,14 @@ impl Cell {
             joint_voltage: if powered { [48.0; 6] } else { [0.0; 6] },
             actual_tcp_pose: pose,
             actual_tcp_speed: arm.tcp_speed,
-            actual_tcp_force: w.tcp_force,
+            actual_tcp_force: arm.measured_tcp_force(&dh),
             target_tcp_pose: pose,
             target_tcp_speed: arm.tcp_speed,
             tcp_offset: arm.tcp,
             tool_accelerometer: [0.0, 0.0, 9.82],
             speed_fraction,
             speed_scaling: speed_fraction,
+            control_mode: arm.control_mode(),
             digital_inputs: bits(&w.digital_in),
             digital_outputs: outputs,
             analog_inputs: [w.analog_in[0], w.analog_in[1]],

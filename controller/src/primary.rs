@@ -35,10 +35,10 @@
 //!
 //! # Values the virtual controller has no source for
 //!
-//! [`Status`] has no joint mode, control mode, tool mode, button state, calibration or
+//! [`Status`] has no joint mode, tool mode, button state, calibration or
 //! configuration limits; the encoders derive or fix them, and say so on each function:
 //! joint and tool modes follow the robot mode ([`joint_mode`]); the control mode is
-//! position (0); the speed slider limit is 1.0; joint limits are ±2π; joint speed limits
+//! [`Status::control_mode`] (1 teach in teach/freedrive mode, 2 force in force mode); the speed slider limit is 1.0; joint limits are ±2π; joint speed limits
 //! are the model's data-sheet ones; the kinematics checksums are a hash of the DH
 //! parameters ([`kinematics_checksum`]).
 //!
@@ -531,7 +531,7 @@ fn encode_package_body(w: &mut W<'_>, s: &Status, layout: Layout, package: Packa
             w.bool(s.program_state == ProgramState::Playing);
             w.bool(s.program_state == ProgramState::Paused);
             w.i8(i8::try_from(s.robot_mode.code()).unwrap_or(-1));
-            w.u8(0); // control mode: position
+            w.u8(s.control_mode); // control mode: 0 position, 1 teach, 2 force
             w.f64(s.speed_fraction);
             w.f64(s.speed_scaling);
             w.f64(1.0); // target speed fraction limit

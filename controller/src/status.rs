@@ -69,6 +69,10 @@ pub struct Status {
     pub speed_fraction: f64,
     /// The speed scaling in effect (0..1, RTDE `speed_scaling`).
     pub speed_scaling: f64,
+    /// The arm's control mode, as primary's robot mode data carries it: 0 position,
+    /// 1 teach (`teach_mode`, `freedrive_mode`, the operator's freedrive), 2 force
+    /// (`force_mode`), 3 torque.
+    pub control_mode: u8,
 
     /// Digital inputs: bits 0-7 standard, 8-15 configurable, 16-17 tool.
     pub digital_inputs: u64,
@@ -165,6 +169,7 @@ impl Default for Status {
             tool_accelerometer: [0.0, 0.0, 9.82],
             speed_fraction: 1.0,
             speed_scaling: 1.0,
+            control_mode: 0,
             digital_inputs: 0,
             digital_outputs: 0,
             analog_inputs: [0.0; 2],

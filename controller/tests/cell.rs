@@ -423,3 +423,93 @@ fn powerdown_ends_the_program_and_powers_the_arm_off() {
         ["Robotmode: POWER_OFF"]
     );
 }
+
+#[test]
+fn the_speed_slider_scales_the_programs_motion() {
+    let (mut cell, _) = ready_cell();
+    cell.apply(&Inputs {
+        speed_slider_fraction: Some(0.5),
+        ..Inputs::default()
+    });
+    let prog = "movej([0.5, -1.2, 0.8, -1.9, 0.3, 0.4], t=1.5)\ntextmsg(\"done\")\n";
+    cell.submit(Submitted::Program(prog.into()), ms(2000));
+    cell.advance(ms(2000 + 1600));
+    assert!(
+        texts(&events(&mut cell)).is_empty(),
+        "at half speed a 1.5 s move is not over at 1.6 s"
+    );
+    let s = cell.status();
+    assert_eq!((s.speed_fraction, s.speed_scaling), (0.5, 0.5));
+    assert!(s.actual_qd.iter().any(|v| *v != 0.0), "still moving");
+    cell.advance(ms(2000 + 2990));
+    assert!(texts(&events(&mut cell)).is_empty(), "3.0 s at half speed");
+    cell.advance(ms(2000 + 3010));
+    assert_eq!(texts(&events(&mut cell)), ["done"]);
+    assert_eq!(cell.status().actual_q, [0.5, -1.2, 0.8, -1.9, 0.3, 0.4]);
+}
+
+#[test]
+fn force_mode_against_a_surface_shows_in_the_tcp_force_and_the_control_mode() {
+    let (mut cell, _) = ready_cell();
+    let z = cell.status().actual_tcp_pose[2];
+    cell.arm_mut()
+        .world
+        .set(&format!("contact_plane=p[0, 0, {}, 0, 0, 0]", z - 0.03))
+        .unwrap();
+    cell.arm_mut().world.set("contact_stiffness=10000").unwrap();
+    let prog = "force_mode(p[0, 0, 0, 0, 0, 0], [0, 0, 1, 0, 0, 0], [0, 0, -20, 0, 0, 0], 2, [0.1, 0.1, 0.1, 1, 1, 1])\nsleep(2)\nend_force_mode()\n";
+    cell.submit(Submitted::Program(prog.into()), ms(2000));
+    cell.advance(ms(2000 + 100));
+    let s = cell.status();
+    assert_eq!(s.control_mode, 2, "force");
+    assert_eq!(
+        s.actual_tcp_force, [0.0; 6],
+        "free space: the sensor reads nothing"
+    );
+    assert!(
+        (s.actual_tcp_pose[2] - (z - 0.01)).abs() < 0.001,
+        "0.1 m/s down"
+    );
+    cell.advance(ms(2000 + 1000));
+    let s = cell.status();
+    // 30 mm to the surface, then 20 N / 10000 N/m = 2 mm into it.
+    assert!(
+        (s.actual_tcp_force[2] - 20.0).abs() < 0.01,
+        "{:?}",
+        s.actual_tcp_force
+    );
+    assert!((s.actual_tcp_pose[2] - (z - 0.032)).abs() < 1e-5);
+    cell.advance(ms(2000 + 2100));
+    assert_eq!(cell.status().control_mode, 0, "the program ended");
+}
+
+#[test]
+fn in_teach_mode_the_operator_moves_the_joints_and_the_streams_follow() {
+    let (mut cell, _) = ready_cell();
+    cell.submit(Submitted::Program("sleep(5)\n".into()), ms(2000));
+    let q = [0.2, -1.3, 1.1, -1.4, -1.5, 0.3];
+    assert!(cell.move_by_hand(q).is_err(), "not in teach mode");
+    cell.submit(
+        Submitted::Program(
+            "teach_mode()\nsleep(5)\ntextmsg(get_actual_joint_positions())\n".into(),
+        ),
+        ms(2100),
+    );
+    cell.advance(ms(2200));
+    assert_eq!(cell.status().control_mode, 1, "teach");
+    cell.move_by_hand(q).unwrap();
+    assert!(cell.move_by_hand([0.0, 0.0, 9.0, 0.0, 0.0, 0.0]).is_err());
+    cell.advance(ms(2300));
+    let s = cell.status();
+    assert_eq!(s.actual_q, q);
+    assert_eq!(s.target_q, q);
+    cell.advance(ms(7200));
+    assert_eq!(
+        texts(&events(&mut cell)),
+        ["[0.2, -1.3, 1.1, -1.4, -1.5, 0.3]"]
+    );
+    assert_eq!(cell.status().control_mode, 0);
+    // With no program running, the operator's freedrive moves the arm too.
+    cell.move_by_hand([0.0; 6]).unwrap();
+    assert_eq!(cell.status().actual_q, [0.0; 6]);
+}

@@ -412,6 +412,30 @@ fn bare_line_floods_from_many_peers_leave_the_good_client_its_rate() {
 }
 
 #[test]
+fn dashboard_and_interpreter_floods_leave_the_good_client_its_rate() {
+    // Each connection has a thread of its own that locks the cell for every command:
+    // sixteen of them sending as fast as they can took the loop's CPU and lock.
+    let _turn = serial();
+    let f = start();
+    brake_release(&f);
+    good_rate_under("dashboard floods from 16 clients", &f, |f, a| {
+        for _ in 0..16 {
+            let s = dashboard(f.addr("dashboard")).expect("connect");
+            a.flood(s, b"robotmode\n".repeat(4096));
+        }
+    });
+    let mut host = connect(f.addr("primary")).expect("connect");
+    host.write_all(b"def host():\n  interpreter_mode()\nend\n")
+        .expect("send");
+    good_rate_under("interpreter floods from 16 clients", &f, |f, a| {
+        for _ in 0..16 {
+            let s = connect(f.addr("interpreter")).expect("connect");
+            a.flood(s, b"x = 1\n".repeat(4096));
+        }
+    });
+}
+
+#[test]
 fn an_rtde_input_flood_leaves_the_good_client_its_rate() {
     let _turn = serial();
     let f = start();

@@ -677,3 +677,23 @@ fn ports_and_what_they_carry() {
     assert_eq!(STATE_RATE_HZ, 10);
     assert_eq!(STATE_PERIOD.as_millis(), 100);
 }
+
+#[test]
+fn robot_mode_data_carries_the_control_mode() {
+    for (mode, layout) in [
+        (0u8, Layout::ESeries),
+        (1, Layout::ESeries),
+        (2, Layout::Cb3),
+    ] {
+        let mut s = Status::default();
+        s.control_mode = mode;
+        let mut out = Vec::new();
+        encode_package(&mut out, &s, layout, Package::RobotModeData);
+        // Header (4-byte length, type), timestamp, seven flags, robot mode, control mode.
+        assert_eq!(out[4], 0);
+        assert_eq!(out[5 + 8 + 7 + 1], mode);
+        // The speed fraction follows it.
+        let f = f64::from_be_bytes(out[22..30].try_into().unwrap());
+        assert_eq!(f, s.speed_fraction);
+    }
+}

@@ -114,6 +114,94 @@ pub struct Arm {
     /// The world model's frames (`add_frame`...; see [`crate::world_model`]): kept
     /// across programs until `reset_world_model()`.
     pub(crate) world_model: crate::world_model::WorldModel,
+    /// The speed slider: the fraction (0-1) of its programmed speed the program's motion
+    /// runs at (RTDE `speed_slider_fraction`, primary `set speed`, the operator). A move
+    /// that takes 1.5 s at 1.0 takes 3.0 s at 0.5; a change takes effect from the next
+    /// step. It scales every motion command's trajectory (`movej`, `movel`, `movep`,
+    /// `movec`, `servoj`, `speedj`, `speedl`, `stopj`, `stopl`): the arm's speeds are the
+    /// programmed ones times the fraction; force mode and the operator's hand are not
+    /// scaled. Default 1.0; a value outside 0-1 counts as the nearest end (NaN as 1.0).
+    pub speed_fraction: f64,
+    /// `teach_mode()` (1) or `freedrive_mode()` (2) is on: the operator moves the joints
+    /// ([`Arm::move_by_hand`]); 0: neither.
+    pub(crate) hand_mode: u8,
+    /// The active `force_mode`, if any (see [`crate::force`]).
+    pub(crate) force_mode: Option<crate::force::ForceMode>,
+}
+
+impl Arm {
+    /// Whether the arm is in `teach_mode()` or `freedrive_mode()`: the operator moves its
+    /// joints ([`Arm::move_by_hand`]) and `is_steady()` is False.
+    pub fn hand_guided(&self) -> bool {
+        self.hand_mode != 0
+    }
+
+    /// Whether a program's `force_mode` is on.
+    pub fn in_force_mode(&self) -> bool {
+        self.force_mode.is_some()
+    }
+
+    /// The arm's control mode as primary's robot mode data carries it: 1 teach (in
+    /// teach or freedrive mode), 2 force (in force mode), else 0 position.
+    pub fn control_mode(&self) -> u8 {
+        if self.hand_guided() {
+            1
+        } else if self.in_force_mode() {
+            2
+        } else {
+            0
+        }
+    }
+
+    /// The operator moves the joints by hand to `q` (rad, each within ±2π): the arm is at
+    /// rest there, and the program sees it at its next step. The caller decides whether
+    /// the arm may be moved by hand (a controller allows it in teach/freedrive mode,
+    /// [`Arm::hand_guided`], or with no program running).
+    ///
+    /// ```
+    /// let mut arm = urscript_interp::Arm::default();
+    /// arm.move_by_hand([0.1, -1.2, 1.3, -1.5, -1.6, 0.2]).unwrap();
+    /// assert_eq!(arm.q[2], 1.3);
+    /// assert!(arm.move_by_hand([0.0, 0.0, 7.0, 0.0, 0.0, 0.0]).is_err());
+    /// ```
+    pub fn move_by_hand(&mut self, q: [f64; 6]) -> Result<(), String> {
+        if let Some((k, v)) = q
+            .iter()
+            .enumerate()
+            .find(|(_, v)| !v.is_finite() || v.abs() > crate::builtins::motion::JOINT_LIMIT)
+        {
+            return Err(format!(
+                "joint {k} at {v} rad is outside the joints' range (±2π)"
+            ));
+        }
+        self.q = q;
+        self.qd = [0.0; 6];
+        self.qdd = [0.0; 6];
+        self.tcp_speed = [0.0; 6];
+        Ok(())
+    }
+
+    /// What the force/torque sensor reads (N, Nm; base frame, as `get_tcp_force()` and
+    /// RTDE's `actual_TCP_force`): [`World::tcp_force`] plus the contact plane's push on
+    /// the TCP (see [`World::contact_plane`]), for the arm's kinematics `dh`.
+    pub fn measured_tcp_force(&self, dh: &Dh) -> [f64; 6] {
+        let pose = kinematics::forward(dh, self.q, self.tcp);
+        let c = crate::force::contact_force(
+            self.world.contact_plane,
+            self.world.contact_stiffness,
+            pose,
+        );
+        std::array::from_fn(|k| self.world.tcp_force[k] + c[k])
+    }
+
+    /// The speed slider as it scales motion: 0-1 (NaN counts as 1).
+    pub(crate) fn slider(&self) -> f64 {
+        if self.speed_fraction.is_nan() {
+            1.0
+        } else {
+            self.speed_fraction.clamp(0.0, 1.0)
+        }
+    }
 }
 
 impl Arm {
@@ -219,6 +307,9 @@ impl Default for Arm {
             force_mode_gain_scaling: 1.0,
             motion_version: 1,
             jerk_gain_scaling: 1.0,
+            speed_fraction: 1.0,
+            hand_mode: 0,
+            force_mode: None,
         }
     }
 }
@@ -251,8 +342,17 @@ pub struct World {
     pub input_float_regs: [f64; 48],
     /// RTDE input bool registers 0-127. Default False.
     pub input_bool_regs: [bool; 128],
-    /// Force/torque at the flange (N, Nm). Default 0 (nothing pushes the virtual arm).
+    /// Force/torque at the flange (N, Nm) besides the contact plane's. Default 0
+    /// (nothing pushes the virtual arm).
     pub tcp_force: [f64; 6],
+    /// A surface the tool can touch: a plane, as a pose (base frame) whose z axis is its
+    /// outward normal; the obstacle fills the half-space below it. It pushes the TCP
+    /// back like a spring of [`World::contact_stiffness`] (see [`crate::force`]).
+    /// Default `p[0, 0, 0, 0, 0, 0]` (with no stiffness: no surface).
+    pub contact_plane: [f64; 6],
+    /// The contact plane's stiffness (N/m): a TCP `d` m below it feels `stiffness · d`
+    /// N along its normal. Default 0.0: no surface, free space.
+    pub contact_stiffness: f64,
     /// Joint torques beyond what moving the arm itself takes (Nm). Default 0.
     pub joint_torques: [f64; 6],
     /// Joint temperatures (°C). Default 35.0 each.
@@ -321,6 +421,8 @@ impl Default for World {
             input_float_regs: [0.0; 48],
             input_bool_regs: [false; 128],
             tcp_force: [0.0; 6],
+            contact_plane: [0.0; 6],
+            contact_stiffness: 0.0,
             joint_torques: [0.0; 6],
             joint_temp: [35.0; 6],
             controller_temp: 30.0,
@@ -368,6 +470,11 @@ pub(crate) struct Controller {
     pub eip: crate::eip::Handles,
     /// The program's RTDE watchdogs (`rtde_set_watchdog`).
     pub rtde_watchdogs: Vec<RtdeWatchdog>,
+    /// The motion clock: the time motions run on (see [`MotionClock`]).
+    pub clock: MotionClock,
+    /// The step the TCP's contact with the contact plane began in (`tool_contact`), while
+    /// it lasts.
+    pub contact_since: Option<u64>,
     /// The move or stream whose start was reported and whose end was not.
     pub tracked: Option<Tracked>,
     /// The start of the move queued behind a blending one (reported when it starts).
@@ -386,6 +493,55 @@ pub(crate) struct Tracked {
     pub stream: bool,
     /// A stream whose last command's motion has ended: the step it ended in.
     pub ended: Option<u64>,
+}
+
+/// The motion clock, counted in steps: it advances by the speed slider's fraction each
+/// step (1.0: it is the step count), so every motion sampled on it runs at that fraction
+/// of its programmed speed. Piecewise linear in the step: `anchor` at `anchor_step`, then
+/// `fraction` per step; a slider change starts a new piece at the step it takes effect.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct MotionClock {
+    pub fraction: f64,
+    pub anchor_step: u64,
+    pub anchor: f64,
+}
+
+impl Default for MotionClock {
+    fn default() -> Self {
+        MotionClock {
+            fraction: 1.0,
+            anchor_step: 0,
+            anchor: 0.0,
+        }
+    }
+}
+
+impl MotionClock {
+    /// The clock at step `step`.
+    pub fn at(&self, step: u64) -> f64 {
+        self.anchor + (step as f64 - self.anchor_step as f64) * self.fraction
+    }
+
+    /// The first step at or after `from` whose clock has reached `t`; `None` if the clock
+    /// stands still (slider at 0) short of it.
+    pub fn step_reaching(&self, t: f64, from: u64) -> Option<u64> {
+        if self.at(from) >= t {
+            return Some(from);
+        }
+        if self.fraction <= 0.0 {
+            return None;
+        }
+        let guess = self.anchor_step as f64 + ((t - self.anchor) / self.fraction).ceil();
+        // `as` saturates; rounding is corrected by a step either way.
+        let mut s = (guess as u64).max(from);
+        while s > from && self.at(s - 1) >= t {
+            s -= 1;
+        }
+        while self.at(s) < t && s < u64::MAX {
+            s += 1;
+        }
+        Some(s)
+    }
 }
 
 /// The most RTDE watchdogs a program sets (one per input field; RTDE has fewer input
@@ -467,6 +623,35 @@ impl Controller {
 }
 
 impl Controller {
+    /// Takes up the arm's speed slider ([`Arm::speed_fraction`]) from step `self.step` on.
+    pub fn sync_speed(&mut self) {
+        let f = self.arm.slider();
+        if f != self.clock.fraction {
+            let at = self.clock.at(self.step);
+            self.clock = MotionClock {
+                fraction: f,
+                anchor_step: self.step,
+                anchor: at,
+            };
+        }
+    }
+
+    /// The motion clock now.
+    pub fn clock_now(&self) -> f64 {
+        self.clock.at(self.step)
+    }
+
+    /// Ends teach/freedrive mode and force mode (the program stopped).
+    pub fn end_modes(&mut self) {
+        self.arm.hand_mode = 0;
+        self.arm.force_mode = None;
+    }
+
+    /// The force the sensor reads now (see [`Arm::measured_tcp_force`]).
+    pub fn measured_tcp_force(&self) -> [f64; 6] {
+        self.arm.measured_tcp_force(&self.dh)
+    }
+
     /// A protective stop: the arm stops at once and the request is left for the
     /// controller that runs the arm (`Arm::protective_stop`; a program alone just goes
     /// on, stopped).
@@ -509,14 +694,23 @@ impl Controller {
         self.queued = None;
         self.motion = Some(Motion {
             kind,
-            start: self.step,
+            start: self.clock_now(),
             owner: self.thread,
             tcp,
             blend: None,
             next: None,
         });
+        self.restart_force_offset();
         self.sampled = None;
         self.advance(self.step);
+    }
+
+    /// A motion that starts where the arm is (force mode's offset included) carries that
+    /// offset in its own start: force mode adds to it from zero.
+    fn restart_force_offset(&mut self) {
+        if let Some(fm) = self.arm.force_mode.as_mut() {
+            fm.offset = [0.0; 6];
+        }
     }
 
     /// The move under way that the running thread commanded with a blend radius (the
@@ -553,7 +747,7 @@ impl Controller {
     ///
     /// The move is reported ([`Event::MoveStart`]) when the arm sets off with it; the one
     /// it blends from ends `Blended` then.
-    pub fn start_move(&mut self, kind: Kind, tcp: [f64; 6], r: f64, info: MoveStart) -> Duration {
+    pub fn start_move(&mut self, kind: Kind, tcp: [f64; 6], r: f64, info: MoveStart) -> f64 {
         let line = info.line;
         let dt = self.step_time.as_secs_f64();
         let steps = |secs: f64| {
@@ -563,10 +757,13 @@ impl Controller {
                 0
             }
         };
+        let now = self.clock_now();
         let mut kind = kind;
-        let mut start = self.step;
+        let mut start = now;
+        // A blend goes on from the programmed path; any other move starts where the arm is.
+        let mut continuous = false;
         if let Some(m) = self.blending() {
-            let t = self.step.saturating_sub(m.start) as f64 * dt;
+            let t = (now - m.start) * dt;
             let began = m.blend.is_some_and(|b| b.step == self.step);
             let blended = if began {
                 trajectory::blend(&self.dh, tcp, (&m.kind, t), &kind, self.arm.q)
@@ -576,9 +773,10 @@ impl Controller {
             match blended {
                 Some(k) => {
                     kind = k;
+                    continuous = true;
                     self.end_move(MoveOutcome::Blended, self.step);
                 }
-                None => start = m.start.saturating_add(steps(m.duration())).max(self.step),
+                None => start = (m.start + steps(m.duration()) as f64).max(now),
             }
         }
         let (mut blend, reduced) = trajectory::blend_start(&self.dh, tcp, &kind, r);
@@ -598,19 +796,16 @@ impl Controller {
             }));
         }
         let back = blend.map_or(kind.duration(), |b| b.at);
-        let wait = self
-            .step_time
-            .saturating_mul(u32::try_from(start - self.step).unwrap_or(u32::MAX))
-            .saturating_add(crate::builtins::secs(back));
-        // The step the program gets control back in (as the scheduler counts a wait).
-        let n = wait
+        // The motion clock the program gets control back at: whole steps of motion time
+        // after the move's start (as the scheduler counts a wait).
+        let n = crate::builtins::secs(back)
             .as_nanos()
-            .div_ceil(self.step_time.as_nanos().max(1))
-            .max(1);
+            .div_ceil(self.step_time.as_nanos().max(1));
+        let until = start + u64::try_from(n).unwrap_or(u64::MAX) as f64;
         if let Some(b) = blend.as_mut() {
-            b.step = self
-                .step
-                .saturating_add(u64::try_from(n).unwrap_or(u64::MAX));
+            b.back = until;
+            b.after = self.step.saturating_add(1);
+            b.step = u64::MAX;
         }
         let motion = Motion {
             kind,
@@ -620,7 +815,7 @@ impl Controller {
             blend,
             next: None,
         };
-        if start > self.step {
+        if start > now {
             if let Some(m) = self.motion.as_mut() {
                 m.next = Some(Box::new(motion));
                 self.queued = Some(Box::new(info));
@@ -629,36 +824,39 @@ impl Controller {
             self.supersede();
             self.begin_move(info, false, self.step);
             self.queued = None;
+            if !continuous {
+                self.restart_force_offset();
+            }
             self.motion = Some(motion);
             self.sampled = None;
             self.advance(self.step);
         }
-        wait
+        until
     }
 
-    /// Puts the arm where the motion under way has it at step `step`.
+    /// Puts the arm where the motion under way (and force mode) has it at step `step`.
     pub fn advance(&mut self, step: u64) {
+        let clock = self.clock.at(step);
         // The move queued behind a blended one starts when that one has ended.
         if let Some(m) = self.motion.as_mut() {
-            if m.next.as_ref().is_some_and(|n| step >= n.start) {
+            if m.next.as_ref().is_some_and(|n| clock >= n.start) {
                 if let Some(n) = m.next.take() {
-                    let at = n.start;
                     // The move before it ended at its target.
                     if let Some((q, _)) = m.kind.end(&self.dh, m.tcp) {
                         self.arm.q = q;
                     }
                     self.motion = Some(*n);
                     self.sampled = None;
-                    self.end_move(MoveOutcome::Reached, at);
+                    self.end_move(MoveOutcome::Reached, step);
                     if let Some(info) = self.queued.take() {
-                        self.begin_move(*info, false, at);
+                        self.begin_move(*info, false, step);
                     }
                 }
             }
         }
-        let Some(m) = self.motion.as_mut() else {
+        if self.motion.is_none() && self.arm.force_mode.is_none() {
             return;
-        };
+        }
         if self.sampled == Some(step) {
             return;
         }
@@ -669,44 +867,168 @@ impl Controller {
         };
         let dt = steps as f64 * self.step_time.as_secs_f64();
         self.sampled = Some(step);
-        let t = step.saturating_sub(m.start) as f64 * self.step_time.as_secs_f64();
-        let s = m.sample(&self.dh, t, self.arm.q);
-        self.arm.q = s.q;
-        for ((a, new), old) in self.arm.qdd.iter_mut().zip(s.qd).zip(self.arm.qd) {
-            *a = if dt > 0.0 { (new - old) / dt } else { 0.0 };
-        }
-        self.arm.qd = s.qd;
-        self.arm.tcp_speed = match s.tcp_speed {
-            Some(v) => v,
-            None => crate::trajectory::tcp_speed(&self.dh, s.q, s.qd, self.arm.tcp),
-        };
-        if s.stop {
-            // The path left the arm's reach: it stops here (nothing queued goes on) and
-            // the controller running it makes that a protective stop.
-            self.motion = None;
-            self.queued = None;
-            self.end_move(MoveOutcome::ProtectiveStop, step);
-            self.arm.qd = [0.0; 6];
-            self.arm.qdd = [0.0; 6];
-            self.arm.tcp_speed = [0.0; 6];
-            self.arm.protective_stop = true;
-        } else if s.done {
-            // A move queued behind this one starts now (at rest, where this one ended).
-            let end = end_step(self.step_time, m).min(step);
-            let next = m.next.take();
-            let queued = next.is_some();
-            self.motion = next.map(|n| *n);
-            self.arm.qdd = [0.0; 6];
-            match self.tracked.as_mut() {
-                Some(t) if t.stream => t.ended = Some(end),
-                _ => self.end_move(MoveOutcome::Reached, end),
-            }
-            if queued {
-                if let Some(info) = self.queued.take() {
-                    self.begin_move(*info, false, end);
+        let before = (self.arm.q, self.arm.qd);
+        let mut moved = false;
+        // How the motion ended in this step, if it did: a protective stop, or at its
+        // target (with whether a queued move started).
+        let mut ended: Option<Result<bool, ()>> = None;
+        if let Some(m) = self.motion.as_mut() {
+            moved = true;
+            // The program gets control back from a move with a blend in the first step
+            // its motion clock reaches the blend.
+            if let Some(b) = m.blend.as_mut() {
+                if b.step == u64::MAX && clock >= b.back && step >= b.after {
+                    b.step = step;
                 }
             }
+            let f = self.clock.fraction;
+            let t = (clock - m.start) * self.step_time.as_secs_f64();
+            let s = m.sample(&self.dh, t, self.arm.q);
+            self.arm.q = s.q;
+            // The arm moves at the slider's fraction of the programmed speeds.
+            let qd = s.qd.map(|v| v * f);
+            for ((a, new), old) in self.arm.qdd.iter_mut().zip(qd).zip(self.arm.qd) {
+                *a = if dt > 0.0 { (new - old) / dt } else { 0.0 };
+            }
+            self.arm.qd = qd;
+            self.arm.tcp_speed = match s.tcp_speed {
+                Some(v) => v.map(|x| x * f),
+                None => crate::trajectory::tcp_speed(&self.dh, s.q, qd, self.arm.tcp),
+            };
+            if s.stop {
+                // The path left the arm's reach: it stops here (nothing queued goes on) and
+                // the controller running it makes that a protective stop.
+                self.motion = None;
+                self.arm.qd = [0.0; 6];
+                self.arm.qdd = [0.0; 6];
+                self.arm.tcp_speed = [0.0; 6];
+                self.arm.protective_stop = true;
+                ended = Some(Err(()));
+            } else if s.done {
+                // A move queued behind this one starts now (at rest, where this one ended).
+                let next = m.next.take();
+                ended = Some(Ok(next.is_some()));
+                self.motion = next.map(|n| *n);
+                self.arm.qdd = [0.0; 6];
+            }
         }
+        match ended {
+            Some(Err(())) => {
+                self.queued = None;
+                self.end_move(MoveOutcome::ProtectiveStop, step);
+            }
+            Some(Ok(queued)) => {
+                match self.tracked.as_mut() {
+                    Some(t) if t.stream => t.ended = Some(step),
+                    _ => self.end_move(MoveOutcome::Reached, step),
+                }
+                if queued {
+                    if let Some(info) = self.queued.take() {
+                        self.begin_move(*info, false, step);
+                    }
+                }
+            }
+            None => {}
+        }
+        if self.arm.force_mode.is_some() {
+            self.force_step(step, moved, before);
+        }
+        if self.arm.world.contact_stiffness > 0.0 {
+            self.track_contact(step);
+        }
+    }
+
+    /// Force mode up to step `step` (from the last step it ran to), from joints `before`
+    /// (speeds `qd_before`): the program's pose (the motion's, when one was sampled this
+    /// step, else the last) moved by what force mode adds (see [`crate::force`]).
+    fn force_step(&mut self, step: u64, sampled: bool, (before, qd_before): ([f64; 6], [f64; 6])) {
+        let step_time = self.step_time.as_secs_f64();
+        let tcp = self.arm.tcp;
+        let programmed_q = self.arm.q;
+        let v = [
+            self.arm.tcp_speed[0],
+            self.arm.tcp_speed[1],
+            self.arm.tcp_speed[2],
+        ];
+        let plane = self.arm.world.contact_plane;
+        let stiffness = self.arm.world.contact_stiffness;
+        let actual = kinematics::forward(&self.dh, before, tcp);
+        let Some(fm) = self.arm.force_mode.as_mut() else {
+            return;
+        };
+        if sampled {
+            fm.programmed = kinematics::forward(&self.dh, programmed_q, tcp);
+        }
+        // Each step moves force mode once (a motion started in a step already run only
+        // takes up the offset).
+        let dt = step.saturating_sub(fm.at) as f64 * step_time;
+        fm.at = fm.at.max(step);
+        let kept = fm.offset;
+        fm.step(actual, v, dt, plane, stiffness);
+        let mut q = crate::force::joints_at(
+            &self.dh,
+            crate::force::offset_pose(fm.programmed, fm.offset),
+            tcp,
+            before,
+        );
+        if q.is_none() {
+            // Out of reach: force mode goes no further that way.
+            fm.offset = kept;
+            q = crate::force::joints_at(
+                &self.dh,
+                crate::force::offset_pose(fm.programmed, kept),
+                tcp,
+                before,
+            );
+        }
+        let q = q.unwrap_or(before);
+        if dt <= 0.0 {
+            self.arm.q = q;
+            return;
+        }
+        let qd: [f64; 6] = if dt > 0.0 {
+            std::array::from_fn(|k| (q[k] - before[k]) / dt)
+        } else {
+            [0.0; 6]
+        };
+        for ((a, new), old) in self.arm.qdd.iter_mut().zip(qd).zip(qd_before) {
+            *a = if dt > 0.0 { (new - old) / dt } else { 0.0 };
+        }
+        self.arm.q = q;
+        self.arm.qd = qd;
+        self.arm.tcp_speed = crate::trajectory::tcp_speed(&self.dh, q, qd, tcp);
+    }
+
+    /// Follows the TCP's contact with the contact plane (`tool_contact`).
+    fn track_contact(&mut self, step: u64) {
+        let touching = self.arm.world.contact_stiffness > 0.0
+            && self.measured_contact().iter().any(|f| *f != 0.0);
+        self.contact_since = match (touching, self.contact_since) {
+            (true, None) => Some(step),
+            (true, since) => since,
+            (false, _) => None,
+        };
+    }
+
+    /// The contact plane's push on the TCP now (N, base frame).
+    pub fn measured_contact(&self) -> [f64; 6] {
+        crate::force::contact_force(
+            self.arm.world.contact_plane,
+            self.arm.world.contact_stiffness,
+            self.tcp_pose(),
+        )
+    }
+
+    /// A built-in about to allocate `bytes` (more than a few) checks they fit in the
+    /// program's memory budget first. A refusal must come before the built-in changes
+    /// anything: the machine recounts and runs it once more if the count was high.
+    pub fn reserve(&mut self, bytes: usize) -> Result<(), Fault> {
+        let events = self.events.bytes();
+        if self.mem.fits(events, bytes) {
+            return Ok(());
+        }
+        self.mem.refused = true;
+        Err(self.mem.over(events, bytes))
     }
 
     /// Reports the start of a move or stream at step `step` and tracks it.
@@ -756,18 +1078,6 @@ impl Controller {
             q: self.arm.q,
             pose,
         })));
-    }
-
-    /// A built-in about to allocate `bytes` (more than a few) checks they fit in the
-    /// program's memory budget first. A refusal must come before the built-in changes
-    /// anything: the machine recounts and runs it once more if the count was high.
-    pub fn reserve(&mut self, bytes: usize) -> Result<(), Fault> {
-        let events = self.events.bytes();
-        if self.mem.fits(events, bytes) {
-            return Ok(());
-        }
-        self.mem.refused = true;
-        Err(self.mem.over(events, bytes))
     }
 
     /// Stops the arm where it is (its thread was killed, the program stopped).
@@ -887,16 +1197,4 @@ impl Controller {
             },
         })
     }
-}
-
-/// The step a motion's profile ends in.
-fn end_step(step_time: Duration, m: &Motion) -> u64 {
-    let dt = step_time.as_secs_f64();
-    let d = m.kind.duration();
-    let n = if dt > 0.0 && d.is_finite() {
-        (d.max(0.0) / dt).ceil() as u64
-    } else {
-        0
-    };
-    m.start.saturating_add(n)
 }

@@ -96,6 +96,7 @@ pub mod drive;
 pub mod eip;
 mod error;
 pub mod event;
+mod force;
 pub mod interpreter;
 pub mod kinematics;
 mod lexer;

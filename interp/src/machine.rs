@@ -221,6 +221,13 @@ pub(crate) enum Wait {
     None,
     /// Resumes at step `until`, with `result` as the value of the call.
     Steps { until: u64, result: Value },
+    /// Waits on a motion: resumes at the first step from `after` whose motion clock has
+    /// reached `until`, with `result` as the value of the call.
+    Motion {
+        until: f64,
+        after: u64,
+        result: Value,
+    },
     /// Used its time slice computing: resumes at step `until` (the next frame), where
     /// it left off.
     Slice(u64),
@@ -442,6 +449,8 @@ impl Machine {
                 rtde_watchdogs: Vec::new(),
                 tracked: None,
                 queued: None,
+                clock: crate::controller::MotionClock::default(),
+                contact_since: None,
             },
             site_stubs,
             prog: Arc::new(program),
@@ -599,6 +608,10 @@ impl Machine {
             let at = match &t.wait {
                 Wait::None | Wait::Resume(_) => Some(self.ctl.step),
                 Wait::Steps { until, .. } | Wait::Slice(until) => Some((*until).max(self.ctl.step)),
+                Wait::Motion { until, after, .. } => self
+                    .ctl
+                    .clock
+                    .step_reaching(*until, (*after).max(self.ctl.step)),
                 Wait::Read { .. } => None,
                 Wait::Connect { .. } => None,
                 Wait::Rpc(p) => Some(p.deadline.max(self.ctl.step)),
@@ -636,6 +649,7 @@ impl Machine {
         let target = u64::try_from(now.as_nanos() / st)
             .unwrap_or(u64::MAX - 1)
             .saturating_add(1);
+        self.ctl.sync_speed();
         while self.state == State::Running && self.ctl.step < target {
             match self.next_wake_step() {
                 Some(s) if s < target => {
@@ -652,7 +666,9 @@ impl Machine {
         }
         // Steps where no thread ran still move the arm: it is where the motion has it at
         // the last step due.
-        if self.state == State::Running && self.ctl.motion.is_some() {
+        if self.state == State::Running
+            && (self.ctl.motion.is_some() || self.ctl.arm.force_mode.is_some())
+        {
             self.ctl.advance(self.ctl.step.saturating_sub(1));
         }
     }
@@ -951,8 +967,9 @@ impl Machine {
 
     fn stop(&mut self, state: State) {
         self.state = state;
-        // The arm stops where it is.
+        // The arm stops where it is; teach, freedrive and force mode end with the program.
         self.ctl.halt();
+        self.ctl.end_modes();
         for t in &mut self.threads {
             t.done = true;
             if let Wait::Rpc(p) = std::mem::replace(&mut t.wait, Wait::None) {
@@ -1040,6 +1057,15 @@ impl Machine {
                     (true, Wait::None)
                 }
                 Wait::Slice(until) if until <= self.ctl.step => (true, Wait::None),
+                Wait::Motion {
+                    until,
+                    after,
+                    result,
+                } if after <= self.ctl.step && self.ctl.clock_now() >= until => {
+                    self.ctl.mem.add(result.held_bytes());
+                    self.threads[i].stack.push(result);
+                    (true, Wait::None)
+                }
                 Wait::Read {
                     socket,
                     call,
@@ -2609,7 +2635,8 @@ impl Machine {
         }
         let (value, wait) = match out {
             Out::Value(v) => (v, None),
-            Out::Wait(d, v) => (v, Some(d)),
+            Out::Wait(d, v) => (v, Some(Ok(d))),
+            Out::Motion(until, v) => (v, Some(Err(until))),
             Out::Read {
                 socket,
                 call,
@@ -2631,7 +2658,12 @@ impl Machine {
             self.ctl.events.push_back(Event::Call(r));
         }
         Ok(match wait {
-            Some(d) => Called::Block(self.wait_for(d, value)),
+            Some(Ok(d)) => Called::Block(self.wait_for(d, value)),
+            Some(Err(until)) => Called::Block(Wait::Motion {
+                until,
+                after: self.ctl.step.saturating_add(1),
+                result: value,
+            }),
             None => Called::Value(value),
         })
     }
@@ -2754,8 +2786,13 @@ impl Machine {
         let step = self.ctl.step;
         for t in &mut self.threads {
             if t.id == owner && !t.done {
-                if let Wait::Steps { until, .. } = &mut t.wait {
-                    *until = step;
+                match &mut t.wait {
+                    Wait::Steps { until, .. } => *until = step,
+                    Wait::Motion { until, after, .. } => {
+                        *until = f64::NEG_INFINITY;
+                        *after = step;
+                    }
+                    _ => {}
                 }
             }
         }

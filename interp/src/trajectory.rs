@@ -520,8 +520,8 @@ pub(crate) enum Kind {
 #[derive(Debug, Clone, PartialEq)]
 pub(crate) struct Motion {
     pub kind: Kind,
-    /// The step it started in.
-    pub start: u64,
+    /// The motion clock (steps) it started at.
+    pub start: f64,
     /// The thread that commanded it (a kill of that thread stops the arm).
     pub owner: u32,
     /// The TCP offset the tool moves of (for tool motions).
@@ -540,7 +540,14 @@ pub(crate) struct Motion {
 pub(crate) struct BlendStart {
     pub r: f64,
     pub at: f64,
-    /// The step the program gets control back in (set by the controller).
+    /// The motion clock (steps, see `crate::controller::MotionClock`) at which the
+    /// program gets control back (set by the controller).
+    pub back: f64,
+    /// The first step the program may get control back in (the one after the move's
+    /// command: a move takes at least a step).
+    pub after: u64,
+    /// The step the program got control back in: the first whose motion clock reached
+    /// `back` (`u64::MAX` until then; set by the controller).
     pub step: u64,
 }
 
@@ -990,6 +997,8 @@ fn blend_start_inner(dh: &Dh, tcp: [f64; 6], kind: &Kind, r: f64) -> Option<Blen
             Some(BlendStart {
                 r,
                 at: off + profile.time_at(f * dist),
+                back: 0.0,
+                after: 0,
                 step: 0,
             })
         }
@@ -1014,6 +1023,8 @@ fn blend_start_inner(dh: &Dh, tcp: [f64; 6], kind: &Kind, r: f64) -> Option<Blen
             Some(BlendStart {
                 r,
                 at: off + profile.time_at(f * profile.distance()),
+                back: 0.0,
+                after: 0,
                 step: 0,
             })
         }

@@ -48,6 +48,14 @@ pub const WORLD_SETTINGS: &[(&str, &str)] = &[
         "tcp_force",
         "6 floats: force (N) and torque (Nm) at the tool",
     ),
+    (
+        "contact_plane",
+        "pose p[x, y, z, rx, ry, rz] (or 6 floats): a surface the tool touches, its z axis the outward normal",
+    ),
+    (
+        "contact_stiffness",
+        "float: the contact plane's stiffness (N/m; 0: no surface)",
+    ),
     ("joint_torques", "6 floats: external joint torques (Nm)"),
     ("joint_temp", "6 floats: joint temperatures (°C)"),
     ("controller_temp", "float: control box temperature (°C)"),
@@ -135,6 +143,24 @@ impl World {
             "input_float_regs" => fill(&mut self.input_float_regs, slot(48)?, &value, as_float),
             "input_bool_regs" => fill(&mut self.input_bool_regs, slot(128)?, &value, as_bool),
             "tcp_force" => fill(&mut self.tcp_force, slot(6)?, &value, as_float),
+            "contact_plane" => match (&value, index) {
+                (Value::Pose(p), None) if p.iter().all(|x| x.is_finite()) => {
+                    self.contact_plane = *p;
+                    Ok(())
+                }
+                _ => fill(&mut self.contact_plane, slot(6)?, &value, as_float),
+            }
+            .map_err(|_| "a pose p[x, y, z, rx, ry, rz] (m, rad) or a list of 6".to_string()),
+            "contact_stiffness" => {
+                scalar_only()?;
+                match as_float(&value) {
+                    Ok(k) if k >= 0.0 && k.is_finite() => {
+                        self.contact_stiffness = k;
+                        Ok(())
+                    }
+                    _ => Err("a stiffness in N/m, 0 or more".to_string()),
+                }
+            }
             "joint_torques" => fill(&mut self.joint_torques, slot(6)?, &value, as_float),
             "joint_temp" => fill(&mut self.joint_temp, slot(6)?, &value, as_float),
             "controller_temp" => {

@@ -95,6 +95,7 @@ fn answer(
             statement: format!("{}...", String::from_utf8_lossy(line)),
         }),
         None => {
+            shared.command_turn();
             let now = shared.now();
             shared.lock_cell().interpreter_line(conn, line, now)
         }

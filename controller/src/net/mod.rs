@@ -465,8 +465,30 @@ pub(crate) struct Shared {
     allow_shutdown: bool,
     /// The dashboard and interpreter connections open.
     conns: Mutex<Vec<Slot>>,
+    /// The commands of dashboard and interpreter connections acted on in this window.
+    commands: CommandBudget,
     sink: Box<Sink>,
 }
+
+/// The dashboard's and the interpreter socket's commands acted on in one window of
+/// [`COMMAND_WINDOW`], all connections together: at most [`COMMAND_BUDGET`]. Each
+/// command locks the cell the real-time loop steps; connections flooding commands from
+/// their own threads would otherwise take the loop's CPU and lock (16 dashboard clients
+/// sending `robotmode` as fast as they could held a 500 Hz RTDE reader to a quarter of
+/// its rate). A command past the budget waits for the next window.
+struct CommandBudget {
+    /// The window the count is for (controller time / [`COMMAND_WINDOW`]).
+    window: AtomicU64,
+    /// Commands taken in it.
+    used: AtomicU64,
+}
+
+/// The window of [`COMMAND_BUDGET`]: one e-Series step.
+pub const COMMAND_WINDOW: Duration = Duration::from_millis(2);
+/// Dashboard and interpreter commands acted on per [`COMMAND_WINDOW`], all connections
+/// together: 16 000 a second, thousands of times what UR's clients send (a driver sends
+/// a few dashboard commands a second; an interpreter client one statement per motion).
+pub const COMMAND_BUDGET: u64 = 32;
 
 /// A dashboard or interpreter connection, for eviction and shutdown.
 struct Slot {
@@ -547,6 +569,32 @@ impl Shared {
 
     pub(crate) fn stopped(&self) -> bool {
         self.stop.load(Ordering::SeqCst)
+    }
+
+    /// Waits until a dashboard or interpreter command may be acted on
+    /// ([`COMMAND_BUDGET`] per [`COMMAND_WINDOW`]); at once if the server stops.
+    pub(crate) fn command_turn(&self) {
+        loop {
+            let window = u64::try_from(self.now().as_nanos() / COMMAND_WINDOW.as_nanos())
+                .unwrap_or(u64::MAX);
+            let seen = self.commands.window.load(Ordering::SeqCst);
+            if seen != window {
+                if self
+                    .commands
+                    .window
+                    .compare_exchange(seen, window, Ordering::SeqCst, Ordering::SeqCst)
+                    .is_ok()
+                {
+                    self.commands.used.store(0, Ordering::SeqCst);
+                }
+                continue;
+            }
+            if self.commands.used.fetch_add(1, Ordering::SeqCst) < COMMAND_BUDGET || self.stopped()
+            {
+                return;
+            }
+            std::thread::sleep(COMMAND_WINDOW / 4);
+        }
     }
 
     pub(crate) fn shutting_down(&self) -> bool {
@@ -675,6 +723,10 @@ impl Server {
             loop_done: AtomicBool::new(false),
             allow_shutdown: options.allow_shutdown,
             conns: Mutex::new(Vec::new()),
+            commands: CommandBudget {
+                window: AtomicU64::new(0),
+                used: AtomicU64::new(0),
+            },
             sink: Box::new(on_event),
         });
         for &(service, addr) in &addrs {
@@ -965,6 +1017,7 @@ fn answer(
 ) -> Result<(), &'static str> {
     let text = String::from_utf8_lossy(line);
     let text = text.strip_suffix('\r').unwrap_or(&text);
+    shared.command_turn();
     let (reply, shut_down) = {
         let mut cell = shared.lock_cell();
         let now = shared.now();

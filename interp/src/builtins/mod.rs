@@ -149,6 +149,10 @@ pub(crate) enum Out {
     Value(Value),
     /// Takes this much program time (at least one step), then returns the value.
     Wait(Duration, Value),
+    /// Waits until the motion clock (steps; see `crate::controller::MotionClock`) reaches
+    /// this (at least one step), then returns the value: a motion's end at the speed
+    /// slider's fraction.
+    Motion(f64, Value),
     /// A socket read waiting for bytes (started in the socket model).
     Read {
         socket: String,
@@ -591,7 +595,7 @@ mod tests {
             traced: false,
         };
         match (b.run)(c, &mut a) {
-            Ok(Out::Value(v) | Out::Wait(_, v)) => v,
+            Ok(Out::Value(v) | Out::Wait(_, v) | Out::Motion(_, v)) => v,
             Ok(_) => panic!("{name} waits for a socket"),
             Err(e) => panic!("{name}: {e:?}"),
         }
@@ -616,6 +620,8 @@ mod tests {
             rtde_watchdogs: Vec::new(),
             tracked: None,
             queued: None,
+            clock: crate::controller::MotionClock::default(),
+            contact_since: None,
         };
         // The documented defaults.
         assert_eq!(

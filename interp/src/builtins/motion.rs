@@ -44,17 +44,27 @@
 //!   (mid-move and mid-blend too); `get_actual_tcp_pose()`, `get_target_tcp_pose()`: the
 //!   tool pose now; `get_target_waypoint()`: the target of the move under way (from the
 //!   start of a blend, the next move's), the tool pose at rest; speeds the speeds now;
-//!   `tool_contact()`: 0; `is_steady()`: False while a motion (a blend too) is under way
-//!   or a speed is held.
+//!   `tool_contact()`: the steps since the TCP touched the contact plane (0 without
+//!   contact; see `crate::force`); `is_steady()`: False while a motion (a blend too) is
+//!   under way, a speed is held, the joints move, or the arm is in teach/freedrive mode.
+//! - The speed slider (`Arm::speed_fraction`): every motion above runs on the motion
+//!   clock, which advances by the slider's fraction each step; moves and `stopj`/`stopl`
+//!   return when their motion ends on it; `servoj`, `speedj`, `speedl` return after `t`
+//!   of program time (the arm gets only as far as the slider lets it).
+//! - `force_mode`/`end_force_mode`: see `crate::force`. `teach_mode`/`freedrive_mode`:
+//!   the arm stops and the operator moves the joints (`Arm::move_by_hand`) until the
+//!   `end_` call or the program's end.
+//! - `is_within_safety_limits(pose, qnear)`: reachable by the inverse kinematics with
+//!   every joint within ±2π (joints given: each within ±2π).
 //! - Settings read back by their getters: payload (`set_target_payload`, `set_payload*`
 //!   -> `get_target_payload*`), TCP (`set_tcp` -> `get_tcp_offset`), gravity, base
 //!   acceleration, path offset (`path_offset_*`), `set_pos` (the joints).
 //! - What the robot measures of the world returns the documented fixed value of its
 //!   field of the virtual arm (`crate::controller::Arm`): `get_tcp_force()` and `force()`
-//!   0, `get_joint_torques()` 0, `get_joint_temp(j)` 35.0 °C, `get_controller_temp()`
+//!   `World::tcp_force` (0) plus the contact plane's push, `get_joint_torques()` 0, `get_joint_temp(j)` 35.0 °C, `get_controller_temp()`
 //!   30.0 °C, `get_tool_temp()` 32.0 °C, `get_tool_current()` 0.0 A;
 //!   `get_tool_accelerometer_reading()` is the gravity vector seen from the flange.
-//! - Settings the virtual arm has no use for (`force_mode`, `zero_ftsensor`,
+//! - Settings the virtual arm has no use for (`zero_ftsensor`,
 //!   `screw_driving`, ...) are accepted with their manual signatures and do nothing.
 
 use super::{accept, float_list, floats, opt, req, secs, Args, Builtin, Default, Domain, Out};
@@ -298,14 +308,14 @@ pub(super) const TABLE: &[Builtin] = &[
         "get_tcp_force",
         D,
         NONE,
-        "The force/torque at the flange: fixed, p[0, 0, 0, 0, 0, 0] (nothing pushes the virtual arm).",
+        "The force/torque sensor (base frame): World::tcp_force plus the contact plane's push on the TCP (settable: tcp_force, contact_plane, contact_stiffness).",
         tcp_force,
     ),
     Builtin::new(
         "force",
         D,
         NONE,
-        "The norm of get_tcp_force()'s force part: fixed, 0.0.",
+        "The norm of get_tcp_force()'s force part.",
         force,
     ),
     Builtin::new(
@@ -493,22 +503,22 @@ pub(super) const TABLE: &[Builtin] = &[
         "tool_contact",
         D,
         &[opt("direction", Default::Absent)],
-        "0: no contact is modelled.",
+        "Steps since the TCP touched the contact plane (against `direction`, base frame; any if absent or zero); 0: no contact.",
         tool_contact,
     ),
     Builtin::new(
         "is_steady",
         D,
         NONE,
-        "True when no motion is under way and the joints are at rest.",
+        "True when no motion is under way, the joints are at rest and the arm is not in teach/freedrive mode.",
         is_steady,
     ),
     Builtin::new(
         "is_within_safety_limits",
         D,
         &[req("pose"), opt("qnear", Default::Absent)],
-        "True: no safety limits are modelled.",
-        is_steady,
+        "A pose: True if the inverse kinematics reach it with every joint within ±2π (TCP offset, from qnear or the joints now); joints: True if each is within ±2π.",
+        within_safety_limits,
     ),
     // Settings accepted with their manual signatures; they change nothing here.
     Builtin::new(
@@ -582,10 +592,16 @@ pub(super) const TABLE: &[Builtin] = &[
             req("type"),
             req("limits"),
         ],
-        "Accepted (no forces are modelled).",
-        accept,
+        "Starts force mode: compliant axes move to reach the wrench at their speed limits, stopped by the contact plane (see crate::force).",
+        force_mode,
     ),
-    Builtin::new("end_force_mode", D, NONE, "Accepted.", accept),
+    Builtin::new(
+        "end_force_mode",
+        D,
+        NONE,
+        "Ends force mode: the arm stays where it is.",
+        force_mode,
+    ),
     Builtin::new(
         "force_mode_set_damping",
         D,
@@ -649,12 +665,30 @@ pub(super) const TABLE: &[Builtin] = &[
             opt("freeAxes", Default::Ints(&[1, 1, 1, 1, 1, 1])),
             opt("feature", Default::Pose([0.0; 6])),
         ],
-        "Accepted (nobody pushes the virtual arm).",
-        accept,
+        "Freedrive: the arm stops; the operator moves the joints (Arm::move_by_hand); is_steady() False until end_freedrive_mode() or the program's end.",
+        hand_mode,
     ),
-    Builtin::new("end_freedrive_mode", D, NONE, "Accepted.", accept),
-    Builtin::new("teach_mode", D, NONE, "Accepted.", accept),
-    Builtin::new("end_teach_mode", D, NONE, "Accepted.", accept),
+    Builtin::new(
+        "end_freedrive_mode",
+        D,
+        NONE,
+        "Ends freedrive: the arm holds where the operator left it.",
+        hand_mode,
+    ),
+    Builtin::new(
+        "teach_mode",
+        D,
+        NONE,
+        "Teach mode: the arm stops; the operator moves the joints (Arm::move_by_hand); is_steady() False until end_teach_mode() or the program's end.",
+        hand_mode,
+    ),
+    Builtin::new(
+        "end_teach_mode",
+        D,
+        NONE,
+        "Ends teach mode: the arm holds where the operator left it.",
+        hand_mode,
+    ),
     Builtin::new(
         "set_safety_mode_transition_hardness",
         D,
@@ -850,7 +884,7 @@ fn tool_move(
     (q1, given): ([f64; 6], bool),
     (accel, speed, t, r): (f64, f64, f64, f64),
     (name, line, fixed): (&'static str, u32, bool),
-) -> std::time::Duration {
+) -> f64 {
     let (q0, p0) = c.move_start();
     let path = Path::new(p0, via, pose);
     let (r0, mut turn) = trajectory::turn_between(p0, pose);
@@ -947,7 +981,7 @@ fn movej(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
             (a.name, a.line, false),
         )
     };
-    Ok(Out::Wait(back, Value::None))
+    Ok(Out::Motion(back, Value::None))
 }
 
 /// `movec`: along the arc from the tool's position through `pose_via`'s to `pose_to`'s
@@ -986,7 +1020,7 @@ fn movec(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
         (accel, speed, 0.0, r),
         (a.name, a.line, fixed),
     );
-    Ok(Out::Wait(back, Value::None))
+    Ok(Out::Motion(back, Value::None))
 }
 
 /// `powerdown()`: the arm stops, the program halts at the call and the request is left
@@ -1102,7 +1136,12 @@ fn stop(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
             a_rot,
         ))
     };
-    Ok(Out::Wait(secs(ramp).max(c.step_time), Value::None))
+    // At rest when the ramp ends on the motion clock (at least a step).
+    let n = secs(ramp)
+        .as_nanos()
+        .div_ceil(c.step_time.as_nanos().max(1));
+    let until = c.clock_now() + u64::try_from(n).unwrap_or(u64::MAX) as f64;
+    Ok(Out::Motion(until, Value::None))
 }
 
 fn direct_torque(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
@@ -1136,11 +1175,11 @@ fn tcp_speed(c: &mut Controller, _: &mut Args) -> Result<Out, Fault> {
 }
 
 fn tcp_force(c: &mut Controller, _: &mut Args) -> Result<Out, Fault> {
-    Ok(Out::Value(Value::Pose(c.arm.world.tcp_force)))
+    Ok(Out::Value(Value::Pose(c.measured_tcp_force())))
 }
 
 fn force(c: &mut Controller, _: &mut Args) -> Result<Out, Fault> {
-    let f = &c.arm.world.tcp_force;
+    let f = &c.measured_tcp_force();
     Ok(Out::Value(Value::Float(
         (f[0] * f[0] + f[1] * f[1] + f[2] * f[2]).sqrt(),
     )))
@@ -1352,14 +1391,130 @@ fn set_tcp(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
     Ok(Out::Value(Value::None))
 }
 
-fn tool_contact(_: &mut Controller, _: &mut Args) -> Result<Out, Fault> {
-    Ok(Out::Value(Value::Int(0)))
+/// `tool_contact(direction)`: the number of steps back to just before the TCP touched
+/// the contact plane (at least 1 while it touches), 0 without contact. With a direction
+/// (base frame, its first three elements) only a contact against it counts: the plane's
+/// normal opposes the direction.
+fn tool_contact(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+    let direction = if a.is_absent(0) { [0.0; 6] } else { a.six(0)? };
+    let f = c.measured_contact();
+    let touching = f.iter().any(|x| *x != 0.0);
+    let against = direction[..3].iter().all(|x| *x == 0.0)
+        || f[0] * direction[0] + f[1] * direction[1] + f[2] * direction[2] < 0.0;
+    if !(touching && against) {
+        return Ok(Out::Value(Value::Int(0)));
+    }
+    let since = c.contact_since.unwrap_or(c.step);
+    let steps = c.step.saturating_sub(since).saturating_add(1);
+    Ok(Out::Value(Value::Int(
+        i32::try_from(steps).unwrap_or(i32::MAX),
+    )))
 }
 
-fn is_steady(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
-    if a.name == "is_steady" {
-        let still = c.motion.is_none() && c.arm.qd.iter().all(|v| *v == 0.0);
-        return Ok(Out::Value(Value::Bool(still)));
+fn is_steady(c: &mut Controller, _: &mut Args) -> Result<Out, Fault> {
+    let still = c.motion.is_none() && c.arm.qd.iter().all(|v| *v == 0.0) && !c.arm.hand_guided();
+    Ok(Out::Value(Value::Bool(still)))
+}
+
+/// `is_within_safety_limits(pose, qnear)`: a pose is within the limits if the arm's
+/// inverse kinematics reach it with every joint within its range (±2π; through the
+/// active TCP offset, nearest `qnear` or the joints now); joint positions if each is
+/// within its range. The installation's safety planes and TCP limits are not modelled.
+fn within_safety_limits(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+    let six = a.six(0)?;
+    let ok = if matches!(a.v[0], Value::Pose(_)) {
+        let qnear = if a.is_absent(1) { c.arm.q } else { a.six(1)? };
+        c.inverse(six, qnear, c.arm.tcp).is_ok()
+    } else {
+        check_joints(a.name, six).is_ok()
+    };
+    Ok(Out::Value(Value::Bool(ok)))
+}
+
+/// `teach_mode()`, `freedrive_mode(freeAxes, feature)` and their ends. The arm stops
+/// (and leaves force mode) on entering; the operator then moves the joints
+/// ([`crate::Arm::move_by_hand`]; `freeAxes` and `feature` are checked, and the
+/// operator's joints taken as given).
+fn hand_mode(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+    match a.name {
+        "teach_mode" | "freedrive_mode" => {
+            if a.name == "freedrive_mode" {
+                let axes = a.six(0)?;
+                if axes.iter().any(|x| *x != 0.0 && *x != 1.0) {
+                    return Err(Fault::from(format!(
+                        "`freedrive_mode`: freeAxes {} must be 0 or 1 each",
+                        a.v[0].to_str()
+                    )));
+                }
+                a.six(1)?;
+            }
+            c.stop_at_once();
+            c.arm.force_mode = None;
+            c.arm.hand_mode = if a.name == "teach_mode" { 1 } else { 2 };
+        }
+        _ => {
+            c.arm.hand_mode = 0;
+            c.arm.qd = [0.0; 6];
+            c.arm.tcp_speed = [0.0; 6];
+        }
     }
-    Ok(Out::Value(Value::Bool(true)))
+    Ok(Out::Value(Value::None))
+}
+
+/// `force_mode(task_frame, selection_vector, wrench, type, limits)` and
+/// `end_force_mode()` (see [`crate::force`]).
+fn force_mode(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+    if a.name == "end_force_mode" {
+        c.arm.force_mode = None;
+        if c.motion.is_none() {
+            c.arm.qd = [0.0; 6];
+            c.arm.qdd = [0.0; 6];
+            c.arm.tcp_speed = [0.0; 6];
+        }
+        return Ok(Out::Value(Value::None));
+    }
+    let frame = a.six(0)?;
+    let sel = a.six(1)?;
+    let wrench = a.six(2)?;
+    let kind = a.int(3)?;
+    let limits = a.six(4)?;
+    if sel.iter().any(|x| *x != 0.0 && *x != 1.0) {
+        return Err(Fault::from(format!(
+            "`force_mode`: selection_vector {} must be 0 or 1 each",
+            a.v[1].to_str()
+        )));
+    }
+    let kind = match kind {
+        1..=3 => kind as u8,
+        _ => {
+            return Err(Fault::from(format!(
+                "`force_mode`: type {kind} is not 1, 2 or 3"
+            )))
+        }
+    };
+    if frame
+        .iter()
+        .chain(&wrench)
+        .chain(&limits)
+        .any(|x| !x.is_finite())
+    {
+        return Err(Fault::from(
+            "`force_mode`: task_frame, wrench and limits must be finite numbers",
+        ));
+    }
+    let programmed = c.tcp_pose();
+    c.arm.hand_mode = 0;
+    c.arm.force_mode = Some(crate::force::ForceMode {
+        frame,
+        selection: sel.map(|x| x == 1.0),
+        wrench,
+        kind,
+        limits,
+        offset: [0.0; 6],
+        programmed,
+        at: c.step,
+    });
+    // The arm moves from this step's pose on.
+    c.sampled = Some(c.step);
+    Ok(Out::Value(Value::None))
 }

@@ -10,11 +10,11 @@
 //! | `timestamp` | program time, s |
 //! | `target_q`, `actual_q`, `target_qd`, `actual_qd`, `target_qdd` | the joints now ([`Arm`](crate::Arm)) |
 //! | `target_TCP_pose`, `actual_TCP_pose`, `target_TCP_speed`, `actual_TCP_speed` | the tool now |
-//! | `actual_TCP_force` | [`World::tcp_force`](crate::World::tcp_force) |
+//! | `actual_TCP_force` | [`Arm::measured_tcp_force`](crate::Arm::measured_tcp_force): [`World::tcp_force`](crate::World::tcp_force) plus the contact plane's push |
 //! | `joint_temperatures` | [`World::joint_temp`](crate::World::joint_temp) |
 //! | `actual_execution_time` | [`World::execution_time`](crate::World::execution_time) |
 //! | `robot_mode`, `safety_mode`, `safety_status`, `runtime_state` | 7 (running), 1 (normal), 1 (normal), 2 (playing): a program runs only on a running arm |
-//! | `speed_scaling`, `target_speed_fraction` | 1.0 (the virtual arm never scales its speed) |
+//! | `speed_scaling`, `target_speed_fraction` | the speed slider, [`Arm::speed_fraction`](crate::Arm::speed_fraction) (1.0 unless a client set it) |
 //! | `actual_digital_input_bits`, `actual_digital_output_bits` | the 18 digital inputs / outputs, bit n = I/O n |
 //! | `standard_analog_input0/1`, `tool_analog_input0/1` | [`World::analog_in`](crate::World::analog_in) |
 //! | `output_int_register_N`, `output_double_register_N`, `input_int_register_N`, `input_double_register_N` | RTDE registers 0-47 |
@@ -67,13 +67,13 @@ fn get_rtde_value(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
         "target_qdd" => floats(arm.qdd),
         "target_TCP_pose" | "actual_TCP_pose" => floats(c.tcp_pose()),
         "target_TCP_speed" | "actual_TCP_speed" => floats(arm.tcp_speed),
-        "actual_TCP_force" => floats(w.tcp_force),
+        "actual_TCP_force" => floats(c.measured_tcp_force()),
         "joint_temperatures" => floats(w.joint_temp),
         "actual_execution_time" => Value::Float(w.execution_time),
         "robot_mode" => Value::Int(7),
         "safety_mode" | "safety_status" => Value::Int(1),
         "runtime_state" => Value::Int(2),
-        "speed_scaling" | "target_speed_fraction" => Value::Float(1.0),
+        "speed_scaling" | "target_speed_fraction" => Value::Float(arm.slider()),
         "actual_digital_input_bits" => bits(w.digital_in.iter().copied()),
         "actual_digital_output_bits" => bits(arm.digital_out.iter().copied()),
         "standard_analog_input0" => Value::Float(w.analog_in[0]),

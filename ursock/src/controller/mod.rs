@@ -72,7 +72,8 @@ pub struct ControllerOptions {
     pub programs: Option<PathBuf>,
     /// Start in local control: every command that acts is refused, as on a pendant not
     /// switched to remote control. (Standard input takes operator commands: `protective
-    /// stop`, `emergency stop`, `release`, `local`, `remote`, `state`, `help`, ...)
+    /// stop`, `emergency stop`, `release`, `local`, `remote`, `speed F`, `freedrive
+    /// [q...]`, `state`, `help`, ...)
     #[arg(long)]
     pub local: bool,
     /// The pendant's remote control setting is off, as on a new robot and on URSim:
@@ -394,7 +395,29 @@ pub fn run(opts: ControllerOptions) -> Result<(), String> {
 /// dashboard command causes (a collision, the emergency stop button, the pendant's
 /// remote/local switch).
 pub const OPERATOR_HELP: &str = "operator commands: protective stop, emergency stop, \
-system emergency stop, safeguard stop, fault, violation, release, local, remote, state, help";
+system emergency stop, safeguard stop, fault, violation, release, local, remote, \
+speed F (the speed slider, 0-1), freedrive [q0, q1, q2, q3, q4, q5] (move the joints by hand, rad: \
+in teach/freedrive mode or with no program running), state, help";
+
+/// Six joint positions (rad) as the operator types them: `[q0, ..., q5]` (brackets and
+/// commas optional).
+fn parse_joints(text: &str) -> Result<[f64; 6], String> {
+    let cleaned = text.trim().trim_start_matches('[').trim_end_matches(']');
+    let parts: Vec<&str> = cleaned
+        .split(|c: char| c == ',' || c.is_whitespace())
+        .filter(|p| !p.is_empty())
+        .collect();
+    let mut q = [0.0; 6];
+    if parts.len() != 6 {
+        return Err(format!("give 6 joint positions (rad), not {}", parts.len()));
+    }
+    for (slot, p) in q.iter_mut().zip(parts) {
+        *slot = p
+            .parse()
+            .map_err(|_| format!("{p:?} is not a number of radians"))?;
+    }
+    Ok(q)
+}
 
 /// Reads operator commands from standard input until its end (lines bounded at
 /// `MAX_LINE` bytes).
@@ -449,6 +472,7 @@ fn operator(server: &Server, json: bool) {
             | "local"
             | "remote"
             | "state" => {}
+            _ if cmd.starts_with("speed ") || cmd.starts_with("freedrive ") => {}
             _ => {
                 crate::out::note(&format!(
                     "operator: unknown command {cmd:?}; {OPERATOR_HELP}"
@@ -482,6 +506,26 @@ fn operator(server: &Server, json: bool) {
                 }
                 _ => None,
             };
+            let by_hand = if let Some(rest) = cmd.strip_prefix("speed ") {
+                match rest.trim().parse::<f64>() {
+                    Ok(f) if (0.0..=1.0).contains(&f) => {
+                        cell.apply(&urscript_controller::Inputs {
+                            speed_slider_fraction: Some(f),
+                            ..Default::default()
+                        });
+                        Ok(())
+                    }
+                    _ => Err(format!("speed {rest:?} is not a fraction 0-1")),
+                }
+            } else if let Some(rest) = cmd.strip_prefix("freedrive ") {
+                parse_joints(rest).and_then(|q| cell.move_by_hand(q))
+            } else {
+                Ok(())
+            };
+            if let Err(why) = by_hand {
+                return format!("operator: {cmd}: refused: {why}");
+            }
+            let c = cell.controller();
             if let Some(status) = status {
                 c.safety_event(now, status);
             }
