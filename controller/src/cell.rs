@@ -439,7 +439,7 @@ impl Cell {
         let mut m = Machine::with_arm(program, self.interp.clone(), copy);
         // A secondary program does not wait: one step (and the few a stray `sync()`
         // might take) is all it gets.
-        m.run_until(self.interp.step_time * 4);
+        m.run_until(self.interp.step_time * SECONDARY_STEPS);
         if let State::Error(e) = m.state() {
             let e = e.clone();
             self.push(CellEvent::Refused {
@@ -448,10 +448,30 @@ impl Cell {
                 text: e.message().to_string(),
             });
         }
+        let mut waited = None;
         while let Some(e) = m.poll_event() {
-            if matches!(e, Event::Message(_)) {
-                self.push(CellEvent::Program(e));
+            match e {
+                Event::Message(_) => self.push(CellEvent::Program(e)),
+                Event::Connect { host, port, .. } => {
+                    waited.get_or_insert(format!("socket_open(\"{host}\", {port})"));
+                }
+                _ => {}
             }
+        }
+        // What it could not finish is said, never dropped in silence: a secondary program
+        // here has no network (its sockets and XML-RPC calls are not served).
+        if *m.state() == State::Running {
+            let what = waited.map_or_else(
+                || "it was still waiting".to_string(),
+                |call| format!("it was waiting for {call}"),
+            );
+            self.push(CellEvent::Refused {
+                line: 0,
+                column: 0,
+                text: format!(
+                    "the secondary program was ended unfinished after {SECONDARY_STEPS} steps: {what} (secondary programs here run without sockets or XML-RPC)"
+                ),
+            });
         }
         let done = m.into_arm();
         let arm = self.arm_mut();
@@ -816,6 +836,9 @@ impl Cell {
         }
     }
 }
+
+/// The steps a secondary program gets: one, and the few a stray `sync()` might take.
+const SECONDARY_STEPS: u32 = 4;
 
 /// Parses a program (after `preamble`, if given); one that does not parse is refused with
 /// the controller's `syntax_error_on_line:LINE:...` text.

@@ -894,13 +894,19 @@ impl Controller {
     /// `shutdown`: the controller turns off.
     pub fn shutdown(&mut self, now: Duration) -> Result<(), Refused> {
         self.remote()?;
+        self.turn_off(now);
+        Ok(())
+    }
+
+    /// The controller turns off whatever the control mode, as when its power button is
+    /// pressed or its process is told to end: the program stops, the arm powers off.
+    pub fn turn_off(&mut self, now: Duration) {
         self.handle_timeout(now);
         self.pending = None;
         self.program_state = ProgramState::Stopped;
         self.script = false;
         self.robot_mode = RobotMode::PowerOff;
         self.shut_down = true;
-        Ok(())
     }
 
     /// Whether a program can start moving the arm now: the arm is RUNNING (powered,

@@ -210,6 +210,35 @@ fn a_program_that_does_not_compile_leaves_the_running_one_alone() {
 }
 
 #[test]
+fn a_secondary_program_that_cannot_finish_says_so() {
+    let (mut cell, _) = ready_cell();
+    cell.submit(
+        Submitted::Secondary(
+            "sec s():\n  socket_open(\"127.0.0.1\", 50000, \"grip\")\n  socket_send_string(\"GO\", \"grip\")\nend\n"
+                .into(),
+        ),
+        ms(2000),
+    );
+    let ev = events(&mut cell);
+    assert!(
+        ev.iter().any(|e| matches!(
+            e,
+            CellEvent::Refused { text, .. }
+                if text.contains("ended unfinished") && text.contains("socket_open(\"127.0.0.1\", 50000)")
+        )),
+        "{ev:?}"
+    );
+    // One that finishes says nothing more.
+    cell.submit(
+        Submitted::Secondary("sec t():\n  set_standard_digital_out(2, True)\nend\n".into()),
+        ms(2010),
+    );
+    assert!(!events(&mut cell)
+        .iter()
+        .any(|e| matches!(e, CellEvent::Refused { .. })));
+}
+
+#[test]
 fn client_inputs_reach_the_program_and_the_status() {
     let (mut cell, _) = ready_cell();
     cell.apply(&Inputs {

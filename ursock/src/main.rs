@@ -17,6 +17,7 @@ mod script;
 mod show;
 mod typed;
 mod vars;
+mod wait;
 
 use clap::{Parser, Subcommand};
 use urscript_socket::robot::ReadCall;
@@ -119,7 +120,19 @@ enum Command {
     },
     /// A virtual UR controller that unmodified clients drive: the dashboard server
     /// (port 29999) with its state machine (power, brakes, safety, programs).
+    ///
+    /// Ready when every port listens: then `--ready-file` is written and, with --json,
+    /// a `ready` event follows the `listening` ones (`ursock wait HOST` waits for it
+    /// from elsewhere). A dashboard `shutdown`, SIGTERM or SIGINT ends the program and
+    /// closes every client, then the last event, `stopped`.
+    ///
+    /// Exit status: 0 stopped; 1 another failure; 2 a bad option or value; 3 a port in
+    /// use; 4 a port that cannot be listened on for another reason.
     Controller(controller::ControllerOptions),
+    /// Wait until a controller (`ursock controller`, URSim, a robot) is ready: its
+    /// dashboard server greets, and its RTDE and primary ports accept. Exit status 0
+    /// when ready; 1, saying what did not answer, after --timeout.
+    Wait(wait::WaitOptions),
     /// Write the bytes a server (or with --robot, the robot) sends.
     /// Formats: floats, floats-lf, int32, bytes, string, line, framed PREFIX TEXT SUFFIX,
     /// var-reply NAME INT, hex HH...; robot: line, string, byte, int, set-var, get-var,
@@ -197,7 +210,14 @@ fn run(cli: Cli) -> Result<(), String> {
         Command::Demo => demo::run(),
         Command::Listen(opts) => listen::listen(opts),
         Command::Client(opts) => client::run(opts),
-        Command::Controller(opts) => controller::run(opts),
+        Command::Wait(opts) => wait::run(opts),
+        Command::Controller(opts) => {
+            if let Err(f) = controller::run(opts) {
+                out::note(&f.message);
+                std::process::exit(f.code);
+            }
+            Ok(())
+        }
         Command::Robot {
             connect,
             script,

@@ -808,6 +808,32 @@ pub struct Dropped {
     pub count: u64,
 }
 
+/// `controller`: every port listens (after every `listening` event): each service's
+/// address, by service name.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Ready {
+    pub t: f64,
+    pub addrs: std::collections::BTreeMap<&'static str, String>,
+}
+
+/// `controller`: an operator command from standard input and the controller's state
+/// after it (or why it was refused).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Operator {
+    pub t: f64,
+    pub command: String,
+    pub text: String,
+}
+
+/// `controller`: the robot mode, safety status or program state changed.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct State {
+    pub t: f64,
+    pub robot_mode: String,
+    pub safety: String,
+    pub program: String,
+}
+
 /// `controller`: the controller stopped (the last event).
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Stopped {
@@ -859,6 +885,9 @@ pub enum Event {
     Client(Client),
     Suppressed(Suppressed),
     Dropped(Dropped),
+    Ready(Ready),
+    Operator(Operator),
+    State(State),
     Stopped(Stopped),
 }
 
@@ -964,6 +993,9 @@ impl Event {
             Event::Evicted(e) => e.t,
             Event::Suppressed(e) => e.t,
             Event::Dropped(e) => e.t,
+            Event::Ready(e) => e.t,
+            Event::Operator(e) => e.t,
+            Event::State(e) => e.t,
             Event::Stopped(e) => e.t,
         }
     }

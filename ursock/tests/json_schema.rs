@@ -662,9 +662,9 @@ fn controller_json_lines_match_the_schema() {
             r.read_line(&mut line).unwrap();
         }
     }
-    // connect, 4 dashboard events, close: read them as they come (bounded).
+    // ready, connect, 4 dashboard events, close: read them as they come (bounded).
     let mut kinds = Vec::new();
-    while kinds.len() < 6 {
+    while kinds.len() < 7 {
         let mut l = String::new();
         if out.read_line(&mut l).unwrap() == 0 {
             break;
@@ -673,6 +673,10 @@ fn controller_json_lines_match_the_schema() {
         if v["event"] == "dashboard" {
             assert!(v["reply"].as_array().is_some_and(|r| !r.is_empty()), "{l}");
         }
+        if v["event"] == "state" {
+            // `power on` changes the robot mode: said, and checked above.
+            continue;
+        }
         kinds.push(v["event"].as_str().unwrap().to_string());
     }
     let _ = child.kill();
@@ -680,6 +684,7 @@ fn controller_json_lines_match_the_schema() {
     assert_eq!(
         kinds,
         [
+            "ready",
             "connect",
             "dashboard",
             "dashboard",
@@ -766,6 +771,71 @@ fn listen_snippet_all_and_periodic_events_match_the_schema() {
     assert!(origins.iter().any(|o| o == "periodic"), "{origins:?}");
     assert!(out.contains("$2 ack = text OK"), "{out}");
     let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn controller_operator_commands_and_state_changes_are_events_that_match_the_schema() {
+    use std::io::{BufRead, BufReader, Write};
+    let root = schema();
+    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_ursock"))
+        .args([
+            "controller",
+            "--dashboard-port",
+            "0",
+            "--no-streams",
+            "--json",
+        ])
+        .stdin(std::process::Stdio::piped())
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .unwrap();
+    // Hang guard: the process ends after 20 s whatever happens, closing its output.
+    let pid = child.id().to_string();
+    std::thread::spawn(move || {
+        std::thread::sleep(std::time::Duration::from_secs(20));
+        let _ = std::process::Command::new("kill")
+            .args(["-KILL", &pid])
+            .status();
+    });
+    let mut stdin = child.stdin.take().unwrap();
+    stdin
+        .write_all(b"protective stop\nspeed 7\nstate\n")
+        .unwrap();
+    let mut out = BufReader::new(child.stdout.take().unwrap());
+    let mut operator = Vec::new();
+    let mut states = Vec::new();
+    while operator.len() < 3 || states.is_empty() {
+        let mut l = String::new();
+        if out.read_line(&mut l).unwrap() == 0 {
+            break;
+        }
+        let v = check_event(&root, l.trim_end());
+        if v["event"] == "operator" {
+            operator.push(v);
+        } else if v["event"] == "state" {
+            states.push(v);
+        }
+    }
+    // The protective stop is said as a change of state too.
+    assert_eq!(
+        states.first().map(|v| &v["safety"]),
+        Some(&serde_json::json!("PROTECTIVE_STOP")),
+        "{states:?}"
+    );
+    let _ = child.kill();
+    let _ = child.wait();
+    assert_eq!(operator.len(), 3, "{operator:?}");
+    assert_eq!(operator[0]["command"], "protective stop");
+    assert!(operator[0]["text"]
+        .as_str()
+        .unwrap()
+        .contains("safety PROTECTIVE_STOP"));
+    assert!(operator[1]["text"]
+        .as_str()
+        .unwrap()
+        .starts_with("refused: "));
+    assert_eq!(operator[2]["command"], "state");
 }
 
 /// Issue 30: the controller's program reports its moves and output changes as `robot`

@@ -360,6 +360,16 @@ pub enum ServerEvent {
         /// Over how long (from the interval's start to its report).
         interval: Duration,
     },
+    /// The robot mode, the safety status or the program state changed (seen at the
+    /// end of a real-time step; not said for the state the controller starts in).
+    State {
+        /// The robot mode now.
+        robot_mode: crate::RobotMode,
+        /// The safety status now.
+        safety: crate::SafetyStatus,
+        /// The program state now.
+        program: crate::ProgramState,
+    },
     /// A dashboard client said `shutdown`: its program has ended and every client has
     /// been closed (their events came first); the server has stopped. The last event.
     Shutdown,
@@ -806,14 +816,45 @@ impl Server {
         self.halt();
     }
 
-    fn halt(&mut self) {
-        self.shared.stop.store(true, Ordering::SeqCst);
-        // Wake the blocking accepts.
+    /// Shuts the controller down as a dashboard `shutdown` does, whatever the control
+    /// mode (for a signal to the process): the running program ends, every client is
+    /// closed (their events come first) and the server stops serving. Returns once
+    /// that is done, after at most twice [`SHUTDOWN_WAIT`]; emits no
+    /// [`ServerEvent::Shutdown`]. While a dashboard `shutdown` is under way it only
+    /// waits for the server to stop.
+    pub fn shut_down(&self) {
+        let first = {
+            let now = self.shared.now();
+            let mut cell = self.shared.lock_cell();
+            cell.advance(now);
+            cell.controller().turn_off(now);
+            !self.shared.shutting_down.swap(true, Ordering::SeqCst)
+        };
+        if first {
+            // Connection numbers start at 1: every connection is closed.
+            self.shared.close_all_for_shutdown(0);
+            self.shared.stop.store(true, Ordering::SeqCst);
+        } else {
+            let start = std::time::Instant::now();
+            while !self.shared.stopped() && start.elapsed() < SHUTDOWN_WAIT * 2 {
+                std::thread::sleep(Duration::from_millis(1));
+            }
+        }
+        self.wake_accepts();
+    }
+
+    /// Wakes the threads blocked in an accept, so they see the stop.
+    fn wake_accepts(&self) {
         for service in ["dashboard", "interpreter"] {
             if let Some(a) = self.addr(service) {
                 let _ = TcpStream::connect_timeout(&a, Duration::from_millis(200));
             }
         }
+    }
+
+    fn halt(&mut self) {
+        self.shared.stop.store(true, Ordering::SeqCst);
+        self.wake_accepts();
         for t in self.threads.drain(..) {
             let _ = t.join();
         }

@@ -331,13 +331,16 @@ pub(crate) fn run(shared: &Arc<Shared>, listeners: Listeners) {
             }
         }
         lp.read_clients(shared, tick);
+        // Read before the step: the shutdown stopped the program under the cell's lock
+        // before it set the flag, so this step ends the program and reports it.
+        let closing = shared.shutting_down();
         lp.step(shared, tick);
         for c in &mut lp.clients {
             c.flush(tick);
         }
         lp.drop_gone(shared);
         lp.report_suppressed(shared, tick);
-        if shared.shutting_down() {
+        if closing {
             // The controller shut down: the step above ended its program; every
             // client is closed, then the loop ends.
             for c in &mut lp.clients {
@@ -947,6 +950,13 @@ impl Loop {
         let key = (status.robot_mode, status.safety, status.program_state);
         let changed = self.state_key.is_some_and(|k| k != key);
         self.state_key = Some(key);
+        if changed {
+            shared.emit(super::ServerEvent::State {
+                robot_mode: status.robot_mode,
+                safety: status.safety,
+                program: status.program_state,
+            });
+        }
         if now >= self.next_state || changed {
             self.next_state = now + primary::STATE_PERIOD;
             self.frame.clear();

@@ -6,8 +6,12 @@
 //! The server's threads (its real-time loop among them) never wait for standard output:
 //! each event is queued (at most [`OUTPUT_QUEUE`]) for a writer thread; when the queue
 //! is full (nobody reads the output) the event is dropped and counted, and a `dropped`
-//! event says how many once output resumes. A dashboard `shutdown` ends the process
-//! with status 0 after the `stopped` event, the last one.
+//! event says how many once output resumes. A dashboard `shutdown`, SIGTERM or SIGINT
+//! ends the process with status 0 after the `stopped` event, the last one.
+//!
+//! Once every port listens, `--ready-file` is written (atomically: a temporary file
+//! renamed) and a `ready` event follows the `listening` ones. The exit statuses are
+//! [`exit`]'s.
 
 use std::io::{BufRead, Read};
 use std::path::PathBuf;
@@ -84,7 +88,10 @@ pub struct ControllerOptions {
     /// Answer as URSim does, as UR's client libraries' CI runs it: programs are also
     /// found at `/ursim/programs/NAME` (NAME in `--programs DIR`), `default.installation`
     /// always loads, the remote control setting is off (as `--remote-control-disabled`)
-    /// and `get serial number` answers 20175599999.
+    /// and `get serial number` answers 20175599999. Without `--programs`, the programs
+    /// shipped with ursock: `default.installation`, `external_control.urp` (the External
+    /// Control URCap's node; its host is `--urcap-host`, else 192.168.56.1:50002) and
+    /// `wait.urp` (waits a second, over and over).
     #[arg(long, conflicts_with = "local")]
     pub ursim: bool,
     /// A URCap's installation preamble, written (as PolyScope does) at the top of every
@@ -105,6 +112,90 @@ pub struct ControllerOptions {
     /// command is served as before.
     #[arg(long)]
     pub no_shutdown: bool,
+    /// Once every port listens, write FILE (atomically: written beside it, then
+    /// renamed) with each service's address as a JSON object, e.g.
+    /// `{"dashboard":"127.0.0.1:29999","rtde":"127.0.0.1:30004"}`.
+    #[arg(long, value_name = "FILE")]
+    pub ready_file: Option<PathBuf>,
+}
+
+/// `ursock controller`'s exit statuses (stable: scripts and CI test them).
+pub mod exit {
+    /// The controller stopped: a dashboard `shutdown`, SIGTERM or SIGINT.
+    pub const STOPPED: i32 = 0;
+    /// Any other failure (the ready file cannot be written, a thread cannot start).
+    pub const FAILED: i32 = 1;
+    /// A bad option or value (the status clap gives a usage error).
+    pub const BAD_OPTION: i32 = 2;
+    /// A port is in use.
+    pub const PORT_IN_USE: i32 = 3;
+    /// A port cannot be listened on for another reason (the address is not this
+    /// machine's, a privileged port).
+    pub const CANNOT_LISTEN: i32 = 4;
+}
+
+/// Why `ursock controller` could not run: the message and its [`exit`] status.
+#[derive(Debug)]
+pub struct Failure {
+    pub code: i32,
+    pub message: String,
+}
+
+impl Failure {
+    fn bad_option(message: String) -> Self {
+        Failure {
+            code: exit::BAD_OPTION,
+            message,
+        }
+    }
+
+    fn failed(message: String) -> Self {
+        Failure {
+            code: exit::FAILED,
+            message,
+        }
+    }
+}
+
+/// The URSim profile's programs folder, shipped with `ursock` (`ursock/ursim/programs`,
+/// plain XML there): `--ursim` without `--programs` writes them, gzip-compressed as
+/// PolyScope saves them, into a folder of its own under the temporary directory, removed
+/// when the controller stops.
+pub const URSIM_PROGRAM_FILES: [(&str, &[u8]); 3] = [
+    (
+        "default.installation",
+        include_bytes!("../../ursim/programs/default.installation"),
+    ),
+    (
+        "external_control.urp",
+        include_bytes!("../../ursim/programs/external_control.urp"),
+    ),
+    ("wait.urp", include_bytes!("../../ursim/programs/wait.urp")),
+];
+
+/// A programs folder written for this process, removed when dropped.
+struct TempPrograms(PathBuf);
+
+impl Drop for TempPrograms {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.0);
+    }
+}
+
+/// Writes [`URSIM_PROGRAM_FILES`], gzip-compressed, into a new folder under the
+/// temporary directory.
+fn write_ursim_programs() -> std::io::Result<TempPrograms> {
+    use std::io::Write;
+    let dir = std::env::temp_dir().join(format!("ursock-ursim-programs-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir)?;
+    let folder = TempPrograms(dir);
+    for (name, xml) in URSIM_PROGRAM_FILES {
+        let mut gz = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::default());
+        gz.write_all(xml)?;
+        std::fs::write(folder.0.join(name), gz.finish()?)?;
+    }
+    Ok(folder)
 }
 
 /// Events waiting for standard output, at most: a second or so of a busy controller's
@@ -242,6 +333,16 @@ fn report_event(e: ServerEvent) -> Option<Event> {
         ServerEvent::Tx { socket, bytes } => Event::tx(&socket, &bytes),
         ServerEvent::Rx { socket, bytes } => Event::rx(&socket, &bytes),
         ServerEvent::Note(text) => Event::note(text),
+        ServerEvent::State {
+            robot_mode,
+            safety,
+            program,
+        } => Event::State(report::State {
+            t,
+            robot_mode: robot_mode.to_string(),
+            safety: safety.to_string(),
+            program: program.to_string(),
+        }),
         ServerEvent::Suppressed {
             conn,
             count,
@@ -268,31 +369,60 @@ fn print(json: bool, event: &Event) {
     }
 }
 
-/// Runs the controller until `shutdown`.
-pub fn run(opts: ControllerOptions) -> Result<(), String> {
-    let model: Model = opts.model.parse().map_err(|e| format!("--model: {e}"))?;
+/// Writes `text` to `path` atomically: into a temporary file beside it, then renamed
+/// over it, so a reader sees either no file or the whole of it.
+fn write_atomically(path: &std::path::Path, text: &str) -> std::io::Result<()> {
+    let mut name = path.file_name().unwrap_or_default().to_os_string();
+    name.push(format!(".{}.tmp", std::process::id()));
+    let tmp = path.with_file_name(name);
+    std::fs::write(&tmp, text)?;
+    std::fs::rename(&tmp, path).inspect_err(|_| {
+        let _ = std::fs::remove_file(&tmp);
+    })
+}
+
+/// Runs the controller until a dashboard `shutdown`, SIGTERM or SIGINT.
+pub fn run(opts: ControllerOptions) -> Result<(), Failure> {
+    let model: Model = opts
+        .model
+        .parse()
+        .map_err(|e| Failure::bad_option(format!("--model: {e}")))?;
     if !valid_version(&opts.polyscope) {
-        return Err(format!(
+        return Err(Failure::bad_option(format!(
             "--polyscope {}: give a version like 5.21.0 or 5.21.0.1234567",
             opts.polyscope
-        ));
+        )));
     }
     if opts.serial.is_empty() || opts.serial.len() > 64 || opts.serial.contains(char::is_whitespace)
     {
-        return Err(format!(
+        return Err(Failure::bad_option(format!(
             "--serial {:?}: give one word, like 20235500001",
             opts.serial
-        ));
+        )));
     }
     let urcap_host = match &opts.urcap_host {
         None => None,
-        Some(h) => Some(parse_host(h).map_err(|e| format!("--urcap-host {h}: {e}"))?),
+        Some(h) => {
+            Some(parse_host(h).map_err(|e| Failure::bad_option(format!("--urcap-host {h}: {e}")))?)
+        }
     };
-    let preamble = crate::script::read_preambles(&opts.preamble)?;
-    let Some(arm) = crate::script::arm_from_settings(&opts.set)? else {
+    let preamble = crate::script::read_preambles(&opts.preamble).map_err(Failure::bad_option)?;
+    let Some(arm) = crate::script::arm_from_settings(&opts.set).map_err(Failure::bad_option)?
+    else {
         return Ok(());
     };
     let stream = |port: u16| (!opts.no_streams).then_some(port);
+    // URSim's programs folder: the one given, else (with --ursim) the shipped one.
+    let ursim_programs = match (&opts.programs, opts.ursim) {
+        (None, true) => Some(write_ursim_programs().map_err(|e| {
+            Failure::failed(format!("cannot write the URSim programs folder: {e}"))
+        })?),
+        _ => None,
+    };
+    let programs = match &ursim_programs {
+        Some(t) => Some(t.0.clone()),
+        None => opts.programs.clone(),
+    };
     let options = ServerOptions {
         bind: opts.bind.clone(),
         ports: Ports {
@@ -312,7 +442,7 @@ pub fn run(opts: ControllerOptions) -> Result<(), String> {
             remote_control_enabled: !opts.remote_control_disabled,
             ..Config::default()
         },
-        programs: opts.programs.clone(),
+        programs,
         urcap_host,
         profile: if opts.ursim {
             Profile::Ursim
@@ -322,7 +452,27 @@ pub fn run(opts: ControllerOptions) -> Result<(), String> {
         allow_shutdown: !opts.no_shutdown,
     };
     let json = opts.json;
-    let (shutdown_tx, shutdown) = mpsc::channel::<()>();
+    // Why the controller stops: a dashboard `shutdown` or a signal.
+    let (shutdown_tx, shutdown) = mpsc::channel::<Stop>();
+    {
+        use signal_hook::consts::{SIGINT, SIGTERM};
+        let mut signals = signal_hook::iterator::Signals::new([SIGTERM, SIGINT])
+            .map_err(|e| Failure::failed(format!("cannot handle signals: {e}")))?;
+        let tx = shutdown_tx.clone();
+        std::thread::Builder::new()
+            .name("signals".into())
+            .spawn(move || {
+                if let Some(signal) = signals.forever().next() {
+                    let name = if signal == SIGINT {
+                        "SIGINT"
+                    } else {
+                        "SIGTERM"
+                    };
+                    let _ = tx.send(Stop::Signal(name));
+                }
+            })
+            .map_err(|e| Failure::failed(format!("cannot start the signal thread: {e}")))?;
+    }
     let shutdown_tx = std::sync::Mutex::new(shutdown_tx);
     let (queue, queued) = mpsc::sync_channel::<Out>(OUTPUT_QUEUE);
     let dropped = Arc::new(AtomicU64::new(0));
@@ -331,13 +481,13 @@ pub fn run(opts: ControllerOptions) -> Result<(), String> {
         std::thread::Builder::new()
             .name("output".into())
             .spawn(move || writer(json, queued, dropped))
-            .map_err(|e| format!("cannot start the output thread: {e}"))?;
+            .map_err(|e| Failure::failed(format!("cannot start the output thread: {e}")))?;
     }
     let sink = queue.clone();
     let server = Server::start(options, move |e| {
         if e == ServerEvent::Shutdown {
             let tx = shutdown_tx.lock().unwrap_or_else(|p| p.into_inner());
-            let _ = tx.send(());
+            let _ = tx.send(Stop::Shutdown);
             return;
         }
         if let Some(event) = report_event(e) {
@@ -348,31 +498,63 @@ pub fn run(opts: ControllerOptions) -> Result<(), String> {
         }
     })
     .map_err(|e| {
-        if e.kind() == std::io::ErrorKind::NotFound || e.kind() == std::io::ErrorKind::NotADirectory
-        {
-            format!("--programs: {e}")
-        } else {
-            e.to_string()
+        use std::io::ErrorKind;
+        match e.kind() {
+            ErrorKind::NotFound | ErrorKind::NotADirectory => {
+                Failure::bad_option(format!("--programs: {e}"))
+            }
+            ErrorKind::AddrInUse => Failure {
+                code: exit::PORT_IN_USE,
+                message: e.to_string(),
+            },
+            _ => Failure {
+                code: exit::CANNOT_LISTEN,
+                message: e.to_string(),
+            },
         }
     })?;
     server.with_cell(|cell, _| {
         cell.set_preamble(preamble);
         *cell.arm_mut() = arm;
     });
+    // Every port listens: the `ready` event follows the `listening` ones (queued from
+    // this thread, in order), and the ready file appears.
+    let addrs: std::collections::BTreeMap<&'static str, String> = server
+        .addrs()
+        .iter()
+        .map(|&(service, addr)| (service, addr.to_string()))
+        .collect();
+    if let Some(path) = &opts.ready_file {
+        let text = serde_json::to_string(&addrs).unwrap_or_default();
+        write_atomically(path, &format!("{text}\n"))
+            .map_err(|e| Failure::failed(format!("--ready-file {}: {e}", path.display())))?;
+    }
+    let _ = queue.try_send(Out::Event(Event::Ready(report::Ready {
+        t: report::now(),
+        addrs,
+    })));
     let server = std::sync::Arc::new(server);
     {
         let server = std::sync::Arc::clone(&server);
+        let out = queue.clone();
         let _ = std::thread::Builder::new()
             .name("operator".into())
-            .spawn(move || operator(&server, json));
+            .spawn(move || operator(&server, json, &out));
     }
-    let _ = shutdown.recv();
+    let reason = match shutdown.recv() {
+        Ok(Stop::Signal(name)) => {
+            // As a dashboard `shutdown`: the program ends and every client is closed.
+            server.shut_down();
+            format!("signal: {name}")
+        }
+        Ok(Stop::Shutdown) | Err(_) => "shutdown: a dashboard client said shutdown".into(),
+    };
     // The last event, after everything the shutdown closed; the process ends with
     // status 0 once it is out (or after FINAL_WAIT if standard output is stuck).
     let (done_tx, done) = mpsc::channel();
     let last = Event::Stopped(report::Stopped {
         t: report::now(),
-        reason: "shutdown: a dashboard client said shutdown".into(),
+        reason,
     });
     let mut last = Some(Out::Last(last, done_tx));
     let start = std::time::Instant::now();
@@ -388,7 +570,16 @@ pub fn run(opts: ControllerOptions) -> Result<(), String> {
             Err(_) => {}
         }
     }
-    std::process::exit(0);
+    drop(ursim_programs);
+    std::process::exit(exit::STOPPED);
+}
+
+/// Why the controller stops.
+enum Stop {
+    /// A dashboard client said `shutdown`.
+    Shutdown,
+    /// The process got this signal.
+    Signal(&'static str),
 }
 
 /// The operator's commands on standard input: what happens at the robot that no
@@ -421,7 +612,7 @@ fn parse_joints(text: &str) -> Result<[f64; 6], String> {
 
 /// Reads operator commands from standard input until its end (lines bounded at
 /// `MAX_LINE` bytes).
-fn operator(server: &Server, json: bool) {
+fn operator(server: &Server, json: bool, out: &mpsc::SyncSender<Out>) {
     let stdin = std::io::stdin();
     let mut input = stdin.lock();
     let mut line = Vec::new();
@@ -523,7 +714,7 @@ fn operator(server: &Server, json: bool) {
                 Ok(())
             };
             if let Err(why) = by_hand {
-                return format!("operator: {cmd}: refused: {why}");
+                return format!("refused: {why}");
             }
             let c = cell.controller();
             if let Some(status) = status {
@@ -537,12 +728,15 @@ fn operator(server: &Server, json: bool) {
             } else {
                 "local"
             };
-            format!(
-                "operator: {cmd}: robot mode {mode}, safety {safety}, program {program}, {remote} control"
-            )
+            format!("robot mode {mode}, safety {safety}, program {program}, {remote} control")
         });
-        if !json {
-            crate::out::line(&said);
-        }
+        let event = Event::Operator(report::Operator {
+            t: report::now(),
+            command: cmd.clone(),
+            text: said,
+        });
+        // In order with the server's events; the operator's thread may wait for the
+        // output.
+        let _ = out.send(Out::Event(event));
     }
 }

@@ -419,6 +419,19 @@ pub fn human(event: &Event, show_max: usize) -> Vec<String> {
             "{} events not written: standard output did not keep up",
             e.count
         )),
+        Event::Ready(e) => one(format!(
+            "ready: {}",
+            e.addrs
+                .iter()
+                .map(|(s, a)| format!("{s} {a}"))
+                .collect::<Vec<_>>()
+                .join(", ")
+        )),
+        Event::Operator(e) => one(format!("operator: {}: {}", e.command, e.text)),
+        Event::State(e) => one(format!(
+            "state: robot mode {}, safety {}, program {}",
+            e.robot_mode, e.safety, e.program
+        )),
         Event::Stopped(e) => one(format!("stopped: {}", e.reason)),
         Event::Dashboard(e) => std::iter::once(format!("<- {:?}", e.command))
             .chain(e.reply.iter().map(|l| format!("-> {l:?}")))
