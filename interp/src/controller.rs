@@ -10,7 +10,9 @@ use urscript_socket::robot::ReadCall;
 
 use crate::builtins::{Args, Out};
 use crate::error::Fault;
-use crate::event::{Event, Message, MessageKind, ReadRecord, MAX_READ_INPUT};
+use crate::event::{
+    Event, Message, MessageKind, MoveEnd, MoveOutcome, MoveStart, ReadRecord, MAX_READ_INPUT,
+};
 use crate::kinematics::{self, Dh};
 use crate::sockets::Sockets;
 use crate::trajectory::{self, Kind, Motion};
@@ -473,6 +475,24 @@ pub(crate) struct Controller {
     /// The step the TCP's contact with the contact plane began in (`tool_contact`), while
     /// it lasts.
     pub contact_since: Option<u64>,
+    /// The move or stream whose start was reported and whose end was not.
+    pub tracked: Option<Tracked>,
+    /// The start of the move queued behind a blending one (reported when it starts).
+    pub queued: Option<Box<MoveStart>>,
+}
+
+/// A move or stream under way, as reported ([`Event::MoveStart`]).
+#[derive(Debug)]
+pub(crate) struct Tracked {
+    pub start: Box<MoveStart>,
+    /// The step it started in.
+    pub step: u64,
+    /// Commands so far (a stream's `servoj` calls...).
+    pub samples: u64,
+    /// A stream of `servoj`/`speedj`... commands (its end is the next other command).
+    pub stream: bool,
+    /// A stream whose last command's motion has ended: the step it ended in.
+    pub ended: Option<u64>,
 }
 
 /// The motion clock, counted in steps: it advances by the speed slider's fraction each
@@ -636,6 +656,7 @@ impl Controller {
     /// controller that runs the arm (`Arm::protective_stop`; a program alone just goes
     /// on, stopped).
     pub fn protective_stop(&mut self) {
+        self.end_move(MoveOutcome::ProtectiveStop, self.step);
         self.stop_at_once();
         self.arm.protective_stop = true;
     }
@@ -648,8 +669,29 @@ impl Controller {
     }
 
     /// Starts a motion now (replacing any under way) for the thread running now, and puts
-    /// the arm at its start.
-    pub fn start_motion(&mut self, kind: Kind, tcp: [f64; 6]) {
+    /// the arm at its start. `stream`: the command of a servo or speed stream (reported
+    /// once per stream: a command of the same function continues the one under way);
+    /// `None`: `stopj`/`stopl`, which stop what is under way.
+    pub fn start_motion(&mut self, kind: Kind, tcp: [f64; 6], stream: Option<MoveStart>) {
+        match stream {
+            None => self.end_move(MoveOutcome::Stopped, self.step),
+            Some(info) => {
+                let same = self
+                    .tracked
+                    .as_ref()
+                    .is_some_and(|t| t.stream && t.start.function == info.function);
+                if same {
+                    if let Some(t) = self.tracked.as_mut() {
+                        t.samples = t.samples.saturating_add(1);
+                        t.ended = None;
+                    }
+                } else {
+                    self.supersede();
+                    self.begin_move(info, true, self.step);
+                }
+            }
+        }
+        self.queued = None;
         self.motion = Some(Motion {
             kind,
             start: self.clock_now(),
@@ -702,7 +744,11 @@ impl Controller {
     /// A radius limited because the blends would overlap (or the move is shorter than
     /// `r`) is reported as a [`MessageKind::BlendRadiusReduced`] message for `line`, as
     /// the controller logs a warning.
-    pub fn start_move(&mut self, kind: Kind, tcp: [f64; 6], r: f64, line: u32) -> f64 {
+    ///
+    /// The move is reported ([`Event::MoveStart`]) when the arm sets off with it; the one
+    /// it blends from ends `Blended` then.
+    pub fn start_move(&mut self, kind: Kind, tcp: [f64; 6], r: f64, info: MoveStart) -> f64 {
+        let line = info.line;
         let dt = self.step_time.as_secs_f64();
         let steps = |secs: f64| {
             if dt > 0.0 && secs.is_finite() {
@@ -728,6 +774,7 @@ impl Controller {
                 Some(k) => {
                     kind = k;
                     continuous = true;
+                    self.end_move(MoveOutcome::Blended, self.step);
                 }
                 None => start = (m.start + steps(m.duration()) as f64).max(now),
             }
@@ -771,8 +818,12 @@ impl Controller {
         if start > now {
             if let Some(m) = self.motion.as_mut() {
                 m.next = Some(Box::new(motion));
+                self.queued = Some(Box::new(info));
             }
         } else {
+            self.supersede();
+            self.begin_move(info, false, self.step);
+            self.queued = None;
             if !continuous {
                 self.restart_force_offset();
             }
@@ -790,8 +841,16 @@ impl Controller {
         if let Some(m) = self.motion.as_mut() {
             if m.next.as_ref().is_some_and(|n| clock >= n.start) {
                 if let Some(n) = m.next.take() {
+                    // The move before it ended at its target.
+                    if let Some((q, _)) = m.kind.end(&self.dh, m.tcp) {
+                        self.arm.q = q;
+                    }
                     self.motion = Some(*n);
                     self.sampled = None;
+                    self.end_move(MoveOutcome::Reached, step);
+                    if let Some(info) = self.queued.take() {
+                        self.begin_move(*info, false, step);
+                    }
                 }
             }
         }
@@ -810,6 +869,9 @@ impl Controller {
         self.sampled = Some(step);
         let before = (self.arm.q, self.arm.qd);
         let mut moved = false;
+        // How the motion ended in this step, if it did: a protective stop, or at its
+        // target (with whether a queued move started).
+        let mut ended: Option<Result<bool, ()>> = None;
         if let Some(m) = self.motion.as_mut() {
             moved = true;
             // The program gets control back from a move with a blend in the first step
@@ -841,12 +903,32 @@ impl Controller {
                 self.arm.qdd = [0.0; 6];
                 self.arm.tcp_speed = [0.0; 6];
                 self.arm.protective_stop = true;
+                ended = Some(Err(()));
             } else if s.done {
                 // A move queued behind this one starts now (at rest, where this one ended).
                 let next = m.next.take();
+                ended = Some(Ok(next.is_some()));
                 self.motion = next.map(|n| *n);
                 self.arm.qdd = [0.0; 6];
             }
+        }
+        match ended {
+            Some(Err(())) => {
+                self.queued = None;
+                self.end_move(MoveOutcome::ProtectiveStop, step);
+            }
+            Some(Ok(queued)) => {
+                match self.tracked.as_mut() {
+                    Some(t) if t.stream => t.ended = Some(step),
+                    _ => self.end_move(MoveOutcome::Reached, step),
+                }
+                if queued {
+                    if let Some(info) = self.queued.take() {
+                        self.begin_move(*info, false, step);
+                    }
+                }
+            }
+            None => {}
         }
         if self.arm.force_mode.is_some() {
             self.force_step(step, moved, before);
@@ -949,8 +1031,59 @@ impl Controller {
         Err(self.mem.over(events, bytes))
     }
 
+    /// Reports the start of a move or stream at step `step` and tracks it.
+    fn begin_move(&mut self, mut info: MoveStart, stream: bool, step: u64) {
+        info.at = self.time_of(step);
+        let start = Box::new(info);
+        self.events.push_back(Event::MoveStart(start.clone()));
+        self.tracked = Some(Tracked {
+            start,
+            step,
+            samples: 1,
+            stream,
+            ended: None,
+        });
+    }
+
+    /// Ends what is tracked because another command takes over now: a stream whose last
+    /// command's motion had ended reached its target then; anything else is replaced.
+    fn supersede(&mut self) {
+        match self.tracked.as_ref().and_then(|t| t.ended) {
+            Some(at) => self.end_move(MoveOutcome::Reached, at),
+            None => self.end_move(MoveOutcome::Replaced, self.step),
+        }
+    }
+
+    /// Reports the end of the tracked move or stream (if any) at step `step`, the arm
+    /// where it is now.
+    fn end_move(&mut self, outcome: MoveOutcome, step: u64) {
+        let Some(t) = self.tracked.take() else {
+            return;
+        };
+        // A stream whose last command had ended reached its target then.
+        let (outcome, step) = match t.ended {
+            Some(at) if outcome != MoveOutcome::ProtectiveStop => (MoveOutcome::Reached, at),
+            _ => (outcome, step),
+        };
+        let step = step.max(t.step);
+        let at = self.time_of(step);
+        let pose = self.tcp_pose();
+        self.events.push_back(Event::MoveEnd(Box::new(MoveEnd {
+            line: t.start.line,
+            function: t.start.function,
+            outcome,
+            at,
+            took: at.saturating_sub(t.start.at),
+            samples: t.samples,
+            q: self.arm.q,
+            pose,
+        })));
+    }
+
     /// Stops the arm where it is (its thread was killed, the program stopped).
     pub fn halt(&mut self) {
+        self.queued = None;
+        self.end_move(MoveOutcome::Halted, self.step);
         if self.motion.take().is_some() {
             self.arm.qd = [0.0; 6];
             self.arm.qdd = [0.0; 6];

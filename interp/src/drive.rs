@@ -19,6 +19,12 @@
 //! once reaches the read that waits for it. A step that keeps up is not delayed: program
 //! time then is real time.
 //!
+//!
+//! With [`Options::virtual_time`], a program with no connection open does not wait in
+//! real time: program time jumps to its next wake (a `sleep`'s end, a move's), so it
+//! runs faster than real time with the same results (the same steps run, at the same
+//! program times). Once it opens a connection, time is real again until it closes.
+//!
 //! ## Bounds
 //! - Bytes the program sends are written without blocking; what a server does not read
 //!   waits in a per-socket queue of at most [`MAX_UNSENT`] bytes. Past that the
@@ -50,6 +56,12 @@ pub struct Options {
     pub connect_timeout: Duration,
     /// The longest sleep between two rounds of reading the sockets.
     pub poll_interval: Duration,
+    /// Run in virtual time while the program has no connection open: a wait (a
+    /// `sleep`, a move, a read's timeout) ends at once instead of lasting its real
+    /// length, and the program gives the same results faster than real time. While a
+    /// connection is open, time is real (a server answers in real time). With it,
+    /// [`max_time`](Self::max_time) counts program time.
+    pub virtual_time: bool,
 }
 
 impl Default for Options {
@@ -58,6 +70,7 @@ impl Default for Options {
             max_time: None,
             connect_timeout: Duration::from_secs(2),
             poll_interval: Duration::from_millis(1),
+            virtual_time: false,
         }
     }
 }
@@ -216,12 +229,20 @@ impl Driver {
         // (a read's timeout, a sleep) lasts its real duration and the sockets are serviced
         // between any two steps, however slow the steps are.
         let mut lag = Duration::ZERO;
+        // Virtual time: the program time skipped (waits that ended at once).
+        let mut skipped = Duration::ZERO;
         loop {
             let elapsed = start.elapsed();
-            if self.options.max_time.is_some_and(|m| elapsed >= m) {
+            let program_time = (elapsed + skipped).saturating_sub(lag);
+            let limit = if self.options.virtual_time {
+                program_time
+            } else {
+                elapsed
+            };
+            if self.options.max_time.is_some_and(|m| limit >= m) {
                 return Ok(Outcome::MaxTime);
             }
-            let now = elapsed.saturating_sub(lag);
+            let now = program_time;
             // Behind by more than a step (the last step overran, a connection took long
             // to open): program time resumes at the step that is due, not past it.
             let slack = machine.step_time();
@@ -250,14 +271,33 @@ impl Driver {
                 State::Error(e) => return Err(e.clone()),
             }
             let busy = self.service_sockets(machine, &mut on_activity);
+            if !busy && self.options.virtual_time && self.conns.is_empty() {
+                // No peer to wait for: program time jumps to the next wake.
+                let now = (start.elapsed() + skipped).saturating_sub(lag);
+                if let Some(wake) = machine.poll_timeout() {
+                    let mut jump = wake.saturating_sub(now);
+                    if let Some(m) = self.options.max_time {
+                        jump = jump.min(m.saturating_sub(now));
+                    }
+                    if !jump.is_zero() {
+                        skipped += jump;
+                        continue;
+                    }
+                }
+            }
             if !busy {
-                let now = start.elapsed().saturating_sub(lag);
+                let now = (start.elapsed() + skipped).saturating_sub(lag);
                 let mut wait = self.options.poll_interval;
                 if let Some(wake) = machine.poll_timeout() {
                     wait = wait.min(wake.saturating_sub(now));
                 }
                 if let Some(m) = self.options.max_time {
-                    wait = wait.min(m.saturating_sub(start.elapsed()));
+                    let limit = if self.options.virtual_time {
+                        now
+                    } else {
+                        start.elapsed()
+                    };
+                    wait = wait.min(m.saturating_sub(limit));
                 }
                 if !wait.is_zero() {
                     std::thread::sleep(wait);
@@ -319,7 +359,11 @@ impl Driver {
                     let _ = c.stream.shutdown(Shutdown::Both);
                 }
             }
-            Event::Message(_) | Event::Call(_) => {}
+            Event::Message(_)
+            | Event::Call(_)
+            | Event::MoveStart(_)
+            | Event::MoveEnd(_)
+            | Event::Output(_) => {}
         }
     }
 
@@ -346,7 +390,12 @@ impl Driver {
                     let _ = c.stream.shutdown(Shutdown::Both);
                 }
             }
-            Event::Connect { .. } | Event::Message(_) | Event::Call(_) => {}
+            Event::Connect { .. }
+            | Event::Message(_)
+            | Event::Call(_)
+            | Event::MoveStart(_)
+            | Event::MoveEnd(_)
+            | Event::Output(_) => {}
         }
     }
 

@@ -43,6 +43,119 @@ pub enum Event {
     /// other built-ins with [`Config::trace_all_calls`](crate::Config::trace_all_calls).
     /// A call that waits (a read, `socket_open`) is recorded when it returns.
     Call(Box<CallRecord>),
+    /// A move (`movej`, `movel`, `movep`, `movec`, `optimove*`) started, or a stream of
+    /// `servoj`, `servoc`, `speedj` or `speedl` commands did (one event for the stream, not
+    /// one per command).
+    MoveStart(Box<MoveStart>),
+    /// The move or stream a [`Event::MoveStart`] reported ended, and how.
+    MoveEnd(Box<MoveEnd>),
+    /// The program changed an output (digital, tool digital or analog); a write that
+    /// leaves the output as it was is not reported.
+    Output(OutputWrite),
+}
+
+/// A move or stream's start: what the program asked.
+#[derive(Debug, Clone, PartialEq)]
+pub struct MoveStart {
+    /// The line of the command.
+    pub line: u32,
+    /// The function (`movej`, `servoj`...).
+    pub function: &'static str,
+    /// Program time the arm set off (a move queued behind a blending one starts when
+    /// that one ends).
+    pub at: std::time::Duration,
+    /// The target joints (rad); for a tool move, those the inverse kinematics gave (the
+    /// start's, if the pose is out of reach); `None` for a speed stream.
+    pub target_q: Option<[f64; 6]>,
+    /// The target tool pose (base frame); `None` for a speed stream.
+    pub target_pose: Option<[f64; 6]>,
+    /// The speeds a `speedj` (rad/s) or `speedl` (m/s, rad/s) stream started with.
+    pub speed: Option<[f64; 6]>,
+    /// Acceleration (`a`, rad/s² or m/s²), 0 if the function has none.
+    pub a: f64,
+    /// Speed (`v`), 0 if the function has none.
+    pub v: f64,
+    /// Time (`t`, s), 0 if not given.
+    pub t: f64,
+    /// Blend radius (`r`, m), 0 if none.
+    pub r: f64,
+}
+
+/// How a move or stream ended.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[non_exhaustive]
+pub enum MoveOutcome {
+    /// The arm reached the target and stopped there (a servo stream: its last target).
+    Reached,
+    /// The next move took over in the blend before the target.
+    Blended,
+    /// `stopj` or `stopl` stopped it.
+    Stopped,
+    /// A protective stop (`protective_stop()`, or the path left the arm's reach).
+    ProtectiveStop,
+    /// Another motion command (of another kind, or from another thread) replaced it.
+    Replaced,
+    /// The program (or the thread that commanded it) stopped, or the move was aborted.
+    Halted,
+}
+
+impl MoveOutcome {
+    /// The outcome's name in `ursock`'s output: `reached`, `blended`, `stopped`,
+    /// `protective-stop`, `replaced`, `halted`.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Self::Reached => "reached",
+            Self::Blended => "blended",
+            Self::Stopped => "stopped",
+            Self::ProtectiveStop => "protective-stop",
+            Self::Replaced => "replaced",
+            Self::Halted => "halted",
+        }
+    }
+}
+
+/// A move or stream's end.
+#[derive(Debug, Clone, PartialEq)]
+pub struct MoveEnd {
+    /// The line of the command that started it.
+    pub line: u32,
+    /// Its function.
+    pub function: &'static str,
+    /// How it ended.
+    pub outcome: MoveOutcome,
+    /// Program time it ended.
+    pub at: std::time::Duration,
+    /// How long it took (from its start).
+    pub took: std::time::Duration,
+    /// How many commands it was: 1 for a move, the number of `servoj`/`speedj`...
+    /// calls for a stream.
+    pub samples: u64,
+    /// The joints (rad) where it ended.
+    pub q: [f64; 6],
+    /// The tool pose where it ended.
+    pub pose: [f64; 6],
+}
+
+/// An output a program changed.
+#[derive(Debug, Clone, PartialEq)]
+pub struct OutputWrite {
+    /// The line of the call.
+    pub line: u32,
+    /// The function (`set_standard_digital_out`...).
+    pub function: &'static str,
+    /// Which output: the pin as the function numbers it.
+    pub pin: i64,
+    /// Its new value.
+    pub value: OutputValue,
+}
+
+/// A digital or analog output's value.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum OutputValue {
+    /// A digital output.
+    Digital(bool),
+    /// An analog output (fraction of its range, as `set_standard_analog_out` takes it).
+    Analog(f64),
 }
 
 /// Which function showed a [`Message`].

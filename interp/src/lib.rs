@@ -40,6 +40,8 @@
 //! | sockets open at once (`socket_open` of a new name past it) | [`MAX_SOCKETS`](builtins::sockets::MAX_SOCKETS) (64) | runtime, `Limit` |
 //! | EtherNet/IP handles per program; instances; bytes per instance; labels per handle | [`eip::MAX_HANDLES`] (64); [`eip::MAX_INSTANCES`] (64); [`eip::MAX_DATA_SIZE`] (4096); [`eip::MAX_LABELS`] (256) | runtime, `Limit` or `Argument` |
 //! | statements per thread per step without consuming time (its time slice) | [`Config::max_statements_per_step`] (10 000) | the thread goes on in the next step |
+//! | steps of a motion one `run_until` puts the arm through one by one | [`MAX_MOTION_SAMPLES`](machine::MAX_MOTION_SAMPLES) (2^22) | past it the arm jumps to where the motion has it |
+//! | motion events | two per move or servo/speed stream ([`Event::MoveStart`], [`Event::MoveEnd`]), one per output change ([`Event::Output`]) | a write of the value already there is not reported |
 //! | memory the program holds at once: values of every variable of every frame of every thread and the globals, temporaries, call frames, threads, events not yet taken by the driver | [`Config::max_memory`] (256 MiB) | runtime, `Limit`: `memory budget exceeded: the program holds N bytes and needs M more, over its budget of B bytes (...)` |
 //!
 //! Everything recursive (parsing, compiling, cloning, comparing, writing and dropping
@@ -112,7 +114,10 @@ mod world_set;
 pub use compile::{Preamble, Program};
 pub use controller::{Arm, World};
 pub use error::{ParseError, ParseErrorKind, RuntimeError, RuntimeErrorKind};
-pub use event::{CallRecord, Event, Message, MessageKind, Outcome, ReadRecord};
+pub use event::{
+    CallRecord, Event, Message, MessageKind, MoveEnd, MoveOutcome, MoveStart, Outcome, OutputValue,
+    OutputWrite, ReadRecord,
+};
 pub use machine::{Config, Machine, State, Stub};
 pub use sockets::{Policy, Timeout};
 pub use value::{Value, MAX_STRUCT_MEMBERS, MAX_VALUE_DEPTH};

@@ -397,13 +397,14 @@ impl Machine {
             .find(|(site, stub)| !site.user && site.builtin.is_none() && stub.is_none())
             .map(|(site, _)| {
                 let name = &program.names[site.name as usize];
+                let hint = suggestion(name, &program);
                 RuntimeError::at(
                     site.at.line,
                     site.at.col,
                     Fault::new(
                         K::UnknownFunction,
                         format!(
-                            "compile_error_name_not_found:{name}: `{name}` is neither defined in the program nor a built-in of the controller (a URCap's function? stub it)"
+                            "compile_error_name_not_found:{name}: `{name}` is neither defined in the program nor a built-in of the controller{hint} (a URCap's function? stub it)"
                         ),
                     ),
                 )
@@ -411,13 +412,14 @@ impl Machine {
         // A variable read that nothing can have given a value is the same compile error;
         // the controller names the first one in the text.
         let unknown_variable = program.unknown_variable.as_ref().map(|(name, at)| {
+            let hint = suggestion(name, &program);
             RuntimeError::at(
                 at.line,
                 at.col,
                 Fault::new(
                     K::UnknownVariable,
                     format!(
-                        "compile_error_name_not_found:{name}: `{name}` is never assigned in its scope (not a global the program assigns, not a parameter or variable of its function)"
+                        "compile_error_name_not_found:{name}: `{name}` is never assigned in its scope (not a global the program assigns, not a parameter or variable of its function){hint}"
                     ),
                 ),
             )
@@ -445,6 +447,8 @@ impl Machine {
                 sampled: None,
                 eip: crate::eip::Handles::default(),
                 rtde_watchdogs: Vec::new(),
+                tracked: None,
+                queued: None,
                 clock: crate::controller::MotionClock::default(),
                 contact_since: None,
             },
@@ -649,11 +653,15 @@ impl Machine {
         while self.state == State::Running && self.ctl.step < target {
             match self.next_wake_step() {
                 Some(s) if s < target => {
+                    self.sample_motion_until(s);
                     self.ctl.step = self.ctl.step.max(s);
                     self.run_step();
                     self.ctl.step += 1;
                 }
-                _ => self.ctl.step = target,
+                _ => {
+                    self.sample_motion_until(target);
+                    self.ctl.step = target;
+                }
             }
         }
         // Steps where no thread ran still move the arm: it is where the motion has it at
@@ -662,6 +670,23 @@ impl Machine {
             && (self.ctl.motion.is_some() || self.ctl.arm.force_mode.is_some())
         {
             self.ctl.advance(self.ctl.step.saturating_sub(1));
+        }
+    }
+
+    /// Puts the arm through every step from the next one up to (not including) `end`
+    /// while a motion is under way, as the controller computes each step: a tool move's
+    /// joints follow its path step by step (each step's inverse kinematics nearest the
+    /// last), so where the arm goes does not depend on how often the driver calls
+    /// [`run_until`](Self::run_until) (real time, or virtual time's jumps).
+    ///
+    /// At most [`MAX_MOTION_SAMPLES`] steps per call: a caller that jumps further (hours
+    /// of a held `speedl` in one call) gets the arm where the motion has it at the end.
+    fn sample_motion_until(&mut self, end: u64) {
+        let mut step = self.ctl.step;
+        let end = end.min(step.saturating_add(MAX_MOTION_SAMPLES));
+        while step < end && self.ctl.motion.is_some() {
+            self.ctl.advance(step);
+            step += 1;
         }
     }
 
@@ -3038,6 +3063,19 @@ impl Machine {
             }
         }
     }
+}
+
+/// The most steps of a motion one [`Machine::run_until`] call puts the arm through one by
+/// one: 2^22, over two hours of 2 ms steps, a few seconds of computing at most.
+pub const MAX_MOTION_SAMPLES: u64 = 1 << 22;
+
+/// `: did you mean `NAME`?` for the built-in or program name (function, variable)
+/// nearest `name` (a typo), else nothing.
+fn suggestion(name: &str, program: &Program) -> String {
+    let funcs = program.funcs.iter().map(|f| f.name.as_str());
+    crate::builtins::nearest_name(name, funcs.chain(program.names.iter().map(String::as_str)))
+        .map(|n| format!(": did you mean `{n}`?"))
+        .unwrap_or_default()
 }
 
 #[cfg(test)]

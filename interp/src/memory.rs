@@ -70,6 +70,9 @@ fn event_bytes(e: &Event) -> usize {
                     std::mem::size_of::<crate::event::ReadRecord>() + read.input.len()
                 })
         }
+        Event::MoveStart(_) => std::mem::size_of::<crate::event::MoveStart>(),
+        Event::MoveEnd(_) => std::mem::size_of::<crate::event::MoveEnd>(),
+        Event::Output(_) => 0,
     };
     std::mem::size_of::<Event>().saturating_add(extra)
 }

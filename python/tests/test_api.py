@@ -69,3 +69,13 @@ def test_the_plugin_is_registered_by_its_entry_point(pytestconfig: pytest.Config
 
 def test_the_package_is_typed() -> None:
     assert (Path(ursock.__file__).parent / "py.typed").is_file()
+
+
+def test_every_public_name_is_in_the_readmes_api_section() -> None:
+    import ursock.pytest_plugin
+
+    readme = (Path(__file__).resolve().parent.parent / "README.md").read_text(encoding="utf-8")
+    api = readme.split("## API", 1)[1].split("\n## ", 1)[0]
+    names = [*ursock.__all__, *ursock.pytest_plugin.__all__]
+    missing = [n for n in names if f"`{n}" not in api]
+    assert missing == [], f"not in python/README.md's API section: {missing}"

@@ -55,10 +55,10 @@ enum Command {
     /// A virtual robot running a URScript program against real servers, in real time:
     /// prints each socket call and what it returned, and textmsg/popup text.
     ///
-    /// Exits 0 when the program ends or halts (or --max-time passes), non-zero with
-    /// `line N:` on a runtime error, and non-zero at a protective stop (a move beyond the
-    /// arm's reach, `protective_stop()`: a controller pauses the program there); a parse
-    /// error names line and column and nothing is sent.
+    /// Exits 0 when the program ends or halts (or --max-time passes), 1 with `line N:`
+    /// on a runtime error, and 1 at a protective stop (a move beyond the arm's reach,
+    /// `protective_stop()`: a controller pauses the program there); a parse error names
+    /// line and column and nothing is sent. `--fail-on` makes a halt or a popup fail too.
     Robot {
         /// Open `socket_0` to HOST:PORT before the program runs.
         #[arg(long)]
@@ -106,6 +106,17 @@ enum Command {
         /// `operator_int=3`... (`--set help` lists every name). Repeatable.
         #[arg(long, value_name = "NAME=VALUE")]
         set: Vec<String>,
+        /// Exit 1 also when the program does this: `halt` (it ran `halt`),
+        /// `error-popup` (a popup with error=True), `popup` (any popup). A compile or
+        /// runtime error and a protective stop always exit 1. Comma-separated, repeatable.
+        #[arg(long, value_name = "WHAT,...")]
+        fail_on: Vec<String>,
+        /// Run in virtual time while the program has no connection open: a sleep or a
+        /// move ends at once instead of lasting its real length, with the same results
+        /// (the same program times). While a connection is open, time is real.
+        /// --max-time then counts program time.
+        #[arg(long)]
+        virtual_time: bool,
     },
     /// A virtual UR controller that unmodified clients drive: the dashboard server
     /// (port 29999) with its state machine (power, brakes, safety, programs).
@@ -220,7 +231,10 @@ fn run(cli: Cli) -> Result<(), String> {
             stub,
             preamble,
             set,
+            fail_on,
+            virtual_time,
         } => {
+            let fail_on = script::FailOn::parse(&fail_on)?;
             let Some(arm) = script::arm_from_settings(&set)? else {
                 return Ok(());
             };
@@ -273,6 +287,8 @@ fn run(cli: Cli) -> Result<(), String> {
                     stubs,
                     preamble: urcaps,
                     arm,
+                    fail_on,
+                    virtual_time,
                 },
             )
         }

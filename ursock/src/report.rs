@@ -436,6 +436,10 @@ pub struct Error {
     pub line: Option<u32>,
     pub column: Option<u32>,
     pub text: String,
+    /// The controller's error code when the error has one (`compile_error_name_not_found`);
+    /// `text` is then the message without it.
+    #[serde(skip_serializing_if = "is_none")]
+    pub code: Option<String>,
 }
 
 /// How a robot program ended.
@@ -455,6 +459,108 @@ pub enum EndOutcome {
 pub struct End {
     pub t: f64,
     pub outcome: EndOutcome,
+    /// `robot`: the arm when the program ended.
+    #[serde(skip_serializing_if = "is_none")]
+    pub arm: Option<ArmState>,
+}
+
+/// The arm's state: where it is and its outputs.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ArmState {
+    /// Joints (rad).
+    #[serde(serialize_with = "pose_array")]
+    pub joints: [f64; 6],
+    /// Tool pose (base frame).
+    #[serde(serialize_with = "pose_array")]
+    pub pose: [f64; 6],
+    /// Digital outputs: standard 0-7, then configurable 0-7.
+    pub digital_out: Vec<bool>,
+    /// Tool digital outputs 0-1.
+    pub tool_out: [bool; 2],
+    /// Standard analog outputs 0-1.
+    pub analog_out: Vec<Value>,
+}
+
+/// `robot`, `controller`: a move (or a servo/speed stream) started.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct MoveStart {
+    pub t: f64,
+    /// Program time it started (s).
+    #[serde(serialize_with = "secs")]
+    pub at: f64,
+    pub line: u32,
+    /// `movej`, `movel`, `servoj`...
+    pub function: String,
+    /// Target joints (rad); `None` for a speed stream.
+    #[serde(serialize_with = "opt_array")]
+    pub target_joints: Option<[f64; 6]>,
+    /// Target tool pose (base frame); `None` for a speed stream.
+    #[serde(serialize_with = "opt_array")]
+    pub target_pose: Option<[f64; 6]>,
+    /// The speeds a speed stream started with.
+    #[serde(serialize_with = "opt_array")]
+    pub speed: Option<[f64; 6]>,
+    #[serde(serialize_with = "num")]
+    pub acceleration: f64,
+    #[serde(serialize_with = "num")]
+    pub velocity: f64,
+    /// The time argument `t` (s), 0 if not given.
+    #[serde(serialize_with = "num")]
+    pub time: f64,
+    #[serde(serialize_with = "num")]
+    pub blend_radius: f64,
+}
+
+/// `robot`, `controller`: the move a `move_start` reported ended.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct MoveEnd {
+    pub t: f64,
+    /// Program time it ended (s).
+    #[serde(serialize_with = "secs")]
+    pub at: f64,
+    pub line: u32,
+    pub function: String,
+    /// `reached`, `blended`, `stopped`, `protective_stop`, `replaced`, `halted`.
+    pub outcome: String,
+    /// How long it took (s, program time).
+    #[serde(serialize_with = "secs")]
+    pub took: f64,
+    /// Commands it was (a stream's sample count; 1 for a move).
+    pub samples: u64,
+    /// Where the arm ended: joints (rad) and tool pose.
+    #[serde(serialize_with = "pose_array")]
+    pub joints: [f64; 6],
+    #[serde(serialize_with = "pose_array")]
+    pub pose: [f64; 6],
+    /// For people: the move's target as its start gave it.
+    #[serde(skip)]
+    pub target: Option<String>,
+}
+
+/// `robot`, `controller`: a program changed an output.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Output {
+    pub t: f64,
+    pub line: u32,
+    pub function: String,
+    pub pin: i64,
+    /// `true`/`false` for a digital output, a number for an analog one.
+    pub value: Value,
+}
+
+fn num<S: Serializer>(v: &f64, s: S) -> Result<S::Ok, S::Error> {
+    float(*v, s)
+}
+
+fn secs<S: Serializer>(v: &f64, s: S) -> Result<S::Ok, S::Error> {
+    float((v * 1e6).round() / 1e6, s)
+}
+
+fn opt_array<S: Serializer>(v: &Option<[f64; 6]>, s: S) -> Result<S::Ok, S::Error> {
+    match v {
+        Some(a) => Floats(a).serialize(s),
+        None => s.serialize_none(),
+    }
 }
 
 // ---- read ----
@@ -779,6 +885,9 @@ pub enum Event {
     Note(Note),
     Error(Error),
     End(End),
+    MoveStart(MoveStart),
+    MoveEnd(MoveEnd),
+    Output(Output),
     // read
     Read(Read),
     // listen
@@ -831,6 +940,7 @@ impl Event {
             line,
             column,
             text: text.into(),
+            code: None,
         })
     }
 
@@ -865,7 +975,11 @@ impl Event {
 
     /// `end`.
     pub fn end(outcome: EndOutcome) -> Self {
-        Event::End(End { t: now(), outcome })
+        Event::End(End {
+            t: now(),
+            outcome,
+            arm: None,
+        })
     }
 }
 
@@ -885,6 +999,9 @@ impl Event {
             Event::Note(e) | Event::Help(e) => e.t,
             Event::Error(e) => e.t,
             Event::End(e) => e.t,
+            Event::MoveStart(e) => e.t,
+            Event::MoveEnd(e) => e.t,
+            Event::Output(e) => e.t,
             Event::Read(e) => e.t,
             Event::Listening(e) => e.t,
             Event::Connect(e) => e.t,
@@ -1007,6 +1124,7 @@ mod tests {
         let e = Event::End(End {
             t: 1.0,
             outcome: EndOutcome::MaxTime,
+            arm: None,
         });
         assert_eq!(
             e.to_json(),

@@ -40,6 +40,70 @@ pub struct Options {
     pub preamble: urscript_interp::Preamble,
     /// The arm at the start: its joints and what it senses (`--set NAME=VALUE`).
     pub arm: urscript_interp::Arm,
+    /// What else fails the run (`--fail-on`).
+    pub fail_on: FailOn,
+    /// Virtual time while no connection is open (`--virtual-time`).
+    pub virtual_time: bool,
+}
+
+/// What makes `ursock robot` exit 1 besides a compile or runtime error and a protective
+/// stop, which always do (`--fail-on halt,error-popup,popup`).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct FailOn {
+    /// The program ran `halt`.
+    pub halt: bool,
+    /// The program showed a popup with `error=True`.
+    pub error_popup: bool,
+    /// The program showed any popup.
+    pub popup: bool,
+}
+
+impl FailOn {
+    /// The union of `--fail-on` values: comma-separated `halt`, `error-popup`, `popup`,
+    /// `protective-stop` (always on; accepted to say so).
+    pub fn parse(args: &[String]) -> Result<Self, String> {
+        let mut f = FailOn::default();
+        for word in args.iter().flat_map(|a| a.split(',')).map(str::trim) {
+            match word {
+                "halt" => f.halt = true,
+                "error-popup" => f.error_popup = true,
+                "popup" => f.popup = true,
+                "protective-stop" | "error" => {}
+                other => {
+                    return Err(format!(
+                        "--fail-on {other:?}: give halt, error-popup, popup or protective-stop (comma-separated)"
+                    ))
+                }
+            }
+        }
+        Ok(f)
+    }
+}
+
+/// A runtime error's message for people, and the controller's code in front of it if it
+/// has one: `compile_error_name_not_found:x: text` is (`compile_error_name_not_found`,
+/// `text`).
+pub(crate) fn split_code(message: &str) -> (Option<String>, String) {
+    let Some((code, rest)) = message.split_once(':') else {
+        return (None, message.to_string());
+    };
+    let is_code = code.contains('_')
+        && code
+            .bytes()
+            .all(|b| b.is_ascii_lowercase() || b.is_ascii_digit() || b == b'_');
+    if !is_code {
+        return (None, message.to_string());
+    }
+    // `compile_error_name_not_found:NAME: ...`: the name is in the text too.
+    let rest = match rest.split_once(':') {
+        Some((name, text))
+            if !name.is_empty() && name.bytes().all(|b| b.is_ascii_alphanumeric() || b == b'_') =>
+        {
+            text
+        }
+        _ => rest,
+    };
+    (Some(code.to_string()), rest.trim_start().to_string())
 }
 
 /// The URCap preambles of `--preamble FILE...`, in order; an error names the file and
@@ -165,8 +229,117 @@ impl Printer {
                 );
             }
             report::Event::Note(n) => out::note(&n.text),
+            report::Event::MoveEnd(m) => outln!("{}", move_end_line(m)),
+            report::Event::Output(o) => outln!("{}", output_line(o)),
             _ => {}
         }
+    }
+}
+
+/// A move's end for people: `line 3: movel -> p[...]: reached in 1.2 s`, with the
+/// sample count of a stream (` x250`) and where the arm stopped if it did not arrive.
+pub(crate) fn move_end_line(m: &report::MoveEnd) -> String {
+    let mut line = format!("line {}: {}", m.line, m.function);
+    if m.samples > 1 {
+        line.push_str(&format!(" x{}", m.samples));
+    }
+    // A stream's first target says little: where it ended is shown instead.
+    let stream = m.samples > 1;
+    if let Some(target) = m.target.as_ref().filter(|_| !stream) {
+        line.push_str(&format!(" -> {target}"));
+    }
+    line.push_str(&format!(
+        ": {} in {} s",
+        m.outcome.replace('_', " "),
+        short(m.took)
+    ));
+    if stream || m.target.is_none() || !matches!(m.outcome.as_str(), "reached" | "blended") {
+        line.push_str(&format!(" at {}", six("", &m.joints)));
+    }
+    line
+}
+
+/// An output change for people: `line 4: set_standard_digital_out(1, True)`.
+pub(crate) fn output_line(o: &report::Output) -> String {
+    format!("line {}: {}({}, {})", o.line, o.function, o.pin, o.value)
+}
+
+/// A number for people: at most 4 decimals, no trailing zeros (`1.5`, `0.0003`, `2`).
+fn short(x: f64) -> String {
+    let s = format!("{x:.4}");
+    let s = s.trim_end_matches('0').trim_end_matches('.');
+    if s == "-0" {
+        "0".into()
+    } else {
+        s.into()
+    }
+}
+
+/// Six numbers as URScript writes them: `[a, b, ...]`, `p[...]` with `prefix` "p".
+fn six(prefix: &str, v: &[f64; 6]) -> String {
+    let parts: Vec<String> = v.iter().map(|x| short(*x)).collect();
+    format!("{prefix}[{}]", parts.join(", "))
+}
+
+/// A move's start as a report event.
+pub(crate) fn move_start_event(s: &urscript_interp::MoveStart) -> report::MoveStart {
+    report::MoveStart {
+        t: report::now(),
+        at: s.at.as_secs_f64(),
+        line: s.line,
+        function: s.function.to_string(),
+        target_joints: s.target_q,
+        target_pose: s.target_pose,
+        speed: s.speed,
+        acceleration: s.a,
+        velocity: s.v,
+        time: s.t,
+        blend_radius: s.r,
+    }
+}
+
+/// A move's target for people: the pose of a tool move, the joints of a joint move,
+/// the speeds of a speed stream.
+pub(crate) fn move_target(s: &urscript_interp::MoveStart) -> Option<String> {
+    let tool = !matches!(s.function, "movej" | "optimovej" | "servoj" | "speedj");
+    match (s.target_q, s.target_pose, s.speed) {
+        (_, Some(p), _) if tool => Some(six("p", &p)),
+        (Some(q), _, _) => Some(six("", &q)),
+        (_, _, Some(v)) => Some(format!("speed {}", six("", &v))),
+        _ => None,
+    }
+}
+
+/// A move's end as a report event (`target`: [`move_target`] of its start).
+pub(crate) fn move_end_event(
+    e: &urscript_interp::MoveEnd,
+    target: Option<String>,
+) -> report::MoveEnd {
+    report::MoveEnd {
+        t: report::now(),
+        at: e.at.as_secs_f64(),
+        line: e.line,
+        function: e.function.to_string(),
+        outcome: e.outcome.as_str().replace('-', "_"),
+        took: e.took.as_secs_f64(),
+        samples: e.samples,
+        joints: e.q,
+        pose: e.pose,
+        target,
+    }
+}
+
+/// An output change as a report event.
+pub(crate) fn output_event(o: &urscript_interp::OutputWrite) -> report::Output {
+    report::Output {
+        t: report::now(),
+        line: o.line,
+        function: o.function.to_string(),
+        pin: o.pin,
+        value: match o.value {
+            urscript_interp::OutputValue::Digital(b) => report::Value::Bool(b),
+            urscript_interp::OutputValue::Analog(x) => report::Value::Float(x),
+        },
     }
 }
 
@@ -329,6 +502,7 @@ pub fn run(script: &str, connect_to: Option<&str>, opts: Options) -> Result<(), 
     let mut driver = Driver::new(drive::Options {
         max_time: opts.max_time,
         connect_timeout: CONNECT_TIMEOUT,
+        virtual_time: opts.virtual_time,
         ..drive::Options::default()
     });
     let mut printer = Printer {
@@ -365,6 +539,10 @@ pub fn run(script: &str, connect_to: Option<&str>, opts: Options) -> Result<(), 
     }
     let mut seen: HashMap<String, Seen> = HashMap::new();
     let trace = opts.trace;
+    // The target of the move under way, for its end's line.
+    let mut target: Option<String> = None;
+    // The first popup that fails the run (`--fail-on`).
+    let mut failing_popup: Option<(u32, String)> = None;
     let result = driver.run(&mut machine, |activity| match activity {
         Activity::Event(Event::Call(c)) => {
             let why = c
@@ -374,7 +552,33 @@ pub fn run(script: &str, connect_to: Option<&str>, opts: Options) -> Result<(), 
             printer.emit(report::Event::Call(call_event(c, why)));
         }
         Activity::Event(Event::Message(m)) => {
+            if let MessageKind::Popup { error, title, .. } = &m.kind {
+                if failing_popup.is_none()
+                    && (opts.fail_on.popup || (*error && opts.fail_on.error_popup))
+                {
+                    let what = if *error { "an error popup" } else { "a popup" };
+                    failing_popup = Some((
+                        m.line,
+                        format!(
+                            "the program showed {what} {title:?}: {} (--fail-on)",
+                            m.text
+                        ),
+                    ));
+                }
+            }
             printer.emit(message_event(m));
+        }
+        Activity::Event(Event::MoveStart(s)) => {
+            target = move_target(s);
+            if opts.json {
+                printer.emit(report::Event::MoveStart(move_start_event(s)));
+            }
+        }
+        Activity::Event(Event::MoveEnd(e)) => {
+            printer.emit(report::Event::MoveEnd(move_end_event(e, target.take())));
+        }
+        Activity::Event(Event::Output(o)) => {
+            printer.emit(report::Event::Output(output_event(o)));
         }
         Activity::Event(Event::Transmit { socket_name, bytes }) => {
             if let Some(t) = seen.get_mut(socket_name).and_then(|s| s.timed_out.as_mut()) {
@@ -396,7 +600,27 @@ pub fn run(script: &str, connect_to: Option<&str>, opts: Options) -> Result<(), 
         }
         _ => {}
     });
-    let end = report::Event::end;
+    let arm = {
+        let a = machine.arm();
+        report::ArmState {
+            joints: a.q,
+            pose: urscript_interp::kinematics::forward(&opts.model.dh(), a.q, a.tcp),
+            digital_out: a.digital_out[..16].to_vec(),
+            tool_out: a.tool_out,
+            analog_out: a
+                .analog_out
+                .iter()
+                .map(|x| report::Value::Float(*x))
+                .collect(),
+        }
+    };
+    let end = |outcome| {
+        report::Event::End(report::End {
+            t: report::now(),
+            outcome,
+            arm: Some(arm.clone()),
+        })
+    };
     match result {
         Ok(drive::Outcome::MaxTime) => {
             printer.emit(report::Event::note(format!(
@@ -417,25 +641,46 @@ pub fn run(script: &str, connect_to: Option<&str>, opts: Options) -> Result<(), 
             Err(why.into())
         }
         Ok(o) => {
+            let halted = o == drive::Outcome::Halted;
+            let failure = match failing_popup {
+                Some((line, why)) => Some((Some(line), why)),
+                None if halted && opts.fail_on.halt => {
+                    Some((None, "the program halted (--fail-on halt)".to_string()))
+                }
+                None => None,
+            };
             if opts.json {
-                printer.emit(end(if o == drive::Outcome::Halted {
+                if let Some((line, why)) = &failure {
+                    printer.emit(report::Event::error(*line, None, why.clone()));
+                }
+                printer.emit(end(if halted {
                     report::EndOutcome::Halted
                 } else {
                     report::EndOutcome::Finished
                 }));
             }
-            Ok(())
+            match failure {
+                Some((Some(line), why)) => Err(format!("line {line}: {why}")),
+                Some((None, why)) => Err(why),
+                None => Ok(()),
+            }
         }
         Err(e) => {
+            let (code, text) = split_code(e.message());
             if opts.json {
-                printer.emit(report::Event::error(
-                    Some(e.line()),
-                    Some(e.column()),
-                    e.message(),
-                ));
+                let mut event =
+                    report::Event::error(Some(e.line()), Some(e.column()), text.clone());
+                if let report::Event::Error(err) = &mut event {
+                    err.code = code;
+                }
+                printer.emit(event);
                 printer.emit(end(report::EndOutcome::Error));
             }
-            Err(e.to_string())
+            Err(if e.line() > 0 {
+                format!("line {}: {text}", e.line())
+            } else {
+                text
+            })
         }
     }
 }

@@ -561,6 +561,52 @@ fn robot_json_lines_match_the_schema() {
         .find(|e| e["event"] == "message" && e["kind"] == "warning")
         .unwrap_or_else(|| panic!("no warning: {text}"));
     assert_eq!(warning["line"].as_u64(), Some(3));
+    // Issue 30: every move is a move_start and a move_end (where the arm went, how the
+    // move ended), every output change an output event.
+    for e in &events {
+        if e["event"] == "move_start" {
+            assert_eq!(e["function"], "movel");
+        }
+    }
+    let ends: Vec<&Value> = events.iter().filter(|e| e["event"] == "move_end").collect();
+    assert_eq!(ends.len(), 4, "{text}");
+    assert_eq!(ends[3]["outcome"], "reached");
+    let pose = ends[3]["pose"].as_array().unwrap();
+    assert!((pose[0].as_f64().unwrap() + 0.2).abs() < 1e-9, "{pose:?}");
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_ursock"))
+        .args([
+            "robot",
+            "--json",
+            "-e",
+            "set_tool_digital_out(0, True)\nset_standard_analog_out(1, 0.5)\nspeedj([0.1, 0, 0, 0, 0, 0], 1, 0.1)\nservoj([0, -1.5, 0, -1.5, 0, 0], t=0.1)\nmovej([0, -1.5, 0, -1.5, 0, 0.1])\nprotective_stop()",
+        ])
+        .stdin(std::process::Stdio::null())
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&out.stdout);
+    let events: Vec<Value> = text.lines().map(|l| check_event(&root, l)).collect();
+    let names: Vec<&str> = events.iter().filter_map(|e| e["event"].as_str()).collect();
+    assert_eq!(
+        names,
+        [
+            "output",
+            "output",
+            "move_start",
+            "move_end",
+            "move_start",
+            "move_end",
+            "move_start",
+            "move_end",
+            "error",
+            "end"
+        ],
+        "{text}"
+    );
+    assert_eq!(events[0]["value"], true);
+    assert_eq!(events[1]["value"], 0.5);
+    assert_eq!(events[3]["outcome"], "replaced");
+    assert_eq!(events[5]["outcome"], "reached");
+    assert_eq!(events[9]["outcome"], "protective_stop");
     // A program error is an `error` event with its line and column, then `end`.
     let out = std::process::Command::new(env!("CARGO_BIN_EXE_ursock"))
         .args(["robot", "--json", "-e", "x = [1]\ny = x[2]"])
@@ -792,4 +838,105 @@ fn controller_operator_commands_and_state_changes_are_events_that_match_the_sche
         .unwrap()
         .starts_with("refused: "));
     assert_eq!(operator[2]["command"], "state");
+}
+
+/// Issue 30: the controller's program reports its moves and output changes as `robot`
+/// does, in the same schema.
+#[test]
+fn controller_json_move_events_match_the_schema() {
+    use std::io::{BufRead, BufReader, Write};
+    use std::sync::mpsc;
+    use std::time::Duration;
+    let root = schema();
+    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_ursock"))
+        .args([
+            "controller",
+            "--dashboard-port",
+            "0",
+            "--primary-port",
+            "0",
+            "--secondary-port",
+            "0",
+            "--realtime-port",
+            "0",
+            "--rtde-port",
+            "0",
+            "--interpreter-port",
+            "0",
+            "--json",
+        ])
+        .stdin(std::process::Stdio::null())
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .unwrap();
+    let stdout = child.stdout.take().unwrap();
+    let (tx, rx) = mpsc::channel::<String>();
+    std::thread::spawn(move || {
+        for line in BufReader::new(stdout).lines() {
+            let Ok(line) = line else { break };
+            if tx.send(line).is_err() {
+                break;
+            }
+        }
+    });
+    // A hang guard for each line.
+    let next = || rx.recv_timeout(Duration::from_secs(30)).expect("an event");
+    let (mut dashboard, mut primary) = (None, None);
+    while dashboard.is_none() || primary.is_none() {
+        let v = check_event(&root, &next());
+        if v["event"] == "listening" {
+            let addr = v["addr"].as_str().unwrap().to_string();
+            match v["service"].as_str() {
+                Some("dashboard") => dashboard = Some(addr),
+                Some("primary") => primary = Some(addr),
+                _ => {}
+            }
+        }
+    }
+    let s = std::net::TcpStream::connect(dashboard.unwrap()).unwrap();
+    s.set_read_timeout(Some(Duration::from_secs(20))).unwrap();
+    let mut r = BufReader::new(s.try_clone().unwrap());
+    let mut w = s;
+    let mut line = String::new();
+    r.read_line(&mut line).unwrap();
+    let mut ask = |cmd: &str| {
+        w.write_all(format!("{cmd}\n").as_bytes()).unwrap();
+        let mut reply = String::new();
+        r.read_line(&mut reply).unwrap();
+        reply
+    };
+    ask("power on");
+    let deadline = std::time::Instant::now() + Duration::from_secs(20);
+    while ask("robotmode").trim() != "Robotmode: IDLE" {
+        assert!(std::time::Instant::now() < deadline, "never IDLE");
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    ask("brake release");
+    while ask("robotmode").trim() != "Robotmode: RUNNING" {
+        assert!(std::time::Instant::now() < deadline, "never RUNNING");
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    let mut p = std::net::TcpStream::connect(primary.unwrap()).unwrap();
+    p.write_all(
+        b"def go():\n  movej([0.5, -1.5, 1, -1, 0.2, 0], a=3, v=3)\n  set_standard_digital_out(1, True)\nend\n",
+    )
+    .unwrap();
+    let mut seen = Vec::new();
+    while !seen.iter().any(|v: &Value| v["event"] == "output") {
+        let v = check_event(&root, &next());
+        if matches!(
+            v["event"].as_str(),
+            Some("move_start" | "move_end" | "output")
+        ) {
+            seen.push(v);
+        }
+    }
+    let _ = child.kill();
+    let _ = child.wait();
+    let kinds: Vec<&str> = seen.iter().filter_map(|v| v["event"].as_str()).collect();
+    assert_eq!(kinds, ["move_start", "move_end", "output"]);
+    assert_eq!(seen[1]["outcome"], "reached");
+    assert_eq!(seen[1]["joints"][0], 0.5);
+    assert_eq!(seen[2]["pin"], 1);
 }

@@ -334,6 +334,12 @@ pub enum ServerEvent {
     Message(Message),
     /// A socket call of the running program.
     Call(Box<CallRecord>),
+    /// A move (or servo/speed stream) of the running program started.
+    MoveStart(Box<urscript_interp::MoveStart>),
+    /// It ended, and how.
+    MoveEnd(Box<urscript_interp::MoveEnd>),
+    /// The running program changed an output.
+    Output(urscript_interp::OutputWrite),
     /// Bytes the program sent on one of its sockets.
     Tx {
         /// The socket's name.

@@ -851,6 +851,9 @@ impl Loop {
                             ProgramEvent::Call(c) => {
                                 emit_program(Event::Call(c.clone()));
                             }
+                            ProgramEvent::MoveStart(m) => emit(Event::MoveStart(m.clone())),
+                            ProgramEvent::MoveEnd(m) => emit(Event::MoveEnd(m.clone())),
+                            ProgramEvent::Output(o) => emit(Event::Output(o.clone())),
                             _ => {}
                         }
                         match cell.machine_mut() {

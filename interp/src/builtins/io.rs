@@ -12,6 +12,7 @@ use super::{accept, opt, req, Args, Builtin, Default, Domain, Out};
 use crate::controller::Controller;
 use crate::controller::ModbusSignal;
 use crate::error::Fault;
+use crate::event::{Event, OutputValue, OutputWrite};
 use crate::value::Value;
 
 const D: Domain = Domain::Io;
@@ -617,7 +618,10 @@ fn digital_slot<'a>(c: &'a mut Controller, a: &Args) -> Result<&'a mut bool, Fau
 
 fn set_digital(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
     let on = a.boolean(1)?;
-    *digital_slot(c, a)? = on;
+    let slot = digital_slot(c, a)?;
+    if std::mem::replace(slot, on) != on {
+        output_changed(c, a, OutputValue::Digital(on));
+    }
     Ok(Out::Value(Value::None))
 }
 
@@ -646,8 +650,21 @@ fn set_analog_out(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
         .ok()
         .and_then(|n| c.arm.analog_out.get_mut(n))
         .ok_or_else(|| format!("`{}`: no analog output {n}", a.name))?;
-    *slot = x;
+    if std::mem::replace(slot, x) != x {
+        output_changed(c, a, OutputValue::Analog(x));
+    }
     Ok(Out::Value(Value::None))
+}
+
+/// Reports the change of the output `a` names (its first argument, the pin).
+fn output_changed(c: &mut Controller, a: &Args, value: OutputValue) {
+    let pin = a.int(0).map_or(-1, i64::from);
+    c.events.push_back(Event::Output(OutputWrite {
+        line: a.line,
+        function: a.name,
+        pin,
+        value,
+    }));
 }
 
 fn get_analog_out(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {

@@ -289,6 +289,65 @@ pub fn lookup(name: &str) -> Option<&'static Builtin> {
         .map(|i| &all[i])
 }
 
+/// The built-in or `other` name nearest `name` by edit distance (insertions, deletions,
+/// substitutions and swaps of neighbours), if one is near enough to be a typo: at most
+/// one edit per three characters of `name` (one at least). Ties go to the built-in, then
+/// the first in order.
+///
+/// ```
+/// use urscript_interp::builtins::nearest_name;
+/// assert_eq!(nearest_name("movjj", ["pick"]), Some("movej".to_string()));
+/// assert_eq!(nearest_name("pikc", ["pick"]), Some("pick".to_string()));
+/// assert_eq!(nearest_name("zzzzzz", ["pick"]), None);
+/// ```
+pub fn nearest_name<'a>(name: &str, other: impl IntoIterator<Item = &'a str>) -> Option<String> {
+    /// Names longer than this are not compared (the distance table is its square).
+    const MAX_LEN: usize = 64;
+    if name.is_empty() || name.len() > MAX_LEN {
+        return None;
+    }
+    let limit = (name.chars().count() / 3).max(1);
+    let mut best: Option<(usize, &str)> = None;
+    let candidates = all().iter().map(|b| b.name).chain(other);
+    for c in candidates {
+        if c == name || c.len() > MAX_LEN || c.len().abs_diff(name.len()) > limit {
+            continue;
+        }
+        let d = edit_distance(name, c);
+        if d <= limit && best.is_none_or(|(bd, _)| d < bd) {
+            best = Some((d, c));
+        }
+    }
+    best.map(|(_, c)| c.to_string())
+}
+
+/// The optimal string alignment distance of `a` and `b` (by characters).
+fn edit_distance(a: &str, b: &str) -> usize {
+    let a: Vec<char> = a.chars().collect();
+    let b: Vec<char> = b.chars().collect();
+    let w = b.len() + 1;
+    let mut d = vec![0usize; (a.len() + 1) * w];
+    for i in 0..=a.len() {
+        d[i * w] = i;
+    }
+    for (j, x) in d.iter_mut().enumerate().take(w) {
+        *x = j;
+    }
+    for i in 1..=a.len() {
+        for j in 1..=b.len() {
+            let cost = usize::from(a[i - 1] != b[j - 1]);
+            let mut v = (d[(i - 1) * w + j] + 1)
+                .min(d[i * w + j - 1] + 1)
+                .min(d[(i - 1) * w + j - 1] + cost);
+            if i > 1 && j > 1 && a[i - 1] == b[j - 2] && a[i - 2] == b[j - 1] {
+                v = v.min(d[(i - 2) * w + j - 2] + 1);
+            }
+            d[i * w + j] = v;
+        }
+    }
+    d[a.len() * w + b.len()]
+}
+
 /// True if `name` is a built-in of this interpreter.
 ///
 /// ```
@@ -559,6 +618,8 @@ mod tests {
             sampled: None,
             eip: crate::eip::Handles::default(),
             rtde_watchdogs: Vec::new(),
+            tracked: None,
+            queued: None,
             clock: crate::controller::MotionClock::default(),
             contact_since: None,
         };

@@ -70,6 +70,7 @@
 use super::{accept, float_list, floats, opt, req, secs, Args, Builtin, Default, Domain, Out};
 use crate::controller::Controller;
 use crate::error::Fault;
+use crate::event::MoveStart;
 use crate::trajectory::{self, Kind, Path, Profile};
 use crate::value::Value;
 
@@ -882,7 +883,7 @@ fn tool_move(
     pose: [f64; 6],
     (q1, given): ([f64; 6], bool),
     (accel, speed, t, r): (f64, f64, f64, f64),
-    (line, fixed): (u32, bool),
+    (name, line, fixed): (&'static str, u32, bool),
 ) -> f64 {
     let (q0, p0) = c.move_start();
     let path = Path::new(p0, via, pose);
@@ -906,6 +907,7 @@ fn tool_move(
     };
     let profile = Profile::new(dist, speed, accel, t);
     let tcp = c.arm.tcp;
+    let info = move_start(name, line, Some(q1), Some(pose), (accel, speed, t, r));
     c.start_move(
         Kind::Tool {
             path,
@@ -920,8 +922,30 @@ fn tool_move(
         },
         tcp,
         r,
-        line,
+        info,
     )
+}
+
+/// The [`MoveStart`] of a command (its time is set when the arm sets off).
+fn move_start(
+    function: &'static str,
+    line: u32,
+    target_q: Option<[f64; 6]>,
+    target_pose: Option<[f64; 6]>,
+    (a, v, t, r): (f64, f64, f64, f64),
+) -> MoveStart {
+    MoveStart {
+        line,
+        function,
+        at: std::time::Duration::ZERO,
+        target_q,
+        target_pose,
+        speed: None,
+        a,
+        v,
+        t,
+        r,
+    }
 }
 
 /// `movej`, `movel`, `movep`, `optimovej`, `optimovel`: the arm moves along a trapezoidal
@@ -944,7 +968,8 @@ fn movej(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
         let q0 = c.move_start().0;
         let profile = Profile::new(joint_distance(q0, q1), speed, accel, t);
         let tcp = c.arm.tcp;
-        c.start_move(Kind::Joint { q0, q1, profile }, tcp, r, a.line)
+        let info = move_start(a.name, a.line, Some(q1), Some(pose), (accel, speed, t, r));
+        c.start_move(Kind::Joint { q0, q1, profile }, tcp, r, info)
     } else {
         let given = !matches!(a.v[0], Value::Pose(_));
         tool_move(
@@ -953,7 +978,7 @@ fn movej(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
             pose,
             (q1, given),
             (accel, speed, t, r),
-            (a.line, false),
+            (a.name, a.line, false),
         )
     };
     Ok(Out::Motion(back, Value::None))
@@ -993,7 +1018,7 @@ fn movec(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
         pose,
         (q1, given),
         (accel, speed, 0.0, r),
-        (a.line, fixed),
+        (a.name, a.line, fixed),
     );
     Ok(Out::Motion(back, Value::None))
 }
@@ -1025,7 +1050,10 @@ fn servoj(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
     let q0 = c.arm.q;
     let profile = Profile::new(joint_distance(q0, q1), 0.0, 0.0, t);
     let tcp = c.arm.tcp;
-    c.start_motion(Kind::Joint { q0, q1, profile }, tcp);
+    let pose = c.tool_pose(q1);
+    let (acc, speed) = (a.num(1)?, a.num(2)?);
+    let info = move_start(a.name, a.line, Some(q1), Some(pose), (acc, speed, t, 0.0));
+    c.start_motion(Kind::Joint { q0, q1, profile }, tcp, Some(info));
     Ok(Out::Wait(secs(t), Value::None))
 }
 
@@ -1042,6 +1070,8 @@ fn speed(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
         a.num(2)?
     };
     let tcp = c.arm.tcp;
+    let mut info = move_start(a.name, a.line, None, None, (acc, 0.0, t, 0.0));
+    info.speed = Some(target);
     if a.name == "speedj" {
         let qd0 = c.arm.qd;
         let ramp = trajectory::ramp_time(&qd0, &target, acc);
@@ -1054,16 +1084,17 @@ fn speed(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
                 ramp,
             },
             tcp,
+            Some(info),
         );
     } else {
         let a_rot = if a.is_absent(3) { acc } else { a.num(3)? };
-        tool_speed(c, target, acc, a_rot);
+        tool_speed(c, target, acc, a_rot, Some(info));
     }
     Ok(Out::Wait(secs(t), Value::None))
 }
 
 /// Ramps the tool speed to `v1` from the current one.
-fn tool_speed(c: &mut Controller, v1: [f64; 6], acc: f64, a_rot: f64) {
+fn tool_speed(c: &mut Controller, v1: [f64; 6], acc: f64, a_rot: f64, info: Option<MoveStart>) {
     let v0 = c.arm.tcp_speed;
     let ramp = trajectory::ramp_time(&v0[..3], &v1[..3], acc).max(trajectory::ramp_time(
         &v0[3..],
@@ -1072,7 +1103,7 @@ fn tool_speed(c: &mut Controller, v1: [f64; 6], acc: f64, a_rot: f64) {
     ));
     let p0 = c.tcp_pose();
     let tcp = c.arm.tcp;
-    c.start_motion(Kind::ToolSpeed { p0, v0, v1, ramp }, tcp);
+    c.start_motion(Kind::ToolSpeed { p0, v0, v1, ramp }, tcp, info);
 }
 
 /// `stopj(a)`: the joint speeds ramp down to zero at `a` (the fastest joint; the others
@@ -1092,12 +1123,13 @@ fn stop(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
                 ramp,
             },
             tcp,
+            None,
         );
         ramp
     } else {
         let a_rot = if a.is_absent(1) { acc } else { a.num(1)? };
         let v0 = c.arm.tcp_speed;
-        tool_speed(c, [0.0; 6], acc, a_rot);
+        tool_speed(c, [0.0; 6], acc, a_rot, None);
         trajectory::ramp_time(&v0[..3], &[0.0; 3], acc).max(trajectory::ramp_time(
             &v0[3..],
             &[0.0; 3],

@@ -108,6 +108,7 @@ impl Harness {
                         self.calls.push(format!("{}: {c}", c.line));
                         Vec::new()
                     }
+                    Event::MoveStart(_) | Event::MoveEnd(_) | Event::Output(_) => Vec::new(),
                 };
                 for (name, bytes) in replies {
                     self.m.handle_received(&name, &bytes);

@@ -16,13 +16,15 @@ import re
 import socket
 import subprocess
 import threading
+import random
 import time
-from typing import IO, Any, Dict, List, Mapping, Optional, Sequence, Tuple, Union
+from typing import IO, Any, Callable, Dict, List, Mapping, Optional, Sequence, Tuple, Union
 
 from ._binary import binary, help_text
-from .robot import urscript_constant
+from .robot import Move, moves_of, urscript_constant
+from .rtde import ROBOT_MODES, RUNTIME_STATES, SAFETY_MODES, RobotState, RtdeReader
 
-__all__ = ["ControllerError", "DashboardClient", "UrController", "SERVERS"]
+__all__ = ["ControllerError", "DashboardClient", "UrController", "SERVERS", "free_loopback_address"]
 
 #: The controller's servers, by the name used here, with the port a real controller
 #: uses. ``ursock controller`` always serves the dashboard; the others only when its
@@ -169,6 +171,31 @@ class DashboardClient:
         self.close()
 
 
+#: How many loopback addresses :func:`free_loopback_address` tries.
+LOOPBACK_TRIES = 64
+
+
+def free_loopback_address(ports: Sequence[int]) -> str:
+    """A loopback address ``127.x.y.z`` (not 127.0.0.1) on which every port of
+    ``ports`` is free now (a later bind may still lose a race).
+
+    :raises ControllerError: when none of :data:`LOOPBACK_TRIES` random ones is."""
+    rng = random.SystemRandom()
+    for _ in range(LOOPBACK_TRIES):
+        host = f"127.{rng.randint(1, 254)}.{rng.randint(0, 255)}.{rng.randint(1, 254)}"
+        free = True
+        for port in ports:
+            with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as probe:
+                try:
+                    probe.bind((host, port))
+                except OSError:
+                    free = False
+                    break
+        if free:
+            return host
+    raise ControllerError(f"no loopback address 127.x.y.z with ports {list(ports)} free (tried {LOOPBACK_TRIES})")
+
+
 class UrController:
     """A running ``ursock controller``: the virtual controller on free ports.
 
@@ -193,6 +220,12 @@ class UrController:
     :param max_events: how many of the newest events :attr:`events` keeps (older ones
         are counted in :attr:`events_dropped`); a controller with a busy client prints
         thousands of events a second, and a test process must not grow with them.
+    :param standard_ports: serve on the standard ports (:data:`SERVERS`: 29999, 30001,
+        30002, 30003, 30004, 30020) of a loopback address of its own, ``127.x.y.z``
+        chosen where they are free (unless ``host`` is given), so that a client without
+        port options (ur_rtde, a driver) reaches it at ``.host``. Linux routes all of
+        127.0.0.0/8 to the loopback interface; elsewhere give ``host`` an address that
+        is configured.
     """
 
     def __init__(
@@ -210,9 +243,12 @@ class UrController:
         startup_timeout: float = 20.0,
         ursock: Optional[Union[str, "os.PathLike[str]"]] = None,
         max_events: int = MAX_EVENTS,
+        standard_ports: bool = False,
     ) -> None:
         if max_events < 1:
             raise ValueError(f"max_events must be at least 1, not {max_events}")
+        self._standard_ports = standard_ports
+        self._host_given = host != "127.0.0.1"
         self.host = host
         self._model = model
         self._polyscope = polyscope
@@ -241,6 +277,7 @@ class UrController:
         self._stderr_chars = 0
         self._threads: List[threading.Thread] = []
         self._client: Optional[DashboardClient] = None
+        self._rtde: Optional[RtdeReader] = None
 
     # -- the process ------------------------------------------------------------------
 
@@ -262,9 +299,12 @@ class UrController:
         if self._proc is not None:
             return self
         others = self.server_options() if self._all_servers else []
-        cmd = [self._ursock, "controller", "--json", "--bind", self.host, "--dashboard-port", "0"]
+        if self._standard_ports and not self._host_given:
+            self.host = free_loopback_address([SERVERS[n] for n in ("dashboard", *others)])
+        port_of = (lambda name: str(SERVERS[name])) if self._standard_ports else (lambda name: "0")
+        cmd = [self._ursock, "controller", "--json", "--bind", self.host, "--dashboard-port", port_of("dashboard")]
         for name in others:
-            cmd += [f"--{name}-port", "0"]
+            cmd += [f"--{name}-port", port_of(name)]
         if self._model:
             cmd += ["--model", self._model]
         if self._polyscope:
@@ -392,6 +432,9 @@ class UrController:
 
     def stop(self, timeout: float = 5.0) -> Optional[int]:
         """Stop the controller (if still running) and return its exit status."""
+        if self._rtde is not None:
+            self._rtde.close()
+            self._rtde = None
         if self._client is not None:
             try:
                 self._client.close()
@@ -520,6 +563,89 @@ class UrController:
     def events_of(self, kind: str) -> List[Dict[str, Any]]:
         """The events named ``kind`` that :attr:`events` holds."""
         return [e for e in self.events if e.get("event") == kind]
+
+    def log(self, last: int = 200) -> str:
+        """What the controller said: its command, its stderr and its ``last`` newest
+        events as JSON lines (what the pytest plugin shows when a test fails)."""
+        with self._lock:
+            err = "".join(self._stderr).strip()
+            events = list(self._events)[-last:] if last > 0 else []
+            dropped = self._dropped + max(0, len(self._events) - len(events))
+        parts = ["command: " + " ".join(self.command)]
+        if err:
+            parts.append("stderr:\n" + err)
+        if events:
+            head = f"last {len(events)} events" + (f" ({dropped} older not shown)" if dropped else "")
+            parts.append(head + ":\n" + "\n".join(json.dumps(e, separators=(",", ":")) for e in events))
+        return "\n".join(parts)
+
+    # -- the arm, as a client sees it ---------------------------------------------------
+
+    def rtde(self) -> RtdeReader:
+        """The controller's shared RTDE reader (connected on first use, closed by
+        :meth:`stop`): the arm's state at 125 Hz through the controller's RTDE server.
+
+        :raises ControllerError: when this controller serves no RTDE."""
+        if self._rtde is None:
+            port = self.rtde_port
+            if port is None:
+                raise ControllerError("this controller has no RTDE server (all_servers=False?)")
+            self._rtde = RtdeReader(self.host, port)
+        return self._rtde
+
+    def state(self, timeout: float = 5.0) -> RobotState:
+        """The arm now, as an RTDE client reads it: ``.joints``, ``.tcp_pose``,
+        ``.tcp_speed``, ``.digital_out``, ``.analog_out``, ``.int_registers``,
+        ``.double_registers``, ``.bool_registers``, ``.robot_mode``, ``.safety_mode``,
+        ``.program_state``."""
+        return self.rtde().state(timeout=timeout)
+
+    def wait_until(self, condition: Callable[[RobotState], bool], timeout: float = 10.0) -> RobotState:
+        """Wait until ``condition(state)`` holds for an RTDE sample and return it:
+        ``ur.wait_until(lambda s: s.digital_out[1])``.
+
+        :raises TimeoutError: naming the last state seen."""
+        return self.rtde().wait_until(condition, timeout=timeout)
+
+    def wait_for_mode(self, mode: str, timeout: float = 10.0) -> RobotState:
+        """Wait until the robot mode (``"RUNNING"``, ``"IDLE"``, ``"POWER_OFF"``...),
+        the safety mode (``"NORMAL"``, ``"PROTECTIVE_STOP"``...) or the program state
+        (``"PLAYING"``, ``"STOPPED"``, ``"PAUSED"``) is ``mode``.
+
+        :raises ValueError: for a name that is none of these."""
+        name = mode.upper()
+        if name in ROBOT_MODES.values():
+            return self.wait_until(lambda s: s.robot_mode == name, timeout)
+        if name in SAFETY_MODES.values():
+            return self.wait_until(lambda s: s.safety_mode == name, timeout)
+        if name in RUNTIME_STATES.values():
+            return self.wait_until(lambda s: s.program_state == name, timeout)
+        known = ", ".join([*ROBOT_MODES.values(), *SAFETY_MODES.values(), *RUNTIME_STATES.values()])
+        raise ValueError(f"wait_for_mode({mode!r}): not a robot mode, safety mode or program state ({known})")
+
+    def send_script(self, program: str, server: str = "primary") -> None:
+        """Send a URScript program to the controller as a client does: its text on the
+        primary (or ``server="secondary"``) interface. A program replaces the one
+        running; a secondary program (``sec ...``) runs beside it."""
+        port = self.ports.get(server)
+        if port is None:
+            raise ControllerError(f"this controller has no {server} server")
+        text = program if program.endswith("\n") else program + "\n"
+        with socket.create_connection((self.host, port), timeout=10.0) as conn:
+            conn.sendall(text.encode("utf-8"))
+            # The controller reads what arrived before the connection closes.
+            conn.shutdown(socket.SHUT_WR)
+            conn.settimeout(1.0)
+            try:
+                while conn.recv(65536):
+                    pass
+            except OSError:
+                pass
+
+    def moves(self) -> List[Move]:
+        """The moves of the programs the controller ran, from its ``move_start`` and
+        ``move_end`` events (those :attr:`events` still holds)."""
+        return moves_of(self.events)
 
     def wait_for_event(self, kind: str, count: int = 1, timeout: float = 5.0) -> List[Dict[str, Any]]:
         """Wait until at least ``count`` events named ``kind`` were printed; return those

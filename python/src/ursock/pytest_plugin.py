@@ -15,7 +15,18 @@ Fixtures:
     A running :class:`ursock.UrController` (the virtual controller on free ports),
     stopped after the test: ``.host``, ``.dashboard_port`` (and ``.primary_port``,
     ``.secondary_port``, ``.realtime_port``, ``.rtde_port``, ``.interpreter_port`` when
-    this ``ursock`` serves them), ``.dashboard("robotmode")``.
+    this ``ursock`` serves them), ``.dashboard("robotmode")``, ``.state()``,
+    ``.wait_until(...)``, ``.send_script(...)``.
+
+``ur_controller_factory``
+    A function: ``ur_controller_factory(model=..., programs=..., world=...,
+    standard_ports=True)`` starts a controller and returns it (stopped after the test).
+    With ``standard_ports`` (the default) it serves the standard ports on a loopback
+    address of its own (``127.x.y.z``), so clients without port options (ur_rtde)
+    reach it at ``.host``.
+
+When a test that used a controller fails, its log (stderr and newest events) is added
+to the report as a section ``ursock controller HOST``.
 
 Settings (``pytest.ini``, ``pyproject.toml``'s ``[tool.pytest.ini_options]``):
 ``ursock_max_time`` (seconds, default 30: the ``--max-time`` given to every program
@@ -27,7 +38,7 @@ from __future__ import annotations
 
 import os
 from pathlib import Path
-from typing import Any, Iterator, Optional, Protocol, Sequence
+from typing import Any, Generator, Iterator, List, Mapping, Optional, Protocol, Sequence, Union
 
 import pytest
 
@@ -35,7 +46,10 @@ from ._binary import BinaryNotFound, binary
 from .controller import ControllerError, UrController
 from .robot import RobotRun, ScriptSource, run_robot
 
-__all__ = ["VirtualRobot", "virtual_robot", "ur_controller"]
+__all__ = ["ControllerFactory", "VirtualRobot", "virtual_robot", "ur_controller", "ur_controller_factory"]
+
+#: The controllers a test started, for its report.
+_CONTROLLERS = pytest.StashKey[List[UrController]]()
 
 DEFAULT_MAX_TIME = 30.0
 
@@ -139,6 +153,7 @@ def ur_controller(request: pytest.FixtureRequest) -> Iterator[UrController]:
     ``.events`` (what it printed).
     """
     controller = UrController(ursock=_ursock_path(request.config))
+    _remember(request, controller)
     try:
         controller.start()
     except ControllerError as e:
@@ -147,3 +162,82 @@ def ur_controller(request: pytest.FixtureRequest) -> Iterator[UrController]:
         yield controller
     finally:
         controller.stop()
+
+
+class ControllerFactory(Protocol):
+    """The type of the ``ur_controller_factory`` fixture (for annotating tests)."""
+
+    def __call__(
+        self,
+        *,
+        model: Optional[str] = None,
+        programs: Optional[Union[str, "os.PathLike[str]"]] = None,
+        world: Optional[Mapping[str, Any]] = None,
+        standard_ports: bool = True,
+        **options: Any,
+    ) -> UrController: ...
+
+
+def _remember(request: pytest.FixtureRequest, controller: UrController) -> None:
+    made = request.node.stash.get(_CONTROLLERS, None)
+    if made is None:
+        made = []
+        request.node.stash[_CONTROLLERS] = made
+    made.append(controller)
+
+
+@pytest.fixture
+def ur_controller_factory(request: pytest.FixtureRequest) -> Iterator[ControllerFactory]:
+    """Start virtual controllers: ``ur_controller_factory(model="ur10e",
+    programs=path, world={"digital_in[0]": True}, standard_ports=True)`` returns a
+    started :class:`ursock.UrController`; every one is stopped after the test.
+
+    ``standard_ports=True`` (the default): the standard ports (29999, 30001-30004,
+    30020) on a loopback address of its own (``.host``, ``127.x.y.z``), for clients that
+    have no port options, like ur_rtde: ``RTDEReceiveInterface(ur.host)``.
+    ``standard_ports=False``: free ports of 127.0.0.1 (``.ports``). Other keywords go to
+    :class:`ursock.UrController` (``polyscope``, ``local``, ``preamble``, ``extra_args``...).
+    """
+    ursock = _ursock_path(request.config)
+    made: List[UrController] = []
+
+    def make(
+        *,
+        model: Optional[str] = None,
+        programs: Optional[Union[str, "os.PathLike[str]"]] = None,
+        world: Optional[Mapping[str, Any]] = None,
+        standard_ports: bool = True,
+        **options: Any,
+    ) -> UrController:
+        controller = UrController(
+            model=model,
+            programs=programs,
+            world=world,
+            standard_ports=standard_ports,
+            ursock=ursock,
+            **options,
+        )
+        made.append(controller)
+        _remember(request, controller)
+        try:
+            controller.start()
+        except ControllerError as e:
+            pytest.fail(str(e), pytrace=False)
+        return controller
+
+    try:
+        yield make
+    finally:
+        for controller in made:
+            controller.stop()
+
+
+@pytest.hookimpl(hookwrapper=True)
+def pytest_runtest_makereport(item: pytest.Item, call: pytest.CallInfo[None]) -> Generator[None, Any, None]:
+    """A failed test's report gets the log of each controller it started."""
+    outcome = yield
+    report = outcome.get_result()
+    if not report.failed:
+        return
+    for controller in item.stash.get(_CONTROLLERS, []):
+        report.sections.append((f"ursock controller {controller.host}", controller.log()))

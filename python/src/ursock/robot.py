@@ -19,14 +19,18 @@ from typing import Any, Dict, Iterable, List, Mapping, Optional, Sequence, Tuple
 from ._binary import binary
 
 __all__ = [
+    "ArmState",
     "CallRecord",
     "Message",
+    "Move",
+    "OutputChange",
     "Pose",
     "ReadResult",
     "RobotRun",
     "RobotRunError",
     "ScriptSource",
     "decode_value",
+    "moves_of",
     "parse_events",
     "robot_command",
     "run_robot",
@@ -194,6 +198,124 @@ class Message:
         )
 
 
+def _six(value: Any) -> Optional[List[float]]:
+    return [float(x) if x is not None else float("nan") for x in value] if isinstance(value, list) else None
+
+
+@dataclass(frozen=True)
+class Move:
+    """One move of the arm (``movej``, ``movel``, ``movep``, ``movec``...) or one stream
+    of ``servoj``/``speedj``/``speedl`` commands, from its ``move_start`` and
+    ``move_end`` events."""
+
+    #: The function (``"movej"``, ``"servoj"``...).
+    function: str
+    #: The line of the command.
+    line: int
+    #: Program time it set off (s).
+    start: float
+    #: Program time it ended (s); ``None`` if the program ended first without saying.
+    end: Optional[float]
+    #: How long it took (s); ``None`` like :attr:`end`.
+    took: Optional[float]
+    #: ``"reached"``, ``"blended"``, ``"stopped"``, ``"protective_stop"``,
+    #: ``"replaced"``, ``"halted"``; ``None`` like :attr:`end`.
+    outcome: Optional[str]
+    #: The target joints (rad); ``None`` for a speed stream.
+    target_joints: Optional[List[float]]
+    #: The target tool pose ``[x, y, z, rx, ry, rz]``; ``None`` for a speed stream.
+    target_pose: Optional[List[float]]
+    #: The joints where it ended (rad).
+    joints: Optional[List[float]]
+    #: The tool pose where it ended.
+    pose: Optional[List[float]]
+    #: Commands it was: a stream's sample count, 1 for a move.
+    samples: int
+    #: The ``a``, ``v``, ``t`` and ``r`` arguments (0 when not given).
+    acceleration: float
+    velocity: float
+    time: float
+    blend_radius: float
+
+    @property
+    def arrived(self) -> bool:
+        """It reached its target (or blended into the next move)."""
+        return self.outcome in ("reached", "blended")
+
+
+@dataclass(frozen=True)
+class OutputChange:
+    """An output the program changed, from an ``output`` event."""
+
+    #: The program line.
+    line: int
+    #: The function (``"set_standard_digital_out"``...).
+    function: str
+    #: The output as the function numbers it.
+    pin: int
+    #: ``True``/``False`` (digital) or a number (analog).
+    value: Any
+
+
+@dataclass(frozen=True)
+class ArmState:
+    """The arm when the program ended (the ``end`` event's ``arm``)."""
+
+    #: Joints (rad).
+    joints: List[float]
+    #: Tool pose ``[x, y, z, rx, ry, rz]`` (base frame).
+    pose: List[float]
+    #: Digital outputs: standard 0-7, then configurable 0-7.
+    digital_out: List[bool]
+    #: Tool digital outputs 0-1.
+    tool_out: List[bool]
+    #: Standard analog outputs 0-1.
+    analog_out: List[float]
+
+
+def moves_of(events: Iterable[Mapping[str, Any]]) -> List[Move]:
+    """The moves of ``move_start``/``move_end`` events, in order (a start and the end
+    that follows it)."""
+    moves: List[Move] = []
+    start: Optional[Mapping[str, Any]] = None
+
+    def close(end: Optional[Mapping[str, Any]]) -> None:
+        assert start is not None
+        e = end or {}
+        moves.append(
+            Move(
+                function=str(start.get("function", "")),
+                line=int(start.get("line") or 0),
+                start=float(start.get("at") or 0.0),
+                end=float(e["at"]) if "at" in e else None,
+                took=float(e["took"]) if "took" in e else None,
+                outcome=e.get("outcome"),
+                target_joints=_six(start.get("target_joints")),
+                target_pose=_six(start.get("target_pose")),
+                joints=_six(e.get("joints")),
+                pose=_six(e.get("pose")),
+                samples=int(e.get("samples") or 1),
+                acceleration=float(start.get("acceleration") or 0.0),
+                velocity=float(start.get("velocity") or 0.0),
+                time=float(start.get("time") or 0.0),
+                blend_radius=float(start.get("blend_radius") or 0.0),
+            )
+        )
+
+    for event in events:
+        kind = event.get("event")
+        if kind == "move_start":
+            if start is not None:
+                close(None)
+            start = event
+        elif kind == "move_end" and start is not None:
+            close(event)
+            start = None
+    if start is not None:
+        close(None)
+    return moves
+
+
 class RobotRunError(AssertionError):
     """``ursock robot`` exited with an error (a syntax error, a runtime error, a bad
     option). ``run`` holds everything it printed."""
@@ -259,6 +381,59 @@ class RobotRun:
         """What went wrong, as ursock said it on stderr (``""`` if nothing)."""
         return self.stderr.strip()
 
+    def moves(self, function: Optional[str] = None) -> List[Move]:
+        """The arm's moves (and servo/speed streams), in order; only those of
+        ``function`` (``"movel"``) if given."""
+        found = moves_of(self.events)
+        return [m for m in found if function is None or m.function == function]
+
+    @property
+    def outputs(self) -> List[OutputChange]:
+        """The outputs the program changed, in order."""
+        return [
+            OutputChange(
+                line=int(e.get("line") or 0),
+                function=str(e.get("function", "")),
+                pin=int(e.get("pin") or 0),
+                value=e.get("value"),
+            )
+            for e in self.events
+            if e.get("event") == "output"
+        ]
+
+    @property
+    def arm(self) -> Optional[ArmState]:
+        """The arm when the program ended (``None`` if it never started)."""
+        for e in reversed(self.events):
+            if e.get("event") == "end" and isinstance(e.get("arm"), dict):
+                a = e["arm"]
+                return ArmState(
+                    joints=_six(a.get("joints")) or [],
+                    pose=_six(a.get("pose")) or [],
+                    digital_out=[bool(x) for x in a.get("digital_out", [])],
+                    tool_out=[bool(x) for x in a.get("tool_out", [])],
+                    analog_out=[float(x) if x is not None else float("nan") for x in a.get("analog_out", [])],
+                )
+        return None
+
+    def final_joints(self) -> List[float]:
+        """The joints (rad) when the program ended.
+
+        :raises LookupError: when the program never ran (a syntax error)."""
+        arm = self.arm
+        if arm is None:
+            raise LookupError("the program never ran: no final state (" + (self.error_text or "no end event") + ")")
+        return arm.joints
+
+    def final_pose(self) -> List[float]:
+        """The tool pose ``[x, y, z, rx, ry, rz]`` when the program ended.
+
+        :raises LookupError: when the program never ran."""
+        arm = self.arm
+        if arm is None:
+            raise LookupError("the program never ran: no final state (" + (self.error_text or "no end event") + ")")
+        return arm.pose
+
     def calls_to(self, name: str) -> List[CallRecord]:
         """The calls of the function ``name``, in order."""
         return [c for c in self.calls if c.call == name]
@@ -323,8 +498,12 @@ class RobotRun:
         if excerpt:
             parts.append("program:\n" + excerpt)
         for e in self.errors:
-            where = f"line {e.get('line')}" + (f", column {e.get('column')}" if e.get("column") else "")
-            parts.append(f"error at {where}: {e.get('text')}")
+            line = e.get("line")
+            if isinstance(line, int) and line > 0:
+                where = f" at line {line}" + (f", column {e.get('column')}" if e.get("column") else "")
+            else:
+                where = ""
+            parts.append(f"error{where}: {e.get('text')}")
         if self.calls:
             parts.append("last calls:\n" + _indent("\n".join(_shown(c) for c in self.calls[-5:])))
         parts.append("command: " + " ".join(_quote(a) for a in self.command))
@@ -404,6 +583,8 @@ def robot_command(
     trace: bool = False,
     extra_args: Sequence[str] = (),
     ursock: Optional[Union[str, "os.PathLike[str]"]] = None,
+    virtual_time: bool = False,
+    fail_on: Sequence[str] = (),
 ) -> List[str]:
     """The ``ursock robot ... --json`` command line for these options."""
     cmd = [str(ursock or binary()), "robot", "--json"]
@@ -427,6 +608,10 @@ def robot_command(
         cmd += ["--model", model]
     if trace:
         cmd.append("--trace")
+    if virtual_time:
+        cmd.append("--virtual-time")
+    if fail_on:
+        cmd += ["--fail-on", ",".join(fail_on)]
     cmd += list(extra_args)
     return cmd
 
@@ -449,6 +634,8 @@ def run_robot(
     cwd: Optional[Union[str, "os.PathLike[str]"]] = None,
     env: Optional[Mapping[str, str]] = None,
     ursock: Optional[Union[str, "os.PathLike[str]"]] = None,
+    virtual_time: bool = False,
+    fail_on: Sequence[str] = (),
 ) -> RobotRun:
     """Run a URScript program on ``ursock``'s virtual robot, in real time, against
     real servers, and return what it did.
@@ -469,6 +656,11 @@ def run_robot(
     :param step_time: the controller's step (0.002 e-Series, 0.008 CB3).
     :param model: the arm (``ur5e``, ``ur10e``, ...).
     :param trace: also record the bytes both ways (``tx``/``rx`` events).
+    :param virtual_time: run in virtual time while the program has no connection open
+        (``--virtual-time``): a ``sleep`` or a move ends at once, with the same results
+        (program times); ``max_time`` then counts program time.
+    :param fail_on: what else makes the run fail (``--fail-on``): ``"halt"``,
+        ``"error-popup"``, ``"popup"``.
     :param extra_args: more ``ursock robot`` options, passed as they are.
     :param timeout: kill ursock after this many seconds (default: ``max_time`` + 30,
         or 300 without ``max_time``); raises ``subprocess.TimeoutExpired``.
@@ -508,6 +700,8 @@ def run_robot(
             trace=trace,
             extra_args=extra_args,
             ursock=ursock,
+            virtual_time=virtual_time,
+            fail_on=fail_on,
         )
         done = subprocess.run(
             cmd,

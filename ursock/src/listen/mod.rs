@@ -606,7 +606,7 @@ async fn run(
                 Some(Ok(line)) => operator(&shared, &line),
                 Some(Err(why)) => shared.out.emit(
                     Kind::Warn,
-                    Event::Error(report::Error { t: now(), line: None, column: None, text: why }),
+                    Event::Error(report::Error { t: now(), line: None, column: None, text: why, code: None }),
                 ),
                 None => stdin_open = false,
             },
@@ -720,6 +720,7 @@ fn operator(shared: &Arc<Shared>, line: &str) {
                 line: None,
                 column: None,
                 text,
+                code: None,
             }),
         )
     };
@@ -1092,6 +1093,7 @@ fn send(shared: &Shared, conn: &Conn, reply: &Reply, origin: &str) -> Result<(),
                     "[#{}] reply of {len} bytes not sent: larger than --max-queue {} (raise it to send it)",
                     conn.id, shared.max_queue
                 ),
+                code: None,
             }),
         );
         return Err(format!("larger than --max-queue {}", shared.max_queue));

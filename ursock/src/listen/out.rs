@@ -482,6 +482,9 @@ pub fn human(event: &Event, show_max: usize) -> Vec<String> {
         }
         Event::Message(e) => one(e.text.clone()),
         Event::PeerClosed(e) => one(format!("{}: the server closed the connection", e.socket)),
+        Event::MoveStart(_) => Vec::new(),
+        Event::MoveEnd(e) => one(crate::script::move_end_line(e)),
+        Event::Output(e) => one(crate::script::output_line(e)),
         Event::End(e) => one(format!(
             "program ended: {}",
             match e.outcome {
