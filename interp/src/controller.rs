@@ -347,7 +347,7 @@ pub struct World {
     pub tcp_force: [f64; 6],
     /// A surface the tool can touch: a plane, as a pose (base frame) whose z axis is its
     /// outward normal; the obstacle fills the half-space below it. It pushes the TCP
-    /// back like a spring of [`World::contact_stiffness`] (see [`crate::force`]).
+    /// back like a spring of [`World::contact_stiffness`] (`force_mode` in the crate README's table of physical functions).
     /// Default `p[0, 0, 0, 0, 0, 0]` (with no stiffness: no surface).
     pub contact_plane: [f64; 6],
     /// The contact plane's stiffness (N/m): a TCP `d` m below it feels `stiffness · d`
