@@ -644,10 +644,23 @@ fn controller_json_lines_match_the_schema() {
         .spawn()
         .unwrap();
     let mut out = BufReader::new(child.stdout.take().unwrap());
-    let mut first = String::new();
-    out.read_line(&mut first).unwrap();
-    let listening = check_event(&root, first.trim_end());
-    let addr = listening["addr"].as_str().unwrap().to_string();
+    // `listening` events, then `ready`: a client connects once the controller is ready
+    // (a connection accepted earlier may be reported before `ready`).
+    let mut addr = None;
+    let mut kinds = Vec::new();
+    loop {
+        let mut l = String::new();
+        assert!(out.read_line(&mut l).unwrap() > 0, "the output ended early");
+        let v = check_event(&root, l.trim_end());
+        if v["event"] == "listening" && v["service"] == "dashboard" {
+            addr = v["addr"].as_str().map(str::to_string);
+        }
+        if v["event"] == "ready" {
+            kinds.push("ready".to_string());
+            break;
+        }
+    }
+    let addr = addr.expect("a dashboard listening event before ready");
     {
         let s = std::net::TcpStream::connect(&addr).unwrap();
         s.set_read_timeout(Some(std::time::Duration::from_secs(20)))
@@ -662,8 +675,7 @@ fn controller_json_lines_match_the_schema() {
             r.read_line(&mut line).unwrap();
         }
     }
-    // ready, connect, 4 dashboard events, close: read them as they come (bounded).
-    let mut kinds = Vec::new();
+    // connect, 4 dashboard events, close: read them as they come (bounded).
     while kinds.len() < 7 {
         let mut l = String::new();
         if out.read_line(&mut l).unwrap() == 0 {
