@@ -301,6 +301,10 @@ impl Driver {
                 }
                 if !wait.is_zero() {
                     std::thread::sleep(wait);
+                    // What arrived during the sleep reaches the machine before its time
+                    // advances: a reply that came before a read's deadline is read, also
+                    // when the sleep ends at the deadline or past it.
+                    self.service_sockets(machine, &mut on_activity);
                 }
             }
         }

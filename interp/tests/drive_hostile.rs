@@ -129,3 +129,42 @@ fn a_program_behind_real_time_still_gets_answers_that_came_at_once() {
         "reads timed out although the server answered at once"
     );
 }
+
+#[test]
+fn a_reply_that_arrives_while_the_driver_sleeps_reaches_the_read_at_its_deadline() {
+    // A poll interval longer than the read's timeout: the driver sleeps until the read's
+    // deadline. Each reply arrives long before it (the server answers at once), so every
+    // read must get its reply, although the driver wakes exactly at the deadline.
+    let server = TcpListener::bind("127.0.0.1:0").unwrap();
+    let port = server.local_addr().unwrap().port();
+    std::thread::spawn(move || {
+        let (s, _) = server.accept().unwrap();
+        let mut w = s.try_clone().unwrap();
+        for line in BufReader::new(s).lines() {
+            if line.is_err() || w.write_all(b"(1,2)\n").is_err() {
+                break;
+            }
+        }
+    });
+    let src = format!(
+        "socket_open(\"127.0.0.1\", {port})\nmissed = 0\nk = 0\nwhile k < 5:\n  socket_send_line(\"go\")\n  r = socket_read_ascii_float(2, timeout=0.2)\n  if r[0] != 2:\n    missed = missed + 1\n  end\n  k = k + 1\nend\ntextmsg(missed)\n"
+    );
+    let messages = within(Duration::from_secs(60), move || {
+        let mut m = Machine::new(Program::parse(&src).unwrap(), Config::default());
+        let mut messages = Vec::new();
+        let outcome = Driver::new(Options {
+            max_time: Some(Duration::from_secs(30)),
+            poll_interval: Duration::from_secs(5),
+            ..Options::default()
+        })
+        .run(&mut m, |a| {
+            if let Activity::Event(Event::Message(msg)) = a {
+                messages.push(msg.text.clone());
+            }
+        })
+        .unwrap();
+        assert_eq!(outcome, Outcome::Finished);
+        messages
+    });
+    assert_eq!(messages, ["0"], "replies that had arrived were not read");
+}
