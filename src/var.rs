@@ -23,20 +23,19 @@
 //!
 //! # Why nom for two keywords
 //!
-//! The adoption review asked whether nom earns its place in a grammar this small. It
-//! stays, for these reasons: nom was asked for by the project's user, and it is a
-//! dependency of the core anyway (the value-line grammar of [`to_str`](crate::to_str)
-//! is larger and uses it), so this module costs no dependency, compiles without `std`
-//! or `alloc` (`default-features = false`), and allocates nothing. In complete mode
-//! over one framed line, every failure carries the input where it happened, so the
-//! error position is `line.len() - rest.len()` with no bookkeeping of ours. The
-//! keyword is read byte by byte (`one_of("SG")`, `E`, `T`) rather than with
-//! `alt((tag("SET"), tag("GET")))`, because a failed `tag` reports where the tag
-//! started, not the byte that differs. A hand-written reader of the grammar exists too,
-//! in the tests (`tests/var_grammar/oracle.rs`): with its cursor and its error rule
-//! spelled out it takes about three times the lines of the parser here, which is what
-//! nom saves. The property tests in `tests/var_grammar.rs` and the `var_message` and
-//! `var_reply` fuzz targets require the two to agree on values, error kinds and offsets.
+//! Does nom earn its place in a grammar this small? It does: nom was asked for by the
+//! project's user, and it is a dependency of the core anyway (the value-line grammar of
+//! [`to_str`](crate::to_str) is larger and uses it), so this module costs no dependency,
+//! compiles without `std` or `alloc` (`default-features = false`), and allocates nothing.
+//! In complete mode over one framed line, every failure carries the input where it
+//! happened, so the error position is `line.len() - rest.len()` with no bookkeeping of
+//! ours. The keyword is read byte by byte (`one_of("SG")`, `E`, `T`) rather than with
+//! `alt((tag("SET"), tag("GET")))`, because a failed `tag` reports where the tag started,
+//! not the byte that differs. A hand-written reader of the grammar exists too, in the tests
+//! (`tests/var_grammar/oracle.rs`): with its cursor and its error rule spelled out it takes
+//! about three times the lines of the parser here, which is what nom saves. The property
+//! tests in `tests/var_grammar.rs` and the `var_message` and `var_reply` fuzz targets
+//! require the two to agree on values, error kinds and offsets.
 
 use nom::bytes::complete::take_while1;
 use nom::character::complete::{char, one_of, space1};

@@ -58,8 +58,9 @@
 //!   robot's and URSim's state, which UR's client library's tests expect) every command
 //!   is accepted and `is in remote control` answers false.
 //!
-//! Playing a program keeps only the state (PLAYING until stop or pause): executing the
-//! `.urp`'s program is the next step.
+//! This state machine keeps the program state (PLAYING until stop or pause); the
+//! [`net`] server runs the loaded `.urp`'s program, translated by [`urp`], on the
+//! interpreter.
 //!
 //! # Primary, secondary and realtime interfaces
 //!

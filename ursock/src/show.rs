@@ -4,15 +4,15 @@ use std::fmt::Write as _;
 
 use urscript_socket::format::{write_quoted, Message};
 
-// Why the hex writers here are ours and not a crate's (the adoption review, item 1): the
-// `hex` crate writes one unbroken run (`hex::encode`), which is exactly the JSON form
-// below, but not the spaced upper-case form people read (`00 00 00 64`) or the dump with
-// offsets and an ASCII column; dump crates (`pretty-hex`, `hexyl`) each have their own
-// layout (lower case, other separators, colours), and this layout is the one the
-// listener, `ursock diagnose` and their docs show. Taking a crate for the one line the
-// JSON form needs would add a dependency to save three lines. So all three stay, and the
-// property tests below check them against the `hex` crate (the digits of every form) and
-// against the layout as documented (offsets, widths, the ASCII column).
+// Why the hex writers here are ours and not a crate's: the `hex` crate writes one unbroken
+// run (`hex::encode`), which is exactly the JSON form below, but not the spaced upper-case
+// form people read (`00 00 00 64`) or the dump with offsets and an ASCII column; dump
+// crates (`pretty-hex`, `hexyl`) each have their own layout (lower case, other separators,
+// colours), and this layout is the one the listener, `ursock diagnose` and their docs show.
+// Taking a crate for the one line the JSON form needs would add a dependency to save three
+// lines. So all three stay, and the property tests below check them against the `hex` crate
+// (the digits of every form) and against the layout as documented (offsets, widths, the
+// ASCII column).
 
 /// `00 00 00 64`
 pub fn hex(bytes: &[u8]) -> String {

@@ -48,7 +48,7 @@ pub fn unescape(s: &str) -> Result<Vec<u8>, String> {
     Ok(out)
 }
 
-// Why the hex parser is ours and not the `hex` crate's (the adoption review, item 1):
+// Why the hex parser is ours and not the `hex` crate's:
 // `hex::decode` reads one run of digits and nothing else, while a person types words
 // (`02 41 03`, `0x02,0x41`, `aa:bb-cc`); splitting words, dropping `0x` and the `:`/`-`
 // separators stays ours either way, and what would be left for the crate is turning two

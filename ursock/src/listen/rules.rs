@@ -83,7 +83,7 @@ pub fn find<'r>(rules: &'r [Rule], message: &[u8]) -> Option<&'r Rule> {
     rules.iter().find(|r| glob(&r.pattern, message))
 }
 
-// Why this matcher is ours and not a crate's (the adoption review, item 1). `wildmatch`
+// Why this matcher is ours and not a crate's. `wildmatch`
 // has exactly these semantics (`*`, `?`, nothing else special, no escapes) but matches
 // `&str`, and a message is bytes that need not be UTF-8: a line with a stray 0xE9 must
 // still match `*` or `err*`, and a lossy conversion would turn every bad byte into
