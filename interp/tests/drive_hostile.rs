@@ -20,6 +20,37 @@ fn within<T: Send + 'static>(limit: Duration, f: impl FnOnce() -> T + Send + 'st
         .unwrap_or_else(|_| panic!("did not end within {limit:?}"))
 }
 
+/// A loopback server that answers each line it reads with `(1,2)\n` at once; its port.
+fn answering_server() -> u16 {
+    let server = TcpListener::bind("127.0.0.1:0").unwrap();
+    let port = server.local_addr().unwrap().port();
+    std::thread::spawn(move || {
+        let (s, _) = server.accept().unwrap();
+        let mut w = s.try_clone().unwrap();
+        for line in BufReader::new(s).lines() {
+            if line.is_err() || w.write_all(b"(1,2)\n").is_err() {
+                break;
+            }
+        }
+    });
+    port
+}
+
+/// Runs `src` to its end with the driver; the texts of its `textmsg`s.
+fn messages_of(src: &str, config: Config, options: Options) -> Vec<String> {
+    let mut m = Machine::new(Program::parse(src).unwrap(), config);
+    let mut messages = Vec::new();
+    let outcome = Driver::new(options)
+        .run(&mut m, |a| {
+            if let Activity::Event(Event::Message(msg)) = a {
+                messages.push(msg.text.clone());
+            }
+        })
+        .unwrap();
+    assert_eq!(outcome, Outcome::Finished);
+    messages
+}
+
 #[test]
 fn a_peer_that_never_reads_cannot_hold_the_program() {
     // The server accepts and never reads: the kernel buffers fill, then the driver's
@@ -89,39 +120,20 @@ fn a_program_behind_real_time_still_gets_answers_that_came_at_once() {
     // 100 µs steps and a busy loop in each: the program runs far behind real time. Each
     // read waits 50 ms of program time for a reply the server sends at once; the driver
     // services the sockets between any two steps, so no read may time out.
-    let server = TcpListener::bind("127.0.0.1:0").unwrap();
-    let port = server.local_addr().unwrap().port();
-    std::thread::spawn(move || {
-        let (s, _) = server.accept().unwrap();
-        let mut w = s.try_clone().unwrap();
-        for line in BufReader::new(s).lines() {
-            if line.is_err() || w.write_all(b"(1,2)\n").is_err() {
-                break;
-            }
-        }
-    });
+    let port = answering_server();
     let src = format!(
         "socket_open(\"127.0.0.1\", {port})\nmissed = 0\nk = 0\nwhile k < 20:\n  j = 0\n  while j < 20000:\n    j = j + 1\n  end\n  socket_send_line(\"go\")\n  r = socket_read_ascii_float(2, timeout=0.05)\n  if r[0] != 2:\n    missed = missed + 1\n  end\n  k = k + 1\nend\ntextmsg(missed)\n"
     );
+    let config = Config {
+        step_time: Duration::from_micros(100),
+        ..Config::default()
+    };
+    let options = Options {
+        max_time: Some(Duration::from_secs(100)),
+        ..Options::default()
+    };
     let messages = within(Duration::from_secs(120), move || {
-        let config = Config {
-            step_time: Duration::from_micros(100),
-            ..Config::default()
-        };
-        let mut m = Machine::new(Program::parse(&src).unwrap(), config);
-        let mut messages = Vec::new();
-        let outcome = Driver::new(Options {
-            max_time: Some(Duration::from_secs(100)),
-            ..Options::default()
-        })
-        .run(&mut m, |a| {
-            if let Activity::Event(Event::Message(msg)) = a {
-                messages.push(msg.text.clone());
-            }
-        })
-        .unwrap();
-        assert_eq!(outcome, Outcome::Finished);
-        messages
+        messages_of(&src, config, options)
     });
     assert_eq!(
         messages,
@@ -135,36 +147,17 @@ fn a_reply_that_arrives_while_the_driver_sleeps_reaches_the_read_at_its_deadline
     // A poll interval longer than the read's timeout: the driver sleeps until the read's
     // deadline. Each reply arrives long before it (the server answers at once), so every
     // read must get its reply, although the driver wakes exactly at the deadline.
-    let server = TcpListener::bind("127.0.0.1:0").unwrap();
-    let port = server.local_addr().unwrap().port();
-    std::thread::spawn(move || {
-        let (s, _) = server.accept().unwrap();
-        let mut w = s.try_clone().unwrap();
-        for line in BufReader::new(s).lines() {
-            if line.is_err() || w.write_all(b"(1,2)\n").is_err() {
-                break;
-            }
-        }
-    });
+    let port = answering_server();
     let src = format!(
         "socket_open(\"127.0.0.1\", {port})\nmissed = 0\nk = 0\nwhile k < 5:\n  socket_send_line(\"go\")\n  r = socket_read_ascii_float(2, timeout=0.2)\n  if r[0] != 2:\n    missed = missed + 1\n  end\n  k = k + 1\nend\ntextmsg(missed)\n"
     );
+    let options = Options {
+        max_time: Some(Duration::from_secs(30)),
+        poll_interval: Duration::from_secs(5),
+        ..Options::default()
+    };
     let messages = within(Duration::from_secs(60), move || {
-        let mut m = Machine::new(Program::parse(&src).unwrap(), Config::default());
-        let mut messages = Vec::new();
-        let outcome = Driver::new(Options {
-            max_time: Some(Duration::from_secs(30)),
-            poll_interval: Duration::from_secs(5),
-            ..Options::default()
-        })
-        .run(&mut m, |a| {
-            if let Activity::Event(Event::Message(msg)) = a {
-                messages.push(msg.text.clone());
-            }
-        })
-        .unwrap();
-        assert_eq!(outcome, Outcome::Finished);
-        messages
+        messages_of(&src, Config::default(), options)
     });
     assert_eq!(messages, ["0"], "replies that had arrived were not read");
 }
