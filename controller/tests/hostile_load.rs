@@ -17,13 +17,13 @@ use std::sync::{Arc, Mutex, MutexGuard};
 use std::thread;
 use std::time::{Duration, Instant};
 
+mod support;
+use support::*;
 use urscript_controller::net::{
-    Ports, Server, ServerEvent, ServerOptions, EVICT_IDLE, MAX_CLIENTS, MAX_CONNECTIONS,
+    Ports, ServerEvent, ServerOptions, EVICT_IDLE, MAX_CLIENTS, MAX_CONNECTIONS,
     MAX_INTERPRETER_CONNECTIONS,
 };
 
-/// The longest any wait lasts before the test fails.
-const WAIT: Duration = Duration::from_secs(20);
 /// The good client's frequency (the e-Series step).
 const HZ: f64 = 500.0;
 /// One measuring window.
@@ -50,23 +50,14 @@ struct Log {
     order: Vec<String>,
 }
 
-struct Fixture {
-    server: Server,
-    log: Arc<Mutex<Log>>,
-}
+type Fixture = support::Fixture<Log>;
 
 fn start() -> Fixture {
-    start_with(ServerOptions {
-        ports: Ports::any(),
-        ..ServerOptions::default()
-    })
+    start_with(any_ports())
 }
 
 fn start_with(options: ServerOptions) -> Fixture {
-    let log = Arc::new(Mutex::new(Log::default()));
-    let sink = Arc::clone(&log);
-    let server = Server::start(options, move |e| {
-        let mut l = sink.lock().unwrap_or_else(|p| p.into_inner());
+    support::start_logging(options, |l: &mut Log, e| {
         l.events += 1;
         let said = match &e {
             ServerEvent::Program { what, .. } => Some(format!("program {what}")),
@@ -84,31 +75,9 @@ fn start_with(options: ServerOptions) -> Fixture {
             _ => {}
         }
     })
-    .expect("the server starts");
-    Fixture { server, log }
 }
 
 impl Fixture {
-    fn addr(&self, service: &str) -> SocketAddr {
-        self.server.addr(service).expect("the service listens")
-    }
-
-    fn log(&self) -> MutexGuard<'_, Log> {
-        self.log.lock().unwrap_or_else(|p| p.into_inner())
-    }
-
-    /// Waits (at most [`WAIT`]) until `f` finds something in the log.
-    fn wait_log<T>(&self, what: &str, f: impl Fn(&Log) -> Option<T>) -> T {
-        let start = Instant::now();
-        loop {
-            if let Some(t) = f(&self.log()) {
-                return t;
-            }
-            assert!(start.elapsed() < WAIT, "never saw {what}");
-            thread::sleep(Duration::from_millis(10));
-        }
-    }
-
     /// The connection numbers of `service`'s clients, in the order they came.
     fn conns(&self, service: &str) -> Vec<u64> {
         self.log()
@@ -118,81 +87,6 @@ impl Fixture {
             .map(|(c, _)| *c)
             .collect()
     }
-}
-
-/// Reads one line (bounded by [`WAIT`] per read and by 64 KiB).
-fn read_line(s: &mut TcpStream) -> std::io::Result<String> {
-    let mut line = Vec::new();
-    let mut b = [0u8; 1];
-    while line.len() < 64 * 1024 {
-        match s.read(&mut b)? {
-            0 => return Err(ErrorKind::UnexpectedEof.into()),
-            _ if b[0] == b'\n' => return Ok(String::from_utf8_lossy(&line).into_owned()),
-            _ => line.push(b[0]),
-        }
-    }
-    Err(ErrorKind::InvalidData.into())
-}
-
-/// A dashboard client past its greeting.
-fn dashboard(addr: SocketAddr) -> std::io::Result<TcpStream> {
-    let mut s = connect(addr)?;
-    let greeting = read_line(&mut s)?;
-    if !greeting.starts_with("Connected") {
-        return Err(std::io::Error::other(format!("greeting {greeting:?}")));
-    }
-    Ok(s)
-}
-
-fn ask(s: &mut TcpStream, command: &str) -> std::io::Result<String> {
-    s.write_all(format!("{command}\n").as_bytes())?;
-    read_line(s)
-}
-
-fn connect(addr: SocketAddr) -> std::io::Result<TcpStream> {
-    let s = TcpStream::connect_timeout(&addr, WAIT)?;
-    s.set_read_timeout(Some(WAIT))?;
-    s.set_write_timeout(Some(WAIT))?;
-    Ok(s)
-}
-
-fn rtde_packet(kind: u8, payload: &[u8]) -> Vec<u8> {
-    let size = u16::try_from(payload.len() + 3).expect("a small packet");
-    let mut p = size.to_be_bytes().to_vec();
-    p.push(kind);
-    p.extend_from_slice(payload);
-    p
-}
-
-fn rtde_read(s: &mut TcpStream) -> std::io::Result<(u8, Vec<u8>)> {
-    let mut head = [0u8; 3];
-    s.read_exact(&mut head)?;
-    let size = usize::from(u16::from_be_bytes([head[0], head[1]]));
-    let mut payload = vec![0u8; size.saturating_sub(3)];
-    s.read_exact(&mut payload)?;
-    Ok((head[2], payload))
-}
-
-/// Reads RTDE packets until one of type `kind` (at most 10 000 packets).
-fn rtde_expect(s: &mut TcpStream, kind: u8) -> std::io::Result<Vec<u8>> {
-    for _ in 0..10_000 {
-        let (k, p) = rtde_read(s)?;
-        if k == kind {
-            return Ok(p);
-        }
-    }
-    Err(std::io::Error::other(format!("no packet {}", kind as char)))
-}
-
-/// A protocol-2 RTDE session: version accepted.
-fn rtde_session(addr: SocketAddr) -> std::io::Result<TcpStream> {
-    let mut s = connect(addr)?;
-    s.write_all(&rtde_packet(b'V', &2u16.to_be_bytes()))?;
-    let accepted = rtde_expect(&mut s, b'V')?;
-    if accepted != [1] {
-        return Err(std::io::Error::other("protocol 2 refused"));
-    }
-    Ok(s)
 }
 
 /// The well-behaved client: `timestamp` at [`HZ`], every package read and counted.

@@ -16,13 +16,12 @@ use std::sync::{Arc, Mutex, MutexGuard};
 use std::thread;
 use std::time::{Duration, Instant};
 
+mod support;
+use support::*;
 use urscript_controller::net::{
-    Ports, Server, ServerEvent, ServerOptions, MAX_CLIENTS, MAX_CONNECTIONS,
-    MAX_INTERPRETER_CONNECTIONS, MAX_SERVER_THREADS, MAX_STALL,
+    ServerEvent, MAX_CLIENTS, MAX_CONNECTIONS, MAX_INTERPRETER_CONNECTIONS, MAX_SERVER_THREADS,
+    MAX_STALL,
 };
-
-/// The longest any wait of these tests lasts before the test fails.
-const WAIT: Duration = Duration::from_secs(20);
 
 /// The tests of this file run one at a time.
 static SERIAL: Mutex<()> = Mutex::new(());
@@ -80,64 +79,30 @@ struct Log {
     connects: Vec<(u64, &'static str)>,
 }
 
-struct Fixture {
-    server: Server,
-    log: Arc<Mutex<Log>>,
-}
+type Fixture = support::Fixture<Log>;
 
 fn start() -> Fixture {
-    let log = Arc::new(Mutex::new(Log::default()));
-    let sink = Arc::clone(&log);
-    let server = Server::start(
-        ServerOptions {
-            ports: Ports::any(),
-            ..ServerOptions::default()
-        },
-        move |e| {
-            let mut l = sink.lock().unwrap_or_else(|p| p.into_inner());
-            match e {
-                ServerEvent::Program {
-                    what, name, text, ..
-                } => l.programs.push((what.to_string(), name, text)),
-                // Short ones only, the last 10 000: a program's message flood does not
-                // grow the test.
-                ServerEvent::Message(m) if m.text.len() < 256 => {
-                    if l.messages.len() >= 10_000 {
-                        l.messages.remove(0);
-                    }
-                    l.messages.push(m.text)
+    support::start_logging(any_ports(), |l: &mut Log, e| {
+        match e {
+            ServerEvent::Program {
+                what, name, text, ..
+            } => l.programs.push((what.to_string(), name, text)),
+            // Short ones only, the last 10 000: a program's message flood does not
+            // grow the test.
+            ServerEvent::Message(m) if m.text.len() < 256 => {
+                if l.messages.len() >= 10_000 {
+                    l.messages.remove(0);
                 }
-                ServerEvent::Close { conn, reason, .. } => l.closes.push((conn, reason)),
-                ServerEvent::Connect { conn, service, .. } => l.connects.push((conn, service)),
-                _ => {}
+                l.messages.push(m.text)
             }
-        },
-    )
-    .expect("the server starts");
-    Fixture { server, log }
+            ServerEvent::Close { conn, reason, .. } => l.closes.push((conn, reason)),
+            ServerEvent::Connect { conn, service, .. } => l.connects.push((conn, service)),
+            _ => {}
+        }
+    })
 }
 
 impl Fixture {
-    fn addr(&self, service: &str) -> SocketAddr {
-        self.server.addr(service).expect("the service listens")
-    }
-
-    fn log(&self) -> MutexGuard<'_, Log> {
-        self.log.lock().unwrap_or_else(|p| p.into_inner())
-    }
-
-    /// Waits (at most [`WAIT`]) until `f` finds something in the log.
-    fn wait_log<T>(&self, what: &str, f: impl Fn(&Log) -> Option<T>) -> T {
-        let start = Instant::now();
-        loop {
-            if let Some(t) = f(&self.log()) {
-                return t;
-            }
-            assert!(start.elapsed() < WAIT, "never saw {what}");
-            thread::sleep(Duration::from_millis(10));
-        }
-    }
-
     /// The controller still serves: a dashboard `robotmode`, a fresh RTDE client's data,
     /// its threads within bounds, and nothing panicked.
     fn healthy(&self, after: &str) {
@@ -227,53 +192,8 @@ fn rss() -> u64 {
         .map_or(0, |kb| kb * 1024)
 }
 
-fn connect(addr: SocketAddr) -> std::io::Result<TcpStream> {
-    let s = TcpStream::connect_timeout(&addr, WAIT)?;
-    s.set_read_timeout(Some(WAIT))?;
-    s.set_write_timeout(Some(WAIT))?;
-    Ok(s)
-}
-
-/// Reads one line (bounded by [`WAIT`] per read and by 64 KiB).
-fn read_line(s: &mut TcpStream) -> std::io::Result<String> {
-    let mut line = Vec::new();
-    let mut b = [0u8; 1];
-    while line.len() < 64 * 1024 {
-        match s.read(&mut b)? {
-            0 => return Err(ErrorKind::UnexpectedEof.into()),
-            _ if b[0] == b'\n' => return Ok(String::from_utf8_lossy(&line).into_owned()),
-            _ => line.push(b[0]),
-        }
-    }
-    Err(ErrorKind::InvalidData.into())
-}
-
 fn dashboard_ask(addr: SocketAddr, command: &str) -> std::io::Result<String> {
-    let mut s = connect(addr)?;
-    let greeting = read_line(&mut s)?;
-    if !greeting.starts_with("Connected") {
-        return Err(std::io::Error::other(format!("greeting {greeting:?}")));
-    }
-    s.write_all(format!("{command}\n").as_bytes())?;
-    read_line(&mut s)
-}
-
-fn rtde_packet(kind: u8, payload: &[u8]) -> Vec<u8> {
-    let size = u16::try_from(payload.len() + 3).expect("a small packet");
-    let mut p = size.to_be_bytes().to_vec();
-    p.push(kind);
-    p.extend_from_slice(payload);
-    p
-}
-
-/// Reads one RTDE packet: its type and payload.
-fn rtde_read(s: &mut TcpStream) -> std::io::Result<(u8, Vec<u8>)> {
-    let mut head = [0u8; 3];
-    s.read_exact(&mut head)?;
-    let size = usize::from(u16::from_be_bytes([head[0], head[1]]));
-    let mut payload = vec![0u8; size.saturating_sub(3)];
-    s.read_exact(&mut payload)?;
-    Ok((head[2], payload))
+    ask(&mut dashboard(addr)?, command)
 }
 
 /// A client of protocol 2 sets up `timestamp` at 125 Hz, starts, and reads packets

@@ -2,80 +2,15 @@
 //! called `interpreter_mode()` runs what a client sends there, line by line, and the arm
 //! moves as the realtime interface reports.
 
-use std::io::{BufRead, BufReader, Read, Write};
-use std::net::TcpStream;
+use std::io::{Read, Write};
 use std::sync::mpsc;
 use std::time::{Duration, Instant};
 
-use urscript_controller::net::{Ports, Server, ServerEvent, ServerOptions};
+mod support;
+use support::*;
+use urscript_controller::net::{Server, ServerEvent, ServerOptions};
 use urscript_controller::realtime::{offset, E_SERIES_SIZE};
 use urscript_controller::RobotMode;
-
-const WAIT: Duration = Duration::from_secs(20);
-
-fn start() -> (Server, mpsc::Receiver<ServerEvent>) {
-    let (tx, rx) = mpsc::channel();
-    let tx = std::sync::Mutex::new(tx);
-    let server = Server::start(
-        ServerOptions {
-            ports: Ports::any(),
-            ..ServerOptions::default()
-        },
-        move |e| {
-            let _ = tx.lock().unwrap().send(e);
-        },
-    )
-    .expect("start");
-    (server, rx)
-}
-
-fn connect(server: &Server, service: &str) -> TcpStream {
-    let s = TcpStream::connect(server.addr(service).unwrap()).unwrap();
-    s.set_read_timeout(Some(WAIT)).unwrap();
-    s
-}
-
-struct Client {
-    reader: BufReader<TcpStream>,
-    writer: TcpStream,
-}
-
-impl Client {
-    fn new(s: TcpStream) -> Client {
-        Client {
-            reader: BufReader::new(s.try_clone().unwrap()),
-            writer: s,
-        }
-    }
-
-    fn read_line(&mut self) -> String {
-        let mut line = String::new();
-        self.reader.read_line(&mut line).unwrap();
-        assert!(line.ends_with('\n'), "a whole line: {line:?}");
-        line.pop();
-        line
-    }
-
-    /// Sends one line, reads the one reply line.
-    fn say(&mut self, text: &str) -> String {
-        self.writer
-            .write_all(format!("{text}\n").as_bytes())
-            .unwrap();
-        self.read_line()
-    }
-}
-
-fn wait_for(rx: &mpsc::Receiver<ServerEvent>, want: impl Fn(&ServerEvent) -> bool) -> ServerEvent {
-    let start = Instant::now();
-    loop {
-        let e = rx
-            .recv_timeout(WAIT.saturating_sub(start.elapsed()))
-            .expect("the event");
-        if want(&e) {
-            return e;
-        }
-    }
-}
 
 fn message(rx: &mpsc::Receiver<ServerEvent>, text: &str) {
     wait_for(
@@ -118,8 +53,8 @@ fn a_bare_interpreter_mode_line_on_the_secondary_port_opens_the_mode() {
     let (server, events) = start();
     let deadline = Instant::now() + WAIT;
     running(&server, deadline);
-    let mut interp = Client::new(connect(&server, "interpreter"));
-    let mut secondary = connect(&server, "secondary");
+    let mut interp = LineClient::new(&server, "interpreter");
+    let mut secondary = connect_to(&server, "secondary");
     secondary.write_all(b"interpreter_mode()\n").unwrap();
     in_interpreter_mode(&server, deadline);
     assert_eq!(
@@ -160,7 +95,7 @@ fn the_interpreter_port_is_served() {
 #[test]
 fn a_client_drives_interpreter_mode_over_tcp() {
     let (server, events) = start();
-    let mut interp = Client::new(connect(&server, "interpreter"));
+    let mut interp = LineClient::new(&server, "interpreter");
     // No program runs: statements are discarded, the numbers are 0.
     assert_eq!(
         interp.say("textmsg(1)"),
@@ -184,7 +119,7 @@ fn a_client_drives_interpreter_mode_over_tcp() {
     // The arm RUNNING, then the program, sent on the secondary interface.
     let deadline = Instant::now() + WAIT;
     running(&server, deadline);
-    let mut secondary = connect(&server, "secondary");
+    let mut secondary = connect_to(&server, "secondary");
     secondary
         .write_all(
             b"def remote():\n  interpreter_mode()\n  textmsg(\"left interpreter mode\")\nend\n",
@@ -210,7 +145,7 @@ fn a_client_drives_interpreter_mode_over_tcp() {
         "ack: 2: textmsg(\"arrived\")"
     );
     // The realtime interface shows the arm getting there.
-    let mut realtime = connect(&server, "realtime");
+    let mut realtime = connect_to(&server, "realtime");
     let mut package = vec![0u8; E_SERIES_SIZE];
     loop {
         realtime.read_exact(&mut package).unwrap();
@@ -278,12 +213,11 @@ fn a_controller_before_polyscope_5_10_has_no_interpreter_port() {
     let start = |polyscope: &str| {
         Server::start(
             ServerOptions {
-                ports: Ports::any(),
                 config: urscript_controller::Config {
                     polyscope: polyscope.into(),
                     ..urscript_controller::Config::default()
                 },
-                ..ServerOptions::default()
+                ..any_ports()
             },
             |_| {},
         )

@@ -2,63 +2,14 @@
 //! a controller on free ports, drive it over TCP as a client, watch its events, act as
 //! the operator, stop it.
 
-use std::io::{BufRead, BufReader, Read, Write};
+use std::io::{Read, Write};
 use std::net::TcpStream;
-use std::sync::mpsc;
 use std::time::{Duration, Instant};
 
-use urscript_controller::net::{Ports, Server, ServerEvent, ServerOptions};
+mod support;
+use support::*;
+use urscript_controller::net::{ServerEvent, ServerOptions};
 use urscript_controller::SafetyStatus;
-
-const WAIT: Duration = Duration::from_secs(20);
-
-fn start() -> (Server, mpsc::Receiver<ServerEvent>) {
-    let (tx, rx) = mpsc::channel();
-    let tx = std::sync::Mutex::new(tx);
-    let server = Server::start(
-        ServerOptions {
-            ports: Ports::any(),
-            ..ServerOptions::default()
-        },
-        move |e| {
-            let _ = tx.lock().unwrap().send(e);
-        },
-    )
-    .expect("start");
-    (server, rx)
-}
-
-fn dashboard(server: &Server) -> (BufReader<TcpStream>, TcpStream) {
-    let s = TcpStream::connect(server.addr("dashboard").unwrap()).unwrap();
-    s.set_read_timeout(Some(WAIT)).unwrap();
-    let mut r = BufReader::new(s.try_clone().unwrap());
-    let mut greeting = String::new();
-    r.read_line(&mut greeting).unwrap();
-    assert_eq!(
-        greeting.trim(),
-        "Connected: Universal Robots Dashboard Server"
-    );
-    (r, s)
-}
-
-fn ask(d: &mut (BufReader<TcpStream>, TcpStream), cmd: &str) -> String {
-    d.1.write_all(format!("{cmd}\n").as_bytes()).unwrap();
-    let mut line = String::new();
-    d.0.read_line(&mut line).unwrap();
-    line.trim_end().to_string()
-}
-
-fn wait_for(rx: &mpsc::Receiver<ServerEvent>, want: impl Fn(&ServerEvent) -> bool) -> ServerEvent {
-    let start = Instant::now();
-    loop {
-        let e = rx
-            .recv_timeout(WAIT.saturating_sub(start.elapsed()))
-            .expect("the event");
-        if want(&e) {
-            return e;
-        }
-    }
-}
 
 #[test]
 fn a_test_starts_a_controller_drives_it_and_stops_it() {
@@ -80,10 +31,10 @@ fn a_test_starts_a_controller_drives_it_and_stops_it() {
     assert!(first
         .iter()
         .all(|e| matches!(e, ServerEvent::Listening { .. })));
-    let mut d = dashboard(&server);
-    assert_eq!(ask(&mut d, "brake release"), "Brake releasing");
+    let mut d = LineClient::dashboard(&server);
+    assert_eq!(d.say("brake release"), "Brake releasing");
     let start = Instant::now();
-    while ask(&mut d, "robotmode") != "Robotmode: RUNNING" {
+    while d.say("robotmode") != "Robotmode: RUNNING" {
         assert!(start.elapsed() < WAIT);
         std::thread::sleep(Duration::from_millis(20));
     }
@@ -96,12 +47,12 @@ fn a_test_starts_a_controller_drives_it_and_stops_it() {
         ServerEvent::Message(m) => assert_eq!(m.text, "hello from the arm"),
         _ => unreachable!(),
     }
-    assert_eq!(ask(&mut d, "programState"), "PLAYING <unnamed>");
+    assert_eq!(d.say("programState"), "PLAYING <unnamed>");
     // The operator (or the cell around the robot) acts through the cell.
     server.with_cell(|cell, now| cell.controller().protective_stop(now));
-    assert_eq!(ask(&mut d, "safetystatus"), "Safetystatus: PROTECTIVE_STOP");
+    assert_eq!(d.say("safetystatus"), "Safetystatus: PROTECTIVE_STOP");
     // A program a client sent ends there (a loaded one would pause).
-    assert_eq!(ask(&mut d, "programState"), "STOPPED <unnamed>");
+    assert_eq!(d.say("programState"), "STOPPED <unnamed>");
     let status = server.with_cell(|cell, _| cell.status());
     assert_eq!(status.safety, SafetyStatus::ProtectiveStop);
     // Stopping closes every listener.
@@ -118,8 +69,8 @@ fn a_test_starts_a_controller_drives_it_and_stops_it() {
 #[test]
 fn shutdown_on_the_dashboard_stops_the_server() {
     let (server, events) = start();
-    let mut d = dashboard(&server);
-    assert_eq!(ask(&mut d, "shutdown"), "Shutting down");
+    let mut d = LineClient::dashboard(&server);
+    assert_eq!(d.say("shutdown"), "Shutting down");
     wait_for(&events, |e| *e == ServerEvent::Shutdown);
     assert!(server.is_stopped());
 }
@@ -129,15 +80,15 @@ fn the_primary_interfaces_unlock_lets_the_next_program_run() {
     // UR's client library unlocks through the primary interface right after a stop and
     // then sends its next program: the unlock has to take effect when it arrives.
     let (server, events) = start();
-    let mut d = dashboard(&server);
-    assert_eq!(ask(&mut d, "brake release"), "Brake releasing");
+    let mut d = LineClient::dashboard(&server);
+    assert_eq!(d.say("brake release"), "Brake releasing");
     let start = Instant::now();
-    while ask(&mut d, "robotmode") != "Robotmode: RUNNING" {
+    while d.say("robotmode") != "Robotmode: RUNNING" {
         assert!(start.elapsed() < WAIT);
         std::thread::sleep(Duration::from_millis(20));
     }
     server.with_cell(|cell, now| cell.controller().protective_stop(now));
-    assert_eq!(ask(&mut d, "safetystatus"), "Safetystatus: PROTECTIVE_STOP");
+    assert_eq!(d.say("safetystatus"), "Safetystatus: PROTECTIVE_STOP");
     let mut primary = TcpStream::connect(server.addr("primary").unwrap()).unwrap();
     // One write: the command, then a program the stop would refuse.
     primary
@@ -150,7 +101,7 @@ fn the_primary_interfaces_unlock_lets_the_next_program_run() {
         ServerEvent::Message(m) => assert_eq!(m.text, "moving again"),
         _ => unreachable!(),
     }
-    assert_eq!(ask(&mut d, "safetystatus"), "Safetystatus: NORMAL");
+    assert_eq!(d.say("safetystatus"), "Safetystatus: NORMAL");
     server.stop();
 }
 
@@ -191,56 +142,46 @@ fn the_ursim_profile_answers_as_ursim() {
     std::fs::create_dir_all(&dir).unwrap();
     std::fs::write(dir.join("hello.urp"), textmsg_urp("hello from ursim")).unwrap();
     let serve = |profile: Profile| {
-        let (tx, rx) = mpsc::channel();
-        let tx = std::sync::Mutex::new(tx);
-        let server = Server::start(
-            ServerOptions {
-                ports: Ports::any(),
-                programs: Some(dir.clone()),
-                profile,
-                ..ServerOptions::default()
-            },
-            move |e| {
-                let _ = tx.lock().unwrap().send(e);
-            },
-        )
-        .expect("start");
-        (server, rx)
+        start_with(ServerOptions {
+            programs: Some(dir.clone()),
+            profile,
+            ..any_ports()
+        })
     };
 
     let (server, events) = serve(Profile::Ursim);
-    let mut d = dashboard(&server);
-    assert_eq!(ask(&mut d, "is in remote control"), "false");
-    assert_eq!(ask(&mut d, "get serial number"), URSIM_SERIAL);
+    let mut d = LineClient::dashboard(&server);
+    assert_eq!(d.say("is in remote control"), "false");
+    assert_eq!(d.say("get serial number"), URSIM_SERIAL);
     assert_eq!(
-        ask(&mut d, "load installation default.installation"),
+        d.say("load installation default.installation"),
         "Loading installation: default.installation"
     );
     assert_eq!(
-        ask(&mut d, "load /ursim/programs/hello.urp"),
+        d.say("load /ursim/programs/hello.urp"),
         "Loading program: /ursim/programs/hello.urp"
     );
     assert_eq!(
-        ask(&mut d, "get loaded program"),
+        d.say("get loaded program"),
         "Loaded program: /ursim/programs/hello.urp"
     );
     assert_eq!(
-        ask(&mut d, "load /ursim/programs/../hello.urp"),
+        d.say("load /ursim/programs/../hello.urp"),
         "File not found: /ursim/programs/../hello.urp"
     );
-    assert_eq!(ask(&mut d, "load hello.urp"), "Loading program: hello.urp");
+    assert_eq!(d.say("load hello.urp"), "Loading program: hello.urp");
     assert_eq!(
-        ask(&mut d, "get loaded program"),
+        d.say("get loaded program"),
         "Loaded program: /ursim/programs/hello.urp"
     );
     // Played, it is read from the programs directory.
-    assert_eq!(ask(&mut d, "brake release"), "Brake releasing");
+    assert_eq!(d.say("brake release"), "Brake releasing");
     let start = Instant::now();
-    while ask(&mut d, "robotmode") != "Robotmode: RUNNING" {
+    while d.say("robotmode") != "Robotmode: RUNNING" {
         assert!(start.elapsed() < WAIT);
         std::thread::sleep(Duration::from_millis(20));
     }
-    assert_eq!(ask(&mut d, "play"), "Starting program");
+    assert_eq!(d.say("play"), "Starting program");
     match wait_for(&events, |e| matches!(e, ServerEvent::Message(_))) {
         ServerEvent::Message(m) => assert_eq!(m.text, "hello from ursim"),
         _ => unreachable!(),
@@ -248,15 +189,15 @@ fn the_ursim_profile_answers_as_ursim() {
     server.stop();
 
     let (server, _events) = serve(Profile::Robot);
-    let mut d = dashboard(&server);
-    assert_eq!(ask(&mut d, "is in remote control"), "true");
-    assert_ne!(ask(&mut d, "get serial number"), URSIM_SERIAL);
+    let mut d = LineClient::dashboard(&server);
+    assert_eq!(d.say("is in remote control"), "true");
+    assert_ne!(d.say("get serial number"), URSIM_SERIAL);
     assert_eq!(
-        ask(&mut d, "load /ursim/programs/hello.urp"),
+        d.say("load /ursim/programs/hello.urp"),
         "File not found: /ursim/programs/hello.urp"
     );
     assert_eq!(
-        ask(&mut d, "load installation default.installation"),
+        d.say("load installation default.installation"),
         "File not found: default.installation"
     );
     server.stop();
