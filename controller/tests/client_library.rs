@@ -12,49 +12,16 @@
 //!   control a specific variable at any time");
 //! - in UR's CI order, a program sent 0.6 s after a `brake release` from POWER_OFF runs.
 
-use std::io::{BufRead, BufReader, Read, Write};
+use std::io::{Read, Write};
 use std::net::TcpStream;
 use std::time::{Duration, Instant};
 
-use urscript_controller::net::{Ports, Server, ServerOptions};
-
-const WAIT: Duration = Duration::from_secs(20);
+mod support;
+use support::*;
+use urscript_controller::net::Server;
 
 fn start() -> Server {
-    Server::start(
-        ServerOptions {
-            ports: Ports::any(),
-            ..ServerOptions::default()
-        },
-        |_| {},
-    )
-    .expect("start")
-}
-
-fn connect(server: &Server, service: &str) -> TcpStream {
-    let s = TcpStream::connect(server.addr(service).unwrap()).unwrap();
-    s.set_read_timeout(Some(WAIT)).unwrap();
-    s
-}
-
-fn running(server: &Server) {
-    let s = connect(server, "dashboard");
-    let mut r = BufReader::new(s.try_clone().unwrap());
-    let mut w = s;
-    let mut greeting = String::new();
-    r.read_line(&mut greeting).unwrap();
-    let mut ask = |cmd: &str| {
-        w.write_all(format!("{cmd}\n").as_bytes()).unwrap();
-        let mut line = String::new();
-        r.read_line(&mut line).unwrap();
-        line.trim_end().to_string()
-    };
-    assert_eq!(ask("brake release"), "Brake releasing");
-    let start = Instant::now();
-    while ask("robotmode") != "Robotmode: RUNNING" {
-        assert!(start.elapsed() < WAIT, "the arm never ran");
-        std::thread::sleep(Duration::from_millis(20));
-    }
+    support::start().0
 }
 
 /// One primary package: its type and body (after the 5-byte header).
@@ -106,7 +73,7 @@ fn error_codes_until(
 fn protective_stop_in_a_secondary_program_reaches_the_primary_client_as_code_209() {
     let server = start();
     running(&server);
-    let mut primary = connect(&server, "primary");
+    let mut primary = connect_to(&server, "primary");
     // The version message first, as the library reads it.
     assert_eq!(primary_package(&mut primary).0, 20);
     // The library's read_error_code, byte for byte (`sendScript` appends a newline).
@@ -127,30 +94,6 @@ fn protective_stop_in_a_secondary_program_reaches_the_primary_client_as_code_209
     server.stop();
 }
 
-fn rtde_packet(kind: u8, payload: &[u8]) -> Vec<u8> {
-    let mut p = ((payload.len() + 3) as u16).to_be_bytes().to_vec();
-    p.push(kind);
-    p.extend_from_slice(payload);
-    p
-}
-
-/// The next RTDE packet of `kind`, others (data packages, text) skipped.
-fn rtde_reply(s: &mut TcpStream, kind: u8) -> Vec<u8> {
-    let start = Instant::now();
-    while start.elapsed() < WAIT {
-        let mut head = [0u8; 3];
-        s.read_exact(&mut head).unwrap();
-        let len = u16::from_be_bytes([head[0], head[1]]) as usize;
-        assert!(len >= 3, "an RTDE packet of {len} bytes");
-        let mut body = vec![0u8; len - 3];
-        s.read_exact(&mut body).unwrap();
-        if head[2] == kind {
-            return body;
-        }
-    }
-    panic!("no RTDE packet {:?} within {WAIT:?}", kind as char);
-}
-
 /// The library's input recipe (`tests/resources/rtde_input_recipe.txt`, in part).
 const INPUTS: &str = "speed_slider_mask,speed_slider_fraction,standard_digital_output_mask,\
                       standard_digital_output";
@@ -159,25 +102,25 @@ const INPUTS: &str = "speed_slider_mask,speed_slider_fraction,standard_digital_o
 /// recipe, started and paused again, the input recipe set up. Returns the connection and
 /// the input setup's reply (recipe id, types).
 fn rtde_client(server: &Server) -> (TcpStream, u8, String) {
-    let mut s = connect(server, "rtde");
+    let mut s = connect_to(server, "rtde");
     s.write_all(&rtde_packet(b'V', &2u16.to_be_bytes()))
         .unwrap();
-    assert_eq!(rtde_reply(&mut s, b'V'), [1]);
+    assert_eq!(rtde_expect(&mut s, b'V').unwrap(), [1]);
     let mut setup = 500f64.to_be_bytes().to_vec();
     setup.extend_from_slice(b"timestamp,actual_q");
     s.write_all(&rtde_packet(b'O', &setup)).unwrap();
-    assert_eq!(rtde_reply(&mut s, b'O')[0], 1);
+    assert_eq!(rtde_expect(&mut s, b'O').unwrap()[0], 1);
     s.write_all(&rtde_packet(b'S', &[])).unwrap();
-    assert_eq!(rtde_reply(&mut s, b'S'), [1]);
+    assert_eq!(rtde_expect(&mut s, b'S').unwrap(), [1]);
     s.write_all(&rtde_packet(b'P', &[])).unwrap();
-    assert_eq!(rtde_reply(&mut s, b'P'), [1]);
+    assert_eq!(rtde_expect(&mut s, b'P').unwrap(), [1]);
     let (id, types) = rtde_inputs(&mut s);
     (s, id, types)
 }
 
 fn rtde_inputs(s: &mut TcpStream) -> (u8, String) {
     s.write_all(&rtde_packet(b'I', INPUTS.as_bytes())).unwrap();
-    let reply = rtde_reply(s, b'I');
+    let reply = rtde_expect(s, b'I').unwrap();
     (reply[0], String::from_utf8(reply[1..].to_vec()).unwrap())
 }
 
@@ -243,29 +186,19 @@ fn rtde_inputs_of_a_started_client_that_stopped_reading_are_freed_when_it_closes
 #[test]
 fn a_program_sent_0_6_s_after_a_brake_release_from_power_off_runs() {
     let server = start();
-    let s = connect(&server, "dashboard");
-    let mut r = BufReader::new(s.try_clone().unwrap());
-    let mut w = s;
-    let mut greeting = String::new();
-    r.read_line(&mut greeting).unwrap();
-    let mut ask = |cmd: &str| {
-        w.write_all(format!("{cmd}\n").as_bytes()).unwrap();
-        let mut line = String::new();
-        r.read_line(&mut line).unwrap();
-        line.trim_end().to_string()
-    };
-    assert_eq!(ask("power off"), "Powering off");
-    assert_eq!(ask("brake release"), "Brake releasing");
+    let mut d = LineClient::dashboard(&server);
+    assert_eq!(d.say("power off"), "Powering off");
+    assert_eq!(d.say("brake release"), "Brake releasing");
     let released = Instant::now();
-    let mut primary = connect(&server, "primary");
+    let mut primary = connect_to(&server, "primary");
     std::thread::sleep(Duration::from_millis(600).saturating_sub(released.elapsed()));
     primary.write_all(b"protective_stop()\n").unwrap();
     let start = Instant::now();
-    while ask("safetystatus") != "Safetystatus: PROTECTIVE_STOP" {
+    while d.say("safetystatus") != "Safetystatus: PROTECTIVE_STOP" {
         assert!(
             start.elapsed() < Duration::from_secs(1),
             "no protective stop: {}",
-            ask("robotmode")
+            d.say("robotmode")
         );
         std::thread::sleep(Duration::from_millis(20));
     }
@@ -326,7 +259,7 @@ fn said_until(s: &mut TcpStream, until: impl Fn(&Said) -> bool) -> Vec<Said> {
 #[test]
 fn a_script_stopped_by_protective_stop_reports_program_stopped() {
     let server = start();
-    let mut primary = connect(&server, "primary");
+    let mut primary = connect_to(&server, "primary");
     assert_eq!(primary_package(&mut primary).0, 20);
     primary.write_all(b"power off\n").unwrap();
     primary.write_all(b"set robotmode run\n").unwrap();

@@ -193,6 +193,17 @@ pub fn ask(s: &mut TcpStream, command: &str) -> std::io::Result<String> {
     read_line(s)
 }
 
+/// Releases the brakes on the dashboard and waits until the arm is RUNNING.
+pub fn running(server: &Server) {
+    let mut d = LineClient::dashboard(server);
+    assert_eq!(d.say("brake release"), "Brake releasing");
+    let start = Instant::now();
+    while d.say("robotmode") != "Robotmode: RUNNING" {
+        assert!(start.elapsed() < WAIT, "the arm never ran");
+        thread::sleep(Duration::from_millis(20));
+    }
+}
+
 /// An RTDE packet: size, type, payload.
 pub fn rtde_packet(kind: u8, payload: &[u8]) -> Vec<u8> {
     let size = u16::try_from(payload.len() + 3).expect("a small packet");
