@@ -1211,6 +1211,16 @@ fn client_event(conn: u64, service: Service, what: &'static str, text: String) -
 }
 
 /// An RTDE session's event as a `client` event's `what` and `text`.
+/// A recipe as the event shows it: `name:TYPE` pairs, comma-separated.
+fn recipe_text(fields: &[String], types: &[String]) -> String {
+    fields
+        .iter()
+        .zip(types)
+        .map(|(f, t)| format!("{f}:{t}"))
+        .collect::<Vec<_>>()
+        .join(",")
+}
+
 fn rtde_event(e: &RtdeEvent) -> (&'static str, String) {
     match e {
         RtdeEvent::ProtocolVersion {
@@ -1232,12 +1242,7 @@ fn rtde_event(e: &RtdeEvent) -> (&'static str, String) {
             "outputs",
             format!(
                 "recipe {recipe} at {frequency} Hz: {}",
-                fields
-                    .iter()
-                    .zip(types)
-                    .map(|(f, t)| format!("{f}:{t}"))
-                    .collect::<Vec<_>>()
-                    .join(",")
+                recipe_text(fields, types)
             ),
         ),
         RtdeEvent::InputSetup {
@@ -1246,15 +1251,7 @@ fn rtde_event(e: &RtdeEvent) -> (&'static str, String) {
             types,
         } => (
             "inputs",
-            format!(
-                "recipe {recipe}: {}",
-                fields
-                    .iter()
-                    .zip(types)
-                    .map(|(f, t)| format!("{f}:{t}"))
-                    .collect::<Vec<_>>()
-                    .join(",")
-            ),
+            format!("recipe {recipe}: {}", recipe_text(fields, types)),
         ),
         RtdeEvent::Started { accepted } => (
             "start",
