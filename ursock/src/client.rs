@@ -118,102 +118,113 @@ enum Input {
     Closed(String),
 }
 
-/// Runs the client; `Err` is the one line `main` prints before exiting 1.
-pub fn run(opts: ClientOptions) -> Result<(), String> {
-    let eol = eol(&opts.eol)?;
-    let endless = |d: Option<Duration>| d.unwrap_or(Duration::MAX);
-    let every = opts
-        .every
-        .map(|s| seconds("--every", s))
-        .transpose()?
-        .map(endless);
-    let max_time = opts
-        .max_time
-        .map(|s| seconds("--max-time", s))
-        .transpose()?
-        .map(endless);
-    // 0 quits at once; a time too long for the clock never does.
-    let wait = if opts.wait == 0.0 {
-        Duration::ZERO
-    } else {
-        seconds("--wait", opts.wait)?.unwrap_or(Duration::MAX)
-    };
-    let connect_timeout = seconds("--connect-timeout", opts.connect_timeout)?
-        .unwrap_or(Duration::from_secs(3600))
-        .max(Duration::from_millis(1));
-    let mut scripted = opts
-        .send
-        .iter()
-        .map(|s| message(s, eol).map_err(|e| format!("--send: {e}")))
-        .collect::<Result<Vec<_>, _>>()?;
-    if let Some(path) = &opts.file {
-        let f = std::fs::File::open(path).map_err(|e| format!("--file {}: {e}", path.display()))?;
-        let mut bytes = Vec::new();
-        f.take(MAX_FILE + 1)
-            .read_to_end(&mut bytes)
-            .map_err(|e| format!("--file {}: {e}", path.display()))?;
-        if bytes.len() as u64 > MAX_FILE {
-            return Err(format!(
-                "--file {}: larger than {MAX_FILE} bytes",
-                path.display()
-            ));
+/// What the options ask for, checked before connecting.
+struct Plan {
+    eol: &'static [u8],
+    /// Send the last message again this often.
+    every: Option<Duration>,
+    max_time: Option<Duration>,
+    /// How long to show replies after the last send (or the end of stdin).
+    wait: Duration,
+    connect_timeout: Duration,
+    /// The `--send` texts and the `--file` bytes, in order (empty: read stdin).
+    scripted: Vec<Vec<u8>>,
+    log: Option<std::fs::File>,
+}
+
+impl Plan {
+    fn of(opts: &ClientOptions) -> Result<Plan, String> {
+        let eol = eol(&opts.eol)?;
+        let endless = |d: Option<Duration>| d.unwrap_or(Duration::MAX);
+        let every = opts
+            .every
+            .map(|s| seconds("--every", s))
+            .transpose()?
+            .map(endless);
+        let max_time = opts
+            .max_time
+            .map(|s| seconds("--max-time", s))
+            .transpose()?
+            .map(endless);
+        // 0 quits at once; a time too long for the clock never does.
+        let wait = if opts.wait == 0.0 {
+            Duration::ZERO
+        } else {
+            seconds("--wait", opts.wait)?.unwrap_or(Duration::MAX)
+        };
+        let connect_timeout = seconds("--connect-timeout", opts.connect_timeout)?
+            .unwrap_or(Duration::from_secs(3600))
+            .max(Duration::from_millis(1));
+        let mut scripted = opts
+            .send
+            .iter()
+            .map(|s| message(s, eol).map_err(|e| format!("--send: {e}")))
+            .collect::<Result<Vec<_>, _>>()?;
+        if let Some(path) = &opts.file {
+            scripted.push(read_file(path)?);
         }
-        if bytes.is_empty() {
-            return Err(format!("--file {}: empty, nothing to send", path.display()));
-        }
-        scripted.push(bytes);
+        let log = match &opts.log {
+            Some(p) => Some(
+                std::fs::OpenOptions::new()
+                    .create(true)
+                    .append(true)
+                    .open(p)
+                    .map_err(|e| format!("--log {}: {e}", p.display()))?,
+            ),
+            None => None,
+        };
+        Ok(Plan {
+            eol,
+            every,
+            max_time,
+            wait,
+            connect_timeout,
+            scripted,
+            log,
+        })
     }
-    let log = match &opts.log {
-        Some(p) => Some(
-            std::fs::OpenOptions::new()
-                .create(true)
-                .append(true)
-                .open(p)
-                .map_err(|e| format!("--log {}: {e}", p.display()))?,
-        ),
-        None => None,
-    };
-    let addrs: Vec<_> = opts
-        .addr
+}
+
+/// A `--file`'s bytes: at most [`MAX_FILE`], not empty.
+fn read_file(path: &std::path::Path) -> Result<Vec<u8>, String> {
+    let f = std::fs::File::open(path).map_err(|e| format!("--file {}: {e}", path.display()))?;
+    let mut bytes = Vec::new();
+    f.take(MAX_FILE + 1)
+        .read_to_end(&mut bytes)
+        .map_err(|e| format!("--file {}: {e}", path.display()))?;
+    if bytes.len() as u64 > MAX_FILE {
+        return Err(format!(
+            "--file {}: larger than {MAX_FILE} bytes",
+            path.display()
+        ));
+    }
+    if bytes.is_empty() {
+        return Err(format!("--file {}: empty, nothing to send", path.display()));
+    }
+    Ok(bytes)
+}
+
+/// Connects to the first of `addr`'s addresses that answers.
+fn connect(addr: &str, timeout: Duration) -> Result<TcpStream, String> {
+    let addrs: Vec<_> = addr
         .to_socket_addrs()
-        .map_err(|e| format!("{}: {e} (give HOST:PORT)", opts.addr))?
+        .map_err(|e| format!("{addr}: {e} (give HOST:PORT)"))?
         .collect();
-    let mut last_err = format!("{}: no address", opts.addr);
-    let mut stream = None;
+    let mut last_err = format!("{addr}: no address");
     for a in &addrs {
-        match TcpStream::connect_timeout(a, connect_timeout) {
+        match TcpStream::connect_timeout(a, timeout) {
             Ok(s) => {
-                stream = Some(s);
-                break;
+                let _ = s.set_nodelay(true);
+                return Ok(s);
             }
             Err(e) => last_err = format!("cannot connect to {a}: {e}"),
         }
     }
-    let stream = stream.ok_or(last_err)?;
-    let _ = stream.set_nodelay(true);
-    let peer = stream
-        .peer_addr()
-        .map(|a| a.to_string())
-        .unwrap_or_else(|_| opts.addr.clone());
-    let out = Out::new(opts.json, false, log, false, opts.show_max).with_utc(opts.utc);
-    // The JSON `connect` event names the peer; people read which way it went.
-    out.emit(
-        Kind::Note,
-        if opts.json {
-            Event::Connect(report::Connect {
-                t: now(),
-                conn: 1,
-                peer: peer.clone(),
-                service: None,
-            })
-        } else {
-            Event::note(format!("connected to {peer}"))
-        },
-    );
+    Err(last_err)
+}
 
-    let (tx, rx) = mpsc::channel::<Input>();
-    let mut reader = stream.try_clone().map_err(|e| e.to_string())?;
-    let to_main = tx.clone();
+/// Reads the device on a thread of its own: its bytes, then why it ended.
+fn spawn_reader(mut reader: TcpStream, to_main: mpsc::Sender<Input>) {
     std::thread::spawn(move || {
         let mut buf = vec![0u8; 64 * 1024];
         loop {
@@ -235,59 +246,72 @@ pub fn run(opts: ClientOptions) -> Result<(), String> {
             }
         }
     });
-    let typing = scripted.is_empty();
-    if typing {
-        let to_main = tx;
-        std::thread::spawn(move || {
-            let stdin = std::io::stdin();
-            let mut lock = stdin.lock();
-            let mut line = Vec::new();
-            loop {
-                line.clear();
-                match (&mut lock)
-                    .take(MAX_LINE as u64 + 1)
-                    .read_until(b'\n', &mut line)
-                {
-                    Ok(0) | Err(_) => break,
-                    Ok(_) => {}
-                }
-                let msg = if line.len() > MAX_LINE && line.last() != Some(&b'\n') {
-                    // Skip the rest of the over-long line.
-                    let mut rest = Vec::new();
-                    let _ = lock.read_until(b'\n', &mut rest);
-                    Some(Err(format!("typed line over {MAX_LINE} bytes, not sent")))
-                } else {
-                    let text = String::from_utf8_lossy(&line);
-                    let text = text.trim_end_matches(['\n', '\r']);
-                    (!text.trim().is_empty()).then(|| message(text, eol))
-                };
-                if let Some(msg) = msg {
-                    if to_main.send(Input::Line(msg)).is_err() {
-                        return;
-                    }
+}
+
+/// Reads typed lines from stdin on a thread of its own (each at most [`MAX_LINE`]
+/// bytes), then says that stdin ended.
+fn spawn_stdin(to_main: mpsc::Sender<Input>, eol: &'static [u8]) {
+    std::thread::spawn(move || {
+        let stdin = std::io::stdin();
+        let mut lock = stdin.lock();
+        let mut line = Vec::new();
+        loop {
+            line.clear();
+            match (&mut lock)
+                .take(MAX_LINE as u64 + 1)
+                .read_until(b'\n', &mut line)
+            {
+                Ok(0) | Err(_) => break,
+                Ok(_) => {}
+            }
+            let msg = if line.len() > MAX_LINE && line.last() != Some(&b'\n') {
+                // Skip the rest of the over-long line.
+                let mut rest = Vec::new();
+                let _ = lock.read_until(b'\n', &mut rest);
+                Some(Err(format!("typed line over {MAX_LINE} bytes, not sent")))
+            } else {
+                let text = String::from_utf8_lossy(&line);
+                let text = text.trim_end_matches(['\n', '\r']);
+                (!text.trim().is_empty()).then(|| message(text, eol))
+            };
+            if let Some(msg) = msg {
+                if to_main.send(Input::Line(msg)).is_err() {
+                    return;
                 }
             }
-            let _ = to_main.send(Input::StdinEnd);
-        });
-    } else {
-        drop(tx);
-    }
+        }
+        let _ = to_main.send(Input::StdinEnd);
+    });
+}
 
-    let start = Instant::now();
-    let deadline = max_time.and_then(|d| start.checked_add(d));
-    let mut writer = stream;
-    let (mut sent, mut rx_total) = (0u64, 0u64);
-    let mut last: Option<Vec<u8>> = None;
-    let mut next_scripted = 0usize;
-    // When the next periodic send is due, and when to quit for want of anything to do.
-    let mut next_every: Option<Instant> = None;
-    let mut quit_at: Option<Instant> = None;
-    let mut send = |bytes: &[u8], sent: &mut u64| -> Result<(), String> {
-        writer
+/// One connection to the device: what was sent and received, and what is due.
+struct Session {
+    writer: TcpStream,
+    out: Out,
+    sent: u64,
+    received: u64,
+    /// The last typed message (sent again by `--every`).
+    last: Option<Vec<u8>>,
+    /// The scripted message `--every` sends next.
+    next_scripted: usize,
+    /// When the next periodic send is due.
+    next_every: Option<Instant>,
+    /// When to quit for want of anything to do.
+    quit_at: Option<Instant>,
+}
+
+/// `d` from now (none for a time too long for the clock).
+fn after(d: Duration) -> Option<Instant> {
+    Instant::now().checked_add(d)
+}
+
+impl Session {
+    fn send(&mut self, bytes: &[u8]) -> Result<(), String> {
+        self.writer
             .write_all(bytes)
             .map_err(|e| format!("send failed: {e}"))?;
-        *sent += bytes.len() as u64;
-        out.emit(
+        self.sent += bytes.len() as u64;
+        self.out.emit(
             Kind::Traffic,
             Event::Tx(report::Traffic {
                 t: now(),
@@ -300,96 +324,152 @@ pub fn run(opts: ClientOptions) -> Result<(), String> {
             }),
         );
         Ok(())
-    };
-    let after = |d: Option<Duration>| d.and_then(|d| Instant::now().checked_add(d));
-    if !typing {
-        for m in &scripted {
-            send(m, &mut sent)?;
+    }
+
+    fn show_received(&mut self, bytes: Vec<u8>) {
+        self.received += bytes.len() as u64;
+        self.out.emit(
+            Kind::Traffic,
+            Event::Rx(report::Traffic {
+                t: now(),
+                socket: None,
+                conn: Some(1),
+                len: bytes.len(),
+                bytes: report::Bytes(bytes),
+                origin: None,
+                format: None,
+            }),
+        );
+    }
+
+    /// Sends, receives and repeats until the plan's end; why it ended.
+    fn run(&mut self, plan: &Plan, rx: &mpsc::Receiver<Input>) -> Result<String, String> {
+        let typing = plan.scripted.is_empty();
+        let deadline = plan.max_time.and_then(after);
+        if !typing {
+            for m in &plan.scripted {
+                self.send(m)?;
+            }
+            match plan.every {
+                Some(d) => self.next_every = after(d),
+                None => self.quit_at = after(plan.wait),
+            }
         }
-        match every {
-            Some(d) => next_every = after(Some(d)),
-            None => quit_at = after(Some(wait)),
+        loop {
+            let now_i = Instant::now();
+            if deadline.is_some_and(|d| now_i >= d) {
+                return Ok("--max-time passed".into());
+            }
+            if self.quit_at.is_some_and(|q| now_i >= q) {
+                return Ok(if typing {
+                    "stdin ended".into()
+                } else {
+                    "everything sent".into()
+                });
+            }
+            if let Some(due) = self.next_every.filter(|d| now_i >= *d) {
+                if typing {
+                    if let Some(m) = self.last.clone() {
+                        self.send(&m)?;
+                    }
+                } else if let Some(m) = plan.scripted.get(self.next_scripted) {
+                    self.send(m)?;
+                    self.next_scripted = (self.next_scripted + 1) % plan.scripted.len();
+                }
+                self.next_every = plan
+                    .every
+                    .and_then(|d| due.checked_add(d))
+                    .map(|n| n.max(now_i));
+                continue;
+            }
+            let wake = [deadline, self.quit_at, self.next_every]
+                .into_iter()
+                .flatten()
+                .min();
+            let got = match wake {
+                Some(w) => rx.recv_timeout(w.saturating_duration_since(now_i)),
+                None => rx.recv().map_err(|_| RecvTimeoutError::Disconnected),
+            };
+            match got {
+                Ok(Input::Rx(bytes)) => self.show_received(bytes),
+                Ok(Input::Line(Ok(bytes))) => {
+                    self.send(&bytes)?;
+                    self.last = Some(bytes);
+                    if let Some(d) = plan.every {
+                        self.next_every = after(d);
+                    }
+                }
+                Ok(Input::Line(Err(e))) => self.out.emit(Kind::Warn, Event::error(None, None, e)),
+                Ok(Input::StdinEnd) => {
+                    // Replies to the last line may still be on their way.
+                    if plan.every.is_none() {
+                        self.quit_at = after(plan.wait);
+                    } else {
+                        return Ok("stdin ended".into());
+                    }
+                }
+                Ok(Input::Closed(why)) => return Ok(why),
+                Err(RecvTimeoutError::Timeout) => {}
+                Err(RecvTimeoutError::Disconnected) => return Ok("nothing more to send".into()),
+            }
         }
     }
-    let reason = loop {
-        let now_i = Instant::now();
-        if deadline.is_some_and(|d| now_i >= d) {
-            break "--max-time passed".to_string();
-        }
-        if quit_at.is_some_and(|q| now_i >= q) {
-            break if typing {
-                "stdin ended".to_string()
-            } else {
-                "everything sent".to_string()
-            };
-        }
-        if let Some(due) = next_every.filter(|d| now_i >= *d) {
-            if typing {
-                if let Some(m) = &last {
-                    send(m, &mut sent)?;
-                }
-            } else if let Some(m) = scripted.get(next_scripted) {
-                send(m, &mut sent)?;
-                next_scripted = (next_scripted + 1) % scripted.len();
-            }
-            next_every = every.and_then(|d| due.checked_add(d)).map(|n| n.max(now_i));
-            continue;
-        }
-        let wake = [deadline, quit_at, next_every].into_iter().flatten().min();
-        let got = match wake {
-            Some(w) => rx.recv_timeout(w.saturating_duration_since(now_i)),
-            None => rx.recv().map_err(|_| RecvTimeoutError::Disconnected),
-        };
-        match got {
-            Ok(Input::Rx(bytes)) => {
-                rx_total += bytes.len() as u64;
-                out.emit(
-                    Kind::Traffic,
-                    Event::Rx(report::Traffic {
-                        t: now(),
-                        socket: None,
-                        conn: Some(1),
-                        len: bytes.len(),
-                        bytes: report::Bytes(bytes),
-                        origin: None,
-                        format: None,
-                    }),
-                );
-            }
-            Ok(Input::Line(Ok(bytes))) => {
-                send(&bytes, &mut sent)?;
-                last = Some(bytes);
-                if let Some(d) = every {
-                    next_every = after(Some(d));
-                }
-            }
-            Ok(Input::Line(Err(e))) => out.emit(Kind::Warn, Event::error(None, None, e)),
-            Ok(Input::StdinEnd) => {
-                // Replies to the last line may still be on their way.
-                if every.is_none() {
-                    quit_at = after(Some(wait));
-                } else {
-                    break "stdin ended".to_string();
-                }
-            }
-            Ok(Input::Closed(why)) => break why,
-            Err(RecvTimeoutError::Timeout) => {}
-            Err(RecvTimeoutError::Disconnected) => break "nothing more to send".to_string(),
-        }
-    };
-    let _ = writer.shutdown(Shutdown::Both);
+}
+
+/// Runs the client; `Err` is the one line `main` prints before exiting 1.
+pub fn run(opts: ClientOptions) -> Result<(), String> {
+    let mut plan = Plan::of(&opts)?;
+    let stream = connect(&opts.addr, plan.connect_timeout)?;
+    let peer = stream
+        .peer_addr()
+        .map(|a| a.to_string())
+        .unwrap_or_else(|_| opts.addr.clone());
+    let out = Out::new(opts.json, false, plan.log.take(), false, opts.show_max).with_utc(opts.utc);
+    // The JSON `connect` event names the peer; people read which way it went.
     out.emit(
+        Kind::Note,
+        if opts.json {
+            Event::Connect(report::Connect {
+                t: now(),
+                conn: 1,
+                peer: peer.clone(),
+                service: None,
+            })
+        } else {
+            Event::note(format!("connected to {peer}"))
+        },
+    );
+    let (tx, rx) = mpsc::channel::<Input>();
+    spawn_reader(stream.try_clone().map_err(|e| e.to_string())?, tx.clone());
+    if plan.scripted.is_empty() {
+        spawn_stdin(tx, plan.eol);
+    } else {
+        drop(tx);
+    }
+    let mut session = Session {
+        writer: stream,
+        out,
+        sent: 0,
+        received: 0,
+        last: None,
+        next_scripted: 0,
+        next_every: None,
+        quit_at: None,
+    };
+    let reason = session.run(&plan, &rx)?;
+    let _ = session.writer.shutdown(Shutdown::Both);
+    session.out.emit(
         Kind::Note,
         Event::Close(report::Close {
             t: now(),
             conn: 1,
             reason,
-            rx: rx_total,
-            tx: sent,
+            rx: session.received,
+            tx: session.sent,
             refused_sets: 0,
         }),
     );
-    out.flush_log();
+    session.out.flush_log();
     Ok(())
 }
 
