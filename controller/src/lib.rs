@@ -132,6 +132,7 @@ mod cell;
 mod dashboard;
 #[cfg(feature = "net")]
 pub mod net;
+mod operator;
 pub mod primary;
 pub mod realtime;
 pub mod rtde;
@@ -142,6 +143,7 @@ pub mod urp;
 
 pub use cell::{Cell, CellEvent, Ended, Submitted, MAX_EVENTS};
 pub use dashboard::{Dashboard, Reply, GREETING, LOCAL_CONTROL, MAX_LINE, UNLOCK_TOO_EARLY};
+pub use operator::{operator_help, OperatorCommand, OperatorError, OPERATOR_COMMANDS};
 pub use rtde::{
     rtde_controller_version, rtde_input_type, rtde_max_frequency, rtde_output_type, InputRegistry,
     RtdeError, RtdeEvent, RtdeSession, RtdeTextLevel, RtdeType, RtdeValue, RTDE_DATA_PACKAGE,

@@ -542,3 +542,44 @@ fn in_teach_mode_the_operator_moves_the_joints_and_the_streams_follow() {
     cell.move_by_hand([0.0; 6]).unwrap();
     assert_eq!(cell.status().actual_q, [0.0; 6]);
 }
+
+#[test]
+fn operator_commands_act_on_the_cell_as_listed() {
+    use urscript_controller::{OperatorCommand, SafetyStatus};
+    let (mut cell, _) = ready_cell();
+    let run = |cell: &mut Cell, line: &str, at: u64| {
+        line.parse::<OperatorCommand>()
+            .unwrap_or_else(|e| panic!("{line}: {e}"))
+            .apply(cell, ms(at))
+    };
+    assert_eq!(run(&mut cell, "speed 0.25", 2000), Ok(()));
+    cell.advance(ms(2010));
+    assert_eq!(cell.status().speed_fraction, 0.25);
+    assert_eq!(run(&mut cell, "Protective Stop", 2010), Ok(()));
+    assert_eq!(
+        cell.controller().safety_status(ms(2010)),
+        SafetyStatus::ProtectiveStop
+    );
+    assert_eq!(run(&mut cell, "release", 2020), Ok(()));
+    assert_eq!(
+        cell.controller().safety_status(ms(2020)),
+        SafetyStatus::Normal
+    );
+    // By hand with no program running: the joints follow.
+    assert_eq!(
+        run(&mut cell, "freedrive 0.1 -1.5 1.2 -1.3 -1.5 0.2", 2030),
+        Ok(())
+    );
+    assert_eq!(cell.status().actual_q[0], 0.1);
+    // A program running outside teach/freedrive mode: refused, the joints stay.
+    cell.submit(
+        Submitted::Program("def waits():\n  while True:\n    sync()\n  end\nend\n".into()),
+        ms(2040),
+    );
+    cell.advance(ms(2050));
+    let refused = run(&mut cell, "freedrive 0 -1.5 1.2 -1.3 -1.5 0.2", 2050);
+    assert!(refused.is_err_and(|why| why.contains("teach or freedrive")));
+    assert_eq!(cell.status().actual_q[0], 0.1);
+    assert_eq!(run(&mut cell, "local", 2060), Ok(()));
+    assert!(!cell.controller().remote_control());
+}

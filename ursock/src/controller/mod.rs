@@ -22,7 +22,7 @@ use std::time::Duration;
 use urscript_controller::net::{
     parse_host, Ports, Profile, Realtime, Server, ServerEvent, ServerOptions,
 };
-use urscript_controller::{Config, Model, SafetyStatus, MAX_LINE};
+use urscript_controller::{operator_help, Config, Model, OperatorCommand, OperatorError, MAX_LINE};
 
 use crate::report::{self, Event};
 
@@ -608,34 +608,6 @@ enum Stop {
     Signal(&'static str),
 }
 
-/// The operator's commands on standard input: what happens at the robot that no
-/// dashboard command causes (a collision, the emergency stop button, the pendant's
-/// remote/local switch).
-pub const OPERATOR_HELP: &str = "operator commands: protective stop, emergency stop, \
-system emergency stop, safeguard stop, fault, violation, release, local, remote, \
-speed F (the speed slider, 0-1), freedrive [q0, q1, q2, q3, q4, q5] (move the joints by hand, rad: \
-in teach/freedrive mode or with no program running), state, help";
-
-/// Six joint positions (rad) as the operator types them: `[q0, ..., q5]` (brackets and
-/// commas optional).
-fn parse_joints(text: &str) -> Result<[f64; 6], String> {
-    let cleaned = text.trim().trim_start_matches('[').trim_end_matches(']');
-    let parts: Vec<&str> = cleaned
-        .split(|c: char| c == ',' || c.is_whitespace())
-        .filter(|p| !p.is_empty())
-        .collect();
-    let mut q = [0.0; 6];
-    if parts.len() != 6 {
-        return Err(format!("give 6 joint positions (rad), not {}", parts.len()));
-    }
-    for (slot, p) in q.iter_mut().zip(parts) {
-        *slot = p
-            .parse()
-            .map_err(|_| format!("{p:?} is not a number of radians"))?;
-    }
-    Ok(q)
-}
-
 /// Reads operator commands from standard input until its end (lines bounded at
 /// `MAX_LINE` bytes).
 fn operator(server: &Server, json: bool, out: &mpsc::SyncSender<Out>) {
@@ -672,90 +644,36 @@ fn operator(server: &Server, json: bool, out: &mpsc::SyncSender<Out>) {
         if cmd.is_empty() {
             continue;
         }
-        match cmd.as_str() {
-            "help" => {
+        let said = match cmd.parse::<OperatorCommand>() {
+            Ok(OperatorCommand::Help) => {
                 if !json {
-                    crate::out::line(OPERATOR_HELP);
+                    crate::out::line(&operator_help());
                 }
                 continue;
             }
-            "protective stop"
-            | "emergency stop"
-            | "system emergency stop"
-            | "safeguard stop"
-            | "fault"
-            | "violation"
-            | "release"
-            | "local"
-            | "remote"
-            | "state" => {}
-            _ if cmd.starts_with("speed ") || cmd.starts_with("freedrive ") => {}
-            _ => {
-                crate::out::note(&format!(
-                    "operator: unknown command {cmd:?}; {OPERATOR_HELP}"
-                ));
+            Err(e @ OperatorError::Unknown(_)) => {
+                crate::out::note(&format!("operator: {e}"));
                 continue;
             }
-        }
-        let said = server.with_cell(|cell, now| {
-            let c = cell.controller();
-            let status = match cmd.as_str() {
-                "protective stop" => {
-                    c.protective_stop(now);
-                    None
+            Err(OperatorError::BadArgument(why)) => format!("refused: {why}"),
+            Ok(command) => server.with_cell(|cell, now| match command.apply(cell, now) {
+                Err(why) => format!("refused: {why}"),
+                Ok(()) => {
+                    let c = cell.controller();
+                    let mode = c.robot_mode(now);
+                    let safety = c.safety_status(now);
+                    let program = c.program_state();
+                    let remote = if c.remote_control() {
+                        "remote"
+                    } else {
+                        "local"
+                    };
+                    format!(
+                        "robot mode {mode}, safety {safety}, program {program}, {remote} control"
+                    )
                 }
-                "emergency stop" => Some(SafetyStatus::RobotEmergencyStop),
-                "system emergency stop" => Some(SafetyStatus::SystemEmergencyStop),
-                "safeguard stop" => Some(SafetyStatus::SafeguardStop),
-                "fault" => Some(SafetyStatus::Fault),
-                "violation" => Some(SafetyStatus::Violation),
-                "release" => {
-                    c.release_stop(now);
-                    None
-                }
-                "local" => {
-                    c.set_remote_control(false);
-                    None
-                }
-                "remote" => {
-                    c.set_remote_control(true);
-                    None
-                }
-                _ => None,
-            };
-            let by_hand = if let Some(rest) = cmd.strip_prefix("speed ") {
-                match rest.trim().parse::<f64>() {
-                    Ok(f) if (0.0..=1.0).contains(&f) => {
-                        cell.apply(&urscript_controller::Inputs {
-                            speed_slider_fraction: Some(f),
-                            ..Default::default()
-                        });
-                        Ok(())
-                    }
-                    _ => Err(format!("speed {rest:?} is not a fraction 0-1")),
-                }
-            } else if let Some(rest) = cmd.strip_prefix("freedrive ") {
-                parse_joints(rest).and_then(|q| cell.move_by_hand(q))
-            } else {
-                Ok(())
-            };
-            if let Err(why) = by_hand {
-                return format!("refused: {why}");
-            }
-            let c = cell.controller();
-            if let Some(status) = status {
-                c.safety_event(now, status);
-            }
-            let mode = c.robot_mode(now);
-            let safety = c.safety_status(now);
-            let program = c.program_state();
-            let remote = if c.remote_control() {
-                "remote"
-            } else {
-                "local"
-            };
-            format!("robot mode {mode}, safety {safety}, program {program}, {remote} control")
-        });
+            }),
+        };
         let l = server.lateness();
         let said = format!(
             "{said}; loop: {} steps late (worst {:.1} ms), {:.3} s held back in {} stalls",
