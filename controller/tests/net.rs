@@ -203,3 +203,35 @@ fn the_ursim_profile_answers_as_ursim() {
     server.stop();
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn a_stop_before_the_loops_first_step_is_a_change_of_state() {
+    // The operator acts before the loop stepped once (the loop is held in its first
+    // event, `scheduling`, until the stop is made): the change from the state the
+    // controller started in is still said.
+    let (go_tx, go_rx) = std::sync::mpsc::channel::<()>();
+    let go_rx = std::sync::Mutex::new(go_rx);
+    let (tx, events) = std::sync::mpsc::channel();
+    let tx = std::sync::Mutex::new(tx);
+    let server = urscript_controller::net::Server::start(any_ports(), move |e| {
+        if matches!(e, ServerEvent::Scheduling(_)) {
+            let _ = go_rx.lock().unwrap().recv_timeout(WAIT);
+        }
+        let _ = tx.lock().unwrap().send(e);
+    })
+    .expect("the server starts");
+    server.with_cell(|cell, now| cell.controller().protective_stop(now));
+    go_tx.send(()).unwrap();
+    let e = wait_for(&events, |e| matches!(e, ServerEvent::State { .. }));
+    assert!(
+        matches!(
+            e,
+            ServerEvent::State {
+                safety: SafetyStatus::ProtectiveStop,
+                ..
+            }
+        ),
+        "{e:?}"
+    );
+    server.stop();
+}

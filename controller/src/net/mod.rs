@@ -785,7 +785,10 @@ impl Server {
             None => None,
         };
         let interp = Cell::interp_config(&controller);
-        let cell = Cell::new(controller, interp);
+        let mut cell = Cell::new(controller, interp);
+        // The state the controller starts in: a change the loop sees is measured from
+        // it, also one made before the loop's first step (an operator's stop).
+        let first = cell.status();
         let shared = Arc::new(Shared {
             cell: Mutex::new(cell),
             config,
@@ -819,7 +822,7 @@ impl Server {
                     .name("controller".into())
                     .spawn(move || {
                         shared.emit(ServerEvent::Scheduling(priority::apply(realtime)));
-                        streams::run(&shared, listeners)
+                        streams::run(&shared, listeners, &first)
                     })?,
             );
         }

@@ -271,8 +271,9 @@ pub(crate) struct Listeners {
     pub(crate) rtde: Option<TcpListener>,
 }
 
-/// Runs the loop until the server stops.
-pub(crate) fn run(shared: &Arc<Shared>, listeners: Listeners) {
+/// Runs the loop until the server stops; `first` is the controller's status before
+/// any client acted: its robot mode, safety status and program state are not changes.
+pub(crate) fn run(shared: &Arc<Shared>, listeners: Listeners, first: &Status) {
     let (done_tx, done_rx) = mpsc::channel();
     let mut lp = Loop {
         clients: Vec::new(),
@@ -287,8 +288,8 @@ pub(crate) fn run(shared: &Arc<Shared>, listeners: Listeners) {
         },
         registry: InputRegistry::new(),
         next_state: Duration::ZERO,
-        safety: None,
-        state_key: None,
+        safety: first.safety,
+        state_key: (first.robot_mode, first.safety, first.program_state),
         buf: vec![0u8; READ_CHUNK],
         frame: Vec::new(),
         program_events: EventBudget::new(shared.now()),
@@ -535,9 +536,9 @@ struct Loop {
     registry: InputRegistry,
     next_state: Duration,
     /// The safety status the primary clients were last told of.
-    safety: Option<crate::SafetyStatus>,
+    safety: crate::SafetyStatus,
     /// The modes of the last state message.
-    state_key: Option<(crate::RobotMode, crate::SafetyStatus, crate::ProgramState)>,
+    state_key: (crate::RobotMode, crate::SafetyStatus, crate::ProgramState),
     buf: Vec<u8>,
     frame: Vec<u8>,
     /// The running program's events (messages, socket calls and bytes) this interval.
@@ -972,7 +973,7 @@ impl Loop {
         // to ignore warnings. The code (209, argument 0) is our choice: UR does not
         // document the code a protective stop reports.
         // They go before the `PROGRAM_XXX_STOPPED` of a program the stop ended this step.
-        if self.safety.is_some_and(|s| s != status.safety) {
+        if self.safety != status.safety {
             let mut safety = vec![RobotMessage::SafetyMode {
                 code: 0,
                 argument: 0,
@@ -998,7 +999,7 @@ impl Loop {
                 .unwrap_or(messages.len());
             messages.splice(at..at, safety);
         }
-        self.safety = Some(status.safety);
+        self.safety = status.safety;
         self.stream(shared, &status, &messages, now);
     }
 
@@ -1040,8 +1041,8 @@ impl Loop {
         // status or the program state changed (a client that acts on a change, e.g.
         // waits for a protective stop to clear, reads it from the robot mode data).
         let key = (status.robot_mode, status.safety, status.program_state);
-        let changed = self.state_key.is_some_and(|k| k != key);
-        self.state_key = Some(key);
+        let changed = self.state_key != key;
+        self.state_key = key;
         if changed {
             shared.emit(super::ServerEvent::State {
                 robot_mode: status.robot_mode,
