@@ -1128,7 +1128,7 @@ impl Doc {
 // ---------------------------------------------------------------------------------------
 // translation
 
-struct Tx<'a> {
+struct Translator<'a> {
     doc: &'a Doc,
     segments: Vec<Segment>,
     indent: usize,
@@ -1231,7 +1231,7 @@ fn translate(doc: &Doc) -> Result<UrpProgram, UrpError> {
     let name = doc.attr(0, "name").unwrap_or("Program").to_string();
     let installation = doc.attr(0, "installation").unwrap_or("default").to_string();
     let created_in = doc.attr(0, "createdIn").map(str::to_string);
-    let mut tx = Tx {
+    let mut tr = Translator {
         doc,
         segments: Vec::new(),
         indent: 1,
@@ -1274,7 +1274,7 @@ fn translate(doc: &Doc) -> Result<UrpProgram, UrpError> {
                 }
                 "SubProgram" => {
                     let sub = doc.resolve(c)?;
-                    tx.subprogram_name(sub)?;
+                    tr.subprogram_name(sub)?;
                 }
                 "Thread" => threads.push(c),
                 _ => return Err(unknown(doc, c)),
@@ -1282,53 +1282,53 @@ fn translate(doc: &Doc) -> Result<UrpProgram, UrpError> {
         }
     }
     for &c in &init {
-        tx.init_variables(c)?;
-        tx.children_of(c)?;
+        tr.init_variables(c)?;
+        tr.children_of(c)?;
     }
     for &c in &before {
-        tx.children_of(c)?;
+        tr.children_of(c)?;
     }
-    tx.threads(&threads)?;
+    tr.threads(&threads)?;
     let Some(main) = main else {
         return Err(invalid(doc, 0, "the program has no MainProgram"));
     };
     let forever = doc.attr(main, "runOnlyOnce") == Some("false");
     if forever {
-        tx.line("while (True):");
-        tx.indent += 1;
+        tr.line("while (True):");
+        tr.indent += 1;
     }
-    tx.children_of(main)?;
+    tr.children_of(main)?;
     if forever {
-        tx.indent -= 1;
-        tx.line("end");
+        tr.indent -= 1;
+        tr.line("end");
     }
-    let body = std::mem::take(&mut tx.segments);
+    let body = std::mem::take(&mut tr.segments);
 
     // Sub programs, from a work list (a sub program may call others, or itself).
     let mut defs = Vec::new();
     let mut next = 0;
-    while next < tx.subprograms.len() {
-        let (sub, fname) = tx.subprograms[next].clone();
+    while next < tr.subprograms.len() {
+        let (sub, fname) = tr.subprograms[next].clone();
         next += 1;
-        tx.indent = 1;
-        tx.line(&format!("def {fname}():"));
-        tx.indent = 2;
-        tx.children_of(sub)?;
-        tx.indent = 1;
-        tx.line("end");
-        defs.append(&mut tx.segments);
+        tr.indent = 1;
+        tr.line(&format!("def {fname}():"));
+        tr.indent = 2;
+        tr.children_of(sub)?;
+        tr.indent = 1;
+        tr.line("end");
+        defs.append(&mut tr.segments);
     }
 
     let mut segments = vec![Segment::Text(format!("def {}():\n", identifier(&name)))];
     segments.extend(defs);
     // Every thread's name is its own: not a sub program's, nor one the translation
     // writes (sub programs met only inside threads are named after the threads are).
-    for (thread, node) in &tx.thread_names {
-        let generated = (thread == "Timer_Thread" && !tx.timers.is_empty())
-            || (1..=tx.watched).any(|k| {
+    for (thread, node) in &tr.thread_names {
+        let generated = (thread == "Timer_Thread" && !tr.timers.is_empty())
+            || (1..=tr.watched).any(|k| {
                 *thread == format!("Thread_while_{k}") || *thread == format!("Thread_if_{k}")
             });
-        if generated || tx.subprogram_names.contains(thread) {
+        if generated || tr.subprogram_names.contains(thread) {
             return Err(invalid(
                 doc,
                 *node,
@@ -1336,9 +1336,9 @@ fn translate(doc: &Doc) -> Result<UrpProgram, UrpError> {
             ));
         }
     }
-    for (sub, fname) in &tx.subprograms {
-        if (fname == "Timer_Thread" && !tx.timers.is_empty())
-            || (1..=tx.watched).any(|k| {
+    for (sub, fname) in &tr.subprograms {
+        if (fname == "Timer_Thread" && !tr.timers.is_empty())
+            || (1..=tr.watched).any(|k| {
                 *fname == format!("Thread_while_{k}") || *fname == format!("Thread_if_{k}")
             })
         {
@@ -1349,21 +1349,21 @@ fn translate(doc: &Doc) -> Result<UrpProgram, UrpError> {
             ));
         }
     }
-    segments.append(&mut tx.hoisted);
-    if !tx.timers.is_empty() {
-        tx.timer_thread();
-        segments.append(&mut tx.segments);
+    segments.append(&mut tr.hoisted);
+    if !tr.timers.is_empty() {
+        tr.timer_thread();
+        segments.append(&mut tr.segments);
     }
     segments.extend(body);
     segments.push(Segment::Text(String::from("end\n")));
-    tx.within_bounds()?;
+    tr.within_bounds()?;
     let segments = merge(segments);
     let mut script = String::new();
     for s in &segments {
         match s {
             Segment::Text(t) => push_bounded(&mut script, t, 0, 0)?,
             Segment::External { index, indent } => {
-                let node = &tx.externals[*index];
+                let node = &tr.externals[*index];
                 let comment = format!(
                     "# External Control node {index}: the script from {}:{} goes here\n",
                     node.host, node.port
@@ -1377,7 +1377,7 @@ fn translate(doc: &Doc) -> Result<UrpProgram, UrpError> {
         installation,
         created_in,
         script,
-        external_control: tx.externals,
+        external_control: tr.externals,
         segments,
     })
 }
@@ -1465,9 +1465,9 @@ fn bool_text(doc: &Doc, id: usize, what: &str, text: &str) -> Result<&'static st
     }
 }
 
-impl Tx<'_> {
+impl Translator<'_> {
     /// Writes one line at the current indentation; past [`MAX_SCRIPT_BYTES`] in all it
-    /// is not kept, and the translation fails at the next node ([`Tx::nodes`]) or at
+    /// is not kept, and the translation fails at the next node ([`Translator::nodes`]) or at
     /// its end.
     fn line(&mut self, text: &str) {
         let size = text.len() + 2 * self.indent + 1;
@@ -2159,25 +2159,25 @@ impl Tx<'_> {
         let cond = self.expression(id)?;
         self.watched += 1;
         let k = self.watched;
-        self.hoist(|tx| {
-            tx.block(&format!("thread Thread_while_{k}():"), |tx| {
-                tx.block("while (True):", |tx| tx.children_of(id))
+        self.hoist(|tr| {
+            tr.block(&format!("thread Thread_while_{k}():"), |tr| {
+                tr.block("while (True):", |tr| tr.children_of(id))
             })
         })?;
-        self.block(&format!("if ({cond}):"), |tx| {
-            tx.line(&format!(
+        self.block(&format!("if ({cond}):"), |tr| {
+            tr.line(&format!(
                 "global thread_handler_{k} = run Thread_while_{k}()"
             ));
-            tx.block(&format!("while ({cond}):"), |tx| {
-                tx.line("sync()");
+            tr.block(&format!("while ({cond}):"), |tr| {
+                tr.line("sync()");
                 Ok(())
             })?;
-            tx.line(&format!("kill thread_handler_{k}"));
+            tr.line(&format!("kill thread_handler_{k}"));
             Ok(())
         })
     }
 
-    /// Writes what `f` writes at the program's top level ([`Tx::hoisted`]).
+    /// Writes what `f` writes at the program's top level ([`Translator::hoisted`]).
     fn hoist(&mut self, f: impl FnOnce(&mut Self) -> Result<(), UrpError>) -> Result<(), UrpError> {
         let outer = std::mem::take(&mut self.segments);
         let indent = std::mem::replace(&mut self.indent, 1);
@@ -2199,10 +2199,10 @@ impl Tx<'_> {
         let cond = self.expression(id)?;
         self.watched += 1;
         let k = self.watched;
-        self.hoist(|tx| {
-            tx.block(&format!("thread Thread_if_{k}():"), |tx| {
-                tx.children_of(id)?;
-                tx.line(&format!("thread_flag_{k} = 1"));
+        self.hoist(|tr| {
+            tr.block(&format!("thread Thread_if_{k}():"), |tr| {
+                tr.children_of(id)?;
+                tr.line(&format!("thread_flag_{k} = 1"));
                 Ok(())
             })
         })?;
@@ -2210,13 +2210,13 @@ impl Tx<'_> {
         self.line(&format!("if ({cond}):"));
         self.indent += 1;
         self.line(&format!("global thread_handler_{k} = run Thread_if_{k}()"));
-        self.block(&format!("while (thread_flag_{k} == 0):"), |tx| {
-            tx.line(&format!("if not({cond}):"));
-            tx.line(&format!("  kill thread_handler_{k}"));
-            tx.line(&format!("  thread_flag_{k} = 2"));
-            tx.line("else:");
-            tx.line("  sync()");
-            tx.line("end");
+        self.block(&format!("while (thread_flag_{k} == 0):"), |tr| {
+            tr.line(&format!("if not({cond}):"));
+            tr.line(&format!("  kill thread_handler_{k}"));
+            tr.line(&format!("  thread_flag_{k} = 2"));
+            tr.line("else:");
+            tr.line("  sync()");
+            tr.line("end");
             Ok(())
         })?;
         self.indent -= 1;
@@ -2313,11 +2313,11 @@ impl Tx<'_> {
                     ))
                 }
             };
-            self.block(&format!("thread {name}():"), |tx| {
+            self.block(&format!("thread {name}():"), |tr| {
                 if forever {
-                    tx.block("while (True):", |tx| tx.children_of(t))
+                    tr.block("while (True):", |tr| tr.children_of(t))
                 } else {
-                    tx.children_of(t)
+                    tr.children_of(t)
                 }
             })?;
             self.thread_names.push((name.clone(), t));
@@ -2330,7 +2330,7 @@ impl Tx<'_> {
     }
 
     /// A `Timer action="Start|Stop|Reset"` on its `<variable>`: the variable counts
-    /// seconds in a thread while `NAME_is_counting` is `True` ([`Tx::timer_thread`]).
+    /// seconds in a thread while `NAME_is_counting` is `True` ([`Translator::timer_thread`]).
     fn timer(&mut self, id: usize) -> Result<(), UrpError> {
         let doc = self.doc;
         let name = self.variable_name(id)?;

@@ -217,7 +217,7 @@ pub const OUTPUT_QUEUE: usize = 4096;
 const FINAL_WAIT: Duration = Duration::from_secs(2);
 
 /// What the writer thread prints.
-enum Out {
+enum Queued {
     Event(Event),
     /// The last event: printed, then `done` is told.
     Last(Event, mpsc::Sender<()>),
@@ -225,7 +225,7 @@ enum Out {
 
 /// The writer thread: prints each queued event; before the next one after events were
 /// dropped (or after a pause of 100 ms), a `dropped` event with their count.
-fn writer(json: bool, queue: mpsc::Receiver<Out>, dropped: Arc<AtomicU64>) {
+fn writer(json: bool, queue: mpsc::Receiver<Queued>, dropped: Arc<AtomicU64>) {
     let say_dropped = || {
         let count = dropped.swap(0, Ordering::SeqCst);
         if count > 0 {
@@ -240,11 +240,11 @@ fn writer(json: bool, queue: mpsc::Receiver<Out>, dropped: Arc<AtomicU64>) {
     };
     loop {
         match queue.recv_timeout(Duration::from_millis(100)) {
-            Ok(Out::Event(e)) => {
+            Ok(Queued::Event(e)) => {
                 say_dropped();
                 print(json, &e);
             }
-            Ok(Out::Last(e, done)) => {
+            Ok(Queued::Last(e, done)) => {
                 say_dropped();
                 print(json, &e);
                 let _ = done.send(());
@@ -500,7 +500,7 @@ pub fn run(opts: ControllerOptions) -> Result<(), Failure> {
             .map_err(|e| Failure::failed(format!("cannot start the signal thread: {e}")))?;
     }
     let shutdown_tx = std::sync::Mutex::new(shutdown_tx);
-    let (queue, queued) = mpsc::sync_channel::<Out>(OUTPUT_QUEUE);
+    let (queue, queued) = mpsc::sync_channel::<Queued>(OUTPUT_QUEUE);
     let dropped = Arc::new(AtomicU64::new(0));
     {
         let dropped = Arc::clone(&dropped);
@@ -518,7 +518,7 @@ pub fn run(opts: ControllerOptions) -> Result<(), Failure> {
         }
         if let Some(event) = report_event(e) {
             // Never wait for the output: a full queue drops the event, counted.
-            if sink.try_send(Out::Event(event)).is_err() {
+            if sink.try_send(Queued::Event(event)).is_err() {
                 dropped.fetch_add(1, Ordering::SeqCst);
             }
         }
@@ -555,7 +555,7 @@ pub fn run(opts: ControllerOptions) -> Result<(), Failure> {
         write_atomically(path, &format!("{text}\n"))
             .map_err(|e| Failure::failed(format!("--ready-file {}: {e}", path.display())))?;
     }
-    let _ = queue.try_send(Out::Event(Event::Ready(report::Ready {
+    let _ = queue.try_send(Queued::Event(Event::Ready(report::Ready {
         t: report::now(),
         addrs,
     })));
@@ -582,7 +582,7 @@ pub fn run(opts: ControllerOptions) -> Result<(), Failure> {
         t: report::now(),
         reason,
     });
-    let mut last = Some(Out::Last(last, done_tx));
+    let mut last = Some(Queued::Last(last, done_tx));
     let start = std::time::Instant::now();
     while let Some(out) = last.take() {
         match queue.try_send(out) {
@@ -610,7 +610,7 @@ enum Stop {
 
 /// Reads operator commands from standard input until its end (lines bounded at
 /// `MAX_LINE` bytes).
-fn operator(server: &Server, json: bool, out: &mpsc::SyncSender<Out>) {
+fn operator(server: &Server, json: bool, out: &mpsc::SyncSender<Queued>) {
     let stdin = std::io::stdin();
     let mut input = stdin.lock();
     let mut line = Vec::new();
@@ -689,6 +689,6 @@ fn operator(server: &Server, json: bool, out: &mpsc::SyncSender<Out>) {
         });
         // In order with the server's events; the operator's thread may wait for the
         // output.
-        let _ = out.send(Out::Event(event));
+        let _ = out.send(Queued::Event(event));
     }
 }
