@@ -3,6 +3,7 @@
 //! ```sh
 //! cargo build --release -p ursock            # the binary under test
 //! cargo run --release -p ursock --example controller_load [-- --seconds 30 --starts 20]
+//! cargo run --release -p ursock --example controller_load -- --only fleet --fleet 16 --hog
 //! ```
 //!
 //! The controller is the release `ursock` binary next to this example's directory
@@ -19,6 +20,13 @@
 //!    `power on` and `brake release`).
 //! 3. The same with four RTDE clients at once, and with one RTDE client next to a
 //!    realtime (30003) client that never reads.
+//! 4. Idle: `--fleet` controllers with no client and no program, their CPU per second.
+//! 5. Fleet: `--fleet` controllers at once, each with one RTDE client at 500 Hz (the
+//!    30-field recipe, no program), all recording for `--seconds`.
+//!
+//! `--hog` runs a busy loop per core (`sh -c 'while :; do :; done'`) during every
+//! scenario; `--realtime auto|off` is passed to each controller; `--only NAME[,NAME]`
+//! picks scenarios (`startup`, `one`, `four`, `silent`, `idle`, `fleet`).
 //!
 //! For each run: packages received against expected, the inter-arrival period's
 //! percentiles, the jitter `|period - 2 ms|`, the controller's `timestamp` deltas, the
@@ -29,7 +37,7 @@ use std::io::{BufRead, BufReader, Read, Write};
 use std::net::{SocketAddr, TcpStream};
 use std::path::PathBuf;
 use std::process::{Child, Command, Stdio};
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
@@ -86,6 +94,20 @@ end
 struct Options {
     seconds: u64,
     starts: usize,
+    /// Controllers of the idle and fleet scenarios.
+    fleet: usize,
+    /// A busy loop per core during every scenario.
+    hog: bool,
+    /// `--realtime` of each controller.
+    realtime: String,
+    /// The scenarios to run (all when empty).
+    only: Vec<String>,
+}
+
+impl Options {
+    fn runs(&self, name: &str) -> bool {
+        self.only.is_empty() || self.only.iter().any(|o| o == name)
+    }
 }
 
 fn main() {
@@ -100,19 +122,55 @@ fn run() -> Result<()> {
     let bin = find_binary()?;
     println!("controller: {}", bin.display());
     println!("machine: {}", machine());
+    println!(
+        "controllers run with --realtime {}{}",
+        opts.realtime,
+        if opts.hog {
+            "; a busy loop per core runs throughout"
+        } else {
+            ""
+        }
+    );
+    let _hog = opts.hog.then(Hog::start).transpose()?;
     println!();
 
-    startup(&bin, opts.starts)?;
-
-    println!();
-    println!("## one RTDE client, 30 fields at 500 Hz, servoj streamed every 2 ms");
-    scenario(&bin, opts.seconds, 1, false)?;
-    println!();
-    println!("## four RTDE clients at once");
-    scenario(&bin, opts.seconds, 4, false)?;
-    println!();
-    println!("## one RTDE client and a realtime client that never reads");
-    scenario(&bin, opts.seconds, 1, true)?;
+    if opts.runs("startup") {
+        startup(&bin, &opts)?;
+    }
+    for (name, title, clients, silent) in [
+        (
+            "one",
+            "one RTDE client, 30 fields at 500 Hz, servoj streamed every 2 ms",
+            1,
+            false,
+        ),
+        ("four", "four RTDE clients at once", 4, false),
+        (
+            "silent",
+            "one RTDE client and a realtime client that never reads",
+            1,
+            true,
+        ),
+    ] {
+        if opts.runs(name) {
+            println!();
+            println!("## {title}");
+            scenario(&bin, &opts, clients, silent)?;
+        }
+    }
+    if opts.runs("idle") {
+        println!();
+        println!("## {} idle controllers (no client, no program)", opts.fleet);
+        idle(&bin, &opts)?;
+    }
+    if opts.runs("fleet") {
+        println!();
+        println!(
+            "## {} controllers, one RTDE client at 500 Hz each (30 fields, no program)",
+            opts.fleet
+        );
+        fleet(&bin, &opts)?;
+    }
     Ok(())
 }
 
@@ -120,19 +178,36 @@ fn parse_args() -> Result<Options> {
     let mut opts = Options {
         seconds: 30,
         starts: 20,
+        fleet: 8,
+        hog: false,
+        realtime: "auto".into(),
+        only: Vec::new(),
     };
     let mut args = std::env::args().skip(1);
     while let Some(a) = args.next() {
-        let value = |args: &mut dyn Iterator<Item = String>| -> Result<u64> {
-            args.next()
-                .and_then(|v| v.parse().ok())
-                .ok_or_else(|| format!("{a} needs a positive number"))
+        let mut value = || args.next().ok_or_else(|| format!("{a} needs a value"));
+        let number = |v: String| -> Result<u64> {
+            v.parse()
+                .map_err(|_| format!("{a} needs a positive number, not {v:?}"))
         };
         match a.as_str() {
-            "--seconds" => opts.seconds = value(&mut args)?.max(1),
-            "--starts" => opts.starts = value(&mut args)?.max(1) as usize,
+            "--seconds" => opts.seconds = number(value()?)?.max(1),
+            "--starts" => opts.starts = number(value()?)?.max(1) as usize,
+            "--fleet" => opts.fleet = number(value()?)?.clamp(1, 256) as usize,
+            "--hog" => opts.hog = true,
+            "--realtime" => {
+                opts.realtime = value()?;
+                if !["auto", "off"].contains(&opts.realtime.as_str()) {
+                    return Err(format!("--realtime auto|off, not {:?}", opts.realtime));
+                }
+            }
+            "--only" => opts.only = value()?.split(',').map(str::to_string).collect(),
             "-h" | "--help" => {
-                println!("controller_load [--seconds N (30)] [--starts N (20)]");
+                println!(
+                    "controller_load [--seconds N (30)] [--starts N (20)] [--fleet N (8)] \
+                     [--hog] [--realtime auto|off] \
+                     [--only startup,one,four,silent,idle,fleet]"
+                );
                 std::process::exit(0);
             }
             _ => return Err(format!("unknown argument {a:?}")),
@@ -187,6 +262,8 @@ fn machine() -> String {
 /// A running controller and the addresses of its servers.
 struct Controller {
     child: Child,
+    /// Steps the controller computed late, summed over its `late` events.
+    late_steps: Arc<AtomicU64>,
     dashboard: SocketAddr,
     secondary: SocketAddr,
     realtime: SocketAddr,
@@ -196,9 +273,9 @@ struct Controller {
 impl Controller {
     /// Spawns the controller; returns once the dashboard is listening (or, with
     /// `all`, all five servers).
-    fn start(bin: &PathBuf, all: bool) -> Result<Controller> {
+    fn start(bin: &PathBuf, realtime: &str, all: bool) -> Result<Controller> {
         let mut child = Command::new(bin)
-            .args(["controller", "--json"])
+            .args(["controller", "--json", "--realtime", realtime])
             .args(["--dashboard-port", "0", "--primary-port", "0"])
             .args(["--secondary-port", "0", "--realtime-port", "0"])
             .args(["--rtde-port", "0", "--interpreter-port", "0"])
@@ -242,15 +319,19 @@ impl Controller {
             let _ = child.wait();
             return Err(e);
         }
-        // Keep draining the events so the controller never blocks on a full pipe.
+        // Keep draining the events so the controller never blocks on a full pipe; the
+        // `late` events are counted.
+        let late_steps = Arc::new(AtomicU64::new(0));
+        let late = Arc::clone(&late_steps);
         std::thread::spawn(move || {
-            let mut sink = Vec::new();
-            while out
-                .read_until(b'\n', &mut sink)
-                .map(|n| n > 0)
-                .unwrap_or(false)
-            {
-                sink.clear();
+            let mut line = String::new();
+            while out.read_line(&mut line).map(|n| n > 0).unwrap_or(false) {
+                if line.contains("\"late\"") {
+                    if let Ok(v) = serde_json::from_str::<serde_json::Value>(&line) {
+                        late.fetch_add(v["late_steps"].as_u64().unwrap_or(0), Ordering::Relaxed);
+                    }
+                }
+                line.clear();
             }
         });
         let find = |name: &str| {
@@ -261,6 +342,7 @@ impl Controller {
                 .unwrap_or_else(|| SocketAddr::from(([127, 0, 0, 1], 0)))
         };
         Ok(Controller {
+            late_steps,
             dashboard: find("dashboard"),
             secondary: find("secondary"),
             realtime: find("realtime"),
@@ -346,13 +428,14 @@ impl Dashboard {
 // ---------------------------------------------------------------------------------------
 // 1. Start-up
 
-fn startup(bin: &PathBuf, starts: usize) -> Result<()> {
+fn startup(bin: &PathBuf, opts: &Options) -> Result<()> {
+    let starts = opts.starts;
     println!("## start-up: spawn to the dashboard's greeting read by a client ({starts} starts)");
     let mut times = Vec::with_capacity(starts);
     let mut greeting = String::new();
     for _ in 0..starts {
         let t0 = Instant::now();
-        let c = Controller::start(bin, false)?;
+        let c = Controller::start(bin, &opts.realtime, false)?;
         let (_d, g) = Dashboard::connect(c.dashboard)?;
         times.push(ms(t0.elapsed()));
         greeting = g;
@@ -533,8 +616,14 @@ impl Default for Record {
 // ---------------------------------------------------------------------------------------
 // 2 and 3. Streaming under load
 
-fn scenario(bin: &PathBuf, seconds: u64, rtde_clients: usize, silent_realtime: bool) -> Result<()> {
-    let c = Controller::start(bin, true)?;
+fn scenario(
+    bin: &PathBuf,
+    opts: &Options,
+    rtde_clients: usize,
+    silent_realtime: bool,
+) -> Result<()> {
+    let seconds = opts.seconds;
+    let c = Controller::start(bin, &opts.realtime, true)?;
     let (mut d, _) = Dashboard::connect(c.dashboard)?;
     d.ask("power on")?;
     d.wait_for("robotmode", "Robotmode: IDLE")?;
@@ -630,6 +719,10 @@ fn scenario(bin: &PathBuf, seconds: u64, rtde_clients: usize, silent_realtime: b
     if silent_realtime {
         println!("realtime client that never read: {waiting} bytes were waiting for it");
     }
+    println!(
+        "controller late steps (its `late` events): {}",
+        c.late_steps.load(Ordering::Relaxed)
+    );
     println!("dashboard after the run: {still_running}");
     println!(
         "host load average at the end (1, 5, 15 min): {}",
@@ -683,16 +776,167 @@ fn report_record(i: usize, r: &Record, expected: usize) {
             steps[2] += 1;
         }
     }
-    let skipped: f64 = r
-        .timestamps
-        .windows(2)
-        .map(|w| ((w[1] - w[0]) / 0.002).round() - 1.0)
-        .filter(|s| *s > 0.0)
-        .sum();
+    let (skipped, _, _) = stream_figures(r);
     println!(
         "  timestamp deltas (nearest step): 2 ms {}, 4 ms {}, 6 ms+ {}; steps skipped {skipped}; not an exact multiple of 2 ms {inexact}",
         steps[0], steps[1], steps[2]
     );
+}
+
+// ---------------------------------------------------------------------------------------
+// 4 and 5. Idle controllers and a fleet
+
+fn idle(bin: &PathBuf, opts: &Options) -> Result<()> {
+    let controllers = (0..opts.fleet)
+        .map(|_| Controller::start(bin, &opts.realtime, true))
+        .collect::<Result<Vec<_>>>()?;
+    // Past start-up.
+    std::thread::sleep(Duration::from_secs(1));
+    let cpu0: Vec<_> = controllers.iter().map(|c| cpu_seconds(c.pid())).collect();
+    let t0 = Instant::now();
+    std::thread::sleep(Duration::from_secs(opts.seconds));
+    let wall = t0.elapsed().as_secs_f64();
+    let mut shares = Vec::new();
+    for (c, a) in controllers.iter().zip(cpu0) {
+        if let (Some(a), Some(b)) = (a, cpu_seconds(c.pid())) {
+            shares.push((b - a) / wall * 100.0);
+        }
+    }
+    shares.sort_by(f64::total_cmp);
+    if shares.is_empty() {
+        println!("idle CPU: n/a");
+    } else {
+        println!(
+            "idle CPU per controller, % of one core: min {:.2}  p50 {:.2}  max {:.2} (sum {:.2})",
+            shares[0],
+            pct(&shares, 50.0),
+            shares[shares.len() - 1],
+            shares.iter().sum::<f64>()
+        );
+    }
+    let rss: Vec<u64> = controllers
+        .iter()
+        .filter_map(|c| peak_rss_kib(c.pid()))
+        .collect();
+    if let Some(max) = rss.iter().max() {
+        println!(
+            "peak RSS per controller: max {:.1} MiB",
+            *max as f64 / 1024.0
+        );
+    }
+    println!("host load average (1, 5, 15 min): {}", load_average());
+    Ok(())
+}
+
+fn fleet(bin: &PathBuf, opts: &Options) -> Result<()> {
+    let controllers = (0..opts.fleet)
+        .map(|_| Controller::start(bin, &opts.realtime, true))
+        .collect::<Result<Vec<_>>>()?;
+    let clients = controllers
+        .iter()
+        .map(|c| Rtde::start(c.rtde))
+        .collect::<Result<Vec<_>>>()?;
+    let cpu0: Vec<_> = controllers.iter().map(|c| cpu_seconds(c.pid())).collect();
+    let late0: Vec<u64> = controllers
+        .iter()
+        .map(|c| c.late_steps.load(Ordering::Relaxed))
+        .collect();
+    let t0 = Instant::now();
+    let end = t0 + Duration::from_secs(opts.seconds);
+    let handles: Vec<_> = clients
+        .into_iter()
+        .map(|r| std::thread::spawn(move || r.record(end)))
+        .collect();
+    let mut records = Vec::new();
+    for h in handles {
+        records.push(h.join().map_err(|_| "an RTDE client thread failed")??);
+    }
+    let wall = t0.elapsed().as_secs_f64();
+    let expected = (opts.seconds as f64 * FREQUENCY).round() as usize;
+    println!("controller  packages/expected  skipped  late steps  jitter p99 ms  max gap ms  CPU %  RSS MiB");
+    let (mut skipped_all, mut late_all, mut worst_p99, mut cpu_all) = (0u64, 0u64, 0.0f64, 0.0);
+    let mut fewest = usize::MAX;
+    for (i, (c, r)) in controllers.iter().zip(&records).enumerate() {
+        let (skipped, p99, max_gap) = stream_figures(r);
+        let late = c.late_steps.load(Ordering::Relaxed) - late0[i];
+        let cpu = match (cpu0[i], cpu_seconds(c.pid())) {
+            (Some(a), Some(b)) => (b - a) / wall * 100.0,
+            _ => f64::NAN,
+        };
+        let rss = peak_rss_kib(c.pid()).map_or(f64::NAN, |k| k as f64 / 1024.0);
+        println!(
+            "{i:>10}  {:>8}/{expected:<8}  {skipped:>7}  {late:>10}  {p99:>13.3}  {max_gap:>10.3}  {cpu:>5.2}  {rss:>7.1}",
+            r.arrivals.len()
+        );
+        skipped_all += skipped;
+        late_all += late;
+        worst_p99 = worst_p99.max(p99);
+        cpu_all += cpu;
+        fewest = fewest.min(r.arrivals.len());
+    }
+    println!(
+        "fleet of {}: fewest packages {fewest}/{expected}, steps skipped {skipped_all}, late steps {late_all}, worst jitter p99 {worst_p99:.3} ms, CPU {cpu_all:.1} % of one core in all",
+        opts.fleet
+    );
+    println!("host load average (1, 5, 15 min): {}", load_average());
+    Ok(())
+}
+
+/// Of one client's record: the steps the controller skipped (timestamp gaps past one
+/// step), the arrival jitter's p99 and the longest gap between arrivals, in ms.
+fn stream_figures(r: &Record) -> (u64, f64, f64) {
+    let skipped: u64 = r
+        .timestamps
+        .windows(2)
+        .map(|w| ((w[1] - w[0]) / 0.002).round() - 1.0)
+        .filter(|s| *s > 0.0)
+        .map(|s| s as u64)
+        .sum();
+    let mut jitter: Vec<f64> = r
+        .arrivals
+        .windows(2)
+        .map(|w| (ms(w[1] - w[0]) - PERIOD_MS).abs())
+        .collect();
+    jitter.sort_by(f64::total_cmp);
+    let max_gap = r
+        .arrivals
+        .windows(2)
+        .map(|w| ms(w[1] - w[0]))
+        .fold(0.0, f64::max);
+    let p99 = if jitter.is_empty() {
+        f64::NAN
+    } else {
+        pct(&jitter, 99.0)
+    };
+    (skipped, p99, max_gap)
+}
+
+/// A busy loop per core, in processes of their own, until dropped.
+struct Hog(Vec<Child>);
+
+impl Hog {
+    fn start() -> Result<Hog> {
+        let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+        let children = (0..cores)
+            .map(|_| {
+                Command::new("sh")
+                    .args(["-c", "while :; do :; done"])
+                    .stdin(Stdio::null())
+                    .spawn()
+                    .map_err(|e| format!("cannot start a busy loop: {e}"))
+            })
+            .collect::<Result<Vec<_>>>()?;
+        Ok(Hog(children))
+    }
+}
+
+impl Drop for Hog {
+    fn drop(&mut self) {
+        for c in &mut self.0 {
+            let _ = c.kill();
+            let _ = c.wait();
+        }
+    }
 }
 
 // ---------------------------------------------------------------------------------------
