@@ -2,9 +2,9 @@
 primary and RTDE servers being added), to check that ``UrController`` passes the port
 options its ``--help`` lists and reads every port the ``listening`` events report.
 
-``FAKE_URSOCK_STYLE``: ``named`` (one event per server, with ``"server"``) or
-``unnamed`` (one event per server, in option order, without a name). The command line
-is written to ``FAKE_URSOCK_ARGV``. ``FAKE_URSOCK_FLOOD=N``: after listening, N events
+It prints what docs/json-events.md defines: a ``listening`` event per server (``service``,
+``addr``), then ``ready`` with every address. The command line is written to
+``FAKE_URSOCK_ARGV``. ``FAKE_URSOCK_FLOOD=N``: after listening, N events
 of kind ``rtde`` and N lines on stderr, then one event of kind ``done``.
 """
 
@@ -32,8 +32,8 @@ def main() -> None:
         return
     with open(os.environ["FAKE_URSOCK_ARGV"], "w") as f:
         json.dump(args, f)
-    named = os.environ.get("FAKE_URSOCK_STYLE", "named") == "named"
     listeners = []
+    addrs = {}
     for name in ("dashboard", "primary", "rtde"):
         flag = f"--{name}-port"
         if flag not in args or args[args.index(flag) + 1] != "0":
@@ -42,10 +42,10 @@ def main() -> None:
         s.bind(("127.0.0.1", 0))
         s.listen()
         listeners.append(s)
-        event = {"event": "listening", "t": 0.0, "addr": "127.0.0.1:%d" % s.getsockname()[1]}
-        if named and name != "dashboard":
-            event["server"] = name
-        print(json.dumps(event), flush=True)
+        addr = "127.0.0.1:%d" % s.getsockname()[1]
+        addrs[name] = addr
+        print(json.dumps({"event": "listening", "t": 0.0, "addr": addr, "service": name}), flush=True)
+    print(json.dumps({"event": "ready", "t": 0.0, "addrs": addrs}), flush=True)
     flood = int(os.environ.get("FAKE_URSOCK_FLOOD", "0"))
     for i in range(flood):
         sys.stdout.write(json.dumps({"event": "rtde", "t": 0.0, "i": i, "pad": "x" * 200}) + "\n")

@@ -102,35 +102,27 @@ def test_a_bad_option_fails_with_stderr() -> None:
 @pytest.mark.parametrize(
     "event, expected",
     [
-        # Today's event: the dashboard server, unnamed.
-        ({"event": "listening", "t": 0.0, "addr": "127.0.0.1:4000"}, [(None, "127.0.0.1", 4000)]),
-        # One event per server, naming it.
         (
-            {"event": "listening", "t": 0.0, "addr": "127.0.0.1:4001", "server": "primary"},
-            [("primary", "127.0.0.1", 4001)],
+            {"event": "listening", "t": 0.0, "addr": "127.0.0.1:4001", "service": "primary"},
+            {"primary": 4001},
         ),
+        ({"event": "listening", "t": 0.0, "addr": "[::1]:4004", "service": "rtde"}, {"rtde": 4004}),
         (
-            {"event": "listening", "t": 0.0, "addr": "[::1]:4004", "interface": "RTDE"},
-            [("rtde", "::1", 4004)],
+            {"event": "ready", "t": 0.0, "addrs": {"dashboard": "127.0.0.1:4000", "rtde": "[::1]:4004"}},
+            {"dashboard": 4000, "rtde": 4004},
         ),
-        # One event with every port.
-        (
-            {"event": "listening", "t": 0.0, "addr": "127.0.0.1:4000", "realtime_port": 4003},
-            [("realtime", None, 4003), (None, "127.0.0.1", 4000)],
-        ),
-        (
-            {"event": "listening", "t": 0.0, "ports": {"dashboard": 4000, "secondary": "127.0.0.1:4002"}},
-            [("dashboard", None, 4000), ("secondary", "127.0.0.1", 4002)],
-        ),
+        # Not the schema's: nothing is guessed.
+        ({"event": "listening", "t": 0.0, "addr": "127.0.0.1:4000"}, {}),
+        ({"event": "listening", "t": 0.0, "addr": "127.0.0.1:4001", "server": "primary"}, {}),
+        ({"event": "connect", "t": 0.0, "peer": "127.0.0.1:5000", "service": "rtde"}, {}),
     ],
 )
-def test_listening_events_of_every_shape(event: Dict[str, Any], expected: List[Any]) -> None:
+def test_ports_are_read_as_the_schema_names_them(event: Dict[str, Any], expected: Dict[str, int]) -> None:
     assert ports_of_event(event) == expected
 
 
-@pytest.mark.parametrize("style", ["named", "unnamed"])
 def test_the_port_options_help_lists_are_passed_and_their_ports_exposed(
-    style: str, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
     import json
     import socket
@@ -141,7 +133,6 @@ def test_the_port_options_help_lists_are_passed_and_their_ports_exposed(
     fake.chmod(0o755)
     argv = tmp_path / "argv.json"
     monkeypatch.setenv("FAKE_URSOCK_ARGV", str(argv))
-    monkeypatch.setenv("FAKE_URSOCK_STYLE", style)
     with UrController(ursock=fake, startup_timeout=10) as ur:
         assert ur.server_options() == ["primary", "rtde"]
         args = json.loads(argv.read_text())
@@ -174,7 +165,8 @@ def test_events_kept_are_bounded_and_nothing_is_queued_after_start(
         events = ur.events
         assert len(events) == 1000
         assert events[-1]["event"] == "done" and events[-2]["i"] == 29999
-        assert ur.events_dropped == 30000 + 3 + 1 - 1000
+        # 3 listening events, ready, the flood, done.
+        assert ur.events_dropped == 3 + 1 + 30000 + 1 - 1000
         # The start-up queue holds nothing once start() returned.
         assert ur._queue.qsize() == 0
         deadline = time.monotonic() + 30

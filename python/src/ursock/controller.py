@@ -68,70 +68,35 @@ class ControllerError(RuntimeError):
     """``ursock controller`` could not be started, or ended early."""
 
 
-def _known_name(text: str) -> Optional[str]:
-    low = text.lower()
-    for name in SERVERS:
-        if name in low:
-            return name
-    if "real-time" in low or "real time" in low:
-        return "realtime"
-    return None
-
-
-def _port_of(value: Any) -> Optional[Tuple[Optional[str], int]]:
-    """``(host, port)`` of ``"host:port"``, ``(None, port)`` of an integer port."""
-    if isinstance(value, bool):
-        return None
-    if isinstance(value, int):
-        return (None, value)
-    if isinstance(value, str):
-        m = _ADDR.match(value.strip())
+def _port_of(addr: Any) -> Optional[int]:
+    """The port of ``"host:port"`` (``"[::1]:port"``), or ``None``."""
+    if isinstance(addr, str):
+        m = _ADDR.match(addr.strip())
         if m:
-            return (m.group("host") or None, int(m.group("port")))
+            return int(m.group("port"))
     return None
 
 
-def ports_of_event(event: Mapping[str, Any]) -> List[Tuple[Optional[str], Optional[str], int]]:
-    """The servers a ``listening`` event reports, as ``(name, host, port)``.
-
-    Today's event is ``{"event": "listening", "addr": "127.0.0.1:PORT"}`` (the
-    dashboard server). The servers being added may say which one they are in a field
-    (``"server": "primary"``, say), as ``NAME_port`` / ``NAME`` keys, or in a nested
-    object; all of these are read. ``name`` is ``None`` when the event does not say.
-    """
-    found: List[Tuple[Optional[str], Optional[str], int]] = []
-    for key, value in event.items():
-        if key in ("event", "t", "time", "addr"):
-            continue
-        low = key.lower()
-        base = low[:-5] if low.endswith("_port") else low[:-5] if low.endswith("_addr") else low
-        if base in SERVERS:
-            hp = _port_of(value)
-            if hp:
-                found.append((base, hp[0], hp[1]))
-                continue
-        if isinstance(value, Mapping):
-            found.extend(ports_of_event(value))
-        elif isinstance(value, list):
-            for item in value:
-                if isinstance(item, Mapping):
-                    found.extend(ports_of_event(item))
-    if "addr" in event:
-        hp = _port_of(event["addr"])
-        if hp:
-            name = None
-            for key in ("server", "service", "name", "kind", "interface", "role", "what", "stream"):
-                v = event.get(key)
-                if isinstance(v, str) and _known_name(v):
-                    name = _known_name(v)
-                    break
-            if name is None:
-                for key, v in event.items():
-                    if key not in ("event", "addr", "time") and isinstance(v, str) and _known_name(v):
-                        name = _known_name(v)
-                        break
-            found.append((name, hp[0], hp[1]))
-    return found
+def ports_of_event(event: Mapping[str, Any]) -> Dict[str, int]:
+    """The ports an event of ``ursock controller --json`` reports, by service name, as
+    docs/json-events.md defines them: a ``listening`` event's ``service`` and ``addr``,
+    a ``ready`` event's ``addrs`` (service to address). Other events report none."""
+    kind = event.get("event")
+    if kind == "listening":
+        port = _port_of(event.get("addr"))
+        service = event.get("service")
+        if isinstance(service, str) and port is not None:
+            return {service: port}
+    elif kind == "ready":
+        addrs = event.get("addrs")
+        if isinstance(addrs, Mapping):
+            found = {}
+            for service, addr in addrs.items():
+                port = _port_of(addr)
+                if isinstance(service, str) and port is not None:
+                    found[service] = port
+            return found
+    return {}
 
 
 class DashboardClient:
@@ -333,7 +298,7 @@ class UrController:
         self._spawn(self._read_stdout)
         self._spawn(self._read_stderr)
         try:
-            self._await_listening(["dashboard", *others])
+            self._await_listening(others)
         except BaseException:
             self.stop()
             raise
@@ -380,42 +345,28 @@ class UrController:
                 while self._stderr_chars > MAX_STDERR:
                     self._stderr_chars -= len(self._stderr.popleft())
 
-    def _await_listening(self, started: List[str]) -> None:
-        expected = len(started)
+    def _await_listening(self, others: List[str]) -> None:
+        """Reads the start-up events until ``ready`` (every port listens) or the start-up
+        timeout: ``listening`` events, then ``ready`` (docs/json-events.md)."""
         deadline = time.monotonic() + self._startup_timeout
-        unnamed: List[int] = []
-        first_seen: Optional[float] = None
         while True:
-            named = set(self.ports)
-            if len(named) + len(unnamed) >= expected:
-                break
             now = time.monotonic()
-            # Once one server listens the others follow at once; do not wait the whole
-            # startup timeout for a server this ursock turns out not to report.
-            limit = deadline if first_seen is None else min(deadline, first_seen + 3.0)
-            if now >= limit:
+            if now >= deadline:
                 break
             try:
-                event = self._queue.get(timeout=limit - now)
+                event = self._queue.get(timeout=deadline - now)
             except queue.Empty:
                 break
             if event is None:
                 raise ControllerError(self._failure("exited before listening"))
-            if event.get("event") != "listening":
-                continue
-            first_seen = first_seen or time.monotonic()
-            for name, host, port in ports_of_event(event):
-                if name is None:
-                    unnamed.append(port)
-                else:
-                    self.ports.setdefault(name, port)
-        # Servers the events did not name: in the order they were started (the
-        # dashboard first, the only one today, then the others in option order).
-        order = [n for n in started if n not in self.ports]
-        for name, port in zip(order, unnamed):
-            self.ports[name] = port
+            self.ports.update(ports_of_event(event))
+            if event.get("event") == "ready":
+                break
         if "dashboard" not in self.ports:
             raise ControllerError(self._failure("no dashboard server listened in time"))
+        missing = [name for name in others if name not in self.ports]
+        if missing:
+            raise ControllerError(self._failure(f"did not say where {', '.join(missing)} listen"))
 
     def _failure(self, what: str) -> str:
         status = self._proc.poll() if self._proc else None
