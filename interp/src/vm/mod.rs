@@ -1,59 +1,8 @@
-//! The running program: threads, the scheduler in virtual time, and the sans-IO interface.
-//!
-//! ## Time
-//! Time is an input: the machine never reads a clock. Program time advances in steps of
-//! [`Config::step_time`] (2 ms e-Series, 8 ms CB3); step `k` runs at `k × step_time`
-//! after the start. In each step the threads run **in a fixed order: the main program
-//! first, then the threads in the order `run` started them** (a thread started during a
-//! step runs in that same step, after the others). Each runs until it consumes physical
-//! time: `sync()` (to the next step), `sleep(t)` and motion (to the step where the time is
-//! over), a socket read whose bytes have not all arrived (until they arrive, checked at
-//! each step, or its timeout), `socket_open` (until the driver reports the connection),
-//! an XML-RPC call `handle.name(...)` (until its reply is complete, at most 10 s), `join`
-//! of a thread that still runs. This is the manual's "Thread scheduling": 2 ms
-//! frames, each runnable thread scheduled round robin, a thread that has used its frame
-//! waits for the next. A thread that computes without consuming time (a loop without
-//! `sync()`) uses its slice up after [`Config::max_statements_per_step`] statements and
-//! waits for the next step, where it goes on: the manual's "computational heavy
-//! instructions (such as an infinite loop that do not control the robot)" that place a
-//! thread "in a non-runnable state" until the next frame. (The manual adds that such a
-//! loop may raise "Lost communication with Controller" on the arm; that depends on the
-//! controller's load and is not modelled.)
-//!
-//! Threads only switch where time is consumed or a slice is used up, so `enter_critical`/`exit_critical` never
-//! needs to hold the others back: a thread inside a critical section already runs alone
-//! until it consumes time, and when it does (as UR's External Control program does inside
-//! one) the others run, as on the controller.
-//!
-//! ## Memory
-//! The program's memory is one budget, [`Config::max_memory`] (256 MiB by default),
-//! counted in bytes as the program allocates: each value where it sits (a stack slot or
-//! a list element: the size of a [`Value`], 56 bytes on 64-bit targets) plus what it
-//! owns (list elements, string bytes, struct members, at every depth); each local
-//! variable's entry; each call frame; each thread; and the events the driver has not
-//! taken yet (bytes to send, messages and call records, with their copies of values).
-//! A value is counted before it is made or copied (a list copied on assignment, a
-//! `make_list`, list arithmetic and matrix products by an upper bound of their result,
-//! the copies a built-in's call record and message keep), so no single step allocates
-//! far past the budget; drops are credited where they happen. When a charge would pass
-//! the budget the machine recounts what the program holds (the count never errs low)
-//! and, if the recount confirms it, stops the program with a
-//! [`Limit`](crate::RuntimeErrorKind::Limit) runtime error at that line:
-//! `memory budget exceeded: the program holds N bytes and needs M more, over its budget
-//! of B bytes (...)`. The counts are of contents, not of the allocator's overhead or a
-//! vector's spare capacity: the process's own use is higher by a small factor.
-//! Separately bounded and not counted: the robot model's receive buffers (64 KiB per
-//! socket, 64 sockets), an XML-RPC reply being read (1 MiB), the interpreter-mode queue
-//! ([`interpreter::MAX_UNEXECUTED`](crate::interpreter::MAX_UNEXECUTED) lines of at most
-//! [`interpreter::MAX_LINE`](crate::interpreter::MAX_LINE) bytes), and the program's
-//! code.
-//!
-//! ## Driving it
-//! Call [`Machine::run_until`] with the time since the program started; it runs every
-//! step due. Take the [`Event`]s with [`Machine::poll_event`]: connections to open, bytes
-//! to send, messages. Report connections ([`Machine::handle_connected`]), received bytes
-//! ([`Machine::handle_received`]) and closed peers. [`Machine::poll_timeout`] says when
-//! the machine next has something to do (`None`: only an input can wake it).
+//! The machine: the running program's threads, the scheduler in virtual time, and the
+//! sans-IO interface. Its public face is [`crate::machine`], whose docs give the time
+//! model and the memory budget.
+
+pub(crate) mod memory;
 
 use std::sync::Arc;
 use std::time::Duration;
@@ -61,13 +10,13 @@ use std::time::Duration;
 use urscript_socket::robot::ReadCall;
 
 use crate::builtins::{Args, Out};
-use crate::compile::{CallSite, Op, PathStep, Program, Sym};
+use crate::syntax::compile::{CallSite, Op, PathStep, Program, Sym};
 use crate::controller::{Arm, Controller};
 use crate::error::{Fault, RuntimeError, RuntimeErrorKind as K};
 pub use crate::event::Event;
 use crate::event::{CallRecord, Outcome, ReadRecord, MAX_READ_INPUT};
-use crate::memory::{ENTRY_BYTES, FRAME_BYTES, SLOT_BYTES, THREAD_BYTES};
-use crate::parser::{BinOp, Scope};
+use memory::{ENTRY_BYTES, FRAME_BYTES, SLOT_BYTES, THREAD_BYTES};
+use crate::syntax::parser::{BinOp, Scope};
 use crate::sockets::{Policy, Sockets};
 use crate::value::{Value, MAX_VALUE_DEPTH, MEMBER_BYTES, VALUE_BYTES};
 
@@ -103,7 +52,7 @@ pub struct Config {
     /// Length of one program step: 2 ms (e-Series, the default), 8 ms (CB3).
     pub step_time: Duration,
     /// The arm: its kinematics place the tool (UR5e by default; [`Config::cb3`]: UR5).
-    pub model: crate::kinematics::Model,
+    pub model: crate::arm::kinematics::Model,
     /// The socket reads' choices where UR's manuals are silent.
     pub policy: Policy,
     /// Functions replaced by stubs, by name. A stub wins over a built-in of that name,
@@ -143,14 +92,14 @@ impl Default for Config {
     fn default() -> Self {
         Config {
             step_time: Duration::from_millis(2),
-            model: crate::kinematics::Model::Ur5e,
+            model: crate::arm::kinematics::Model::Ur5e,
             policy: Policy::default(),
             stubs: Vec::new(),
             max_statements_per_step: 10_000,
             trace_socket_calls: true,
             trace_all_calls: false,
             max_value_size: crate::value::DEFAULT_MAX_VALUE_SIZE,
-            max_memory: crate::memory::DEFAULT_MAX_MEMORY,
+            max_memory: memory::DEFAULT_MAX_MEMORY,
         }
     }
 }
@@ -189,7 +138,7 @@ impl Config {
     pub fn cb3() -> Self {
         Config {
             step_time: Duration::from_millis(8),
-            model: crate::kinematics::Model::Ur5,
+            model: crate::arm::kinematics::Model::Ur5,
             ..Config::default()
         }
     }
@@ -440,8 +389,8 @@ impl Machine {
                 step: 0,
                 arm,
                 sockets: Sockets::new(config.policy),
-                events: crate::memory::Events::default(),
-                mem: crate::memory::Memory::new(config.max_memory),
+                events: memory::Events::default(),
+                mem: memory::Memory::new(config.max_memory),
                 motion: None,
                 thread: 0,
                 sampled: None,
@@ -879,7 +828,7 @@ impl Machine {
         target: Value,
         method: &str,
         args: Vec<Value>,
-        at: crate::compile::Pos,
+        at: crate::syntax::compile::Pos,
     ) -> Result<Option<Value>, RuntimeError> {
         let fail = |f: Fault| RuntimeError::at(at.line, at.col, f);
         let Value::Rpc(url) = target else {
@@ -1944,7 +1893,7 @@ fn check_value(v: &Value, max_size: usize) -> Result<(), Fault> {
 /// The end of an XML-RPC call: its connection closes, its record (if traced) is
 /// emitted, and the thread resumes with the value or stops with the error.
 fn rpc_done(
-    events: &mut crate::memory::Events,
+    events: &mut memory::Events,
     p: &mut crate::rpc::Pending,
     outcome: Result<Value, String>,
     max_size: usize,
@@ -2438,7 +2387,7 @@ fn matrix_product(a: &[Value], b: &[Value]) -> Result<Value, Fault> {
 /// (every parameter without a default is given: the compiler checked). A default that
 /// names a variable is that global's value now; a global never assigned is an error.
 fn bind_user(
-    callee: &crate::compile::Func,
+    callee: &crate::syntax::compile::Func,
     site: &CallSite,
     args: Vec<Value>,
     globals: &[Option<Value>],
@@ -2477,13 +2426,13 @@ fn bind_user(
 /// (a pose item must be a number). The result is checked against the value bounds by
 /// the caller.
 fn default_value(
-    d: &crate::parser::ParamDefault<Sym>,
+    d: &crate::syntax::parser::ParamDefault<Sym>,
     globals: &[Option<Value>],
     names: &[String],
     param: Sym,
     func: &str,
 ) -> Result<Value, Fault> {
-    use crate::parser::ParamDefault as D;
+    use crate::syntax::parser::ParamDefault as D;
     let name = |s: Sym| names.get(s as usize).map_or("?", |n| n.as_str());
     Ok(match d {
         D::Const(v) => v.clone(),
@@ -2774,7 +2723,7 @@ impl Machine {
     /// `abort`: stops the `movej`/`movel` under way (a joint or tool motion); the thread
     /// that commanded it goes on at once. Whether one was stopped.
     fn interpreter_abort(&mut self) -> bool {
-        use crate::trajectory::Kind;
+        use crate::arm::trajectory::Kind;
         let Some(m) = &self.ctl.motion else {
             return false;
         };
@@ -2816,8 +2765,8 @@ impl Machine {
             column: e.column(),
             message: e.message().to_string(),
         };
-        let stmts = match crate::lexer::lex(text)
-            .and_then(|toks| crate::parser::Parser::new(toks).program())
+        let stmts = match crate::syntax::lexer::lex(text)
+            .and_then(|toks| crate::syntax::parser::Parser::new(toks).program())
         {
             Ok(s) => s,
             Err(e) => return discard(compile_error(e)),

@@ -26,14 +26,14 @@ pub(crate) const DEFAULT_MAX_MEMORY: usize = 256 * 1024 * 1024;
 
 /// The bytes one call frame takes besides its locals (the frame record, with room for
 /// its return address and stack base).
-pub(crate) const FRAME_BYTES: usize = std::mem::size_of::<crate::machine::Frame>();
+pub(crate) const FRAME_BYTES: usize = std::mem::size_of::<crate::vm::Frame>();
 
 /// The bytes one local variable's entry takes in its frame (its name and its slot; the
 /// value's own content is counted apart).
 pub(crate) const ENTRY_BYTES: usize = std::mem::size_of::<(u32, Option<Value>)>();
 
 /// The bytes one thread takes besides its name, frames and stack.
-pub(crate) const THREAD_BYTES: usize = std::mem::size_of::<crate::machine::Thread>();
+pub(crate) const THREAD_BYTES: usize = std::mem::size_of::<crate::vm::Thread>();
 
 /// The bytes an event holds: the event itself and the text and values it owns.
 fn event_bytes(e: &Event) -> usize {
