@@ -4,6 +4,10 @@ use std::fmt;
 
 use urscript_socket::to_str::{encode_value, List, Scalar, Value as WireValue};
 
+pub(crate) mod access;
+pub(crate) mod ops;
+pub(crate) mod size;
+
 /// A URScript value.
 ///
 /// ```
