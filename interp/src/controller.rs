@@ -6,15 +6,10 @@ use std::collections::BTreeMap;
 use std::f64::consts::FRAC_PI_2;
 use std::time::Duration;
 
-use urscript_socket::robot::ReadCall;
-
 use crate::arm::kinematics::{self, Dh};
 use crate::arm::trajectory::{self, Kind, Motion};
-use crate::builtins::{Args, Out};
 use crate::error::Fault;
-use crate::event::{
-    Event, Message, MessageKind, MoveEnd, MoveOutcome, MoveStart, ReadRecord, MAX_READ_INPUT,
-};
+use crate::event::{Event, Message, MessageKind, MoveEnd, MoveOutcome, MoveStart};
 use crate::sockets::Sockets;
 
 /// The virtual arm and the I/O around it: where the arm is now (mid-move too), not
@@ -168,7 +163,7 @@ impl Arm {
         if let Some((k, v)) = q
             .iter()
             .enumerate()
-            .find(|(_, v)| !v.is_finite() || v.abs() > crate::builtins::motion::JOINT_LIMIT)
+            .find(|(_, v)| !v.is_finite() || v.abs() > JOINT_LIMIT)
         {
             return Err(format!(
                 "joint {k} at {v} rad is outside the joints' range (±2π)"
@@ -798,7 +793,7 @@ impl Controller {
         let back = blend.map_or(kind.duration(), |b| b.at);
         // The motion clock the program gets control back at: whole steps of motion time
         // after the move's start (as the scheduler counts a wait).
-        let n = crate::builtins::secs(back)
+        let n = secs(back)
             .as_nanos()
             .div_ceil(self.step_time.as_nanos().max(1));
         let until = start + u64::try_from(n).unwrap_or(u64::MAX) as f64;
@@ -1155,46 +1150,12 @@ impl Controller {
             });
         }
     }
+}
 
-    /// Starts a read that may wait `timeout` seconds: the value at once if the buffered
-    /// bytes complete it (or the socket is not open: the sentinel), else a wait.
-    pub fn start_read(
-        &mut self,
-        socket: String,
-        call: ReadCall,
-        timeout: f64,
-        args: &mut Args,
-    ) -> Result<Out, Fault> {
-        let now = self.now();
-        // What the read sees first: the bytes already buffered (kept for the record).
-        let (input, buffered_at_start) = if args.traced {
-            let n = self.sockets.buffered_len(&socket);
-            (self.sockets.buffered(&socket, MAX_READ_INPUT), n)
-        } else {
-            (Vec::new(), 0)
-        };
-        let done = self.sockets.start_read(&socket, &call, timeout, now)?;
-        self.flush(&socket);
-        Ok(match done {
-            Some(result) => {
-                let v = crate::sockets::to_value(&result);
-                if !self.sockets.is_open(&socket) {
-                    args.failure = Some(format!("the socket \"{socket}\" is not open"));
-                }
-                args.read = Some(ReadRecord {
-                    call,
-                    result,
-                    input,
-                    buffered_at_start,
-                });
-                Out::Value(v)
-            }
-            None => Out::Read {
-                socket,
-                call,
-                input,
-                buffered_at_start,
-            },
-        })
-    }
+/// The joint range of UR's arms (e-Series and CB3): ±2π, ±360°.
+pub const JOINT_LIMIT: f64 = std::f64::consts::TAU;
+
+/// Seconds as a duration (negative: zero; too large: the longest).
+pub(crate) fn secs(x: f64) -> Duration {
+    Duration::try_from_secs_f64(x.max(0.0)).unwrap_or(Duration::MAX)
 }

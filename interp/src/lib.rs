@@ -20,6 +20,28 @@
 //! See [`machine`] for the time model (steps, thread order) and [`builtins`] for the
 //! built-ins and the virtual arm.
 //!
+//! ## Layout
+//!
+//! | where | what |
+//! |---|---|
+//! | `syntax/` | lexer, parser and compiler: program text to code, every call resolved and checked |
+//! | `vm/` | the [`Machine`] ([`machine`]): configuration and state, the scheduler, a thread's run, calls and stubs, the waits the driver's inputs end, interpreter mode, the memory budget |
+//! | `value/` | [`Value`], its operators, indexing and members, what it costs the memory budget |
+//! | `arm/` | the arm's mechanics: [`kinematics`], speed profiles and blends, force mode, poses, the [`world_model`] |
+//! | [`builtins`] | the built-in table and each built-in's code |
+//! | `native.rs` | what the machine and a built-in's code exchange: the table entry ([`builtins::Builtin`]), the bound arguments, what the code returns |
+//! | `controller.rs` | what built-ins act on: the [`Arm`], the [`World`], the robot's sockets, program time, the events |
+//! | [`event`], [`interpreter`], [`eip`], [`drive`] | the events out, interpreter mode's wire side, EtherNet/IP, the real-time driver |
+//!
+//! Dependencies point one way: the machine and the compiler use the built-in table;
+//! the built-ins use `native`, `controller`, [`event`], `arm` and `value`; `controller`
+//! uses `arm`, [`event`] and `value`, and nothing of the built-ins; `arm` and `value` use
+//! neither the built-ins nor the machine (`arm` uses nothing outside itself). Three
+//! edges go back by design: the value operators take the compiled code's operator and
+//! store path (`syntax/`); a [`CallRecord`] names its [`Builtin`](builtins::Builtin),
+//! whose code takes the controller that holds the events; and the controller holds the
+//! memory budget's counters (`vm/memory.rs`).
+//!
 //! ## Bounds: any program text is safe to run
 //!
 //! A program is input: whatever it says, the interpreter neither crashes (no stack
@@ -97,11 +119,13 @@ pub mod eip;
 mod error;
 pub mod event;
 pub mod interpreter;
+mod native;
 mod rpc;
 mod sockets;
 mod syntax;
 mod value;
 mod vm;
+mod world_set;
 
 pub use arm::{kinematics, world_model};
 
@@ -166,7 +190,6 @@ pub mod machine {
     pub use crate::vm::{Config, Event, Machine, State, Stub, MAX_MOTION_SAMPLES, MAX_THREADS};
 }
 
-pub use arm::world_set::{SetError, ARM_SETTINGS, WORLD_SETTINGS};
 pub use controller::{Arm, World};
 pub use error::{ParseError, ParseErrorKind, RuntimeError, RuntimeErrorKind};
 pub use event::{
@@ -177,6 +200,7 @@ pub use machine::{Config, Machine, State, Stub};
 pub use sockets::{Policy, Timeout};
 pub use syntax::compile::{Preamble, Program};
 pub use value::{Value, MAX_STRUCT_MEMBERS, MAX_VALUE_DEPTH};
+pub use world_set::{SetError, ARM_SETTINGS, WORLD_SETTINGS};
 
 /// Reads a URScript constant: a number, `True`/`False`, a string, a list or a pose of
 /// constants (as a stub's value on a command line).

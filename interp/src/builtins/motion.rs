@@ -805,8 +805,7 @@ fn joint_distance(from: [f64; 6], to: [f64; 6]) -> f64 {
     (0..6).map(|k| (to[k] - from[k]).abs()).fold(0.0, f64::max)
 }
 
-/// The joint range of UR's arms (e-Series and CB3): ±2π, ±360°.
-pub const JOINT_LIMIT: f64 = std::f64::consts::TAU;
+pub use crate::controller::JOINT_LIMIT;
 
 /// Refuses joint targets outside the arm's range (a little rounding over ±2π passes).
 fn check_joints(name: &str, q: [f64; 6]) -> Result<[f64; 6], Fault> {

@@ -76,6 +76,9 @@ pub const MAX_VALUE_DEPTH: usize = 32;
 /// The most members a struct may have: a `struct(...)` with more is a compile error.
 pub const MAX_STRUCT_MEMBERS: usize = 64;
 
+/// The longest string `str_cat` makes, as on the controller.
+pub const MAX_STRING_LEN: usize = 1023;
+
 /// The default of [`Config::max_value_size`](crate::Config::max_value_size).
 pub(crate) const DEFAULT_MAX_VALUE_SIZE: usize = 1_000_000;
 

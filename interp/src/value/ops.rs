@@ -69,10 +69,10 @@ pub(crate) fn binary(op: BinOp, l: Value, r: Value) -> Result<Value, Fault> {
     // controller's 1023-character strings.
     if let (Value::Str(a), Value::Str(b), BinOp::Add) = (&l, &r, op) {
         let len = a.len() + b.len();
-        if len > crate::builtins::MAX_STRING_LEN {
+        if len > super::MAX_STRING_LEN {
             return Err(Fault::from(format!(
                 "string + string: the result would be {len} characters, more than {}",
-                crate::builtins::MAX_STRING_LEN
+                super::MAX_STRING_LEN
             )));
         }
         let mut out = Vec::with_capacity(len);

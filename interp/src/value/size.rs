@@ -39,7 +39,7 @@ pub(crate) fn member_bytes(v: &Value, name: &str) -> usize {
 /// An upper bound of the bytes `binary(op, l, r)` allocates for its result, before it
 /// runs: a list result has as many elements as its list operand (a matrix product: rows
 /// times columns, plus the rows). Numbers, bools and poses make nothing; a string join
-/// is at most [`MAX_STRING_LEN`](crate::builtins::MAX_STRING_LEN) bytes.
+/// is at most [`MAX_STRING_LEN`](super::MAX_STRING_LEN) bytes.
 pub(crate) fn binary_bytes(op: BinOp, l: &Value, r: &Value) -> usize {
     use Value::List;
     match (l, r) {
@@ -54,7 +54,7 @@ pub(crate) fn binary_bytes(op: BinOp, l: &Value, r: &Value) -> usize {
         (List(_), _) | (_, List(_)) => {
             VALUE_BYTES.saturating_add(l.content_bytes().max(r.content_bytes()))
         }
-        (Value::Str(_), Value::Str(_)) => VALUE_BYTES + crate::builtins::MAX_STRING_LEN,
+        (Value::Str(_), Value::Str(_)) => VALUE_BYTES + super::MAX_STRING_LEN,
         _ => VALUE_BYTES,
     }
 }

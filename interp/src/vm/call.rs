@@ -2,9 +2,9 @@
 //! stub that replaces it) called with its arguments, its memory charge and its record.
 
 use super::{Called, Machine, Stub, Thread, Wait};
-use crate::builtins::{Args, Out};
 use crate::error::{Fault, RuntimeErrorKind as K};
 use crate::event::{CallRecord, Event, Outcome};
+use crate::native::{Args, Out};
 use crate::syntax::compile::{CallSite, Program, Sym};
 use crate::value::size::check_value;
 use crate::value::Value;
@@ -114,7 +114,7 @@ impl Machine {
         let name = &prog.names[site.name as usize];
         let traced = match site.builtin {
             _ if stub.is_some() => true,
-            Some(b) if b.domain == crate::builtins::Domain::Sockets => {
+            Some(b) if b.domain == crate::native::Domain::Sockets => {
                 self.config.trace_socket_calls || self.config.trace_all_calls
             }
             _ => self.config.trace_all_calls,
@@ -154,7 +154,7 @@ impl Machine {
         }
         if let Some(b) = site
             .builtin
-            .filter(|b| b.domain == crate::builtins::Domain::Interpreter)
+            .filter(|b| b.domain == crate::native::Domain::Interpreter)
         {
             return self.interpreter_builtin(b, site, args);
         }

@@ -338,7 +338,7 @@ impl Machine {
     /// machine, not on the arm.
     pub(super) fn interpreter_builtin(
         &mut self,
-        builtin: &crate::builtins::Builtin,
+        builtin: &crate::native::Builtin,
         site: &CallSite,
         args: Vec<Value>,
     ) -> Result<Called, Fault> {
