@@ -160,7 +160,7 @@ pub mod machine {
     //! ## Memory
     //! The program's memory is one budget, [`Config::max_memory`] (256 MiB by default),
     //! counted in bytes as the program allocates: each value where it sits (a stack slot or
-    //! a list element: the size of a [`Value`], 56 bytes on 64-bit targets) plus what it
+    //! a list element: the size of a [`Value`](crate::Value), 56 bytes on 64-bit targets) plus what it
     //! owns (list elements, string bytes, struct members, at every depth); each local
     //! variable's entry; each call frame; each thread; and the events the driver has not
     //! taken yet (bytes to send, messages and call records, with their copies of values).
