@@ -4,9 +4,8 @@
 
 use std::collections::{HashMap, HashSet};
 
-use crate::builtins;
+use crate::builtins::{self, Builtin};
 use crate::error::{ParseError, ParseErrorKind};
-use crate::native::{self, Builtin};
 use crate::syntax::parser::{Access, BinOp, Expr, FuncDef, ParamDefault, Scope, Stmt, StmtKind};
 use crate::value::{Value, MAX_STRUCT_MEMBERS};
 
@@ -1300,7 +1299,7 @@ impl Compiler {
             let params = b
                 .params
                 .iter()
-                .map(|p| (p.name, p.default != native::Default::Required));
+                .map(|p| (p.name, p.default != builtins::Default::Required));
             builtins::match_args(name, params, args.len(), &named).map_err(|m| err(at, m))?
         } else {
             Vec::new()

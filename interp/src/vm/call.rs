@@ -51,7 +51,7 @@ pub(super) fn bind_user(
 /// global never assigned is an error), list and pose literals are built from their items
 /// (a pose item must be a number). The result is checked against the value bounds by
 /// the caller.
-pub(super) fn default_value(
+fn default_value(
     d: &crate::syntax::parser::ParamDefault<Sym>,
     globals: &[Option<Value>],
     names: &[String],

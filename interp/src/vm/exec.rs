@@ -618,7 +618,7 @@ impl Machine {
 }
 
 /// The value of variable `s` as a frame reads it: its local, else the global.
-pub(super) fn lookup<'a>(
+fn lookup<'a>(
     frame: &'a Frame,
     globals: &'a [Option<Value>],
     s: Sym,
@@ -632,7 +632,7 @@ pub(super) fn lookup<'a>(
         .or_else(|| globals.get(s as usize).and_then(Option::as_ref))
 }
 
-pub(super) fn pop(stack: &mut Vec<Value>, line: u32) -> Result<Value, RuntimeError> {
+fn pop(stack: &mut Vec<Value>, line: u32) -> Result<Value, RuntimeError> {
     stack
         .pop()
         .ok_or_else(|| RuntimeError::internal(line, "internal error: stack empty"))
@@ -640,7 +640,7 @@ pub(super) fn pop(stack: &mut Vec<Value>, line: u32) -> Result<Value, RuntimeErr
 
 /// A condition's truth: a bool, or a number (non-zero is true: UR's own External Control
 /// script tests a float, `if has_qnear:`). Anything else is a type error.
-pub(super) fn as_bool(v: &Value, what: &str) -> Result<bool, Fault> {
+fn as_bool(v: &Value, what: &str) -> Result<bool, Fault> {
     match v {
         Value::Bool(b) => Ok(*b),
         Value::Int(i) => Ok(*i != 0),

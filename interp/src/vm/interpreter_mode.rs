@@ -114,7 +114,7 @@ impl Machine {
 
     /// `abort`: stops the `movej`/`movel` under way (a joint or tool motion); the thread
     /// that commanded it goes on at once. Whether one was stopped.
-    pub(super) fn interpreter_abort(&mut self) -> bool {
+    fn interpreter_abort(&mut self) -> bool {
         use crate::arm::trajectory::Kind;
         let Some(m) = &self.ctl.motion else {
             return false;
@@ -141,7 +141,7 @@ impl Machine {
     }
 
     /// Compiles one statement line into the program and queues it.
-    pub(super) fn interpret_text(&mut self, text: &str) -> crate::interpreter::Reply {
+    fn interpret_text(&mut self, text: &str) -> crate::interpreter::Reply {
         use crate::interpreter::{Discard, Queued, Reply, MAX_INTERPRETED};
         let discard = |reason: Discard| Reply::Discard {
             reason,
@@ -269,7 +269,7 @@ impl Machine {
 
     /// Removes everything interpreted since the last clear: the queue, the functions and
     /// globals the lines made; threads running interpreted code stop.
-    pub(super) fn interpreter_clear(&mut self) {
+    fn interpreter_clear(&mut self) {
         if let Some(last) = self
             .interp
             .base
@@ -312,7 +312,7 @@ impl Machine {
 
     /// Once the statement that clears has run (or was dropped), the lines held behind it
     /// are compiled and answered, up to the next one that clears.
-    pub(super) fn release_held(&mut self) {
+    fn release_held(&mut self) {
         let Some(id) = self.interp.clearing else {
             return;
         };

@@ -204,7 +204,7 @@ impl Machine {
     /// [`charge`](Self::charge) when the count says the bytes do not fit.
     #[cold]
     #[inline(never)]
-    pub(super) fn charge_after_recount(
+    fn charge_after_recount(
         &mut self,
         current: Option<&Thread>,
         bytes: usize,

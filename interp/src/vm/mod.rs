@@ -243,7 +243,7 @@ enum Flow {
     Halt,
 }
 
-/// A program running in virtual time. See the module docs for the time model.
+/// A program running in virtual time. See [`crate::machine`] for the time model.
 ///
 /// ```
 /// use std::time::Duration;

@@ -101,7 +101,7 @@ impl Machine {
     ///
     /// At most [`MAX_MOTION_SAMPLES`] steps per call: a caller that jumps further (hours
     /// of a held `speedl` in one call) gets the arm where the motion has it at the end.
-    pub(super) fn sample_motion_until(&mut self, end: u64) {
+    fn sample_motion_until(&mut self, end: u64) {
         let mut step = self.ctl.step;
         let end = end.min(step.saturating_add(MAX_MOTION_SAMPLES));
         while step < end && self.ctl.motion.is_some() {
@@ -150,7 +150,7 @@ impl Machine {
     /// Runs one step: every live thread, in the order they started. Finished threads
     /// leave the list at the end of the step, so a step visits at most the live threads
     /// and those started during it.
-    pub(super) fn run_step(&mut self) {
+    fn run_step(&mut self) {
         self.ctl.advance(self.ctl.step);
         let step_time = self.ctl.step_time.as_secs_f64();
         match self
@@ -180,7 +180,7 @@ impl Machine {
         }
     }
 
-    pub(super) fn run_threads(&mut self) {
+    fn run_threads(&mut self) {
         let mut i = 0;
         while i < self.threads.len() {
             if self.state != State::Running {

@@ -80,7 +80,7 @@ impl Machine {
 
     /// The connection of an XML-RPC call is up (its request goes out) or failed (the
     /// call fails). False if no call waits for `socket_name`.
-    pub(super) fn rpc_connected(&mut self, socket_name: &str, result: &Result<(), String>) -> bool {
+    fn rpc_connected(&mut self, socket_name: &str, result: &Result<(), String>) -> bool {
         let Some(t) = self
             .threads
             .iter_mut()
@@ -121,7 +121,7 @@ impl Machine {
     /// Bytes (`Some`) or the peer's close (`None`) on `socket_name`, for the XML-RPC
     /// call waiting on it: the call ends when its reply is complete, malformed or cut
     /// short. False if no call waits for `socket_name`.
-    pub(super) fn rpc_event(&mut self, socket_name: &str, bytes: Option<&[u8]>) -> bool {
+    fn rpc_event(&mut self, socket_name: &str, bytes: Option<&[u8]>) -> bool {
         let Some(t) = self
             .threads
             .iter_mut()
@@ -146,7 +146,7 @@ impl Machine {
     }
 
     /// Completes a read waiting on `socket_name` if its bytes are there.
-    pub(super) fn poll_reads(&mut self, socket_name: &str) {
+    fn poll_reads(&mut self, socket_name: &str) {
         for t in &mut self.threads {
             let Wait::Read {
                 socket,
