@@ -618,11 +618,7 @@ impl Machine {
 }
 
 /// The value of variable `s` as a frame reads it: its local, else the global.
-fn lookup<'a>(
-    frame: &'a Frame,
-    globals: &'a [Option<Value>],
-    s: Sym,
-) -> Option<&'a Value> {
+fn lookup<'a>(frame: &'a Frame, globals: &'a [Option<Value>], s: Sym) -> Option<&'a Value> {
     frame
         .locals
         .iter()
