@@ -6,16 +6,11 @@ use std::collections::BTreeMap;
 use std::f64::consts::FRAC_PI_2;
 use std::time::Duration;
 
-use urscript_socket::robot::ReadCall;
-
-use crate::builtins::{Args, Out};
+use crate::arm::kinematics::{self, Dh};
+use crate::arm::trajectory::{self, Kind, Motion};
 use crate::error::Fault;
-use crate::event::{
-    Event, Message, MessageKind, MoveEnd, MoveOutcome, MoveStart, ReadRecord, MAX_READ_INPUT,
-};
-use crate::kinematics::{self, Dh};
+use crate::event::{Event, Message, MessageKind, MoveEnd, MoveOutcome, MoveStart};
 use crate::sockets::Sockets;
-use crate::trajectory::{self, Kind, Motion};
 
 /// The virtual arm and the I/O around it: where the arm is now (mid-move too), not
 /// dynamics (see
@@ -113,7 +108,7 @@ pub struct Arm {
     pub(crate) eip: crate::eip::Adapter,
     /// The world model's frames (`add_frame`...; see [`crate::world_model`]): kept
     /// across programs until `reset_world_model()`.
-    pub(crate) world_model: crate::world_model::WorldModel,
+    pub(crate) world_model: crate::arm::world_model::WorldModel,
     /// The speed slider: the fraction (0-1) of its programmed speed the program's motion
     /// runs at (RTDE `speed_slider_fraction`, primary `set speed`, the operator). A move
     /// that takes 1.5 s at 1.0 takes 3.0 s at 0.5; a change takes effect from the next
@@ -125,8 +120,8 @@ pub struct Arm {
     /// `teach_mode()` (1) or `freedrive_mode()` (2) is on: the operator moves the joints
     /// ([`Arm::move_by_hand`]); 0: neither.
     pub(crate) hand_mode: u8,
-    /// The active `force_mode`, if any (see [`crate::force`]).
-    pub(crate) force_mode: Option<crate::force::ForceMode>,
+    /// The active `force_mode`, if any (see [`crate::arm::force`]).
+    pub(crate) force_mode: Option<crate::arm::force::ForceMode>,
 }
 
 impl Arm {
@@ -168,7 +163,7 @@ impl Arm {
         if let Some((k, v)) = q
             .iter()
             .enumerate()
-            .find(|(_, v)| !v.is_finite() || v.abs() > crate::builtins::motion::JOINT_LIMIT)
+            .find(|(_, v)| !v.is_finite() || v.abs() > JOINT_LIMIT)
         {
             return Err(format!(
                 "joint {k} at {v} rad is outside the joints' range (±2π)"
@@ -186,7 +181,7 @@ impl Arm {
     /// the TCP (see [`World::contact_plane`]), for the arm's kinematics `dh`.
     pub fn measured_tcp_force(&self, dh: &Dh) -> [f64; 6] {
         let pose = kinematics::forward(dh, self.q, self.tcp);
-        let c = crate::force::contact_force(
+        let c = crate::arm::force::contact_force(
             self.world.contact_plane,
             self.world.contact_stiffness,
             pose,
@@ -302,7 +297,7 @@ impl Default for Arm {
             pause_requested: false,
             powerdown: false,
             eip: crate::eip::Adapter::default(),
-            world_model: crate::world_model::WorldModel::default(),
+            world_model: crate::arm::world_model::WorldModel::default(),
             force_mode_damping: 0.0,
             force_mode_gain_scaling: 1.0,
             motion_version: 1,
@@ -457,9 +452,9 @@ pub(crate) struct Controller {
     pub arm: Arm,
     pub sockets: Sockets,
     /// What the driver must do or show, oldest first.
-    pub events: crate::memory::Events,
+    pub events: crate::vm::memory::Events,
     /// The count of the program's memory against its budget.
-    pub mem: crate::memory::Memory,
+    pub mem: crate::vm::memory::Memory,
     /// The motion under way, if the arm moves.
     pub motion: Option<Motion>,
     /// The handle of the thread running now (the owner of a motion it commands).
@@ -798,7 +793,7 @@ impl Controller {
         let back = blend.map_or(kind.duration(), |b| b.at);
         // The motion clock the program gets control back at: whole steps of motion time
         // after the move's start (as the scheduler counts a wait).
-        let n = crate::builtins::secs(back)
+        let n = secs(back)
             .as_nanos()
             .div_ceil(self.step_time.as_nanos().max(1));
         let until = start + u64::try_from(n).unwrap_or(u64::MAX) as f64;
@@ -893,7 +888,7 @@ impl Controller {
             self.arm.qd = qd;
             self.arm.tcp_speed = match s.tcp_speed {
                 Some(v) => v.map(|x| x * f),
-                None => crate::trajectory::tcp_speed(&self.dh, s.q, qd, self.arm.tcp),
+                None => crate::arm::trajectory::tcp_speed(&self.dh, s.q, qd, self.arm.tcp),
             };
             if s.stop {
                 // The path left the arm's reach: it stops here (nothing queued goes on) and
@@ -940,7 +935,7 @@ impl Controller {
 
     /// Force mode up to step `step` (from the last step it ran to), from joints `before`
     /// (speeds `qd_before`): the program's pose (the motion's, when one was sampled this
-    /// step, else the last) moved by what force mode adds (see [`crate::force`]).
+    /// step, else the last) moved by what force mode adds (see [`crate::arm::force`]).
     fn force_step(&mut self, step: u64, sampled: bool, (before, qd_before): ([f64; 6], [f64; 6])) {
         let step_time = self.step_time.as_secs_f64();
         let tcp = self.arm.tcp;
@@ -965,18 +960,18 @@ impl Controller {
         fm.at = fm.at.max(step);
         let kept = fm.offset;
         fm.step(actual, v, dt, plane, stiffness);
-        let mut q = crate::force::joints_at(
+        let mut q = crate::arm::force::joints_at(
             &self.dh,
-            crate::force::offset_pose(fm.programmed, fm.offset),
+            crate::arm::force::offset_pose(fm.programmed, fm.offset),
             tcp,
             before,
         );
         if q.is_none() {
             // Out of reach: force mode goes no further that way.
             fm.offset = kept;
-            q = crate::force::joints_at(
+            q = crate::arm::force::joints_at(
                 &self.dh,
-                crate::force::offset_pose(fm.programmed, kept),
+                crate::arm::force::offset_pose(fm.programmed, kept),
                 tcp,
                 before,
             );
@@ -996,7 +991,7 @@ impl Controller {
         }
         self.arm.q = q;
         self.arm.qd = qd;
-        self.arm.tcp_speed = crate::trajectory::tcp_speed(&self.dh, q, qd, tcp);
+        self.arm.tcp_speed = crate::arm::trajectory::tcp_speed(&self.dh, q, qd, tcp);
     }
 
     /// Follows the TCP's contact with the contact plane (`tool_contact`).
@@ -1012,7 +1007,7 @@ impl Controller {
 
     /// The contact plane's push on the TCP now (N, base frame).
     pub fn measured_contact(&self) -> [f64; 6] {
-        crate::force::contact_force(
+        crate::arm::force::contact_force(
             self.arm.world.contact_plane,
             self.arm.world.contact_stiffness,
             self.tcp_pose(),
@@ -1155,46 +1150,12 @@ impl Controller {
             });
         }
     }
+}
 
-    /// Starts a read that may wait `timeout` seconds: the value at once if the buffered
-    /// bytes complete it (or the socket is not open: the sentinel), else a wait.
-    pub fn start_read(
-        &mut self,
-        socket: String,
-        call: ReadCall,
-        timeout: f64,
-        args: &mut Args,
-    ) -> Result<Out, Fault> {
-        let now = self.now();
-        // What the read sees first: the bytes already buffered (kept for the record).
-        let (input, buffered_at_start) = if args.traced {
-            let n = self.sockets.buffered_len(&socket);
-            (self.sockets.buffered(&socket, MAX_READ_INPUT), n)
-        } else {
-            (Vec::new(), 0)
-        };
-        let done = self.sockets.start_read(&socket, &call, timeout, now)?;
-        self.flush(&socket);
-        Ok(match done {
-            Some(result) => {
-                let v = crate::sockets::to_value(&result);
-                if !self.sockets.is_open(&socket) {
-                    args.failure = Some(format!("the socket \"{socket}\" is not open"));
-                }
-                args.read = Some(ReadRecord {
-                    call,
-                    result,
-                    input,
-                    buffered_at_start,
-                });
-                Out::Value(v)
-            }
-            None => Out::Read {
-                socket,
-                call,
-                input,
-                buffered_at_start,
-            },
-        })
-    }
+/// The joint range of UR's arms (e-Series and CB3): ±2π, ±360°.
+pub const JOINT_LIMIT: f64 = std::f64::consts::TAU;
+
+/// Seconds as a duration (negative: zero; too large: the longest).
+pub(crate) fn secs(x: f64) -> Duration {
+    Duration::try_from_secs_f64(x.max(0.0)).unwrap_or(Duration::MAX)
 }

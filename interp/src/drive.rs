@@ -42,7 +42,7 @@ use std::time::{Duration, Instant};
 
 use crate::error::RuntimeError;
 use crate::event::Event;
-use crate::machine::{Machine, State};
+use crate::vm::{Machine, State};
 
 /// The most bytes a socket keeps queued for a server that does not read them.
 pub const MAX_UNSENT: usize = 16 * 1024 * 1024;

@@ -9,7 +9,7 @@ use std::fmt;
 
 use urscript_socket::robot::{ReadCall, ReadResult};
 
-use crate::builtins::Builtin;
+use crate::native::Builtin;
 use crate::value::Value;
 
 /// What the machine asks of its driver, or reports.

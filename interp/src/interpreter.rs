@@ -66,7 +66,7 @@
 use std::collections::VecDeque;
 use std::fmt;
 
-use crate::compile::Sizes;
+use crate::syntax::compile::Sizes;
 
 /// The longest line accepted (bytes, without the `\n`); a longer one is discarded
 /// ([`Discard::LineTooLong`]).

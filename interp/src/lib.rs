@@ -20,6 +20,28 @@
 //! See [`machine`] for the time model (steps, thread order) and [`builtins`] for the
 //! built-ins and the virtual arm.
 //!
+//! ## Layout
+//!
+//! | where | what |
+//! |---|---|
+//! | `syntax/` | lexer, parser and compiler: program text to code, every call resolved and checked |
+//! | `vm/` | the [`Machine`] ([`machine`]): configuration and state, the scheduler, a thread's run, calls and stubs, the waits the driver's inputs end, interpreter mode, the memory budget |
+//! | `value/` | [`Value`], its operators, indexing and members, what it costs the memory budget |
+//! | `arm/` | the arm's mechanics: [`kinematics`], speed profiles and blends, force mode, poses, the [`world_model`] |
+//! | [`builtins`] | the built-in table and each built-in's code |
+//! | `native.rs` | what the machine and a built-in's code exchange: the table entry ([`builtins::Builtin`]), the bound arguments, what the code returns |
+//! | `controller.rs` | what built-ins act on: the [`Arm`], the [`World`], the robot's sockets, program time, the events |
+//! | [`event`], [`interpreter`], [`eip`], [`drive`] | the events out, interpreter mode's wire side, EtherNet/IP, the real-time driver |
+//!
+//! Dependencies point one way: the machine and the compiler use the built-in table;
+//! the built-ins use `native`, `controller`, [`event`], `arm` and `value`; `controller`
+//! uses `arm`, [`event`] and `value`, and nothing of the built-ins; `arm` and `value` use
+//! neither the built-ins nor the machine (`arm` uses nothing outside itself). Three
+//! edges go back by design: the value operators take the compiled code's operator and
+//! store path (`syntax/`); a [`CallRecord`] names its [`Builtin`](builtins::Builtin),
+//! whose code takes the controller that holds the events; and the controller holds the
+//! memory budget's counters (`vm/memory.rs`).
+//!
 //! ## Bounds: any program text is safe to run
 //!
 //! A program is input: whatever it says, the interpreter neither crashes (no stack
@@ -89,29 +111,85 @@
 #![forbid(unsafe_code)]
 #![warn(missing_docs)]
 
+mod arm;
 pub mod builtins;
-mod compile;
 mod controller;
 pub mod drive;
 pub mod eip;
 mod error;
 pub mod event;
-mod force;
 pub mod interpreter;
-pub mod kinematics;
-mod lexer;
-pub mod machine;
-mod memory;
-mod parser;
-mod pose;
+mod native;
 mod rpc;
 mod sockets;
-mod trajectory;
+mod syntax;
 mod value;
-pub mod world_model;
+mod vm;
 mod world_set;
 
-pub use compile::{Preamble, Program};
+pub use arm::{kinematics, world_model};
+
+pub mod machine {
+    //! The running program: threads, the scheduler in virtual time, and the sans-IO interface.
+    //!
+    //! ## Time
+    //! Time is an input: the machine never reads a clock. Program time advances in steps of
+    //! [`Config::step_time`] (2 ms e-Series, 8 ms CB3); step `k` runs at `k × step_time`
+    //! after the start. In each step the threads run **in a fixed order: the main program
+    //! first, then the threads in the order `run` started them** (a thread started during a
+    //! step runs in that same step, after the others). Each runs until it consumes physical
+    //! time: `sync()` (to the next step), `sleep(t)` and motion (to the step where the time is
+    //! over), a socket read whose bytes have not all arrived (until they arrive, checked at
+    //! each step, or its timeout), `socket_open` (until the driver reports the connection),
+    //! an XML-RPC call `handle.name(...)` (until its reply is complete, at most 10 s), `join`
+    //! of a thread that still runs. This is the manual's "Thread scheduling": 2 ms
+    //! frames, each runnable thread scheduled round robin, a thread that has used its frame
+    //! waits for the next. A thread that computes without consuming time (a loop without
+    //! `sync()`) uses its slice up after [`Config::max_statements_per_step`] statements and
+    //! waits for the next step, where it goes on: the manual's "computational heavy
+    //! instructions (such as an infinite loop that do not control the robot)" that place a
+    //! thread "in a non-runnable state" until the next frame. (The manual adds that such a
+    //! loop may raise "Lost communication with Controller" on the arm; that depends on the
+    //! controller's load and is not modelled.)
+    //!
+    //! Threads only switch where time is consumed or a slice is used up, so `enter_critical`/`exit_critical` never
+    //! needs to hold the others back: a thread inside a critical section already runs alone
+    //! until it consumes time, and when it does (as UR's External Control program does inside
+    //! one) the others run, as on the controller.
+    //!
+    //! ## Memory
+    //! The program's memory is one budget, [`Config::max_memory`] (256 MiB by default),
+    //! counted in bytes as the program allocates: each value where it sits (a stack slot or
+    //! a list element: the size of a [`Value`](crate::Value), 56 bytes on 64-bit targets) plus what it
+    //! owns (list elements, string bytes, struct members, at every depth); each local
+    //! variable's entry; each call frame; each thread; and the events the driver has not
+    //! taken yet (bytes to send, messages and call records, with their copies of values).
+    //! A value is counted before it is made or copied (a list copied on assignment, a
+    //! `make_list`, list arithmetic and matrix products by an upper bound of their result,
+    //! the copies a built-in's call record and message keep), so no single step allocates
+    //! far past the budget; drops are credited where they happen. When a charge would pass
+    //! the budget the machine recounts what the program holds (the count never errs low)
+    //! and, if the recount confirms it, stops the program with a
+    //! [`Limit`](crate::RuntimeErrorKind::Limit) runtime error at that line:
+    //! `memory budget exceeded: the program holds N bytes and needs M more, over its budget
+    //! of B bytes (...)`. The counts are of contents, not of the allocator's overhead or a
+    //! vector's spare capacity: the process's own use is higher by a small factor.
+    //! Separately bounded and not counted: the robot model's receive buffers (64 KiB per
+    //! socket, 64 sockets), an XML-RPC reply being read (1 MiB), the interpreter-mode queue
+    //! ([`interpreter::MAX_UNEXECUTED`](crate::interpreter::MAX_UNEXECUTED) lines of at most
+    //! [`interpreter::MAX_LINE`](crate::interpreter::MAX_LINE) bytes), and the program's
+    //! code.
+    //!
+    //! ## Driving it
+    //! Call [`Machine::run_until`] with the time since the program started; it runs every
+    //! step due. Take the [`Event`]s with [`Machine::poll_event`]: connections to open, bytes
+    //! to send, messages. Report connections ([`Machine::handle_connected`]), received bytes
+    //! ([`Machine::handle_received`]) and closed peers. [`Machine::poll_timeout`] says when
+    //! the machine next has something to do (`None`: only an input can wake it).
+
+    pub use crate::vm::{Config, Event, Machine, State, Stub, MAX_MOTION_SAMPLES, MAX_THREADS};
+}
+
 pub use controller::{Arm, World};
 pub use error::{ParseError, ParseErrorKind, RuntimeError, RuntimeErrorKind};
 pub use event::{
@@ -120,6 +198,7 @@ pub use event::{
 };
 pub use machine::{Config, Machine, State, Stub};
 pub use sockets::{Policy, Timeout};
+pub use syntax::compile::{Preamble, Program};
 pub use value::{Value, MAX_STRUCT_MEMBERS, MAX_VALUE_DEPTH};
 pub use world_set::{SetError, ARM_SETTINGS, WORLD_SETTINGS};
 
@@ -132,9 +211,9 @@ pub use world_set::{SetError, ARM_SETTINGS, WORLD_SETTINGS};
 /// assert!(parse_constant("x").is_err());
 /// ```
 pub fn parse_constant(text: &str) -> Result<Value, ParseError> {
-    let toks = lexer::lex(text)?;
-    let mut p = parser::Parser::new(toks);
+    let toks = syntax::lexer::lex(text)?;
+    let mut p = syntax::parser::Parser::new(toks);
     let e = p.expr()?;
     p.end_of_constant()?;
-    parser::const_value(&e).ok_or_else(|| ParseError::new(1, 1, "not a constant".into()))
+    syntax::parser::const_value(&e).ok_or_else(|| ParseError::new(1, 1, "not a constant".into()))
 }

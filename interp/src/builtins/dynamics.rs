@@ -225,10 +225,11 @@ fn estimate_payload(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
     let wrenches = sixes(a, 1, "a list of wrenches")?;
     // The flange's orientation: the TCP pose composed with the inverse of the TCP's
     // rotation (its offset does not change the orientation).
-    let tcp_rot_inv = crate::pose::inv([0.0, 0.0, 0.0, c.arm.tcp[3], c.arm.tcp[4], c.arm.tcp[5]]);
+    let tcp_rot_inv =
+        crate::arm::pose::inv([0.0, 0.0, 0.0, c.arm.tcp[3], c.arm.tcp[4], c.arm.tcp[5]]);
     let flanges: Vec<[f64; 6]> = poses
         .iter()
-        .map(|p| crate::pose::trans(*p, tcp_rot_inv))
+        .map(|p| crate::arm::pose::trans(*p, tcp_rot_inv))
         .collect();
     let (mass, cog) = dynamics::estimate_payload(&flanges, &wrenches, c.arm.gravity)
         .map_err(|e| Fault::from(format!("`estimate_payload`: {e}")))?;

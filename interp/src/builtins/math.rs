@@ -284,7 +284,7 @@ fn to_value(m: Vec<Vec<f64>>) -> Value {
 
 fn inv(_: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
     if let Value::Pose(p) = a.v[0] {
-        return Ok(Out::Value(Value::Pose(crate::pose::inv(p))));
+        return Ok(Out::Value(Value::Pose(crate::arm::pose::inv(p))));
     }
     let mut m = matrix(a)?;
     let n = m.len();

@@ -1,6 +1,6 @@
 //! Motion, the arm's state, and the arm's settings, on the **virtual arm**: the arm
 //! follows each command in time (kinematics, speed profiles), not dynamics. See
-//! `crate::trajectory` for the profiles; in short:
+//! `crate::arm::trajectory` for the profiles; in short:
 //!
 //! - `movej(q, a=1.4, v=1.05, t=0, r=0)`: a trapezoidal profile in joint space on the joint
 //!   that moves furthest (a triangle when too short to reach `v`), all joints arriving
@@ -21,7 +21,7 @@
 //!   tool enters the sphere of radius `r` around its target (the program's next
 //!   statements run then, as on the controller, which evaluates them on entering the
 //!   blend radius). A `movej`, `movel` or `movep` commanded in that same step after one
-//!   of them blends in without a stop (see `crate::trajectory::blend`: joint speeds
+//!   of them blends in without a stop (see `crate::arm::trajectory::blend`: joint speeds
 //!   continuous, the tool within `r` of the corner, a straight-move blend a circular arc
 //!   at constant tool speed). A move commanded later (a `sleep`, `sync`, a socket read
 //!   ran first), or one that cannot blend (`movec` either side, a next target inside
@@ -45,13 +45,13 @@
 //!   tool pose now; `get_target_waypoint()`: the target of the move under way (from the
 //!   start of a blend, the next move's), the tool pose at rest; speeds the speeds now;
 //!   `tool_contact()`: the steps since the TCP touched the contact plane (0 without
-//!   contact; see `crate::force`); `is_steady()`: False while a motion (a blend too) is
+//!   contact; see `crate::arm::force`); `is_steady()`: False while a motion (a blend too) is
 //!   under way, a speed is held, the joints move, or the arm is in teach/freedrive mode.
 //! - The speed slider (`Arm::speed_fraction`): every motion above runs on the motion
 //!   clock, which advances by the slider's fraction each step; moves and `stopj`/`stopl`
 //!   return when their motion ends on it; `servoj`, `speedj`, `speedl` return after `t`
 //!   of program time (the arm gets only as far as the slider lets it).
-//! - `force_mode`/`end_force_mode`: see `crate::force`. `teach_mode`/`freedrive_mode`:
+//! - `force_mode`/`end_force_mode`: see `crate::arm::force`. `teach_mode`/`freedrive_mode`:
 //!   the arm stops and the operator moves the joints (`Arm::move_by_hand`) until the
 //!   `end_` call or the program's end.
 //! - `is_within_safety_limits(pose, qnear)`: reachable by the inverse kinematics with
@@ -68,10 +68,10 @@
 //!   `screw_driving`, ...) are accepted with their manual signatures and do nothing.
 
 use super::{accept, float_list, floats, opt, req, secs, Args, Builtin, Default, Domain, Out};
+use crate::arm::trajectory::{self, Kind, Path, Profile};
 use crate::controller::Controller;
 use crate::error::Fault;
 use crate::event::MoveStart;
-use crate::trajectory::{self, Kind, Path, Profile};
 use crate::value::Value;
 
 const D: Domain = Domain::Motion;
@@ -592,7 +592,7 @@ pub(super) const TABLE: &[Builtin] = &[
             req("type"),
             req("limits"),
         ],
-        "Starts force mode: compliant axes move to reach the wrench at their speed limits, stopped by the contact plane (see crate::force).",
+        "Starts force mode: compliant axes move to reach the wrench at their speed limits, stopped by the contact plane (see crate::arm::force).",
         force_mode,
     ),
     Builtin::new(
@@ -805,8 +805,7 @@ fn joint_distance(from: [f64; 6], to: [f64; 6]) -> f64 {
     (0..6).map(|k| (to[k] - from[k]).abs()).fold(0.0, f64::max)
 }
 
-/// The joint range of UR's arms (e-Series and CB3): ±2π, ±360°.
-pub const JOINT_LIMIT: f64 = std::f64::consts::TAU;
+pub use crate::controller::JOINT_LIMIT;
 
 /// Refuses joint targets outside the arm's range (a little rounding over ±2π passes).
 fn check_joints(name: &str, q: [f64; 6]) -> Result<[f64; 6], Fault> {
@@ -1462,7 +1461,7 @@ fn hand_mode(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
 }
 
 /// `force_mode(task_frame, selection_vector, wrench, type, limits)` and
-/// `end_force_mode()` (see [`crate::force`]).
+/// `end_force_mode()` (see [`crate::arm::force`]).
 fn force_mode(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
     if a.name == "end_force_mode" {
         c.arm.force_mode = None;
@@ -1504,7 +1503,7 @@ fn force_mode(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
     }
     let programmed = c.tcp_pose();
     c.arm.hand_mode = 0;
-    c.arm.force_mode = Some(crate::force::ForceMode {
+    c.arm.force_mode = Some(crate::arm::force::ForceMode {
         frame,
         selection: sel.map(|x| x == 1.0),
         wrench,

@@ -114,7 +114,7 @@ fn dist(_: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
 
 /// `v` rotated by the rotation vector `r`.
 pub(super) fn rotate(r: [f64; 3], v: [f64; 3]) -> [f64; 3] {
-    let p = crate::pose::trans(
+    let p = crate::arm::pose::trans(
         [0.0, 0.0, 0.0, r[0], r[1], r[2]],
         [v[0], v[1], v[2], 0.0, 0.0, 0.0],
     );
@@ -134,8 +134,8 @@ fn rotvec2rpy(_: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
 fn rpy2rotvec(_: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
     let [roll, pitch, yaw]: [f64; 3] = a.nums(0)?;
     let rot = |x: f64, y: f64, z: f64| [0.0, 0.0, 0.0, x, y, z];
-    let p = crate::pose::trans(
-        crate::pose::trans(rot(0.0, 0.0, yaw), rot(0.0, pitch, 0.0)),
+    let p = crate::arm::pose::trans(
+        crate::arm::pose::trans(rot(0.0, 0.0, yaw), rot(0.0, pitch, 0.0)),
         rot(roll, 0.0, 0.0),
     );
     Ok(Out::Value(float_list(&p[3..])))
@@ -162,14 +162,14 @@ fn wrench_trans(_: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
 fn compose(_: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
     let (p, q) = (a.six(0)?, a.six(1)?);
     Ok(Out::Value(Value::Pose(match a.name {
-        "pose_trans" => crate::pose::trans(p, q),
-        "pose_add" => crate::pose::add(p, q),
-        _ => crate::pose::sub(p, q),
+        "pose_trans" => crate::arm::pose::trans(p, q),
+        "pose_add" => crate::arm::pose::add(p, q),
+        _ => crate::arm::pose::sub(p, q),
     })))
 }
 
 fn pose_inv(_: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
-    Ok(Out::Value(Value::Pose(crate::pose::inv(a.six(0)?))))
+    Ok(Out::Value(Value::Pose(crate::arm::pose::inv(a.six(0)?))))
 }
 
 fn interpolate_pose(_: &mut Controller, a: &mut Args) -> Result<Out, Fault> {

@@ -7,6 +7,7 @@ use urscript_socket::robot::ReadCall;
 use super::{opt, req, Args, Builtin, Default, Domain, Out, SOCKET_NAME};
 use crate::controller::Controller;
 use crate::error::{Fault, RuntimeErrorKind};
+use crate::event::{ReadRecord, MAX_READ_INPUT};
 use crate::value::Value;
 
 const D: Domain = Domain::Sockets;
@@ -214,7 +215,7 @@ fn set_var(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
 fn get_var(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
     let name = a.text(0)?;
     let socket = a.text(1)?;
-    c.start_read(socket, ReadCall::GetVar { name }, 2.0, a)
+    start_read(c, socket, ReadCall::GetVar { name }, 2.0, a)
 }
 
 fn read_counted(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
@@ -230,13 +231,13 @@ fn read_counted(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
         "socket_read_binary_integer" => ReadCall::BinaryInteger { number },
         _ => ReadCall::ByteList { number },
     };
-    c.start_read(socket, call, timeout, a)
+    start_read(c, socket, call, timeout, a)
 }
 
 fn read_line(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
     let socket = a.text(0)?;
     let timeout = a.num(1)?;
-    c.start_read(socket, ReadCall::Line, timeout, a)
+    start_read(c, socket, ReadCall::Line, timeout, a)
 }
 
 fn read_string(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
@@ -247,5 +248,47 @@ fn read_string(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
         interpret_escape: a.boolean(3)?,
     };
     let timeout = a.num(4)?;
-    c.start_read(socket, call, timeout, a)
+    start_read(c, socket, call, timeout, a)
+}
+
+/// Starts a read that may wait `timeout` seconds: the value at once if the buffered
+/// bytes complete it (or the socket is not open: the sentinel), else a wait.
+fn start_read(
+    c: &mut Controller,
+    socket: String,
+    call: ReadCall,
+    timeout: f64,
+    args: &mut Args,
+) -> Result<Out, Fault> {
+    let now = c.now();
+    // What the read sees first: the bytes already buffered (kept for the record).
+    let (input, buffered_at_start) = if args.traced {
+        let n = c.sockets.buffered_len(&socket);
+        (c.sockets.buffered(&socket, MAX_READ_INPUT), n)
+    } else {
+        (Vec::new(), 0)
+    };
+    let done = c.sockets.start_read(&socket, &call, timeout, now)?;
+    c.flush(&socket);
+    Ok(match done {
+        Some(result) => {
+            let v = crate::sockets::to_value(&result);
+            if !c.sockets.is_open(&socket) {
+                args.failure = Some(format!("the socket \"{socket}\" is not open"));
+            }
+            args.read = Some(ReadRecord {
+                call,
+                result,
+                input,
+                buffered_at_start,
+            });
+            Out::Value(v)
+        }
+        None => Out::Read {
+            socket,
+            call,
+            input,
+            buffered_at_start,
+        },
+    })
 }

@@ -7,8 +7,7 @@ use crate::controller::Controller;
 use crate::error::Fault;
 use crate::value::Value;
 
-/// The longest string `str_cat` makes, as on the controller.
-pub const MAX_STRING_LEN: usize = 1023;
+pub use crate::value::MAX_STRING_LEN;
 
 const D: Domain = Domain::Strings;
 

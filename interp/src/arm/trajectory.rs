@@ -32,8 +32,8 @@
 //!
 //! The end state of a move is its target exactly.
 
-use crate::kinematics::{self, Dh};
-use crate::pose::{mul, to_matrix, to_rotvec, transpose};
+use crate::arm::kinematics::{self, Dh};
+use crate::arm::pose::{mul, to_matrix, to_rotvec, transpose};
 
 type M = [[f64; 3]; 3];
 
@@ -1657,7 +1657,7 @@ mod tests {
 
     #[test]
     fn a_straight_blend_is_an_arc_within_r_of_the_corner_tangent_to_both_lines() {
-        let dh = crate::kinematics::Model::Ur5e.dh();
+        let dh = crate::arm::kinematics::Model::Ur5e.dh();
         let q0 = [0.3, -1.4, 1.6, -1.8, -1.57, 0.2];
         let tcp = [0.0; 6];
         let p0 = kinematics::forward(&dh, q0, tcp);
@@ -1711,7 +1711,7 @@ mod tests {
 
     #[test]
     fn the_jacobian_twist_matches_a_finite_difference() {
-        let dh = crate::kinematics::Model::Ur5e.dh();
+        let dh = crate::arm::kinematics::Model::Ur5e.dh();
         let q = [0.3, -1.2, 1.4, -1.8, -1.57, 0.2];
         let qd = [0.1, -0.2, 0.3, 0.05, -0.4, 0.7];
         let tcp = [0.01, 0.02, 0.15, 0.1, 0.0, 0.2];

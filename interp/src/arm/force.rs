@@ -24,8 +24,8 @@
 //!   used; force mode runs in real time (the speed slider does not scale it).
 //!   `end_force_mode()`, the program's end, `teach_mode()` and `freedrive_mode()` end it.
 
-use crate::kinematics::{self, Dh};
-use crate::pose::{mul, to_matrix, to_rotvec};
+use crate::arm::kinematics::{self, Dh};
+use crate::arm::pose::{mul, to_matrix, to_rotvec};
 
 type M = [[f64; 3]; 3];
 

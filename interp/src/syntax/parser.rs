@@ -3,7 +3,7 @@
 //! (`== != < <= > >=`), `+ -`, `* / %`, unary `-`, then indexing and calls.
 
 use crate::error::ParseError;
-use crate::lexer::{Tok, Token};
+use crate::syntax::lexer::{Tok, Token};
 use crate::value::{Value, DEFAULT_MAX_VALUE_SIZE, MAX_VALUE_DEPTH};
 
 /// Nesting bound of blocks, brackets and unary operators (the parser's own recursion), so

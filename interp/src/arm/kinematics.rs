@@ -181,13 +181,13 @@ impl T {
 
     fn of_pose(p: [f64; 6]) -> T {
         T {
-            r: crate::pose::to_matrix([p[3], p[4], p[5]]),
+            r: crate::arm::pose::to_matrix([p[3], p[4], p[5]]),
             t: [p[0], p[1], p[2]],
         }
     }
 
     fn pose(&self) -> [f64; 6] {
-        let v = crate::pose::to_rotvec(self.r);
+        let v = crate::arm::pose::to_rotvec(self.r);
         [self.t[0], self.t[1], self.t[2], v[0], v[1], v[2]]
     }
 
@@ -449,7 +449,7 @@ pub fn pose_error(a: [f64; 6], b: [f64; 6]) -> f64 {
         .map(|i| (ta.t[i] - tb.t[i]).powi(2))
         .sum::<f64>()
         .sqrt();
-    let dr = crate::pose::to_rotvec(ta.r_t_mul(&tb));
+    let dr = crate::arm::pose::to_rotvec(ta.r_t_mul(&tb));
     dp + (dr[0] * dr[0] + dr[1] * dr[1] + dr[2] * dr[2]).sqrt()
 }
 

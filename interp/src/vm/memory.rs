@@ -17,8 +17,10 @@
 
 use std::collections::VecDeque;
 
+use super::{Frame, Machine, Thread};
 use crate::error::{Fault, RuntimeErrorKind as K};
 use crate::event::Event;
+use crate::value::size::held_all;
 use crate::value::{Value, VALUE_BYTES};
 
 /// The default of [`Config::max_memory`](crate::Config::max_memory): 256 MiB.
@@ -26,14 +28,14 @@ pub(crate) const DEFAULT_MAX_MEMORY: usize = 256 * 1024 * 1024;
 
 /// The bytes one call frame takes besides its locals (the frame record, with room for
 /// its return address and stack base).
-pub(crate) const FRAME_BYTES: usize = std::mem::size_of::<crate::machine::Frame>();
+pub(crate) const FRAME_BYTES: usize = std::mem::size_of::<crate::vm::Frame>();
 
 /// The bytes one local variable's entry takes in its frame (its name and its slot; the
 /// value's own content is counted apart).
 pub(crate) const ENTRY_BYTES: usize = std::mem::size_of::<(u32, Option<Value>)>();
 
 /// The bytes one thread takes besides its name, frames and stack.
-pub(crate) const THREAD_BYTES: usize = std::mem::size_of::<crate::machine::Thread>();
+pub(crate) const THREAD_BYTES: usize = std::mem::size_of::<crate::vm::Thread>();
 
 /// The bytes an event holds: the event itself and the text and values it owns.
 fn event_bytes(e: &Event) -> usize {
@@ -168,3 +170,94 @@ impl Memory {
 
 /// The bytes one stack slot takes (a value's own slot).
 pub(crate) const SLOT_BYTES: usize = VALUE_BYTES;
+
+impl Machine {
+    /// Sets the count to what the program holds now: the globals and every live thread,
+    /// with `current` (the thread running, out of the list while it runs).
+    pub(super) fn recount(&mut self, current: Option<&Thread>) {
+        let globals = self
+            .globals
+            .iter()
+            .filter_map(Option::as_ref)
+            .map(Value::content_bytes)
+            .fold(0, usize::saturating_add);
+        let threads = self
+            .threads
+            .iter()
+            .filter(|t| !t.done)
+            .chain(current)
+            .map(thread_bytes)
+            .fold(0, usize::saturating_add);
+        self.ctl.mem.held = globals.saturating_add(threads);
+    }
+
+    /// Counts `bytes` the program is about to allocate, or refuses them (a recount
+    /// first, if the count says they do not fit) with the budget's error.
+    #[inline]
+    pub(super) fn charge(&mut self, current: Option<&Thread>, bytes: usize) -> Result<(), Fault> {
+        if self.ctl.mem.try_add(self.ctl.events.bytes(), bytes) {
+            return Ok(());
+        }
+        self.charge_after_recount(current, bytes)
+    }
+
+    /// [`charge`](Self::charge) when the count says the bytes do not fit.
+    #[cold]
+    #[inline(never)]
+    fn charge_after_recount(
+        &mut self,
+        current: Option<&Thread>,
+        bytes: usize,
+    ) -> Result<(), Fault> {
+        self.reserve(current, bytes)?;
+        self.ctl.mem.add(bytes);
+        Ok(())
+    }
+
+    /// Whether `bytes` more fit in the budget (a recount first, if the count says they
+    /// do not), without counting them.
+    #[inline]
+    pub(super) fn reserve(&mut self, current: Option<&Thread>, bytes: usize) -> Result<(), Fault> {
+        let events = self.ctl.events.bytes();
+        if !self.ctl.mem.fits(events, bytes) {
+            self.recount(current);
+            if !self.ctl.mem.fits(events, bytes) {
+                return Err(self.ctl.mem.over(events, bytes));
+            }
+        }
+        Ok(())
+    }
+
+    /// The count of the program's memory and a recount of it now, for tests of the
+    /// accounting (the count must never be below the recount). Not for drivers.
+    #[doc(hidden)]
+    pub fn memory_audit(&mut self) -> (usize, usize) {
+        let counted = self.ctl.mem.held;
+        self.recount(None);
+        let recounted = self.ctl.mem.held;
+        self.ctl.mem.held = counted;
+        (counted, recounted)
+    }
+}
+
+/// The bytes a frame holds: the frame, its locals' entries and their values' content.
+pub(super) fn frame_bytes(f: &Frame) -> usize {
+    let values: usize = f
+        .locals
+        .iter()
+        .filter_map(|(_, v)| v.as_ref())
+        .map(Value::content_bytes)
+        .fold(0, usize::saturating_add);
+    FRAME_BYTES
+        .saturating_add(f.locals.len().saturating_mul(ENTRY_BYTES))
+        .saturating_add(values)
+}
+
+/// The bytes a thread holds: itself, its name, its frames and its stack.
+pub(super) fn thread_bytes(t: &Thread) -> usize {
+    t.frames
+        .iter()
+        .map(frame_bytes)
+        .fold(THREAD_BYTES, usize::saturating_add)
+        .saturating_add(held_all(&t.stack))
+}

@@ -381,7 +381,7 @@ pub fn estimate_payload(
     }
     let rot: Vec<M3> = poses
         .iter()
-        .map(|p| crate::pose::to_matrix([p[3], p[4], p[5]]))
+        .map(|p| crate::arm::pose::to_matrix([p[3], p[4], p[5]]))
         .collect();
     let min = std::f64::consts::PI / (2.0 * n as f64);
     for i in 0..n {
@@ -440,7 +440,7 @@ pub fn estimate_payload(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::kinematics::MODELS;
+    use crate::arm::kinematics::MODELS;
 
     /// The kinetic energy `½ qdᵀ M qd` equals the links' own, summed from each centre of
     /// mass's speed (a numeric derivative of the forward kinematics) and each link's
@@ -510,7 +510,7 @@ mod tests {
         let wrenches: Vec<[f64; 6]> = poses
             .iter()
             .map(|p| {
-                let rc = mat_vec(&crate::pose::to_matrix([p[3], p[4], p[5]]), cog);
+                let rc = mat_vec(&crate::arm::pose::to_matrix([p[3], p[4], p[5]]), cog);
                 let f = scale(-mass, gravity);
                 let t = cross(rc, f);
                 [f[0], f[1], f[2], t[0], t[1], t[2]]

@@ -6,7 +6,7 @@ use std::collections::{HashMap, HashSet};
 
 use crate::builtins::{self, Builtin};
 use crate::error::{ParseError, ParseErrorKind};
-use crate::parser::{Access, BinOp, Expr, FuncDef, ParamDefault, Scope, Stmt, StmtKind};
+use crate::syntax::parser::{Access, BinOp, Expr, FuncDef, ParamDefault, Scope, Stmt, StmtKind};
 use crate::value::{Value, MAX_STRUCT_MEMBERS};
 
 /// Index of a name in [`Program::names`].
@@ -147,8 +147,8 @@ impl Preamble {
     /// Parses `text` and appends its statements. A syntax error names its line and
     /// column in `text`; nothing of `text` is added then.
     pub fn add(&mut self, text: &str) -> Result<(), ParseError> {
-        let toks = crate::lexer::lex(text)?;
-        let stmts = crate::parser::Parser::new(toks).program()?;
+        let toks = crate::syntax::lexer::lex(text)?;
+        let stmts = crate::syntax::parser::Parser::new(toks).program()?;
         if self.stmts.len().saturating_add(stmts.len()) > Self::MAX_STATEMENTS {
             return Err(ParseError::new(
                 1,
@@ -256,8 +256,8 @@ impl Program {
     /// assert!(Program::parse("def prog():\n  gripper_open()\nend\n").unwrap().called_builtins() == ["gripper_open"]);
     /// ```
     pub fn parse_with_preamble(preamble: &Preamble, src: &str) -> Result<Program, ParseError> {
-        let toks = crate::lexer::lex(src)?;
-        let stmts = crate::parser::Parser::new(toks).program()?;
+        let toks = crate::syntax::lexer::lex(src)?;
+        let stmts = crate::syntax::parser::Parser::new(toks).program()?;
         let c = Compiler {
             markers: step_markers(src),
             ..Compiler::default()
@@ -275,13 +275,13 @@ impl Program {
     /// assert!(Program::parse_bytes(b"x = 1\r").is_ok());
     /// ```
     pub fn parse_bytes(src: &[u8]) -> Result<Program, ParseError> {
-        crate::lexer::check_size(src.len())?;
+        crate::syntax::lexer::check_size(src.len())?;
         match std::str::from_utf8(src) {
             Ok(text) => Self::parse(text),
             Err(e) => {
                 let at = e.valid_up_to();
                 let valid = std::str::from_utf8(&src[..at]).unwrap_or_default();
-                let (line, col) = crate::lexer::position_of(valid, at);
+                let (line, col) = crate::syntax::lexer::position_of(valid, at);
                 let byte = src.get(at).copied().unwrap_or(0);
                 Err(ParseError::new(
                     line,
@@ -1094,8 +1094,8 @@ impl Compiler {
             Expr::Unary(op, inner) => {
                 self.expr(inner)?;
                 self.emit(match op {
-                    crate::parser::UnOp::Neg => Op::Neg,
-                    crate::parser::UnOp::Not => Op::Not,
+                    crate::syntax::parser::UnOp::Neg => Op::Neg,
+                    crate::syntax::parser::UnOp::Not => Op::Not,
                 });
             }
             Expr::Binary(BinOp::And, l, r) | Expr::Binary(BinOp::Or, l, r) => {

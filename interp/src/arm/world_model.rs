@@ -40,7 +40,7 @@
 //! At most [`MAX_FRAMES`] added frames, names of 1 to [`MAX_NAME_LEN`] bytes: past
 //! either, a runtime error naming the function.
 
-use crate::pose;
+use crate::arm::pose;
 
 /// The most frames a program may add.
 pub const MAX_FRAMES: usize = 256;

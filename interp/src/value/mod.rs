@@ -4,6 +4,10 @@ use std::fmt;
 
 use urscript_socket::to_str::{encode_value, List, Scalar, Value as WireValue};
 
+pub(crate) mod access;
+pub(crate) mod ops;
+pub(crate) mod size;
+
 /// A URScript value.
 ///
 /// ```
@@ -71,6 +75,9 @@ pub const MAX_VALUE_DEPTH: usize = 32;
 
 /// The most members a struct may have: a `struct(...)` with more is a compile error.
 pub const MAX_STRUCT_MEMBERS: usize = 64;
+
+/// The longest string `str_cat` makes, as on the controller.
+pub const MAX_STRING_LEN: usize = 1023;
 
 /// The default of [`Config::max_value_size`](crate::Config::max_value_size).
 pub(crate) const DEFAULT_MAX_VALUE_SIZE: usize = 1_000_000;
