@@ -140,7 +140,9 @@ mod status;
 pub mod urp;
 
 pub use cell::{Cell, CellEvent, Ended, Submitted, MAX_EVENTS};
-pub use dashboard::{Dashboard, Reply, GREETING, LOCAL_CONTROL, MAX_LINE, UNLOCK_TOO_EARLY};
+pub use dashboard::{
+    Dashboard, DashboardCommand, Reply, GREETING, LOCAL_CONTROL, MAX_LINE, UNLOCK_TOO_EARLY,
+};
 pub use rtde::{
     rtde_controller_version, rtde_input_type, rtde_max_frequency, rtde_output_type, InputRegistry,
     RtdeError, RtdeEvent, RtdeSession, RtdeTextLevel, RtdeType, RtdeValue, RTDE_DATA_PACKAGE,

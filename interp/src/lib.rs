@@ -118,6 +118,7 @@ pub use event::{
     CallRecord, Event, Message, MessageKind, MoveEnd, MoveOutcome, MoveStart, Outcome, OutputValue,
     OutputWrite, ReadRecord,
 };
+pub use lexer::{top_level_end, TopLevel, UnitKind, UnitLine};
 pub use machine::{Config, Machine, State, Stub};
 pub use sockets::{Policy, Timeout};
 pub use value::{Value, MAX_STRUCT_MEMBERS, MAX_VALUE_DEPTH};
