@@ -262,3 +262,46 @@ fn the_ursim_profile_answers_as_ursim() {
     server.stop();
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// The dashboard's framing over TCP: a line of more than 4096 bytes (a `\r` before its
+/// `\n` counted) is answered as soon as the bound is passed, with its first 40 bytes,
+/// and dropped to its `\n`, however it arrives; one `\r` before the `\n` is dropped;
+/// the event shows the first 40 characters.
+#[test]
+fn dashboard_lines_long_split_and_with_cr() {
+    let (server, events) = start();
+    let mut d = dashboard(&server);
+    let long = |n: usize| "é".repeat(n / 2);
+    let too_long = format!(
+        "could not understand: '{}...' (a command line is at most 4096 bytes)",
+        "é".repeat(20)
+    );
+    // 4096 bytes of content and a CR: past the bound, answered before its LF.
+    d.1.write_all(format!("{}\r", long(4096)).as_bytes())
+        .unwrap();
+    let mut reply = String::new();
+    d.0.read_line(&mut reply).unwrap();
+    assert_eq!(reply.trim_end(), too_long);
+    let shown = format!("{}...", "é".repeat(40));
+    wait_for(
+        &events,
+        |e| matches!(e, ServerEvent::Dashboard { command, .. } if *command == shown),
+    );
+    // The rest of it (in pieces) is dropped; the next line is answered.
+    for piece in ["ééé", "é\r", "\nrobotmode\r", "\n"] {
+        d.1.write_all(piece.as_bytes()).unwrap();
+        std::thread::sleep(Duration::from_millis(5));
+    }
+    let mut reply = String::new();
+    d.0.read_line(&mut reply).unwrap();
+    assert_eq!(reply, "Robotmode: POWER_OFF\n");
+    // 4094 bytes and a CR fit: an unknown command, echoed whole, without its CR.
+    let fits = long(4094);
+    assert_eq!(
+        ask(&mut d, &format!("{fits}\r")),
+        format!("could not understand: '{fits}'")
+    );
+    // Two CRs: one is dropped, the other is a blank the dashboard trims.
+    assert_eq!(ask(&mut d, "ROBOTMODE\r\r"), "Robotmode: POWER_OFF");
+    drop(server);
+}
