@@ -113,7 +113,7 @@ mod world_set;
 
 pub use compile::{Preamble, Program};
 pub use controller::{Arm, World};
-pub use error::{ParseError, ParseErrorKind, RuntimeError, RuntimeErrorKind};
+pub use error::{ControllerCode, ParseError, ParseErrorKind, RuntimeError, RuntimeErrorKind};
 pub use event::{
     CallRecord, Event, Message, MessageKind, MoveEnd, MoveOutcome, MoveStart, Outcome, OutputValue,
     OutputWrite, ReadRecord,
