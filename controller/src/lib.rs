@@ -129,6 +129,7 @@
 
 mod cell;
 mod dashboard;
+mod lines;
 #[cfg(feature = "net")]
 pub mod net;
 pub mod primary;

@@ -42,8 +42,8 @@
 use std::fmt;
 
 use urscript_interp::{TopLevel, UnitKind};
-use urscript_socket::line::LineDecoder;
-use urscript_socket::Status;
+
+use crate::lines::{Event, LineReader};
 
 /// The longest line accepted, in bytes (without its `\n`): 64 KiB.
 pub const MAX_LINE: usize = 64 * 1024;
@@ -128,11 +128,9 @@ struct Block {
 }
 
 /// The incremental parser. See the [module](self) documentation.
-#[derive(Debug, Clone)]
 pub struct ScriptIntake {
-    lines: LineDecoder,
-    /// The start of a line whose `\n` has not arrived (at most [`MAX_LINE`] bytes).
-    pending: Vec<u8>,
+    /// The lines; holds less than one line ([`MAX_LINE`]) and one read between calls.
+    lines: LineReader,
     units: TopLevel,
     block: Option<Block>,
 }
@@ -140,11 +138,19 @@ pub struct ScriptIntake {
 impl Default for ScriptIntake {
     fn default() -> Self {
         ScriptIntake {
-            lines: LineDecoder::with_max_len(MAX_LINE),
-            pending: Vec::new(),
+            lines: LineReader::new(MAX_LINE, 0),
             units: TopLevel::new(),
             block: None,
         }
+    }
+}
+
+impl fmt::Debug for ScriptIntake {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.debug_struct("ScriptIntake")
+            .field("pending", &self.is_pending())
+            .field("block", &self.block)
+            .finish()
     }
 }
 
@@ -175,7 +181,7 @@ impl ScriptIntake {
 
     /// Whether a partial line or an unfinished program is pending.
     pub fn is_pending(&self) -> bool {
-        !self.pending.is_empty() || self.lines.is_discarding() || self.block.is_some()
+        self.lines.is_pending() || self.block.is_some()
     }
 
     /// Feeds bytes; returns what they completed, in order. Any split of the same bytes
@@ -183,128 +189,106 @@ impl ScriptIntake {
     pub fn push(&mut self, bytes: &[u8]) -> Vec<Result<Intake, IntakeError>> {
         let mut out = Vec::new();
         let mut rest = bytes;
-        loop {
-            // A held line start is topped up with no more than can complete it (or make
-            // it too long); otherwise the new bytes are decoded where they are.
-            let held = self.pending.len();
-            let took = if held > 0 {
-                let take = rest.len().min((MAX_LINE + 1).saturating_sub(held));
-                self.pending.extend_from_slice(&rest[..take]);
-                take
-            } else {
-                0
-            };
-            let data: &[u8] = if held > 0 { &self.pending } else { rest };
-            let (line, used, more) = match self.lines.decode(data) {
-                Ok(Status::Complete { item, consumed, .. }) => (
-                    Some(Ok(String::from_utf8_lossy(item).into_owned())),
-                    consumed,
-                    true,
-                ),
-                Ok(Status::Partial { consumed }) => (None, consumed, false),
-                // A line decoder's one error: the line is too long.
-                Err(e) => (Some(Err(IntakeError::LineTooLong)), e.skip(), true),
-            };
-            if held > 0 {
-                if used >= held {
-                    rest = &rest[(used - held).min(rest.len())..];
-                    self.pending.clear();
-                } else {
-                    self.pending.drain(..used);
-                    rest = &rest[took..];
+        let ScriptIntake {
+            lines,
+            units,
+            block,
+        } = self;
+        // Reading from a slice cannot fail.
+        while lines.read_from(&mut rest).unwrap_or(0) > 0 {
+            let _ = lines.drain(|event| {
+                match event {
+                    Event::Line(line) => {
+                        let text = String::from_utf8_lossy(line).into_owned();
+                        complete_line(units, block, text, &mut out);
+                    }
+                    Event::TooLong(_) => {
+                        out.push(Err(IntakeError::LineTooLong));
+                        too_long(block);
+                    }
+                    Event::LongEnded(_) => {}
                 }
-            } else {
-                rest = &rest[used.min(rest.len())..];
-                if !more {
-                    // The start of a line, at most MAX_LINE bytes (the decoder reports a
-                    // longer one), or nothing while a too-long one is dropped.
-                    self.pending.extend_from_slice(rest);
-                    rest = &[];
-                }
-            }
-            match line {
-                Some(Ok(text)) => self.complete_line(text, &mut out),
-                Some(Err(e)) => {
-                    out.push(Err(e));
-                    self.too_long();
-                }
-                None => {}
-            }
-            if !more && rest.is_empty() {
-                return out;
-            }
+                Ok::<(), ()>(())
+            });
         }
+        out
     }
+}
 
-    /// The current line went over [`MAX_LINE`]: it is dropped, and with it the program
-    /// it is in, which is read on to its end (its blocks still counted: the dropped line
-    /// neither opens nor closes one).
-    fn too_long(&mut self) {
-        if let Some(b) = &mut self.block {
-            if !b.dropping {
-                b.dropping = true;
-                b.source = String::new();
-            }
-        }
-    }
-
-    fn complete_line(&mut self, line: String, out: &mut Vec<Result<Intake, IntakeError>>) {
-        if self.block.is_none() {
-            if let Some(c) = command(&line) {
-                out.push(Ok(Intake::Command(c)));
-                return;
-            }
-        }
-        let step = self.units.line(&line);
-        let b = match (&mut self.block, step.starts) {
-            (Some(b), _) => b,
-            (None, None) => return,
-            (None, Some(kind)) => self.block.insert(Block {
-                kind,
-                source: String::new(),
-                dropping: false,
-            }),
-        };
+/// The current line went over [`MAX_LINE`]: it is dropped, and with it the program
+/// it is in, which is read on to its end (its blocks still counted: the dropped line
+/// neither opens nor closes one).
+fn too_long(block: &mut Option<Block>) {
+    if let Some(b) = block {
         if !b.dropping {
-            if b.source.len() + line.len() + 1 > MAX_PROGRAM {
-                b.dropping = true;
-                b.source = String::new();
-                out.push(Err(IntakeError::ProgramTooLong {
-                    name: match &b.kind {
-                        UnitKind::Def(name) | UnitKind::Sec(name) => name.clone(),
-                        _ => String::new(),
-                    },
-                }));
-            } else {
-                b.source.push_str(&line);
-                b.source.push('\n');
-            }
+            b.dropping = true;
+            b.source = String::new();
         }
-        if !step.ends {
-            return;
-        }
-        let Some(b) = self.block.take() else {
-            return;
-        };
-        if b.dropping {
-            return;
-        }
-        out.push(Ok(match b.kind {
-            UnitKind::Def(name) => Intake::Program {
-                name,
-                source: b.source,
-            },
-            UnitKind::Sec(name) => Intake::Secondary {
-                name,
-                source: b.source,
-            },
-            _ => {
-                let mut s = b.source;
-                if s.ends_with('\n') {
-                    s.pop();
-                }
-                Intake::Line(s)
-            }
-        }));
     }
+}
+
+/// One complete line: a command, part of a unit, or nothing (no code between units).
+fn complete_line(
+    units: &mut TopLevel,
+    block: &mut Option<Block>,
+    line: String,
+    out: &mut Vec<Result<Intake, IntakeError>>,
+) {
+    if block.is_none() {
+        if let Some(c) = command(&line) {
+            out.push(Ok(Intake::Command(c)));
+            return;
+        }
+    }
+    let step = units.line(&line);
+    let b = match (&mut *block, step.starts) {
+        (Some(b), _) => b,
+        (None, None) => return,
+        (None, Some(kind)) => block.insert(Block {
+            kind,
+            source: String::new(),
+            dropping: false,
+        }),
+    };
+    if !b.dropping {
+        if b.source.len() + line.len() + 1 > MAX_PROGRAM {
+            b.dropping = true;
+            b.source = String::new();
+            out.push(Err(IntakeError::ProgramTooLong {
+                name: match &b.kind {
+                    UnitKind::Def(name) | UnitKind::Sec(name) => name.clone(),
+                    _ => String::new(),
+                },
+            }));
+        } else {
+            b.source.push_str(&line);
+            b.source.push('\n');
+        }
+    }
+    if !step.ends {
+        return;
+    }
+    let Some(b) = block.take() else {
+        return;
+    };
+    if b.dropping {
+        return;
+    }
+    out.push(Ok(match b.kind {
+        UnitKind::Def(name) => Intake::Program {
+            name,
+            source: b.source,
+        },
+        UnitKind::Sec(name) => Intake::Secondary {
+            name,
+            source: b.source,
+        },
+        _ => {
+            let mut s = b.source;
+            if s.ends_with('\n') {
+                s.pop();
+            }
+            Intake::Line(s)
+        }
+    }));
 }

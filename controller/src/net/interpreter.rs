@@ -21,8 +21,8 @@ use std::time::Duration;
 
 use urscript_interp::interpreter::{Discard, Reply, MAX_LINE};
 
-use super::lines::{Event, LineReader};
 use super::{Activity, Counts, ServerEvent, Shared, WRITE_TIMEOUT};
+use crate::lines::{Event, LineReader};
 
 /// Interpreter connections served at once; more are accepted and closed at once. Each
 /// is a thread; a program in interpreter mode has one client as a rule, so 16 is ample

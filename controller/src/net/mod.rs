@@ -94,7 +94,6 @@ pub use clock::MAX_CATCH_UP;
 pub use priority::{Realtime, Scheduling, FIFO_PRIORITY, NICE};
 mod fetch;
 mod interpreter;
-mod lines;
 mod streams;
 
 use std::io::{ErrorKind, Write};
@@ -107,8 +106,8 @@ use std::time::Duration;
 
 use urscript_interp::{CallRecord, Message};
 
+use crate::lines::{Event, LineReader};
 use crate::{Cell, Config, Controller, Dashboard, DashboardCommand, Programs, Reply, MAX_LINE};
-use lines::{Event, LineReader};
 
 pub use fetch::{parse_host, MAX_FETCHED, MAX_FILE};
 pub use interpreter::{MAX_INTERPRETER_CONNECTIONS, POLL as INTERPRETER_POLL};

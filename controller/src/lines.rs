@@ -1,5 +1,5 @@
-//! The lines a dashboard or interpreter connection sends, cut by the core's
-//! [`LineDecoder`]: a line ends at `\n` and one `\r` before it is dropped; a line whose
+//! The lines a client sends (dashboard, interpreter socket, script on 30001-30003), cut
+//! by the core's [`LineDecoder`]: a line ends at `\n` and one `\r` before it is dropped; a line whose
 //! content (a `\r` before its `\n` included) goes past the bound is reported once, at the
 //! first byte past it, and the rest of it is dropped up to its `\n`.
 
@@ -8,13 +8,13 @@ use std::io::{self, Read};
 use urscript_socket::line::LineDecoder;
 use urscript_socket::{ErrorKind, RecvBuffer, Status};
 
-/// The most bytes one `read` from the socket takes: one page, the chunk the connection
-/// threads always read in.
-pub(super) const READ_CHUNK: usize = 4096;
+/// The most bytes one [`LineReader::read_from`] takes: one page, the chunk the
+/// connection threads read in.
+pub(crate) const READ_CHUNK: usize = 4096;
 
 /// What the received bytes hold, in stream order.
 #[derive(Debug, PartialEq, Eq)]
-pub(super) enum Event<'a> {
+pub(crate) enum Event<'a> {
     /// A complete line, without its `\n` and one `\r` before it.
     Line(&'a [u8]),
     /// A line went past the bound: its first bytes (at most the reader's `echo`). The
@@ -26,10 +26,11 @@ pub(super) enum Event<'a> {
 }
 
 /// One connection's received bytes and the line framing over them.
-pub(super) struct LineReader {
-    /// At most `max_len + 1 + READ_CHUNK` bytes: between reads it holds less than one
+pub(crate) struct LineReader {
+    /// `max_len + 1 + READ_CHUNK` bytes, allocated at the first read (a stream client
+    /// that never sends a script costs nothing): between reads it holds less than one
     /// line (a longer one is reported and dropped), and a read adds one chunk.
-    buf: RecvBuffer<Box<[u8]>>,
+    buf: Option<RecvBuffer<Box<[u8]>>>,
     lines: LineDecoder,
     max_len: usize,
     echo: usize,
@@ -40,9 +41,9 @@ pub(super) struct LineReader {
 impl LineReader {
     /// Lines of at most `max_len` bytes; a longer one is reported with its first `echo`
     /// bytes.
-    pub(super) fn new(max_len: usize, echo: usize) -> Self {
+    pub(crate) fn new(max_len: usize, echo: usize) -> Self {
         LineReader {
-            buf: RecvBuffer::with_capacity(max_len + 1 + READ_CHUNK),
+            buf: None,
             lines: LineDecoder::with_max_len(max_len),
             max_len,
             echo,
@@ -50,23 +51,35 @@ impl LineReader {
         }
     }
 
+    /// Whether part of a line is held, or a too-long line is being dropped.
+    pub(crate) fn is_pending(&self) -> bool {
+        self.buf.as_ref().is_some_and(|b| !b.is_empty()) || self.lines.is_discarding()
+    }
+
     /// Reads once from `from` (at most [`READ_CHUNK`] bytes); `Ok(0)` at end of input.
-    pub(super) fn read_from(&mut self, from: &mut impl Read) -> io::Result<usize> {
-        let spare = self.buf.spare();
+    pub(crate) fn read_from(&mut self, from: &mut impl Read) -> io::Result<usize> {
+        let capacity = self.max_len + 1 + READ_CHUNK;
+        let buf = self
+            .buf
+            .get_or_insert_with(|| RecvBuffer::with_capacity(capacity));
+        let spare = buf.spare();
         let room = spare.len().min(READ_CHUNK);
         let n = from.read(&mut spare[..room])?;
-        self.buf.commit(n);
+        buf.commit(n);
         Ok(n)
     }
 
     /// Hands every event the bytes received so far complete to `f`, in order; stops at
     /// the first error `f` returns.
-    pub(super) fn drain<E>(
+    pub(crate) fn drain<E>(
         &mut self,
         mut f: impl FnMut(Event<'_>) -> Result<(), E>,
     ) -> Result<(), E> {
+        let Some(buf) = &mut self.buf else {
+            return Ok(());
+        };
         loop {
-            let data = self.buf.data();
+            let data = buf.data();
             match self.lines.decode(data) {
                 Ok(Status::Complete { item, consumed, at }) => {
                     let ended = self
@@ -76,11 +89,11 @@ impl LineReader {
                     let r = ended
                         .map_or(Ok(()), &mut f)
                         .and_then(|()| f(Event::Line(item)));
-                    self.buf.consume(consumed);
+                    buf.consume(consumed);
                     r?;
                 }
                 Ok(Status::Partial { consumed }) => {
-                    self.buf.consume(consumed);
+                    buf.consume(consumed);
                     if let Some(start) = self.long {
                         if !self.lines.is_discarding() {
                             self.long = None;
@@ -103,7 +116,7 @@ impl LineReader {
                         // A line decoder has no other error.
                         _ => Ok(()),
                     };
-                    self.buf.consume(skip);
+                    buf.consume(skip);
                     r?;
                 }
             }
