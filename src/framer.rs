@@ -976,6 +976,24 @@ impl<P: Parse> FrameDecoder<P> {
         self.framer.position()
     }
 
+    /// Whether the rest of an over-long message is being dropped: after its
+    /// [`TooLong`](ErrorKind::TooLong) error and until its close (a line's LF) has been
+    /// consumed. A caller that reports how long the dropped message was reads
+    /// [`position`](Self::position) once this turns false.
+    ///
+    /// ```
+    /// # use urscript_socket::{line::LineDecoder, Status};
+    /// let mut d = LineDecoder::with_max_len(2);
+    /// assert!(d.decode(b"abc").is_err());
+    /// assert!(d.is_discarding());
+    /// assert_eq!(d.decode(b"cde\n").unwrap(), Status::Partial { consumed: 4 });
+    /// assert!(!d.is_discarding());
+    /// assert_eq!(d.position(), 6); // the dropped line was 5 bytes and its LF
+    /// ```
+    pub fn is_discarding(&self) -> bool {
+        matches!(self.framer.scan.state, State::Discarding)
+    }
+
     /// The parse step, its error offsets made absolute; the frame's bytes are consumed
     /// either way (a malformed message is dropped whole).
     #[inline(always)]

@@ -37,7 +37,9 @@ use std::time::Duration;
 
 use urscript_interp::interpreter::{self, Command, Discard};
 use urscript_interp::kinematics;
-use urscript_interp::{Arm, Event, Machine, Preamble, Program, RuntimeError, State};
+use urscript_interp::{
+    Arm, ControllerCode, Event, Machine, Preamble, Program, RuntimeError, State,
+};
 
 use crate::state::{Controller, ProgramState};
 use crate::status::{Inputs, Status};
@@ -858,9 +860,17 @@ fn parse(text: &str, preamble: Option<&Preamble>) -> Result<Program, CellEvent> 
         Some(p) => Program::parse_with_preamble(p, text),
         None => Program::parse(text),
     }
-    .map_err(|e| CellEvent::Refused {
-        line: e.line(),
-        column: e.column(),
-        text: format!("syntax_error_on_line:{}:{}", e.line(), e.message()),
+    .map_err(|e| {
+        let text = match e.code() {
+            // The code, then what was wrong (the controller names the token).
+            code @ ControllerCode::SyntaxErrorOnLine { .. } => format!("{code}{}", e.message()),
+            // A code of its own: the interpreter's message, which names it.
+            _ => e.message().to_string(),
+        };
+        CellEvent::Refused {
+            line: e.line(),
+            column: e.column(),
+            text,
+        }
     })
 }

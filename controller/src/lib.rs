@@ -130,6 +130,7 @@
 
 mod cell;
 mod dashboard;
+mod lines;
 #[cfg(feature = "net")]
 pub mod net;
 mod operator;
@@ -142,7 +143,9 @@ mod status;
 pub mod urp;
 
 pub use cell::{Cell, CellEvent, Ended, Submitted, MAX_EVENTS};
-pub use dashboard::{Dashboard, Reply, GREETING, LOCAL_CONTROL, MAX_LINE, UNLOCK_TOO_EARLY};
+pub use dashboard::{
+    Dashboard, DashboardCommand, Reply, GREETING, LOCAL_CONTROL, MAX_LINE, UNLOCK_TOO_EARLY,
+};
 pub use operator::{operator_help, OperatorCommand, OperatorError, OPERATOR_COMMANDS};
 pub use rtde::{
     rtde_controller_version, rtde_input_type, rtde_max_frequency, rtde_output_type, InputRegistry,

@@ -14,12 +14,13 @@
 //!   `set unlock protective stop`, `stop program`, and `set speed` with the slider
 //!   fraction (`set speed0.5` or `set speed 0.5`).
 //!
-//! Blocks are counted line by line: a line whose first word is `def`, `sec`, `thread`,
-//! `if`, `while` or `for` opens one, a line whose first word is `end` closes one (a line
-//! may only start with such a word outside a string or a comment, so `textmsg("end")`
-//! and `# end` close nothing). The program ends with the `end` that brings the count back
-//! to zero. Lines end at `\n`; a `\r` before it is dropped; blank and comment-only lines
-//! outside a program are skipped.
+//! Where a unit ends is the interpreter's call ([`urscript_interp::TopLevel`]): its
+//! lexer reads each line, so words in strings and comments (`textmsg("end")`, `# end`)
+//! open and close nothing, and a unit ends with the line that closes the last block it
+//! opened (`def`, `sec`, `thread`, `if`, `while`, each closed by `end`; `if x: y() end`
+//! on one line opens and closes one). The lines themselves are cut by the core's
+//! [`LineDecoder`]: a line ends at `\n` and one `\r` before it is dropped. Lines with no
+//! code (blanks, comments, `$` step markers) outside a program are skipped.
 //!
 //! # Bounds
 //!
@@ -39,6 +40,10 @@
 //! ```
 
 use std::fmt;
+
+use urscript_interp::{TopLevel, UnitKind};
+
+use crate::lines::{Event, LineReader};
 
 /// The longest line accepted, in bytes (without its `\n`): 64 KiB.
 pub const MAX_LINE: usize = 64 * 1024;
@@ -114,86 +119,39 @@ impl fmt::Display for IntakeError {
 
 impl std::error::Error for IntakeError {}
 
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-enum BlockKind {
-    Def,
-    Sec,
-    Bare,
-}
-
 #[derive(Debug, Clone)]
 struct Block {
-    kind: BlockKind,
-    name: String,
+    kind: UnitKind,
     source: String,
-    depth: usize,
-    /// Over the bound: counting blocks to the end, keeping nothing.
+    /// Over the bound: reading on to the unit's end, keeping nothing.
     dropping: bool,
 }
 
 /// The incremental parser. See the [module](self) documentation.
-#[derive(Debug, Clone, Default)]
 pub struct ScriptIntake {
-    line: Vec<u8>,
-    /// The current line went over [`MAX_LINE`]: skip to its `\n`.
-    skipping: bool,
+    /// The lines; holds less than one line ([`MAX_LINE`]) and one read between calls.
+    lines: LineReader,
+    units: TopLevel,
     block: Option<Block>,
 }
 
-/// How a line's first word affects the block count.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-enum Word {
-    Opens,
-    Closes,
-    Other,
-}
-
-/// The code of a line: up to a `#` outside a string.
-fn code_of(line: &str) -> &str {
-    let mut quote: Option<char> = None;
-    let mut escaped = false;
-    for (i, c) in line.char_indices() {
-        match quote {
-            Some(q) => {
-                if escaped {
-                    escaped = false;
-                } else if c == '\\' {
-                    escaped = true;
-                } else if c == q {
-                    quote = None;
-                }
-            }
-            None => match c {
-                '"' | '\'' => quote = Some(c),
-                '#' => return &line[..i],
-                _ => {}
-            },
+impl Default for ScriptIntake {
+    fn default() -> Self {
+        ScriptIntake {
+            lines: LineReader::new(MAX_LINE, 0),
+            units: TopLevel::new(),
+            block: None,
         }
     }
-    line
 }
 
-/// The leading identifier of a trimmed code line.
-fn first_word(code: &str) -> &str {
-    let end = code
-        .find(|c: char| !(c.is_ascii_alphanumeric() || c == '_'))
-        .unwrap_or(code.len());
-    &code[..end]
-}
-
-fn classify(code: &str) -> Word {
-    match first_word(code.trim_start()) {
-        "def" | "sec" | "thread" | "if" | "while" | "for" => Word::Opens,
-        "end" => Word::Closes,
-        _ => Word::Other,
+impl fmt::Debug for ScriptIntake {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.debug_struct("ScriptIntake")
+            .field("pending", &self.is_pending())
+            .field("block", &self.block)
+            .finish()
     }
-}
-
-/// The name after `def `/`sec ` in a trimmed code line.
-fn block_name(code: &str) -> String {
-    let rest = code.trim_start();
-    let rest = rest.get(3..).unwrap_or("").trim_start();
-    first_word(rest).to_string()
 }
 
 fn command(line: &str) -> Option<Command> {
@@ -223,7 +181,7 @@ impl ScriptIntake {
 
     /// Whether a partial line or an unfinished program is pending.
     pub fn is_pending(&self) -> bool {
-        !self.line.is_empty() || self.skipping || self.block.is_some()
+        self.lines.is_pending() || self.block.is_some()
     }
 
     /// Feeds bytes; returns what they completed, in order. Any split of the same bytes
@@ -231,128 +189,106 @@ impl ScriptIntake {
     pub fn push(&mut self, bytes: &[u8]) -> Vec<Result<Intake, IntakeError>> {
         let mut out = Vec::new();
         let mut rest = bytes;
-        while !rest.is_empty() {
-            let (chunk, newline) = match rest.iter().position(|&b| b == b'\n') {
-                Some(i) => (&rest[..i], Some(i)),
-                None => (rest, None),
-            };
-            if !self.skipping {
-                if self.line.len() + chunk.len() > MAX_LINE {
-                    self.line.clear();
-                    self.skipping = true;
-                    out.push(Err(IntakeError::LineTooLong));
-                    if let Some(b) = &mut self.block {
-                        if !b.dropping {
-                            b.dropping = true;
-                            b.source = String::new();
-                        }
+        let ScriptIntake {
+            lines,
+            units,
+            block,
+        } = self;
+        // Reading from a slice cannot fail.
+        while lines.read_from(&mut rest).unwrap_or(0) > 0 {
+            let _ = lines.drain(|event| {
+                match event {
+                    Event::Line(line) => {
+                        let text = String::from_utf8_lossy(line).into_owned();
+                        complete_line(units, block, text, &mut out);
                     }
-                } else {
-                    self.line.extend_from_slice(chunk);
-                }
-            }
-            match newline {
-                Some(i) => {
-                    rest = &rest[i + 1..];
-                    if self.skipping {
-                        // The dropped line neither opens nor closes a block.
-                        self.skipping = false;
-                    } else {
-                        let mut line = std::mem::take(&mut self.line);
-                        if line.last() == Some(&b'\r') {
-                            line.pop();
-                        }
-                        let text = String::from_utf8_lossy(&line).into_owned();
-                        self.complete_line(text, &mut out);
+                    Event::TooLong(_) => {
+                        out.push(Err(IntakeError::LineTooLong));
+                        too_long(block);
                     }
+                    Event::LongEnded(_) => {}
                 }
-                None => rest = &[],
-            }
+                Ok::<(), ()>(())
+            });
         }
         out
     }
+}
 
-    fn complete_line(&mut self, line: String, out: &mut Vec<Result<Intake, IntakeError>>) {
-        let code = code_of(&line);
-        let word = classify(code);
-        match &mut self.block {
-            Some(b) => {
-                match word {
-                    Word::Opens => b.depth += 1,
-                    Word::Closes => b.depth = b.depth.saturating_sub(1),
-                    Word::Other => {}
-                }
-                if !b.dropping {
-                    if b.source.len() + line.len() + 1 > MAX_PROGRAM {
-                        b.dropping = true;
-                        b.source = String::new();
-                        out.push(Err(IntakeError::ProgramTooLong {
-                            name: b.name.clone(),
-                        }));
-                    } else {
-                        b.source.push_str(&line);
-                        b.source.push('\n');
-                    }
-                }
-                if b.depth == 0 {
-                    if let Some(b) = self.block.take() {
-                        if !b.dropping {
-                            out.push(Ok(match b.kind {
-                                BlockKind::Def => Intake::Program {
-                                    name: b.name,
-                                    source: b.source,
-                                },
-                                BlockKind::Sec => Intake::Secondary {
-                                    name: b.name,
-                                    source: b.source,
-                                },
-                                BlockKind::Bare => {
-                                    let mut s = b.source;
-                                    if s.ends_with('\n') {
-                                        s.pop();
-                                    }
-                                    Intake::Line(s)
-                                }
-                            }));
-                        }
-                    }
-                }
-            }
-            None => {
-                if code.trim().is_empty() {
-                    return;
-                }
-                if let Some(c) = command(code) {
-                    out.push(Ok(Intake::Command(c)));
-                    return;
-                }
-                if word != Word::Opens {
-                    // A stray `end` at the top level is passed on as a line: the
-                    // controller reports it as a syntax error.
-                    out.push(Ok(Intake::Line(line)));
-                    return;
-                }
-                let first = first_word(code.trim_start());
-                let kind = match first {
-                    "def" => BlockKind::Def,
-                    "sec" => BlockKind::Sec,
-                    _ => BlockKind::Bare,
-                };
-                let name = if kind == BlockKind::Bare {
-                    String::new()
-                } else {
-                    block_name(code)
-                };
-                let mut source = line;
-                source.push('\n');
-                self.block = Some(Block {
-                    kind,
-                    name,
-                    source,
-                    depth: 1,
-                    dropping: false,
-                });
-            }
+/// The current line went over [`MAX_LINE`]: it is dropped, and with it the program
+/// it is in, which is read on to its end (its blocks still counted: the dropped line
+/// neither opens nor closes one).
+fn too_long(block: &mut Option<Block>) {
+    if let Some(b) = block {
+        if !b.dropping {
+            b.dropping = true;
+            b.source = String::new();
         }
     }
+}
+
+/// One complete line: a command, part of a unit, or nothing (no code between units).
+fn complete_line(
+    units: &mut TopLevel,
+    block: &mut Option<Block>,
+    line: String,
+    out: &mut Vec<Result<Intake, IntakeError>>,
+) {
+    if block.is_none() {
+        if let Some(c) = command(&line) {
+            out.push(Ok(Intake::Command(c)));
+            return;
+        }
+    }
+    let step = units.line(&line);
+    let b = match (&mut *block, step.starts) {
+        (Some(b), _) => b,
+        (None, None) => return,
+        (None, Some(kind)) => block.insert(Block {
+            kind,
+            source: String::new(),
+            dropping: false,
+        }),
+    };
+    if !b.dropping {
+        if b.source.len() + line.len() + 1 > MAX_PROGRAM {
+            b.dropping = true;
+            b.source = String::new();
+            out.push(Err(IntakeError::ProgramTooLong {
+                name: match &b.kind {
+                    UnitKind::Def(name) | UnitKind::Sec(name) => name.clone(),
+                    _ => String::new(),
+                },
+            }));
+        } else {
+            b.source.push_str(&line);
+            b.source.push('\n');
+        }
+    }
+    if !step.ends {
+        return;
+    }
+    let Some(b) = block.take() else {
+        return;
+    };
+    if b.dropping {
+        return;
+    }
+    out.push(Ok(match b.kind {
+        UnitKind::Def(name) => Intake::Program {
+            name,
+            source: b.source,
+        },
+        UnitKind::Sec(name) => Intake::Secondary {
+            name,
+            source: b.source,
+        },
+        _ => {
+            let mut s = b.source;
+            if s.ends_with('\n') {
+                s.pop();
+            }
+            Intake::Line(s)
+        }
+    }));
 }

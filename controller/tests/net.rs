@@ -235,3 +235,43 @@ fn a_stop_before_the_loops_first_step_is_a_change_of_state() {
     );
     server.stop();
 }
+
+/// The dashboard's framing over TCP: a line of more than 4096 bytes (a `\r` before its
+/// `\n` counted) is answered as soon as the bound is passed, with its first 40 bytes,
+/// and dropped to its `\n`, however it arrives; one `\r` before the `\n` is dropped;
+/// the event shows the first 40 characters.
+#[test]
+fn dashboard_lines_long_split_and_with_cr() {
+    let (server, events) = start();
+    let mut d = LineClient::dashboard(&server);
+    let long = |n: usize| "é".repeat(n / 2);
+    let too_long = format!(
+        "could not understand: '{}...' (a command line is at most 4096 bytes)",
+        "é".repeat(20)
+    );
+    // 4096 bytes of content and a CR: past the bound, answered before its LF.
+    d.writer
+        .write_all(format!("{}\r", long(4096)).as_bytes())
+        .unwrap();
+    assert_eq!(d.read_line(), too_long);
+    let shown = format!("{}...", "é".repeat(40));
+    wait_for(
+        &events,
+        |e| matches!(e, ServerEvent::Dashboard { command, .. } if *command == shown),
+    );
+    // The rest of it (in pieces) is dropped; the next line is answered.
+    for piece in ["ééé", "é\r", "\nrobotmode\r", "\n"] {
+        d.writer.write_all(piece.as_bytes()).unwrap();
+        std::thread::sleep(Duration::from_millis(5));
+    }
+    assert_eq!(d.read_line(), "Robotmode: POWER_OFF");
+    // 4094 bytes and a CR fit: an unknown command, echoed whole, without its CR.
+    let fits = long(4094);
+    assert_eq!(
+        d.say(&format!("{fits}\r")),
+        format!("could not understand: '{fits}'")
+    );
+    // Two CRs: one is dropped, the other is a blank the dashboard trims.
+    assert_eq!(d.say("ROBOTMODE\r\r"), "Robotmode: POWER_OFF");
+    drop(server);
+}

@@ -74,11 +74,29 @@ fn end_in_strings_and_comments_closes_nothing() {
                \x20 s = \"if x:\" # while\n\
                \x20 t = \"a # end\"\n\
                \x20 u = 'end'\n\
-               \x20 v = \"escaped \\\" end\"\n\
+               \x20 v = \"quote ' end\" + 'a \" end'\n\
+               \x20 w = s.end\n\
                \x20 endless = 1\n\
                \x20 if_x = 2\n\
                end\n";
     assert_eq!(all(src.as_bytes()), vec![program("p", src)]);
+}
+
+/// Where a program ends is the interpreter's lexer's call: a block opened and closed on
+/// one line (`if x: y = 1 end`, as the parser accepts it) leaves the count as it was, a
+/// `$` step marker is no code.
+#[test]
+fn blocks_on_one_line_and_markers_as_the_interpreter_reads_them() {
+    let src = "def p():\n  if x: y = 1 end\n  while False: sync() end\nend\n";
+    assert_eq!(
+        all(format!("{src}textmsg(1)\n").as_bytes()),
+        vec![program("p", src), line("textmsg(1)")]
+    );
+    // At the top level a one-line block is one unit, and what follows is read afresh.
+    assert_eq!(
+        all(b"if True: textmsg(1) end\n$ 1 \"Robot Program\"\ntextmsg(2)\n"),
+        vec![line("if True: textmsg(1) end"), line("textmsg(2)")]
+    );
 }
 
 #[test]

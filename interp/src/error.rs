@@ -4,6 +4,44 @@
 
 use std::fmt;
 
+/// The code UR's controller gives a program it refuses: what the text of its runtime
+/// exception starts with (URSim sends `compile_error_name_not_found:txtmsg:` and
+/// `syntax_error_on_line:2:end:`). [`Display`](fmt::Display) writes that text.
+///
+/// ```
+/// use urscript_interp::{ControllerCode, Program};
+/// let e = Program::parse("x = (1 +\n").unwrap_err();
+/// assert_eq!(e.code(), ControllerCode::SyntaxErrorOnLine { line: 2 });
+/// assert_eq!(e.code().to_string(), "syntax_error_on_line:2:");
+/// ```
+#[derive(Debug, Clone, PartialEq, Eq)]
+#[non_exhaustive]
+pub enum ControllerCode {
+    /// `compile_error_name_not_found:NAME:`: a name that is neither defined, built in,
+    /// stubbed, nor assigned where it is read.
+    NameNotFound {
+        /// The name.
+        name: String,
+    },
+    /// `syntax_error_on_line:LINE:`: the text does not parse (or does not compile for a
+    /// reason with no code of its own).
+    SyntaxErrorOnLine {
+        /// The 1-based line.
+        line: u32,
+    },
+}
+
+impl fmt::Display for ControllerCode {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            ControllerCode::NameNotFound { name } => {
+                write!(f, "compile_error_name_not_found:{name}:")
+            }
+            ControllerCode::SyntaxErrorOnLine { line } => write!(f, "syntax_error_on_line:{line}:"),
+        }
+    }
+}
+
 /// Which stage refused the program.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 #[non_exhaustive]
@@ -34,6 +72,7 @@ pub struct ParseError {
     line: u32,
     column: u32,
     message: String,
+    code: Option<ControllerCode>,
 }
 
 impl ParseError {
@@ -47,7 +86,24 @@ impl ParseError {
             line,
             column,
             message,
+            code: None,
         }
+    }
+
+    /// The same error with the controller's `code` for it.
+    pub(crate) fn with_code(mut self, code: ControllerCode) -> Self {
+        self.code = Some(code);
+        self
+    }
+
+    /// The controller's code for this error: its own where it has one
+    /// ([`NameNotFound`](ControllerCode::NameNotFound)), else
+    /// [`SyntaxErrorOnLine`](ControllerCode::SyntaxErrorOnLine) at its line, as the
+    /// controller refuses a program that does not parse.
+    pub fn code(&self) -> ControllerCode {
+        self.code
+            .clone()
+            .unwrap_or(ControllerCode::SyntaxErrorOnLine { line: self.line })
     }
 
     /// Syntax or compile error.
@@ -127,6 +183,7 @@ pub struct RuntimeError {
     line: u32,
     column: u32,
     message: String,
+    code: Option<ControllerCode>,
 }
 
 impl RuntimeError {
@@ -137,6 +194,7 @@ impl RuntimeError {
             line,
             column: 1,
             message: message.into(),
+            code: None,
         }
     }
 
@@ -147,7 +205,15 @@ impl RuntimeError {
             line,
             column,
             message: fault.message,
+            code: fault.code,
         }
+    }
+
+    /// The controller's code for this error, if it has one: a program that fails the
+    /// compile check (a name neither defined, built in, stubbed nor assigned) does not
+    /// start, with [`NameNotFound`](ControllerCode::NameNotFound).
+    pub fn code(&self) -> Option<&ControllerCode> {
+        self.code.as_ref()
     }
 
     /// What kind of failure.
@@ -177,13 +243,21 @@ impl RuntimeError {
 pub(crate) struct Fault {
     pub kind: RuntimeErrorKind,
     pub message: String,
+    /// The controller's code, for a fault of the compile check.
+    pub code: Option<ControllerCode>,
 }
+
+/// What the message of a compile-check fault starts with, before the name and a `:`.
+const NAME_NOT_FOUND: &str = "compile_error_name_not_found:";
 
 impl Fault {
     pub fn new(kind: RuntimeErrorKind, message: impl Into<String>) -> Self {
+        let message = message.into();
+        let code = compile_check_code(kind, &message);
         Fault {
             kind,
-            message: message.into(),
+            message,
+            code,
         }
     }
 
@@ -214,3 +288,68 @@ impl fmt::Display for RuntimeError {
 }
 
 impl std::error::Error for RuntimeError {}
+
+/// The code of a fault the machine's compile check makes: an unknown function or
+/// variable whose message it writes as `compile_error_name_not_found:NAME: why`. Read
+/// once, here, where the fault is made, so that users of the error get the code typed
+/// ([`RuntimeError::code`]) and never cut it out of the text.
+fn compile_check_code(kind: RuntimeErrorKind, message: &str) -> Option<ControllerCode> {
+    if !matches!(
+        kind,
+        RuntimeErrorKind::UnknownFunction | RuntimeErrorKind::UnknownVariable
+    ) {
+        return None;
+    }
+    let (name, _) = message.strip_prefix(NAME_NOT_FOUND)?.split_once(':')?;
+    let is_name = !name.is_empty() && name.bytes().all(|b| b.is_ascii_alphanumeric() || b == b'_');
+    is_name.then(|| ControllerCode::NameNotFound {
+        name: name.to_string(),
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_compile_checks_faults_carry_their_code() {
+        let f = Fault::new(
+            RuntimeErrorKind::UnknownFunction,
+            "compile_error_name_not_found:rq_open: `rq_open` is neither defined",
+        );
+        let e = RuntimeError::at(3, 5, f);
+        assert_eq!(
+            e.code(),
+            Some(&ControllerCode::NameNotFound {
+                name: "rq_open".into()
+            })
+        );
+        assert_eq!(
+            e.code().map(ToString::to_string).as_deref(),
+            Some("compile_error_name_not_found:rq_open:")
+        );
+        // Other faults have none, whatever their text says.
+        for (kind, text) in [
+            (
+                RuntimeErrorKind::Argument,
+                "compile_error_name_not_found:x: no",
+            ),
+            (RuntimeErrorKind::UnknownVariable, "unknown variable `x`"),
+            (
+                RuntimeErrorKind::UnknownFunction,
+                "compile_error_name_not_found::",
+            ),
+        ] {
+            assert_eq!(RuntimeError::at(1, 1, Fault::new(kind, text)).code(), None);
+        }
+    }
+
+    #[test]
+    fn parse_errors_are_syntax_errors_unless_they_say_otherwise() {
+        let e = ParseError::new(4, 2, "expected `:`".into());
+        assert_eq!(e.code(), ControllerCode::SyntaxErrorOnLine { line: 4 });
+        let e = ParseError::with_kind(ParseErrorKind::Compile, 1, 1, "x".into())
+            .with_code(ControllerCode::NameNotFound { name: "y".into() });
+        assert_eq!(e.code().to_string(), "compile_error_name_not_found:y:");
+    }
+}

@@ -191,11 +191,12 @@ pub mod machine {
 }
 
 pub use controller::{Arm, World};
-pub use error::{ParseError, ParseErrorKind, RuntimeError, RuntimeErrorKind};
+pub use error::{ControllerCode, ParseError, ParseErrorKind, RuntimeError, RuntimeErrorKind};
 pub use event::{
     CallRecord, Event, Message, MessageKind, MoveEnd, MoveOutcome, MoveStart, Outcome, OutputValue,
     OutputWrite, ReadRecord,
 };
+pub use syntax::lexer::{top_level_end, TopLevel, UnitKind, UnitLine};
 pub use machine::{Config, Machine, State, Stub};
 pub use sockets::{Policy, Timeout};
 pub use syntax::compile::{Preamble, Program};

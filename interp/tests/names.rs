@@ -3,7 +3,7 @@
 //! (`compile_error_name_not_found`); everything a real program may do still runs.
 use std::time::Duration;
 
-use urscript_interp::{Config, Event, Machine, Program, RuntimeErrorKind, State};
+use urscript_interp::{Config, ControllerCode, Event, Machine, Program, RuntimeErrorKind, State};
 
 /// The machine before any step: its state, and the messages after running 1 s.
 fn run(src: &str) -> (State, State, Vec<String>) {
@@ -32,6 +32,11 @@ fn refused(src: &str, name: &str, line: u32, col: u32) {
         "{src}: {e}"
     );
     assert_eq!((e.line(), e.column()), (line, col), "{src}: {e}");
+    assert_eq!(
+        e.code(),
+        Some(&ControllerCode::NameNotFound { name: name.into() }),
+        "{src}: {e}"
+    );
     // Nothing ran.
     assert!(msgs.is_empty(), "{src}: {msgs:?}");
 }
@@ -80,6 +85,10 @@ fn a_name_never_assigned_is_refused_before_anything_runs() {
     assert!(e
         .message()
         .starts_with("compile_error_name_not_found:rq_activate:"));
+    assert_eq!(
+        e.code().map(ToString::to_string).as_deref(),
+        Some("compile_error_name_not_found:rq_activate:")
+    );
 }
 
 #[test]

@@ -15,13 +15,14 @@
 //! - A line held behind a `clear_interpreter()` is answered when the program has run the
 //!   clear: the connection looks for such answers every [`POLL`].
 
-use std::io::{ErrorKind, Read, Write};
+use std::io::{ErrorKind, Write};
 use std::net::TcpStream;
 use std::time::Duration;
 
 use urscript_interp::interpreter::{Discard, Reply, MAX_LINE};
 
 use super::{Activity, Counts, ServerEvent, Shared, WRITE_TIMEOUT};
+use crate::lines::{Event, LineReader};
 
 /// Interpreter connections served at once; more are accepted and closed at once. Each
 /// is a thread; a program in interpreter mode has one client as a rule, so 16 is ample
@@ -118,11 +119,9 @@ fn session(
         Ok(r) => r,
         Err(_) => return "cannot read",
     };
-    let mut chunk = [0u8; 4096];
-    // The line so far (at most MAX_LINE bytes); `long`: the length of a line past
-    // MAX_LINE being skipped to its end (its first ECHO bytes kept in `line`).
-    let mut line: Vec<u8> = Vec::new();
-    let mut long: Option<usize> = None;
+    let mut lines = LineReader::new(MAX_LINE, ECHO);
+    // The first bytes of the too-long line being dropped, answered when it ends.
+    let mut long: Vec<u8> = Vec::new();
     loop {
         if shared.stopped() {
             return "the server stopped";
@@ -133,9 +132,9 @@ fn session(
                 return "write failed: the client is not reading";
             }
         }
-        let n = match reader.read(&mut chunk) {
+        match lines.read_from(&mut reader) {
             Ok(0) => return "client closed",
-            Ok(n) => n,
+            Ok(n) => *rx += n as u64,
             Err(e)
                 if matches!(
                     e.kind(),
@@ -145,33 +144,29 @@ fn session(
                 continue
             }
             Err(_) => return "read failed",
-        };
+        }
         activity.touch(shared);
-        *rx += n as u64;
-        let mut rest = &chunk[..n];
-        while !rest.is_empty() {
-            let end = rest.iter().position(|&b| b == b'\n');
-            let part = &rest[..end.unwrap_or(rest.len())];
-            rest = match end {
-                Some(i) => &rest[i + 1..],
-                None => &[],
-            };
-            if let Some(len) = long.as_mut() {
-                *len += part.len();
-            } else if line.len() + part.len() > MAX_LINE {
-                long = Some(line.len() + part.len());
-                line.extend_from_slice(&part[..ECHO.saturating_sub(line.len()).min(part.len())]);
-                line.truncate(ECHO);
-            } else {
-                line.extend_from_slice(part);
-            }
-            if end.is_some() {
-                let ok = answer(stream, conn, shared, &line, long.take(), tx);
-                line.clear();
-                if !ok {
-                    return "write failed: the client is not reading";
+        let answered = lines.drain(|event| {
+            let ok = match event {
+                Event::Line(line) => answer(stream, conn, shared, line, None, tx),
+                Event::TooLong(start) => {
+                    long.clear();
+                    long.extend_from_slice(start);
+                    true
                 }
+                Event::LongEnded(len) => {
+                    let len = usize::try_from(len).unwrap_or(usize::MAX);
+                    answer(stream, conn, shared, &long, Some(len), tx)
+                }
+            };
+            if ok {
+                Ok(())
+            } else {
+                Err("write failed: the client is not reading")
             }
+        });
+        if let Err(reason) = answered {
+            return reason;
         }
     }
 }

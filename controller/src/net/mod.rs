@@ -96,7 +96,7 @@ mod fetch;
 mod interpreter;
 mod streams;
 
-use std::io::{ErrorKind, Read, Write};
+use std::io::{ErrorKind, Write};
 use std::net::{SocketAddr, TcpListener, TcpStream};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
@@ -106,7 +106,8 @@ use std::time::Duration;
 
 use urscript_interp::{CallRecord, Message};
 
-use crate::{Cell, Config, Controller, Dashboard, Programs, Reply, MAX_LINE};
+use crate::lines::{Event, LineReader};
+use crate::{Cell, Config, Controller, Dashboard, DashboardCommand, Programs, Reply, MAX_LINE};
 
 pub use fetch::{parse_host, MAX_FETCHED, MAX_FILE};
 pub use interpreter::{MAX_INTERPRETER_CONNECTIONS, POLL as INTERPRETER_POLL};
@@ -1131,7 +1132,8 @@ fn one_line(text: &str) -> Reply {
     }
 }
 
-/// Answer one command line; `Err(reason)` when the connection ends.
+/// Answer one command line, or one longer than [`MAX_LINE`] (`too_long`: `line` holds
+/// its first bytes); `Err(reason)` when the connection ends.
 fn answer(
     stream: &mut TcpStream,
     conn: u64,
@@ -1142,7 +1144,6 @@ fn answer(
     counts: &mut Counts,
 ) -> Result<(), &'static str> {
     let text = String::from_utf8_lossy(line);
-    let text = text.strip_suffix('\r').unwrap_or(&text);
     shared.command_turn();
     let (reply, shut_down) = {
         let mut cell = shared.lock_cell();
@@ -1150,25 +1151,28 @@ fn answer(
         cell.advance(now);
         let c = cell.controller();
         let reply = if too_long {
-            dashboard.line_too_long(text)
-        } else if !shared.allow_shutdown && text.trim().eq_ignore_ascii_case("shutdown") {
-            // Refused as the controller refuses it: in local control its one reply to
-            // every command that acts, else the failure UR's commands answer.
-            if c.config().remote_control_enabled && !c.remote_control() {
-                one_line(crate::dashboard::LOCAL_CONTROL)
-            } else {
-                one_line("Failed to execute: shutdown")
-            }
+            dashboard.line_too_long(&text)
         } else {
-            dashboard.handle_line(c, text, now)
+            let command = DashboardCommand::parse(&text, c.config().major());
+            if command == DashboardCommand::Shutdown && !shared.allow_shutdown {
+                // Refused as the controller refuses it: in local control its one reply
+                // to every command that acts, else the failure UR's commands answer.
+                if c.config().remote_control_enabled && !c.remote_control() {
+                    one_line(crate::dashboard::LOCAL_CONTROL)
+                } else {
+                    one_line("Failed to execute: shutdown")
+                }
+            } else {
+                dashboard.answer(c, &command, now)
+            }
         };
         let shut_down = c.is_shut_down() && !shared.shutting_down.swap(true, Ordering::SeqCst);
         (reply, shut_down)
     };
     let shown = if too_long {
-        format!("{}...", text.chars().take(40).collect::<String>())
+        format!("{}...", text.chars().take(SHOWN).collect::<String>())
     } else {
-        text.to_string()
+        text.into_owned()
     };
     shared.emit(ServerEvent::Dashboard {
         conn,
@@ -1188,6 +1192,9 @@ fn answer(
     Ok(())
 }
 
+/// Characters of a too-long dashboard line shown in its event.
+const SHOWN: usize = 40;
+
 fn session(
     stream: &mut TcpStream,
     conn: u64,
@@ -1203,54 +1210,29 @@ fn session(
         Err(_) => return "cannot read",
     };
     let mut dashboard = Dashboard::new();
-    let mut chunk = [0u8; 4096];
-    // The line so far (at most MAX_LINE bytes); `discarding`: a too-long line was
-    // answered and its rest is skipped up to the next newline.
-    let mut line: Vec<u8> = Vec::new();
-    let mut discarding = false;
+    // A too-long line keeps the bytes of its first SHOWN characters (4 bytes each at
+    // most) for its reply and its event.
+    let mut lines = LineReader::new(MAX_LINE, SHOWN * 4);
     loop {
-        let n = match reader.read(&mut chunk) {
+        match lines.read_from(&mut reader) {
             Ok(0) => return "client closed",
-            Ok(n) => n,
+            Ok(n) => counts.rx += n as u64,
             Err(e) if e.kind() == ErrorKind::Interrupted => continue,
             Err(_) => return "read failed",
-        };
+        }
         if shared.stopped() {
             return "the server stopped";
         }
         activity.touch(shared);
-        counts.rx += n as u64;
-        let mut rest = &chunk[..n];
-        while !rest.is_empty() {
-            let end = rest.iter().position(|&b| b == b'\n');
-            let part = &rest[..end.unwrap_or(rest.len())];
-            rest = match end {
-                Some(i) => &rest[i + 1..],
-                None => &[],
-            };
-            if discarding {
-                discarding = end.is_none();
-                continue;
+        let answered = lines.drain(|event| match event {
+            Event::Line(line) => answer(stream, conn, shared, &mut dashboard, line, false, counts),
+            Event::TooLong(start) => {
+                answer(stream, conn, shared, &mut dashboard, start, true, counts)
             }
-            if line.len() + part.len() > MAX_LINE {
-                let room = MAX_LINE - line.len();
-                line.extend_from_slice(&part[..room.min(64)]);
-                let r = answer(stream, conn, shared, &mut dashboard, &line, true, counts);
-                line.clear();
-                discarding = end.is_none();
-                if let Err(reason) = r {
-                    return reason;
-                }
-                continue;
-            }
-            line.extend_from_slice(part);
-            if end.is_some() {
-                let r = answer(stream, conn, shared, &mut dashboard, &line, false, counts);
-                line.clear();
-                if let Err(reason) = r {
-                    return reason;
-                }
-            }
+            Event::LongEnded(_) => Ok(()),
+        });
+        if let Err(reason) = answered {
+            return reason;
         }
     }
 }

@@ -904,7 +904,7 @@ impl Loop {
                             messages.push(RobotMessage::RuntimeException {
                                 line: i32::try_from(e.line()).unwrap_or(i32::MAX),
                                 column: i32::try_from(e.column()).unwrap_or(i32::MAX),
-                                text: controller_text(e.message()).to_string(),
+                                text: controller_text(e),
                             });
                         }
                         messages.push(RobotMessage::program_stopped(&name));
@@ -1274,13 +1274,10 @@ fn rtde_event(e: &RtdeEvent) -> (&'static str, String) {
     }
 }
 
-/// The controller's own text of an error: the interpreter's message starts with it
-/// (`compile_error_name_not_found:NAME:`) and may add an explanation for people after a
-/// space, which the controller does not send.
-fn controller_text(message: &str) -> &str {
-    if message.starts_with("compile_error") || message.starts_with("syntax_error") {
-        message.split(' ').next().unwrap_or(message)
-    } else {
-        message
-    }
+/// The text of the runtime exception a failed program sends: the controller's code when
+/// the error has one (`compile_error_name_not_found:NAME:`, without the interpreter's
+/// explanation for people), else the interpreter's message.
+fn controller_text(e: &urscript_interp::RuntimeError) -> String {
+    e.code()
+        .map_or_else(|| e.message().to_string(), ToString::to_string)
 }

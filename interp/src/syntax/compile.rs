@@ -5,7 +5,7 @@
 use std::collections::{HashMap, HashSet};
 
 use crate::builtins::{self, Builtin};
-use crate::error::{ParseError, ParseErrorKind};
+use crate::error::{ControllerCode, ParseError, ParseErrorKind};
 use crate::syntax::parser::{Access, BinOp, Expr, FuncDef, ParamDefault, Scope, Stmt, StmtKind};
 use crate::value::{Value, MAX_STRUCT_MEMBERS};
 
@@ -789,7 +789,8 @@ impl Compiler {
             return Err(err(
                 at,
                 format!("compile_error_name_not_found:{name}: `{name}` is never assigned"),
-            ));
+            )
+            .with_code(ControllerCode::NameNotFound { name }));
         }
         self.declare("<interpreter>".into(), &defs);
         self.function(id, &stmts, 1)?;

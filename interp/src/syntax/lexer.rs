@@ -345,3 +345,302 @@ pub(crate) fn lex(src: &str) -> Result<Vec<Token>, ParseError> {
     });
     Ok(out)
 }
+
+/// The words that open a block an `end` closes. `for` is not URScript (the parser refuses
+/// it with its own message) but is counted, so a program that uses it arrives whole.
+const BLOCK_OPENERS: &[&str] = &["def", "sec", "thread", "if", "while", "for"];
+
+/// What a top-level unit of a script sent line by line is.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum UnitKind {
+    /// A `def NAME():` ... `end` program (the name empty if the line has none).
+    Def(String),
+    /// A `sec NAME():` ... `end` secondary program.
+    Sec(String),
+    /// Anything else: a statement, or a block (`if`, `while`, `thread`) at the top level.
+    Other,
+}
+
+/// What one line fed to [`TopLevel::line`] did.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct UnitLine {
+    /// The line starts a unit, of this kind. `None` for a line inside a unit, and for a
+    /// line between units that holds no code (blanks, a comment, a `$` step marker).
+    pub starts: Option<UnitKind>,
+    /// The unit is complete with this line: the blocks it opened are all closed.
+    pub ends: bool,
+}
+
+/// Where the top-level units of URScript that arrives line by line end (a client
+/// writing programs, secondary programs and single statements to the primary and
+/// secondary ports), by this interpreter's lexer: a unit starts at the first line with
+/// code, and ends with the line where every block opened since (`def`, `sec`, `thread`,
+/// `if`, `while`, each closed by an `end`) is closed. Words inside strings and comments
+/// do not count; a line that does not lex counts its tokens up to the fault (the
+/// program is then refused with the lexer's error).
+///
+/// ```
+/// use urscript_interp::{TopLevel, UnitKind};
+/// let mut t = TopLevel::new();
+/// assert_eq!(t.line("# a comment").starts, None);
+/// assert_eq!(t.line("def move():").starts, Some(UnitKind::Def("move".into())));
+/// assert!(!t.line("  if x: textmsg(\"end\") end").ends);
+/// assert!(t.line("end").ends);
+/// ```
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+pub struct TopLevel {
+    /// Blocks open in the current unit (0 between units).
+    open: usize,
+}
+
+impl TopLevel {
+    /// Between units.
+    pub fn new() -> Self {
+        TopLevel::default()
+    }
+
+    /// Whether a unit has started and is not complete yet.
+    pub fn is_inside(&self) -> bool {
+        self.open > 0
+    }
+
+    /// Feeds the next line (without its line end).
+    pub fn line(&mut self, line: &str) -> UnitLine {
+        let (tokens, has_code) = line_tokens(line);
+        let starts = if self.open == 0 {
+            if !has_code {
+                return UnitLine {
+                    starts: None,
+                    ends: false,
+                };
+            }
+            Some(unit_kind(&tokens))
+        } else {
+            None
+        };
+        let mut after_dot = false;
+        for t in &tokens {
+            if let Tok::Ident(word) = &t.kind {
+                if !after_dot {
+                    if BLOCK_OPENERS.contains(&word.as_str()) {
+                        self.open = self.open.saturating_add(1);
+                    } else if word == "end" {
+                        self.open = self.open.saturating_sub(1);
+                    }
+                }
+            }
+            after_dot = t.kind == Tok::Dot;
+        }
+        UnitLine {
+            starts,
+            ends: self.open == 0,
+        }
+    }
+}
+
+/// Where the first complete top-level unit of `src` ends, and what it is: the byte
+/// offset just past its last line's `\n` (or `src.len()` if that line has none).
+/// `None` while `src` holds no complete unit (nothing but blanks and comments, or a unit
+/// whose blocks are still open). See [`TopLevel`] for the rules.
+///
+/// ```
+/// use urscript_interp::{top_level_end, UnitKind};
+/// let src = "# pick\ndef pick():\n  while True:\n    sync()\n  end\nend\ntextmsg(1)\n";
+/// let (end, kind) = top_level_end(src).unwrap();
+/// assert_eq!((&src[end..], kind), ("textmsg(1)\n", UnitKind::Def("pick".into())));
+/// assert_eq!(top_level_end("def pick():\n  sync()\n"), None);
+/// ```
+pub fn top_level_end(src: &str) -> Option<(usize, UnitKind)> {
+    let mut scan = TopLevel::new();
+    let mut kind = None;
+    let mut at = 0;
+    for line in src.split_inclusive('\n') {
+        at += line.len();
+        let step = scan.line(line.strip_suffix('\n').unwrap_or(line));
+        if step.starts.is_some() {
+            kind = step.starts;
+        }
+        if step.ends {
+            return kind.map(|k| (at, k));
+        }
+    }
+    None
+}
+
+/// The tokens of one line (no `Newline`/`Eof`), and whether it holds code: a line that
+/// does not lex gives its tokens before the fault, and holds code.
+fn line_tokens(line: &str) -> (Vec<Token>, bool) {
+    let code = |t: &Token| !matches!(t.kind, Tok::Newline | Tok::Eof);
+    match lex(line) {
+        Ok(tokens) => {
+            let tokens: Vec<Token> = tokens.into_iter().filter(code).collect();
+            let has_code = !tokens.is_empty();
+            (tokens, has_code)
+        }
+        Err(e) => {
+            let before = &line[..offset_of(line, e.line(), e.column())];
+            let tokens =
+                lex(before).map_or_else(|_| Vec::new(), |t| t.into_iter().filter(code).collect());
+            (tokens, true)
+        }
+    }
+}
+
+/// The kind of the unit whose first line has `tokens`.
+fn unit_kind(tokens: &[Token]) -> UnitKind {
+    let name = || match tokens.get(1).map(|t| &t.kind) {
+        Some(Tok::Ident(name)) => name.clone(),
+        _ => String::new(),
+    };
+    match tokens.first().map(|t| &t.kind) {
+        Some(Tok::Ident(w)) if w == "def" => UnitKind::Def(name()),
+        Some(Tok::Ident(w)) if w == "sec" => UnitKind::Sec(name()),
+        _ => UnitKind::Other,
+    }
+}
+
+/// The byte offset of 1-based `line` and `column` (in characters) of `src`, with the line
+/// ends [`lex`] knows: the inverse of [`position_of`]. Past the end: `src.len()`.
+fn offset_of(src: &str, line: u32, column: u32) -> usize {
+    let mut at_line = 1u32;
+    let mut start = 0usize;
+    let bytes = src.as_bytes();
+    let mut i = 0usize;
+    while at_line < line && i < bytes.len() {
+        let end = match bytes[i] {
+            b'\r' if bytes.get(i + 1) == Some(&b'\n') => Some(2),
+            b'\n' | b'\r' => Some(1),
+            _ => None,
+        };
+        match end {
+            Some(n) => {
+                i += n;
+                at_line += 1;
+                start = i;
+            }
+            None => i += 1,
+        }
+    }
+    let skip = usize::try_from(column.saturating_sub(1)).unwrap_or(usize::MAX);
+    src[start..]
+        .char_indices()
+        .nth(skip)
+        .map_or(src.len(), |(k, _)| start + k)
+}
+
+#[cfg(test)]
+mod top_level_tests {
+    use super::*;
+
+    fn ends(lines: &[&str]) -> Vec<(Option<UnitKind>, bool)> {
+        let mut t = TopLevel::new();
+        lines
+            .iter()
+            .map(|l| {
+                let s = t.line(l);
+                (s.starts, s.ends)
+            })
+            .collect()
+    }
+
+    #[test]
+    fn programs_blocks_and_statements() {
+        use UnitKind::*;
+        assert_eq!(
+            ends(&[
+                "",
+                "  # note",
+                "$ 1 \"Robot Program\"",
+                "textmsg(1)",
+                "def a():",
+                "  if x:",
+                "  elif y:",
+                "  else:",
+                "  end",
+                "end",
+                "sec s():",
+                "end",
+                "end"
+            ]),
+            [
+                (None, false),
+                (None, false),
+                (None, false),
+                (Some(Other), true),
+                (Some(Def("a".into())), false),
+                (None, false),
+                (None, false),
+                (None, false),
+                (None, false),
+                (None, true),
+                (Some(Sec("s".into())), false),
+                (None, true),
+                // A stray `end` is a unit of its own (the parser refuses it).
+                (Some(Other), true),
+            ]
+        );
+    }
+
+    #[test]
+    fn strings_comments_members_and_one_line_blocks_do_not_miscount() {
+        let mut t = TopLevel::new();
+        assert!(!t.line("def f():").ends);
+        for line in [
+            "  textmsg(\"end\")",
+            "  textmsg('if x:')",
+            "  x = 1 # end",
+            "  y = s.end",
+            "  if x: y = 1 end",
+            "  while False: sync() end",
+            "  thread t(): return 1 end",
+        ] {
+            assert_eq!(
+                t.line(line),
+                UnitLine {
+                    starts: None,
+                    ends: false
+                },
+                "{line}"
+            );
+        }
+        assert!(t.line("end").ends);
+        // At the top level a one-line block is a whole unit.
+        assert!(t.line("if True: textmsg(1) end").ends);
+        assert!(!t.is_inside());
+    }
+
+    #[test]
+    fn a_line_that_does_not_lex_counts_its_tokens_before_the_fault() {
+        let mut t = TopLevel::new();
+        assert_eq!(t.line("{{placeholder}}").starts, Some(UnitKind::Other));
+        assert!(!t.is_inside());
+        assert!(!t.line("def f():").ends);
+        assert!(!t.line("  if x == @:").ends);
+        assert!(!t.line("  textmsg(\"end").ends);
+        assert!(!t.line("  end").ends);
+        assert!(t.line("end").ends);
+    }
+
+    #[test]
+    fn top_level_end_finds_the_first_unit() {
+        assert_eq!(top_level_end(""), None);
+        assert_eq!(top_level_end("# only\n\n"), None);
+        assert_eq!(top_level_end("x = 1"), Some((5, UnitKind::Other)));
+        assert_eq!(
+            top_level_end("\r\nsec s():\r\n  x = 1\r\nend\r\ny = 2\n"),
+            Some((26, UnitKind::Sec("s".into())))
+        );
+        assert_eq!(top_level_end("def f():\n  if x:\n  end\n"), None);
+    }
+
+    #[test]
+    fn offsets_invert_positions() {
+        let src = "ab\r\ncé\rx\ny";
+        for i in (0..=src.len()).filter(|&i| src.is_char_boundary(i)) {
+            let (line, col) = position_of(src, i);
+            let back = offset_of(src, line, col);
+            // A line end maps to the start of its line's end: same position.
+            assert_eq!(position_of(src, back), (line, col), "{i}");
+        }
+    }
+}
