@@ -105,6 +105,7 @@ mod memory;
 mod parser;
 mod pose;
 mod rpc;
+pub mod rtde_fields;
 mod sockets;
 mod trajectory;
 mod value;
