@@ -24,76 +24,13 @@
 //!
 //! # Fields
 //!
-//! [`rtde_output_type`] and [`rtde_input_type`] give the type of every name the guide lists, for a
-//! controller version. Each output is read from one [`Status`] field; where `Status`
-//! has nothing behind a field, the value is derived or a documented plausible constant:
-//!
-//! - `joint_control_output`: the target currents; `actual_current_window`: zeros;
-//!   `actual_execution_time`: 0.3 (ms); `actual_momentum`: 0; the euromap67 fields: 0
-//!   (no Euromap67 interface); `ft_raw_wrench`: the TCP force;
-//!   `joint_position_deviation_ratio`, `collision_detection_ratio`, `time_scale_source`:
-//!   0; `tool_output_mode` 0, `tool_digital_output0_mode`/`1_mode` 1 (sinking NPN).
-//! - The newest fields: `actual_current_as_torque` the target moments (the virtual arm
-//!   follows its targets); `wrench_calc_from_currents` the TCP force; the TCP
-//!   accelerations, `target_base_acceleration`, `target_base_wrench`, the energies and
-//!   the encoders 0; `target_execution_time` 2.0 (ms, the e-Series period);
-//!   `target_gravity` `[0, 0, -9.82]`; `control_step` the step count, `time / 2 ms`;
-//!   the configurable digital inputs and outputs: bits 8-15 of the digital bits, shifted
-//!   down to 0-7.
-//! - `elbow_position` / `elbow_velocity`: the position (and its time derivative from
-//!   `actual_qd`) of the elbow joint, the end of the upper arm, from the model's DH
-//!   parameters and `actual_q`.
-//! - `joint_mode` and `tool_mode`: from the robot mode (239 power off, 247 booting, 246
-//!   motor initialisation (POWER_ON), 255 idle, 253 running, 238 backdrive, 249
-//!   bootloader (updating firmware)); 251 violation and 252 fault under those safety
-//!   statuses.
-//! - `safety_mode`: the safety status code, with the two e-Series stops (12, 13)
-//!   reported as 5 (safeguard stop), as the older field predates them.
-//! - `runtime_state`: 1 STOPPED, 2 PLAYING, 4 PAUSED (the guide's codes: 0 stopping,
-//!   1 stopped, 2 playing, 3 pausing, 4 paused, 5 resuming; the virtual controller has
-//!   no transition states).
-//! - `robot_status_bits`: bit 0 power on (POWER_ON, IDLE, RUNNING, BACKDRIVE), bit 1
-//!   program running; the teach and power buttons (bits 2, 3) are never pressed.
-//! - `safety_status_bits`: bit 0 normal, 1 reduced, 2 protective stopped, 3 recovery,
-//!   4 safeguard stopped, 5 system emergency stopped, 6 robot emergency stopped,
-//!   7 emergency stopped (either), 8 violation, 9 fault, 10 stopped due to safety
-//!   (any of 2 and 4-9, and the two e-Series stops, which also set bit 4).
-//! - `tcp_force_scalar`: the norm of the TCP force's xyz part.
-//!
-//! Index ranges as the guide gives them: `output_int_register_N`,
-//! `output_double_register_N`, `input_int_register_N`, `input_double_register_N` for N
-//! in 0-47; the bool registers one by one (`output_bit_register_N`,
-//! `input_bit_register_N`) for N in 64-127, and 0-63 as the two `UINT32`
-//! `*_bit_registers0_to_31` / `*_bit_registers32_to_63`. Names must be spelled exactly
-//! (no leading zeros in N).
-//!
-//! Fields that later controller versions added are `NOT_FOUND` on an older
-//! [`Config::polyscope`]. The versions are the guide's notes as far as they could be
-//! established, cross-checked with clients that gate on them (`ur_rtde` asks
-//! `payload_inertia` of a 3.15 controller, `ft_raw_wrench` only of e-Series, and the
-//! TCP acceleration of 5.23 and later); where a version was not certain, it is marked
-//! (approximate):
-//!
-//! | fields | CB3 | e-Series |
-//! |---|---|---|
-//! | registers 24-47 (int, double) and bool registers 64-127 | 3.9 | 5.3 |
-//! | `elbow_position`, `elbow_velocity` | 3.5 | 5.0 |
-//! | `safety_status` | 3.10 | 5.4 |
-//! | `payload`, `payload_cog`, `payload_inertia` (outputs and inputs) | 3.11 | 5.5 |
-//! | `script_control_line` | 3.14 (approximate) | 5.6 (approximate) |
-//! | `tool_output_mode`, `tool_digital_output0_mode`, `tool_digital_output1_mode` | - | 5.2 (approximate) |
-//! | `ft_raw_wrench`, input `external_force_torque` | - | 5.9 |
-//! | `joint_position_deviation_ratio`, `collision_detection_ratio`, `time_scale_source` | - | 5.14 (approximate) |
-//! | `actual_current_window`, `tcp_offset` | - | 5.20 (approximate) |
-//! | `actual_current_as_torque`, `actual_TCP_acceleration`, `target_TCP_acceleration`, `actual_configurable_digital_input_bits`, `actual_configurable_digital_output_bits`, `target_execution_time`, `actual_robot_energy_consumed`, `actual_robot_braking_energy_dissipated`, `encoder0_raw`, `encoder1_raw`, `wrench_calc_from_currents`, `target_gravity`, `target_base_acceleration`, `control_step`, `target_base_wrench` | - | 5.23 (approximate) |
-//!
-//! Everything else is available from RTDE's first version (CB3 3.4, e-Series 5.0).
-//!
-//! Two kinds of input names are served beyond the guide's input table:
-//! `tool_digital_output_mask` / `tool_digital_output` (controllers accept them and
-//! `ur_rtde`'s `RTDEIOInterface` sets them up), and `payload`, `payload_cog`,
-//! `payload_inertia` as inputs (the outputs' names, into [`Inputs::payload`]), an
-//! extension of this virtual controller.
+//! The field names, their types, the controller versions that gate them and how each
+//! output is read are the one table of [`urscript_interp::rtde_fields`], which the
+//! interpreter's `get_rtde_value` and `rtde_set_watchdog` use as well. [`rtde_output_type`]
+//! and [`rtde_input_type`] give a name's type for a controller version. Outputs are read
+//! from [`Status`] (its [`RtdeSource`] implementation); `actual_execution_time` is 0.3
+//! (ms). Register names are spelled exactly (`input_int_register_5`; `_05`, `_+5` are
+//! `NOT_FOUND`), as the table's one name rule says.
 //!
 //! # Setup, ownership and recipes
 //!
@@ -345,6 +282,9 @@ impl std::error::Error for RtdeError {}
 
 /// Something a session did or received, for the caller to log or act on.
 #[derive(Debug, Clone, PartialEq)]
+// `Inputs` is applied by value as it comes, one event per input package; boxing it
+// would cost an allocation per package for no gain.
+#[allow(clippy::large_enum_variant)]
 pub enum RtdeEvent {
     /// The client asked for a protocol version.
     ProtocolVersion {
