@@ -592,43 +592,99 @@ pub enum Input {
     PayloadInertia,
 }
 
+/// How an output is read: a function of the source whose result type is the field's
+/// RTDE type.
+#[derive(Clone, Copy)]
+enum Read {
+    Double(fn(&dyn RtdeSource) -> f64),
+    Vector3d(fn(&dyn RtdeSource) -> [f64; 3]),
+    Vector6d(fn(&dyn RtdeSource) -> [f64; 6]),
+    Int32(fn(&dyn RtdeSource) -> i32),
+    Uint8(fn(&dyn RtdeSource) -> u8),
+    Uint32(fn(&dyn RtdeSource) -> u32),
+    Uint64(fn(&dyn RtdeSource) -> u64),
+    Vector6Int32(fn(&dyn RtdeSource) -> [i32; 6]),
+}
+
+impl Read {
+    fn rtde_type(self) -> RtdeType {
+        match self {
+            Read::Double(_) => RtdeType::Double,
+            Read::Vector3d(_) => RtdeType::Vector3d,
+            Read::Vector6d(_) => RtdeType::Vector6d,
+            Read::Int32(_) => RtdeType::Int32,
+            Read::Uint8(_) => RtdeType::Uint8,
+            Read::Uint32(_) => RtdeType::Uint32,
+            Read::Uint64(_) => RtdeType::Uint64,
+            Read::Vector6Int32(_) => RtdeType::Vector6Int32,
+        }
+    }
+
+    fn read(self, s: &dyn RtdeSource) -> RtdeValue {
+        match self {
+            Read::Double(f) => RtdeValue::Double(f(s)),
+            Read::Vector3d(f) => RtdeValue::Vector3d(f(s)),
+            Read::Vector6d(f) => RtdeValue::Vector6d(f(s)),
+            Read::Int32(f) => RtdeValue::Int32(f(s)),
+            Read::Uint8(f) => RtdeValue::Uint8(f(s)),
+            Read::Uint32(f) => RtdeValue::Uint32(f(s)),
+            Read::Uint64(f) => RtdeValue::Uint64(f(s)),
+            Read::Vector6Int32(f) => RtdeValue::Vector6Int32(f(s)),
+        }
+    }
+}
+
 /// How a fixed-name field is served.
 #[derive(Clone, Copy)]
 enum Kind {
-    /// An output, read by this function.
-    Output(fn(&dyn RtdeSource) -> RtdeValue),
-    /// An input, writing this.
-    Input(Input),
+    /// An output, read so.
+    Output(Read),
+    /// An input of this type, writing this.
+    Input(RtdeType, Input),
 }
 
 /// One fixed-name field.
 struct Named {
     name: &'static str,
-    ty: RtdeType,
     since: Since,
     kind: Kind,
 }
 
-const fn out(
-    name: &'static str,
-    ty: RtdeType,
-    since: Since,
-    read: fn(&dyn RtdeSource) -> RtdeValue,
-) -> Named {
-    Named {
-        name,
-        ty,
-        since,
-        kind: Kind::Output(read),
+impl Named {
+    fn rtde_type(&self) -> RtdeType {
+        match self.kind {
+            Kind::Output(r) => r.rtde_type(),
+            Kind::Input(ty, _) => ty,
+        }
+    }
+
+    fn direction(&self) -> Direction {
+        match self.kind {
+            Kind::Output(_) => Direction::Output,
+            Kind::Input(..) => Direction::Input,
+        }
     }
 }
+
+/// The table's constructors, one per output type (`v6`: VECTOR6D ...) and `inp` for
+/// inputs.
+macro_rules! outputs {
+    ($($f:ident: $t:ty => $v:ident),*) => {$(
+        const fn $f(name: &'static str, since: Since, read: fn(&dyn RtdeSource) -> $t) -> Named {
+            Named { name, since, kind: Kind::Output(Read::$v(read)) }
+        }
+    )*};
+}
+
+outputs!(f64_: f64 => Double, v3: [f64; 3] => Vector3d, v6: [f64; 6] => Vector6d,
+    i32_: i32 => Int32, u8_: u8 => Uint8, u32_: u32 => Uint32, u64_: u64 => Uint64,
+    v6i32: [i32; 6] => Vector6Int32);
 
 const fn inp(name: &'static str, ty: RtdeType, since: Since, input: Input) -> Named {
     Named {
         name,
-        ty,
         since,
-        kind: Kind::Input(input),
+        kind: Kind::Input(ty, input),
     }
 }
 
@@ -638,261 +694,136 @@ use RtdeValue as V;
 /// Every fixed-name field, outputs then inputs (a name may be both: `payload`,
 /// `input_bit_registers0_to_31`).
 const NAMED: &[Named] = &[
-    out("timestamp", T::Double, ALWAYS, |s| V::Double(s.time())),
-    out("target_q", T::Vector6d, ALWAYS, |s| {
-        V::Vector6d(s.target_q())
+    f64_("timestamp", ALWAYS, |s| s.time()),
+    v6("target_q", ALWAYS, |s| s.target_q()),
+    v6("target_qd", ALWAYS, |s| s.target_qd()),
+    v6("target_qdd", ALWAYS, |s| s.target_qdd()),
+    v6("target_current", ALWAYS, |s| s.target_current()),
+    v6("target_moment", ALWAYS, |s| s.target_moment()),
+    v6("actual_q", ALWAYS, |s| s.actual_q()),
+    v6("actual_qd", ALWAYS, |s| s.actual_qd()),
+    v6("actual_current", ALWAYS, |s| s.actual_current()),
+    v6("actual_current_window", NEWER, |_| [0.0; 6]),
+    v6("joint_control_output", ALWAYS, |s| s.target_current()),
+    v6("actual_TCP_pose", ALWAYS, |s| s.actual_tcp_pose()),
+    v6("actual_TCP_speed", ALWAYS, |s| s.actual_tcp_speed()),
+    v6("actual_TCP_force", ALWAYS, |s| s.actual_tcp_force()),
+    v6("target_TCP_pose", ALWAYS, |s| s.target_tcp_pose()),
+    v6("target_TCP_speed", ALWAYS, |s| s.target_tcp_speed()),
+    u64_("actual_digital_input_bits", ALWAYS, |s| s.digital_inputs()),
+    v6("joint_temperatures", ALWAYS, |s| s.joint_temperatures()),
+    f64_("actual_execution_time", ALWAYS, |s| {
+        s.actual_execution_time()
     }),
-    out("target_qd", T::Vector6d, ALWAYS, |s| {
-        V::Vector6d(s.target_qd())
+    i32_("robot_mode", ALWAYS, |s| s.robot_mode()),
+    v6i32("joint_mode", ALWAYS, |s| {
+        [joint_mode(s.robot_mode(), s.safety_status()); 6]
     }),
-    out("target_qdd", T::Vector6d, ALWAYS, |s| {
-        V::Vector6d(s.target_qdd())
+    i32_("safety_mode", ALWAYS, |s| match s.safety_status() {
+        12 | 13 => 5,
+        code => code,
     }),
-    out("target_current", T::Vector6d, ALWAYS, |s| {
-        V::Vector6d(s.target_current())
+    i32_("safety_status", SAFETY_STATUS, |s| s.safety_status()),
+    v3("actual_tool_accelerometer", ALWAYS, |s| {
+        s.tool_accelerometer()
     }),
-    out("target_moment", T::Vector6d, ALWAYS, |s| {
-        V::Vector6d(s.target_moment())
+    f64_("speed_scaling", ALWAYS, |s| s.speed_scaling()),
+    f64_("target_speed_fraction", ALWAYS, |s| s.speed_fraction()),
+    f64_("actual_momentum", ALWAYS, |_| 0.0),
+    f64_("actual_main_voltage", ALWAYS, |s| s.main_voltage()),
+    f64_("actual_robot_voltage", ALWAYS, |s| s.robot_voltage()),
+    f64_("actual_robot_current", ALWAYS, |s| s.robot_current()),
+    v6("actual_joint_voltage", ALWAYS, |s| s.joint_voltage()),
+    u64_("actual_digital_output_bits", ALWAYS, |s| {
+        s.digital_outputs()
     }),
-    out("actual_q", T::Vector6d, ALWAYS, |s| {
-        V::Vector6d(s.actual_q())
+    u32_("runtime_state", ALWAYS, |s| s.runtime_state()),
+    v3("elbow_position", ELBOW, |s| {
+        elbow(&s.dh(), s.actual_q(), s.actual_qd()).0
     }),
-    out("actual_qd", T::Vector6d, ALWAYS, |s| {
-        V::Vector6d(s.actual_qd())
+    v3("elbow_velocity", ELBOW, |s| {
+        elbow(&s.dh(), s.actual_q(), s.actual_qd()).1
     }),
-    out("actual_current", T::Vector6d, ALWAYS, |s| {
-        V::Vector6d(s.actual_current())
-    }),
-    out("actual_current_window", T::Vector6d, NEWER, |_| {
-        V::Vector6d([0.0; 6])
-    }),
-    out("joint_control_output", T::Vector6d, ALWAYS, |s| {
-        V::Vector6d(s.target_current())
-    }),
-    out("actual_TCP_pose", T::Vector6d, ALWAYS, |s| {
-        V::Vector6d(s.actual_tcp_pose())
-    }),
-    out("actual_TCP_speed", T::Vector6d, ALWAYS, |s| {
-        V::Vector6d(s.actual_tcp_speed())
-    }),
-    out("actual_TCP_force", T::Vector6d, ALWAYS, |s| {
-        V::Vector6d(s.actual_tcp_force())
-    }),
-    out("target_TCP_pose", T::Vector6d, ALWAYS, |s| {
-        V::Vector6d(s.target_tcp_pose())
-    }),
-    out("target_TCP_speed", T::Vector6d, ALWAYS, |s| {
-        V::Vector6d(s.target_tcp_speed())
-    }),
-    out("actual_digital_input_bits", T::Uint64, ALWAYS, |s| {
-        V::Uint64(s.digital_inputs())
-    }),
-    out("joint_temperatures", T::Vector6d, ALWAYS, |s| {
-        V::Vector6d(s.joint_temperatures())
-    }),
-    out("actual_execution_time", T::Double, ALWAYS, |s| {
-        V::Double(s.actual_execution_time())
-    }),
-    out("robot_mode", T::Int32, ALWAYS, |s| V::Int32(s.robot_mode())),
-    out("joint_mode", T::Vector6Int32, ALWAYS, |s| {
-        V::Vector6Int32([joint_mode(s.robot_mode(), s.safety_status()); 6])
-    }),
-    out("safety_mode", T::Int32, ALWAYS, |s| {
-        V::Int32(match s.safety_status() {
-            12 | 13 => 5,
-            code => code,
-        })
-    }),
-    out("safety_status", T::Int32, SAFETY_STATUS, |s| {
-        V::Int32(s.safety_status())
-    }),
-    out("actual_tool_accelerometer", T::Vector3d, ALWAYS, |s| {
-        V::Vector3d(s.tool_accelerometer())
-    }),
-    out("speed_scaling", T::Double, ALWAYS, |s| {
-        V::Double(s.speed_scaling())
-    }),
-    out("target_speed_fraction", T::Double, ALWAYS, |s| {
-        V::Double(s.speed_fraction())
-    }),
-    out("actual_momentum", T::Double, ALWAYS, |_| V::Double(0.0)),
-    out("actual_main_voltage", T::Double, ALWAYS, |s| {
-        V::Double(s.main_voltage())
-    }),
-    out("actual_robot_voltage", T::Double, ALWAYS, |s| {
-        V::Double(s.robot_voltage())
-    }),
-    out("actual_robot_current", T::Double, ALWAYS, |s| {
-        V::Double(s.robot_current())
-    }),
-    out("actual_joint_voltage", T::Vector6d, ALWAYS, |s| {
-        V::Vector6d(s.joint_voltage())
-    }),
-    out("actual_digital_output_bits", T::Uint64, ALWAYS, |s| {
-        V::Uint64(s.digital_outputs())
-    }),
-    out("runtime_state", T::Uint32, ALWAYS, |s| {
-        V::Uint32(s.runtime_state())
-    }),
-    out("elbow_position", T::Vector3d, ELBOW, |s| {
-        V::Vector3d(elbow(&s.dh(), s.actual_q(), s.actual_qd()).0)
-    }),
-    out("elbow_velocity", T::Vector3d, ELBOW, |s| {
-        V::Vector3d(elbow(&s.dh(), s.actual_q(), s.actual_qd()).1)
-    }),
-    out("robot_status_bits", T::Uint32, ALWAYS, |s| {
+    u32_("robot_status_bits", ALWAYS, |s| {
         let power = matches!(s.robot_mode(), 4..=7);
         let running = s.runtime_state() == 2;
-        V::Uint32(u32::from(power) | u32::from(running) << 1)
+        u32::from(power) | u32::from(running) << 1
     }),
-    out("safety_status_bits", T::Uint32, ALWAYS, |s| {
-        V::Uint32(safety_status_bits(s.safety_status()))
+    u32_("safety_status_bits", ALWAYS, |s| {
+        safety_status_bits(s.safety_status())
     }),
-    out("analog_io_types", T::Uint32, ALWAYS, |s| {
-        V::Uint32(s.analog_io_types())
+    u32_("analog_io_types", ALWAYS, |s| s.analog_io_types()),
+    f64_("standard_analog_input0", ALWAYS, |s| s.analog_inputs()[0]),
+    f64_("standard_analog_input1", ALWAYS, |s| s.analog_inputs()[1]),
+    f64_("standard_analog_output0", ALWAYS, |s| s.analog_outputs()[0]),
+    f64_("standard_analog_output1", ALWAYS, |s| s.analog_outputs()[1]),
+    f64_("io_current", ALWAYS, |s| s.io_current()),
+    u32_("euromap67_input_bits", ALWAYS, |_| 0),
+    u32_("euromap67_output_bits", ALWAYS, |_| 0),
+    f64_("euromap67_24V_voltage", ALWAYS, |_| 0.0),
+    f64_("euromap67_24V_current", ALWAYS, |_| 0.0),
+    u32_("tool_mode", ALWAYS, |s| {
+        joint_mode(s.robot_mode(), s.safety_status()) as u32
     }),
-    out("standard_analog_input0", T::Double, ALWAYS, |s| {
-        V::Double(s.analog_inputs()[0])
+    u32_("tool_analog_input_types", ALWAYS, |s| {
+        s.tool_analog_input_types()
     }),
-    out("standard_analog_input1", T::Double, ALWAYS, |s| {
-        V::Double(s.analog_inputs()[1])
-    }),
-    out("standard_analog_output0", T::Double, ALWAYS, |s| {
-        V::Double(s.analog_outputs()[0])
-    }),
-    out("standard_analog_output1", T::Double, ALWAYS, |s| {
-        V::Double(s.analog_outputs()[1])
-    }),
-    out("io_current", T::Double, ALWAYS, |s| {
-        V::Double(s.io_current())
-    }),
-    out("euromap67_input_bits", T::Uint32, ALWAYS, |_| V::Uint32(0)),
-    out("euromap67_output_bits", T::Uint32, ALWAYS, |_| V::Uint32(0)),
-    out("euromap67_24V_voltage", T::Double, ALWAYS, |_| {
-        V::Double(0.0)
-    }),
-    out("euromap67_24V_current", T::Double, ALWAYS, |_| {
-        V::Double(0.0)
-    }),
-    out("tool_mode", T::Uint32, ALWAYS, |s| {
-        V::Uint32(joint_mode(s.robot_mode(), s.safety_status()) as u32)
-    }),
-    out("tool_analog_input_types", T::Uint32, ALWAYS, |s| {
-        V::Uint32(s.tool_analog_input_types())
-    }),
-    out("tool_analog_input0", T::Double, ALWAYS, |s| {
-        V::Double(s.tool_analog_inputs()[0])
-    }),
-    out("tool_analog_input1", T::Double, ALWAYS, |s| {
-        V::Double(s.tool_analog_inputs()[1])
-    }),
-    out("tool_output_voltage", T::Int32, ALWAYS, |s| {
-        V::Int32(s.tool_output_voltage())
-    }),
-    out("tool_output_current", T::Double, ALWAYS, |s| {
-        V::Double(s.tool_current())
-    }),
-    out("tool_temperature", T::Double, ALWAYS, |s| {
-        V::Double(s.tool_temperature())
-    }),
-    out("tcp_force_scalar", T::Double, ALWAYS, |s| {
+    f64_("tool_analog_input0", ALWAYS, |s| s.tool_analog_inputs()[0]),
+    f64_("tool_analog_input1", ALWAYS, |s| s.tool_analog_inputs()[1]),
+    i32_("tool_output_voltage", ALWAYS, |s| s.tool_output_voltage()),
+    f64_("tool_output_current", ALWAYS, |s| s.tool_current()),
+    f64_("tool_temperature", ALWAYS, |s| s.tool_temperature()),
+    f64_("tcp_force_scalar", ALWAYS, |s| {
         let [fx, fy, fz, ..] = s.actual_tcp_force();
-        V::Double((fx * fx + fy * fy + fz * fz).sqrt())
+        (fx * fx + fy * fy + fz * fz).sqrt()
     }),
-    out("output_bit_registers0_to_31", T::Uint32, ALWAYS, |s| {
-        V::Uint32(pack_bits(s.output_bool_registers(), 0))
+    u32_("output_bit_registers0_to_31", ALWAYS, |s| {
+        pack_bits(s.output_bool_registers(), 0)
     }),
-    out("output_bit_registers32_to_63", T::Uint32, ALWAYS, |s| {
-        V::Uint32(pack_bits(s.output_bool_registers(), 32))
+    u32_("output_bit_registers32_to_63", ALWAYS, |s| {
+        pack_bits(s.output_bool_registers(), 32)
     }),
-    out("input_bit_registers0_to_31", T::Uint32, ALWAYS, |s| {
-        V::Uint32(pack_bits(s.input_bool_registers(), 0))
+    u32_("input_bit_registers0_to_31", ALWAYS, |s| {
+        pack_bits(s.input_bool_registers(), 0)
     }),
-    out("input_bit_registers32_to_63", T::Uint32, ALWAYS, |s| {
-        V::Uint32(pack_bits(s.input_bool_registers(), 32))
+    u32_("input_bit_registers32_to_63", ALWAYS, |s| {
+        pack_bits(s.input_bool_registers(), 32)
     }),
-    out("tool_output_mode", T::Uint8, TOOL_MODES, |_| V::Uint8(0)),
-    out("tool_digital_output0_mode", T::Uint8, TOOL_MODES, |_| {
-        V::Uint8(1)
+    u8_("tool_output_mode", TOOL_MODES, |_| 0),
+    u8_("tool_digital_output0_mode", TOOL_MODES, |_| 1),
+    u8_("tool_digital_output1_mode", TOOL_MODES, |_| 1),
+    f64_("payload", PAYLOAD, |s| s.payload_mass()),
+    v3("payload_cog", PAYLOAD, |s| s.payload_cog()),
+    v6("payload_inertia", PAYLOAD, |s| s.payload_inertia()),
+    u32_("script_control_line", SCRIPT_LINE, |s| s.script_line()),
+    v6("ft_raw_wrench", FT_RAW, |s| s.actual_tcp_force()),
+    f64_("joint_position_deviation_ratio", RATIOS, |_| 0.0),
+    f64_("collision_detection_ratio", RATIOS, |_| 0.0),
+    i32_("time_scale_source", RATIOS, |_| 0),
+    v6("tcp_offset", NEWER, |s| s.tcp_offset()),
+    v6("actual_current_as_torque", NEWEST, |s| s.target_moment()),
+    v6("actual_TCP_acceleration", NEWEST, |_| [0.0; 6]),
+    v6("target_TCP_acceleration", NEWEST, |_| [0.0; 6]),
+    u64_("actual_configurable_digital_input_bits", NEWEST, |s| {
+        s.digital_inputs() >> 8 & 0xff
     }),
-    out("tool_digital_output1_mode", T::Uint8, TOOL_MODES, |_| {
-        V::Uint8(1)
+    u64_("actual_configurable_digital_output_bits", NEWEST, |s| {
+        s.digital_outputs() >> 8 & 0xff
     }),
-    out("payload", T::Double, PAYLOAD, |s| {
-        V::Double(s.payload_mass())
+    f64_("target_execution_time", NEWEST, |_| 2.0),
+    f64_("actual_robot_energy_consumed", NEWEST, |_| 0.0),
+    f64_("actual_robot_braking_energy_dissipated", NEWEST, |_| 0.0),
+    i32_("encoder0_raw", NEWEST, |_| 0),
+    i32_("encoder1_raw", NEWEST, |_| 0),
+    v6("wrench_calc_from_currents", NEWEST, |s| {
+        s.actual_tcp_force()
     }),
-    out("payload_cog", T::Vector3d, PAYLOAD, |s| {
-        V::Vector3d(s.payload_cog())
+    v3("target_gravity", NEWEST, |_| [0.0, 0.0, -9.82]),
+    v6("target_base_acceleration", NEWEST, |_| [0.0; 6]),
+    u64_("control_step", NEWEST, |s| {
+        (s.time().max(0.0) / 0.002).round() as u64
     }),
-    out("payload_inertia", T::Vector6d, PAYLOAD, |s| {
-        V::Vector6d(s.payload_inertia())
-    }),
-    out("script_control_line", T::Uint32, SCRIPT_LINE, |s| {
-        V::Uint32(s.script_line())
-    }),
-    out("ft_raw_wrench", T::Vector6d, FT_RAW, |s| {
-        V::Vector6d(s.actual_tcp_force())
-    }),
-    out("joint_position_deviation_ratio", T::Double, RATIOS, |_| {
-        V::Double(0.0)
-    }),
-    out("collision_detection_ratio", T::Double, RATIOS, |_| {
-        V::Double(0.0)
-    }),
-    out("time_scale_source", T::Int32, RATIOS, |_| V::Int32(0)),
-    out("tcp_offset", T::Vector6d, NEWER, |s| {
-        V::Vector6d(s.tcp_offset())
-    }),
-    out("actual_current_as_torque", T::Vector6d, NEWEST, |s| {
-        V::Vector6d(s.target_moment())
-    }),
-    out("actual_TCP_acceleration", T::Vector6d, NEWEST, |_| {
-        V::Vector6d([0.0; 6])
-    }),
-    out("target_TCP_acceleration", T::Vector6d, NEWEST, |_| {
-        V::Vector6d([0.0; 6])
-    }),
-    out(
-        "actual_configurable_digital_input_bits",
-        T::Uint64,
-        NEWEST,
-        |s| V::Uint64(s.digital_inputs() >> 8 & 0xff),
-    ),
-    out(
-        "actual_configurable_digital_output_bits",
-        T::Uint64,
-        NEWEST,
-        |s| V::Uint64(s.digital_outputs() >> 8 & 0xff),
-    ),
-    out("target_execution_time", T::Double, NEWEST, |_| {
-        V::Double(2.0)
-    }),
-    out("actual_robot_energy_consumed", T::Double, NEWEST, |_| {
-        V::Double(0.0)
-    }),
-    out(
-        "actual_robot_braking_energy_dissipated",
-        T::Double,
-        NEWEST,
-        |_| V::Double(0.0),
-    ),
-    out("encoder0_raw", T::Int32, NEWEST, |_| V::Int32(0)),
-    out("encoder1_raw", T::Int32, NEWEST, |_| V::Int32(0)),
-    out("wrench_calc_from_currents", T::Vector6d, NEWEST, |s| {
-        V::Vector6d(s.actual_tcp_force())
-    }),
-    out("target_gravity", T::Vector3d, NEWEST, |_| {
-        V::Vector3d([0.0, 0.0, -9.82])
-    }),
-    out("target_base_acceleration", T::Vector6d, NEWEST, |_| {
-        V::Vector6d([0.0; 6])
-    }),
-    out("control_step", T::Uint64, NEWEST, |s| {
-        V::Uint64((s.time().max(0.0) / 0.002).round() as u64)
-    }),
-    out("target_base_wrench", T::Vector6d, NEWEST, |_| {
-        V::Vector6d([0.0; 6])
-    }),
+    v6("target_base_wrench", NEWEST, |_| [0.0; 6]),
     inp(
         "speed_slider_mask",
         T::Uint32,
@@ -1141,7 +1072,7 @@ impl Field {
     /// Its RTDE type.
     pub fn rtde_type(self) -> RtdeType {
         match self.0 {
-            Repr::Named(_) => self.named().map_or(RtdeType::Bool, |f| f.ty),
+            Repr::Named(_) => self.named().map_or(RtdeType::Bool, Named::rtde_type),
             Repr::Register(r, ..) => r.rtde_type(),
         }
     }
@@ -1166,8 +1097,8 @@ impl Field {
     pub fn read(self, source: &dyn RtdeSource) -> Option<RtdeValue> {
         match self.0 {
             Repr::Named(_) => match self.named()?.kind {
-                Kind::Output(read) => Some(read(source)),
-                Kind::Input(_) => None,
+                Kind::Output(read) => Some(read.read(source)),
+                Kind::Input(..) => None,
             },
             Repr::Register(_, Direction::Input, _) => None,
             Repr::Register(r, Direction::Output, n) => {
@@ -1208,7 +1139,7 @@ impl Field {
     pub fn input(self) -> Option<Input> {
         match self.0 {
             Repr::Named(_) => match self.named()?.kind {
-                Kind::Input(i) => Some(i),
+                Kind::Input(_, i) => Some(i),
                 Kind::Output(_) => None,
             },
             Repr::Register(_, Direction::Output, _) => None,
@@ -1218,15 +1149,6 @@ impl Field {
                 Register::InputDouble => Some(Input::DoubleRegister(n)),
                 _ => None,
             },
-        }
-    }
-}
-
-impl Named {
-    fn direction(&self) -> Direction {
-        match self.kind {
-            Kind::Output(_) => Direction::Output,
-            Kind::Input(_) => Direction::Input,
         }
     }
 }
