@@ -658,47 +658,13 @@ impl Cell {
         let speed_fraction = self.speed_fraction;
         let arm = self.arm_mut();
         arm.speed_fraction = speed_fraction;
-        // Each field written counts as an update for the programs' RTDE watchdogs (the
-        // registers that exist only: the keys stay RTDE's bounded set of names).
-        let (bits, ints, doubles) = (
-            arm.world.input_bool_regs.len(),
-            arm.world.input_int_regs.len(),
-            arm.world.input_float_regs.len(),
-        );
-        let mut updated = |name: String| {
-            *arm.world.rtde_input_updates.entry(name).or_default() += 1;
-        };
-        if inputs.speed_slider_fraction.is_some() {
-            updated("speed_slider_fraction".into());
-        }
-        for (set, name) in [
-            (
-                inputs.standard_digital_outputs.is_some(),
-                "standard_digital_output",
-            ),
-            (
-                inputs.configurable_digital_outputs.is_some(),
-                "configurable_digital_output",
-            ),
-            (inputs.tool_digital_outputs.is_some(), "tool_digital_output"),
-            (
-                inputs.standard_analog_outputs.is_some(),
-                "standard_analog_output_0",
-            ),
-            (inputs.payload.is_some(), "payload"),
-        ] {
-            if set {
-                updated(name.into());
-            }
-        }
-        for &(i, _) in inputs.bool_registers.iter().filter(|(i, _)| *i < bits) {
-            updated(format!("input_bit_register_{i}"));
-        }
-        for &(i, _) in inputs.int_registers.iter().filter(|(i, _)| *i < ints) {
-            updated(format!("input_int_register_{i}"));
-        }
-        for &(i, _) in inputs.double_registers.iter().filter(|(i, _)| *i < doubles) {
-            updated(format!("input_double_register_{i}"));
+        // Each RTDE input field written counts as an update for the programs' RTDE
+        // watchdogs, under its RTDE name (the keys stay RTDE's bounded set of names).
+        for name in &inputs.fields {
+            *arm.world
+                .rtde_input_updates
+                .entry(name.clone())
+                .or_default() += 1;
         }
         let masked = |out: &mut [bool], (mask, values): (u8, u8)| {
             for (i, o) in out.iter_mut().enumerate().take(8) {

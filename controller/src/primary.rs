@@ -337,28 +337,12 @@ pub fn timestamp_us(time: f64) -> u64 {
 }
 
 /// The joint mode code (joint data, tool data's tool mode, realtime joint modes) the
-/// virtual arm reports: it follows the robot mode, with a safety violation or fault
-/// shown as VIOLATION (251) or FAULT (252). RUNNING 253, IDLE 255, POWER_OFF 239,
-/// BOOTING 247, MOTOR_INITIALISATION 246 (power on), BACKDRIVE 238, BOOTLOADER 249
-/// (updating firmware).
+/// virtual arm reports, the one RTDE's `joint_mode` carries:
+/// [`urscript_interp::rtde_fields::joint_mode`].
 pub fn joint_mode(status: &Status) -> u8 {
-    match status.safety {
-        SafetyStatus::Violation => return 251,
-        SafetyStatus::Fault => return 252,
-        _ => {}
-    }
-    match status.robot_mode {
-        RobotMode::Running => 253,
-        RobotMode::Idle => 255,
-        RobotMode::Booting => 247,
-        RobotMode::PowerOn => 246,
-        RobotMode::Backdrive => 238,
-        RobotMode::UpdatingFirmware => 249,
-        RobotMode::NoController
-        | RobotMode::Disconnected
-        | RobotMode::ConfirmSafety
-        | RobotMode::PowerOff => 239,
-    }
+    let code =
+        urscript_interp::rtde_fields::joint_mode(status.robot_mode.code(), status.safety.code());
+    u8::try_from(code).unwrap_or(0)
 }
 
 /// The safety mode code (masterboard data, realtime `Safety Mode`). The e-Series'

@@ -35,7 +35,6 @@ use std::time::Duration;
 use crate::primary::{joint_mode, safety_mode_code, Layout};
 use crate::state::{Config, ProgramState};
 use crate::status::Status;
-use urscript_interp::kinematics::forward;
 
 /// The realtime port.
 pub const REALTIME_PORT: u16 = 30003;
@@ -158,15 +157,9 @@ pub fn program_state_code(state: ProgramState) -> f64 {
 }
 
 /// The elbow (the origin of the third joint's frame) in the base frame, for joint
-/// positions `q` of the status's model.
+/// positions `q` of the status's model: [`urscript_interp::rtde_fields::elbow`].
 pub fn elbow_position(status: &Status, q: [f64; 6]) -> [f64; 3] {
-    let mut dh = status.model.dh();
-    for i in 2..6 {
-        dh.a[i] = 0.0;
-        dh.d[i] = 0.0;
-    }
-    let p = forward(&dh, q, [0.0; 6]);
-    [p[0], p[1], p[2]]
+    urscript_interp::rtde_fields::elbow(&status.model.dh(), q, [0.0; 6]).0
 }
 
 /// Writes one realtime package in the configuration's layout.
@@ -217,21 +210,10 @@ pub fn encode_realtime_layout(out: &mut Vec<u8>, s: &Status, layout: Layout) {
     d(&s.joint_voltage);
     d(&[(s.digital_outputs & 0x3ffff) as f64]);
     d(&[program_state_code(s.program_state)]);
-    let elbow = elbow_position(s, s.actual_q);
+    let (elbow, elbow_velocity) =
+        urscript_interp::rtde_fields::elbow(&s.model.dh(), s.actual_q, s.actual_qd);
     d(&elbow);
-    // The elbow's velocity: a central difference along the joint velocities.
-    let h = 1e-6;
-    let ahead = elbow_position(
-        s,
-        std::array::from_fn(|i| s.actual_q[i] + h * s.actual_qd[i]),
-    );
-    let behind = elbow_position(
-        s,
-        std::array::from_fn(|i| s.actual_q[i] - h * s.actual_qd[i]),
-    );
-    d(&std::array::from_fn::<f64, 3, _>(|i| {
-        (ahead[i] - behind[i]) / (2.0 * h)
-    }));
+    d(&elbow_velocity);
     if layout == Layout::ESeries {
         d(&[f64::from(s.safety.code())]);
         d(&[0.0; 3]); // used by UR software only

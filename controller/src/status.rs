@@ -221,4 +221,8 @@ pub struct Inputs {
     pub double_registers: Vec<(usize, f64)>,
     /// Payload set through RTDE: mass, centre of gravity, inertia (if given).
     pub payload: Option<(f64, [f64; 3], Option<[f64; 6]>)>,
+    /// The RTDE input fields this package wrote, by name (each counts as an update for
+    /// the programs' `rtde_set_watchdog`); empty from other interfaces. At most one
+    /// recipe's fields ([`crate::rtde::RTDE_MAX_FIELDS`]).
+    pub fields: Vec<String>,
 }

@@ -421,6 +421,7 @@ fn an_rtde_watchdog_pauses_the_program_when_its_client_stops_writing() {
         t += 40;
         cell.apply(&Inputs {
             int_registers: vec![(0, 1)],
+            fields: vec!["input_int_register_0".into()],
             ..Inputs::default()
         });
         cell.advance(ms(t));

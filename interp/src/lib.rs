@@ -121,6 +121,7 @@ pub mod event;
 pub mod interpreter;
 mod native;
 mod rpc;
+pub mod rtde_fields;
 mod sockets;
 mod syntax;
 mod value;

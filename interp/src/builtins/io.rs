@@ -947,9 +947,17 @@ fn register(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
 /// field has no update for `1 / min_frequency` s (checked each step, once per time-out).
 /// The action's case does not matter (PolyScope writes `"PAUSE"`). A frequency of 0
 /// removes the field's watchdog (our reading; the manual gives no way to remove one but
-/// the program's end). The watchdogs end with the program.
+/// the program's end). The watchdogs end with the program. `variable_name` must be an
+/// input field of [`crate::rtde_fields`] (`input_int_register_0`,
+/// `speed_slider_fraction`, ...): any other name is a runtime error.
 fn rtde_set_watchdog(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
     let variable = a.text(0)?;
+    if crate::rtde_fields::Field::lookup(&variable, crate::rtde_fields::Direction::Input).is_none()
+    {
+        return Err(
+            format!("`rtde_set_watchdog`: \"{variable}\" is not an RTDE input field").into(),
+        );
+    }
     let f = a.num(1)?;
     let action = match a.text(2)?.to_ascii_lowercase().as_str() {
         "ignore" => 0,

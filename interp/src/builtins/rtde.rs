@@ -1,32 +1,39 @@
 //! `get_rtde_value(key)` (e-Series 5.x interfaces): the value of an RTDE output field, as
 //! an RTDE client would read it, from the virtual arm's state.
 //!
-//! The fields served, by RTDE type (VECTOR6D, VECTOR3D: a list of floats; DOUBLE: a float;
-//! INT32, UINT32, UINT64: an int, bit fields as URScript's 32-bit int, so bit 31 reads
-//! negative; BOOL: a bool):
+//! Every output field of [`crate::rtde_fields`] is served (the interpreter has no
+//! PolyScope version, so no field is gated), read by the table's function from the
+//! virtual arm:
 //!
-//! | key | value |
+//! | source | value |
 //! | --- | --- |
 //! | `timestamp` | program time, s |
-//! | `target_q`, `actual_q`, `target_qd`, `actual_qd`, `target_qdd` | the joints now ([`Arm`](crate::Arm)) |
-//! | `target_TCP_pose`, `actual_TCP_pose`, `target_TCP_speed`, `actual_TCP_speed` | the tool now |
+//! | target and actual joints, TCP pose and speed | the commanded ones ([`Arm`](crate::Arm)): the virtual arm follows its targets |
 //! | `actual_TCP_force` | [`Arm::measured_tcp_force`](crate::Arm::measured_tcp_force): [`World::tcp_force`](crate::World::tcp_force) plus the contact plane's push |
-//! | `joint_temperatures` | [`World::joint_temp`](crate::World::joint_temp) |
+//! | `target_moment` | [`World::joint_torques`](crate::World::joint_torques) |
+//! | `joint_temperatures`, tool temperature and current | [`World::joint_temp`](crate::World::joint_temp), [`World::tool_temp`](crate::World::tool_temp), [`World::tool_current`](crate::World::tool_current) |
 //! | `actual_execution_time` | [`World::execution_time`](crate::World::execution_time) |
-//! | `robot_mode`, `safety_mode`, `safety_status`, `runtime_state` | 7 (running), 1 (normal), 1 (normal), 2 (playing): a program runs only on a running arm |
+//! | `robot_mode`, `safety_mode`, `safety_status`, `runtime_state` | 7 (running), 1 (normal), 1 (normal), 2 (playing): a program runs only on a running arm; `joint_mode` and the status bits follow |
 //! | `speed_scaling`, `target_speed_fraction` | the speed slider, [`Arm::speed_fraction`](crate::Arm::speed_fraction) (1.0 unless a client set it) |
 //! | `actual_digital_input_bits`, `actual_digital_output_bits` | the 18 digital inputs / outputs, bit n = I/O n |
-//! | `standard_analog_input0/1`, `tool_analog_input0/1` | [`World::analog_in`](crate::World::analog_in) |
-//! | `output_int_register_N`, `output_double_register_N`, `input_int_register_N`, `input_double_register_N` | RTDE registers 0-47 |
-//! | `output_bit_register_N`, `input_bit_register_N` | RTDE bit registers 64-127 |
-//! | `output_bit_registers0_to_31`, `output_bit_registers32_to_63`, `input_bit_registers0_to_31`, `input_bit_registers32_to_63` | bit registers as bit fields |
+//! | standard and tool analog inputs | [`World::analog_in`](crate::World::analog_in) |
+//! | registers | the output registers as written, the input registers from the world |
 //! | `payload`, `payload_cog`, `payload_inertia` | the active payload |
 //!
-//! Any other key is a runtime error naming it.
+//! The rest are the table's plausible constants. Types become URScript values: VECTOR6D,
+//! VECTOR3D a list of floats, VECTOR6INT32 / VECTOR6UINT32 a list of ints, DOUBLE a
+//! float, BOOL a bool, the integers an int; UINT32 and UINT64 (bit fields, counters) as
+//! URScript's 32-bit int of their low 32 bits, so bit 31 reads negative.
+//!
+//! A key that is not an RTDE output field (an input such as `speed_slider_mask`, a
+//! misspelt name, a register number out of range or with a leading zero) is a runtime
+//! error naming it.
 
-use super::{float_list, floats, req, Args, Builtin, Domain, Out};
+use super::{req, Args, Builtin, Domain, Out};
 use crate::controller::Controller;
 use crate::error::Fault;
+use crate::kinematics::Dh;
+use crate::rtde_fields::{self, Direction, Field, RtdeSource, RtdeValue};
 use crate::value::Value;
 
 pub(super) const TABLE: &[Builtin] = &[Builtin::new(
@@ -37,75 +44,167 @@ pub(super) const TABLE: &[Builtin] = &[Builtin::new(
     get_rtde_value,
 )];
 
-/// Bits as URScript's 32-bit int (bit 31 makes it negative).
-fn bits(b: impl Iterator<Item = bool>) -> Value {
-    let mut v: u32 = 0;
-    for (i, on) in b.take(32).enumerate() {
-        if on {
-            v |= 1 << i;
-        }
-    }
-    Value::Int(v as i32)
+/// Bools packed bit 0 first (at most 64).
+fn bits(b: &[bool]) -> u64 {
+    b.iter()
+        .take(64)
+        .enumerate()
+        .fold(0, |acc, (i, &on)| acc | (u64::from(on) << i))
 }
 
-/// The register number of `key` after `prefix`, within `0..n`.
-fn register(key: &str, prefix: &str, n: usize) -> Option<usize> {
-    key.strip_prefix(prefix)?
-        .parse::<usize>()
-        .ok()
-        .filter(|i| *i < n)
+/// An RTDE value as a URScript value.
+fn value(v: RtdeValue) -> Value {
+    let floats = |v: &[f64]| Value::List(v.iter().map(|&x| Value::Float(x)).collect());
+    match v {
+        RtdeValue::Bool(b) => Value::Bool(b),
+        RtdeValue::Uint8(x) => Value::Int(i32::from(x)),
+        RtdeValue::Uint32(x) => Value::Int(x as i32),
+        RtdeValue::Uint64(x) => Value::Int(x as u32 as i32),
+        RtdeValue::Int32(x) => Value::Int(x),
+        RtdeValue::Double(x) => Value::Float(x),
+        RtdeValue::Vector3d(v) => floats(&v),
+        RtdeValue::Vector6d(v) => floats(&v),
+        RtdeValue::Vector6Int32(v) => Value::List(v.iter().map(|&x| Value::Int(x)).collect()),
+        RtdeValue::Vector6Uint32(v) => {
+            Value::List(v.iter().map(|&x| Value::Int(x as i32)).collect())
+        }
+    }
+}
+
+/// The virtual arm as an RTDE source: a running arm (robot mode 7, safety normal, a
+/// program playing) whose targets are its actual values.
+impl RtdeSource for Controller {
+    fn time(&self) -> f64 {
+        self.now().as_secs_f64()
+    }
+    fn dh(&self) -> Dh {
+        self.dh
+    }
+    fn robot_mode(&self) -> i32 {
+        7
+    }
+    fn safety_status(&self) -> i32 {
+        1
+    }
+    fn runtime_state(&self) -> u32 {
+        2
+    }
+    fn target_q(&self) -> [f64; 6] {
+        self.arm.q
+    }
+    fn target_qd(&self) -> [f64; 6] {
+        self.arm.qd
+    }
+    fn target_qdd(&self) -> [f64; 6] {
+        self.arm.qdd
+    }
+    fn actual_q(&self) -> [f64; 6] {
+        self.arm.q
+    }
+    fn actual_qd(&self) -> [f64; 6] {
+        self.arm.qd
+    }
+    fn target_moment(&self) -> [f64; 6] {
+        self.arm.world.joint_torques
+    }
+    fn joint_temperatures(&self) -> [f64; 6] {
+        self.arm.world.joint_temp
+    }
+    fn actual_execution_time(&self) -> f64 {
+        self.arm.world.execution_time
+    }
+    fn actual_tcp_pose(&self) -> [f64; 6] {
+        self.tcp_pose()
+    }
+    fn actual_tcp_speed(&self) -> [f64; 6] {
+        self.arm.tcp_speed
+    }
+    fn actual_tcp_force(&self) -> [f64; 6] {
+        self.measured_tcp_force()
+    }
+    fn target_tcp_pose(&self) -> [f64; 6] {
+        self.tcp_pose()
+    }
+    fn target_tcp_speed(&self) -> [f64; 6] {
+        self.arm.tcp_speed
+    }
+    fn tcp_offset(&self) -> [f64; 6] {
+        self.arm.tcp
+    }
+    fn speed_fraction(&self) -> f64 {
+        self.arm.slider()
+    }
+    fn speed_scaling(&self) -> f64 {
+        self.arm.slider()
+    }
+    fn digital_inputs(&self) -> u64 {
+        bits(&self.arm.world.digital_in)
+    }
+    fn digital_outputs(&self) -> u64 {
+        bits(&self.arm.digital_out)
+    }
+    fn analog_inputs(&self) -> [f64; 2] {
+        [self.arm.world.analog_in[0], self.arm.world.analog_in[1]]
+    }
+    fn analog_outputs(&self) -> [f64; 2] {
+        let a = &self.arm;
+        std::array::from_fn(|i| {
+            rtde_fields::analog_output(a.analog_out[i], a.analog_out_domain[i] != 0)
+        })
+    }
+    fn analog_io_types(&self) -> u32 {
+        let d = self.arm.analog_out_domain;
+        rtde_fields::analog_io_types([d[0] != 0, d[1] != 0])
+    }
+    fn tool_analog_inputs(&self) -> [f64; 2] {
+        [self.arm.world.analog_in[2], self.arm.world.analog_in[3]]
+    }
+    fn tool_current(&self) -> f64 {
+        self.arm.world.tool_current
+    }
+    fn tool_temperature(&self) -> f64 {
+        self.arm.world.tool_temp
+    }
+    fn output_bool_registers(&self) -> &[bool] {
+        &self.arm.bool_regs
+    }
+    fn output_int_registers(&self) -> &[i32] {
+        &self.arm.int_regs
+    }
+    fn output_double_registers(&self) -> &[f64] {
+        &self.arm.float_regs
+    }
+    fn input_bool_registers(&self) -> &[bool] {
+        &self.arm.world.input_bool_regs
+    }
+    fn input_int_registers(&self) -> &[i32] {
+        &self.arm.world.input_int_regs
+    }
+    fn input_double_registers(&self) -> &[f64] {
+        &self.arm.world.input_float_regs
+    }
+    fn payload_mass(&self) -> f64 {
+        self.arm.payload_mass
+    }
+    fn payload_cog(&self) -> [f64; 3] {
+        self.arm.payload_cog
+    }
+    fn payload_inertia(&self) -> [f64; 6] {
+        self.arm.payload_inertia
+    }
 }
 
 fn get_rtde_value(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
     let key = a.text(0)?;
-    let arm = &c.arm;
-    let w = &arm.world;
-    let v = match key.as_str() {
-        "timestamp" => Value::Float(c.now().as_secs_f64()),
-        "target_q" | "actual_q" => floats(arm.q),
-        "target_qd" | "actual_qd" => floats(arm.qd),
-        "target_qdd" => floats(arm.qdd),
-        "target_TCP_pose" | "actual_TCP_pose" => floats(c.tcp_pose()),
-        "target_TCP_speed" | "actual_TCP_speed" => floats(arm.tcp_speed),
-        "actual_TCP_force" => floats(c.measured_tcp_force()),
-        "joint_temperatures" => floats(w.joint_temp),
-        "actual_execution_time" => Value::Float(w.execution_time),
-        "robot_mode" => Value::Int(7),
-        "safety_mode" | "safety_status" => Value::Int(1),
-        "runtime_state" => Value::Int(2),
-        "speed_scaling" | "target_speed_fraction" => Value::Float(arm.slider()),
-        "actual_digital_input_bits" => bits(w.digital_in.iter().copied()),
-        "actual_digital_output_bits" => bits(arm.digital_out.iter().copied()),
-        "standard_analog_input0" => Value::Float(w.analog_in[0]),
-        "standard_analog_input1" => Value::Float(w.analog_in[1]),
-        "tool_analog_input0" => Value::Float(w.analog_in[2]),
-        "tool_analog_input1" => Value::Float(w.analog_in[3]),
-        "output_bit_registers0_to_31" => bits(arm.bool_regs[..32].iter().copied()),
-        "output_bit_registers32_to_63" => bits(arm.bool_regs[32..64].iter().copied()),
-        "input_bit_registers0_to_31" => bits(w.input_bool_regs[..32].iter().copied()),
-        "input_bit_registers32_to_63" => bits(w.input_bool_regs[32..64].iter().copied()),
-        "payload" => Value::Float(arm.payload_mass),
-        "payload_cog" => float_list(&arm.payload_cog),
-        "payload_inertia" => float_list(&arm.payload_inertia),
-        k => {
-            if let Some(i) = register(k, "output_int_register_", 48) {
-                Value::Int(arm.int_regs[i])
-            } else if let Some(i) = register(k, "output_double_register_", 48) {
-                Value::Float(arm.float_regs[i])
-            } else if let Some(i) = register(k, "input_int_register_", 48) {
-                Value::Int(w.input_int_regs[i])
-            } else if let Some(i) = register(k, "input_double_register_", 48) {
-                Value::Float(w.input_float_regs[i])
-            } else if let Some(i) = register(k, "output_bit_register_", 128).filter(|i| *i >= 64) {
-                Value::Bool(arm.bool_regs[i])
-            } else if let Some(i) = register(k, "input_bit_register_", 128).filter(|i| *i >= 64) {
-                Value::Bool(w.input_bool_regs[i])
-            } else {
-                return Err(Fault::from(format!(
-                    "`get_rtde_value`: \"{k}\" is not an RTDE output field this virtual controller serves"
-                )));
-            }
-        }
-    };
-    Ok(Out::Value(v))
+    let field = Field::lookup(&key, Direction::Output).ok_or_else(|| {
+        Fault::from(format!(
+            "`get_rtde_value`: \"{key}\" is not an RTDE output field this virtual controller serves"
+        ))
+    })?;
+    let v = field.read(&*c).ok_or_else(|| {
+        Fault::from(format!(
+            "`get_rtde_value`: \"{key}\" is not an output field"
+        ))
+    })?;
+    Ok(Out::Value(value(v)))
 }
