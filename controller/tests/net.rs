@@ -262,3 +262,44 @@ fn the_ursim_profile_answers_as_ursim() {
     server.stop();
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// Accepts one connection on `listener` and reads it to its end (hang guard: `WAIT`).
+fn read_one_connection(listener: std::net::TcpListener) -> std::thread::JoinHandle<String> {
+    std::thread::spawn(move || {
+        let (mut s, _) = listener.accept().expect("the program connects");
+        s.set_read_timeout(Some(WAIT)).unwrap();
+        let mut got = String::new();
+        s.read_to_string(&mut got)
+            .expect("read until the program closes");
+        got
+    })
+}
+
+#[test]
+fn a_secondary_program_sends_on_a_socket_of_its_own() {
+    let (server, rx) = start();
+    let listener = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
+    let port = listener.local_addr().unwrap().port();
+    let got = read_one_connection(listener);
+    let mut secondary = TcpStream::connect(server.addr("secondary").unwrap()).unwrap();
+    secondary
+        .write_all(
+            format!(
+                "sec s():\n  socket_open(\"127.0.0.1\", {port}, \"x\")\n  socket_send_string(\"hi\", \"x\")\n  socket_close(\"x\")\n  textmsg(\"sent\")\nend\n"
+            )
+            .as_bytes(),
+        )
+        .unwrap();
+    assert_eq!(got.join().unwrap(), "hi");
+    wait_for(
+        &rx,
+        |e| matches!(e, ServerEvent::Message(m) if m.text == "sent"),
+    );
+    // Nothing was reported unfinished.
+    server.stop();
+    let refused: Vec<ServerEvent> = rx
+        .try_iter()
+        .filter(|e| format!("{e:?}").contains("unfinished"))
+        .collect();
+    assert!(refused.is_empty(), "{refused:?}");
+}

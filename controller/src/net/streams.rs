@@ -273,18 +273,12 @@ pub(crate) struct Listeners {
 
 /// Runs the loop until the server stops.
 pub(crate) fn run(shared: &Arc<Shared>, listeners: Listeners) {
-    let (done_tx, done_rx) = mpsc::channel();
     let mut lp = Loop {
         clients: Vec::new(),
         driver: Driver::new(Options::default()),
-        connects: Connects {
-            timeout: Options::default().connect_timeout,
-            generation: 0,
-            waiting: VecDeque::new(),
-            in_flight: 0,
-            done_tx,
-            done_rx,
-        },
+        connects: Connects::new(),
+        secondary_driver: Driver::new(Options::default()),
+        secondary_connects: Connects::new(),
         registry: InputRegistry::new(),
         next_state: Duration::ZERO,
         safety: None,
@@ -476,6 +470,18 @@ struct Connects {
 }
 
 impl Connects {
+    fn new() -> Self {
+        let (done_tx, done_rx) = mpsc::channel();
+        Connects {
+            timeout: Options::default().connect_timeout,
+            generation: 0,
+            waiting: VecDeque::new(),
+            in_flight: 0,
+            done_tx,
+            done_rx,
+        }
+    }
+
     /// A program started or ended: what its connects bring is no one's.
     fn next_program(&mut self) {
         self.generation += 1;
@@ -531,6 +537,10 @@ struct Loop {
     clients: Vec<Client>,
     driver: Driver,
     connects: Connects,
+    /// The sockets of the secondary program waiting for the network (its own: its
+    /// socket names are not the main program's).
+    secondary_driver: Driver,
+    secondary_connects: Connects,
     /// Which RTDE client owns which input field.
     registry: InputRegistry,
     next_state: Duration,
@@ -557,6 +567,8 @@ impl Loop {
         self.clients.is_empty()
             && self.connects.waiting.is_empty()
             && self.connects.in_flight == 0
+            && self.secondary_connects.waiting.is_empty()
+            && self.secondary_connects.in_flight == 0
             && !shared.shutting_down()
             && shared.loop_cell().is_idle()
     }
@@ -881,6 +893,30 @@ impl Loop {
                             None => self.driver.handle_event_after_end(e),
                         }
                     }
+                    CellEvent::Secondary(e) => match (cell.secondary_machine_mut(), e) {
+                        (
+                            Some(_),
+                            ProgramEvent::Connect {
+                                socket_name,
+                                host,
+                                port,
+                            },
+                        ) => self.secondary_connects.waiting.push_back(ConnectRequest {
+                            generation: self.secondary_connects.generation,
+                            socket_name,
+                            host,
+                            port,
+                        }),
+                        (Some(m), e) => {
+                            self.secondary_driver
+                                .handle_event(m, e, &mut |a| show(&emit_program, a));
+                        }
+                        (None, e) => self.secondary_driver.handle_event_after_end(e),
+                    },
+                    CellEvent::SecondaryEnded => {
+                        self.secondary_driver.close_all();
+                        self.secondary_connects.next_program();
+                    }
                     CellEvent::ProgramStarted { name } => {
                         self.connects.next_program();
                         emit(program_event("started", &name, None, None, None));
@@ -956,6 +992,12 @@ impl Loop {
             self.connects.service(&mut self.driver, cell.machine_mut());
             if let Some(m) = cell.machine_mut() {
                 self.driver.poll_sockets(m, &mut |a| show(&emit_program, a));
+            }
+            self.secondary_connects
+                .service(&mut self.secondary_driver, cell.secondary_machine_mut());
+            if let Some(m) = cell.secondary_machine_mut() {
+                self.secondary_driver
+                    .poll_sockets(m, &mut |a| show(&emit_program, a));
             }
             let mut status = cell.status();
             // The step's time (the dashboard's thread may have advanced the cell to the
