@@ -97,6 +97,7 @@ pub mod eip;
 mod error;
 pub mod event;
 mod force;
+mod history;
 pub mod interpreter;
 pub mod kinematics;
 mod lexer;
@@ -118,6 +119,7 @@ pub use event::{
     CallRecord, Event, Message, MessageKind, MoveEnd, MoveOutcome, MoveStart, Outcome, OutputValue,
     OutputWrite, ReadRecord,
 };
+pub use history::JOINT_HISTORY_STEPS;
 pub use machine::{Config, Machine, State, Stub};
 pub use sockets::{Policy, Timeout};
 pub use value::{Value, MAX_STRUCT_MEMBERS, MAX_VALUE_DEPTH};

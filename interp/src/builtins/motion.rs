@@ -259,8 +259,8 @@ pub(super) const TABLE: &[Builtin] = &[
         "get_actual_joint_positions_history",
         D,
         &[opt("steps", Default::Int(0))],
-        "The commanded joints (no history is kept).",
-        joints,
+        "The joints `steps` controller steps ago (0: now); a runtime error past the history's JOINT_HISTORY_STEPS steps.",
+        joints_history,
     ),
     Builtin::new(
         "get_actual_joint_speeds",
@@ -1151,6 +1151,15 @@ fn direct_torque(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
 
 fn joints(c: &mut Controller, _: &mut Args) -> Result<Out, Fault> {
     Ok(Out::Value(floats(c.arm.q)))
+}
+
+fn joints_history(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+    let back = a.int(0)?;
+    let q = c
+        .joint_history
+        .at(c.step, i64::from(back), c.arm.q)
+        .map_err(|e| Fault::from(format!("`get_actual_joint_positions_history`: {e}")))?;
+    Ok(Out::Value(floats(q)))
 }
 
 fn joint_speeds(c: &mut Controller, _: &mut Args) -> Result<Out, Fault> {
