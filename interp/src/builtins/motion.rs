@@ -440,7 +440,7 @@ pub(super) const TABLE: &[Builtin] = &[
             opt("maxOrientationError", Default::Float(1e-10)),
             opt("tcp", Default::Absent),
         ],
-        "True if some joint position puts the tool at the pose (the arm's inverse kinematics).",
+        "True if get_inverse_kin has a solution: the arm reaches the pose exactly, or within maxPositionError and maxOrientationError.",
         has_solution,
     ),
     Builtin::new(
@@ -1331,7 +1331,10 @@ fn has_solution(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
     let pose = a.six(0)?;
     let qnear = if a.is_absent(1) { c.arm.q } else { a.six(1)? };
     let tcp = if a.is_absent(4) { c.arm.tcp } else { a.six(4)? };
-    Ok(Out::Value(Value::Bool(c.inverse(pose, qnear, tcp).is_ok())))
+    let (max_position, max_orientation) = super::poses::tolerances(a)?;
+    Ok(Out::Value(Value::Bool(
+        super::poses::inverse_within(c, pose, qnear, tcp, max_position, max_orientation).is_ok(),
+    )))
 }
 
 fn set_pos(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
