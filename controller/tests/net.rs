@@ -367,7 +367,10 @@ fn a_secondary_program_calls_xml_rpc() {
         )
         .unwrap();
     let request = rpc.join().unwrap();
-    assert!(request.contains("<methodName>add</methodName>"), "{request}");
+    assert!(
+        request.contains("<methodName>add</methodName>"),
+        "{request}"
+    );
     wait_for(
         &rx,
         |e| matches!(e, ServerEvent::Message(m) if m.text == "sum 3"),

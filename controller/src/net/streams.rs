@@ -81,6 +81,11 @@ pub const READ_CHUNK: usize = 64 * 1024;
 /// dashboard. More wait their turn (at most one per program thread); those of a program
 /// that ended are dropped. Eight is more than programs open at once.
 pub const MAX_CONNECTING: usize = 8;
+
+/// Connects in progress for the secondary program waiting for the network (threads of
+/// their own, as [`MAX_CONNECTING`]): 2, as UR allows only quick calls there (a socket
+/// and an XML-RPC server at once); more wait their turn.
+pub const MAX_SECONDARY_CONNECTING: usize = 2;
 /// Bytes read from the stream clients in one step, each client reading at most its
 /// fair share (this over the number of clients that sent something the step before, at
 /// least [`MIN_READ_SHARE`]) in one read: 2 MB/s at 2 ms steps (0.5 MB/s at CB3's
@@ -276,9 +281,9 @@ pub(crate) fn run(shared: &Arc<Shared>, listeners: Listeners) {
     let mut lp = Loop {
         clients: Vec::new(),
         driver: Driver::new(Options::default()),
-        connects: Connects::new(),
+        connects: Connects::new(MAX_CONNECTING),
         secondary_driver: Driver::new(Options::default()),
-        secondary_connects: Connects::new(),
+        secondary_connects: Connects::new(MAX_SECONDARY_CONNECTING),
         registry: InputRegistry::new(),
         next_state: Duration::ZERO,
         safety: None,
@@ -460,6 +465,8 @@ struct Connected {
 
 /// The program's connects, each in a thread of its own (see [`MAX_CONNECTING`]).
 struct Connects {
+    /// The most connects in progress at once.
+    limit: usize,
     timeout: Duration,
     /// Counts the programs: an outcome for an earlier one is dropped.
     generation: u64,
@@ -470,9 +477,10 @@ struct Connects {
 }
 
 impl Connects {
-    fn new() -> Self {
+    fn new(limit: usize) -> Self {
         let (done_tx, done_rx) = mpsc::channel();
         Connects {
+            limit,
             timeout: Options::default().connect_timeout,
             generation: 0,
             waiting: VecDeque::new(),
@@ -503,7 +511,7 @@ impl Connects {
                 }
             }
         }
-        while self.in_flight < MAX_CONNECTING {
+        while self.in_flight < self.limit {
             let Some(r) = self.waiting.pop_front() else {
                 break;
             };
