@@ -9,8 +9,8 @@
 //!   replaces the one running (as on the controller, whose new program stops the old
 //!   one) and runs at once if the arm is RUNNING and the safety allows motion; otherwise
 //!   it is refused with the reason. A `sec` program ([`Submitted::Secondary`]) runs beside
-//!   the main program: it may not move the arm or wait, so it runs to its end in one step
-//!   on a copy of the arm whose outputs, registers and settings then become the arm's.
+//!   the main program: it may not move the arm; what it sets becomes the arm's; it may
+//!   use sockets and XML-RPC, briefly ([`secondary`]).
 //! - `play` of a loaded `.urp` asks the caller for its text ([`CellEvent::NeedProgram`]);
 //!   the caller reads and translates the file and gives the script back
 //!   ([`Cell::start_loaded`]).
@@ -43,6 +43,8 @@ use urscript_interp::{
 
 use crate::state::{Controller, ProgramState};
 use crate::status::{Inputs, Status};
+
+pub(crate) mod secondary;
 
 /// The most events waiting for the caller; past it the oldest go first (a caller that
 /// never polls does not grow the cell).
@@ -107,6 +109,12 @@ pub enum CellEvent {
     /// record, or a socket that needs the network (`Connect`, `Transmit`, `Close`: give
     /// those to a driver, e.g. [`urscript_interp::drive::Driver::handle_event`]).
     Program(Event),
+    /// A socket event of the secondary program waiting for the network (`Connect`,
+    /// `Transmit`, `Close`): give it to a driver of its own, with
+    /// [`Cell::secondary_machine_mut`].
+    Secondary(Event),
+    /// The secondary program that used the network ended: close what its driver holds.
+    SecondaryEnded,
 }
 
 /// The program running now.
@@ -143,6 +151,11 @@ pub struct Cell {
     /// Answers to held lines, for their connections (at most
     /// [`interpreter::MAX_UNEXECUTED`]; the oldest go first past it).
     deferred: VecDeque<(u64, interpreter::Reply)>,
+    /// The secondary program waiting for the network, if one is.
+    secondary: Option<secondary::Secondary>,
+    /// The secondary programs sent while one waits (at most
+    /// [`secondary::MAX_SECONDARY_QUEUED`]).
+    secondary_queue: VecDeque<String>,
 }
 
 impl std::fmt::Debug for Cell {
@@ -174,6 +187,8 @@ impl Cell {
             preamble: Preamble::default(),
             held: VecDeque::new(),
             deferred: VecDeque::new(),
+            secondary: None,
+            secondary_queue: VecDeque::new(),
         }
     }
 
@@ -267,11 +282,13 @@ impl Cell {
     }
 
     /// Whether nothing in the cell needs time to pass step by step: no program running,
-    /// paused, playing or being loaded, and no event waiting. What the controller's
+    /// paused, playing or being loaded, no secondary program waiting for the network, and
+    /// no event waiting. What the controller's
     /// state machine does with time alone (power-on, brake release, a stop's hold) is
     /// worked out from the time at the next [`Cell::advance`], however far it jumps.
     pub fn is_idle(&self) -> bool {
         self.running.is_none()
+            && self.secondary.is_none()
             && !self.awaiting_load
             && self.events.is_empty()
             && self.controller.program_state() == ProgramState::Stopped
@@ -441,71 +458,6 @@ impl Cell {
             && !self.controller.runs_script()
     }
 
-    /// Runs a `sec` program to its end on a copy of the arm; what it set becomes the
-    /// arm's (its joints cannot change: a secondary program may not move the arm).
-    fn run_secondary(&mut self, text: &str, now: Duration) {
-        let program = match parse(text, None) {
-            Ok(p) => p,
-            Err(refused) => return self.push(refused),
-        };
-        let copy = self.arm().clone();
-        let mut m = Machine::with_arm(program, self.interp.clone(), copy);
-        // A secondary program does not wait: one step (and the few a stray `sync()`
-        // might take) is all it gets.
-        m.run_until(self.interp.step_time * SECONDARY_STEPS);
-        if let State::Error(e) = m.state() {
-            let e = e.clone();
-            self.push(CellEvent::Refused {
-                line: e.line(),
-                column: e.column(),
-                text: e.message().to_string(),
-            });
-        }
-        let mut waited = None;
-        while let Some(e) = m.poll_event() {
-            match e {
-                Event::Message(_) => self.push(CellEvent::Program(e)),
-                Event::Connect { host, port, .. } => {
-                    waited.get_or_insert(format!("socket_open(\"{host}\", {port})"));
-                }
-                _ => {}
-            }
-        }
-        // What it could not finish is said, never dropped in silence: a secondary program
-        // here has no network (its sockets and XML-RPC calls are not served).
-        if *m.state() == State::Running {
-            let what = waited.map_or_else(
-                || "it was still waiting".to_string(),
-                |call| format!("it was waiting for {call}"),
-            );
-            self.push(CellEvent::Refused {
-                line: 0,
-                column: 0,
-                text: format!(
-                    "the secondary program was ended unfinished after {SECONDARY_STEPS} steps: {what} (secondary programs here run without sockets or XML-RPC)"
-                ),
-            });
-        }
-        let done = m.into_arm();
-        let arm = self.arm_mut();
-        let (q, qd, tcp_speed) = (arm.q, arm.qd, arm.tcp_speed);
-        *arm = done;
-        arm.q = q;
-        arm.qd = qd;
-        arm.tcp_speed = tcp_speed;
-        // `protective_stop()` in a secondary program stops the arm as in a main one (UR's
-        // client library's driver test sends one and waits for the stop's error code).
-        if std::mem::take(&mut arm.protective_stop) {
-            self.controller.protective_stop(now);
-            if self.controller.program_state() == ProgramState::Stopped {
-                // The program a client sent ends (`Controller::protective_stop`).
-                self.end_running(Ended::Stopped);
-            } else if let Some(r) = &mut self.running {
-                r.paused_at.get_or_insert(now);
-            }
-        }
-    }
-
     fn end_running(&mut self, how: Ended) {
         if let Some(r) = self.running.take() {
             let mut machine = r.machine;
@@ -569,6 +521,7 @@ impl Cell {
             }
             (None, _) => {}
         }
+        self.advance_secondary(now);
     }
 
     fn run_program(&mut self, now: Duration) {
@@ -635,10 +588,14 @@ impl Cell {
                 r.machine.poll_timeout().map(|t| t + r.origin)
             }
         });
-        match (program, self.controller.poll_timeout()) {
-            (Some(a), Some(b)) => Some(a.min(b)),
-            (a, b) => a.or(b),
-        }
+        let secondary = self
+            .secondary
+            .as_ref()
+            .and_then(|s| s.machine.poll_timeout().map(|t| t + s.origin));
+        [program, secondary, self.controller.poll_timeout()]
+            .into_iter()
+            .flatten()
+            .min()
     }
 
     /// The running program's machine, for a driver that gives it what its sockets did
@@ -815,9 +772,6 @@ impl Cell {
         }
     }
 }
-
-/// The steps a secondary program gets: one, and the few a stray `sync()` might take.
-const SECONDARY_STEPS: u32 = 4;
 
 /// Parses a program (after `preamble`, if given); one that does not parse is refused with
 /// the controller's `syntax_error_on_line:LINE:...` text.

@@ -142,6 +142,7 @@ mod state;
 mod status;
 pub mod urp;
 
+pub use cell::secondary::{MAX_SECONDARY_QUEUED, SECONDARY_TIME};
 pub use cell::{Cell, CellEvent, Ended, Submitted, MAX_EVENTS};
 pub use dashboard::{
     Dashboard, DashboardCommand, Reply, GREETING, LOCAL_CONTROL, MAX_LINE, UNLOCK_TOO_EARLY,

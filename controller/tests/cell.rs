@@ -219,6 +219,22 @@ fn a_secondary_program_that_cannot_finish_says_so() {
         ),
         ms(2000),
     );
+    // It asks for its connection (a driver of its own serves it) and waits for it.
+    let ev = events(&mut cell);
+    assert!(
+        ev.iter().any(|e| matches!(e, CellEvent::Secondary(Event::Connect { socket_name, .. }) if socket_name == "grip")),
+        "{ev:?}"
+    );
+    assert!(cell.secondary_machine_mut().is_some());
+    // A second one waits its turn.
+    cell.submit(
+        Submitted::Secondary("sec t():\n  set_standard_digital_out(2, True)\nend\n".into()),
+        ms(2010),
+    );
+    assert_eq!(cell.status().digital_outputs >> 2 & 1, 0);
+    // No connection came within the secondary program's time: it is ended, saying so,
+    // and the next one runs.
+    cell.advance(ms(2000) + urscript_controller::SECONDARY_TIME);
     let ev = events(&mut cell);
     assert!(
         ev.iter().any(|e| matches!(
@@ -228,14 +244,9 @@ fn a_secondary_program_that_cannot_finish_says_so() {
         )),
         "{ev:?}"
     );
-    // One that finishes says nothing more.
-    cell.submit(
-        Submitted::Secondary("sec t():\n  set_standard_digital_out(2, True)\nend\n".into()),
-        ms(2010),
-    );
-    assert!(!events(&mut cell)
-        .iter()
-        .any(|e| matches!(e, CellEvent::Refused { .. })));
+    assert!(ev.iter().any(|e| matches!(e, CellEvent::SecondaryEnded)));
+    assert!(cell.secondary_machine_mut().is_none());
+    assert_eq!(cell.status().digital_outputs >> 2 & 1, 1);
 }
 
 #[test]

@@ -2,7 +2,7 @@
 //! a controller on free ports, drive it over TCP as a client, watch its events, act as
 //! the operator, stop it.
 
-use std::io::{Read, Write};
+use std::io::{BufRead, BufReader, Read, Write};
 use std::net::TcpStream;
 use std::time::{Duration, Instant};
 
@@ -274,4 +274,119 @@ fn dashboard_lines_long_split_and_with_cr() {
     // Two CRs: one is dropped, the other is a blank the dashboard trims.
     assert_eq!(d.say("ROBOTMODE\r\r"), "Robotmode: POWER_OFF");
     drop(server);
+}
+
+/// Accepts one connection on `listener` and reads it to its end (hang guard: `WAIT`).
+fn read_one_connection(listener: std::net::TcpListener) -> std::thread::JoinHandle<String> {
+    std::thread::spawn(move || {
+        listener.set_nonblocking(true).unwrap();
+        let start = Instant::now();
+        let mut s = loop {
+            match listener.accept() {
+                Ok((s, _)) => break s,
+                Err(_) if start.elapsed() < WAIT => {
+                    std::thread::sleep(Duration::from_millis(5));
+                }
+                Err(e) => panic!("the program never connected: {e}"),
+            }
+        };
+        s.set_nonblocking(false).unwrap();
+        s.set_read_timeout(Some(WAIT)).unwrap();
+        let mut got = String::new();
+        s.read_to_string(&mut got)
+            .expect("read until the program closes");
+        got
+    })
+}
+
+#[test]
+fn a_secondary_program_sends_on_a_socket_of_its_own() {
+    let (server, rx) = start();
+    let listener = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
+    let port = listener.local_addr().unwrap().port();
+    let got = read_one_connection(listener);
+    let mut secondary = TcpStream::connect(server.addr("secondary").unwrap()).unwrap();
+    secondary
+        .write_all(
+            format!(
+                "sec s():\n  socket_open(\"127.0.0.1\", {port}, \"x\")\n  socket_send_string(\"hi\", \"x\")\n  socket_close(\"x\")\n  textmsg(\"sent\")\nend\n"
+            )
+            .as_bytes(),
+        )
+        .unwrap();
+    assert_eq!(got.join().unwrap(), "hi");
+    wait_for(
+        &rx,
+        |e| matches!(e, ServerEvent::Message(m) if m.text == "sent"),
+    );
+    // Nothing was reported unfinished.
+    server.stop();
+    let refused: Vec<ServerEvent> = rx
+        .try_iter()
+        .filter(|e| format!("{e:?}").contains("unfinished"))
+        .collect();
+    assert!(refused.is_empty(), "{refused:?}");
+}
+
+#[test]
+fn a_secondary_program_calls_xml_rpc() {
+    let (server, rx) = start();
+    let listener = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
+    let port = listener.local_addr().unwrap().port();
+    // One XML-RPC server call: read the request's headers and body, answer 3.
+    let rpc = std::thread::spawn(move || {
+        listener.set_nonblocking(true).unwrap();
+        let start = Instant::now();
+        let s = loop {
+            match listener.accept() {
+                Ok((s, _)) => break s,
+                Err(_) if start.elapsed() < WAIT => std::thread::sleep(Duration::from_millis(5)),
+                Err(e) => panic!("the program never called: {e}"),
+            }
+        };
+        s.set_nonblocking(false).unwrap();
+        s.set_read_timeout(Some(WAIT)).unwrap();
+        let mut r = BufReader::new(s.try_clone().unwrap());
+        let mut length = 0;
+        loop {
+            let mut line = String::new();
+            r.read_line(&mut line).unwrap();
+            if let Some(v) = line.to_ascii_lowercase().strip_prefix("content-length:") {
+                length = v.trim().parse().unwrap();
+            }
+            if line.trim().is_empty() {
+                break;
+            }
+        }
+        let mut body = vec![0; length];
+        r.read_exact(&mut body).unwrap();
+        let reply = "<?xml version=\"1.0\"?><methodResponse><params><param><value><int>3</int></value></param></params></methodResponse>";
+        let mut w = s;
+        write!(
+            w,
+            "HTTP/1.1 200 OK\r\nContent-Type: text/xml\r\nContent-Length: {}\r\n\r\n{reply}",
+            reply.len()
+        )
+        .unwrap();
+        String::from_utf8(body).unwrap()
+    });
+    let mut secondary = TcpStream::connect(server.addr("secondary").unwrap()).unwrap();
+    secondary
+        .write_all(
+            format!(
+                "sec s():\n  h = rpc_factory(\"xmlrpc\", \"http://127.0.0.1:{port}/RPC2\")\n  textmsg(\"sum \", h.add(1, 2))\nend\n"
+            )
+            .as_bytes(),
+        )
+        .unwrap();
+    let request = rpc.join().unwrap();
+    assert!(
+        request.contains("<methodName>add</methodName>"),
+        "{request}"
+    );
+    wait_for(
+        &rx,
+        |e| matches!(e, ServerEvent::Message(m) if m.text == "sum 3"),
+    );
+    server.stop();
 }

@@ -470,6 +470,8 @@ pub(crate) struct Controller {
     /// The step the TCP's contact with the contact plane began in (`tool_contact`), while
     /// it lasts.
     pub contact_since: Option<u64>,
+    /// The joints of the steps before (`get_actual_joint_positions_history`).
+    pub(crate) joint_history: crate::history::JointHistory,
     /// The move or stream whose start was reported and whose end was not.
     pub tracked: Option<Tracked>,
     /// The start of the move queued behind a blending one (reported when it starts).
@@ -931,6 +933,7 @@ impl Controller {
         if self.arm.world.contact_stiffness > 0.0 {
             self.track_contact(step);
         }
+        self.joint_history.record(step, before.0, self.arm.q);
     }
 
     /// Force mode up to step `step` (from the last step it ran to), from joints `before`

@@ -118,6 +118,7 @@ pub mod drive;
 pub mod eip;
 mod error;
 pub mod event;
+mod history;
 pub mod interpreter;
 mod native;
 mod rpc;
@@ -197,10 +198,11 @@ pub use event::{
     CallRecord, Event, Message, MessageKind, MoveEnd, MoveOutcome, MoveStart, Outcome, OutputValue,
     OutputWrite, ReadRecord,
 };
-pub use syntax::lexer::{top_level_end, TopLevel, UnitKind, UnitLine};
+pub use history::JOINT_HISTORY_STEPS;
 pub use machine::{Config, Machine, State, Stub};
 pub use sockets::{Policy, Timeout};
 pub use syntax::compile::{Preamble, Program};
+pub use syntax::lexer::{top_level_end, TopLevel, UnitKind, UnitLine};
 pub use value::{Value, MAX_STRUCT_MEMBERS, MAX_VALUE_DEPTH};
 pub use world_set::{SetError, ARM_SETTINGS, WORLD_SETTINGS};
 

@@ -115,6 +115,41 @@ fn force_mode_presses_against_a_plane_until_the_spring_balances_the_wrench() {
 }
 
 #[test]
+fn force_mode_holds_the_axes_it_does_not_select_whatever_the_wrench_says_there() {
+    // Only z is compliant; the wrench asks for force and torque on every axis, and a
+    // tilted surface pushes back partly along x: x, y and the orientation stay put.
+    // (Types 2 and 3 keep the frame's z axis; type 1 turns it toward the frame's origin.)
+    for kind in [2, 3] {
+        let src = format!(
+            "p0 = get_actual_tcp_pose()\n\
+            force_mode(p[0.3, 0.2, 0, 0, 0, 0], [0, 0, 1, 0, 0, 0], [10, -10, -10, 1, -1, 1], {kind}, [0.1, 0.1, 0.1, 0.17, 0.17, 0.17])\n\
+            sleep(1.0)\n\
+            textmsg(pose_sub(get_actual_tcp_pose(), p0))\n\
+            end_force_mode()\n"
+        );
+        let mut m = machine(&src);
+        let start = m.tcp_pose();
+        // A surface 30 mm below, tilted 0.3 rad about y.
+        m.world_mut()
+            .set(&format!(
+                "contact_plane=p[{}, {}, {}, 0, 0.3, 0]",
+                start[0],
+                start[1],
+                start[2] - 0.03
+            ))
+            .unwrap();
+        m.world_mut().set("contact_stiffness=5000").unwrap();
+        run(&mut m, 2000);
+        assert_eq!(m.state(), &State::Finished, "type {kind}");
+        let moved = floats(&messages(&mut m)[0]);
+        for k in [0, 1, 3, 4, 5] {
+            assert!(moved[k].abs() < 1e-9, "type {kind}, axis {k}: {moved:?}");
+        }
+        assert!(moved[2] < -0.02, "type {kind}: z is compliant: {moved:?}");
+    }
+}
+
+#[test]
 fn speedl_until_tool_contact_stops_at_the_surface() {
     // ur_rtde's moveUntilContact: speedl toward the surface until tool_contact, then stopl.
     let src = "speedl([0, 0, -0.05, 0, 0, 0], 0.5)\n\
@@ -143,6 +178,60 @@ fn speedl_until_tool_contact_stops_at_the_surface() {
     // Contact against the motion only: none seen looking the other way.
     assert_eq!(msgs[1], "0");
     assert_eq!(msgs[2], "True");
+}
+
+#[test]
+fn move_until_contact_steps_back_to_where_the_contact_began() {
+    // The loop ur_rtde's control script runs for moveUntilContact: speedl until
+    // tool_contact, then the joints from just before the contact
+    // (get_actual_joint_positions_history), stopl, and movel back there.
+    let src = "xd = [0, 0, -0.05, 0, 0, 0]\n\
+        while True:\n\
+          step_back = tool_contact(direction=p[0, 0, -1, 0, 0, 0])\n\
+          if step_back <= 0:\n\
+            speedl(xd, 0.5, t=get_steptime())\n\
+          else:\n\
+            q = get_actual_joint_positions_history(step_back)\n\
+            stopl(3)\n\
+            textmsg(get_actual_tcp_pose())\n\
+            movel(q)\n\
+            break\n\
+          end\n\
+        end\n\
+        textmsg(get_actual_tcp_pose())\n\
+        textmsg(tool_contact())\n";
+    let mut m = machine(src);
+    let start = m.tcp_pose();
+    let table = start[2] - 0.02;
+    m.world_mut()
+        .set(&format!("contact_plane=p[0, 0, {table}, 0, 0, 0]"))
+        .unwrap();
+    m.world_mut().set("contact_stiffness=20000").unwrap();
+    run(&mut m, 5000);
+    assert_eq!(m.state(), &State::Finished);
+    let msgs = messages(&mut m);
+    let stopped = floats(&msgs[0]);
+    let back = floats(&msgs[1]);
+    // It stopped past the surface, then went back to just above it: out of contact.
+    assert!(stopped[2] < table, "{} vs {table}", stopped[2]);
+    assert!(
+        back[2] >= table && back[2] < table + 0.0005,
+        "{} vs {table}",
+        back[2]
+    );
+    assert_eq!(msgs[2], "0");
+}
+
+#[test]
+fn the_joint_history_ends_at_its_bound() {
+    let mut m = machine("textmsg(get_actual_joint_positions_history(1000))\nget_actual_joint_positions_history(1001)\n");
+    run(&mut m, 10);
+    assert!(
+        matches!(m.state(), State::Error(e) if e.message().contains("beyond the history buffer")),
+        "{:?}",
+        m.state()
+    );
+    assert_eq!(messages(&mut m).len(), 1);
 }
 
 #[test]

@@ -32,7 +32,8 @@
 //!   interpreter's accepting threads, one per dashboard connection ([`MAX_CONNECTIONS`]),
 //!   one per interpreter connection ([`MAX_INTERPRETER_CONNECTIONS`]), one per connect
 //!   of the running program in progress ([`MAX_CONNECTING`]: a connect never blocks the
-//!   real-time loop), and one reading a played `.urp` program (the cell asks for one
+//!   real-time loop), one per connect of a secondary program ([`MAX_SECONDARY_CONNECTING`]),
+//!   and one reading a played `.urp` program (the cell asks for one
 //!   program at a time).
 //! - Connections past a limit ([`MAX_CONNECTIONS`], [`MAX_INTERPRETER_CONNECTIONS`],
 //!   [`MAX_CLIENTS`]): a newcomer evicts the connection of that limit idle longest if it
@@ -113,8 +114,9 @@ pub use fetch::{parse_host, MAX_FETCHED, MAX_FILE};
 pub use interpreter::{MAX_INTERPRETER_CONNECTIONS, POLL as INTERPRETER_POLL};
 pub use streams::{
     EVENT_INTERVAL, IDLE_POLL, MAX_BACKLOG, MAX_CLIENTS, MAX_CONNECTING, MAX_EVENTS_PER_INTERVAL,
-    MAX_QUEUE, MAX_STALL, MIN_ITEM_SHARE, MIN_OUTPUT_SHARE, MIN_READ_SHARE, READ_CHUNK,
-    STEP_ITEM_BUDGET, STEP_OUTPUT_BUDGET, STEP_READ_BUDGET, STEP_START_BUDGET,
+    MAX_QUEUE, MAX_SECONDARY_CONNECTING, MAX_STALL, MIN_ITEM_SHARE, MIN_OUTPUT_SHARE,
+    MIN_READ_SHARE, READ_CHUNK, STEP_ITEM_BUDGET, STEP_OUTPUT_BUDGET, STEP_READ_BUDGET,
+    STEP_START_BUDGET,
 };
 
 /// Dashboard connections served at once; more are accepted and closed at once. Each is
@@ -124,10 +126,15 @@ pub const MAX_CONNECTIONS: usize = 16;
 
 /// The most threads a [`Server`] runs at once: the real-time loop, two accepting
 /// threads, [`MAX_CONNECTIONS`] dashboard and [`MAX_INTERPRETER_CONNECTIONS`]
-/// interpreter connections, [`MAX_CONNECTING`] connects of the program, and one reading
+/// interpreter connections, [`MAX_CONNECTING`] connects of the program,
+/// [`MAX_SECONDARY_CONNECTING`] of the secondary program waiting for the network, and one reading
 /// a played `.urp` program.
-pub const MAX_SERVER_THREADS: usize =
-    3 + MAX_CONNECTIONS + MAX_INTERPRETER_CONNECTIONS + MAX_CONNECTING + 1;
+pub const MAX_SERVER_THREADS: usize = 3
+    + MAX_CONNECTIONS
+    + MAX_INTERPRETER_CONNECTIONS
+    + MAX_CONNECTING
+    + MAX_SECONDARY_CONNECTING
+    + 1;
 
 /// How long a connection must have been idle to be evicted for a newcomer when its
 /// interface's limit ([`MAX_CONNECTIONS`], [`MAX_INTERPRETER_CONNECTIONS`],

@@ -81,6 +81,11 @@ pub const READ_CHUNK: usize = 64 * 1024;
 /// dashboard. More wait their turn (at most one per program thread); those of a program
 /// that ended are dropped. Eight is more than programs open at once.
 pub const MAX_CONNECTING: usize = 8;
+
+/// Connects in progress for the secondary program waiting for the network (threads of
+/// their own, as [`MAX_CONNECTING`]): 2, as UR allows only quick calls there (a socket
+/// and an XML-RPC server at once); more wait their turn.
+pub const MAX_SECONDARY_CONNECTING: usize = 2;
 /// Bytes read from the stream clients in one step, each client reading at most its
 /// fair share (this over the number of clients that sent something the step before, at
 /// least [`MIN_READ_SHARE`]) in one read: 2 MB/s at 2 ms steps (0.5 MB/s at CB3's
@@ -274,18 +279,12 @@ pub(crate) struct Listeners {
 /// Runs the loop until the server stops; `first` is the controller's status before
 /// any client acted: its robot mode, safety status and program state are not changes.
 pub(crate) fn run(shared: &Arc<Shared>, listeners: Listeners, first: &Status) {
-    let (done_tx, done_rx) = mpsc::channel();
     let mut lp = Loop {
         clients: Vec::new(),
         driver: Driver::new(Options::default()),
-        connects: Connects {
-            timeout: Options::default().connect_timeout,
-            generation: 0,
-            waiting: VecDeque::new(),
-            in_flight: 0,
-            done_tx,
-            done_rx,
-        },
+        connects: Connects::new(MAX_CONNECTING),
+        secondary_driver: Driver::new(Options::default()),
+        secondary_connects: Connects::new(MAX_SECONDARY_CONNECTING),
         registry: InputRegistry::new(),
         next_state: Duration::ZERO,
         safety: first.safety,
@@ -467,6 +466,8 @@ struct Connected {
 
 /// The program's connects, each in a thread of its own (see [`MAX_CONNECTING`]).
 struct Connects {
+    /// The most connects in progress at once.
+    limit: usize,
     timeout: Duration,
     /// Counts the programs: an outcome for an earlier one is dropped.
     generation: u64,
@@ -477,6 +478,19 @@ struct Connects {
 }
 
 impl Connects {
+    fn new(limit: usize) -> Self {
+        let (done_tx, done_rx) = mpsc::channel();
+        Connects {
+            limit,
+            timeout: Options::default().connect_timeout,
+            generation: 0,
+            waiting: VecDeque::new(),
+            in_flight: 0,
+            done_tx,
+            done_rx,
+        }
+    }
+
     /// A program started or ended: what its connects bring is no one's.
     fn next_program(&mut self) {
         self.generation += 1;
@@ -498,7 +512,7 @@ impl Connects {
                 }
             }
         }
-        while self.in_flight < MAX_CONNECTING {
+        while self.in_flight < self.limit {
             let Some(r) = self.waiting.pop_front() else {
                 break;
             };
@@ -532,6 +546,10 @@ struct Loop {
     clients: Vec<Client>,
     driver: Driver,
     connects: Connects,
+    /// The sockets of the secondary program waiting for the network (its own: its
+    /// socket names are not the main program's).
+    secondary_driver: Driver,
+    secondary_connects: Connects,
     /// Which RTDE client owns which input field.
     registry: InputRegistry,
     next_state: Duration,
@@ -558,6 +576,8 @@ impl Loop {
         self.clients.is_empty()
             && self.connects.waiting.is_empty()
             && self.connects.in_flight == 0
+            && self.secondary_connects.waiting.is_empty()
+            && self.secondary_connects.in_flight == 0
             && !shared.shutting_down()
             && shared.loop_cell().is_idle()
     }
@@ -882,6 +902,30 @@ impl Loop {
                             None => self.driver.handle_event_after_end(e),
                         }
                     }
+                    CellEvent::Secondary(e) => match (cell.secondary_machine_mut(), e) {
+                        (
+                            Some(_),
+                            ProgramEvent::Connect {
+                                socket_name,
+                                host,
+                                port,
+                            },
+                        ) => self.secondary_connects.waiting.push_back(ConnectRequest {
+                            generation: self.secondary_connects.generation,
+                            socket_name,
+                            host,
+                            port,
+                        }),
+                        (Some(m), e) => {
+                            self.secondary_driver
+                                .handle_event(m, e, &mut |a| show(&emit_program, a));
+                        }
+                        (None, e) => self.secondary_driver.handle_event_after_end(e),
+                    },
+                    CellEvent::SecondaryEnded => {
+                        self.secondary_driver.close_all();
+                        self.secondary_connects.next_program();
+                    }
                     CellEvent::ProgramStarted { name } => {
                         self.connects.next_program();
                         emit(program_event("started", &name, None, None, None));
@@ -957,6 +1001,12 @@ impl Loop {
             self.connects.service(&mut self.driver, cell.machine_mut());
             if let Some(m) = cell.machine_mut() {
                 self.driver.poll_sockets(m, &mut |a| show(&emit_program, a));
+            }
+            self.secondary_connects
+                .service(&mut self.secondary_driver, cell.secondary_machine_mut());
+            if let Some(m) = cell.secondary_machine_mut() {
+                self.secondary_driver
+                    .poll_sockets(m, &mut |a| show(&emit_program, a));
             }
             let mut status = cell.status();
             // The step's time (the dashboard's thread may have advanced the cell to the

@@ -281,6 +281,33 @@ mod tests {
     }
 
     #[test]
+    fn only_the_selected_axes_of_the_task_frame_move() {
+        // Only z selected, a wrench on every axis, a tilted plane in contact.
+        let tcp = [0.1, -0.2, 0.25, 0.0, 0.0, 0.0];
+        let plane = [0.1, -0.2, 0.26, 0.0, 0.3, 0.0];
+        for kind in [1, 2, 3] {
+            let mut m = mode(
+                kind,
+                [false, false, true, false, false, false],
+                [10.0, -10.0, -10.0, 1.0, -1.0, 1.0],
+            );
+            let v = [0.02, 0.01, 0.0];
+            let axes = m.axes(tcp, v);
+            m.step(tcp, v, 0.1, plane, 5000.0);
+            let t = [m.offset[0], m.offset[1], m.offset[2]];
+            assert!(dot(t, t) > 0.0, "type {kind}: z moves");
+            for k in 0..2 {
+                assert!(
+                    dot(t, column(&axes, k)).abs() < 1e-12,
+                    "type {kind}: axis {k} held: {:?}",
+                    m.offset
+                );
+            }
+            assert_eq!(m.offset[3..], [0.0; 3], "type {kind}: no turn");
+        }
+    }
+
+    #[test]
     fn a_wrench_away_from_the_plane_leaves_it_and_a_zero_wrench_only_comes_out_of_it() {
         let plane = [0.0, 0.0, 0.0, 0.0, 0.0, 0.0];
         // 1 mm into the plane.

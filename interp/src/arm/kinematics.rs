@@ -23,6 +23,8 @@ use std::fmt;
 use std::str::FromStr;
 
 pub mod dynamics;
+mod reach;
+pub(crate) use reach::nearest_reach;
 
 /// A UR arm model.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]

@@ -335,6 +335,7 @@ mod tests {
             queued: None,
             clock: crate::controller::MotionClock::default(),
             contact_since: None,
+            joint_history: crate::history::JointHistory::default(),
         };
         // The documented defaults.
         assert_eq!(

@@ -259,8 +259,8 @@ pub(super) const TABLE: &[Builtin] = &[
         "get_actual_joint_positions_history",
         D,
         &[opt("steps", Default::Int(0))],
-        "The commanded joints (no history is kept).",
-        joints,
+        "The joints `steps` controller steps ago (0: now); a runtime error past the history's JOINT_HISTORY_STEPS steps.",
+        joints_history,
     ),
     Builtin::new(
         "get_actual_joint_speeds",
@@ -440,7 +440,7 @@ pub(super) const TABLE: &[Builtin] = &[
             opt("maxOrientationError", Default::Float(1e-10)),
             opt("tcp", Default::Absent),
         ],
-        "True if some joint position puts the tool at the pose (the arm's inverse kinematics).",
+        "True if get_inverse_kin has a solution: the arm reaches the pose exactly, or within maxPositionError and maxOrientationError.",
         has_solution,
     ),
     Builtin::new(
@@ -1152,6 +1152,15 @@ fn joints(c: &mut Controller, _: &mut Args) -> Result<Out, Fault> {
     Ok(Out::Value(floats(c.arm.q)))
 }
 
+fn joints_history(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+    let back = a.int(0)?;
+    let q = c
+        .joint_history
+        .at(c.step, i64::from(back), c.arm.q)
+        .map_err(|e| Fault::from(format!("`get_actual_joint_positions_history`: {e}")))?;
+    Ok(Out::Value(floats(q)))
+}
+
 fn joint_speeds(c: &mut Controller, _: &mut Args) -> Result<Out, Fault> {
     Ok(Out::Value(floats(c.arm.qd)))
 }
@@ -1321,7 +1330,10 @@ fn has_solution(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
     let pose = a.six(0)?;
     let qnear = if a.is_absent(1) { c.arm.q } else { a.six(1)? };
     let tcp = if a.is_absent(4) { c.arm.tcp } else { a.six(4)? };
-    Ok(Out::Value(Value::Bool(c.inverse(pose, qnear, tcp).is_ok())))
+    let (max_position, max_orientation) = super::poses::tolerances(a)?;
+    Ok(Out::Value(Value::Bool(
+        super::poses::inverse_within(c, pose, qnear, tcp, max_position, max_orientation).is_ok(),
+    )))
 }
 
 fn set_pos(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {

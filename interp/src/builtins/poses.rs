@@ -1,9 +1,11 @@
 //! Poses and kinematics: pose arithmetic composes rigid transforms with rotation vectors
 //! as the manual defines them; `rotvec2rpy`/`rpy2rotvec` convert to and from
 //! roll-pitch-yaw; `wrench_trans` moves a wrench's point of view; `interpolate_pose` interpolates each element linearly
-//! (exact for translation, approximate for rotation). The kinematics functions have no
-//! model of the arm yet: `get_inverse_kin(x, qnear)` returns `qnear` (or the commanded
-//! joints), `get_forward_kin()` the commanded pose.
+//! (exact for translation, approximate for rotation). `get_inverse_kin` and
+//! `get_forward_kin` use the arm model's kinematics ([`crate::kinematics`]); a pose out
+//! of exact reach gets the nearest the arm comes when that is within `maxPositionError`
+//! and `maxOrientationError`, else the runtime error the controller raises (which
+//! `get_inverse_kin_has_solution` is there to avoid).
 
 use super::{float_list, floats, opt, req, Args, Builtin, Default, Domain, Out};
 use crate::controller::Controller;
@@ -94,7 +96,7 @@ pub(super) const TABLE: &[Builtin] = &[
             opt("maxOrientationError", Default::Float(1e-10)),
             opt("tcp", Default::Absent),
         ],
-        "The joints that put the tool at x, nearest qnear (default: the current joints), by the arm model's inverse kinematics; an error if x is out of reach.",
+        "The joints that put the tool at x, nearest qnear (default: the current joints), by the arm model's inverse kinematics; out of exact reach, the nearest the arm comes if within maxPositionError and maxOrientationError, else a runtime error (as on the controller).",
         get_inverse_kin,
     ),
     Builtin::new(
@@ -186,10 +188,48 @@ fn get_inverse_kin(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
     let pose = a.six(0)?;
     let qnear = if a.is_absent(1) { c.arm.q } else { a.six(1)? };
     let tcp = if a.is_absent(4) { c.arm.tcp } else { a.six(4)? };
-    let q = c
-        .inverse(pose, qnear, tcp)
+    let (max_position, max_orientation) = tolerances(a)?;
+    let q = inverse_within(c, pose, qnear, tcp, max_position, max_orientation)
         .map_err(|e| Fault::from(format!("`get_inverse_kin`: {e}")))?;
     Ok(Out::Value(floats(q)))
+}
+
+/// `maxPositionError` and `maxOrientationError` (arguments 2 and 3): each 0 or more.
+pub(super) fn tolerances(a: &Args) -> Result<(f64, f64), Fault> {
+    let (p, o) = (a.num(2)?, a.num(3)?);
+    for (name, v) in [("maxPositionError", p), ("maxOrientationError", o)] {
+        if !(v >= 0.0 && v.is_finite()) {
+            return Err(Fault::from(format!(
+                "`{}`: {name} must be 0 or more, not {v}",
+                a.name
+            )));
+        }
+    }
+    Ok((p, o))
+}
+
+/// The joints nearest `qnear` that put the tool at `pose` (through `tcp`), exactly when
+/// the arm reaches it, else as near as the arm comes if that is within both allowed
+/// errors (the manual's "maximum allowed" position and orientation errors); what was
+/// missed otherwise.
+pub(super) fn inverse_within(
+    c: &Controller,
+    pose: [f64; 6],
+    qnear: [f64; 6],
+    tcp: [f64; 6],
+    max_position: f64,
+    max_orientation: f64,
+) -> Result<[f64; 6], String> {
+    c.inverse(pose, qnear, tcp).or_else(|exact| {
+        let (q, p, o) = crate::kinematics::nearest_reach(&c.dh, pose, tcp, qnear);
+        if p <= max_position && o <= max_orientation {
+            Ok(q)
+        } else {
+            Err(format!(
+                "{exact} (the nearest the arm comes is {p:.6} m and {o:.6} rad away; allowed: maxPositionError {max_position}, maxOrientationError {max_orientation})"
+            ))
+        }
+    })
 }
 
 fn get_forward_kin(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {

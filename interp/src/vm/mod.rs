@@ -403,6 +403,7 @@ impl Machine {
                 queued: None,
                 clock: crate::controller::MotionClock::default(),
                 contact_since: None,
+                joint_history: Default::default(),
             },
             site_stubs,
             prog: Arc::new(program),
