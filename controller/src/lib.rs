@@ -133,6 +133,7 @@ mod dashboard;
 pub mod net;
 pub mod primary;
 pub mod realtime;
+mod reason;
 pub mod rtde;
 pub mod script_intake;
 mod state;
@@ -141,6 +142,7 @@ pub mod urp;
 
 pub use cell::{Cell, CellEvent, Ended, Submitted, MAX_EVENTS};
 pub use dashboard::{Dashboard, Reply, GREETING, LOCAL_CONTROL, MAX_LINE, UNLOCK_TOO_EARLY};
+pub use reason::StopReason;
 pub use rtde::{
     rtde_controller_version, rtde_input_type, rtde_max_frequency, rtde_output_type, InputRegistry,
     RtdeError, RtdeEvent, RtdeSession, RtdeTextLevel, RtdeType, RtdeValue, RTDE_DATA_PACKAGE,
