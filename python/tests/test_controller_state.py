@@ -120,3 +120,24 @@ def test_every_register_of_the_rtde_guide_is_read(ur_controller_factory: Control
     assert [i for i, b in enumerate(s.bool_registers) if b] == [63, 100, 127]
     assert len(s.input_int_registers) == 48 and len(s.input_double_registers) == 48
     assert len(s.input_bool_registers) == 128 and not any(s.input_bool_registers)
+
+
+def test_stops_say_why_the_program_paused_or_stopped(ur_controller_factory: ControllerFactory) -> None:
+    ur = ur_controller_factory(standard_ports=False)
+    _ready(ur)
+    ur.send_script("def one():\n  sleep(30)\nend\n")
+    ur.wait_for_mode("PLAYING")
+    assert ur.dashboard("pause") == "Pausing program"
+    ur.wait_for_mode("PAUSED")
+    assert ur.dashboard("stop") == "Stopped"
+    ur.wait_for_event("program", count=2)
+    ur.send_script("def two():\n  x = [1]\n  y = x[3]\nend\n")
+    ur.wait_for_event("program", count=4)
+    stops = ur.stops()
+    assert [(s.what, s.reason, s.name) for s in stops] == [
+        ("paused", "dashboard_pause", ""),
+        ("stopped", "dashboard_stop", "one"),
+        ("state_stopped", "dashboard_stop", ""),
+        ("error", "runtime_error", "two"),
+    ], stops
+    assert stops[3].line == 3 and "index" in (stops[3].text or "")
