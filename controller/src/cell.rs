@@ -41,6 +41,8 @@ use urscript_interp::{
     Arm, ControllerCode, Event, Machine, Preamble, Program, RuntimeError, State,
 };
 
+use crate::{RobotMode, SafetyStatus, StopReason};
+
 use crate::state::{Controller, ProgramState};
 use crate::status::{Inputs, Status};
 
@@ -86,6 +88,8 @@ pub enum CellEvent {
         name: String,
         /// How.
         how: Ended,
+        /// Why.
+        reason: StopReason,
     },
     /// A program was not run: it does not compile, or the arm cannot move now. The
     /// controller reports this as a runtime exception (syntax errors) or a message.
@@ -156,6 +160,13 @@ pub struct Cell {
     /// The secondary programs sent while one waits (at most
     /// [`secondary::MAX_SECONDARY_QUEUED`]).
     secondary_queue: VecDeque<String>,
+
+    /// Why the program state is about to leave PLAYING, as the client that acted said
+    /// ([`Cell::set_stop_cause`]) or the cell itself knows; used by the next pause or
+    /// stop.
+    cause: Option<StopReason>,
+    /// Why the program last paused or stopped ([`Cell::take_stop_reason`]).
+    reason: Option<StopReason>,
 }
 
 impl std::fmt::Debug for Cell {
@@ -189,7 +200,49 @@ impl Cell {
             deferred: VecDeque::new(),
             secondary: None,
             secondary_queue: VecDeque::new(),
+
+            cause: None,
+            reason: None,
         }
+    }
+
+    /// A client just paused or stopped the program (a dashboard `stop`, a primary
+    /// client's `power off`...): the pause or stop that follows is said with `cause`.
+    pub fn set_stop_cause(&mut self, cause: StopReason) {
+        self.cause = Some(cause);
+    }
+
+    /// Why the program last paused or stopped: once, then the reason the controller's
+    /// state shows now (a safety stop, the power off) if no other is known.
+    pub fn take_stop_reason(&mut self) -> StopReason {
+        match self.reason.take().or_else(|| self.cause.take()) {
+            Some(r) => r,
+            None => self.state_reason(),
+        }
+    }
+
+    /// The reason the controller's state shows: a safety stop, the arm powered off, else
+    /// the controller's own.
+    fn state_reason(&mut self) -> StopReason {
+        let now = self.now;
+        let safety = self.controller.safety_status(now);
+        if !matches!(safety, SafetyStatus::Normal | SafetyStatus::Reduced) {
+            return StopReason::Safety(safety);
+        }
+        if self.controller.robot_mode(now) == RobotMode::PowerOff {
+            return StopReason::PowerOff;
+        }
+        StopReason::Controller
+    }
+
+    /// The reason of a pause or stop happening now: the cause given, else the state's.
+    fn stop_reason_now(&mut self) -> StopReason {
+        let reason = match self.cause.take() {
+            Some(c) => c,
+            None => self.state_reason(),
+        };
+        self.reason = Some(reason);
+        reason
     }
 
     /// One line (without its `\n`) from interpreter client `conn`, at `now`: the reply to
@@ -433,6 +486,9 @@ impl Cell {
             });
             return;
         }
+        if self.running.is_some() {
+            self.cause = Some(StopReason::Replaced);
+        }
         self.end_running(Ended::Stopped);
         let name = file.or(entry).unwrap_or_else(|| "<script>".to_string());
         *machine.arm_mut() = std::mem::take(&mut self.arm);
@@ -460,6 +516,13 @@ impl Cell {
 
     fn end_running(&mut self, how: Ended) {
         if let Some(r) = self.running.take() {
+            let reason = match how {
+                Ended::Finished => StopReason::EndOfProgram,
+                Ended::Halted => StopReason::Halt,
+                Ended::Error(_) => StopReason::RuntimeError,
+                Ended::Stopped => self.stop_reason_now(),
+            };
+            self.reason = Some(reason);
             let mut machine = r.machine;
             while let Some(e) = machine.poll_event() {
                 self.push(CellEvent::Program(e));
@@ -480,7 +543,11 @@ impl Cell {
                 };
                 self.defer(conn, reply);
             }
-            self.push(CellEvent::ProgramEnded { name: r.name, how });
+            self.push(CellEvent::ProgramEnded {
+                name: r.name,
+                how,
+                reason,
+            });
         }
     }
 
@@ -499,7 +566,10 @@ impl Cell {
                 self.end_running(Ended::Stopped);
             }
             (Some(r), ProgramState::Paused) => {
-                r.paused_at.get_or_insert(prev);
+                if r.paused_at.is_none() {
+                    r.paused_at = Some(prev);
+                    self.stop_reason_now();
+                }
             }
             (Some(r), ProgramState::Playing) => {
                 if let Some(at) = r.paused_at.take() {
@@ -537,11 +607,13 @@ impl Cell {
             self.controller.protective_stop(now);
             r.paused_at = Some(now);
             stopped = self.controller.program_state() == ProgramState::Stopped;
+            self.reason = Some(StopReason::Safety(SafetyStatus::ProtectiveStop));
         }
         if std::mem::take(&mut r.machine.arm_mut().pause_requested) {
             // An RTDE watchdog with the action "pause": the program pauses.
             self.controller.pause_program(now);
             r.paused_at.get_or_insert(now);
+            self.reason = Some(StopReason::RtdeWatchdog);
         }
         let mut out = Vec::new();
         while let Some(e) = r.machine.poll_event() {
@@ -575,6 +647,7 @@ impl Cell {
             // `powerdown()`: the arm powers off (the virtual controller itself stays up
             // for its clients).
             self.controller.powerdown(now);
+            self.cause = Some(StopReason::Powerdown);
         }
     }
 

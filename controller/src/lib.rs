@@ -136,6 +136,7 @@ pub mod net;
 mod operator;
 pub mod primary;
 pub mod realtime;
+mod reason;
 pub mod rtde;
 pub mod script_intake;
 mod state;
@@ -148,6 +149,7 @@ pub use dashboard::{
     Dashboard, DashboardCommand, Reply, GREETING, LOCAL_CONTROL, MAX_LINE, UNLOCK_TOO_EARLY,
 };
 pub use operator::{operator_help, OperatorCommand, OperatorError, OPERATOR_COMMANDS};
+pub use reason::StopReason;
 pub use rtde::{
     rtde_controller_version, rtde_input_type, rtde_max_frequency, rtde_output_type, InputRegistry,
     RtdeError, RtdeEvent, RtdeSession, RtdeTextLevel, RtdeType, RtdeValue, RTDE_DATA_PACKAGE,

@@ -4,7 +4,7 @@ use std::time::Duration;
 
 use urscript_controller::{
     Cell, CellEvent, Config, Controller, Dashboard, Ended, Inputs, ProgramList, ProgramState,
-    Submitted,
+    StopReason, Submitted,
 };
 use urscript_interp::{Event, MessageKind};
 
@@ -61,7 +61,7 @@ fn a_program_runs_to_its_end_and_leaves_its_outputs() {
     let ev = events(&mut cell);
     assert_eq!(texts(&ev), ["done"]);
     assert!(ev.iter().any(
-        |e| matches!(e, CellEvent::ProgramEnded { name, how: Ended::Finished } if name == "prog")
+        |e| matches!(e, CellEvent::ProgramEnded { name, how: Ended::Finished, reason: StopReason::EndOfProgram } if name == "prog")
     ));
     assert_eq!(cell.program(), None);
     assert_eq!(cell.controller().program_state(), ProgramState::Stopped);
@@ -177,7 +177,7 @@ fn a_new_program_replaces_the_running_one_and_a_secondary_runs_beside_it() {
     );
     let ev = events(&mut cell);
     assert!(ev.iter().any(
-        |e| matches!(e, CellEvent::ProgramEnded { name, how: Ended::Stopped } if name == "a")
+        |e| matches!(e, CellEvent::ProgramEnded { name, how: Ended::Stopped, reason: StopReason::Replaced } if name == "a")
     ));
     assert!(ev
         .iter()
@@ -205,7 +205,7 @@ fn a_program_that_does_not_compile_leaves_the_running_one_alone() {
     )));
     assert_eq!(texts(&ev), ["moved"]);
     assert!(ev.iter().any(
-        |e| matches!(e, CellEvent::ProgramEnded { name, how: Ended::Finished } if name == "move")
+        |e| matches!(e, CellEvent::ProgramEnded { name, how: Ended::Finished, .. } if name == "move")
     ));
 }
 

@@ -96,3 +96,48 @@ def test_a_failed_test_shows_the_controllers_log(pytester: pytest.Pytester) -> N
     assert "ursock controller 127.0.0.1" in out
     assert '"event":"dashboard"' in out and "power on" in out
     assert "command: " in out
+
+
+def test_every_register_of_the_rtde_guide_is_read(ur_controller_factory: ControllerFactory) -> None:
+    # UR's RTDE guide: int and double registers 0-47 (24-47 the general-purpose range),
+    # bool registers 0-127 (64-127 one field each); inputs as well as outputs.
+    ur = ur_controller_factory(standard_ports=False)
+    _ready(ur)
+    ur.send_script(
+        "def p():\n"
+        "  write_output_integer_register(47, -7)\n"
+        "  write_output_integer_register(24, 24)\n"
+        "  write_output_float_register(40, 2.25)\n"
+        "  write_output_boolean_register(100, True)\n"
+        "  write_output_boolean_register(127, True)\n"
+        "  write_output_boolean_register(63, True)\n"
+        "end\n"
+    )
+    s = ur.wait_until(lambda s: len(s.int_registers) == 48 and s.int_registers[47] == -7, timeout=15)
+    assert s.int_registers[24] == 24
+    assert s.double_registers[40] == 2.25 and len(s.double_registers) == 48
+    assert len(s.bool_registers) == 128
+    assert [i for i, b in enumerate(s.bool_registers) if b] == [63, 100, 127]
+    assert len(s.input_int_registers) == 48 and len(s.input_double_registers) == 48
+    assert len(s.input_bool_registers) == 128 and not any(s.input_bool_registers)
+
+
+def test_stops_say_why_the_program_paused_or_stopped(ur_controller_factory: ControllerFactory) -> None:
+    ur = ur_controller_factory(standard_ports=False)
+    _ready(ur)
+    ur.send_script("def one():\n  sleep(30)\nend\n")
+    ur.wait_for_mode("PLAYING")
+    assert ur.dashboard("pause") == "Pausing program"
+    ur.wait_for_mode("PAUSED")
+    assert ur.dashboard("stop") == "Stopped"
+    ur.wait_for_event("program", count=2)
+    ur.send_script("def two():\n  x = [1]\n  y = x[3]\nend\n")
+    ur.wait_for_event("program", count=4)
+    stops = ur.stops()
+    assert [(s.what, s.reason, s.name) for s in stops] == [
+        ("paused", "dashboard_pause", ""),
+        ("stopped", "dashboard_stop", "one"),
+        ("state_stopped", "dashboard_stop", ""),
+        ("error", "runtime_error", "two"),
+    ], stops
+    assert stops[3].line == 3 and "index" in (stops[3].text or "")

@@ -624,6 +624,11 @@ pub struct Program {
     /// The error or the reason.
     #[serde(skip_serializing_if = "is_none")]
     pub text: Option<String>,
+    /// Why a program that ended stopped (`finished`, `halted`, `stopped`, `error`):
+    /// `end_of_program`, `halt`, `runtime_error` (the message is `text`), `replaced`,
+    /// `dashboard_stop`, `protective_stop`... ([`urscript_controller::StopReason`]).
+    #[serde(skip_serializing_if = "is_none")]
+    pub reason: Option<&'static str>,
 }
 
 /// `controller`: what a client of the primary, secondary or realtime interface sent
@@ -862,6 +867,10 @@ pub struct State {
     pub robot_mode: String,
     pub safety: String,
     pub program: String,
+    /// Why, when the program state became `PAUSED` or `STOPPED`: `dashboard_pause`,
+    /// `protective_stop`, `end_of_program`... ([`urscript_controller::StopReason`]).
+    #[serde(skip_serializing_if = "is_none")]
+    pub reason: Option<&'static str>,
 }
 
 /// `controller`: the controller stopped (the last event).

@@ -183,15 +183,30 @@ fn visible(text: &str) -> std::borrow::Cow<'_, str> {
     out.into()
 }
 
-/// The printer: every event goes through [`Printer::emit`], as JSON or for people.
+/// Where a run's events go: every event to a caller's function (`ursock listen --robot`
+/// shows them among its own).
+pub type Sink = Box<dyn FnMut(report::Event) + Send>;
+
+/// The printer: every event goes through [`Printer::emit`], as JSON or for people, or to
+/// a [`Sink`].
 struct Printer {
     json: bool,
+    sink: Option<Sink>,
     /// The last note said for each line: a polling loop says it once until it changes.
     last_why: HashMap<u32, String>,
 }
 
 impl Printer {
+    /// Every event is wanted (JSON lines, or a sink), not only the lines people read.
+    fn all(&self) -> bool {
+        self.json || self.sink.is_some()
+    }
+
     fn emit(&mut self, event: report::Event) {
+        if let Some(sink) = &mut self.sink {
+            sink(event);
+            return;
+        }
         if self.json {
             outln!("{}", event.to_json());
             return;
@@ -259,6 +274,29 @@ pub(crate) fn move_end_line(m: &report::MoveEnd) -> String {
     line
 }
 
+/// A move's start for people: `line 3: movel -> p[...] starts (v 0.25, a 1.2)`, with
+/// the time argument (`t 2 s`) and blend radius (`r 0.05`) when given, the speeds of a
+/// speed stream in place of a target.
+pub(crate) fn move_start_line(m: &report::MoveStart) -> String {
+    let target = target_text(&m.function, m.target_joints, m.target_pose, m.speed);
+    let mut line = format!("line {}: {}", m.line, m.function);
+    if let Some(target) = target {
+        line.push_str(&format!(" -> {target}"));
+    }
+    let mut args = vec![
+        format!("v {}", short(m.velocity)),
+        format!("a {}", short(m.acceleration)),
+    ];
+    if m.time > 0.0 {
+        args.push(format!("t {} s", short(m.time)));
+    }
+    if m.blend_radius > 0.0 {
+        args.push(format!("r {}", short(m.blend_radius)));
+    }
+    line.push_str(&format!(" starts ({})", args.join(", ")));
+    line
+}
+
 /// An output change for people: `line 4: set_standard_digital_out(1, True)`.
 pub(crate) fn output_line(o: &report::Output) -> String {
     format!("line {}: {}({}, {})", o.line, o.function, o.pin, o.value)
@@ -301,8 +339,18 @@ pub(crate) fn move_start_event(s: &urscript_interp::MoveStart) -> report::MoveSt
 /// A move's target for people: the pose of a tool move, the joints of a joint move,
 /// the speeds of a speed stream.
 pub(crate) fn move_target(s: &urscript_interp::MoveStart) -> Option<String> {
-    let tool = !matches!(s.function, "movej" | "optimovej" | "servoj" | "speedj");
-    match (s.target_q, s.target_pose, s.speed) {
+    target_text(s.function, s.target_q, s.target_pose, s.speed)
+}
+
+/// [`move_target`] from a move's function and targets.
+fn target_text(
+    function: &str,
+    q: Option<[f64; 6]>,
+    pose: Option<[f64; 6]>,
+    speed: Option<[f64; 6]>,
+) -> Option<String> {
+    let tool = !matches!(function, "movej" | "optimovej" | "servoj" | "speedj");
+    match (q, pose, speed) {
         (_, Some(p), _) if tool => Some(six("p", &p)),
         (Some(q), _, _) => Some(six("", &q)),
         (_, _, Some(v)) => Some(format!("speed {}", six("", &v))),
@@ -470,16 +518,43 @@ pub(crate) fn message_event(m: &Message) -> report::Event {
 /// stderr (and in `--log`). A compile error (nothing sent) or a runtime error is the
 /// `Err`, naming the line.
 pub fn run(script: &str, connect_to: Option<&str>, opts: Options) -> Result<(), String> {
+    let printer = Printer {
+        json: opts.json,
+        sink: None,
+        last_why: HashMap::new(),
+    };
+    run_with(script, connect_to, opts, printer)
+}
+
+/// [`run`], every event given to `sink` (those `--json` prints, `move_start` included)
+/// instead of printed.
+pub fn run_into(
+    script: &str,
+    connect_to: Option<&str>,
+    opts: Options,
+    sink: Sink,
+) -> Result<(), String> {
+    let printer = Printer {
+        json: false,
+        sink: Some(sink),
+        last_why: HashMap::new(),
+    };
+    run_with(script, connect_to, opts, printer)
+}
+
+fn run_with(
+    script: &str,
+    connect_to: Option<&str>,
+    opts: Options,
+    mut printer: Printer,
+) -> Result<(), String> {
+    let all = printer.all();
     let program = match Program::parse_with_preamble(&opts.preamble, script) {
         Ok(p) => p,
         Err(e) => {
             // As docs/json-events.md says: a compile error is an `error` event (with
             // its line and column) and the `end`, nothing else.
-            if opts.json {
-                let mut printer = Printer {
-                    json: true,
-                    last_why: HashMap::new(),
-                };
+            if all {
                 printer.emit(report::Event::error(
                     Some(e.line()),
                     Some(e.column()),
@@ -505,10 +580,6 @@ pub fn run(script: &str, connect_to: Option<&str>, opts: Options) -> Result<(), 
         virtual_time: opts.virtual_time,
         ..drive::Options::default()
     });
-    let mut printer = Printer {
-        json: opts.json,
-        last_why: HashMap::new(),
-    };
     if let Some(addr) = connect_to {
         let (host, port) = split_host_port(addr)?;
         let opened = driver.connect(&mut machine, DEFAULT_SOCKET_NAME, &host, port);
@@ -570,7 +641,7 @@ pub fn run(script: &str, connect_to: Option<&str>, opts: Options) -> Result<(), 
         }
         Activity::Event(Event::MoveStart(s)) => {
             target = move_target(s);
-            if opts.json {
+            if all {
                 printer.emit(report::Event::MoveStart(move_start_event(s)));
             }
         }
@@ -595,7 +666,7 @@ pub fn run(script: &str, connect_to: Option<&str>, opts: Options) -> Result<(), 
         Activity::Received { socket_name, bytes } if trace => {
             printer.emit(report::Event::rx(socket_name, bytes));
         }
-        Activity::PeerClosed { socket_name } if opts.json => {
+        Activity::PeerClosed { socket_name } if all => {
             printer.emit(report::Event::peer_closed(socket_name));
         }
         _ => {}
@@ -627,14 +698,14 @@ pub fn run(script: &str, connect_to: Option<&str>, opts: Options) -> Result<(), 
                 "--max-time {}s reached: the program was ended",
                 opts.max_time.unwrap_or_default().as_secs_f64()
             )));
-            if opts.json {
+            if all {
                 printer.emit(end(report::EndOutcome::MaxTime));
             }
             Ok(())
         }
         Ok(drive::Outcome::ProtectiveStop) => {
             let why = "protective stop: the arm stopped (a move's path left the arm's reach, or protective_stop() ran); a controller pauses the program here until an operator resumes it";
-            if opts.json {
+            if all {
                 printer.emit(report::Event::error(None, None, why));
                 printer.emit(end(report::EndOutcome::ProtectiveStop));
             }
@@ -649,7 +720,7 @@ pub fn run(script: &str, connect_to: Option<&str>, opts: Options) -> Result<(), 
                 }
                 None => None,
             };
-            if opts.json {
+            if all {
                 if let Some((line, why)) = &failure {
                     printer.emit(report::Event::error(*line, None, why.clone()));
                 }
@@ -667,7 +738,7 @@ pub fn run(script: &str, connect_to: Option<&str>, opts: Options) -> Result<(), 
         }
         Err(e) => {
             let (code, text) = split_code(e.message());
-            if opts.json {
+            if all {
                 let mut event =
                     report::Event::error(Some(e.line()), Some(e.column()), text.clone());
                 if let report::Event::Error(err) = &mut event {

@@ -952,3 +952,194 @@ fn controller_json_move_events_match_the_schema() {
     assert_eq!(seen[1]["joints"][0], 0.5);
     assert_eq!(seen[2]["pin"], 1);
 }
+
+/// `listen --robot FILE --json`: the virtual robot's calls, moves and outputs are events
+/// of the schema, among the listener's own.
+#[test]
+fn listen_robot_json_lines_match_the_schema() {
+    let root = schema();
+    let dir = std::env::temp_dir().join(format!("ursock-listen-robot-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let program = dir.join("moves.script");
+    std::fs::write(
+        &program,
+        "socket_send_line(\"hello\")\nmovej([0.5, -1.5, 1, -1, 0.2, 0], a=3, v=3, r=0)\nset_standard_digital_out(1, True)\n",
+    )
+    .unwrap();
+    let (code, out, err) = run(
+        &[
+            "listen",
+            "--bind",
+            "127.0.0.1",
+            "--port",
+            "0",
+            "--decode",
+            "line",
+            "--exit-after",
+            "1",
+            "--json",
+            "--robot",
+            program.to_str().unwrap(),
+        ],
+        b"",
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+    assert_eq!(code, 0, "{err}");
+    let events: Vec<Value> = out.lines().map(|l| check_event(&root, l)).collect();
+    let at = |kind: &str| {
+        events
+            .iter()
+            .position(|v| v["event"] == kind)
+            .unwrap_or_else(|| panic!("no {kind} event:\n{out}"))
+    };
+    // The robot's call and the listener's decode of what it sent come from two threads:
+    // both are there; the moves and the output come in the program's order.
+    let _ = (at("call"), at("decoded"));
+    assert!(
+        at("move_start") < at("move_end") && at("move_end") < at("output"),
+        "{out}"
+    );
+    let start = events
+        .iter()
+        .find(|v| v["event"] == "move_start")
+        .expect(&out);
+    assert_eq!(start["function"], "movej");
+    assert_eq!(start["target_joints"][0], 0.5);
+    let end = events
+        .iter()
+        .find(|v| v["event"] == "move_end")
+        .expect(&out);
+    assert_eq!(end["outcome"], "reached");
+    assert!(end["took"].as_f64().unwrap() > 0.0, "{end}");
+    assert!(end["time"].is_string(), "stamped as listen's events: {end}");
+}
+
+/// Issue 29: a program that pauses, stops or ends is said with the reason, in `program`
+/// and `state` events of the schema: a client's new program replaced it, a dashboard
+/// `pause` and `stop`, a runtime error (its message), a protective stop, its end.
+#[test]
+fn controller_json_says_why_a_program_paused_or_stopped() {
+    use std::io::{BufRead, BufReader, Write};
+    use std::sync::mpsc;
+    use std::time::Duration;
+    let root = schema();
+    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_ursock"))
+        .args(["controller", "--dashboard-port", "0", "--primary-port", "0"])
+        .args([
+            "--secondary-port",
+            "0",
+            "--realtime-port",
+            "0",
+            "--rtde-port",
+            "0",
+        ])
+        .args(["--interpreter-port", "0", "--json"])
+        .stdin(std::process::Stdio::null())
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .unwrap();
+    let stdout = child.stdout.take().unwrap();
+    let (tx, rx) = mpsc::channel::<String>();
+    std::thread::spawn(move || {
+        for line in BufReader::new(stdout).lines() {
+            let Ok(line) = line else { break };
+            if tx.send(line).is_err() {
+                break;
+            }
+        }
+    });
+    // A hang guard for each line.
+    let next = || rx.recv_timeout(Duration::from_secs(30)).expect("an event");
+    let (mut dashboard, mut primary) = (None, None);
+    while dashboard.is_none() || primary.is_none() {
+        let v = check_event(&root, &next());
+        if v["event"] == "listening" {
+            let addr = v["addr"].as_str().unwrap().to_string();
+            match v["service"].as_str() {
+                Some("dashboard") => dashboard = Some(addr),
+                Some("primary") => primary = Some(addr),
+                _ => {}
+            }
+        }
+    }
+    let s = std::net::TcpStream::connect(dashboard.unwrap()).unwrap();
+    s.set_read_timeout(Some(Duration::from_secs(20))).unwrap();
+    let mut r = BufReader::new(s.try_clone().unwrap());
+    let mut w = s;
+    let mut line = String::new();
+    r.read_line(&mut line).unwrap();
+    let mut ask = |cmd: &str| {
+        w.write_all(format!("{cmd}\n").as_bytes()).unwrap();
+        let mut reply = String::new();
+        r.read_line(&mut reply).unwrap();
+        reply
+    };
+    ask("power on");
+    let deadline = std::time::Instant::now() + Duration::from_secs(20);
+    while ask("robotmode").trim() != "Robotmode: IDLE" {
+        assert!(std::time::Instant::now() < deadline, "never IDLE");
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    ask("brake release");
+    while ask("robotmode").trim() != "Robotmode: RUNNING" {
+        assert!(std::time::Instant::now() < deadline, "never RUNNING");
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    let mut p = std::net::TcpStream::connect(primary.unwrap()).unwrap();
+    // The events up to the one `until` accepts, each checked against the schema.
+    let upto = |until: &dyn Fn(&Value) -> bool| {
+        let mut seen = Vec::new();
+        loop {
+            let v = check_event(&root, &next());
+            let done = until(&v);
+            if matches!(v["event"].as_str(), Some("program" | "state")) {
+                seen.push(v);
+            }
+            if done {
+                return seen;
+            }
+        }
+    };
+    let program = |what: &'static str, name: &'static str| {
+        move |v: &Value| v["event"] == "program" && v["what"] == what && v["name"] == name
+    };
+    let state =
+        |program: &'static str| move |v: &Value| v["event"] == "state" && v["program"] == program;
+    p.write_all(b"def one():\n  sleep(30)\nend\n").unwrap();
+    upto(&program("started", "one"));
+    p.write_all(b"def two():\n  sleep(30)\nend\n").unwrap();
+    let seen = upto(&program("started", "two"));
+    let one = seen
+        .iter()
+        .find(|v| program("stopped", "one")(v))
+        .expect("one stopped");
+    assert_eq!(one["reason"], "replaced", "{one}");
+    assert_eq!(ask("pause").trim(), "Pausing program");
+    let seen = upto(&state("PAUSED"));
+    assert_eq!(seen.last().unwrap()["reason"], "dashboard_pause");
+    assert_eq!(ask("stop").trim(), "Stopped");
+    let seen = upto(&state("STOPPED"));
+    let two = seen
+        .iter()
+        .find(|v| program("stopped", "two")(v))
+        .expect("two stopped");
+    assert_eq!(two["reason"], "dashboard_stop", "{two}");
+    assert_eq!(seen.last().unwrap()["reason"], "dashboard_stop");
+    // A program that fails or stops in its first step: the `program` event says why.
+    p.write_all(b"def three():\n  x = [1, 2]\n  y = x[5]\nend\n")
+        .unwrap();
+    let seen = upto(&program("error", "three"));
+    let three = seen.last().unwrap();
+    assert_eq!(three["reason"], "runtime_error", "{three}");
+    assert!(
+        three["text"].as_str().is_some_and(|t| t.contains("index")),
+        "{three}"
+    );
+    p.write_all(b"def four():\n  protective_stop()\n  sleep(30)\nend\n")
+        .unwrap();
+    let seen = upto(&program("stopped", "four"));
+    assert_eq!(seen.last().unwrap()["reason"], "protective_stop");
+    let _ = child.kill();
+    let _ = child.wait();
+}

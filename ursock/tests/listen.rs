@@ -751,3 +751,47 @@ fn every_sends_periodically_until_stopped_or_the_robot_leaves() {
     l.type_line("every");
     l.wait_for("no periodic sends", false);
 }
+
+/// Issue 30: `listen --robot FILE` runs a virtual robot against the listener and says
+/// its moves as `ursock robot` does: a line when each starts (function, target, speed)
+/// and when it ends (how, in how long).
+#[test]
+fn a_robot_run_by_listen_shows_its_moves() {
+    let dir = std::env::temp_dir().join(format!("ursock-listen-moves-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let program = dir.join("moves.script");
+    std::fs::write(
+        &program,
+        "socket_send_line(\"hi\")\nmovel(p[0.3, -0.2, 0.4, 0, 3.14, 0], a=1.2, v=0.25, t=0, r=0)\nmovej([0.5, -1.5, 1, -1, 0.2, 0], t=0.5)\n",
+    )
+    .unwrap();
+    let out = std::process::Command::new(listen_common::bin())
+        .args([
+            "listen",
+            "--bind",
+            "127.0.0.1",
+            "--port",
+            "0",
+            "--decode",
+            "line",
+        ])
+        .args(["--exit-after", "1", "--robot"])
+        .arg(&program)
+        .stdin(std::process::Stdio::null())
+        .output()
+        .unwrap();
+    let _ = std::fs::remove_dir_all(&dir);
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success(), "{text}");
+    let line = |needle: &str| {
+        text.lines()
+            .find(|l| l.contains(needle))
+            .unwrap_or_else(|| panic!("no line with {needle:?}:\n{text}"))
+            .to_string()
+    };
+    line("= \"hi\"");
+    line("line 2: movel -> p[0.3, -0.2, 0.4, 0, 3.14, 0] starts (v 0.25, a 1.2)");
+    assert!(line("line 2: movel -> p[0.3, -0.2, 0.4, 0, 3.14, 0]: reached in ").ends_with(" s"));
+    line("line 3: movej -> [0.5, -1.5, 1, -1, 0.2, 0] starts (v 1.05, a 1.4, t 0.5 s)");
+    line("line 3: movej -> [0.5, -1.5, 1, -1, 0.2, 0]: reached in 0.5");
+}

@@ -343,3 +343,38 @@ fn tui_shows_traffic_and_sends_typed_replies() {
         std::thread::sleep(Duration::from_millis(50));
     }
 }
+
+/// Issue 30: `listen --tui --robot FILE` shows the virtual robot's moves, a line when
+/// each starts and ends, beside the traffic it sent.
+#[test]
+fn the_tui_shows_the_robots_moves() {
+    if tmux_missing() {
+        return;
+    }
+    let dir = std::env::temp_dir().join(format!("ursock-tui-robot-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let program = dir.join("moves.script");
+    std::fs::write(
+        &program,
+        "socket_send_line(\"hello\")\nmovej([0.5, -1.5, 1, -1, 0.2, 0], a=3, v=3)\nset_standard_digital_out(1, True)\nsleep(30)\n",
+    )
+    .unwrap();
+    let t = start(
+        "robot",
+        free_port(),
+        &format!("--decode line --robot {}", program.display()),
+    );
+    let pane = t.wait_for("reached in");
+    assert!(
+        pane.contains("line 2: movej -> [0.5, -1.5, 1, -1, 0.2, 0] starts (v 3, a 3)"),
+        "{pane}"
+    );
+    let pane = t.wait_for("set_standard_digital_out(1, True)");
+    assert!(
+        pane.contains("= \"hello\""),
+        "the traffic beside it:\n{pane}"
+    );
+    println!("{pane}");
+    t.key("Escape");
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -337,6 +337,8 @@ pub enum ServerEvent {
         column: Option<u32>,
         /// The error or the reason.
         text: Option<String>,
+        /// Why a program that ended stopped (`None` for `started` and `refused`).
+        reason: Option<crate::StopReason>,
     },
     /// `textmsg`, `popup` or `varmsg` of the running program.
     Message(Message),
@@ -394,6 +396,8 @@ pub enum ServerEvent {
         safety: crate::SafetyStatus,
         /// The program state now.
         program: crate::ProgramState,
+        /// Why, when the program state became PAUSED or STOPPED.
+        reason: Option<crate::StopReason>,
     },
     /// A dashboard client said `shutdown`: its program has ended and every client has
     /// been closed (their events came first); the server has stopped. The last event.
@@ -1131,6 +1135,29 @@ pub(crate) fn closed(shared: &Shared, conn: u64, reason: &str, counts: &Counts) 
     });
 }
 
+/// Why a client's command paused or stopped the program (its state was `before`), if
+/// it did: a shutdown, a power off, else the pause or stop itself (`dashboard` commands).
+pub(crate) fn stop_cause(
+    c: &mut Controller,
+    before: crate::ProgramState,
+    now: Duration,
+) -> Option<crate::StopReason> {
+    use crate::{ProgramState, RobotMode, StopReason};
+    let after = c.program_state();
+    if after == before || after == ProgramState::Playing {
+        return None;
+    }
+    Some(if c.is_shut_down() {
+        StopReason::Shutdown
+    } else if c.robot_mode(now) == RobotMode::PowerOff {
+        StopReason::PowerOff
+    } else if after == ProgramState::Paused {
+        StopReason::DashboardPause
+    } else {
+        StopReason::DashboardStop
+    })
+}
+
 /// A reply of one line that keeps the connection open.
 fn one_line(text: &str) -> Reply {
     Reply {
@@ -1157,6 +1184,7 @@ fn answer(
         let now = shared.now();
         cell.advance(now);
         let c = cell.controller();
+        let before = c.program_state();
         let reply = if too_long {
             dashboard.line_too_long(&text)
         } else {
@@ -1174,6 +1202,9 @@ fn answer(
             }
         };
         let shut_down = c.is_shut_down() && !shared.shutting_down.swap(true, Ordering::SeqCst);
+        if let Some(cause) = stop_cause(c, before, now) {
+            cell.set_stop_cause(cause);
+        }
         (reply, shut_down)
     };
     let shown = if too_long {

@@ -823,6 +823,7 @@ impl Loop {
                     emit("command", &|| format!("{cmd:?}"));
                     let mut cell = shared.loop_cell();
                     let c = cell.controller();
+                    let before = c.program_state();
                     let _ = match cmd {
                         Command::PowerOn => c.power_on(now),
                         Command::PowerOff => c.power_off(now),
@@ -837,6 +838,16 @@ impl Loop {
                             Ok(())
                         }
                     };
+                    // A primary client's `stop program` or `power off`.
+                    let cause = match super::stop_cause(cell.controller(), before, now) {
+                        Some(crate::StopReason::DashboardStop) => {
+                            Some(crate::StopReason::ClientStop)
+                        }
+                        other => other,
+                    };
+                    if let Some(cause) = cause {
+                        cell.set_stop_cause(cause);
+                    }
                 }
                 Err(e) => emit("refused", &|| e.to_string()),
             }
@@ -931,7 +942,7 @@ impl Loop {
                         emit(program_event("started", &name, None, None, None));
                         messages.push(RobotMessage::program_started(&name));
                     }
-                    CellEvent::ProgramEnded { name, how } => {
+                    CellEvent::ProgramEnded { name, how, reason } => {
                         let (what, line, column, text) = match &how {
                             Ended::Finished => ("finished", None, None, None),
                             Ended::Halted => ("halted", None, None, None),
@@ -943,7 +954,11 @@ impl Loop {
                                 Some(e.message().to_string()),
                             ),
                         };
-                        emit(program_event(what, &name, line, column, text.clone()));
+                        let mut event = program_event(what, &name, line, column, text.clone());
+                        if let Event::Program { reason: r, .. } = &mut event {
+                            *r = Some(reason);
+                        }
+                        emit(event);
                         if let Ended::Error(e) = &how {
                             messages.push(RobotMessage::RuntimeException {
                                 line: i32::try_from(e.line()).unwrap_or(i32::MAX),
@@ -1012,8 +1027,15 @@ impl Loop {
             // The step's time (the dashboard's thread may have advanced the cell to the
             // wall clock since this step's boundary).
             status.time = now.as_secs_f64();
-            status
+            // A program state that became PAUSED or STOPPED is said with its reason.
+            let left = self.state_key.2 != status.program_state
+                && matches!(
+                    status.program_state,
+                    crate::ProgramState::Paused | crate::ProgramState::Stopped
+                );
+            (status, left.then(|| cell.take_stop_reason()))
         };
+        let (status, stop_reason) = status;
         for e in deferred.into_inner() {
             shared.emit(e);
         }
@@ -1050,13 +1072,14 @@ impl Loop {
             messages.splice(at..at, safety);
         }
         self.safety = status.safety;
-        self.stream(shared, &status, &messages, now);
+        self.stream(shared, &status, stop_reason, &messages, now);
     }
 
     fn stream(
         &mut self,
         shared: &Shared,
         status: &Status,
+        stop_reason: Option<crate::StopReason>,
         messages: &[RobotMessage],
         now: Duration,
     ) {
@@ -1098,6 +1121,7 @@ impl Loop {
                 robot_mode: status.robot_mode,
                 safety: status.safety,
                 program: status.program_state,
+                reason: stop_reason,
             });
         }
         if now >= self.next_state || changed {
@@ -1249,6 +1273,7 @@ fn program_event(
         line,
         column,
         text,
+        reason: None,
     }
 }
 

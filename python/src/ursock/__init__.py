@@ -16,7 +16,15 @@ typed API over its JSON output, and a pytest plugin.
 from __future__ import annotations
 
 from ._binary import ENV_VAR, BinaryNotFound, binary
-from .controller import SERVERS, ControllerError, DashboardClient, UrController, free_loopback_address
+from .controller import (
+    SERVERS,
+    ControllerError,
+    DashboardClient,
+    ProgramStop,
+    UrController,
+    free_loopback_address,
+    stops_of,
+)
 from .rtde import ROBOT_MODES, RUNTIME_STATES, SAFETY_MODES, RobotState, RtdeError, RtdeReader
 from .robot import (
     ArmState,
@@ -36,6 +44,8 @@ from .robot import (
 )
 
 __all__ = [
+    "ProgramStop",
+    "stops_of",
     "ROBOT_MODES",
     "RUNTIME_STATES",
     "SAFETY_MODES",

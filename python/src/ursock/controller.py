@@ -18,13 +18,63 @@ import subprocess
 import threading
 import random
 import time
+from dataclasses import dataclass
 from typing import IO, Any, Callable, Dict, List, Mapping, Optional, Sequence, Tuple, Union
 
 from ._binary import binary, help_text
 from .robot import Move, moves_of, urscript_constant
 from .rtde import ROBOT_MODES, RUNTIME_STATES, SAFETY_MODES, RobotState, RtdeReader
 
-__all__ = ["ControllerError", "DashboardClient", "UrController", "SERVERS", "free_loopback_address"]
+__all__ = [
+    "ControllerError",
+    "DashboardClient",
+    "ProgramStop",
+    "UrController",
+    "SERVERS",
+    "free_loopback_address",
+]
+
+@dataclass(frozen=True)
+class ProgramStop:
+    """A program that paused, stopped or ended, and why: from the controller's
+    ``program`` events (``finished``, ``halted``, ``stopped``, ``error``) and its
+    ``state`` events that say the program became ``PAUSED`` or ``STOPPED``."""
+
+    #: ``"finished"``, ``"halted"``, ``"stopped"``, ``"error"`` (a program ended), or
+    #: ``"paused"`` / ``"state_stopped"`` (the program state changed).
+    what: str
+    #: Why: ``"end_of_program"``, ``"halt"``, ``"runtime_error"``, ``"replaced"`` (a
+    #: client's new program), ``"dashboard_stop"``, ``"dashboard_pause"``,
+    #: ``"power_off"``, ``"protective_stop"``, ``"robot_emergency_stop"``... (the
+    #: ``stop_reason`` of docs/json-events.schema.json); ``None`` if not said.
+    reason: Optional[str]
+    #: The program's name (empty for a state change).
+    name: str = ""
+    #: The runtime error's message.
+    text: Optional[str] = None
+    #: The runtime error's line.
+    line: Optional[int] = None
+
+
+def stops_of(events: Sequence[Mapping[str, Any]]) -> List[ProgramStop]:
+    """The :class:`ProgramStop` list of ``program`` and ``state`` events, in order."""
+    out: List[ProgramStop] = []
+    for e in events:
+        if e.get("event") == "program" and e.get("what") in ("finished", "halted", "stopped", "error"):
+            out.append(
+                ProgramStop(
+                    what=str(e["what"]),
+                    reason=e.get("reason"),
+                    name=str(e.get("name", "")),
+                    text=e.get("text"),
+                    line=e.get("line"),
+                )
+            )
+        elif e.get("event") == "state" and e.get("reason") is not None:
+            what = "paused" if e.get("program") == "PAUSED" else "state_stopped"
+            out.append(ProgramStop(what=what, reason=e.get("reason")))
+    return out
+
 
 #: The controller's servers, by the name used here, with the port a real controller
 #: uses. ``ursock controller`` always serves the dashboard; the others only when its
@@ -592,6 +642,11 @@ class UrController:
                     pass
             except OSError:
                 pass
+
+    def stops(self) -> List[ProgramStop]:
+        """Every pause, stop and end of its programs, with the reason
+        (:class:`ProgramStop`), from the events :attr:`events` still holds."""
+        return stops_of(self.events)
 
     def moves(self) -> List[Move]:
         """The moves of the programs the controller ran, from its ``move_start`` and

@@ -63,9 +63,14 @@ RUNTIME_STATES: Dict[int, str] = {
     5: "RESUMING",
 }
 
-#: How many output registers of each kind are read (int and double 0-23, as UR's
-#: ``write_output_*_register`` functions address them for external clients).
-REGISTERS = 24
+#: How many int and double registers of each direction are read: 0-47, as UR's RTDE
+#: guide numbers them (0-23 are shared with the fieldbus interfaces, 24-47 are general
+#: purpose since PolyScope 3.9/5.3). A server without the upper ones (an older
+#: controller) refuses their names and is read without them.
+REGISTERS = 48
+#: How many bool registers of each direction are read: 0-127 (0-63 packed in two
+#: ``UINT32`` fields, 64-127 one ``BOOL`` field each, since PolyScope 3.9/5.3).
+BOOL_REGISTERS = 128
 
 _V, _O, _S, _P, _U, _M = 86, 79, 83, 80, 85, 77
 _FORMATS = {
@@ -95,10 +100,17 @@ _FIELDS: List[str] = [
     "robot_mode",
     "safety_mode",
     "runtime_state",
-    "output_bit_registers0_to_31",
-    "output_bit_registers32_to_63",
-    *[f"output_int_register_{i}" for i in range(REGISTERS)],
-    *[f"output_double_register_{i}" for i in range(REGISTERS)],
+    *(
+        name
+        for side in ("output", "input")
+        for name in (
+            f"{side}_bit_registers0_to_31",
+            f"{side}_bit_registers32_to_63",
+            *[f"{side}_bit_register_{i}" for i in range(64, BOOL_REGISTERS)],
+            *[f"{side}_int_register_{i}" for i in range(REGISTERS)],
+            *[f"{side}_double_register_{i}" for i in range(REGISTERS)],
+        )
+    ),
 ]
 
 
@@ -132,12 +144,21 @@ class RobotState:
     safety_mode: str
     #: The program's state: ``"PLAYING"``, ``"STOPPED"``, ``"PAUSED"``...
     program_state: str
-    #: Output int registers 0-23.
+    #: Output int registers 0-47 (written by the program; ``[i]`` is register ``i``;
+    #: 0-23 only from a server without the upper range).
     int_registers: List[int]
-    #: Output double registers 0-23.
+    #: Output double registers 0-47, the same way.
     double_registers: List[float]
-    #: Output bool registers 0-63 (empty if the server has none).
+    #: Output bool registers 0-127 (0-63 only from a server without the upper range;
+    #: empty if it has none).
     bool_registers: List[bool]
+    #: Input int registers 0-47: what RTDE clients wrote (the program reads them with
+    #: ``read_input_integer_register``).
+    input_int_registers: List[int]
+    #: Input double registers 0-47.
+    input_double_registers: List[float]
+    #: Input bool registers 0-127.
+    input_bool_registers: List[bool]
     #: Every field read, by its RTDE name.
     raw: Dict[str, Any]
 
@@ -149,6 +170,31 @@ class RobotState:
 
 def _bits(value: Any, n: int) -> List[bool]:
     return [bool((int(value) >> i) & 1) for i in range(n)] if value is not None else []
+
+
+def _registers(raw: Dict[str, Any], side: str, kind: str, cast: Callable[[Any], Any]) -> List[Any]:
+    """``{side}_{kind}_register_N`` from 0 up to the first one the server did not give."""
+    out = []
+    for i in range(REGISTERS):
+        v = raw.get(f"{side}_{kind}_register_{i}")
+        if v is None:
+            break
+        out.append(cast(v))
+    return out
+
+
+def _bool_registers(raw: Dict[str, Any], side: str) -> List[bool]:
+    """Bool registers 0-63 from the packed fields, then 64-127 while the server gave them."""
+    out = _bits(raw.get(f"{side}_bit_registers0_to_31"), 32)
+    if len(out) == 32:
+        out += _bits(raw.get(f"{side}_bit_registers32_to_63"), 32)
+    if len(out) == 64:
+        for i in range(64, BOOL_REGISTERS):
+            v = raw.get(f"{side}_bit_register_{i}")
+            if v is None:
+                break
+            out.append(bool(v))
+    return out
 
 
 def _state(raw: Dict[str, Any]) -> RobotState:
@@ -167,12 +213,12 @@ def _state(raw: Dict[str, Any]) -> RobotState:
         robot_mode=ROBOT_MODES.get(int(raw.get("robot_mode", -1)), str(raw.get("robot_mode"))),
         safety_mode=SAFETY_MODES.get(int(raw.get("safety_mode", 0)), str(raw.get("safety_mode"))),
         program_state=RUNTIME_STATES.get(int(raw.get("runtime_state", 1)), str(raw.get("runtime_state"))),
-        int_registers=[int(raw[f"output_int_register_{i}"]) for i in range(REGISTERS) if f"output_int_register_{i}" in raw],
-        double_registers=[
-            float(raw[f"output_double_register_{i}"]) for i in range(REGISTERS) if f"output_double_register_{i}" in raw
-        ],
-        bool_registers=_bits(raw.get("output_bit_registers0_to_31"), 32)
-        + _bits(raw.get("output_bit_registers32_to_63"), 32),
+        int_registers=_registers(raw, "output", "int", int),
+        double_registers=_registers(raw, "output", "double", float),
+        bool_registers=_bool_registers(raw, "output"),
+        input_int_registers=_registers(raw, "input", "int", int),
+        input_double_registers=_registers(raw, "input", "double", float),
+        input_bool_registers=_bool_registers(raw, "input"),
         raw=raw,
     )
 

@@ -22,7 +22,9 @@ use std::time::Duration;
 use urscript_controller::net::{
     parse_host, Ports, Profile, Realtime, Server, ServerEvent, ServerOptions,
 };
-use urscript_controller::{operator_help, Config, Model, OperatorCommand, OperatorError, MAX_LINE};
+use urscript_controller::{
+    operator_help, Config, Model, OperatorCommand, OperatorError, StopReason, MAX_LINE,
+};
 
 use crate::report::{self, Event};
 
@@ -324,6 +326,7 @@ fn report_event(e: ServerEvent) -> Option<Event> {
             line,
             column,
             text,
+            reason,
         } => Event::Program(report::Program {
             t,
             what,
@@ -331,6 +334,7 @@ fn report_event(e: ServerEvent) -> Option<Event> {
             line,
             column,
             text,
+            reason: reason.map(StopReason::as_str),
         }),
         ServerEvent::Message(m) => crate::script::message_event(&m),
         ServerEvent::Call(c) => Event::Call(crate::script::call_event(&c, None)),
@@ -344,11 +348,13 @@ fn report_event(e: ServerEvent) -> Option<Event> {
             robot_mode,
             safety,
             program,
+            reason,
         } => Event::State(report::State {
             t,
             robot_mode: robot_mode.to_string(),
             safety: safety.to_string(),
             program: program.to_string(),
+            reason: reason.map(StopReason::as_str),
         }),
         ServerEvent::Suppressed {
             conn,

@@ -158,6 +158,14 @@ pub struct ListenOptions {
     /// periodically, F2..F9 in --tui send the first eight to the selected robot.
     #[arg(long, value_name = "FILE")]
     pub snippets: Option<PathBuf>,
+    /// Also run a URScript program on a virtual robot (a UR5e, as `ursock robot` runs
+    /// one) connected to this listener: `socket_0` is opened to it before the program
+    /// runs, as `ursock robot --connect` does. Its calls, messages, outputs and moves
+    /// (a line when each starts and ends: function, target, how it ended, how long it
+    /// took) are shown with the traffic (--json: `call`, `move_start`, `move_end`,
+    /// `output`, `end` events); in --tui in the status pane.
+    #[arg(long, value_name = "FILE")]
+    pub robot: Option<PathBuf>,
 }
 
 struct Shared {
@@ -296,6 +304,13 @@ pub fn listen(opts: ListenOptions) -> Result<(), String> {
         Some(s) => Some(diagnose::parse_robot_reads(s)?),
         None => None,
     };
+    let robot_program = match &opts.robot {
+        Some(path) => Some(
+            std::fs::read_to_string(path)
+                .map_err(|e| format!("--robot {}: {e}", path.display()))?,
+        ),
+        None => None,
+    };
     let delimiter = crate::formats::delimiter(&opts.delimiter)?;
     if let Some(format) = opts.decode {
         format.decoder(&delimiter)?;
@@ -387,6 +402,9 @@ pub fn listen(opts: ListenOptions) -> Result<(), String> {
         open: AtomicUsize::new(0),
         exit: Notify::new(),
     });
+    if let Some(text) = robot_program {
+        spawn_robot(&shared, text, addr)?;
+    }
     let (cmd_tx, cmd_rx) = mpsc::channel::<Result<String, String>>(16);
     let rt = tokio::runtime::Builder::new_current_thread()
         .enable_all()
@@ -409,6 +427,51 @@ pub fn listen(opts: ListenOptions) -> Result<(), String> {
     let r = rt.block_on(run(Arc::clone(&shared), std_listener, cmd_rx));
     shared.out.flush_log();
     r
+}
+
+/// Runs `program` on a virtual robot in a thread of its own, `socket_0` opened to the
+/// listener at `addr` (the loopback address when it listens on every interface); its
+/// events are said as listen's own.
+fn spawn_robot(
+    shared: &Arc<Shared>,
+    program: String,
+    addr: std::net::SocketAddr,
+) -> Result<(), String> {
+    let ip = match addr.ip() {
+        std::net::IpAddr::V4(ip) if ip.is_unspecified() => std::net::Ipv4Addr::LOCALHOST.into(),
+        std::net::IpAddr::V6(ip) if ip.is_unspecified() => std::net::Ipv6Addr::LOCALHOST.into(),
+        ip => ip,
+    };
+    let target = std::net::SocketAddr::new(ip, addr.port()).to_string();
+    let s = Arc::clone(shared);
+    let sink: crate::script::Sink = Box::new(move |event: Event| {
+        let kind = match &event {
+            Event::Call(_) | Event::Tx(_) | Event::Rx(_) => Kind::Traffic,
+            Event::Error(_) => Kind::Warn,
+            _ => Kind::Note,
+        };
+        s.out.emit(kind, event);
+    });
+    let opts = crate::script::Options {
+        trace: false,
+        json: false,
+        max_time: None,
+        step_time: Duration::from_millis(2),
+        model: urscript_interp::kinematics::Model::Ur5e,
+        stubs: Vec::new(),
+        preamble: urscript_interp::Preamble::default(),
+        arm: urscript_interp::Arm::default(),
+        fail_on: crate::script::FailOn::default(),
+        virtual_time: false,
+    };
+    std::thread::Builder::new()
+        .name("robot".into())
+        .spawn(move || {
+            // Every outcome (an error too) was given to the sink as an event.
+            let _ = crate::script::run_into(&program, Some(&target), opts, sink);
+        })
+        .map(|_| ())
+        .map_err(|e| format!("--robot: cannot start its thread: {e}"))
 }
 
 /// The longest line typed on stdin that is read as a command: a longer one is reported

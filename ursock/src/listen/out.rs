@@ -250,8 +250,13 @@ impl Out {
         }
     }
 
-    /// The event's JSON line: the event, then the wall-clock `time`.
+    /// The event's JSON line: the event, then the wall-clock `time`. A `move_start` (of
+    /// `--robot`) has a `time` of its own, the move's time argument: it is written
+    /// without the wall-clock time.
     pub fn json_line(&self, event: &Event, now: jiff::Timestamp) -> String {
+        if matches!(event, Event::MoveStart(_)) {
+            return event.to_json();
+        }
         #[derive(serde::Serialize)]
         struct Stamped<'a> {
             #[serde(flatten)]
@@ -336,6 +341,9 @@ pub fn human(event: &Event, show_max: usize) -> Vec<String> {
             }
             if let Some(t) = &e.text {
                 text.push_str(&format!(": {t}"));
+            }
+            if let Some(why) = e.reason.filter(|_| e.what == "stopped") {
+                text.push_str(&format!(" ({})", why.replace('_', " ")));
             }
             one(text)
         }
@@ -452,10 +460,19 @@ pub fn human(event: &Event, show_max: usize) -> Vec<String> {
                 .join(", ")
         )),
         Event::Operator(e) => one(format!("operator: {}: {}", e.command, e.text)),
-        Event::State(e) => one(format!(
-            "state: robot mode {}, safety {}, program {}",
-            e.robot_mode, e.safety, e.program
-        )),
+        Event::State(e) => one(match e.reason {
+            Some(why) => format!(
+                "state: robot mode {}, safety {}, program {} ({})",
+                e.robot_mode,
+                e.safety,
+                e.program,
+                why.replace('_', " ")
+            ),
+            None => format!(
+                "state: robot mode {}, safety {}, program {}",
+                e.robot_mode, e.safety, e.program
+            ),
+        }),
         Event::Stopped(e) => one(format!("stopped: {}", e.reason)),
         Event::Dashboard(e) => std::iter::once(format!("<- {:?}", e.command))
             .chain(e.reply.iter().map(|l| format!("-> {l:?}")))
@@ -465,7 +482,10 @@ pub fn human(event: &Event, show_max: usize) -> Vec<String> {
             e.text.lines().map(String::from).collect()
         }
         Event::Help(e) | Event::Note(e) => one(e.text.clone()),
-        Event::Error(e) => one(e.text.clone()),
+        Event::Error(e) => one(match e.line.filter(|l| *l > 0) {
+            Some(line) => format!("line {line}: {}", e.text),
+            None => e.text.clone(),
+        }),
         Event::Call(e) => {
             let args: Vec<String> = e.args.iter().map(ToString::to_string).collect();
             let mut text = format!(
@@ -482,7 +502,7 @@ pub fn human(event: &Event, show_max: usize) -> Vec<String> {
         }
         Event::Message(e) => one(e.text.clone()),
         Event::PeerClosed(e) => one(format!("{}: the server closed the connection", e.socket)),
-        Event::MoveStart(_) => Vec::new(),
+        Event::MoveStart(e) => one(crate::script::move_start_line(e)),
         Event::MoveEnd(e) => one(crate::script::move_end_line(e)),
         Event::Output(e) => one(crate::script::output_line(e)),
         Event::End(e) => one(format!(
