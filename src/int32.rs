@@ -195,6 +195,7 @@ impl Int32Decoder {
     /// assert!(Int32Decoder::new(0).is_err());
     /// assert!(Int32Decoder::new(30).is_ok());
     /// ```
+    #[inline]
     pub fn new(number: usize) -> Result<Self, ArgumentError> {
         if !(1..=MAX_VALUES).contains(&number) {
             return Err(ArgumentError::NumberOutOfRange { number });
@@ -202,6 +203,7 @@ impl Int32Decoder {
         Ok(Self::of(number as u8))
     }
 
+    #[inline]
     const fn of(number: u8) -> Self {
         FrameDecoder::from_parts(
             Framer::counted(number as usize * 4, 4),
@@ -215,6 +217,7 @@ impl Int32Decoder {
     /// # use urscript_socket::int32::Int32Decoder;
     /// assert_eq!(Int32Decoder::single().number(), 1);
     /// ```
+    #[inline]
     pub const fn single() -> Self {
         Self::of(1)
     }
