@@ -107,7 +107,10 @@ impl<'a> Int32Values<'a> {
     /// ```
     #[inline]
     pub fn get(&self, index: usize) -> Option<i32> {
-        let b = self.bytes.get(index.checked_mul(4)?..)?.first_chunk::<4>()?;
+        let b = self
+            .bytes
+            .get(index.checked_mul(4)?..)?
+            .first_chunk::<4>()?;
         Some(i32::from_be_bytes(*b))
     }
 
@@ -162,7 +165,11 @@ impl<'a> Int32Values<'a> {
 #[allow(clippy::incompatible_msrv)] // only compiled where `as_chunks` exists (build.rs)
 #[inline]
 fn values(bytes: &[u8]) -> impl ExactSizeIterator<Item = i32> + '_ {
-    bytes.as_chunks::<4>().0.iter().map(|b| i32::from_be_bytes(*b))
+    bytes
+        .as_chunks::<4>()
+        .0
+        .iter()
+        .map(|b| i32::from_be_bytes(*b))
 }
 
 /// The values of `bytes`: the portable path, for compilers older than Rust 1.88.
