@@ -51,6 +51,9 @@ fn int32(c: &mut Criterion) {
     let mut g = c.benchmark_group("int32_external_control_100k");
     g.throughput(Throughput::Bytes(stream.len() as u64));
     g.bench_function("ours", |b| b.iter(|| ours_int32(black_box(&stream))));
+    g.bench_function("ours_runtime_number", |b| {
+        b.iter(|| ours_int32_runtime_number(black_box(&stream)))
+    });
     g.bench_function("chunks_exact", |b| {
         b.iter(|| chunks_exact_int32(black_box(&stream)))
     });

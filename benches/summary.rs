@@ -109,6 +109,12 @@ fn main() {
         time(|| chunks_exact_int32(&ints)) / time(|| ours_int32(&ints)),
         0.8,
     );
+    assert_eq!(ours_int32_runtime_number(&ints), chunks_exact_int32(&ints));
+    r.at_least(
+        "int32, length known at run time, vs chunks_exact",
+        time(|| chunks_exact_int32(&ints)) / time(|| ours_int32_runtime_number(&ints)),
+        0.8,
+    );
 
     // Lines.
     let lines = line_stream(100_000);

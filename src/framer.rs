@@ -227,6 +227,7 @@ fn find(pattern: &[u8], hay: &[u8]) -> Option<usize> {
 }
 
 impl Framer {
+    #[inline]
     const fn with(shape: Shape, at_eof: AtEof, bound: usize, window: usize, report: usize) -> Self {
         Framer {
             shape,
@@ -280,6 +281,7 @@ impl Framer {
     }
 
     /// Exactly `len` bytes (at least 1), `unit` per value.
+    #[inline]
     pub const fn counted(len: usize, unit: usize) -> Self {
         Framer::with(
             Shape::Counted { len, unit },

@@ -98,16 +98,20 @@ impl<'a> Int32Values<'a> {
         self.bytes.is_empty()
     }
 
-    /// The value at `index`, if any.
+    /// The value at `index`, if any (`None` past the end, however large `index` is).
     ///
     /// ```
     /// # use urscript_socket::int32::Int32Values;
     /// assert_eq!(Int32Values::new(&[0, 0, 0x75, 0x30]).get(0), Some(30000));
+    /// assert_eq!(Int32Values::new(&[0, 0, 0x75, 0x30]).get(usize::MAX), None);
     /// ```
     #[inline]
     pub fn get(&self, index: usize) -> Option<i32> {
-        let b = self.bytes.get(index * 4..index * 4 + 4)?;
-        Some(i32::from_be_bytes([b[0], b[1], b[2], b[3]]))
+        let b = self
+            .bytes
+            .get(index.checked_mul(4)?..)?
+            .first_chunk::<4>()?;
+        Some(i32::from_be_bytes(*b))
     }
 
     /// The values in order.
@@ -118,9 +122,7 @@ impl<'a> Int32Values<'a> {
     /// ```
     #[inline]
     pub fn iter(&self) -> impl ExactSizeIterator<Item = i32> + 'a {
-        self.bytes
-            .chunks_exact(4)
-            .map(|b| i32::from_be_bytes([b[0], b[1], b[2], b[3]]))
+        values(self.bytes)
     }
 
     /// The raw bytes, 4 per value.
@@ -151,6 +153,32 @@ impl<'a> Int32Values<'a> {
         }
         n
     }
+}
+
+/// The values of `bytes` (a multiple of 4 long), as a slice iterator over `[u8; 4]` where
+/// the compiler has `as_chunks` (Rust 1.88): a caller's loop over it compiles to scalar
+/// loads and byte swaps, unrolled, like a loop over a constant-length message, where
+/// `chunks_exact(4)` of a run-time length is vectorised into a slower SSE2 byte-swap
+/// sequence (callgrind: 50 instructions per 8-value message instead of 60). The same values
+/// either way.
+#[cfg(has_as_chunks)]
+#[allow(clippy::incompatible_msrv)] // only compiled where `as_chunks` exists (build.rs)
+#[inline]
+fn values(bytes: &[u8]) -> impl ExactSizeIterator<Item = i32> + '_ {
+    bytes
+        .as_chunks::<4>()
+        .0
+        .iter()
+        .map(|b| i32::from_be_bytes(*b))
+}
+
+/// The values of `bytes`: the portable path, for compilers older than Rust 1.88.
+#[cfg(not(has_as_chunks))]
+#[inline]
+fn values(bytes: &[u8]) -> impl ExactSizeIterator<Item = i32> + '_ {
+    bytes
+        .chunks_exact(4)
+        .map(|b| i32::from_be_bytes([b[0], b[1], b[2], b[3]]))
 }
 
 /// Decoder of `number` big-endian int32 per message: the robot's
@@ -195,6 +223,7 @@ impl Int32Decoder {
     /// assert!(Int32Decoder::new(0).is_err());
     /// assert!(Int32Decoder::new(30).is_ok());
     /// ```
+    #[inline]
     pub fn new(number: usize) -> Result<Self, ArgumentError> {
         if !(1..=MAX_VALUES).contains(&number) {
             return Err(ArgumentError::NumberOutOfRange { number });
@@ -202,6 +231,7 @@ impl Int32Decoder {
         Ok(Self::of(number as u8))
     }
 
+    #[inline]
     const fn of(number: u8) -> Self {
         FrameDecoder::from_parts(
             Framer::counted(number as usize * 4, 4),
@@ -215,6 +245,7 @@ impl Int32Decoder {
     /// # use urscript_socket::int32::Int32Decoder;
     /// assert_eq!(Int32Decoder::single().number(), 1);
     /// ```
+    #[inline]
     pub const fn single() -> Self {
         Self::of(1)
     }

@@ -3,7 +3,7 @@
 use proptest::prelude::*;
 use urscript_socket::ascii_float::{encode_float_tuple, FloatTupleDecoder};
 use urscript_socket::byte_list::{encode_byte_list, ByteListDecoder};
-use urscript_socket::int32::{encode_int32_list, Int32Decoder};
+use urscript_socket::int32::{encode_int32_list, Int32Decoder, Int32Values};
 use urscript_socket::line::{encode_line, LineDecoder};
 use urscript_socket::string::{encode_framed_string, DelimitedDecoder, ReadStringDecoder};
 use urscript_socket::stx_etx::{encode_stx_etx, StxEtxDecoder};
@@ -72,6 +72,30 @@ proptest! {
         encode_int32_list(&values, &mut out).unwrap();
         let v = item(Int32Decoder::new(values.len()).unwrap().decode(&out).unwrap(), out.len());
         prop_assert_eq!(v.iter().collect::<Vec<_>>(), values);
+    }
+
+    /// The view's accessors against an independent reading of the same bytes (a trailing
+    /// partial value ignored), at any index, huge ones included.
+    #[test]
+    fn int32_values_view(bytes in prop::collection::vec(any::<u8>(), 0..130), index in any::<usize>()) {
+        let want: Vec<i32> = bytes
+            .chunks(4)
+            .filter(|c| c.len() == 4)
+            .map(|c| (u32::from(c[0]) << 24 | u32::from(c[1]) << 16 | u32::from(c[2]) << 8 | u32::from(c[3])) as i32)
+            .collect();
+        let v = Int32Values::new(&bytes);
+        prop_assert_eq!(v.len(), want.len());
+        prop_assert_eq!(v.iter().len(), want.len());
+        prop_assert_eq!(v.iter().collect::<Vec<_>>(), want.clone());
+        for (i, w) in want.iter().enumerate() {
+            prop_assert_eq!(v.get(i), Some(*w));
+        }
+        prop_assert_eq!(v.get(want.len()), None);
+        prop_assert_eq!(v.get(index), want.get(index).copied());
+        prop_assert_eq!(v.get(usize::MAX / 4 + 1), None);
+        let mut out = [0i32; 40];
+        prop_assert_eq!(v.copy_to(&mut out), want.len());
+        prop_assert_eq!(&out[..want.len()], &want[..]);
     }
 
     #[test]
