@@ -155,25 +155,7 @@ impl<'a> Int32Values<'a> {
     }
 }
 
-/// The values of `bytes` (a multiple of 4 long), as a slice iterator over `[u8; 4]` where
-/// the compiler has `as_chunks` (Rust 1.88): a caller's loop over it compiles to scalar
-/// loads and byte swaps, unrolled, like a loop over a constant-length message, where
-/// `chunks_exact(4)` of a run-time length is vectorised into a slower SSE2 byte-swap
-/// sequence (callgrind: 50 instructions per 8-value message instead of 60). The same values
-/// either way.
-#[cfg(has_as_chunks)]
-#[allow(clippy::incompatible_msrv)] // only compiled where `as_chunks` exists (build.rs)
-#[inline]
-fn values(bytes: &[u8]) -> impl ExactSizeIterator<Item = i32> + '_ {
-    bytes
-        .as_chunks::<4>()
-        .0
-        .iter()
-        .map(|b| i32::from_be_bytes(*b))
-}
-
-/// The values of `bytes`: the portable path, for compilers older than Rust 1.88.
-#[cfg(not(has_as_chunks))]
+/// The values of `bytes` (a multiple of 4 long), in order.
 #[inline]
 fn values(bytes: &[u8]) -> impl ExactSizeIterator<Item = i32> + '_ {
     bytes
