@@ -247,17 +247,25 @@ pub(crate) struct Fault {
     pub code: Option<ControllerCode>,
 }
 
-/// What the message of a compile-check fault starts with, before the name and a `:`.
-const NAME_NOT_FOUND: &str = "compile_error_name_not_found:";
-
 impl Fault {
     pub fn new(kind: RuntimeErrorKind, message: impl Into<String>) -> Self {
-        let message = message.into();
-        let code = compile_check_code(kind, &message);
         Fault {
             kind,
-            message,
-            code,
+            message: message.into(),
+            code: None,
+        }
+    }
+
+    /// The compile check's refusal of `name` (an unknown function or a variable nothing
+    /// assigns): the controller's code, then `why`.
+    pub fn name_not_found(kind: RuntimeErrorKind, name: &str, why: &str) -> Self {
+        let code = ControllerCode::NameNotFound {
+            name: name.to_string(),
+        };
+        Fault {
+            kind,
+            message: format!("{code} {why}"),
+            code: Some(code),
         }
     }
 
@@ -289,33 +297,20 @@ impl fmt::Display for RuntimeError {
 
 impl std::error::Error for RuntimeError {}
 
-/// The code of a fault the machine's compile check makes: an unknown function or
-/// variable whose message it writes as `compile_error_name_not_found:NAME: why`. Read
-/// once, here, where the fault is made, so that users of the error get the code typed
-/// ([`RuntimeError::code`]) and never cut it out of the text.
-fn compile_check_code(kind: RuntimeErrorKind, message: &str) -> Option<ControllerCode> {
-    if !matches!(
-        kind,
-        RuntimeErrorKind::UnknownFunction | RuntimeErrorKind::UnknownVariable
-    ) {
-        return None;
-    }
-    let (name, _) = message.strip_prefix(NAME_NOT_FOUND)?.split_once(':')?;
-    let is_name = !name.is_empty() && name.bytes().all(|b| b.is_ascii_alphanumeric() || b == b'_');
-    is_name.then(|| ControllerCode::NameNotFound {
-        name: name.to_string(),
-    })
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
 
     #[test]
     fn the_compile_checks_faults_carry_their_code() {
-        let f = Fault::new(
+        let f = Fault::name_not_found(
             RuntimeErrorKind::UnknownFunction,
-            "compile_error_name_not_found:rq_open: `rq_open` is neither defined",
+            "rq_open",
+            "`rq_open` is neither defined",
+        );
+        assert_eq!(
+            f.message,
+            "compile_error_name_not_found:rq_open: `rq_open` is neither defined"
         );
         let e = RuntimeError::at(3, 5, f);
         assert_eq!(
@@ -324,24 +319,12 @@ mod tests {
                 name: "rq_open".into()
             })
         );
-        assert_eq!(
-            e.code().map(ToString::to_string).as_deref(),
-            Some("compile_error_name_not_found:rq_open:")
-        );
         // Other faults have none, whatever their text says.
-        for (kind, text) in [
-            (
-                RuntimeErrorKind::Argument,
-                "compile_error_name_not_found:x: no",
-            ),
-            (RuntimeErrorKind::UnknownVariable, "unknown variable `x`"),
-            (
-                RuntimeErrorKind::UnknownFunction,
-                "compile_error_name_not_found::",
-            ),
-        ] {
-            assert_eq!(RuntimeError::at(1, 1, Fault::new(kind, text)).code(), None);
-        }
+        let text = "compile_error_name_not_found:x: no";
+        assert_eq!(
+            RuntimeError::at(1, 1, Fault::new(RuntimeErrorKind::UnknownFunction, text)).code(),
+            None
+        );
     }
 
     #[test]

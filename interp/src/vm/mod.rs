@@ -353,10 +353,11 @@ impl Machine {
                 RuntimeError::at(
                     site.at.line,
                     site.at.col,
-                    Fault::new(
+                    Fault::name_not_found(
                         K::UnknownFunction,
-                        format!(
-                            "compile_error_name_not_found:{name}: `{name}` is neither defined in the program nor a built-in of the controller{hint} (a URCap's function? stub it)"
+                        name,
+                        &format!(
+                            "`{name}` is neither defined in the program nor a built-in of the controller{hint} (a URCap's function? stub it)"
                         ),
                     ),
                 )
@@ -368,10 +369,11 @@ impl Machine {
             RuntimeError::at(
                 at.line,
                 at.col,
-                Fault::new(
+                Fault::name_not_found(
                     K::UnknownVariable,
-                    format!(
-                        "compile_error_name_not_found:{name}: `{name}` is never assigned in its scope (not a global the program assigns, not a parameter or variable of its function){hint}"
+                    name,
+                    &format!(
+                        "`{name}` is never assigned in its scope (not a global the program assigns, not a parameter or variable of its function){hint}"
                     ),
                 ),
             )
