@@ -26,6 +26,7 @@
 
 use crate::arm::kinematics::{self, Dh};
 use crate::arm::pose::{mul, to_matrix, to_rotvec};
+use crate::arm::vec3::{cross, dot};
 
 type M = [[f64; 3]; 3];
 
@@ -53,18 +54,6 @@ pub(crate) struct ForceMode {
 
 fn rot(p: [f64; 6]) -> M {
     to_matrix([p[3], p[4], p[5]])
-}
-
-fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-
-fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
 }
 
 fn unit(a: [f64; 3]) -> Option<[f64; 3]> {

@@ -22,6 +22,8 @@ use std::f64::consts::{FRAC_PI_2, TAU};
 use std::fmt;
 use std::str::FromStr;
 
+use crate::arm::vec3::{add, cross, scale, sub};
+
 pub mod dynamics;
 mod reach;
 pub(crate) use reach::nearest_reach;
@@ -258,26 +260,6 @@ fn frames(dh: &Dh, q: [f64; 6]) -> [T; 7] {
         out[i + 1] = out[i].mul(&link(dh, i, q[i]));
     }
     out
-}
-
-fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
-}
-
-fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-
-fn add(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
-}
-
-fn scale(k: f64, a: [f64; 3]) -> [f64; 3] {
-    [k * a[0], k * a[1], k * a[2]]
 }
 
 /// The z axis of a frame (the axis the next joint turns about).

@@ -34,6 +34,7 @@
 
 use crate::arm::kinematics::{self, Dh};
 use crate::arm::pose::{mul, to_matrix, to_rotvec, transpose};
+use crate::arm::vec3::{cross, dot, norm, scale, sub};
 
 type M = [[f64; 3]; 3];
 
@@ -283,7 +284,7 @@ fn bezier_tangent(p: &[[f64; 3]; 4], t: f64) -> [f64; 3] {
     });
     let n = norm(d);
     if n > 0.0 && n.is_finite() {
-        scale3(d, 1.0 / n)
+        scale(1.0 / n, d)
     } else {
         [0.0; 3]
     }
@@ -297,7 +298,7 @@ impl Path {
         let mut prev = p[0];
         for i in 1..=BEZIER_CHORDS {
             let q = bezier_point(&p, i as f64 / n);
-            len[i] = len[i - 1] + norm(sub3(q, prev));
+            len[i] = len[i - 1] + norm(sub(q, prev));
             prev = q;
         }
         Path::Bezier { p, len }
@@ -317,25 +318,6 @@ impl Path {
     }
 }
 
-fn sub3(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
-}
-fn scale3(a: [f64; 3], k: f64) -> [f64; 3] {
-    [a[0] * k, a[1] * k, a[2] * k]
-}
-fn norm(a: [f64; 3]) -> f64 {
-    dot(a, a).sqrt()
-}
 fn xyz(p: [f64; 6]) -> [f64; 3] {
     [p[0], p[1], p[2]]
 }
@@ -351,26 +333,26 @@ impl Path {
         let line = Path::Line { from: p0, to: p1 };
         let Some(via) = via else { return line };
         let pv = xyz(via);
-        let a = sub3(p0, p1);
-        let b = sub3(pv, p1);
+        let a = sub(p0, p1);
+        let b = sub(pv, p1);
         let axb = cross(a, b);
         let n2 = dot(axb, axb);
         if !n2.is_finite() || n2 < 1e-18 {
             return line;
         }
-        let k = sub3(scale3(b, dot(a, a)), scale3(a, dot(b, b)));
-        let off = scale3(cross(k, axb), 1.0 / (2.0 * n2));
+        let k = sub(scale(dot(a, a), b), scale(dot(b, b), a));
+        let off = scale(1.0 / (2.0 * n2), cross(k, axb));
         let c = [p1[0] + off[0], p1[1] + off[1], p1[2] + off[2]];
-        let r = norm(sub3(p0, c));
-        let n = cross(sub3(pv, p0), sub3(p1, pv));
+        let r = norm(sub(p0, c));
+        let n = cross(sub(pv, p0), sub(p1, pv));
         let nn = norm(n);
         if !(r.is_finite() && r > 1e-9 && nn > 1e-18) {
             return line;
         }
-        let n = scale3(n, 1.0 / nn);
-        let u = scale3(sub3(p0, c), 1.0 / r);
+        let n = scale(1.0 / nn, n);
+        let u = scale(1.0 / r, sub(p0, c));
         let w = cross(n, u);
-        let e = sub3(p1, c);
+        let e = sub(p1, c);
         let mut angle = dot(e, w).atan2(dot(e, u));
         if angle <= 0.0 {
             angle += std::f64::consts::TAU;
@@ -381,7 +363,7 @@ impl Path {
     /// Its length (m).
     pub fn length(&self) -> f64 {
         match *self {
-            Path::Line { from, to } => norm(sub3(to, from)),
+            Path::Line { from, to } => norm(sub(to, from)),
             Path::Arc { r, angle, .. } => r * angle,
             Path::Bezier { len, .. } => len[BEZIER_CHORDS],
         }
@@ -421,13 +403,9 @@ impl Path {
     fn at(&self, f: f64) -> ([f64; 3], [f64; 3]) {
         match *self {
             Path::Line { from, to } => {
-                let d = sub3(to, from);
+                let d = sub(to, from);
                 let l = norm(d);
-                let t = if l > 0.0 {
-                    scale3(d, 1.0 / l)
-                } else {
-                    [0.0; 3]
-                };
+                let t = if l > 0.0 { scale(1.0 / l, d) } else { [0.0; 3] };
                 (
                     [from[0] + d[0] * f, from[1] + d[1] * f, from[2] + d[2] * f],
                     t,
@@ -748,11 +726,11 @@ impl Kind {
                 let f = if *dist > 0.0 { s / dist } else { 1.0 };
                 let fd = if *dist > 0.0 { sd / dist } else { 0.0 };
                 let (p, tangent) = path.at(f);
-                let r = mul(to_matrix(scale3(*turn, f)), *r0);
+                let r = mul(to_matrix(scale(f, *turn)), *r0);
                 let rv = to_rotvec(r);
                 let pose = [p[0], p[1], p[2], rv[0], rv[1], rv[2]];
-                let v = scale3(tangent, fd * path.length());
-                let w = scale3(*turn, fd);
+                let v = scale(fd * path.length(), tangent);
+                let w = scale(fd, *turn);
                 let xd = [v[0], v[1], v[2], w[0], w[1], w[2]];
                 match nearest_ik(dh, pose, tcp, prev_q) {
                     Some(q) => Sample {
@@ -960,11 +938,11 @@ fn radius_cap(dh: &Dh, tcp: [f64; 6], kind: &Kind) -> Option<f64> {
             Some(match kind {
                 Kind::Then { first, .. } => match **first {
                     Kind::JointBlend { p1, w, .. } => {
-                        norm(sub3(target, fk(w))) - norm(sub3(fk(p1), fk(w)))
+                        norm(sub(target, fk(w))) - norm(sub(fk(p1), fk(w)))
                     }
-                    _ => norm(sub3(target, fk(*q0))),
+                    _ => norm(sub(target, fk(*q0))),
                 },
-                _ => norm(sub3(target, fk(*q0))),
+                _ => norm(sub(target, fk(*q0))),
             })
         }
         _ => None,
@@ -993,7 +971,7 @@ fn blend_start_inner(dh: &Dh, tcp: [f64; 6], kind: &Kind, r: f64) -> Option<Blen
             }
             let target = xyz(*to);
             // All of it within r (the room left is exactly r): the blend begins at once.
-            let f = crossing(|f| norm(sub3(path.at(f).0, target)), r, true).unwrap_or(0.0);
+            let f = crossing(|f| norm(sub(path.at(f).0, target)), r, true).unwrap_or(0.0);
             Some(BlendStart {
                 r,
                 at: off + profile.time_at(f * dist),
@@ -1008,18 +986,17 @@ fn blend_start_inner(dh: &Dh, tcp: [f64; 6], kind: &Kind, r: f64) -> Option<Blen
             let cap = match kind {
                 Kind::Then { first, .. } => match **first {
                     Kind::JointBlend { p1, w, .. } => {
-                        norm(sub3(target, fk(w))) - norm(sub3(fk(p1), fk(w)))
+                        norm(sub(target, fk(w))) - norm(sub(fk(p1), fk(w)))
                     }
-                    _ => norm(sub3(target, fk(*q0))),
+                    _ => norm(sub(target, fk(*q0))),
                 },
-                _ => norm(sub3(target, fk(*q0))),
+                _ => norm(sub(target, fk(*q0))),
             };
             let r = r.min(cap);
             if r <= 1e-9 || profile.distance() <= 0.0 {
                 return None;
             }
-            let f =
-                crossing(|f| norm(sub3(fk(lerp6(*q0, *q1, f)), target)), r, true).unwrap_or(0.0);
+            let f = crossing(|f| norm(sub(fk(lerp6(*q0, *q1, f)), target)), r, true).unwrap_or(0.0);
             Some(BlendStart {
                 r,
                 at: off + profile.time_at(f * profile.distance()),
@@ -1090,8 +1067,8 @@ pub(crate) fn blend(
             let dur = 2.0 * (d - s) / sd;
             let fk = |q: [f64; 6]| xyz(kinematics::forward(dh, q, tcp));
             let w = fk(*q1);
-            let r1 = norm(sub3(fk(p1), w));
-            let g = crossing(|f| norm(sub3(fk(lerp6(*b0, *b1, f)), w)), r1, false)?;
+            let r1 = norm(sub(fk(p1), w));
+            let g = crossing(|f| norm(sub(fk(lerp6(*b0, *b1, f)), w)), r1, false)?;
             if !(dur > 0.0 && dur.is_finite() && g > 0.0 && g < 1.0) {
                 return None;
             }
@@ -1145,16 +1122,16 @@ pub(crate) fn blend(
                 ..
             },
         ) => {
-            let la_len = norm(sub3(*wp, *a0));
-            let lb = norm(sub3(*c, *wp));
+            let la_len = norm(sub(*wp, *a0));
+            let lb = norm(sub(*c, *wp));
             let (s, sd) = profile.at(tl);
             let r1 = la_len - s;
             if la_len <= 1e-9 || *dist <= 0.0 || sd.is_nan() || sd <= 1e-9 || r1 <= 1e-9 || lb <= r1
             {
                 return None;
             }
-            let u1 = scale3(sub3(*wp, *a0), 1.0 / la_len);
-            let u2 = scale3(sub3(*c, *wp), 1.0 / lb);
+            let u1 = scale(1.0 / la_len, sub(*wp, *a0));
+            let u2 = scale(1.0 / lb, sub(*c, *wp));
             let cos = dot(u1, u2).clamp(-1.0, 1.0);
             if cos < -1.0 + 1e-9 {
                 return None;
@@ -1162,9 +1139,9 @@ pub(crate) fn blend(
             let p1 = [a0[0] + u1[0] * s, a0[1] + u1[1] * s, a0[2] + u1[2] * s];
             let p2 = [wp[0] + u2[0] * r1, wp[1] + u2[1] * r1, wp[2] + u2[2] * r1];
             // Orientations where the blend begins and ends.
-            let r_in = mul(to_matrix(scale3(*ta, s / dist)), *ra);
+            let r_in = mul(to_matrix(scale(s / dist, *ta)), *ra);
             let g = r1 / lb;
-            let r_out = mul(to_matrix(scale3(*tb, g)), *rb);
+            let r_out = mul(to_matrix(scale(g, *tb)), *rb);
             let pose_in = with_rot(p1, r_in);
             let pose_out = with_rot(p2, r_out);
             let arc = if cos > 1.0 - 1e-12 {
@@ -1173,8 +1150,8 @@ pub(crate) fn blend(
                 // The circle tangent to both lines at distance r1 from the waypoint:
                 // its centre on the bisector, its point nearest the waypoint the via.
                 let theta = cos.acos();
-                let bis = sub3(u2, u1);
-                let bis = scale3(bis, 1.0 / norm(bis));
+                let bis = sub(u2, u1);
+                let bis = scale(1.0 / norm(bis), bis);
                 let rho = r1 / (theta / 2.0).tan();
                 let dc = r1 / (theta / 2.0).sin();
                 let via = [
@@ -1209,7 +1186,7 @@ pub(crate) fn blend(
             let rest = Kind::Tool {
                 path: Path::Line { from: p2, to: *c },
                 r0: r_out,
-                turn: scale3(*tb, 1.0 - g),
+                turn: scale(1.0 - g, *tb),
                 profile: Profile::with_start_speed(lb - r1, sd, vb, ab),
                 dist: lb - r1,
                 to: *cto,
@@ -1283,11 +1260,11 @@ fn curve_blend(
     let fa = (s / dist).clamp(0.0, 1.0);
     let (p1, t1) = pa.at(fa);
     let wp = pa.at(1.0).0;
-    let r1 = norm(sub3(p1, wp));
+    let r1 = norm(sub(p1, wp));
     if r1.is_nan() || r1 <= 1e-9 {
         return None;
     }
-    let g = crossing(|f| norm(sub3(pbp.at(f).0, wp)), r1, false)?;
+    let g = crossing(|f| norm(sub(pbp.at(f).0, wp)), r1, false)?;
     if !(g > 0.0 && g < 1.0 - 1e-9) {
         return None;
     }
@@ -1295,7 +1272,7 @@ fn curve_blend(
     if dot(t1, t2) < -1.0 + 1e-6 {
         return None;
     }
-    let inside = |q: [f64; 3]| norm(sub3(q, wp)) <= r1 * (1.0 + 1e-9);
+    let inside = |q: [f64; 3]| norm(sub(q, wp)) <= r1 * (1.0 + 1e-9);
     let mut k = 0.5 * r1;
     let mut curve = None;
     for _ in 0..CURVE_TRIES {
@@ -1318,8 +1295,8 @@ fn curve_blend(
     if !can_stop(sd, rest_d, ab) {
         return None;
     }
-    let r_in = mul(to_matrix(scale3(*ta, fa)), *ra);
-    let r_out = mul(to_matrix(scale3(*tb, g)), *rb);
+    let r_in = mul(to_matrix(scale(fa, *ta)), *ra);
+    let r_out = mul(to_matrix(scale(g, *tb)), *rb);
     let pose_out = with_rot(p2, r_out);
     let q_out = nearest_ik(dh, pose_out, tcp, *qa1).unwrap_or(*qa1);
     let first = Kind::Tool {
@@ -1336,7 +1313,7 @@ fn curve_blend(
     let rest = Kind::Tool {
         path: pbp.rest_from(g),
         r0: r_out,
-        turn: scale3(*tb, 1.0 - g),
+        turn: scale(1.0 - g, *tb),
         profile: Profile::with_start_speed(rest_d, sd, vb, ab),
         dist: rest_d,
         to: *cto,
@@ -1367,7 +1344,7 @@ fn move_point(
         }
         Kind::Tool { path, r0, turn, .. } => {
             let p = path.at(f).0;
-            let pose = with_rot(p, mul(to_matrix(scale3(*turn, f)), *r0));
+            let pose = with_rot(p, mul(to_matrix(scale(f, *turn)), *r0));
             Some((nearest_ik(dh, pose, tcp, near)?, p))
         }
         _ => None,
@@ -1393,8 +1370,8 @@ fn move_joint_speed(dh: &Dh, tcp: [f64; 6], k: &Kind, (q, f): ([f64; 6], f64), s
             path, turn, dist, ..
         } if *dist > 0.0 => {
             let (_, tangent) = path.at(f);
-            let v = scale3(tangent, s * path.length() / dist);
-            let w = scale3(*turn, s / dist);
+            let v = scale(s * path.length() / dist, tangent);
+            let w = scale(s / dist, *turn);
             joint_speed(dh, q, tcp, [v[0], v[1], v[2], w[0], w[1], w[2]])
         }
         _ => [0.0; 6],
@@ -1431,14 +1408,14 @@ fn mixed_blend(
     let (qw, wpose) = la.end(dh, tcp)?;
     let w = xyz(wpose);
     let fk = |q: [f64; 6]| xyz(kinematics::forward(dh, q, tcp));
-    let r1 = norm(sub3(fk(q_now), w));
+    let r1 = norm(sub(fk(q_now), w));
     let twist = tcp_speed(dh, q_now, now.qd, tcp);
     let vt = norm([twist[0], twist[1], twist[2]]);
     if r1 <= 1e-9 || vt.is_nan() || vt <= 1e-9 {
         return None;
     }
     let g = crossing(
-        |f| move_point(dh, tcp, b, f, qw).map_or(0.0, |(_, p)| norm(sub3(p, w))),
+        |f| move_point(dh, tcp, b, f, qw).map_or(0.0, |(_, p)| norm(sub(p, w))),
         r1,
         false,
     )?;
@@ -1475,7 +1452,7 @@ fn mixed_blend(
     let c2: [f64; 6] = std::array::from_fn(|j| q2[j] - v2[j] * dur / 3.0);
     let strays = (1..32).any(|i| {
         let (q, _) = bezier(q_now, c1, c2, q2, dur, dur * f64::from(i) / 32.0);
-        norm(sub3(fk(q), w)) > MIXED_STRAY * r1
+        norm(sub(fk(q), w)) > MIXED_STRAY * r1
     });
     if strays {
         return None;
@@ -1496,8 +1473,8 @@ fn mixed_blend(
             ..
         } => Kind::Tool {
             path: path.rest_from(g),
-            r0: mul(to_matrix(scale3(*turn, g)), *r0),
-            turn: scale3(*turn, 1.0 - g),
+            r0: mul(to_matrix(scale(g, *turn)), *r0),
+            turn: scale(1.0 - g, *turn),
             profile: Profile::with_start_speed((1.0 - g) * db, s2, vb, ab),
             dist: (1.0 - g) * db,
             to: *to,
@@ -1546,7 +1523,7 @@ pub(crate) fn turn_between(p0: [f64; 6], p1: [f64; 6]) -> ([[f64; 3]; 3], [f64; 
 /// that orientation (the manual: only `pose_to`'s position is used in fixed mode).
 pub(crate) fn fixed_turn(path: &Path, p0: [f64; 6], to: [f64; 6]) -> ([f64; 3], [f64; 6]) {
     let turn = match *path {
-        Path::Arc { u, w, angle, .. } => scale3(cross(u, w), angle),
+        Path::Arc { u, w, angle, .. } => scale(angle, cross(u, w)),
         Path::Line { .. } | Path::Bezier { .. } => [0.0; 3],
     };
     let end = mul(to_matrix(turn), rot(p0));
@@ -1698,14 +1675,14 @@ mod tests {
         assert!(matches!(path, Path::Arc { .. }));
         for i in 0..=100 {
             let (p, _) = path.at(f64::from(i) / 100.0);
-            assert!(norm(sub3(p, xyz(w))) <= r + 1e-9);
+            assert!(norm(sub(p, xyz(w))) <= r + 1e-9);
         }
         // Tangent to the first line where it begins, to the second where it ends.
         let (_, t0) = path.at(0.0);
         let (_, t1) = path.at(1.0);
-        assert!(norm(sub3(t0, [1.0, 0.0, 0.0])) < 1e-9, "{t0:?}");
+        assert!(norm(sub(t0, [1.0, 0.0, 0.0])) < 1e-9, "{t0:?}");
         let s = std::f64::consts::FRAC_1_SQRT_2;
-        assert!(norm(sub3(t1, [s, -s, 0.0])) < 1e-9, "{t1:?}");
+        assert!(norm(sub(t1, [s, -s, 0.0])) < 1e-9, "{t1:?}");
         assert!(*dur > 0.0 && k.duration() < a.duration() + b.duration());
     }
 
@@ -1748,8 +1725,8 @@ mod tests {
         let p = Path::new(from, Some(via), to);
         assert!((p.length() - std::f64::consts::PI).abs() < 1e-12);
         let (mid, _) = p.at(0.5);
-        assert!(norm(sub3(mid, [0.0, 1.0, 0.0])) < 1e-12);
+        assert!(norm(sub(mid, [0.0, 1.0, 0.0])) < 1e-12);
         let (end, _) = p.at(1.0);
-        assert!(norm(sub3(end, [-1.0, 0.0, 0.0])) < 1e-12);
+        assert!(norm(sub(end, [-1.0, 0.0, 0.0])) < 1e-12);
     }
 }

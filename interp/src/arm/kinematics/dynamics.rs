@@ -34,7 +34,8 @@
 //! assert!(m[0][0] > 0.0);
 //! ```
 
-use super::{add, cross, frames, scale, sub, Model};
+use super::{frames, Model};
+use crate::arm::vec3::{add, cross, dot, scale, sub};
 
 /// One link's mass properties.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -160,10 +161,6 @@ type M3 = [[f64; 3]; 3];
 
 fn mat_vec(m: &M3, v: [f64; 3]) -> [f64; 3] {
     std::array::from_fn(|i| m[i][0] * v[0] + m[i][1] * v[1] + m[i][2] * v[2])
-}
-
-fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 }
 
 /// A rigid body in its link frame: mass, centre of mass, inertia about it (3×3).
