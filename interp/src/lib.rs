@@ -113,7 +113,6 @@
 
 mod arm;
 pub mod builtins;
-mod controller;
 pub mod drive;
 pub mod eip;
 mod error;
@@ -123,6 +122,7 @@ pub mod interpreter;
 mod native;
 mod rpc;
 pub mod rtde_fields;
+mod runtime;
 mod sockets;
 mod syntax;
 mod value;
@@ -192,7 +192,6 @@ pub mod machine {
     pub use crate::vm::{Config, Event, Machine, State, Stub, MAX_MOTION_SAMPLES, MAX_THREADS};
 }
 
-pub use controller::{Arm, World};
 pub use error::{ControllerCode, ParseError, ParseErrorKind, RuntimeError, RuntimeErrorKind};
 pub use event::{
     CallRecord, Event, Message, MessageKind, MoveEnd, MoveOutcome, MoveStart, Outcome, OutputValue,
@@ -200,6 +199,7 @@ pub use event::{
 };
 pub use history::JOINT_HISTORY_STEPS;
 pub use machine::{Config, Machine, State, Stub};
+pub use runtime::{Arm, World};
 pub use sockets::{Policy, Timeout};
 pub use syntax::compile::{Preamble, Program};
 pub use syntax::lexer::{top_level_end, TopLevel, UnitKind, UnitLine};

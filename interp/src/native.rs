@@ -3,12 +3,12 @@
 //! parameters (`Args`), and what the code returns (`Out`: a value, or a wait for time,
 //! motion, bytes or a connection). The table itself and the code are in
 //! [`crate::builtins`]; the machine ([`crate::machine`]) calls an entry's code with the
-//! [`Controller`] and its `Args`. Nothing here knows the table.
+//! [`Runtime`] and its `Args`. Nothing here knows the table.
 
 use std::time::Duration;
 
-use crate::controller::Controller;
 use crate::error::Fault;
+use crate::runtime::Runtime;
 use crate::value::Value;
 
 /// The manual's chapter a built-in belongs to.
@@ -90,7 +90,7 @@ pub(crate) enum Out {
     Value(Value),
     /// Takes this much program time (at least one step), then returns the value.
     Wait(Duration, Value),
-    /// Waits until the motion clock (steps; see `crate::controller::MotionClock`) reaches
+    /// Waits until the motion clock (steps; see `crate::runtime::MotionClock`) reaches
     /// this (at least one step), then returns the value: a motion's end at the speed
     /// slider's fraction.
     Motion(f64, Value),
@@ -107,7 +107,7 @@ pub(crate) enum Out {
 }
 
 /// The code of a built-in.
-pub(crate) type Handler = fn(&mut Controller, &mut Args) -> Result<Out, Fault>;
+pub(crate) type Handler = fn(&mut Runtime, &mut Args) -> Result<Out, Fault>;
 
 /// A built-in function: one entry of the table.
 #[derive(Clone, Copy)]

@@ -2,7 +2,7 @@
 //! (`ursock robot --set digital_in[3]=True`), where NAME is a field of [`World`] and
 //! VALUE a URScript constant (`True`, `4.2`, `[0, 0, -10, 0, 0, 0]`, `"ok"`).
 
-use crate::controller::{Arm, World};
+use crate::runtime::{Arm, World};
 use crate::value::Value;
 
 /// Why a setting was refused: the setting as given and what is wrong with it.

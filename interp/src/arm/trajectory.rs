@@ -518,7 +518,7 @@ pub(crate) struct Motion {
 pub(crate) struct BlendStart {
     pub r: f64,
     pub at: f64,
-    /// The motion clock (steps, see `crate::controller::MotionClock`) at which the
+    /// The motion clock (steps, see `crate::runtime::MotionClock`) at which the
     /// program gets control back (set by the controller).
     pub back: f64,
     /// The first step the program may get control back in (the one after the move's

@@ -13,8 +13,8 @@
 //! - `track_conveyor_linear`, `track_conveyor_circular`, `stop_conveyor_tracking`.
 
 use super::{opt, req, Args, Builtin, Default, Domain, Out};
-use crate::controller::{Controller, Encoder};
 use crate::error::Fault;
+use crate::runtime::{Encoder, Runtime};
 use crate::value::Value;
 
 const D: Domain = Domain::Motion;
@@ -143,7 +143,7 @@ fn wrap(id: i32, ticks: i64) -> i64 {
     }
 }
 
-fn enable(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+fn enable(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
     let (k, enc) = match a.name {
         "conveyor_pulse_decode" => {
             let t = a.int(0)?;
@@ -204,7 +204,7 @@ fn enable(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
     Ok(Out::Value(Value::None))
 }
 
-fn get_ticks(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+fn get_ticks(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
     let (k, raw) = if a.name == "get_conveyor_tick_count" {
         (0, false)
     } else {
@@ -218,7 +218,7 @@ fn get_ticks(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
     }))
 }
 
-fn set_ticks(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+fn set_ticks(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
     if a.name == "set_conveyor_tick_count" {
         let ticks = a.int(0)?;
         let id = range_id(a, 1)?;
@@ -252,7 +252,7 @@ fn set_ticks(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
     Ok(Out::Value(Value::None))
 }
 
-fn unwind(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+fn unwind(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
     let k = a.index(0, 2, "encoder")?;
     let delta = a.num(1)?;
     let enc = c.arm.encoders[k];
@@ -270,7 +270,7 @@ fn unwind(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
     Ok(Out::Value(Value::Float(d)))
 }
 
-fn track(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+fn track(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
     a.six(0)?;
     a.num(1)?;
     let at = if a.name == "track_conveyor_linear" {
@@ -284,7 +284,7 @@ fn track(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
     Ok(Out::Value(Value::None))
 }
 
-fn stop(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+fn stop(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
     a.num(0)?;
     c.arm.conveyor = None;
     c.arm.qd = [0.0; 6];

@@ -34,10 +34,10 @@
 //! the dynamics functions are then a runtime error.
 
 use super::{float_list, floats, opt, Args, Builtin, Default, Domain, Out};
-use crate::controller::Controller;
 use crate::error::Fault;
 use crate::kinematics::dynamics::{self, Payload};
 use crate::kinematics::{self, Model, MODELS};
+use crate::runtime::Runtime;
 use crate::value::Value;
 
 const NONE: &[super::Param] = &[];
@@ -121,7 +121,7 @@ fn six_or(a: &Args, i: usize, now: [f64; 6]) -> Result<[f64; 6], Fault> {
 }
 
 /// The model whose DH parameters the arm has.
-fn model(c: &Controller, name: &str) -> Result<Model, Fault> {
+fn model(c: &Runtime, name: &str) -> Result<Model, Fault> {
     MODELS
         .iter()
         .copied()
@@ -133,7 +133,7 @@ fn model(c: &Controller, name: &str) -> Result<Model, Fault> {
         })
 }
 
-fn payload(c: &Controller) -> Payload {
+fn payload(c: &Runtime) -> Payload {
     Payload {
         mass: c.arm.payload_mass,
         cog: c.arm.payload_cog,
@@ -141,13 +141,13 @@ fn payload(c: &Controller) -> Payload {
     }
 }
 
-fn jacobian(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+fn jacobian(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
     let q = six_or(a, 0, c.arm.q)?;
     let tcp = six_or(a, 1, c.arm.tcp)?;
     Ok(Out::Value(matrix(kinematics::jacobian(&c.dh, q, tcp))))
 }
 
-fn jacobian_time_derivative(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+fn jacobian_time_derivative(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
     let q = six_or(a, 0, c.arm.q)?;
     let qd = six_or(a, 1, c.arm.qd)?;
     let tcp = six_or(a, 2, c.arm.tcp)?;
@@ -156,7 +156,7 @@ fn jacobian_time_derivative(c: &mut Controller, a: &mut Args) -> Result<Out, Fau
     ))))
 }
 
-fn mass_matrix(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+fn mass_matrix(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
     let model = model(c, a.name)?;
     let q = six_or(a, 0, c.arm.q)?;
     let mut m = dynamics::mass_matrix(model, q, &payload(c));
@@ -168,7 +168,7 @@ fn mass_matrix(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
     Ok(Out::Value(matrix(m)))
 }
 
-fn coriolis(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+fn coriolis(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
     let model = model(c, a.name)?;
     let q = six_or(a, 0, c.arm.q)?;
     let qd = six_or(a, 1, c.arm.qd)?;
@@ -176,7 +176,7 @@ fn coriolis(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
     Ok(Out::Value(float_list(&tau)))
 }
 
-fn accelerations(c: &mut Controller, _: &mut Args) -> Result<Out, Fault> {
+fn accelerations(c: &mut Runtime, _: &mut Args) -> Result<Out, Fault> {
     Ok(Out::Value(floats(c.arm.qdd)))
 }
 
@@ -220,7 +220,7 @@ fn bad_item(a: &Args, i: usize, k: usize, x: &Value) -> Fault {
     ))
 }
 
-fn estimate_payload(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+fn estimate_payload(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
     let poses = sixes(a, 0, "a list of poses")?;
     let wrenches = sixes(a, 1, "a list of wrenches")?;
     // The flange's orientation: the TCP pose composed with the inverse of the TCP's

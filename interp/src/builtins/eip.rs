@@ -6,8 +6,8 @@
 //! reached as on the robot, through `rpc_factory("xmlrpc", "http://127.0.0.1:40000/RPC2")`.
 
 use super::{req, Args, Builtin, Domain, Out};
-use crate::controller::Controller;
 use crate::error::Fault;
+use crate::runtime::Runtime;
 
 const PARAMS: &[super::Param] = &[req("instance_name"), req("data_size")];
 
@@ -28,17 +28,17 @@ pub(super) const TABLE: &[Builtin] = &[
     ),
 ];
 
-fn open(c: &mut Controller, a: &Args, writer: bool) -> Result<Out, Fault> {
+fn open(c: &mut Runtime, a: &Args, writer: bool) -> Result<Out, Fault> {
     let name = a.bytes(0)?.to_vec();
     let size = a.int(1)?;
-    let Controller { eip, arm, .. } = c;
+    let Runtime { eip, arm, .. } = c;
     eip.open(&mut arm.eip, writer, &name, size).map(Out::Value)
 }
 
-fn reader(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+fn reader(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
     open(c, a, false)
 }
 
-fn writer(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+fn writer(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
     open(c, a, true)
 }

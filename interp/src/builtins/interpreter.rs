@@ -5,8 +5,8 @@
 //! interpreter socket's lines.
 
 use super::{opt, Args, Builtin, Default, Domain, Out};
-use crate::controller::Controller;
 use crate::error::Fault;
+use crate::runtime::Runtime;
 
 const D: Domain = Domain::Interpreter;
 
@@ -38,7 +38,7 @@ pub(super) const TABLE: &[Builtin] = &[
 ];
 
 /// The machine intercepts these built-ins before their code would run.
-fn by_machine(_: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+fn by_machine(_: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
     Err(Fault::from(format!(
         "internal error: `{}` is run by the machine",
         a.name

@@ -2,17 +2,17 @@
 //! chapters, sockets aside): digital and analog outputs, tool outputs, flags, the RTDE
 //! output registers and the Modbus server's ports store what is written and read back.
 //! Inputs and the RTDE input registers read their field of the virtual arm
-//! (`crate::controller::Arm`: `False`/0 unless a test sets them; nothing is wired).
+//! (`crate::runtime::Arm`: `False`/0 unless a test sets them; nothing is wired).
 //! Modbus signals live in a virtual client with no device behind it: an output signal
 //! reads back what was set, an input signal reads 0/False. The virtual operator answers
 //! `request_*_from_primary_client` at once with fixed values (False, 0, 0.0, "").
 //! Other I/O settings are accepted with their manual signatures and change nothing.
 
 use super::{accept, opt, req, Args, Builtin, Default, Domain, Out};
-use crate::controller::Controller;
-use crate::controller::ModbusSignal;
 use crate::error::Fault;
 use crate::event::{Event, OutputValue, OutputWrite};
+use crate::runtime::ModbusSignal;
+use crate::runtime::Runtime;
 use crate::value::Value;
 
 const D: Domain = Domain::Io;
@@ -596,7 +596,7 @@ pub(super) const TABLE: &[Builtin] = &[
 ];
 
 /// The output slot a digital function names.
-fn digital_slot<'a>(c: &'a mut Controller, a: &Args) -> Result<&'a mut bool, Fault> {
+fn digital_slot<'a>(c: &'a mut Runtime, a: &Args) -> Result<&'a mut bool, Fault> {
     let n = a.int(0)?;
     let arm = &mut c.arm;
     let slot = usize::try_from(n).ok().and_then(|k| {
@@ -616,7 +616,7 @@ fn digital_slot<'a>(c: &'a mut Controller, a: &Args) -> Result<&'a mut bool, Fau
     slot.ok_or_else(|| Fault::from(format!("`{}`: no output {n}", a.name)))
 }
 
-fn set_digital(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+fn set_digital(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
     let on = a.boolean(1)?;
     let slot = digital_slot(c, a)?;
     if std::mem::replace(slot, on) != on {
@@ -625,11 +625,11 @@ fn set_digital(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
     Ok(Out::Value(Value::None))
 }
 
-fn get_digital_out(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+fn get_digital_out(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
     Ok(Out::Value(Value::Bool(*digital_slot(c, a)?)))
 }
 
-fn get_digital_in(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+fn get_digital_in(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
     // digital_in: standard 0-7, configurable 8-15, tool 16-17.
     let k = match a.name {
         "get_standard_digital_in" => a.index(0, 8, "input")?,
@@ -643,7 +643,7 @@ fn get_digital_in(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
     Ok(Out::Value(Value::Bool(c.arm.world.digital_in[k])))
 }
 
-fn set_analog_out(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+fn set_analog_out(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
     let n = a.int(0)?;
     let x = a.num(1)?;
     let slot = usize::try_from(n)
@@ -657,7 +657,7 @@ fn set_analog_out(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
 }
 
 /// Reports the change of the output `a` names (its first argument, the pin).
-fn output_changed(c: &mut Controller, a: &Args, value: OutputValue) {
+fn output_changed(c: &mut Runtime, a: &Args, value: OutputValue) {
     let pin = a.int(0).map_or(-1, i64::from);
     c.events.push_back(Event::Output(OutputWrite {
         line: a.line,
@@ -667,12 +667,12 @@ fn output_changed(c: &mut Controller, a: &Args, value: OutputValue) {
     }));
 }
 
-fn get_analog_out(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+fn get_analog_out(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
     let n = a.index(0, 2, "analog output")?;
     Ok(Out::Value(Value::Float(c.arm.analog_out[n])))
 }
 
-fn get_analog_in(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+fn get_analog_in(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
     // analog_in: standard 0-1, tool 2-3.
     let k = match a.name {
         "get_standard_analog_in" => a.index(0, 2, "analog input")?,
@@ -682,7 +682,7 @@ fn get_analog_in(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
     Ok(Out::Value(Value::Float(c.arm.world.analog_in[k])))
 }
 
-fn read_input(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+fn read_input(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
     let arm = &c.arm;
     Ok(Out::Value(match a.name {
         "read_input_integer_register" => {
@@ -695,7 +695,7 @@ fn read_input(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
     }))
 }
 
-fn flag(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+fn flag(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
     let n = a.index(0, 32, "flag")?;
     if a.name == "set_flag" {
         c.arm.flags[n] = a.boolean(1)?;
@@ -704,7 +704,7 @@ fn flag(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
     Ok(Out::Value(Value::Bool(c.arm.flags[n])))
 }
 
-fn port(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+fn port(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
     let addr = a.int(0)?;
     if addr < 0 {
         return Err(Fault::from(format!("`{}`: no port {addr}", a.name)));
@@ -732,7 +732,7 @@ fn port(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
     }))
 }
 
-fn set_analog_outputdomain(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+fn set_analog_outputdomain(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
     let port = a.index(0, 2, "analog output")?;
     let domain = a.int(1)?;
     if !(0..=1).contains(&domain) {
@@ -758,7 +758,7 @@ fn check_action(a: &Args, i: usize) -> Result<(), Fault> {
     }
 }
 
-fn input_action(_: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+fn input_action(_: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
     let n = match a.name {
         "set_configurable_digital_input_action" => 8,
         "set_tool_digital_input_action" => 2,
@@ -770,7 +770,7 @@ fn input_action(_: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
 }
 
 /// The Modbus signal named by argument `i`.
-fn signal<'a>(c: &'a mut Controller, a: &Args, i: usize) -> Result<&'a mut ModbusSignal, Fault> {
+fn signal<'a>(c: &'a mut Runtime, a: &Args, i: usize) -> Result<&'a mut ModbusSignal, Fault> {
     let name = a.text(i)?;
     c.arm
         .modbus
@@ -778,7 +778,7 @@ fn signal<'a>(c: &'a mut Controller, a: &Args, i: usize) -> Result<&'a mut Modbu
         .ok_or_else(|| Fault::from(format!("`{}`: no Modbus signal \"{name}\"", a.name)))
 }
 
-fn modbus(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+fn modbus(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
     match a.name {
         "modbus_add_signal" | "modbus_add_rw_signal" => {
             let rw = a.name == "modbus_add_rw_signal";
@@ -901,7 +901,7 @@ fn modbus(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
     Ok(Out::Value(Value::None))
 }
 
-fn request(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+fn request(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
     if a.bytes(0)?.is_empty() {
         return Err(Fault::from(format!("`{}`: the message is empty", a.name)));
     }
@@ -914,7 +914,7 @@ fn request(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
     }))
 }
 
-fn register(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+fn register(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
     let write = a.name.starts_with("write");
     let addr = a.int(0)?;
     let bools = a.name.contains("boolean");
@@ -950,7 +950,7 @@ fn register(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
 /// the program's end). The watchdogs end with the program. `variable_name` must be an
 /// input field of [`crate::rtde_fields`] (`input_int_register_0`,
 /// `speed_slider_fraction`, ...): any other name is a runtime error.
-fn rtde_set_watchdog(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+fn rtde_set_watchdog(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
     let variable = a.text(0)?;
     if crate::rtde_fields::Field::lookup(&variable, crate::rtde_fields::Direction::Input).is_none()
     {
@@ -979,12 +979,12 @@ fn rtde_set_watchdog(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
     if f == 0.0 {
         return Ok(Out::Value(Value::None));
     }
-    if c.rtde_watchdogs.len() >= crate::controller::MAX_RTDE_WATCHDOGS {
+    if c.rtde_watchdogs.len() >= crate::runtime::MAX_RTDE_WATCHDOGS {
         return Err(Fault::new(
             crate::error::RuntimeErrorKind::Limit,
             format!(
                 "`rtde_set_watchdog`: at most {} watchdogs",
-                crate::controller::MAX_RTDE_WATCHDOGS
+                crate::runtime::MAX_RTDE_WATCHDOGS
             ),
         ));
     }
@@ -1003,7 +1003,7 @@ fn rtde_set_watchdog(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
         .copied()
         .unwrap_or(0);
     let since = c.step;
-    c.rtde_watchdogs.push(crate::controller::RtdeWatchdog {
+    c.rtde_watchdogs.push(crate::runtime::RtdeWatchdog {
         variable,
         period,
         action,
@@ -1019,7 +1019,7 @@ fn rtde_set_watchdog(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
 /// Inputs read [`World::euromap_in`](crate::World::euromap_in); outputs read back what
 /// was set; the run-state choice (0: preserve, 1: low, 2: high when no program runs) is
 /// recorded (no program runs on the virtual arm between programs to apply it).
-fn euromap(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+fn euromap(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
     let n = a.index(0, 32, "Euromap67 signal")?;
     Ok(Out::Value(match a.name {
         "get_euromap_input" => Value::Bool(c.arm.world.euromap_in[n]),

@@ -2,8 +2,8 @@
 //! functions on lists of lists (`inv`, `transpose`; `inv` of a pose is `pose_inv`).
 
 use super::{float_list, req, Args, Builtin, Domain, Out};
-use crate::controller::Controller;
 use crate::error::Fault;
+use crate::runtime::Runtime;
 use crate::value::Value;
 
 const D: Domain = Domain::Math;
@@ -93,7 +93,7 @@ pub(super) const TABLE: &[Builtin] = &[
     ),
 ];
 
-fn unary(_: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+fn unary(_: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
     let x = a.num(0)?;
     let r = match a.name {
         "sin" => x.sin(),
@@ -115,15 +115,15 @@ fn unary(_: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
     Ok(Out::Value(Value::Float(r)))
 }
 
-fn atan2(_: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+fn atan2(_: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
     Ok(Out::Value(Value::Float(a.num(0)?.atan2(a.num(1)?))))
 }
 
-fn pow(_: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+fn pow(_: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
     Ok(Out::Value(Value::Float(a.num(0)?.powf(a.num(1)?))))
 }
 
-fn log(_: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+fn log(_: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
     let (base, x) = (a.num(0)?, a.num(1)?);
     if base <= 0.0 || base == 1.0 || x <= 0.0 {
         return Err(Fault::from(format!("`log`: log({base}, {x}) is undefined")));
@@ -131,7 +131,7 @@ fn log(_: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
     Ok(Out::Value(Value::Float(x.ln() / base.ln())))
 }
 
-fn round(_: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+fn round(_: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
     let x = a.num(0)?;
     let r = if a.name == "floor" {
         x.floor()
@@ -147,7 +147,7 @@ fn round(_: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
     Ok(Out::Value(Value::Int(r as i32)))
 }
 
-fn norm(_: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+fn norm(_: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
     let n = match &a.v[0] {
         Value::Int(x) => f64::from(*x).abs(),
         Value::Float(x) => x.abs(),
@@ -172,7 +172,7 @@ fn norm(_: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
     Ok(Out::Value(Value::Float(n)))
 }
 
-fn binary_list_to_integer(_: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+fn binary_list_to_integer(_: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
     let Value::List(items) = &a.v[0] else {
         return Err(Fault::type_error(
             "type error: `binary_list_to_integer` needs a list of bools",
@@ -203,14 +203,14 @@ fn binary_list_to_integer(_: &mut Controller, a: &mut Args) -> Result<Out, Fault
     Ok(Out::Value(Value::Int(out as i32)))
 }
 
-fn integer_to_binary_list(_: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+fn integer_to_binary_list(_: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
     let x = a.int(0)? as u32;
     Ok(Out::Value(Value::List(
         (0..32).map(|k| Value::Bool(x >> k & 1 == 1)).collect(),
     )))
 }
 
-fn random(c: &mut Controller, _: &mut Args) -> Result<Out, Fault> {
+fn random(c: &mut Runtime, _: &mut Args) -> Result<Out, Fault> {
     // A fixed-seed xorshift: runs are reproducible.
     let mut x = c.arm.random_state;
     x ^= x << 13;
@@ -222,7 +222,7 @@ fn random(c: &mut Controller, _: &mut Args) -> Result<Out, Fault> {
     )))
 }
 
-fn normalize(_: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+fn normalize(_: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
     let v = numbers(a, &a.v[0])?;
     let n = v.iter().map(|x| x * x).sum::<f64>().sqrt();
     if n == 0.0 {
@@ -282,7 +282,7 @@ fn to_value(m: Vec<Vec<f64>>) -> Value {
     Value::List(m.iter().map(|r| float_list(r)).collect())
 }
 
-fn inv(_: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+fn inv(_: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
     if let Value::Pose(p) = a.v[0] {
         return Ok(Out::Value(Value::Pose(crate::arm::pose::inv(p))));
     }
@@ -322,7 +322,7 @@ fn inv(_: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
     Ok(Out::Value(to_value(out)))
 }
 
-fn transpose(_: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+fn transpose(_: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
     let m = matrix(a)?;
     let t = (0..m[0].len())
         .map(|j| m.iter().map(|r| r[j]).collect())

@@ -3,9 +3,9 @@
 //! operator closes it at once).
 
 use super::{opt, req, Args, Builtin, Default, Domain, Out};
-use crate::controller::Controller;
 use crate::error::Fault;
 use crate::event::{Event, Message, MessageKind};
+use crate::runtime::Runtime;
 use crate::value::Value;
 
 const D: Domain = Domain::Messages;
@@ -40,7 +40,7 @@ pub(super) const TABLE: &[Builtin] = &[
     ),
 ];
 
-fn show(c: &mut Controller, a: &mut Args, kind: MessageKind, text: String) -> Result<Out, Fault> {
+fn show(c: &mut Runtime, a: &mut Args, kind: MessageKind, text: String) -> Result<Out, Fault> {
     let given = a.positional.min(a.v.len());
     c.events.push_back(Event::Message(Message {
         line: a.line,
@@ -51,17 +51,17 @@ fn show(c: &mut Controller, a: &mut Args, kind: MessageKind, text: String) -> Re
     Ok(Out::Value(Value::None))
 }
 
-fn textmsg(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+fn textmsg(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
     let text = format!("{}{}", a.v[0].to_str(), a.v[1].to_str());
     show(c, a, MessageKind::Textmsg, text)
 }
 
-fn varmsg(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+fn varmsg(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
     let text = format!("{} = {}", a.v[0].to_str(), a.v[1].to_str());
     show(c, a, MessageKind::Varmsg, text)
 }
 
-fn popup(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+fn popup(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
     let kind = MessageKind::Popup {
         title: a.v[1].to_str(),
         warning: a.boolean(2)?,

@@ -31,8 +31,8 @@
 
 use std::sync::OnceLock;
 
-use crate::controller::Controller;
 use crate::error::Fault;
+use crate::runtime::Runtime;
 use crate::value::Value;
 
 pub mod conveyor;
@@ -51,9 +51,9 @@ pub mod strings;
 pub mod time;
 pub mod world_model;
 
-pub(crate) use crate::controller::secs;
 pub(crate) use crate::native::{Args, Out};
 pub use crate::native::{Builtin, Default, Domain, Param};
+pub(crate) use crate::runtime::secs;
 pub use strings::MAX_STRING_LEN;
 
 /// A required parameter.
@@ -252,7 +252,7 @@ pub(crate) fn float_list(v: &[f64]) -> Value {
 }
 
 /// Does nothing and returns nothing: settings the virtual arm has no use for.
-pub(crate) fn accept(_: &mut Controller, _: &mut Args) -> Result<Out, Fault> {
+pub(crate) fn accept(_: &mut Runtime, _: &mut Args) -> Result<Out, Fault> {
     Ok(Out::Value(Value::None))
 }
 
@@ -286,7 +286,7 @@ mod tests {
     }
 
     /// Calls built-in `name` on `c` with these positional arguments (defaults after).
-    fn call(c: &mut Controller, name: &str, args: Vec<Value>) -> Value {
+    fn call(c: &mut Runtime, name: &str, args: Vec<Value>) -> Value {
         let b = lookup(name).unwrap();
         let positional = args.len();
         let mut v: Vec<Value> = b
@@ -318,11 +318,11 @@ mod tests {
     /// read what a test sets there.
     #[test]
     fn the_worlds_values_are_fields_a_test_sets() {
-        let mut c = Controller {
+        let mut c = Runtime {
             dh: crate::kinematics::Model::Ur5e.dh(),
             step_time: Duration::from_millis(2),
             step: 0,
-            arm: crate::controller::Arm::default(),
+            arm: crate::runtime::Arm::default(),
             sockets: crate::sockets::Sockets::new(crate::sockets::Policy::default()),
             events: crate::vm::memory::Events::default(),
             mem: crate::vm::memory::Memory::new(crate::vm::memory::DEFAULT_MAX_MEMORY),
@@ -333,7 +333,7 @@ mod tests {
             rtde_watchdogs: Vec::new(),
             tracked: None,
             queued: None,
-            clock: crate::controller::MotionClock::default(),
+            clock: crate::runtime::MotionClock::default(),
             contact_since: None,
             joint_history: crate::history::JointHistory::default(),
         };

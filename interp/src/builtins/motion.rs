@@ -60,7 +60,7 @@
 //!   -> `get_target_payload*`), TCP (`set_tcp` -> `get_tcp_offset`), gravity, base
 //!   acceleration, path offset (`path_offset_*`), `set_pos` (the joints).
 //! - What the robot measures of the world returns the documented fixed value of its
-//!   field of the virtual arm (`crate::controller::Arm`): `get_tcp_force()` and `force()`
+//!   field of the virtual arm (`crate::runtime::Arm`): `get_tcp_force()` and `force()`
 //!   `World::tcp_force` (0) plus the contact plane's push, `get_joint_torques()` 0, `get_joint_temp(j)` 35.0 °C, `get_controller_temp()`
 //!   30.0 °C, `get_tool_temp()` 32.0 °C, `get_tool_current()` 0.0 A;
 //!   `get_tool_accelerometer_reading()` is the gravity vector seen from the flange.
@@ -69,9 +69,9 @@
 
 use super::{accept, float_list, floats, opt, req, secs, Args, Builtin, Default, Domain, Out};
 use crate::arm::trajectory::{self, Kind, Path, Profile};
-use crate::controller::Controller;
 use crate::error::Fault;
 use crate::event::MoveStart;
+use crate::runtime::Runtime;
 use crate::value::Value;
 
 const D: Domain = Domain::Motion;
@@ -805,7 +805,7 @@ fn joint_distance(from: [f64; 6], to: [f64; 6]) -> f64 {
     (0..6).map(|k| (to[k] - from[k]).abs()).fold(0.0, f64::max)
 }
 
-pub use crate::controller::JOINT_LIMIT;
+pub use crate::runtime::JOINT_LIMIT;
 
 /// Refuses joint targets outside the arm's range (a little rounding over ±2π passes).
 fn check_joints(name: &str, q: [f64; 6]) -> Result<[f64; 6], Fault> {
@@ -824,7 +824,7 @@ fn check_joints(name: &str, q: [f64; 6]) -> Result<[f64; 6], Fault> {
 /// through inverse kinematics nearest the joints the move starts from. Returns the joints
 /// and the tool pose there (the pose given, for a pose).
 fn target(
-    c: &Controller,
+    c: &Runtime,
     name: &str,
     v: &Value,
     six: [f64; 6],
@@ -843,7 +843,7 @@ fn target(
 /// singularity); the joints returned are then the move's start, which do not reach
 /// the pose.
 fn tool_target(
-    c: &Controller,
+    c: &Runtime,
     name: &str,
     v: &Value,
     six: [f64; 6],
@@ -873,11 +873,11 @@ fn radius(a: &Args, i: usize) -> Result<f64, Fault> {
     }
 }
 
-/// A move of the tool from where it starts ([`Controller::move_start`]) along a line (or
+/// A move of the tool from where it starts ([`Runtime::move_start`]) along a line (or
 /// the arc through `via`) to `pose` (joints `q1` there), along a trapezoidal profile,
 /// blend radius `r`; returns the time until the program gets control back.
 fn tool_move(
-    c: &mut Controller,
+    c: &mut Runtime,
     via: Option<[f64; 6]>,
     pose: [f64; 6],
     (q1, given): ([f64; 6], bool),
@@ -950,8 +950,8 @@ fn move_start(
 /// `movej`, `movel`, `movep`, `optimovej`, `optimovel`: the arm moves along a trapezoidal
 /// profile (accelerate at `a` to `v`, cruise, decelerate), stretched to `t` if given, and
 /// is at the target when the move ends; with a blend radius `r > 0` the program gets
-/// control back where the blend begins (see [`Controller::start_move`]).
-fn movej(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+/// control back where the blend begins (see [`Runtime::start_move`]).
+fn movej(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
     let six = a.six(0)?;
     let (accel, speed) = (a.num(1)?, a.num(2)?);
     // movep and optimove* have no `t`; `r` is last.
@@ -988,7 +988,7 @@ fn movej(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
 /// from the start's to `pose_to`'s; `mode=1` (fixed): it keeps its relation to the
 /// arc's tangent from the start's, turning about the circle's axis by the angle swept
 /// (`pose_to`'s orientation is not used); another mode is a runtime error.
-fn movec(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+fn movec(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
     let via_six = a.six(0)?;
     let via = if matches!(a.v[0], Value::Pose(_)) {
         via_six
@@ -1025,7 +1025,7 @@ fn movec(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
 /// `powerdown()`: the arm stops, the program halts at the call and the request is left
 /// for the controller that runs it (`Arm::powerdown`: it powers the arm off; a real
 /// controller also shuts itself down, which a virtual one serving its clients does not).
-fn powerdown(c: &mut Controller, _: &mut Args) -> Result<Out, Fault> {
+fn powerdown(c: &mut Runtime, _: &mut Args) -> Result<Out, Fault> {
     c.stop_at_once();
     c.arm.powerdown = true;
     Ok(Out::Value(Value::None))
@@ -1033,7 +1033,7 @@ fn powerdown(c: &mut Controller, _: &mut Args) -> Result<Out, Fault> {
 
 /// `protective_stop()`: the arm stops at once and the request is left for the
 /// controller that runs the arm (`Arm::protective_stop`).
-fn protective_stop(c: &mut Controller, _: &mut Args) -> Result<Out, Fault> {
+fn protective_stop(c: &mut Runtime, _: &mut Args) -> Result<Out, Fault> {
     c.protective_stop();
     // One step: the statements after it do not run in the step the stop happened, so a
     // controller acting on `Arm::protective_stop` after the step pauses the program
@@ -1043,7 +1043,7 @@ fn protective_stop(c: &mut Controller, _: &mut Args) -> Result<Out, Fault> {
 
 /// `servoj`: straight to `q` in joint space at constant speed over `t` (`a`, `v`,
 /// `lookahead_time` and `gain` shape a real servo's tracking; not modelled).
-fn servoj(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+fn servoj(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
     let q1 = check_joints(a.name, a.six(0)?)?;
     let t = a.num(3)?;
     let q0 = c.arm.q;
@@ -1060,7 +1060,7 @@ fn servoj(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
 /// current one to the target at `a` (the component that changes most; `aRot` for the
 /// tool's rotation, `a` if left out), then holds until the next motion command; returns
 /// after `t` (one step if left out).
-fn speed(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+fn speed(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
     let target = a.six(0)?;
     let acc = a.num(1)?;
     let t = if a.is_absent(2) {
@@ -1093,7 +1093,7 @@ fn speed(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
 }
 
 /// Ramps the tool speed to `v1` from the current one.
-fn tool_speed(c: &mut Controller, v1: [f64; 6], acc: f64, a_rot: f64, info: Option<MoveStart>) {
+fn tool_speed(c: &mut Runtime, v1: [f64; 6], acc: f64, a_rot: f64, info: Option<MoveStart>) {
     let v0 = c.arm.tcp_speed;
     let ramp = trajectory::ramp_time(&v0[..3], &v1[..3], acc).max(trajectory::ramp_time(
         &v0[3..],
@@ -1108,7 +1108,7 @@ fn tool_speed(c: &mut Controller, v1: [f64; 6], acc: f64, a_rot: f64, info: Opti
 /// `stopj(a)`: the joint speeds ramp down to zero at `a` (the fastest joint; the others
 /// in proportion); `stopl(a, aRot)`: the tool speed, at `a` (`aRot` for its rotation).
 /// Returns when the arm is at rest (at least one step).
-fn stop(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+fn stop(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
     let acc = a.num(0)?;
     let ramp = if a.name == "stopj" {
         let qd0 = c.arm.qd;
@@ -1143,16 +1143,16 @@ fn stop(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
     Ok(Out::Motion(until, Value::None))
 }
 
-fn direct_torque(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+fn direct_torque(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
     a.six(0)?;
     Ok(Out::Wait(c.step_time, Value::None))
 }
 
-fn joints(c: &mut Controller, _: &mut Args) -> Result<Out, Fault> {
+fn joints(c: &mut Runtime, _: &mut Args) -> Result<Out, Fault> {
     Ok(Out::Value(floats(c.arm.q)))
 }
 
-fn joints_history(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+fn joints_history(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
     let back = a.int(0)?;
     let q = c
         .joint_history
@@ -1161,15 +1161,15 @@ fn joints_history(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
     Ok(Out::Value(floats(q)))
 }
 
-fn joint_speeds(c: &mut Controller, _: &mut Args) -> Result<Out, Fault> {
+fn joint_speeds(c: &mut Runtime, _: &mut Args) -> Result<Out, Fault> {
     Ok(Out::Value(floats(c.arm.qd)))
 }
 
-fn tcp_pose(c: &mut Controller, _: &mut Args) -> Result<Out, Fault> {
+fn tcp_pose(c: &mut Runtime, _: &mut Args) -> Result<Out, Fault> {
     Ok(Out::Value(Value::Pose(c.tcp_pose())))
 }
 
-fn waypoint(c: &mut Controller, _: &mut Args) -> Result<Out, Fault> {
+fn waypoint(c: &mut Runtime, _: &mut Args) -> Result<Out, Fault> {
     let pose = c
         .motion
         .as_ref()
@@ -1178,26 +1178,26 @@ fn waypoint(c: &mut Controller, _: &mut Args) -> Result<Out, Fault> {
     Ok(Out::Value(Value::Pose(pose)))
 }
 
-fn tcp_speed(c: &mut Controller, _: &mut Args) -> Result<Out, Fault> {
+fn tcp_speed(c: &mut Runtime, _: &mut Args) -> Result<Out, Fault> {
     Ok(Out::Value(floats(c.arm.tcp_speed)))
 }
 
-fn tcp_force(c: &mut Controller, _: &mut Args) -> Result<Out, Fault> {
+fn tcp_force(c: &mut Runtime, _: &mut Args) -> Result<Out, Fault> {
     Ok(Out::Value(Value::Pose(c.measured_tcp_force())))
 }
 
-fn force(c: &mut Controller, _: &mut Args) -> Result<Out, Fault> {
+fn force(c: &mut Runtime, _: &mut Args) -> Result<Out, Fault> {
     let f = &c.measured_tcp_force();
     Ok(Out::Value(Value::Float(
         (f[0] * f[0] + f[1] * f[1] + f[2] * f[2]).sqrt(),
     )))
 }
 
-fn flange_pose(c: &mut Controller, _: &mut Args) -> Result<Out, Fault> {
+fn flange_pose(c: &mut Runtime, _: &mut Args) -> Result<Out, Fault> {
     Ok(Out::Value(Value::Pose(c.flange_pose())))
 }
 
-fn payload(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+fn payload(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
     Ok(Out::Value(match a.name {
         "get_target_payload" => Value::Float(c.arm.payload_mass),
         "get_target_payload_cog" => float_list(&c.arm.payload_cog),
@@ -1205,7 +1205,7 @@ fn payload(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
     }))
 }
 
-fn set_payload(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+fn set_payload(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
     let arm = &mut c.arm;
     match a.name {
         "set_payload_mass" => arm.payload_mass = a.num(0)?,
@@ -1240,7 +1240,7 @@ fn set_payload(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
 
 /// Settings stored on the arm and read back by their getters: each refuses a value
 /// outside the range the manual gives, naming it.
-fn motion_setting(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+fn motion_setting(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
     let arm = &mut c.arm;
     let (slot, lo, hi) = match a.name {
         "force_mode_set_damping" => (&mut arm.force_mode_damping, 0.0, 1.0),
@@ -1268,7 +1268,7 @@ fn motion_setting(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
     Ok(Out::Value(Value::None))
 }
 
-fn motion_setting_get(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+fn motion_setting_get(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
     let arm = &c.arm;
     Ok(Out::Value(match a.name {
         "force_mode_get_damping" => Value::Float(arm.force_mode_damping),
@@ -1278,16 +1278,16 @@ fn motion_setting_get(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
     }))
 }
 
-fn joint_torques(c: &mut Controller, _: &mut Args) -> Result<Out, Fault> {
+fn joint_torques(c: &mut Runtime, _: &mut Args) -> Result<Out, Fault> {
     Ok(Out::Value(floats(c.arm.world.joint_torques)))
 }
 
-fn joint_temp(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+fn joint_temp(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
     let j = a.index(0, 6, "joint")?;
     Ok(Out::Value(Value::Float(c.arm.world.joint_temp[j])))
 }
 
-fn scalar(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+fn scalar(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
     Ok(Out::Value(Value::Float(match a.name {
         "get_controller_temp" => c.arm.world.controller_temp,
         "get_tool_temp" => c.arm.world.tool_temp,
@@ -1295,7 +1295,7 @@ fn scalar(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
     })))
 }
 
-fn accelerometer(c: &mut Controller, _: &mut Args) -> Result<Out, Fault> {
+fn accelerometer(c: &mut Runtime, _: &mut Args) -> Result<Out, Fault> {
     // What the flange's axes see of gravity: the inverse rotation applied to it.
     let f = c.flange_pose();
     Ok(Out::Value(float_list(&super::poses::rotate(
@@ -1304,7 +1304,7 @@ fn accelerometer(c: &mut Controller, _: &mut Args) -> Result<Out, Fault> {
     ))))
 }
 
-fn get3(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+fn get3(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
     Ok(Out::Value(float_list(if a.name == "get_gravity" {
         &c.arm.gravity
     } else {
@@ -1312,7 +1312,7 @@ fn get3(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
     })))
 }
 
-fn set3(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+fn set3(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
     let v = a.nums(0)?;
     if a.name == "set_gravity" {
         c.arm.gravity = v;
@@ -1322,11 +1322,11 @@ fn set3(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
     Ok(Out::Value(Value::None))
 }
 
-fn zero_int(_: &mut Controller, _: &mut Args) -> Result<Out, Fault> {
+fn zero_int(_: &mut Runtime, _: &mut Args) -> Result<Out, Fault> {
     Ok(Out::Value(Value::Int(0)))
 }
 
-fn has_solution(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+fn has_solution(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
     let pose = a.six(0)?;
     let qnear = if a.is_absent(1) { c.arm.q } else { a.six(1)? };
     let tcp = if a.is_absent(4) { c.arm.tcp } else { a.six(4)? };
@@ -1336,7 +1336,7 @@ fn has_solution(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
     )))
 }
 
-fn set_pos(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+fn set_pos(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
     let q = check_joints(a.name, a.six(0)?)?;
     c.halt();
     c.arm.q = q;
@@ -1345,7 +1345,7 @@ fn set_pos(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
     Ok(Out::Value(Value::None))
 }
 
-fn path_offset(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+fn path_offset(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
     let po = &mut c.arm.path_offset;
     let kind = |a: &Args, i: usize| -> Result<i32, Fault> {
         let t = a.int(i)?;
@@ -1393,11 +1393,11 @@ fn path_offset(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
     Ok(Out::Value(Value::None))
 }
 
-fn tcp_offset(c: &mut Controller, _: &mut Args) -> Result<Out, Fault> {
+fn tcp_offset(c: &mut Runtime, _: &mut Args) -> Result<Out, Fault> {
     Ok(Out::Value(Value::Pose(c.arm.tcp)))
 }
 
-fn set_tcp(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+fn set_tcp(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
     c.arm.tcp = a.six(0)?;
     Ok(Out::Value(Value::None))
 }
@@ -1406,7 +1406,7 @@ fn set_tcp(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
 /// the contact plane (at least 1 while it touches), 0 without contact. With a direction
 /// (base frame, its first three elements) only a contact against it counts: the plane's
 /// normal opposes the direction.
-fn tool_contact(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+fn tool_contact(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
     let direction = if a.is_absent(0) { [0.0; 6] } else { a.six(0)? };
     let f = c.measured_contact();
     let touching = f.iter().any(|x| *x != 0.0);
@@ -1422,7 +1422,7 @@ fn tool_contact(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
     )))
 }
 
-fn is_steady(c: &mut Controller, _: &mut Args) -> Result<Out, Fault> {
+fn is_steady(c: &mut Runtime, _: &mut Args) -> Result<Out, Fault> {
     let still = c.motion.is_none() && c.arm.qd.iter().all(|v| *v == 0.0) && !c.arm.hand_guided();
     Ok(Out::Value(Value::Bool(still)))
 }
@@ -1431,7 +1431,7 @@ fn is_steady(c: &mut Controller, _: &mut Args) -> Result<Out, Fault> {
 /// inverse kinematics reach it with every joint within its range (±2π; through the
 /// active TCP offset, nearest `qnear` or the joints now); joint positions if each is
 /// within its range. The installation's safety planes and TCP limits are not modelled.
-fn within_safety_limits(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+fn within_safety_limits(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
     let six = a.six(0)?;
     let ok = if matches!(a.v[0], Value::Pose(_)) {
         let qnear = if a.is_absent(1) { c.arm.q } else { a.six(1)? };
@@ -1446,7 +1446,7 @@ fn within_safety_limits(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> 
 /// (and leaves force mode) on entering; the operator then moves the joints
 /// ([`crate::Arm::move_by_hand`]; `freeAxes` and `feature` are checked, and the
 /// operator's joints taken as given).
-fn hand_mode(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+fn hand_mode(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
     match a.name {
         "teach_mode" | "freedrive_mode" => {
             if a.name == "freedrive_mode" {
@@ -1474,7 +1474,7 @@ fn hand_mode(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
 
 /// `force_mode(task_frame, selection_vector, wrench, type, limits)` and
 /// `end_force_mode()` (see [`crate::arm::force`]).
-fn force_mode(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+fn force_mode(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
     if a.name == "end_force_mode" {
         c.arm.force_mode = None;
         if c.motion.is_none() {

@@ -8,8 +8,8 @@
 //! `get_inverse_kin_has_solution` is there to avoid).
 
 use super::{float_list, floats, opt, req, Args, Builtin, Default, Domain, Out};
-use crate::controller::Controller;
 use crate::error::Fault;
+use crate::runtime::Runtime;
 use crate::value::Value;
 
 const D: Domain = Domain::Poses;
@@ -108,7 +108,7 @@ pub(super) const TABLE: &[Builtin] = &[
     ),
 ];
 
-fn dist(_: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+fn dist(_: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
     let (p, q) = (a.six(0)?, a.six(1)?);
     let d = (0..3).map(|k| (p[k] - q[k]).powi(2)).sum::<f64>().sqrt();
     Ok(Out::Value(Value::Float(d)))
@@ -123,7 +123,7 @@ pub(super) fn rotate(r: [f64; 3], v: [f64; 3]) -> [f64; 3] {
     [p[0], p[1], p[2]]
 }
 
-fn rotvec2rpy(_: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+fn rotvec2rpy(_: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
     let r: [f64; 3] = a.nums(0)?;
     // The rotation matrix's columns: the rotated axes.
     let [c0, c1, c2] = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]].map(|e| rotate(r, e));
@@ -133,7 +133,7 @@ fn rotvec2rpy(_: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
     Ok(Out::Value(float_list(&[roll, pitch, yaw])))
 }
 
-fn rpy2rotvec(_: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+fn rpy2rotvec(_: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
     let [roll, pitch, yaw]: [f64; 3] = a.nums(0)?;
     let rot = |x: f64, y: f64, z: f64| [0.0, 0.0, 0.0, x, y, z];
     let p = crate::arm::pose::trans(
@@ -143,7 +143,7 @@ fn rpy2rotvec(_: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
     Ok(Out::Value(float_list(&p[3..])))
 }
 
-fn wrench_trans(_: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+fn wrench_trans(_: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
     let t = a.six(0)?;
     let w = a.six(1)?;
     let (p, f, m) = ([t[0], t[1], t[2]], [w[0], w[1], w[2]], [w[3], w[4], w[5]]);
@@ -161,7 +161,7 @@ fn wrench_trans(_: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
     ])))
 }
 
-fn compose(_: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+fn compose(_: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
     let (p, q) = (a.six(0)?, a.six(1)?);
     Ok(Out::Value(Value::Pose(match a.name {
         "pose_trans" => crate::arm::pose::trans(p, q),
@@ -170,11 +170,11 @@ fn compose(_: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
     })))
 }
 
-fn pose_inv(_: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+fn pose_inv(_: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
     Ok(Out::Value(Value::Pose(crate::arm::pose::inv(a.six(0)?))))
 }
 
-fn interpolate_pose(_: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+fn interpolate_pose(_: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
     let (p, q) = (a.six(0)?, a.six(1)?);
     let t = a.num(2)?;
     let mut out = [0.0; 6];
@@ -184,7 +184,7 @@ fn interpolate_pose(_: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
     Ok(Out::Value(Value::Pose(out)))
 }
 
-fn get_inverse_kin(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+fn get_inverse_kin(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
     let pose = a.six(0)?;
     let qnear = if a.is_absent(1) { c.arm.q } else { a.six(1)? };
     let tcp = if a.is_absent(4) { c.arm.tcp } else { a.six(4)? };
@@ -213,7 +213,7 @@ pub(super) fn tolerances(a: &Args) -> Result<(f64, f64), Fault> {
 /// errors (the manual's "maximum allowed" position and orientation errors); what was
 /// missed otherwise.
 pub(super) fn inverse_within(
-    c: &Controller,
+    c: &Runtime,
     pose: [f64; 6],
     qnear: [f64; 6],
     tcp: [f64; 6],
@@ -232,7 +232,7 @@ pub(super) fn inverse_within(
     })
 }
 
-fn get_forward_kin(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+fn get_forward_kin(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
     let q = if a.is_absent(0) { c.arm.q } else { a.six(0)? };
     Ok(Out::Value(Value::Pose(if a.is_absent(1) {
         c.tool_pose(q)

@@ -5,8 +5,8 @@
 //! the crate docs' "Bounds" and the package README for the types, errors and bounds).
 
 use super::{req, Args, Builtin, Domain, Out};
-use crate::controller::Controller;
 use crate::error::Fault;
+use crate::runtime::Runtime;
 use crate::value::Value;
 
 pub(super) const TABLE: &[Builtin] = &[Builtin::new(
@@ -17,7 +17,7 @@ pub(super) const TABLE: &[Builtin] = &[Builtin::new(
     rpc_factory,
 )];
 
-fn rpc_factory(_c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+fn rpc_factory(_c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
     let kind = a.text(0)?;
     if kind != "xmlrpc" {
         return Err(format!("`rpc_factory`: type must be \"xmlrpc\", got \"{kind}\"").into());

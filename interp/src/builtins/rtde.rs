@@ -30,10 +30,10 @@
 //! error naming it.
 
 use super::{req, Args, Builtin, Domain, Out};
-use crate::controller::Controller;
 use crate::error::Fault;
 use crate::kinematics::Dh;
 use crate::rtde_fields::{self, Direction, Field, RtdeSource, RtdeValue};
+use crate::runtime::Runtime;
 use crate::value::Value;
 
 pub(super) const TABLE: &[Builtin] = &[Builtin::new(
@@ -73,7 +73,7 @@ fn value(v: RtdeValue) -> Value {
 
 /// The virtual arm as an RTDE source: a running arm (robot mode 7, safety normal, a
 /// program playing) whose targets are its actual values.
-impl RtdeSource for Controller {
+impl RtdeSource for Runtime {
     fn time(&self) -> f64 {
         self.now().as_secs_f64()
     }
@@ -194,7 +194,7 @@ impl RtdeSource for Controller {
     }
 }
 
-fn get_rtde_value(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+fn get_rtde_value(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
     let key = a.text(0)?;
     let field = Field::lookup(&key, Direction::Output).ok_or_else(|| {
         Fault::from(format!(

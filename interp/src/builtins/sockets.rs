@@ -5,9 +5,9 @@
 use urscript_socket::robot::ReadCall;
 
 use super::{opt, req, Args, Builtin, Default, Domain, Out, SOCKET_NAME};
-use crate::controller::Controller;
 use crate::error::{Fault, RuntimeErrorKind};
 use crate::event::{ReadRecord, MAX_READ_INPUT};
+use crate::runtime::Runtime;
 use crate::value::Value;
 
 const D: Domain = Domain::Sockets;
@@ -122,7 +122,7 @@ pub(super) const TABLE: &[Builtin] = &[
     ),
 ];
 
-fn open(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+fn open(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
     let host = a.text(0)?;
     let port = a.int(1)?;
     let port =
@@ -146,14 +146,14 @@ fn open(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
     Ok(Out::Connect { socket })
 }
 
-fn close(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+fn close(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
     let socket = a.text(0)?;
     c.close(&socket);
     Ok(Out::Value(Value::None))
 }
 
 /// The value a send returns, with the reason when it is `False`.
-fn sent(c: &mut Controller, a: &mut Args, socket: &str, ok: bool) -> Result<Out, Fault> {
+fn sent(c: &mut Runtime, a: &mut Args, socket: &str, ok: bool) -> Result<Out, Fault> {
     c.flush(socket);
     if !ok {
         a.failure = Some(if !c.sockets.is_open(socket) {
@@ -167,7 +167,7 @@ fn sent(c: &mut Controller, a: &mut Args, socket: &str, ok: bool) -> Result<Out,
     Ok(Out::Value(Value::Bool(ok)))
 }
 
-fn send_string(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+fn send_string(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
     let socket = a.text(1)?;
     let bytes = a.v[0].to_str_bytes();
     let ok = if a.name == "socket_send_line" {
@@ -178,7 +178,7 @@ fn send_string(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
     sent(c, a, &socket, ok)
 }
 
-fn send_byte(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+fn send_byte(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
     let v = a.int(0)?;
     let v = u8::try_from(v)
         .map_err(|_| format!("`socket_send_byte`: value must be 0..255, got {v}"))?;
@@ -192,7 +192,7 @@ fn send_byte(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
 /// driver, "works with SW3.0 and above", sends `socket_send_int(10000.0 * pose[0])`),
 /// so the controller takes a float here. Truncation is our choice (the manuals are
 /// silent); a float outside the int32 range, or not finite, is a type error.
-fn send_int(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+fn send_int(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
     let v = match a.v[0] {
         Value::Float(x) if (f64::from(i32::MIN)..=f64::from(i32::MAX)).contains(&x.trunc()) => {
             x.trunc() as i32
@@ -204,7 +204,7 @@ fn send_int(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
     sent(c, a, &socket, ok)
 }
 
-fn set_var(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+fn set_var(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
     let var = a.text(0)?;
     let v = a.int(1)?;
     let socket = a.text(2)?;
@@ -212,13 +212,13 @@ fn set_var(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
     sent(c, a, &socket, ok)
 }
 
-fn get_var(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+fn get_var(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
     let name = a.text(0)?;
     let socket = a.text(1)?;
     start_read(c, socket, ReadCall::GetVar { name }, 2.0, a)
 }
 
-fn read_counted(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+fn read_counted(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
     let n = a.int(0)?;
     let number = usize::try_from(n)
         .ok()
@@ -234,13 +234,13 @@ fn read_counted(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
     start_read(c, socket, call, timeout, a)
 }
 
-fn read_line(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+fn read_line(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
     let socket = a.text(0)?;
     let timeout = a.num(1)?;
     start_read(c, socket, ReadCall::Line, timeout, a)
 }
 
-fn read_string(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+fn read_string(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
     let socket = a.text(0)?;
     let call = ReadCall::String {
         prefix: a.bytes(1)?.to_vec(),
@@ -254,7 +254,7 @@ fn read_string(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
 /// Starts a read that may wait `timeout` seconds: the value at once if the buffered
 /// bytes complete it (or the socket is not open: the sentinel), else a wait.
 fn start_read(
-    c: &mut Controller,
+    c: &mut Runtime,
     socket: String,
     call: ReadCall,
     timeout: f64,

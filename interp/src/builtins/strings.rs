@@ -3,8 +3,8 @@
 use urscript_socket::to_str::{parse_value, Scalar, Value as WireValue};
 
 use super::{opt, req, Args, Builtin, Default, Domain, Out};
-use crate::controller::Controller;
 use crate::error::Fault;
+use crate::runtime::Runtime;
 use crate::value::Value;
 
 pub use crate::value::MAX_STRING_LEN;
@@ -106,7 +106,7 @@ pub(super) const TABLE: &[Builtin] = &[
     ),
 ];
 
-fn str_cat(_: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+fn str_cat(_: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
     let mut out = a.v[0].to_str_bytes();
     out.extend(a.v[1].to_str_bytes());
     // The controller's strings hold at most 1023 characters.
@@ -119,7 +119,7 @@ fn str_cat(_: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
     Ok(Out::Value(Value::Str(out)))
 }
 
-fn str_len(_: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+fn str_len(_: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
     let st = a.bytes(0)?;
     Ok(Out::Value(if a.name == "str_len" {
         Value::Int(i32::try_from(st.len()).unwrap_or(i32::MAX))
@@ -128,7 +128,7 @@ fn str_len(_: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
     }))
 }
 
-fn str_sub(_: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+fn str_sub(_: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
     let start = usize::try_from(a.int(1)?).unwrap_or(usize::MAX);
     let len = a.int(2)?;
     let src = a.bytes(0)?;
@@ -140,7 +140,7 @@ fn str_sub(_: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
     Ok(Out::Value(Value::Str(src[start..end].to_vec())))
 }
 
-fn str_find(_: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+fn str_find(_: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
     let from = usize::try_from(a.int(2)?).unwrap_or(0);
     let (src, target) = (a.bytes(0)?, a.bytes(1)?);
     let from = from.min(src.len());
@@ -157,7 +157,7 @@ fn str_find(_: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
     )))
 }
 
-fn str_at(_: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+fn str_at(_: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
     let k = a.int(1)?;
     let src = a.bytes(0)?;
     let at = usize::try_from(k).ok().and_then(|k| src.get(k));
@@ -166,11 +166,11 @@ fn str_at(_: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
     )))
 }
 
-fn to_str(_: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+fn to_str(_: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
     Ok(Out::Value(Value::Str(a.v[0].to_str_bytes())))
 }
 
-fn to_num(_: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+fn to_num(_: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
     let st = a.bytes(0)?;
     match parse_value(st) {
         Ok(WireValue::Scalar(Scalar::Int(x))) => Ok(Out::Value(Value::Int(x))),
@@ -182,7 +182,7 @@ fn to_num(_: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
     }
 }
 
-fn length(_: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+fn length(_: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
     let n = match &a.v[0] {
         Value::List(items) => items.len(),
         Value::Str(st) => st.len(),
@@ -198,7 +198,7 @@ fn length(_: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
     Ok(Out::Value(Value::Int(i32::try_from(n).unwrap_or(i32::MAX))))
 }
 
-fn size(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+fn size(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
     if let Value::List(rows) = &a.v[0] {
         if let Some(Value::List(first)) = rows.first() {
             if rows.iter().all(|r| matches!(r, Value::List(_))) {
@@ -213,7 +213,7 @@ fn size(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
 /// The longest list `make_list` makes (a guard, not the controller's limit).
 const MAX_LIST_LEN: i32 = 1 << 20;
 
-fn make_list(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+fn make_list(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
     let n = a.int(0)?;
     let cap = if a.is_absent(2) { n } else { a.int(2)? };
     if !(0..=MAX_LIST_LEN).contains(&n) || cap < n {

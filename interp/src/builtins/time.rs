@@ -18,8 +18,8 @@
 //! [`World::system_time`]: crate::World::system_time
 
 use super::{opt, req, secs, Args, Builtin, Default, Domain, Out};
-use crate::controller::Controller;
 use crate::error::Fault;
+use crate::runtime::Runtime;
 use crate::value::Value;
 
 const D: Domain = Domain::Time;
@@ -55,19 +55,19 @@ pub(super) const TABLE: &[Builtin] = &[
     ),
 ];
 
-fn sync(c: &mut Controller, _: &mut Args) -> Result<Out, Fault> {
+fn sync(c: &mut Runtime, _: &mut Args) -> Result<Out, Fault> {
     Ok(Out::Wait(c.step_time, Value::None))
 }
 
-fn sleep(_: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+fn sleep(_: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
     Ok(Out::Wait(secs(a.num(0)?), Value::None))
 }
 
-fn get_steptime(c: &mut Controller, _: &mut Args) -> Result<Out, Fault> {
+fn get_steptime(c: &mut Runtime, _: &mut Args) -> Result<Out, Fault> {
     Ok(Out::Value(Value::Float(c.step_time.as_secs_f64())))
 }
 
-fn time(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+fn time(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
     let mode = a.int(0)?;
     let start = match mode {
         0 => c.arm.world.controller_uptime,

@@ -3,8 +3,8 @@
 //! its choices and bounds are in [`crate::world_model`].
 
 use super::{opt, req, Args, Builtin, Default, Domain, Out};
-use crate::controller::Controller;
 use crate::error::Fault;
+use crate::runtime::Runtime;
 use crate::value::Value;
 use crate::world_model::ArmNow;
 
@@ -118,7 +118,7 @@ pub(super) const TABLE: &[Builtin] = &[
     ),
 ];
 
-fn now(c: &Controller) -> ArmNow {
+fn now(c: &Runtime) -> ArmNow {
     ArmNow {
         flange: c.flange_pose(),
         tcp: c.arm.tcp,
@@ -133,36 +133,36 @@ fn done(r: Result<(), String>, a: &Args) -> Result<Out, Fault> {
     r.map(|()| Out::Value(Value::None)).map_err(|e| fail(a, e))
 }
 
-fn add_frame(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+fn add_frame(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
     let (name, p, reference) = (a.text(0)?, a.six(1)?, a.text(2)?);
     let arm = now(c);
     done(c.arm.world_model.add(&name, p, &reference, arm), a)
 }
 
-fn attach_frame(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+fn attach_frame(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
     let (child, parent) = (a.text(0)?, a.text(1)?);
     let arm = now(c);
     done(c.arm.world_model.attach(&child, &parent, arm), a)
 }
 
-fn delete_frame(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+fn delete_frame(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
     let name = a.text(0)?;
     let arm = now(c);
     done(c.arm.world_model.delete(&name, arm), a)
 }
 
-fn delete_all_frames(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+fn delete_all_frames(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
     let arm = now(c);
     done(c.arm.world_model.delete_all(arm), a)
 }
 
-fn move_frame(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+fn move_frame(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
     let (name, p, reference) = (a.text(0)?, a.six(1)?, a.text(2)?);
     let arm = now(c);
     done(c.arm.world_model.move_to(&name, p, &reference, arm), a)
 }
 
-fn get_pose(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+fn get_pose(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
     let (name, rel) = (a.text(0)?, a.text(1)?);
     let reference = if a.is_absent(2) {
         rel.clone()
@@ -176,7 +176,7 @@ fn get_pose(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
         .map_err(|e| fail(a, e))
 }
 
-fn convert_pose(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+fn convert_pose(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
     let (p, from, to) = (a.six(0)?, a.text(1)?, a.text(2)?);
     c.arm
         .world_model
@@ -185,17 +185,17 @@ fn convert_pose(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
         .map_err(|e| fail(a, e))
 }
 
-fn reset_world_model(c: &mut Controller, _: &mut Args) -> Result<Out, Fault> {
+fn reset_world_model(c: &mut Runtime, _: &mut Args) -> Result<Out, Fault> {
     c.arm.world_model.reset();
     Ok(Out::Value(Value::None))
 }
 
-fn is_frame(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+fn is_frame(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
     let name = a.text(0)?;
     Ok(Out::Value(Value::Bool(c.arm.world_model.is_frame(&name))))
 }
 
-fn get_frame_parent(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+fn get_frame_parent(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
     let name = a.text(0)?;
     c.arm
         .world_model
@@ -204,7 +204,7 @@ fn get_frame_parent(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
         .map_err(|e| fail(a, e))
 }
 
-fn get_children(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+fn get_children(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
     let name = a.text(0)?;
     c.arm
         .world_model
@@ -217,23 +217,23 @@ fn get_children(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
         .map_err(|e| fail(a, e))
 }
 
-fn frame_tracking_enable(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+fn frame_tracking_enable(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
     let name = a.text(0)?;
     done(c.arm.world_model.track(Some(&name)), a)
 }
 
-fn frame_tracking_disable(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+fn frame_tracking_disable(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
     done(c.arm.world_model.track(None), a)
 }
 
-fn set_mass_properties(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+fn set_mass_properties(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
     let (frame, m) = (a.text(0)?, a.num(1)?);
     let cog: [f64; 3] = a.nums(2)?;
     let inertia: [f64; 6] = a.nums(3)?;
     done(c.arm.world_model.set_mass(&frame, m, cog, inertia), a)
 }
 
-fn set_payload_from_attached_frames(c: &mut Controller, a: &mut Args) -> Result<Out, Fault> {
+fn set_payload_from_attached_frames(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
     let (m, cog, inertia) = c.arm.world_model.payload(now(c)).map_err(|e| fail(a, e))?;
     c.arm.payload_mass = m;
     c.arm.payload_cog = cog;

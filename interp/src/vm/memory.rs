@@ -113,7 +113,7 @@ pub(crate) struct Memory {
     pub held: usize,
     /// The budget, [`Config::max_memory`](crate::Config::max_memory).
     pub limit: usize,
-    /// A built-in refused to allocate ([`Controller::reserve`](crate::controller::Controller::reserve))
+    /// A built-in refused to allocate ([`Runtime::reserve`](crate::runtime::Runtime::reserve))
     /// on the count: the machine recounts and runs it again once.
     pub refused: bool,
 }

@@ -14,10 +14,10 @@ use std::time::Duration;
 
 use urscript_socket::robot::ReadCall;
 
-use crate::controller::{Arm, Controller};
 use crate::error::{Fault, RuntimeError, RuntimeErrorKind as K};
 use crate::event::CallRecord;
 pub use crate::event::Event;
+use crate::runtime::{Arm, Runtime};
 use crate::sockets::{Policy, Sockets};
 use crate::syntax::compile::{Program, Sym};
 use crate::value::Value;
@@ -261,7 +261,7 @@ pub struct Machine {
     globals: Vec<Option<Value>>,
     threads: Vec<Thread>,
     /// The controller's state: the arm, the sockets, the step to run next, events.
-    ctl: Controller,
+    ctl: Runtime,
     /// For each call site, the stub that answers it (by index in `config.stubs`).
     site_stubs: Vec<Option<u32>>,
     state: State,
@@ -388,7 +388,7 @@ impl Machine {
         };
         let main_bytes = thread_bytes(&main);
         let mut m = Machine {
-            ctl: Controller {
+            ctl: Runtime {
                 dh: config.model.dh(),
                 step_time: config.step_time,
                 step: 0,
@@ -403,7 +403,7 @@ impl Machine {
                 rtde_watchdogs: Vec::new(),
                 tracked: None,
                 queued: None,
-                clock: crate::controller::MotionClock::default(),
+                clock: crate::runtime::MotionClock::default(),
                 contact_since: None,
                 joint_history: Default::default(),
             },
@@ -504,13 +504,13 @@ impl Machine {
     }
 
     /// What the robot senses of the world (inputs, measurements, the operator's answers).
-    pub fn world(&self) -> &crate::controller::World {
+    pub fn world(&self) -> &crate::runtime::World {
         &self.ctl.arm.world
     }
 
     /// The world, to change what the program will sense: a digital input switching, a
     /// temperature, an RTDE input register.
-    pub fn world_mut(&mut self) -> &mut crate::controller::World {
+    pub fn world_mut(&mut self) -> &mut crate::runtime::World {
         &mut self.ctl.arm.world
     }
 

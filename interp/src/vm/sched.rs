@@ -167,8 +167,8 @@ impl Machine {
             None => {}
         }
         match self.ctl.check_rtde_watchdogs() {
-            Some(crate::controller::WatchdogTrip::Pause) => self.ctl.arm.pause_requested = true,
-            Some(crate::controller::WatchdogTrip::Stop(why)) => {
+            Some(crate::runtime::WatchdogTrip::Pause) => self.ctl.arm.pause_requested = true,
+            Some(crate::runtime::WatchdogTrip::Stop(why)) => {
                 self.state = State::Error(RuntimeError::at(0, 0, Fault::new(K::Limit, why)));
                 return;
             }

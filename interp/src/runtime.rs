@@ -442,7 +442,7 @@ impl Default for World {
 
 /// The controller's state.
 #[derive(Debug)]
-pub(crate) struct Controller {
+pub(crate) struct Runtime {
     /// The arm's kinematics (its model's DH parameters).
     pub dh: Dh,
     /// Length of one step.
@@ -566,7 +566,7 @@ pub(crate) enum WatchdogTrip {
     Stop(String),
 }
 
-impl Controller {
+impl Runtime {
     /// Checks the RTDE watchdogs at this step (see [`World::rtde_watchdogs`]).
     pub fn check_rtde_watchdogs(&mut self) -> Option<WatchdogTrip> {
         if !self.arm.world.rtde_watchdogs {
@@ -619,7 +619,7 @@ impl Controller {
     }
 }
 
-impl Controller {
+impl Runtime {
     /// Takes up the arm's speed slider ([`Arm::speed_fraction`]) from step `self.step` on.
     pub fn sync_speed(&mut self) {
         let f = self.arm.slider();
