@@ -100,6 +100,9 @@ pub enum CellEvent {
         column: u32,
         /// The controller's text (`syntax_error_on_line:3:...`) or the reason.
         text: String,
+        /// The controller's code when it is all the controller says on its primary
+        /// interface (`compile_error_name_not_found:NAME:`); `text` explains it.
+        code: Option<ControllerCode>,
     },
     /// `play` of the loaded `.urp` file at this path: read and translate it, then call
     /// [`Cell::start_loaded`] (or [`Cell::refuse_loaded`]).
@@ -436,6 +439,7 @@ impl Cell {
             line: 0,
             column: 0,
             text: why,
+            code: None,
         });
     }
 
@@ -467,6 +471,7 @@ impl Cell {
                 line: e.line(),
                 column: e.column(),
                 text: e.message().to_string(),
+                code: e.code().cloned(),
             };
             self.push(refused);
             return;
@@ -483,6 +488,7 @@ impl Cell {
                 text: format!(
                     "the program was not started: the robot is {mode} with safety {safety} (power on and release the brakes first)"
                 ),
+                code: None,
             });
             return;
         }
@@ -854,16 +860,19 @@ fn parse(text: &str, preamble: Option<&Preamble>) -> Result<Program, CellEvent> 
         None => Program::parse(text),
     }
     .map_err(|e| {
-        let text = match e.code() {
+        let (text, code) = match e.code() {
             // The code, then what was wrong (the controller names the token).
-            code @ ControllerCode::SyntaxErrorOnLine { .. } => format!("{code}{}", e.message()),
+            code @ ControllerCode::SyntaxErrorOnLine { .. } => {
+                (format!("{code}{}", e.message()), None)
+            }
             // A code of its own: the interpreter's message, which names it.
-            _ => e.message().to_string(),
+            code => (e.message().to_string(), Some(code)),
         };
         CellEvent::Refused {
             line: e.line(),
             column: e.column(),
             text,
+            code,
         }
     })
 }

@@ -214,6 +214,8 @@ enum Said {
     Code(i32, i32, i32),
     /// A safety mode message: the mode.
     Safety(u8),
+    /// A runtime exception: line, column, text.
+    Exception(i32, i32, String),
     /// Another robot message type.
     Other(u8),
 }
@@ -240,6 +242,11 @@ fn said_until(s: &mut TcpStream, until: impl Fn(&Said) -> bool) -> Vec<Said> {
                 Said::Code(be_i32(rest), be_i32(&rest[4..]), be_i32(&rest[8..]))
             }
             5 if rest.len() >= 9 => Said::Safety(rest[8]),
+            10 if rest.len() >= 8 => Said::Exception(
+                be_i32(rest),
+                be_i32(&rest[4..]),
+                String::from_utf8_lossy(&rest[8..]).into_owned(),
+            ),
             other => Said::Other(other),
         };
         let done = until(&s);
@@ -306,6 +313,30 @@ fn a_script_stopped_by_protective_stop_reports_program_stopped() {
     assert!(
         said.contains(&Said::Key("PROGRAM_XXX_STARTED".into(), "next_one".into())),
         "{said:?}"
+    );
+    server.stop();
+}
+
+/// The library's `test_program_execution_reports_exception`: a program calling a function
+/// nothing defines is reported as URSim reports it, the code alone
+/// (`compile_error_name_not_found:NAME:`) in a runtime exception at the call.
+#[test]
+fn a_call_of_an_unknown_function_is_reported_with_the_code_alone() {
+    let server = start();
+    running(&server);
+    let mut primary = connect_to(&server, "primary");
+    assert_eq!(primary_package(&mut primary).0, 20);
+    primary
+        .write_all(b"def test_function():\n  calldoesntexist()\nend\n")
+        .unwrap();
+    let said = said_until(&mut primary, |s| matches!(s, Said::Exception(..)));
+    assert_eq!(
+        said.last(),
+        Some(&Said::Exception(
+            2,
+            3,
+            "compile_error_name_not_found:calldoesntexist:".into()
+        ))
     );
     server.stop();
 }

@@ -59,6 +59,7 @@ impl Cell {
                     text: format!(
                         "the secondary program was not run: {MAX_SECONDARY_QUEUED} secondary programs already wait behind one waiting for the network"
                     ),
+                    code: None,
                 });
             }
             self.secondary_queue.push_back(text.to_string());
@@ -113,6 +114,7 @@ impl Cell {
                 line: e.line(),
                 column: e.column(),
                 text: e.message().to_string(),
+                code: e.code().cloned(),
             });
         }
         while let Some(e) = machine.poll_event() {
@@ -154,6 +156,7 @@ impl Cell {
                     "the secondary program was ended unfinished after {} s: {what}",
                     SECONDARY_TIME.as_secs_f64()
                 ),
+                code: None,
             });
         }
         let arm = machine.into_arm();

@@ -970,7 +970,12 @@ impl Loop {
                         self.driver.close_all();
                         self.connects.next_program();
                     }
-                    CellEvent::Refused { line, column, text } => {
+                    CellEvent::Refused {
+                        line,
+                        column,
+                        text,
+                        code,
+                    } => {
                         let at = (line > 0).then_some(line);
                         emit(program_event(
                             "refused",
@@ -980,10 +985,11 @@ impl Loop {
                             Some(text.clone()),
                         ));
                         messages.push(if line > 0 {
+                            // The code alone where the controller says only its code.
                             RobotMessage::RuntimeException {
                                 line: i32::try_from(line).unwrap_or(i32::MAX),
                                 column: i32::try_from(column).unwrap_or(i32::MAX),
-                                text,
+                                text: code.map_or(text, |c| c.to_string()),
                             }
                         } else {
                             RobotMessage::text(&text)
