@@ -179,3 +179,25 @@ def test_events_kept_are_bounded_and_nothing_is_queued_after_start(
 def test_max_events_must_be_positive() -> None:
     with pytest.raises(ValueError):
         UrController(max_events=0)
+
+
+def test_start_returns_at_the_ready_event_not_at_the_startup_timeout(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    import sys
+    import threading
+
+    fake = tmp_path / "ursock"
+    fake.write_text(f"#!{sys.executable}\n" + (Path(__file__).parent / "fake_ursock.py").read_text())
+    fake.chmod(0o755)
+    monkeypatch.setenv("FAKE_URSOCK_ARGV", str(tmp_path / "argv.json"))
+    ur = UrController(ursock=fake, startup_timeout=600)
+    started = threading.Thread(target=ur.start, daemon=True)
+    started.start()
+    # A hang guard, far below the start-up timeout: `ready` ends the wait.
+    started.join(60)
+    try:
+        assert not started.is_alive(), "start() waited for the start-up timeout"
+        assert set(ur.ports) == {"dashboard", "primary", "rtde"}
+    finally:
+        ur.stop()

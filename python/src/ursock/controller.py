@@ -379,7 +379,7 @@ class UrController:
                 kind = event.get("event")
                 if isinstance(kind, str) and (kind in self._counts or len(self._counts) < MAX_KINDS):
                     self._counts[kind] = self._counts.get(kind, 0) + 1
-                if self._starting and kind == "listening":
+                if self._starting and kind in ("listening", "ready"):
                     self._queue.put(event)
         with self._lock:
             if self._starting:
