@@ -19,7 +19,7 @@
 //! open and close nothing, and a unit ends with the line that closes the last block it
 //! opened (`def`, `sec`, `thread`, `if`, `while`, each closed by `end`; `if x: y() end`
 //! on one line opens and closes one). The lines themselves are cut by the core's
-//! [`LineDecoder`]: a line ends at `\n` and one `\r` before it is dropped. Lines with no
+//! [`LineDecoder`](urscript_socket::line::LineDecoder): a line ends at `\n` and one `\r` before it is dropped. Lines with no
 //! code (blanks, comments, `$` step markers) outside a program are skipped.
 //!
 //! # Bounds
