@@ -58,7 +58,10 @@ fn ready_file_and_event_name_every_port_wait_answers_and_sigterm_stops_with_stat
     let file = temp_path("addrs.json");
     let _ = std::fs::remove_file(&file);
     let mut c = Controller::start_with(&["--ready-file", file.to_str().unwrap()]);
-    // The event after the six `listening` ones (Controller::start read them).
+    // The events after the six `listening` ones (Controller::start read them): what
+    // scheduling the loop got, then `ready`.
+    let scheduling = c.wait_event("any", |_| true);
+    assert_eq!(scheduling["event"], "scheduling", "{scheduling}");
     let ready = c.wait_event("any", |_| true);
     assert_eq!(ready["event"], "ready", "{ready}");
     let addrs = ready["addrs"].as_object().expect("addrs");

@@ -376,7 +376,8 @@ pub enum ServerEvent {
         /// Over how long (from the interval's start to its report).
         interval: Duration,
     },
-    /// What scheduling the real-time loop's thread got (once, when it starts).
+    /// What scheduling the real-time loop's thread got: once, after the
+    /// [`ServerEvent::Listening`] events, before [`Server::start`] returns.
     Scheduling(Scheduling),
     /// The real-time loop fell behind its steps (at most one report per
     /// [`EVENT_INTERVAL`], and at once when it held time back): every step was still
@@ -827,16 +828,22 @@ impl Server {
         }
         let mut threads = Vec::new();
         {
-            let shared = Arc::clone(&shared);
+            let looping = Arc::clone(&shared);
             let realtime = options.realtime;
+            // The loop thread asks for its own scheduling; `start` says what it got
+            // before returning, so the event's place among the start-up events is fixed.
+            let (granted, scheduling) = std::sync::mpsc::sync_channel(1);
             threads.push(
                 std::thread::Builder::new()
                     .name("controller".into())
                     .spawn(move || {
-                        shared.emit(ServerEvent::Scheduling(priority::apply(realtime)));
-                        streams::run(&shared, listeners, &first)
+                        let _ = granted.send(priority::apply(realtime));
+                        streams::run(&looping, listeners, &first)
                     })?,
             );
+            if let Ok(s) = scheduling.recv() {
+                shared.emit(ServerEvent::Scheduling(s));
+            }
         }
         if let Some(listener) = dashboard {
             let shared = Arc::clone(&shared);
