@@ -104,6 +104,23 @@ pub(crate) enum Out {
     },
     /// `socket_open`, waiting for the driver's answer.
     Connect { socket: String },
+    /// Interpreter mode: the machine acts on the program's queue of interpreted
+    /// statements (and refuses what the mode's state does not allow).
+    Interpreter(InterpreterRequest),
+}
+
+/// What an interpreter-mode built-in asks of the machine.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum InterpreterRequest {
+    /// `interpreter_mode(clearQueueOnEnter, clearOnEnd)`.
+    Enter {
+        clear_queue: bool,
+        clear_on_end: bool,
+    },
+    /// `end_interpreter()`.
+    End,
+    /// `clear_interpreter()`.
+    Clear,
 }
 
 /// The code of a built-in.
@@ -206,93 +223,261 @@ pub(crate) struct Args {
 
 impl Args {
     pub(crate) fn bad(&self, i: usize, what: &str) -> Fault {
-        let v = &self.v[i];
-        Fault::type_error(format!(
-            "type error: `{}` argument `{}` needs {what}, got {} {}",
-            self.name,
-            self.params.get(i).map_or("?", |p| p.name),
-            v.type_name(),
-            v.to_source()
-        ))
+        bad_arg(self, self.v.get(i).unwrap_or(&Value::None), i, what)
+    }
+
+    /// Argument `i` converted to `T` (a type error naming the parameter otherwise).
+    fn arg<'s, T: FromArg<'s>>(&'s self, i: usize) -> Result<T, Fault> {
+        T::from_arg(self, self.v.get(i).unwrap_or(NONE), i)
     }
 
     /// Argument `i` as a number (an int or a float).
     pub fn num(&self, i: usize) -> Result<f64, Fault> {
-        self.v[i].as_f64().ok_or_else(|| self.bad(i, "a number"))
+        self.arg(i)
     }
 
     /// Argument `i` as an int (a float with no fraction is accepted).
     pub fn int(&self, i: usize) -> Result<i32, Fault> {
-        match &self.v[i] {
-            Value::Int(x) => Ok(*x),
-            Value::Float(x) if x.fract() == 0.0 && x.abs() <= f64::from(i32::MAX) => Ok(*x as i32),
-            _ => Err(self.bad(i, "an int")),
-        }
+        self.arg(i)
     }
 
     /// Argument `i` as a string's bytes.
     pub fn bytes(&self, i: usize) -> Result<&[u8], Fault> {
-        match &self.v[i] {
-            Value::Str(s) => Ok(s),
-            _ => Err(self.bad(i, "a string")),
-        }
+        self.arg(i)
     }
 
     /// Argument `i` as text (a socket or variable name).
     pub fn text(&self, i: usize) -> Result<String, Fault> {
-        Ok(String::from_utf8_lossy(self.bytes(i)?).into_owned())
+        self.arg(i)
     }
 
     /// Argument `i` as a bool (an int: non-zero is true).
     pub fn boolean(&self, i: usize) -> Result<bool, Fault> {
-        match &self.v[i] {
-            Value::Bool(b) => Ok(*b),
-            Value::Int(x) => Ok(*x != 0),
-            _ => Err(self.bad(i, "a bool")),
-        }
+        self.arg(i)
     }
 
     /// Argument `i` as six numbers (a pose or a list of 6 numbers).
     pub fn six(&self, i: usize) -> Result<[f64; 6], Fault> {
-        match &self.v[i] {
-            Value::Pose(p) => Ok(*p),
-            Value::List(items) if items.len() == 6 => {
-                let mut out = [0.0; 6];
-                for (o, x) in out.iter_mut().zip(items) {
-                    *o = x.as_f64().ok_or_else(|| self.bad(i, "6 numbers"))?;
-                }
-                Ok(out)
-            }
-            _ => Err(self.bad(i, "6 numbers")),
-        }
+        self.arg(i)
     }
 
     /// Argument `i` as a list of numbers of length `n` (a pose when `n` is 6).
     pub fn nums<const N: usize>(&self, i: usize) -> Result<[f64; N], Fault> {
-        let what = format!("{N} numbers");
-        let items: Vec<f64> = match &self.v[i] {
-            Value::Pose(p) => p.to_vec(),
-            Value::List(items) => items
-                .iter()
-                .map(Value::as_f64)
-                .collect::<Option<Vec<f64>>>()
-                .ok_or_else(|| self.bad(i, &what))?,
-            _ => return Err(self.bad(i, &what)),
-        };
-        items.try_into().map_err(|_| self.bad(i, &what))
+        self.arg(i)
     }
 
     /// Argument `i` as an index into `0..n` (`what` names the thing indexed).
     pub fn index(&self, i: usize, n: usize, what: &str) -> Result<usize, Fault> {
-        let k = self.int(i)?;
-        usize::try_from(k)
-            .ok()
-            .filter(|k| *k < n)
-            .ok_or_else(|| Fault::from(format!("`{}`: no {what} {k} (0-{})", self.name, n - 1)))
+        index(self, self.int(i)?, n, what)
     }
 
     /// Argument `i` was left out (its default is [`Default::Absent`]).
     pub fn is_absent(&self, i: usize) -> bool {
-        matches!(self.v[i], Value::None)
+        matches!(self.v.get(i), None | Some(Value::None))
     }
 }
+
+/// The value an argument past the end of a call's arguments reads as.
+const NONE: &Value = &Value::None;
+
+/// The type error for argument `i` of the call `a`, whose value `v` is not `what`.
+fn bad_arg(a: &Args, v: &Value, i: usize, what: &str) -> Fault {
+    Fault::type_error(format!(
+        "type error: `{}` argument `{}` needs {what}, got {} {}",
+        a.name,
+        a.params.get(i).map_or("?", |p| p.name),
+        v.type_name(),
+        v.to_source()
+    ))
+}
+
+/// `k` as an index into `0..n`, or the error of the call `a` (`what` names the thing
+/// indexed).
+pub(crate) fn index(a: &Args, k: i32, n: usize, what: &str) -> Result<usize, Fault> {
+    usize::try_from(k).ok().filter(|k| *k < n).ok_or_else(|| {
+        Fault::from(format!(
+            "`{}`: no {what} {k} (0-{})",
+            a.name,
+            n.saturating_sub(1)
+        ))
+    })
+}
+
+/// A URScript argument as the Rust type a built-in's code takes: what [`builtin!`]
+/// converts each argument with, before the code runs. The conversion borrows from the
+/// argument where it can (`&Value`, `&[u8]`, `&[Value]`).
+pub(crate) trait FromArg<'v>: Sized {
+    /// `v`, argument `i` of the call `a`, as this type; a type error naming the
+    /// parameter otherwise.
+    fn from_arg(a: &Args, v: &'v Value, i: usize) -> Result<Self, Fault>;
+}
+
+/// Any value.
+impl<'v> FromArg<'v> for &'v Value {
+    fn from_arg(_: &Args, v: &'v Value, _: usize) -> Result<Self, Fault> {
+        Ok(v)
+    }
+}
+
+/// Any value, copied (for code that keeps it).
+impl FromArg<'_> for Value {
+    fn from_arg(_: &Args, v: &Value, _: usize) -> Result<Self, Fault> {
+        Ok(v.clone())
+    }
+}
+
+/// A number (an int or a float).
+impl FromArg<'_> for f64 {
+    fn from_arg(a: &Args, v: &Value, i: usize) -> Result<Self, Fault> {
+        v.as_f64().ok_or_else(|| bad_arg(a, v, i, "a number"))
+    }
+}
+
+/// An int (a float with no fraction is accepted).
+impl FromArg<'_> for i32 {
+    fn from_arg(a: &Args, v: &Value, i: usize) -> Result<Self, Fault> {
+        match v {
+            Value::Int(x) => Ok(*x),
+            Value::Float(x) if x.fract() == 0.0 && x.abs() <= f64::from(i32::MAX) => Ok(*x as i32),
+            _ => Err(bad_arg(a, v, i, "an int")),
+        }
+    }
+}
+
+/// A bool (an int: non-zero is true).
+impl FromArg<'_> for bool {
+    fn from_arg(a: &Args, v: &Value, i: usize) -> Result<Self, Fault> {
+        match v {
+            Value::Bool(b) => Ok(*b),
+            Value::Int(x) => Ok(*x != 0),
+            _ => Err(bad_arg(a, v, i, "a bool")),
+        }
+    }
+}
+
+/// A string's bytes.
+impl<'v> FromArg<'v> for &'v [u8] {
+    fn from_arg(a: &Args, v: &'v Value, i: usize) -> Result<Self, Fault> {
+        match v {
+            Value::Str(s) => Ok(s),
+            _ => Err(bad_arg(a, v, i, "a string")),
+        }
+    }
+}
+
+/// A string as text (a socket or variable name; bytes that are not UTF-8 become U+FFFD).
+impl FromArg<'_> for String {
+    fn from_arg(a: &Args, v: &Value, i: usize) -> Result<Self, Fault> {
+        let bytes: &[u8] = FromArg::from_arg(a, v, i)?;
+        Ok(String::from_utf8_lossy(bytes).into_owned())
+    }
+}
+
+/// A list's items.
+impl<'v> FromArg<'v> for &'v [Value] {
+    fn from_arg(a: &Args, v: &'v Value, i: usize) -> Result<Self, Fault> {
+        match v {
+            Value::List(items) => Ok(items),
+            _ => Err(bad_arg(a, v, i, "a list")),
+        }
+    }
+}
+
+/// `N` numbers: a list of `N` numbers, or a pose when `N` is 6.
+impl<const N: usize> FromArg<'_> for [f64; N] {
+    fn from_arg(a: &Args, v: &Value, i: usize) -> Result<Self, Fault> {
+        let what = || bad_arg(a, v, i, &format!("{N} numbers"));
+        let mut out = [0.0; N];
+        match v {
+            Value::Pose(p) if N == 6 => out.copy_from_slice(p),
+            Value::List(items) if items.len() == N => {
+                for (o, x) in out.iter_mut().zip(items) {
+                    *o = x.as_f64().ok_or_else(what)?;
+                }
+            }
+            _ => return Err(what()),
+        }
+        Ok(out)
+    }
+}
+
+/// An argument whose default is [`Default::Absent`]: `None` when it was left out.
+impl<'v, T: FromArg<'v>> FromArg<'v> for Option<T> {
+    fn from_arg(a: &Args, v: &'v Value, i: usize) -> Result<Self, Fault> {
+        match v {
+            Value::None => Ok(None),
+            v => T::from_arg(a, v, i).map(Some),
+        }
+    }
+}
+
+/// A parameter's URScript name from its Rust name (`r#type` is `type`).
+pub(crate) const fn param_name(rust: &'static str) -> &'static str {
+    match rust.as_bytes() {
+        [b'r', b'#', rest @ ..] => match core::str::from_utf8(rest) {
+            Ok(name) => name,
+            Err(_) => rust,
+        },
+        _ => rust,
+    }
+}
+
+/// One table entry, its signature declared once: the built-in's URScript name, each
+/// parameter's name, the Rust type its argument converts to ([`FromArg`]) and its
+/// default (a [`Default`] variant, none if it is required), the code, and what it does
+/// in one sentence. The entry's domain is the calling module's `D`.
+///
+/// The code is called as `code(runtime, args, p1, p2, ...)` with every argument
+/// converted; an argument of the wrong type is a type error naming its parameter,
+/// before the code runs.
+///
+/// ```ignore
+/// builtin!(sleep(t: f64) => sleep, "Waits t seconds of program time."),
+/// builtin!(time(mode: i32 = Int(0)) => time, "The time as struct(sec, nanosec)."),
+/// builtin!(socket_close(socket_name: String = Str("socket_0")) => close, "Closes it."),
+/// builtin!(movel(pose: [f64; 6], a: f64 = Float(1.2)) => |c, x, p, a| go(c, x, Kind::Line, p, a), "..."),
+/// ```
+macro_rules! builtin {
+    (@default) => {
+        $crate::native::Default::Required
+    };
+    (@default $kind:ident $(($($v:tt)*))?) => {
+        $crate::native::Default::$kind $(($($v)*))?
+    };
+    (
+        $name:ident ( $($p:ident : $t:ty $(= $kind:ident $(($($v:tt)*))?)?),* $(,)? )
+        => $code:expr, $summary:literal $(,)?
+    ) => {
+        $crate::native::Builtin::new(
+            stringify!($name),
+            D,
+            &[$($crate::native::Param {
+                name: $crate::native::param_name(stringify!($p)),
+                default: $crate::native::builtin!(@default $($kind $(($($v)*))?)?),
+            }),*],
+            $summary,
+            |c, a| {
+                let v = ::core::mem::take(&mut a.v);
+                #[allow(unused_labels)]
+                let out = 'call: {
+                    let _args = &mut v
+                        .iter()
+                        .chain(::core::iter::repeat(&$crate::value::Value::None))
+                        .enumerate();
+                    $(
+                        let (k, x) = _args.next().unwrap_or((0, &$crate::value::Value::None));
+                        #[allow(non_snake_case)]
+                        let $p: $t = match $crate::native::FromArg::from_arg(a, x, k) {
+                            Ok(p) => p,
+                            Err(e) => break 'call Err(e),
+                        };
+                    )*
+                    ($code)(c, &mut *a, $($p),*)
+                };
+                a.v = v;
+                out
+            },
+        )
+    };
+}
+pub(crate) use builtin;

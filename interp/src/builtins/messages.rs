@@ -2,7 +2,7 @@
 //! [`Event::Message`]; a popup never blocks (the virtual
 //! operator closes it at once).
 
-use super::{opt, req, Args, Builtin, Default, Domain, Out};
+use super::{builtin, Args, Builtin, Domain, Out};
 use crate::error::Fault;
 use crate::event::{Event, Message, MessageKind};
 use crate::runtime::Runtime;
@@ -11,63 +11,72 @@ use crate::value::Value;
 const D: Domain = Domain::Messages;
 
 pub(super) const TABLE: &[Builtin] = &[
-    Builtin::new(
-        "textmsg",
-        D,
-        &[req("s1"), opt("s2", Default::Str(""))],
+    builtin!(
+        textmsg(s1: &Value, s2: &Value = Str("")) => textmsg,
         "Writes s1 and s2 (as to_str writes them) to the log.",
-        textmsg,
     ),
-    Builtin::new(
-        "varmsg",
-        D,
-        &[req("name"), req("value")],
+    builtin!(
+        varmsg(name: &Value, value: &Value) => varmsg,
         "Writes `name = value` to the log.",
-        varmsg,
     ),
-    Builtin::new(
-        "popup",
-        D,
-        &[
-            req("s"),
-            opt("title", Default::Str("Popup")),
-            opt("warning", Default::Bool(false)),
-            opt("error", Default::Bool(false)),
-            opt("blocking", Default::Bool(false)),
-        ],
+    builtin!(
+        popup(
+            s: &Value,
+            title: &Value = Str("Popup"),
+            warning: bool = Bool(false),
+            error: bool = Bool(false),
+            blocking: bool = Bool(false),
+        ) => popup,
         "Shows a popup (a message event; it never blocks here).",
-        popup,
     ),
 ];
 
-fn show(c: &mut Runtime, a: &mut Args, kind: MessageKind, text: String) -> Result<Out, Fault> {
-    let given = a.positional.min(a.v.len());
+/// The message event: `args` are the call's arguments, of which the first
+/// `Args::positional` were given by position (the event keeps those).
+fn show<const N: usize>(
+    c: &mut Runtime,
+    a: &Args,
+    kind: MessageKind,
+    text: String,
+    args: [&Value; N],
+) -> Out {
+    let given = a.positional.min(args.len());
     c.events.push_back(Event::Message(Message {
         line: a.line,
         kind,
         text,
-        args: a.v[..given].to_vec(),
+        args: args.into_iter().take(given).cloned().collect(),
     }));
-    Ok(Out::Value(Value::None))
+    Out::Value(Value::None)
 }
 
-fn textmsg(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
-    let text = format!("{}{}", a.v[0].to_str(), a.v[1].to_str());
-    show(c, a, MessageKind::Textmsg, text)
+fn textmsg(c: &mut Runtime, a: &mut Args, s1: &Value, s2: &Value) -> Result<Out, Fault> {
+    let text = format!("{}{}", s1.to_str(), s2.to_str());
+    Ok(show(c, a, MessageKind::Textmsg, text, [s1, s2]))
 }
 
-fn varmsg(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
-    let text = format!("{} = {}", a.v[0].to_str(), a.v[1].to_str());
-    show(c, a, MessageKind::Varmsg, text)
+fn varmsg(c: &mut Runtime, a: &mut Args, name: &Value, value: &Value) -> Result<Out, Fault> {
+    let text = format!("{} = {}", name.to_str(), value.to_str());
+    Ok(show(c, a, MessageKind::Varmsg, text, [name, value]))
 }
 
-fn popup(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
+fn popup(
+    c: &mut Runtime,
+    a: &mut Args,
+    s: &Value,
+    title: &Value,
+    warning: bool,
+    error: bool,
+    blocking: bool,
+) -> Result<Out, Fault> {
     let kind = MessageKind::Popup {
-        title: a.v[1].to_str(),
-        warning: a.boolean(2)?,
-        error: a.boolean(3)?,
-        blocking: a.boolean(4)?,
+        title: title.to_str(),
+        warning,
+        error,
+        blocking,
     };
-    let text = a.v[0].to_str();
-    show(c, a, kind, text)
+    let flags = [warning, error, blocking].map(Value::Bool);
+    let text = s.to_str();
+    let [w, e, b] = &flags;
+    Ok(show(c, a, kind, text, [s, title, w, e, b]))
 }

@@ -51,7 +51,7 @@ pub mod strings;
 pub mod time;
 pub mod world_model;
 
-pub(crate) use crate::native::{Args, Out};
+pub(crate) use crate::native::{builtin, Args, Out};
 pub use crate::native::{Builtin, Default, Domain, Param};
 pub(crate) use crate::runtime::secs;
 pub use strings::MAX_STRING_LEN;

@@ -17,7 +17,7 @@
 //! [`World::controller_uptime`]: crate::World::controller_uptime
 //! [`World::system_time`]: crate::World::system_time
 
-use super::{opt, req, secs, Args, Builtin, Default, Domain, Out};
+use super::{builtin, secs, Args, Builtin, Domain, Out};
 use crate::error::Fault;
 use crate::runtime::Runtime;
 use crate::value::Value;
@@ -25,33 +25,21 @@ use crate::value::Value;
 const D: Domain = Domain::Time;
 
 pub(super) const TABLE: &[Builtin] = &[
-    Builtin::new(
-        "sync",
-        D,
-        &[],
+    builtin!(
+        sync() => sync,
         "Uses up the rest of this step: the thread goes on at the next one.",
-        sync,
     ),
-    Builtin::new(
-        "sleep",
-        D,
-        &[req("t")],
+    builtin!(
+        sleep(t: f64) => sleep,
         "Waits t seconds of program time (at least one step).",
-        sleep,
     ),
-    Builtin::new(
-        "get_steptime",
-        D,
-        &[],
+    builtin!(
+        get_steptime() => get_steptime,
         "The length of one step in seconds (0.002 e-Series, 0.008 CB3).",
-        get_steptime,
     ),
-    Builtin::new(
-        "time",
-        D,
-        &[opt("mode", Default::Int(0))],
+    builtin!(
+        time(mode: i32 = Int(0)) => time,
         "The time as struct(sec, nanosec): mode 0 the controller's execution time, mode 2 the system time (GMT), both on the virtual clock.",
-        time,
     ),
 ];
 
@@ -59,16 +47,15 @@ fn sync(c: &mut Runtime, _: &mut Args) -> Result<Out, Fault> {
     Ok(Out::Wait(c.step_time, Value::None))
 }
 
-fn sleep(_: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
-    Ok(Out::Wait(secs(a.num(0)?), Value::None))
+fn sleep(_: &mut Runtime, _: &mut Args, t: f64) -> Result<Out, Fault> {
+    Ok(Out::Wait(secs(t), Value::None))
 }
 
 fn get_steptime(c: &mut Runtime, _: &mut Args) -> Result<Out, Fault> {
     Ok(Out::Value(Value::Float(c.step_time.as_secs_f64())))
 }
 
-fn time(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
-    let mode = a.int(0)?;
+fn time(c: &mut Runtime, _: &mut Args, mode: i32) -> Result<Out, Fault> {
     let start = match mode {
         0 => c.arm.world.controller_uptime,
         2 => c.arm.world.system_time,

@@ -152,12 +152,6 @@ impl Machine {
             }
             return Ok(Called::Value(v));
         }
-        if let Some(b) = site
-            .builtin
-            .filter(|b| b.domain == crate::native::Domain::Interpreter)
-        {
-            return self.interpreter_builtin(b, site, args);
-        }
         let Some(builtin) = site.builtin else {
             return Err(Fault::new(
                 K::UnknownFunction,
@@ -227,6 +221,7 @@ impl Machine {
                 }))
             }
             Out::Connect { socket } => return Ok(Called::Block(Wait::Connect { socket, record })),
+            Out::Interpreter(r) => return self.interpreter_request(r),
         };
         if let Some(mut r) = record {
             r.result = value.clone();

@@ -6,8 +6,9 @@ use std::sync::Arc;
 
 use super::memory::{FRAME_BYTES, SLOT_BYTES};
 use super::{Called, Frame, Machine, State, Wait};
-use crate::error::{Fault, RuntimeErrorKind as K};
-use crate::syntax::compile::{CallSite, Sym};
+use crate::error::Fault;
+use crate::native::InterpreterRequest;
+use crate::syntax::compile::Sym;
 use crate::value::Value;
 
 /// Interpreter mode: see [`crate::interpreter`] for the wire behaviour and its sources.
@@ -336,36 +337,12 @@ impl Machine {
 
     /// `interpreter_mode`, `end_interpreter`, `clear_interpreter`: they act on the
     /// machine, not on the arm.
-    pub(super) fn interpreter_builtin(
-        &mut self,
-        builtin: &crate::native::Builtin,
-        site: &CallSite,
-        args: Vec<Value>,
-    ) -> Result<Called, Fault> {
-        let mut v: Vec<Value> = builtin
-            .params
-            .iter()
-            .map(|p| p.default.value().unwrap_or(Value::None))
-            .collect();
-        for (slot, a) in site.slots.iter().zip(args) {
-            if let Some(x) = v.get_mut(usize::from(*slot)) {
-                *x = a;
-            }
-        }
-        let flag = |i: usize| match v.get(i) {
-            Some(Value::Bool(b)) => Ok(*b),
-            other => Err(Fault::new(
-                K::Type,
-                format!(
-                    "type error: `{}` argument {} must be a bool, got {}",
-                    builtin.name,
-                    i + 1,
-                    other.map_or("nothing", |x| x.type_name())
-                ),
-            )),
-        };
-        match builtin.name {
-            "interpreter_mode" => {
+    pub(super) fn interpreter_request(&mut self, r: InterpreterRequest) -> Result<Called, Fault> {
+        match r {
+            InterpreterRequest::Enter {
+                clear_queue,
+                clear_on_end,
+            } => {
                 if self.ctl.thread != 0 {
                     return Err(Fault::from(
                         "interpreter_mode() can only be called in the main thread",
@@ -376,7 +353,6 @@ impl Machine {
                         "interpreter_mode(): nested interpreter modes are not supported",
                     ));
                 }
-                let (clear_queue, clear_on_end) = (flag(0)?, flag(1)?);
                 if clear_queue {
                     if let Some(last) = self.interp.queue.back() {
                         self.interp.status.last_cleared = last.id;
@@ -387,13 +363,13 @@ impl Machine {
                 self.interp.clear_on_end = clear_on_end;
                 Ok(Called::Block(Wait::Interpreter))
             }
-            "end_interpreter" => {
+            InterpreterRequest::End => {
                 if self.interp.status.active {
                     self.interp.ending = true;
                 }
                 Ok(Called::Value(Value::None))
             }
-            _ => {
+            InterpreterRequest::Clear => {
                 if !self.interp.status.active {
                     return Err(Fault::from(
                         "clear_interpreter() can only be called in interpreter mode",
