@@ -38,7 +38,7 @@ use std::time::Duration;
 use urscript_interp::interpreter::{self, Command, Discard};
 use urscript_interp::kinematics;
 use urscript_interp::{
-    Arm, ControllerCode, Event, Machine, Preamble, Program, RuntimeError, State,
+    Arm, ControllerCode, Effect, Event, Machine, Preamble, Program, RuntimeError, State,
 };
 
 use crate::{RobotMode, SafetyStatus, StopReason};
@@ -607,7 +607,8 @@ impl Cell {
         r.machine.arm_mut().speed_fraction = speed_fraction;
         r.machine.run_until(now.saturating_sub(r.origin));
         let mut stopped = false;
-        if std::mem::take(&mut r.machine.arm_mut().protective_stop) {
+        let effects = r.machine.take_effects();
+        if effects.contains(&Effect::ProtectiveStop) {
             // `protective_stop()`: a loaded program pauses, one a client sent ends
             // (`Controller::protective_stop`).
             self.controller.protective_stop(now);
@@ -615,7 +616,7 @@ impl Cell {
             stopped = self.controller.program_state() == ProgramState::Stopped;
             self.reason = Some(StopReason::Safety(SafetyStatus::ProtectiveStop));
         }
-        if std::mem::take(&mut r.machine.arm_mut().pause_requested) {
+        if effects.contains(&Effect::Pause) {
             // An RTDE watchdog with the action "pause": the program pauses.
             self.controller.pause_program(now);
             r.paused_at.get_or_insert(now);
@@ -629,7 +630,7 @@ impl Cell {
         while let Some(reply) = r.machine.poll_interpreter_reply() {
             replies.push(reply);
         }
-        let powerdown = std::mem::take(&mut r.machine.arm_mut().powerdown);
+        let powerdown = effects.contains(&Effect::PowerOff);
         let end = match r.machine.state() {
             State::Running if stopped => Some(Ended::Stopped),
             State::Running => None,

@@ -7,7 +7,7 @@
 
 use std::time::Duration;
 
-use urscript_interp::{Config, Event, Machine, Program, State};
+use urscript_interp::{Config, Effect, Event, Machine, Program, State};
 
 fn main() {
     let mut args = std::env::args().skip(1);
@@ -44,7 +44,7 @@ fn main() {
                 m.handle_connected(&socket_name, Ok(()));
             }
         }
-        if m.arm().protective_stop {
+        if m.effects().contains(&Effect::ProtectiveStop) {
             // A controller pauses the program here (a move left the reach, or
             // `protective_stop()` ran); nobody resumes it.
             println!(
@@ -61,7 +61,7 @@ fn main() {
         };
     }
     println!("{:?} at {:.3}s", m.state(), now.as_secs_f64());
-    if m.arm().protective_stop || matches!(m.state(), State::Error(_)) {
+    if m.effects().contains(&Effect::ProtectiveStop) || matches!(m.state(), State::Error(_)) {
         std::process::exit(1);
     }
 }

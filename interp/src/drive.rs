@@ -113,7 +113,7 @@ pub enum Outcome {
     /// [`Options::max_time`] passed first.
     MaxTime,
     /// The arm made a protective stop (a `movel`/`movep`/`movec` whose path left the
-    /// arm's reach, or `protective_stop()`; [`Arm::protective_stop`](crate::Arm)). A
+    /// arm's reach, or `protective_stop()`; [`Effect::ProtectiveStop`](crate::Effect)). A
     /// controller pauses the program there until an operator resumes it; with no
     /// operator, the driver stops running it.
     ProtectiveStop,
@@ -261,7 +261,8 @@ impl Driver {
             if overrun > slack {
                 lag += overrun;
             }
-            if machine.arm().protective_stop && !matches!(machine.state(), State::Error(_)) {
+            let stopped = machine.effects().contains(&crate::Effect::ProtectiveStop);
+            if stopped && !matches!(machine.state(), State::Error(_)) {
                 return Ok(Outcome::ProtectiveStop);
             }
             match machine.state() {

@@ -12,6 +12,22 @@ use urscript_socket::robot::{ReadCall, ReadResult};
 use crate::native::Builtin;
 use crate::value::Value;
 
+/// What a program asks of the controller that runs its arm, beyond motion: the
+/// controller acts on it after the step ([`Machine::take_effects`](crate::Machine::take_effects)).
+/// A program run alone (no controller) just goes on, its arm stopped.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[non_exhaustive]
+pub enum Effect {
+    /// A protective stop: `protective_stop()`, a move whose path left the arm's reach,
+    /// or the EtherNet/IP adapter's connection lost with the action "pause" or "stop".
+    /// The arm has stopped; the controller pauses (or stops) the program.
+    ProtectiveStop,
+    /// An RTDE watchdog with the action "pause" fired: the controller pauses the program.
+    Pause,
+    /// `powerdown()`: the program halted at the call; the controller powers the arm off.
+    PowerOff,
+}
+
 /// What the machine asks of its driver, or reports.
 #[derive(Debug, Clone, PartialEq)]
 pub enum Event {

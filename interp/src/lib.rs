@@ -194,8 +194,8 @@ pub mod machine {
 
 pub use error::{ControllerCode, ParseError, ParseErrorKind, RuntimeError, RuntimeErrorKind};
 pub use event::{
-    CallRecord, Event, Message, MessageKind, MoveEnd, MoveOutcome, MoveStart, Outcome, OutputValue,
-    OutputWrite, ReadRecord,
+    CallRecord, Effect, Event, Message, MessageKind, MoveEnd, MoveOutcome, MoveStart, Outcome,
+    OutputValue, OutputWrite, ReadRecord,
 };
 pub use history::JOINT_HISTORY_STEPS;
 pub use machine::{Config, Machine, State, Stub};

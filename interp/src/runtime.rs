@@ -9,7 +9,7 @@ use std::time::Duration;
 use crate::arm::kinematics::{self, Dh};
 use crate::arm::trajectory::{self, Kind, Motion};
 use crate::error::Fault;
-use crate::event::{Event, Message, MessageKind, MoveEnd, MoveOutcome, MoveStart};
+use crate::event::{Effect, Event, Message, MessageKind, MoveEnd, MoveOutcome, MoveStart};
 use crate::sockets::Sockets;
 
 /// The virtual arm and the I/O around it: where the arm is now (mid-move too), not
@@ -94,15 +94,6 @@ pub struct Arm {
     pub(crate) motion_version: i32,
     /// Jerk gain scaling (`jerk_gain_scaling_set`, 0.01-1). Default 1.0.
     pub(crate) jerk_gain_scaling: f64,
-    /// `protective_stop()` ran: a controller that runs the arm acts on it (a protective
-    /// stop pauses its program) and clears it.
-    pub protective_stop: bool,
-    /// An RTDE watchdog with the action "pause" fired: a controller that runs the
-    /// program pauses it and clears this.
-    pub pause_requested: bool,
-    /// `powerdown()` ran: the program halted there, and a controller that runs it powers
-    /// the arm off (and clears this).
-    pub powerdown: bool,
     /// The Flexible EtherNet/IP Adapter's assemblies and the Robot→PLC data the programs
     /// wrote (see [`crate::eip`] and [`Arm::eip_to_plc`]).
     pub(crate) eip: crate::eip::Adapter,
@@ -293,9 +284,6 @@ impl Default for Arm {
             conveyor: None,
             path_offset: PathOffset::default(),
             world: World::default(),
-            protective_stop: false,
-            pause_requested: false,
-            powerdown: false,
             eip: crate::eip::Adapter::default(),
             world_model: crate::arm::world_model::WorldModel::default(),
             force_mode_damping: 0.0,
@@ -453,6 +441,9 @@ pub(crate) struct Runtime {
     pub sockets: Sockets,
     /// What the driver must do or show, oldest first.
     pub events: crate::vm::memory::Events,
+    /// What the program asks of the controller running it, in the order asked, each
+    /// kind at most once (so at most as many as [`Effect`] has kinds).
+    pub(crate) effects: Vec<Effect>,
     /// The count of the program's memory against its budget.
     pub mem: crate::vm::memory::Memory,
     /// The motion under way, if the arm moves.
@@ -649,13 +640,20 @@ impl Runtime {
         self.arm.measured_tcp_force(&self.dh)
     }
 
-    /// A protective stop: the arm stops at once and the request is left for the
-    /// controller that runs the arm (`Arm::protective_stop`; a program alone just goes
-    /// on, stopped).
+    /// A protective stop: the arm stops at once and [`Effect::ProtectiveStop`] is left
+    /// for the controller that runs the arm (a program alone just goes on, stopped).
     pub fn protective_stop(&mut self) {
         self.end_move(MoveOutcome::ProtectiveStop, self.step);
         self.stop_at_once();
-        self.arm.protective_stop = true;
+        self.effect(Effect::ProtectiveStop);
+    }
+
+    /// Leaves `e` for the controller that runs the program (once: a second request of
+    /// the same kind before the controller takes them adds nothing).
+    pub(crate) fn effect(&mut self, e: Effect) {
+        if !self.effects.contains(&e) {
+            self.effects.push(e);
+        }
     }
 
     /// The arm stops where it is, at once (no ramp): no motion, no speed.
@@ -899,7 +897,7 @@ impl Runtime {
                 self.arm.qd = [0.0; 6];
                 self.arm.qdd = [0.0; 6];
                 self.arm.tcp_speed = [0.0; 6];
-                self.arm.protective_stop = true;
+                self.effect(Effect::ProtectiveStop);
                 ended = Some(Err(()));
             } else if s.done {
                 // A move queued behind this one starts now (at rest, where this one ended).

@@ -3,7 +3,9 @@ mod common;
 use std::time::Duration;
 
 use common::{int32s, messages, runtime_error, Harness, Input};
-use urscript_interp::{Config, Event, Machine, MessageKind, Outcome, Program, State, Stub, Value};
+use urscript_interp::{
+    Config, Effect, Event, Machine, MessageKind, Outcome, Program, State, Stub, Value,
+};
 
 fn one(expr: &str) -> String {
     messages(&format!("textmsg({expr})\n"))[0].clone()
@@ -498,5 +500,5 @@ fn servoc_moves_to_the_pose_and_protective_stop_is_left_for_the_controller() {
         Some(urscript_interp::Value::Float(d)) => assert!(*d < 1e-9, "{d}"),
         other => panic!("{other:?}"),
     }
-    assert!(m.arm().protective_stop);
+    assert!(m.effects().contains(&Effect::ProtectiveStop));
 }

@@ -4,7 +4,7 @@
 //! handles, defines their layouts, waits for the PLC and answers it; the watchdog.
 use std::time::Duration;
 
-use urscript_interp::{Config, Event, Machine, Program, RuntimeErrorKind, State, Value};
+use urscript_interp::{Config, Effect, Event, Machine, Program, RuntimeErrorKind, State, Value};
 
 const CELL: &str = r#"def cell():
   global cfg = rpc_factory("xmlrpc", "http://127.0.0.1:40000/RPC2")
@@ -106,18 +106,18 @@ fn a_watchdog_without_a_scanner_stops_the_program() {
     };
     assert!(e.message().contains("watchdog"), "{e}");
     assert!(e.message().contains("instance 111"), "{e}");
-    assert!(m.arm().protective_stop);
+    assert!(m.effects().contains(&Effect::ProtectiveStop));
 }
 
 #[test]
 fn a_pausing_watchdog_asks_for_a_protective_stop_and_a_fed_one_stays_quiet() {
     let mut m = watchdog(1, false);
     m.run_until(Duration::from_millis(500));
-    assert!(m.arm().protective_stop);
+    assert!(m.effects().contains(&Effect::ProtectiveStop));
     let mut m = watchdog(2, true);
     m.run_until(Duration::from_secs(2));
     assert_eq!(m.state(), &State::Finished);
-    assert!(!m.arm().protective_stop);
+    assert!(!m.effects().contains(&Effect::ProtectiveStop));
     let mut m = watchdog(0, false);
     m.run_until(Duration::from_secs(2));
     assert_eq!(m.state(), &State::Finished);

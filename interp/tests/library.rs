@@ -4,6 +4,7 @@ mod common;
 
 use common::{messages, runtime_error};
 use urscript_interp::builtins::{all, lookup, Default};
+use urscript_interp::Effect;
 
 /// The numbers in a message such as `[1, 2.5, 3]` or `p[0.1, 0, 0, 0, 0, 0]`.
 fn nums(msg: &str) -> Vec<f64> {
@@ -1157,7 +1158,7 @@ fn rtde_watchdogs_fire_without_updates_and_stay_quiet_with_them() {
     // "pause" asks the controller to pause the program; the program itself goes on.
     let mut m = watchdog_machine("pause", true);
     m.run_until(Duration::from_millis(150));
-    assert!(m.arm().pause_requested);
+    assert!(m.effects().contains(&Effect::Pause));
     // Without an RTDE server modelled (the default) nothing fires.
     let mut m = watchdog_machine("stop", false);
     m.run_until(Duration::from_secs(2));
@@ -1218,5 +1219,5 @@ fn powerdown_halts_the_program_and_asks_for_power_off() {
     m.run_until(Duration::from_millis(10));
     assert_eq!(m.state(), &urscript_interp::State::Halted);
     assert_eq!(m.global("x"), Some(&urscript_interp::Value::Int(1)));
-    assert!(m.arm().powerdown);
+    assert!(m.effects().contains(&Effect::PowerOff));
 }

@@ -4,7 +4,7 @@
 use std::time::Duration;
 
 use urscript_interp::kinematics::{forward, move_time, Model};
-use urscript_interp::{Config, Event, Machine, Program, RuntimeErrorKind, State};
+use urscript_interp::{Config, Effect, Event, Machine, Program, RuntimeErrorKind, State};
 
 const STEP: Duration = Duration::from_millis(2);
 const HOME: [f64; 6] = [
@@ -413,7 +413,7 @@ fn movel_beyond_reach_moves_along_the_line_then_stops_with_a_protective_stop() {
     steps(&mut m, 20_000, |k, m| {
         let p = m.tcp_pose();
         furthest = furthest.max(p[0] - p0[0]);
-        if stopped_at.is_none() && m.arm().protective_stop {
+        if stopped_at.is_none() && m.effects().contains(&Effect::ProtectiveStop) {
             stopped_at = Some(k);
         }
     });

@@ -130,12 +130,15 @@ impl Cell {
                 _ => {}
             }
         }
+        let stop = machine
+            .take_effects()
+            .contains(&urscript_interp::Effect::ProtectiveStop);
         let running = *machine.state() == State::Running;
         let in_time = now.saturating_sub(origin) < SECONDARY_TIME;
         if running && in_time {
             // Its settings so far are the arm's; it goes on at the next step.
             let arm = machine.arm().clone();
-            self.merge_secondary_arm(arm, now);
+            self.merge_secondary_arm(arm, stop, now);
             self.secondary = Some(Secondary {
                 machine,
                 origin,
@@ -160,7 +163,7 @@ impl Cell {
             });
         }
         let arm = machine.into_arm();
-        self.merge_secondary_arm(arm, now);
+        self.merge_secondary_arm(arm, stop, now);
         if networked {
             self.push(CellEvent::SecondaryEnded);
         }
@@ -169,8 +172,9 @@ impl Cell {
         }
     }
 
-    /// What a secondary program set becomes the arm's, its motion excepted.
-    fn merge_secondary_arm(&mut self, done: urscript_interp::Arm, now: Duration) {
+    /// What a secondary program set becomes the arm's, its motion excepted; `stop`: it
+    /// made a protective stop.
+    fn merge_secondary_arm(&mut self, done: urscript_interp::Arm, stop: bool, now: Duration) {
         let arm = self.arm_mut();
         let (q, qd, tcp_speed) = (arm.q, arm.qd, arm.tcp_speed);
         *arm = done;
@@ -179,7 +183,7 @@ impl Cell {
         arm.tcp_speed = tcp_speed;
         // `protective_stop()` in a secondary program stops the arm as in a main one (UR's
         // client library's driver test sends one and waits for the stop's error code).
-        if std::mem::take(&mut arm.protective_stop) {
+        if stop {
             self.controller.protective_stop(now);
             if self.controller.program_state() == ProgramState::Stopped {
                 // The program a client sent ends (`Controller::protective_stop`).

@@ -325,6 +325,7 @@ mod tests {
             arm: crate::runtime::Arm::default(),
             sockets: crate::sockets::Sockets::new(crate::sockets::Policy::default()),
             events: crate::vm::memory::Events::default(),
+            effects: Vec::new(),
             mem: crate::vm::memory::Memory::new(crate::vm::memory::DEFAULT_MAX_MEMORY),
             motion: None,
             thread: 0,

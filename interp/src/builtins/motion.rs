@@ -13,7 +13,7 @@
 //!   speeds). A target given as a pose is reached through inverse kinematics nearest the
 //!   joints the move starts from (out of reach: for `movej` a runtime error before the
 //!   arm moves; for `movel`/`movep`/`movec` the tool sets off along its path and stops
-//!   where the path leaves the arm's reach, with a protective stop, `Arm::protective_stop`,
+//!   where the path leaves the arm's reach, with a protective stop, `Effect::ProtectiveStop`,
 //!   as a real arm stops when the line runs it into a singularity).
 //!   Every motion takes at least one step; with `r = 0` the arm is exactly at the target,
 //!   at rest, in the step the move returns.
@@ -1022,21 +1022,22 @@ fn movec(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
     Ok(Out::Motion(back, Value::None))
 }
 
-/// `powerdown()`: the arm stops, the program halts at the call and the request is left
-/// for the controller that runs it (`Arm::powerdown`: it powers the arm off; a real
-/// controller also shuts itself down, which a virtual one serving its clients does not).
+/// `powerdown()`: the arm stops, the program halts at the call and
+/// [`Effect::PowerOff`](crate::Effect) is left for the controller that runs it (it powers
+/// the arm off; a real controller also shuts itself down, which a virtual one serving its
+/// clients does not).
 fn powerdown(c: &mut Runtime, _: &mut Args) -> Result<Out, Fault> {
     c.stop_at_once();
-    c.arm.powerdown = true;
+    c.effect(crate::Effect::PowerOff);
     Ok(Out::Value(Value::None))
 }
 
-/// `protective_stop()`: the arm stops at once and the request is left for the
-/// controller that runs the arm (`Arm::protective_stop`).
+/// `protective_stop()`: the arm stops at once and
+/// [`Effect::ProtectiveStop`](crate::Effect) is left for the controller that runs the arm.
 fn protective_stop(c: &mut Runtime, _: &mut Args) -> Result<Out, Fault> {
     c.protective_stop();
     // One step: the statements after it do not run in the step the stop happened, so a
-    // controller acting on `Arm::protective_stop` after the step pauses the program
+    // controller acting on the effect after the step pauses the program
     // before them, as the real one stops it at once.
     Ok(Out::Wait(c.step_time, Value::None))
 }

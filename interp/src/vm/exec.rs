@@ -433,7 +433,9 @@ impl Machine {
                     self.ctl.mem.credit(freed);
                     match called {
                         // `powerdown()`: the program ends there, as `halt` ends it.
-                        Called::Value(_) if self.ctl.arm.powerdown => return Ok(Flow::Halt),
+                        Called::Value(_) if self.ctl.effects.contains(&crate::Effect::PowerOff) => {
+                            return Ok(Flow::Halt)
+                        }
                         Called::Value(v) => {
                             check_value(&v, self.config.max_value_size).map_err(fail)?;
                             self.charge(Some(&*th), v.held_bytes()).map_err(fail)?;

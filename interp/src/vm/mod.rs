@@ -15,8 +15,8 @@ use std::time::Duration;
 use urscript_socket::robot::ReadCall;
 
 use crate::error::{Fault, RuntimeError, RuntimeErrorKind as K};
-use crate::event::CallRecord;
 pub use crate::event::Event;
+use crate::event::{CallRecord, Effect};
 use crate::runtime::{Arm, Runtime};
 use crate::sockets::{Policy, Sockets};
 use crate::syntax::compile::{Program, Sym};
@@ -395,6 +395,7 @@ impl Machine {
                 arm,
                 sockets: Sockets::new(config.policy),
                 events: memory::Events::default(),
+                effects: Vec::new(),
                 mem: memory::Memory::new(config.max_memory),
                 motion: None,
                 thread: 0,
@@ -482,6 +483,26 @@ impl Machine {
     /// The next event, oldest first.
     pub fn poll_event(&mut self) -> Option<Event> {
         self.ctl.events.pop_front()
+    }
+
+    /// What the program asks of the controller running it and has not been taken
+    /// ([`Machine::take_effects`]), in the order asked.
+    pub fn effects(&self) -> &[Effect] {
+        &self.ctl.effects
+    }
+
+    /// Takes what the program asks of the controller running it: a controller calls this
+    /// after each step and acts on each (a protective stop, a pause, a power-off).
+    ///
+    /// ```
+    /// # use urscript_interp::{Config, Effect, Machine, Program};
+    /// let mut m = Machine::new(Program::parse("protective_stop()\n").unwrap(), Config::default());
+    /// m.run_until(std::time::Duration::ZERO);
+    /// assert_eq!(m.take_effects(), [Effect::ProtectiveStop]);
+    /// assert!(m.effects().is_empty());
+    /// ```
+    pub fn take_effects(&mut self) -> Vec<Effect> {
+        std::mem::take(&mut self.ctl.effects)
     }
 
     /// The value of a global variable, if set.

@@ -167,7 +167,7 @@ impl Machine {
             None => {}
         }
         match self.ctl.check_rtde_watchdogs() {
-            Some(crate::runtime::WatchdogTrip::Pause) => self.ctl.arm.pause_requested = true,
+            Some(crate::runtime::WatchdogTrip::Pause) => self.ctl.effect(crate::Effect::Pause),
             Some(crate::runtime::WatchdogTrip::Stop(why)) => {
                 self.state = State::Error(RuntimeError::at(0, 0, Fault::new(K::Limit, why)));
                 return;
