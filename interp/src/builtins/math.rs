@@ -1,110 +1,125 @@
 //! Math: trigonometry, powers, rounding, norms, bit lists, `random`, and the matrix
 //! functions on lists of lists (`inv`, `transpose`; `inv` of a pose is `pose_inv`).
 
-use super::{float_list, req, Args, Builtin, Domain, Out};
+use super::{builtin, float_list, Args, Builtin, Domain, Out};
 use crate::error::Fault;
 use crate::runtime::Runtime;
 use crate::value::Value;
 
 const D: Domain = Domain::Math;
-const F: &[super::Param] = &[req("f")];
 
 pub(super) const TABLE: &[Builtin] = &[
-    Builtin::new("sin", D, F, "The sine of f (radians).", unary),
-    Builtin::new("cos", D, F, "The cosine of f (radians).", unary),
-    Builtin::new("tan", D, F, "The tangent of f (radians).", unary),
-    Builtin::new("atan", D, F, "The arc tangent of f.", unary),
-    Builtin::new("d2r", D, &[req("d")], "Degrees to radians.", unary),
-    Builtin::new("r2d", D, &[req("r")], "Radians to degrees.", unary),
-    Builtin::new("asin", D, F, "The arc sine of f (-1..1).", unary),
-    Builtin::new("acos", D, F, "The arc cosine of f (-1..1).", unary),
-    Builtin::new("sqrt", D, F, "The square root of f (f >= 0).", unary),
-    Builtin::new(
-        "atan2",
-        D,
-        &[req("x"), req("y")],
+    builtin!(
+        sin(f: f64) => |c, x, f| unary(c, x, Unary::Sin, f),
+        "The sine of f (radians).",
+    ),
+    builtin!(
+        cos(f: f64) => |c, x, f| unary(c, x, Unary::Cos, f),
+        "The cosine of f (radians).",
+    ),
+    builtin!(
+        tan(f: f64) => |c, x, f| unary(c, x, Unary::Tan, f),
+        "The tangent of f (radians).",
+    ),
+    builtin!(
+        atan(f: f64) => |c, x, f| unary(c, x, Unary::Atan, f),
+        "The arc tangent of f.",
+    ),
+    builtin!(
+        d2r(d: f64) => |c, x, d| unary(c, x, Unary::D2r, d),
+        "Degrees to radians.",
+    ),
+    builtin!(
+        r2d(r: f64) => |c, x, r| unary(c, x, Unary::R2d, r),
+        "Radians to degrees.",
+    ),
+    builtin!(
+        asin(f: f64) => |c, x, f| unary(c, x, Unary::Asin, f),
+        "The arc sine of f (-1..1).",
+    ),
+    builtin!(
+        acos(f: f64) => |c, x, f| unary(c, x, Unary::Acos, f),
+        "The arc cosine of f (-1..1).",
+    ),
+    builtin!(
+        sqrt(f: f64) => |c, x, f| unary(c, x, Unary::Sqrt, f),
+        "The square root of f (f >= 0).",
+    ),
+    builtin!(
+        atan2(x: f64, y: f64) => atan2,
         "The arc tangent of x/y (the manual's names: the first argument over the second), in the right quadrant.",
-        atan2,
     ),
-    Builtin::new(
-        "pow",
-        D,
-        &[req("base"), req("exponent")],
+    builtin!(
+        pow(base: f64, exponent: f64) => pow,
         "base to the power exponent.",
-        pow,
     ),
-    Builtin::new(
-        "log",
-        D,
-        &[req("b"), req("f")],
+    builtin!(
+        log(b: f64, f: f64) => log,
         "The logarithm of f in base b.",
-        log,
     ),
-    Builtin::new("floor", D, F, "The largest int not above f.", round),
-    Builtin::new("ceil", D, F, "The smallest int not below f.", round),
-    Builtin::new(
-        "norm",
-        D,
-        &[req("a")],
+    builtin!(
+        floor(f: f64) => |c, x, f| round(c, x, Round::Floor, f),
+        "The largest int not above f.",
+    ),
+    builtin!(
+        ceil(f: f64) => |c, x, f| round(c, x, Round::Ceil, f),
+        "The smallest int not below f.",
+    ),
+    builtin!(
+        norm(a: &Value) => norm,
         "The absolute value of a number, the Euclidean norm of a list or pose.",
-        norm,
     ),
-    Builtin::new(
-        "normalize",
-        D,
-        &[req("v")],
+    builtin!(
+        normalize(v: &Value) => normalize,
         "The unit vector in the direction of a list of numbers (not all zero).",
-        normalize,
     ),
-    Builtin::new(
-        "inv",
-        D,
-        &[req("m")],
+    builtin!(
+        inv(m: &Value) => inv,
         "The inverse of a square non-singular matrix (a list of lists), or of a pose.",
-        inv,
     ),
-    Builtin::new(
-        "transpose",
-        D,
-        &[req("m")],
+    builtin!(
+        transpose(m: &Value) => transpose,
         "The transpose of a matrix (a list of lists; a list is a 1-row matrix).",
-        transpose,
     ),
-    Builtin::new(
-        "binary_list_to_integer",
-        D,
-        &[req("l")],
+    builtin!(
+        binary_list_to_integer(l: &Value) => binary_list_to_integer,
         "The int whose bits (least significant first) are the list's bools.",
-        binary_list_to_integer,
     ),
-    Builtin::new(
-        "integer_to_binary_list",
-        D,
-        &[req("x")],
+    builtin!(
+        integer_to_binary_list(x: i32) => integer_to_binary_list,
         "The 32 bits of x as bools, least significant first.",
-        integer_to_binary_list,
     ),
-    Builtin::new(
-        "random",
-        D,
-        &[],
+    builtin!(
+        random() => random,
         "A number in [0, 1) from a fixed-seed generator (runs are reproducible).",
-        random,
     ),
 ];
 
-fn unary(_: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
-    let x = a.num(0)?;
-    let r = match a.name {
-        "sin" => x.sin(),
-        "cos" => x.cos(),
-        "tan" => x.tan(),
-        "atan" => x.atan(),
-        "d2r" => x.to_radians(),
-        "r2d" => x.to_degrees(),
-        "asin" => x.asin(),
-        "acos" => x.acos(),
-        _ => x.sqrt(),
+/// The functions of one number to one number.
+#[derive(Clone, Copy)]
+enum Unary {
+    Sin,
+    Cos,
+    Tan,
+    Atan,
+    D2r,
+    R2d,
+    Asin,
+    Acos,
+    Sqrt,
+}
+
+fn unary(_: &mut Runtime, a: &mut Args, f: Unary, x: f64) -> Result<Out, Fault> {
+    let r = match f {
+        Unary::Sin => x.sin(),
+        Unary::Cos => x.cos(),
+        Unary::Tan => x.tan(),
+        Unary::Atan => x.atan(),
+        Unary::D2r => x.to_radians(),
+        Unary::R2d => x.to_degrees(),
+        Unary::Asin => x.asin(),
+        Unary::Acos => x.acos(),
+        Unary::Sqrt => x.sqrt(),
     };
     if r.is_nan() && !x.is_nan() {
         return Err(Fault::from(format!(
@@ -115,28 +130,32 @@ fn unary(_: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
     Ok(Out::Value(Value::Float(r)))
 }
 
-fn atan2(_: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
-    Ok(Out::Value(Value::Float(a.num(0)?.atan2(a.num(1)?))))
+fn atan2(_: &mut Runtime, _: &mut Args, x: f64, y: f64) -> Result<Out, Fault> {
+    Ok(Out::Value(Value::Float(x.atan2(y))))
 }
 
-fn pow(_: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
-    Ok(Out::Value(Value::Float(a.num(0)?.powf(a.num(1)?))))
+fn pow(_: &mut Runtime, _: &mut Args, base: f64, exponent: f64) -> Result<Out, Fault> {
+    Ok(Out::Value(Value::Float(base.powf(exponent))))
 }
 
-fn log(_: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
-    let (base, x) = (a.num(0)?, a.num(1)?);
+fn log(_: &mut Runtime, _: &mut Args, base: f64, x: f64) -> Result<Out, Fault> {
     if base <= 0.0 || base == 1.0 || x <= 0.0 {
         return Err(Fault::from(format!("`log`: log({base}, {x}) is undefined")));
     }
     Ok(Out::Value(Value::Float(x.ln() / base.ln())))
 }
 
-fn round(_: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
-    let x = a.num(0)?;
-    let r = if a.name == "floor" {
-        x.floor()
-    } else {
-        x.ceil()
+/// Which way `floor` and `ceil` round.
+#[derive(Clone, Copy)]
+enum Round {
+    Floor,
+    Ceil,
+}
+
+fn round(_: &mut Runtime, a: &mut Args, way: Round, x: f64) -> Result<Out, Fault> {
+    let r = match way {
+        Round::Floor => x.floor(),
+        Round::Ceil => x.ceil(),
     };
     if !(f64::from(i32::MIN)..=f64::from(i32::MAX)).contains(&r) {
         return Err(Fault::from(format!(
@@ -147,8 +166,8 @@ fn round(_: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
     Ok(Out::Value(Value::Int(r as i32)))
 }
 
-fn norm(_: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
-    let n = match &a.v[0] {
+fn norm(_: &mut Runtime, _: &mut Args, v: &Value) -> Result<Out, Fault> {
+    let n = match v {
         Value::Int(x) => f64::from(*x).abs(),
         Value::Float(x) => x.abs(),
         Value::Pose(p) => p.iter().map(|x| x * x).sum::<f64>().sqrt(),
@@ -172,8 +191,8 @@ fn norm(_: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
     Ok(Out::Value(Value::Float(n)))
 }
 
-fn binary_list_to_integer(_: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
-    let Value::List(items) = &a.v[0] else {
+fn binary_list_to_integer(_: &mut Runtime, _: &mut Args, l: &Value) -> Result<Out, Fault> {
+    let Value::List(items) = l else {
         return Err(Fault::type_error(
             "type error: `binary_list_to_integer` needs a list of bools",
         ));
@@ -203,8 +222,8 @@ fn binary_list_to_integer(_: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
     Ok(Out::Value(Value::Int(out as i32)))
 }
 
-fn integer_to_binary_list(_: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
-    let x = a.int(0)? as u32;
+fn integer_to_binary_list(_: &mut Runtime, _: &mut Args, x: i32) -> Result<Out, Fault> {
+    let x = x as u32;
     Ok(Out::Value(Value::List(
         (0..32).map(|k| Value::Bool(x >> k & 1 == 1)).collect(),
     )))
@@ -222,8 +241,8 @@ fn random(c: &mut Runtime, _: &mut Args) -> Result<Out, Fault> {
     )))
 }
 
-fn normalize(_: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
-    let v = numbers(a, &a.v[0])?;
+fn normalize(_: &mut Runtime, a: &mut Args, v: &Value) -> Result<Out, Fault> {
+    let v = numbers(a, v)?;
     let n = v.iter().map(|x| x * x).sum::<f64>().sqrt();
     if n == 0.0 {
         return Err(Fault::from("`normalize`: the vector is zero"));
@@ -256,13 +275,13 @@ fn numbers(a: &Args, v: &Value) -> Result<Vec<f64>, Fault> {
         .collect()
 }
 
-/// A matrix: a list of equally long lists of numbers (a flat list is one row).
-fn matrix(a: &Args) -> Result<Vec<Vec<f64>>, Fault> {
-    let Value::List(rows) = &a.v[0] else {
+/// `v` as a matrix: a list of equally long lists of numbers (a flat list is one row).
+fn matrix(a: &Args, v: &Value) -> Result<Vec<Vec<f64>>, Fault> {
+    let Value::List(rows) = v else {
         return Err(Fault::type_error(format!(
             "type error: `{}` needs a matrix, got {}",
             a.name,
-            a.v[0].type_name()
+            v.type_name()
         )));
     };
     let m: Vec<Vec<f64>> = if rows.iter().all(|r| matches!(r, Value::List(_))) {
@@ -270,7 +289,7 @@ fn matrix(a: &Args) -> Result<Vec<Vec<f64>>, Fault> {
             .map(|r| numbers(a, r))
             .collect::<Result<_, _>>()?
     } else {
-        vec![numbers(a, &a.v[0])?]
+        vec![numbers(a, v)?]
     };
     if m.is_empty() || m.iter().any(|r| r.len() != m[0].len() || r.is_empty()) {
         return Err(Fault::from(format!("`{}`: not a matrix", a.name)));
@@ -282,11 +301,11 @@ fn to_value(m: Vec<Vec<f64>>) -> Value {
     Value::List(m.iter().map(|r| float_list(r)).collect())
 }
 
-fn inv(_: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
-    if let Value::Pose(p) = a.v[0] {
-        return Ok(Out::Value(Value::Pose(crate::arm::pose::inv(p))));
+fn inv(_: &mut Runtime, a: &mut Args, v: &Value) -> Result<Out, Fault> {
+    if let Value::Pose(p) = v {
+        return Ok(Out::Value(Value::Pose(crate::arm::pose::inv(*p))));
     }
-    let mut m = matrix(a)?;
+    let mut m = matrix(a, v)?;
     let n = m.len();
     if m[0].len() != n {
         return Err(Fault::from("`inv`: the matrix is not square"));
@@ -322,8 +341,8 @@ fn inv(_: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
     Ok(Out::Value(to_value(out)))
 }
 
-fn transpose(_: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
-    let m = matrix(a)?;
+fn transpose(_: &mut Runtime, a: &mut Args, v: &Value) -> Result<Out, Fault> {
+    let m = matrix(a, v)?;
     let t = (0..m[0].len())
         .map(|j| m.iter().map(|r| r[j]).collect())
         .collect();

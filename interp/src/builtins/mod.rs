@@ -69,9 +69,6 @@ pub(crate) const fn opt(name: &'static str, default: Default) -> Param {
     Param { name, default }
 }
 
-/// The `socket_name="socket_0"` parameter every socket function has.
-pub(crate) const SOCKET_NAME: Param = opt("socket_name", Default::Str("socket_0"));
-
 /// Every built-in, sorted by name (names are unique: a test proves it).
 ///
 /// ```

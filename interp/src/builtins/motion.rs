@@ -1331,7 +1331,7 @@ fn has_solution(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
     let pose = a.six(0)?;
     let qnear = if a.is_absent(1) { c.arm.q } else { a.six(1)? };
     let tcp = if a.is_absent(4) { c.arm.tcp } else { a.six(4)? };
-    let (max_position, max_orientation) = super::poses::tolerances(a)?;
+    let (max_position, max_orientation) = super::poses::tolerances(a, a.num(2)?, a.num(3)?)?;
     Ok(Out::Value(Value::Bool(
         super::poses::inverse_within(c, pose, qnear, tcp, max_position, max_orientation).is_ok(),
     )))

@@ -7,109 +7,72 @@
 //! and `maxOrientationError`, else the runtime error the controller raises (which
 //! `get_inverse_kin_has_solution` is there to avoid).
 
-use super::{float_list, floats, opt, req, Args, Builtin, Default, Domain, Out};
+use super::{builtin, float_list, floats, Args, Builtin, Domain, Out};
 use crate::error::Fault;
 use crate::runtime::Runtime;
 use crate::value::Value;
 
 const D: Domain = Domain::Poses;
-const TWO: &[super::Param] = &[req("p_from"), req("p_to")];
 
 pub(super) const TABLE: &[Builtin] = &[
-    Builtin::new(
-        "point_dist",
-        D,
-        TWO,
+    builtin!(
+        point_dist(p_from: [f64; 6], p_to: [f64; 6]) => dist,
         "The distance between the two poses' positions.",
-        dist,
     ),
-    Builtin::new(
-        "pose_dist",
-        D,
-        TWO,
+    builtin!(
+        pose_dist(p_from: [f64; 6], p_to: [f64; 6]) => dist,
         "The distance between the two poses' positions.",
-        dist,
     ),
-    Builtin::new(
-        "rotvec2rpy",
-        D,
-        &[req("rotation_vector")],
+    builtin!(
+        rotvec2rpy(rotation_vector: [f64; 3]) => rotvec2rpy,
         "The roll-pitch-yaw angles [r, p, y] of a rotation vector (R = Rz(y)Ry(p)Rx(r)).",
-        rotvec2rpy,
     ),
-    Builtin::new(
-        "rpy2rotvec",
-        D,
-        &[req("rpy_vector")],
+    builtin!(
+        rpy2rotvec(rpy_vector: [f64; 3]) => rpy2rotvec,
         "The rotation vector of roll-pitch-yaw angles [r, p, y] (R = Rz(y)Ry(p)Rx(r)).",
-        rpy2rotvec,
     ),
-    Builtin::new(
-        "wrench_trans",
-        D,
-        &[req("T_from_to"), req("w_from")],
+    builtin!(
+        wrench_trans(T_from_to: [f64; 6], w_from: [f64; 6]) => wrench_trans,
         "The wrench [F, M] seen from the frame T_from_to: torque moved to its origin, both in its axes.",
-        wrench_trans,
     ),
-    Builtin::new(
-        "pose_trans",
-        D,
-        &[req("p_from"), req("p_from_to")],
+    builtin!(
+        pose_trans(p_from: [f64; 6], p_from_to: [f64; 6])
+            => |c, x, p, q| compose(c, x, Compose::Trans, p, q),
         "p_from_to expressed in the base frame, seen from p_from (the composition).",
-        compose,
     ),
-    Builtin::new(
-        "pose_add",
-        D,
-        &[req("p_1"), req("p_2")],
+    builtin!(
+        pose_add(p_1: [f64; 6], p_2: [f64; 6]) => |c, x, p, q| compose(c, x, Compose::Add, p, q),
         "Positions added, rotations composed.",
-        compose,
     ),
-    Builtin::new(
-        "pose_sub",
-        D,
-        &[req("p_to"), req("p_from")],
+    builtin!(
+        pose_sub(p_to: [f64; 6], p_from: [f64; 6]) => |c, x, p, q| compose(c, x, Compose::Sub, p, q),
         "Positions subtracted, rotations composed with the inverse.",
-        compose,
     ),
-    Builtin::new(
-        "pose_inv",
-        D,
-        &[req("p_from")],
+    builtin!(
+        pose_inv(p_from: [f64; 6]) => |_, _, p| Ok(Out::Value(Value::Pose(crate::arm::pose::inv(p)))),
         "The inverse transform.",
-        pose_inv,
     ),
-    Builtin::new(
-        "interpolate_pose",
-        D,
-        &[req("p_from"), req("p_to"), req("alpha")],
+    builtin!(
+        interpolate_pose(p_from: [f64; 6], p_to: [f64; 6], alpha: f64) => interpolate_pose,
         "The pose a fraction alpha of the way (element-wise).",
-        interpolate_pose,
     ),
-    Builtin::new(
-        "get_inverse_kin",
-        D,
-        &[
-            req("x"),
-            opt("qnear", Default::Absent),
-            opt("maxPositionError", Default::Float(1e-10)),
-            opt("maxOrientationError", Default::Float(1e-10)),
-            opt("tcp", Default::Absent),
-        ],
+    builtin!(
+        get_inverse_kin(
+            x: [f64; 6],
+            qnear: Option<[f64; 6]> = Absent,
+            maxPositionError: f64 = Float(1e-10),
+            maxOrientationError: f64 = Float(1e-10),
+            tcp: Option<[f64; 6]> = Absent,
+        ) => get_inverse_kin,
         "The joints that put the tool at x, nearest qnear (default: the current joints), by the arm model's inverse kinematics; out of exact reach, the nearest the arm comes if within maxPositionError and maxOrientationError, else a runtime error (as on the controller).",
-        get_inverse_kin,
     ),
-    Builtin::new(
-        "get_forward_kin",
-        D,
-        &[opt("q", Default::Absent), opt("tcp", Default::Absent)],
+    builtin!(
+        get_forward_kin(q: Option<[f64; 6]> = Absent, tcp: Option<[f64; 6]> = Absent) => get_forward_kin,
         "The tool pose of q (default: the current joints) through tcp (default: the active TCP), by the arm model's forward kinematics.",
-        get_forward_kin,
     ),
 ];
 
-fn dist(_: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
-    let (p, q) = (a.six(0)?, a.six(1)?);
+fn dist(_: &mut Runtime, _: &mut Args, p: [f64; 6], q: [f64; 6]) -> Result<Out, Fault> {
     let d = (0..3).map(|k| (p[k] - q[k]).powi(2)).sum::<f64>().sqrt();
     Ok(Out::Value(Value::Float(d)))
 }
@@ -123,8 +86,7 @@ pub(super) fn rotate(r: [f64; 3], v: [f64; 3]) -> [f64; 3] {
     [p[0], p[1], p[2]]
 }
 
-fn rotvec2rpy(_: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
-    let r: [f64; 3] = a.nums(0)?;
+fn rotvec2rpy(_: &mut Runtime, _: &mut Args, r: [f64; 3]) -> Result<Out, Fault> {
     // The rotation matrix's columns: the rotated axes.
     let [c0, c1, c2] = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]].map(|e| rotate(r, e));
     let pitch = (-c0[2]).atan2(c0[0].hypot(c0[1]));
@@ -133,8 +95,8 @@ fn rotvec2rpy(_: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
     Ok(Out::Value(float_list(&[roll, pitch, yaw])))
 }
 
-fn rpy2rotvec(_: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
-    let [roll, pitch, yaw]: [f64; 3] = a.nums(0)?;
+fn rpy2rotvec(_: &mut Runtime, _: &mut Args, rpy: [f64; 3]) -> Result<Out, Fault> {
+    let [roll, pitch, yaw] = rpy;
     let rot = |x: f64, y: f64, z: f64| [0.0, 0.0, 0.0, x, y, z];
     let p = crate::arm::pose::trans(
         crate::arm::pose::trans(rot(0.0, 0.0, yaw), rot(0.0, pitch, 0.0)),
@@ -143,9 +105,7 @@ fn rpy2rotvec(_: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
     Ok(Out::Value(float_list(&p[3..])))
 }
 
-fn wrench_trans(_: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
-    let t = a.six(0)?;
-    let w = a.six(1)?;
+fn wrench_trans(_: &mut Runtime, _: &mut Args, t: [f64; 6], w: [f64; 6]) -> Result<Out, Fault> {
     let (p, f, m) = ([t[0], t[1], t[2]], [w[0], w[1], w[2]], [w[3], w[4], w[5]]);
     // The torque about the new origin: M - p x F; then both in the new frame's axes.
     let pxf = [
@@ -161,22 +121,35 @@ fn wrench_trans(_: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
     ])))
 }
 
-fn compose(_: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
-    let (p, q) = (a.six(0)?, a.six(1)?);
-    Ok(Out::Value(Value::Pose(match a.name {
-        "pose_trans" => crate::arm::pose::trans(p, q),
-        "pose_add" => crate::arm::pose::add(p, q),
-        _ => crate::arm::pose::sub(p, q),
+/// How `pose_trans`, `pose_add` and `pose_sub` combine their two poses.
+#[derive(Clone, Copy)]
+enum Compose {
+    Trans,
+    Add,
+    Sub,
+}
+
+fn compose(
+    _: &mut Runtime,
+    _: &mut Args,
+    how: Compose,
+    p: [f64; 6],
+    q: [f64; 6],
+) -> Result<Out, Fault> {
+    Ok(Out::Value(Value::Pose(match how {
+        Compose::Trans => crate::arm::pose::trans(p, q),
+        Compose::Add => crate::arm::pose::add(p, q),
+        Compose::Sub => crate::arm::pose::sub(p, q),
     })))
 }
 
-fn pose_inv(_: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
-    Ok(Out::Value(Value::Pose(crate::arm::pose::inv(a.six(0)?))))
-}
-
-fn interpolate_pose(_: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
-    let (p, q) = (a.six(0)?, a.six(1)?);
-    let t = a.num(2)?;
+fn interpolate_pose(
+    _: &mut Runtime,
+    _: &mut Args,
+    p: [f64; 6],
+    q: [f64; 6],
+    t: f64,
+) -> Result<Out, Fault> {
     let mut out = [0.0; 6];
     for k in 0..6 {
         out[k] = p[k] + (q[k] - p[k]) * t;
@@ -184,19 +157,26 @@ fn interpolate_pose(_: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
     Ok(Out::Value(Value::Pose(out)))
 }
 
-fn get_inverse_kin(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
-    let pose = a.six(0)?;
-    let qnear = if a.is_absent(1) { c.arm.q } else { a.six(1)? };
-    let tcp = if a.is_absent(4) { c.arm.tcp } else { a.six(4)? };
-    let (max_position, max_orientation) = tolerances(a)?;
+fn get_inverse_kin(
+    c: &mut Runtime,
+    a: &mut Args,
+    pose: [f64; 6],
+    qnear: Option<[f64; 6]>,
+    max_position: f64,
+    max_orientation: f64,
+    tcp: Option<[f64; 6]>,
+) -> Result<Out, Fault> {
+    let qnear = qnear.unwrap_or(c.arm.q);
+    let tcp = tcp.unwrap_or(c.arm.tcp);
+    let (max_position, max_orientation) = tolerances(a, max_position, max_orientation)?;
     let q = inverse_within(c, pose, qnear, tcp, max_position, max_orientation)
         .map_err(|e| Fault::from(format!("`get_inverse_kin`: {e}")))?;
     Ok(Out::Value(floats(q)))
 }
 
-/// `maxPositionError` and `maxOrientationError` (arguments 2 and 3): each 0 or more.
-pub(super) fn tolerances(a: &Args) -> Result<(f64, f64), Fault> {
-    let (p, o) = (a.num(2)?, a.num(3)?);
+/// The arguments `maxPositionError` (`p`) and `maxOrientationError` (`o`) of the call
+/// `a`, checked: each 0 or more.
+pub(super) fn tolerances(a: &Args, p: f64, o: f64) -> Result<(f64, f64), Fault> {
     for (name, v) in [("maxPositionError", p), ("maxOrientationError", o)] {
         if !(v >= 0.0 && v.is_finite()) {
             return Err(Fault::from(format!(
@@ -232,11 +212,15 @@ pub(super) fn inverse_within(
     })
 }
 
-fn get_forward_kin(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
-    let q = if a.is_absent(0) { c.arm.q } else { a.six(0)? };
-    Ok(Out::Value(Value::Pose(if a.is_absent(1) {
-        c.tool_pose(q)
-    } else {
-        crate::kinematics::forward(&c.dh, q, a.six(1)?)
+fn get_forward_kin(
+    c: &mut Runtime,
+    _: &mut Args,
+    q: Option<[f64; 6]>,
+    tcp: Option<[f64; 6]>,
+) -> Result<Out, Fault> {
+    let q = q.unwrap_or(c.arm.q);
+    Ok(Out::Value(Value::Pose(match tcp {
+        None => c.tool_pose(q),
+        Some(tcp) => crate::kinematics::forward(&c.dh, q, tcp),
     })))
 }

@@ -4,9 +4,10 @@
 
 use urscript_socket::robot::ReadCall;
 
-use super::{opt, req, Args, Builtin, Default, Domain, Out, SOCKET_NAME};
+use super::{builtin, Args, Builtin, Domain, Out};
 use crate::error::{Fault, RuntimeErrorKind};
 use crate::event::{ReadRecord, MAX_READ_INPUT};
+use crate::native::FromArg;
 use crate::runtime::Runtime;
 use crate::value::Value;
 
@@ -20,114 +21,92 @@ const D: Domain = Domain::Sockets;
 /// a PC), as [`MAX_THREADS`](crate::machine::MAX_THREADS) is for threads. Opening one
 /// more stops the program with a [`Limit`](RuntimeErrorKind::Limit) error.
 pub const MAX_SOCKETS: usize = 64;
-const TIMEOUT: super::Param = opt("timeout", Default::Float(2.0));
 
 pub(super) const TABLE: &[Builtin] = &[
-    Builtin::new(
-        "socket_open",
-        D,
-        &[req("address"), req("port"), SOCKET_NAME],
+    builtin!(
+        socket_open(address: String, port: i32, socket_name: String = Str("socket_0")) => open,
         "Opens a TCP connection to address:port (the driver connects); True if it is up. An open name is closed first.",
-        open,
     ),
-    Builtin::new(
-        "socket_close",
-        D,
-        &[SOCKET_NAME],
+    builtin!(
+        socket_close(socket_name: String = Str("socket_0")) => close,
         "Closes the connection (nothing if it is not open).",
-        close,
     ),
-    Builtin::new(
-        "socket_send_string",
-        D,
-        &[req("str"), SOCKET_NAME],
+    builtin!(
+        socket_send_string(str: &Value, socket_name: String = Str("socket_0"))
+            => |c, x, v, s| send_string(c, x, Ending::None, v, s),
         "Sends the value's text (a string's bytes, a number or list as to_str writes it); False if the socket is not open or broken.",
-        send_string,
     ),
-    Builtin::new(
-        "socket_send_line",
-        D,
-        &[req("str"), SOCKET_NAME],
+    builtin!(
+        socket_send_line(str: &Value, socket_name: String = Str("socket_0"))
+            => |c, x, v, s| send_string(c, x, Ending::Lf, v, s),
         "Sends the value's text and a LF (\\n).",
-        send_string,
     ),
-    Builtin::new(
-        "socket_send_byte",
-        D,
-        &[req("value"), SOCKET_NAME],
+    builtin!(
+        socket_send_byte(value: i32, socket_name: String = Str("socket_0")) => send_byte,
         "Sends one byte (0..255).",
-        send_byte,
     ),
-    Builtin::new(
-        "socket_send_int",
-        D,
-        &[req("value"), SOCKET_NAME],
+    builtin!(
+        socket_send_int(value: SendInt, socket_name: String = Str("socket_0")) => send_int,
         "Sends a big-endian int32 (a float is truncated toward zero; outside the int32 range an error).",
-        send_int,
     ),
-    Builtin::new(
-        "socket_set_var",
-        D,
-        &[req("name"), req("value"), SOCKET_NAME],
+    builtin!(
+        socket_set_var(name: String, value: i32, socket_name: String = Str("socket_0")) => set_var,
         "Sends `SET name value\\n`.",
-        set_var,
     ),
-    Builtin::new(
-        "socket_get_var",
-        D,
-        &[req("name"), SOCKET_NAME],
+    builtin!(
+        socket_get_var(name: String, socket_name: String = Str("socket_0")) => get_var,
         "Sends `GET name\\n` and reads the `name value\\n` reply as an int (0 after 2 s).",
-        get_var,
     ),
-    Builtin::new(
-        "socket_read_ascii_float",
-        D,
-        &[req("number"), SOCKET_NAME, TIMEOUT],
+    builtin!(
+        socket_read_ascii_float(
+            number: i32,
+            socket_name: String = Str("socket_0"),
+            timeout: f64 = Float(2.0),
+        ) => |c, x, n, s, t| read_counted(c, x, Counted::AsciiFloat, n, s, t),
         "Reads a `(f1, ..., fn)` tuple: [n, f1, ..., fn], or [0, nan...] on timeout.",
-        read_counted,
     ),
-    Builtin::new(
-        "socket_read_binary_integer",
-        D,
-        &[req("number"), SOCKET_NAME, TIMEOUT],
+    builtin!(
+        socket_read_binary_integer(
+            number: i32,
+            socket_name: String = Str("socket_0"),
+            timeout: f64 = Float(2.0),
+        ) => |c, x, n, s, t| read_counted(c, x, Counted::BinaryInteger, n, s, t),
         "Reads `number` big-endian int32s: [n, i1, ...], or [0, -1...] on timeout.",
-        read_counted,
     ),
-    Builtin::new(
-        "socket_read_byte_list",
-        D,
-        &[req("number"), SOCKET_NAME, TIMEOUT],
+    builtin!(
+        socket_read_byte_list(
+            number: i32,
+            socket_name: String = Str("socket_0"),
+            timeout: f64 = Float(2.0),
+        ) => |c, x, n, s, t| read_counted(c, x, Counted::ByteList, n, s, t),
         "Reads `number` bytes: [n, b1, ...], or [0, -1...] on timeout.",
-        read_counted,
     ),
-    Builtin::new(
-        "socket_read_line",
-        D,
-        &[SOCKET_NAME, TIMEOUT],
+    builtin!(
+        socket_read_line(socket_name: String = Str("socket_0"), timeout: f64 = Float(2.0))
+            => |c, x, s, t| start_read(c, s, ReadCall::Line, t, x),
         "Reads to the next LF, without it (\"\" on timeout).",
-        read_line,
     ),
-    Builtin::new(
-        "socket_read_string",
-        D,
-        &[
-            SOCKET_NAME,
-            opt("prefix", Default::Str("")),
-            opt("suffix", Default::Str("")),
-            opt("interpret_escape", Default::Bool(false)),
-            TIMEOUT,
-        ],
+    builtin!(
+        socket_read_string(
+            socket_name: String = Str("socket_0"),
+            prefix: &[u8] = Str(""),
+            suffix: &[u8] = Str(""),
+            interpret_escape: bool = Bool(false),
+            timeout: f64 = Float(2.0),
+        ) => read_string,
         "Reads what arrives (between prefix and suffix when given) as a string (\"\" on timeout).",
-        read_string,
     ),
 ];
 
-fn open(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
-    let host = a.text(0)?;
-    let port = a.int(1)?;
+fn open(
+    c: &mut Runtime,
+    _: &mut Args,
+    host: String,
+    port: i32,
+    socket: String,
+) -> Result<Out, Fault> {
     let port =
         u16::try_from(port).map_err(|_| format!("`socket_open`: port {port} out of range"))?;
-    let socket = a.text(2)?;
     // Policy: opening an open name closes the old connection first.
     c.close(&socket);
     if c.sockets.count() >= MAX_SOCKETS {
@@ -146,8 +125,7 @@ fn open(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
     Ok(Out::Connect { socket })
 }
 
-fn close(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
-    let socket = a.text(0)?;
+fn close(c: &mut Runtime, _: &mut Args, socket: String) -> Result<Out, Fault> {
     c.close(&socket);
     Ok(Out::Value(Value::None))
 }
@@ -167,87 +145,119 @@ fn sent(c: &mut Runtime, a: &mut Args, socket: &str, ok: bool) -> Result<Out, Fa
     Ok(Out::Value(Value::Bool(ok)))
 }
 
-fn send_string(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
-    let socket = a.text(1)?;
-    let bytes = a.v[0].to_str_bytes();
-    let ok = if a.name == "socket_send_line" {
-        c.sockets.send_line(&socket, &bytes)
-    } else {
-        c.sockets.send_string(&socket, &bytes)
+/// What `socket_send_string` and `socket_send_line` put after the text.
+#[derive(Clone, Copy)]
+enum Ending {
+    /// Nothing.
+    None,
+    /// A LF.
+    Lf,
+}
+
+fn send_string(
+    c: &mut Runtime,
+    a: &mut Args,
+    ending: Ending,
+    v: &Value,
+    socket: String,
+) -> Result<Out, Fault> {
+    let bytes = v.to_str_bytes();
+    let ok = match ending {
+        Ending::None => c.sockets.send_string(&socket, &bytes),
+        Ending::Lf => c.sockets.send_line(&socket, &bytes),
     };
     sent(c, a, &socket, ok)
 }
 
-fn send_byte(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
-    let v = a.int(0)?;
+fn send_byte(c: &mut Runtime, a: &mut Args, v: i32, socket: String) -> Result<Out, Fault> {
     let v = u8::try_from(v)
         .map_err(|_| format!("`socket_send_byte`: value must be 0..255, got {v}"))?;
-    let socket = a.text(1)?;
     let ok = c.sockets.send_byte(&socket, v);
     sent(c, a, &socket, ok)
 }
 
-/// `socket_send_int(value)`: an int, or a float truncated toward zero. UR's manual says
-/// only "the int to send"; drivers send scaled floats without conversion (Machina's UR
-/// driver, "works with SW3.0 and above", sends `socket_send_int(10000.0 * pose[0])`),
-/// so the controller takes a float here. Truncation is our choice (the manuals are
-/// silent); a float outside the int32 range, or not finite, is a type error.
-fn send_int(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
-    let v = match a.v[0] {
-        Value::Float(x) if (f64::from(i32::MIN)..=f64::from(i32::MAX)).contains(&x.trunc()) => {
-            x.trunc() as i32
+/// The argument of `socket_send_int(value)`: an int, or a float truncated toward zero.
+/// UR's manual says only "the int to send"; drivers send scaled floats without
+/// conversion (Machina's UR driver, "works with SW3.0 and above", sends
+/// `socket_send_int(10000.0 * pose[0])`), so the controller takes a float here.
+/// Truncation is our choice (the manuals are silent); a float outside the int32 range,
+/// or not finite, is a type error.
+struct SendInt(i32);
+
+impl FromArg<'_> for SendInt {
+    fn from_arg(a: &Args, v: &Value, i: usize) -> Result<Self, Fault> {
+        match *v {
+            Value::Float(x) if (f64::from(i32::MIN)..=f64::from(i32::MAX)).contains(&x.trunc()) => {
+                Ok(SendInt(x.trunc() as i32))
+            }
+            _ => i32::from_arg(a, v, i).map(SendInt),
         }
-        _ => a.int(0)?,
-    };
-    let socket = a.text(1)?;
-    let ok = c.sockets.send_int(&socket, v);
+    }
+}
+
+fn send_int(c: &mut Runtime, a: &mut Args, v: SendInt, socket: String) -> Result<Out, Fault> {
+    let ok = c.sockets.send_int(&socket, v.0);
     sent(c, a, &socket, ok)
 }
 
-fn set_var(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
-    let var = a.text(0)?;
-    let v = a.int(1)?;
-    let socket = a.text(2)?;
+fn set_var(
+    c: &mut Runtime,
+    a: &mut Args,
+    var: String,
+    v: i32,
+    socket: String,
+) -> Result<Out, Fault> {
     let ok = c.sockets.set_var(&socket, &var, v)?;
     sent(c, a, &socket, ok)
 }
 
-fn get_var(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
-    let name = a.text(0)?;
-    let socket = a.text(1)?;
+fn get_var(c: &mut Runtime, a: &mut Args, name: String, socket: String) -> Result<Out, Fault> {
     start_read(c, socket, ReadCall::GetVar { name }, 2.0, a)
 }
 
-fn read_counted(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
-    let n = a.int(0)?;
+/// What `socket_read_ascii_float`, `socket_read_binary_integer` and
+/// `socket_read_byte_list` read `number` of.
+#[derive(Clone, Copy)]
+enum Counted {
+    AsciiFloat,
+    BinaryInteger,
+    ByteList,
+}
+
+fn read_counted(
+    c: &mut Runtime,
+    a: &mut Args,
+    what: Counted,
+    n: i32,
+    socket: String,
+    timeout: f64,
+) -> Result<Out, Fault> {
     let number = usize::try_from(n)
         .ok()
         .filter(|n| (1..=30).contains(n))
         .ok_or_else(|| format!("`{}`: number must be 1..30, got {n}", a.name))?;
-    let socket = a.text(1)?;
-    let timeout = a.num(2)?;
-    let call = match a.name {
-        "socket_read_ascii_float" => ReadCall::AsciiFloat { number },
-        "socket_read_binary_integer" => ReadCall::BinaryInteger { number },
-        _ => ReadCall::ByteList { number },
+    let call = match what {
+        Counted::AsciiFloat => ReadCall::AsciiFloat { number },
+        Counted::BinaryInteger => ReadCall::BinaryInteger { number },
+        Counted::ByteList => ReadCall::ByteList { number },
     };
     start_read(c, socket, call, timeout, a)
 }
 
-fn read_line(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
-    let socket = a.text(0)?;
-    let timeout = a.num(1)?;
-    start_read(c, socket, ReadCall::Line, timeout, a)
-}
-
-fn read_string(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
-    let socket = a.text(0)?;
+fn read_string(
+    c: &mut Runtime,
+    a: &mut Args,
+    socket: String,
+    prefix: &[u8],
+    suffix: &[u8],
+    interpret_escape: bool,
+    timeout: f64,
+) -> Result<Out, Fault> {
     let call = ReadCall::String {
-        prefix: a.bytes(1)?.to_vec(),
-        suffix: a.bytes(2)?.to_vec(),
-        interpret_escape: a.boolean(3)?,
+        prefix: prefix.to_vec(),
+        suffix: suffix.to_vec(),
+        interpret_escape,
     };
-    let timeout = a.num(4)?;
     start_read(c, socket, call, timeout, a)
 }
 
@@ -291,4 +301,41 @@ fn start_read(
             buffered_at_start,
         },
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::{all, Default, Domain};
+
+    /// The manual's socket functions are all here, and each takes
+    /// `socket_name="socket_0"`.
+    #[test]
+    fn every_socket_function_has_socket_name_socket_0() {
+        let manual = [
+            "socket_close",
+            "socket_get_var",
+            "socket_open",
+            "socket_read_ascii_float",
+            "socket_read_binary_integer",
+            "socket_read_byte_list",
+            "socket_read_line",
+            "socket_read_string",
+            "socket_send_byte",
+            "socket_send_int",
+            "socket_send_line",
+            "socket_send_string",
+            "socket_set_var",
+        ];
+        // (`rpc_factory` is of the domain too.)
+        let ours: Vec<_> = all()
+            .iter()
+            .filter(|b| b.domain == Domain::Sockets && b.name.starts_with("socket_"))
+            .collect();
+        let names: Vec<&str> = ours.iter().map(|b| b.name).collect();
+        assert_eq!(names, manual);
+        for b in ours {
+            let p = b.param("socket_name").map(|i| b.params[i].default);
+            assert_eq!(p, Some(Default::Str("socket_0")), "{}", b.name);
+        }
+    }
 }

@@ -2,7 +2,7 @@
 
 use urscript_socket::to_str::{parse_value, Scalar, Value as WireValue};
 
-use super::{opt, req, Args, Builtin, Default, Domain, Out};
+use super::{builtin, Args, Builtin, Domain, Out};
 use crate::error::Fault;
 use crate::runtime::Runtime;
 use crate::value::Value;
@@ -12,103 +12,61 @@ pub use crate::value::MAX_STRING_LEN;
 const D: Domain = Domain::Strings;
 
 pub(super) const TABLE: &[Builtin] = &[
-    Builtin::new(
-        "str_cat",
-        D,
-        &[req("op1"), req("op2")],
+    builtin!(
+        str_cat(op1: &Value, op2: &Value) => str_cat,
         "The two values' texts joined (at most 1023 characters).",
-        str_cat,
     ),
-    Builtin::new(
-        "str_len",
-        D,
-        &[req("str")],
+    builtin!(
+        str_len(str: &[u8]) => |_, _, s: &[u8]| Ok(Out::Value(Value::Int(
+            i32::try_from(s.len()).unwrap_or(i32::MAX)
+        ))),
         "The string's length in bytes.",
-        str_len,
     ),
-    Builtin::new(
-        "str_empty",
-        D,
-        &[req("str")],
+    builtin!(
+        str_empty(str: &[u8]) => |_, _, s: &[u8]| Ok(Out::Value(Value::Bool(s.is_empty()))),
         "True if the string is empty.",
-        str_len,
     ),
-    Builtin::new(
-        "str_sub",
-        D,
-        &[req("src"), req("index"), opt("len", Default::Int(-1))],
+    builtin!(
+        str_sub(src: &[u8], index: i32, len: i32 = Int(-1)) => str_sub,
         "The part of src from index, len bytes long (-1: to the end).",
-        str_sub,
     ),
-    Builtin::new(
-        "str_find",
-        D,
-        &[
-            req("src"),
-            req("target"),
-            opt("start_from", Default::Int(0)),
-        ],
+    builtin!(
+        str_find(src: &[u8], target: &[u8], start_from: i32 = Int(0)) => str_find,
         "The index of target in src from start_from, or -1.",
-        str_find,
     ),
-    Builtin::new(
-        "str_at",
-        D,
-        &[req("src"), req("index")],
+    builtin!(
+        str_at(src: &[u8], index: i32) => str_at,
         "The one-byte string at index (\"\" past the end).",
-        str_at,
     ),
-    Builtin::new(
-        "to_str",
-        D,
-        &[req("val")],
+    builtin!(
+        to_str(val: &Value) => |_, _, v: &Value| Ok(Out::Value(Value::Str(v.to_str_bytes()))),
         "The value's text, as the controller writes it.",
-        to_str,
     ),
-    Builtin::new(
-        "to_num",
-        D,
-        &[req("str")],
+    builtin!(
+        to_num(str: &[u8]) => to_num,
         "The number the string holds (int or float).",
-        to_num,
     ),
-    Builtin::new(
-        "length",
-        D,
-        &[req("v")],
+    builtin!(
+        length(v: &Value) => length,
         "The length of a list or string (6 for a pose).",
-        length,
     ),
-    Builtin::new(
-        "size",
-        D,
-        &[req("v")],
+    builtin!(
+        size(v: &Value) => size,
         "The length of a list or string; [rows, columns] of a matrix (a list of lists).",
-        size,
     ),
-    Builtin::new(
-        "make_list",
-        D,
-        &[
-            req("length"),
-            req("initial_value"),
-            opt("capacity", Default::Absent),
-        ],
+    builtin!(
+        make_list(length: i32, initial_value: &Value, capacity: Option<i32> = Absent) => make_list,
         "A list of length copies of initial_value (capacity, if given, at least length).",
-        make_list,
     ),
-    Builtin::new(
-        "get_list_length",
-        D,
-        &[req("v")],
+    builtin!(
+        get_list_length(v: &Value) => length,
         "The length of a list (as `length`).",
-        length,
     ),
 ];
 
-fn str_cat(_: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
-    let mut out = a.v[0].to_str_bytes();
-    out.extend(a.v[1].to_str_bytes());
+fn str_cat(_: &mut Runtime, _: &mut Args, op1: &Value, op2: &Value) -> Result<Out, Fault> {
+    let mut out = op1.to_str_bytes();
+    out.extend(op2.to_str_bytes());
     // The controller's strings hold at most 1023 characters.
     if out.len() > MAX_STRING_LEN {
         return Err(Fault::from(format!(
@@ -119,20 +77,8 @@ fn str_cat(_: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
     Ok(Out::Value(Value::Str(out)))
 }
 
-fn str_len(_: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
-    let st = a.bytes(0)?;
-    Ok(Out::Value(if a.name == "str_len" {
-        Value::Int(i32::try_from(st.len()).unwrap_or(i32::MAX))
-    } else {
-        Value::Bool(st.is_empty())
-    }))
-}
-
-fn str_sub(_: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
-    let start = usize::try_from(a.int(1)?).unwrap_or(usize::MAX);
-    let len = a.int(2)?;
-    let src = a.bytes(0)?;
-    let start = start.min(src.len());
+fn str_sub(_: &mut Runtime, _: &mut Args, src: &[u8], index: i32, len: i32) -> Result<Out, Fault> {
+    let start = usize::try_from(index).unwrap_or(usize::MAX).min(src.len());
     let end = match usize::try_from(len) {
         Ok(l) => start.saturating_add(l).min(src.len()),
         Err(_) => src.len(),
@@ -140,10 +86,14 @@ fn str_sub(_: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
     Ok(Out::Value(Value::Str(src[start..end].to_vec())))
 }
 
-fn str_find(_: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
-    let from = usize::try_from(a.int(2)?).unwrap_or(0);
-    let (src, target) = (a.bytes(0)?, a.bytes(1)?);
-    let from = from.min(src.len());
+fn str_find(
+    _: &mut Runtime,
+    _: &mut Args,
+    src: &[u8],
+    target: &[u8],
+    start_from: i32,
+) -> Result<Out, Fault> {
+    let from = usize::try_from(start_from).unwrap_or(0).min(src.len());
     let found = if target.is_empty() {
         Some(from)
     } else {
@@ -157,21 +107,14 @@ fn str_find(_: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
     )))
 }
 
-fn str_at(_: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
-    let k = a.int(1)?;
-    let src = a.bytes(0)?;
-    let at = usize::try_from(k).ok().and_then(|k| src.get(k));
+fn str_at(_: &mut Runtime, _: &mut Args, src: &[u8], index: i32) -> Result<Out, Fault> {
+    let at = usize::try_from(index).ok().and_then(|k| src.get(k));
     Ok(Out::Value(Value::Str(
         at.map(|c| vec![*c]).unwrap_or_default(),
     )))
 }
 
-fn to_str(_: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
-    Ok(Out::Value(Value::Str(a.v[0].to_str_bytes())))
-}
-
-fn to_num(_: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
-    let st = a.bytes(0)?;
+fn to_num(_: &mut Runtime, _: &mut Args, st: &[u8]) -> Result<Out, Fault> {
     match parse_value(st) {
         Ok(WireValue::Scalar(Scalar::Int(x))) => Ok(Out::Value(Value::Int(x))),
         Ok(WireValue::Scalar(Scalar::Float(x))) => Ok(Out::Value(Value::Float(x))),
@@ -182,8 +125,8 @@ fn to_num(_: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
     }
 }
 
-fn length(_: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
-    let n = match &a.v[0] {
+fn length(_: &mut Runtime, a: &mut Args, v: &Value) -> Result<Out, Fault> {
+    let n = match v {
         Value::List(items) => items.len(),
         Value::Str(st) => st.len(),
         Value::Pose(_) => 6,
@@ -198,8 +141,8 @@ fn length(_: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
     Ok(Out::Value(Value::Int(i32::try_from(n).unwrap_or(i32::MAX))))
 }
 
-fn size(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
-    if let Value::List(rows) = &a.v[0] {
+fn size(c: &mut Runtime, a: &mut Args, v: &Value) -> Result<Out, Fault> {
+    if let Value::List(rows) = v {
         if let Some(Value::List(first)) = rows.first() {
             if rows.iter().all(|r| matches!(r, Value::List(_))) {
                 let n = |x: usize| Value::Int(i32::try_from(x).unwrap_or(i32::MAX));
@@ -207,28 +150,33 @@ fn size(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
             }
         }
     }
-    length(c, a)
+    length(c, a, v)
 }
 
 /// The longest list `make_list` makes (a guard, not the controller's limit).
 const MAX_LIST_LEN: i32 = 1 << 20;
 
-fn make_list(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
-    let n = a.int(0)?;
-    let cap = if a.is_absent(2) { n } else { a.int(2)? };
+fn make_list(
+    c: &mut Runtime,
+    _: &mut Args,
+    n: i32,
+    initial_value: &Value,
+    capacity: Option<i32>,
+) -> Result<Out, Fault> {
+    let cap = capacity.unwrap_or(n);
     if !(0..=MAX_LIST_LEN).contains(&n) || cap < n {
         return Err(Fault::from(format!(
             "`make_list`: length {n} must be 0-{MAX_LIST_LEN} and capacity {cap} at least it"
         )));
     }
-    if matches!(a.v[1], Value::List(_)) {
+    if matches!(initial_value, Value::List(_)) {
         return Err(Fault::from(
             "`make_list`: a list of lists is a matrix, not made by make_list",
         ));
     }
     // The list's elements, each a copy of the value, counted before they are made.
     let n = n as usize;
-    let bytes = n.saturating_mul(a.v[1].held_bytes());
+    let bytes = n.saturating_mul(initial_value.held_bytes());
     c.reserve(bytes)?;
-    Ok(Out::Value(Value::List(vec![a.v[1].clone(); n])))
+    Ok(Out::Value(Value::List(vec![initial_value.clone(); n])))
 }

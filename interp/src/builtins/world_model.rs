@@ -2,7 +2,7 @@
 //! named frames on the virtual controller, kept by the arm across programs. The model,
 //! its choices and bounds are in [`crate::world_model`].
 
-use super::{opt, req, Args, Builtin, Default, Domain, Out};
+use super::{builtin, Args, Builtin, Domain, Out};
 use crate::error::Fault;
 use crate::runtime::Runtime;
 use crate::value::Value;
@@ -11,110 +11,65 @@ use crate::world_model::ArmNow;
 const D: Domain = Domain::Poses;
 
 pub(super) const TABLE: &[Builtin] = &[
-    Builtin::new(
-        "add_frame",
-        D,
-        &[req("name"), req("pose"), opt("ref_frame", Default::Str("base"))],
+    builtin!(
+        add_frame(name: String, pose: [f64; 6], ref_frame: String = Str("base")) => add_frame,
         "Adds frame `name` at `pose` given in `ref_frame`, under world.",
-        add_frame,
     ),
-    Builtin::new(
-        "attach_frame",
-        D,
-        &[req("child"), req("parent")],
+    builtin!(
+        attach_frame(child: String, parent: String) => attach_frame,
         "Attaches frame `child` to `parent`, keeping its place in the world.",
-        attach_frame,
     ),
-    Builtin::new(
-        "delete_frame",
-        D,
-        &[req("name")],
+    builtin!(
+        delete_frame(name: String) => delete_frame,
         "Deletes an added frame; its children stay where they are, under world.",
-        delete_frame,
     ),
-    Builtin::new(
-        "delete_all_frames",
-        D,
-        &[],
+    builtin!(
+        delete_all_frames() => delete_all_frames,
         "Deletes every added frame (world, base, flange and tcp stay).",
-        delete_all_frames,
     ),
-    Builtin::new(
-        "move_frame",
-        D,
-        &[req("name"), req("pose"), opt("ref_frame", Default::Str("base"))],
+    builtin!(
+        move_frame(name: String, pose: [f64; 6], ref_frame: String = Str("base")) => move_frame,
         "Moves frame `name` (its children with it) to `pose` given in `ref_frame`.",
-        move_frame,
     ),
-    Builtin::new(
-        "get_pose",
-        D,
-        &[req("name"), req("rel_frame"), opt("ref_frame", Default::Absent)],
+    builtin!(
+        get_pose(name: String, rel_frame: String, ref_frame: Option<String> = Absent) => get_pose,
         "The pose of frame `name` relative to `rel_frame`, in `ref_frame`'s axes (default: rel_frame's).",
-        get_pose,
     ),
-    Builtin::new(
-        "convert_pose",
-        D,
-        &[req("pose"), req("from_frame"), req("to_frame")],
+    builtin!(
+        convert_pose(pose: [f64; 6], from_frame: String, to_frame: String) => convert_pose,
         "A pose given in `from_frame`, given in `to_frame`.",
-        convert_pose,
     ),
-    Builtin::new(
-        "reset_world_model",
-        D,
-        &[],
+    builtin!(
+        reset_world_model() => reset_world_model,
         "Deletes every added frame and puts base back at the world origin.",
-        reset_world_model,
     ),
-    Builtin::new(
-        "is_frame",
-        D,
-        &[req("name")],
+    builtin!(
+        is_frame(name: String) => is_frame,
         "True if the world model has a frame `name`.",
-        is_frame,
     ),
-    Builtin::new(
-        "get_frame_parent",
-        D,
-        &[req("name")],
+    builtin!(
+        get_frame_parent(name: String) => get_frame_parent,
         "The name of frame `name`'s parent.",
-        get_frame_parent,
     ),
-    Builtin::new(
-        "get_children",
-        D,
-        &[req("name")],
+    builtin!(
+        get_children(name: String) => get_children,
         "The names of frame `name`'s immediate children.",
-        get_children,
     ),
-    Builtin::new(
-        "frame_tracking_enable",
-        D,
-        &[req("frame_name")],
+    builtin!(
+        frame_tracking_enable(frame_name: String) => frame_tracking_enable,
         "Records frame `frame_name` as tracked (frames here move only by move_frame or with the arm).",
-        frame_tracking_enable,
     ),
-    Builtin::new(
-        "frame_tracking_disable",
-        D,
-        &[],
+    builtin!(
+        frame_tracking_disable() => frame_tracking_disable,
         "Ends frame tracking.",
-        frame_tracking_disable,
     ),
-    Builtin::new(
-        "set_mass_properties",
-        D,
-        &[req("frame"), req("m"), req("cog"), req("inertia")],
+    builtin!(
+        set_mass_properties(frame: String, m: f64, cog: [f64; 3], inertia: [f64; 6]) => set_mass_properties,
         "Sets an added frame's mass (kg), CoG (m, frame axes) and inertia [Ixx, Iyy, Izz, Ixy, Ixz, Iyz] about the CoG.",
-        set_mass_properties,
     ),
-    Builtin::new(
-        "set_payload_from_attached_frames",
-        D,
-        &[],
+    builtin!(
+        set_payload_from_attached_frames() => set_payload_from_attached_frames,
         "Sets the payload from the mass properties of the frames under the flange.",
-        set_payload_from_attached_frames,
     ),
 ];
 
@@ -133,20 +88,28 @@ fn done(r: Result<(), String>, a: &Args) -> Result<Out, Fault> {
     r.map(|()| Out::Value(Value::None)).map_err(|e| fail(a, e))
 }
 
-fn add_frame(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
-    let (name, p, reference) = (a.text(0)?, a.six(1)?, a.text(2)?);
+fn add_frame(
+    c: &mut Runtime,
+    a: &mut Args,
+    name: String,
+    p: [f64; 6],
+    reference: String,
+) -> Result<Out, Fault> {
     let arm = now(c);
     done(c.arm.world_model.add(&name, p, &reference, arm), a)
 }
 
-fn attach_frame(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
-    let (child, parent) = (a.text(0)?, a.text(1)?);
+fn attach_frame(
+    c: &mut Runtime,
+    a: &mut Args,
+    child: String,
+    parent: String,
+) -> Result<Out, Fault> {
     let arm = now(c);
     done(c.arm.world_model.attach(&child, &parent, arm), a)
 }
 
-fn delete_frame(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
-    let name = a.text(0)?;
+fn delete_frame(c: &mut Runtime, a: &mut Args, name: String) -> Result<Out, Fault> {
     let arm = now(c);
     done(c.arm.world_model.delete(&name, arm), a)
 }
@@ -156,19 +119,25 @@ fn delete_all_frames(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
     done(c.arm.world_model.delete_all(arm), a)
 }
 
-fn move_frame(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
-    let (name, p, reference) = (a.text(0)?, a.six(1)?, a.text(2)?);
+fn move_frame(
+    c: &mut Runtime,
+    a: &mut Args,
+    name: String,
+    p: [f64; 6],
+    reference: String,
+) -> Result<Out, Fault> {
     let arm = now(c);
     done(c.arm.world_model.move_to(&name, p, &reference, arm), a)
 }
 
-fn get_pose(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
-    let (name, rel) = (a.text(0)?, a.text(1)?);
-    let reference = if a.is_absent(2) {
-        rel.clone()
-    } else {
-        a.text(2)?
-    };
+fn get_pose(
+    c: &mut Runtime,
+    a: &mut Args,
+    name: String,
+    rel: String,
+    reference: Option<String>,
+) -> Result<Out, Fault> {
+    let reference = reference.unwrap_or_else(|| rel.clone());
     c.arm
         .world_model
         .get_pose(&name, &rel, &reference, now(c))
@@ -176,8 +145,13 @@ fn get_pose(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
         .map_err(|e| fail(a, e))
 }
 
-fn convert_pose(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
-    let (p, from, to) = (a.six(0)?, a.text(1)?, a.text(2)?);
+fn convert_pose(
+    c: &mut Runtime,
+    a: &mut Args,
+    p: [f64; 6],
+    from: String,
+    to: String,
+) -> Result<Out, Fault> {
     c.arm
         .world_model
         .convert(p, &from, &to, now(c))
@@ -190,13 +164,11 @@ fn reset_world_model(c: &mut Runtime, _: &mut Args) -> Result<Out, Fault> {
     Ok(Out::Value(Value::None))
 }
 
-fn is_frame(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
-    let name = a.text(0)?;
+fn is_frame(c: &mut Runtime, _: &mut Args, name: String) -> Result<Out, Fault> {
     Ok(Out::Value(Value::Bool(c.arm.world_model.is_frame(&name))))
 }
 
-fn get_frame_parent(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
-    let name = a.text(0)?;
+fn get_frame_parent(c: &mut Runtime, a: &mut Args, name: String) -> Result<Out, Fault> {
     c.arm
         .world_model
         .parent(&name)
@@ -204,8 +176,7 @@ fn get_frame_parent(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
         .map_err(|e| fail(a, e))
 }
 
-fn get_children(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
-    let name = a.text(0)?;
+fn get_children(c: &mut Runtime, a: &mut Args, name: String) -> Result<Out, Fault> {
     c.arm
         .world_model
         .get_children(&name)
@@ -217,8 +188,7 @@ fn get_children(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
         .map_err(|e| fail(a, e))
 }
 
-fn frame_tracking_enable(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
-    let name = a.text(0)?;
+fn frame_tracking_enable(c: &mut Runtime, a: &mut Args, name: String) -> Result<Out, Fault> {
     done(c.arm.world_model.track(Some(&name)), a)
 }
 
@@ -226,10 +196,14 @@ fn frame_tracking_disable(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
     done(c.arm.world_model.track(None), a)
 }
 
-fn set_mass_properties(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
-    let (frame, m) = (a.text(0)?, a.num(1)?);
-    let cog: [f64; 3] = a.nums(2)?;
-    let inertia: [f64; 6] = a.nums(3)?;
+fn set_mass_properties(
+    c: &mut Runtime,
+    a: &mut Args,
+    frame: String,
+    m: f64,
+    cog: [f64; 3],
+    inertia: [f64; 6],
+) -> Result<Out, Fault> {
     done(c.arm.world_model.set_mass(&frame, m, cog, inertia), a)
 }
 
