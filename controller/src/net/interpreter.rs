@@ -97,8 +97,8 @@ fn answer(
         }),
         None => {
             shared.command_turn();
-            let now = shared.now();
-            shared.lock_cell().interpreter_line(conn, line, now)
+            let line = line.to_vec();
+            shared.ask(move |cell, now| cell.interpreter_line(conn, &line, now))
         }
     };
     match reply {
@@ -126,7 +126,7 @@ fn session(
         if shared.stopped() {
             return "the server stopped";
         }
-        let late = shared.lock_cell().interpreter_replies(conn);
+        let late = shared.ask(move |cell, _| cell.interpreter_replies(conn));
         for r in &late {
             if !send(stream, conn, shared, r, tx) {
                 return "write failed: the client is not reading";

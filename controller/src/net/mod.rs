@@ -90,8 +90,10 @@
 //! ```
 
 mod clock;
+mod owner;
 mod priority;
 pub use clock::MAX_CATCH_UP;
+pub use owner::MAX_REQUESTS;
 pub use priority::{Realtime, Scheduling, FIFO_PRIORITY, NICE};
 mod fetch;
 mod interpreter;
@@ -512,7 +514,11 @@ impl Lateness {
 
 /// What the server's threads share.
 pub(crate) struct Shared {
-    cell: Mutex<Cell>,
+    /// The cell while no loop owns it: before the real-time loop starts, after it ends
+    /// (see [`owner`]).
+    parked: Mutex<Option<Cell>>,
+    /// Requests to the loop that owns the cell, at most [`MAX_REQUESTS`] waiting.
+    requests: owner::Requests,
     config: Config,
     /// Controller time: wall time less what the host took from the real-time loop.
     clock: clock::Clock,
@@ -625,19 +631,7 @@ impl Shared {
         }
     }
 
-    /// The cell, for any thread but the real-time loop: the loop, if it sleeps idle,
-    /// wakes to look at what the caller did.
-    pub(crate) fn lock_cell(&self) -> MutexGuard<'_, Cell> {
-        self.wake_loop();
-        self.loop_cell()
-    }
-
-    /// The cell, for the real-time loop.
-    pub(crate) fn loop_cell(&self) -> MutexGuard<'_, Cell> {
-        self.cell.lock().unwrap_or_else(|p| p.into_inner())
-    }
-
-    /// Wakes the real-time loop if it sleeps idle.
+    /// Wakes the real-time loop if it sleeps (idle, or until its next step).
     pub(crate) fn wake_loop(&self) {
         if let Some(t) = self
             .loop_thread
@@ -802,8 +796,10 @@ impl Server {
         // The state the controller starts in: a change the loop sees is measured from
         // it, also one made before the loop's first step (an operator's stop).
         let first = cell.status();
+        let (requests, requested) = owner::queue();
         let shared = Arc::new(Shared {
-            cell: Mutex::new(cell),
+            parked: owner::parking(cell),
+            requests,
             config,
             clock: clock::Clock::new(),
             lateness: Mutex::new(Lateness::default()),
@@ -838,7 +834,7 @@ impl Server {
                     .name("controller".into())
                     .spawn(move || {
                         let _ = granted.send(priority::apply(realtime));
-                        streams::run(&looping, listeners, &first)
+                        streams::run(&looping, listeners, requested, &first)
                     })?,
             );
             if let Ok(s) = scheduling.recv() {
@@ -892,11 +888,15 @@ impl Server {
 
     /// Acts on the controller as the operator or the world would (a protective stop, an
     /// input switching, a temperature): `f` gets the cell and the controller's time.
-    pub fn with_cell<R>(&self, f: impl FnOnce(&mut Cell, Duration) -> R) -> R {
-        let now = self.shared.now();
-        let mut cell = self.shared.lock_cell();
-        cell.advance(now);
-        f(&mut cell, now)
+    /// The real-time loop, which owns the cell while it runs, runs `f` between two of
+    /// its steps and this returns its result; not to be called from the event sink
+    /// (the loop's own thread).
+    pub fn with_cell<F, R>(&self, f: F) -> R
+    where
+        F: FnOnce(&mut Cell, Duration) -> R + Send + 'static,
+        R: Send + 'static,
+    {
+        self.shared.ask(f)
     }
 
     /// How late the real-time loop has been since the start (as of the end of the last
@@ -927,13 +927,9 @@ impl Server {
     /// [`ServerEvent::Shutdown`]. While a dashboard `shutdown` is under way it only
     /// waits for the server to stop.
     pub fn shut_down(&self) {
-        let first = {
-            let now = self.shared.now();
-            let mut cell = self.shared.lock_cell();
-            cell.advance(now);
-            cell.controller().turn_off(now);
-            !self.shared.shutting_down.swap(true, Ordering::SeqCst)
-        };
+        self.shared
+            .ask(|cell, now| cell.controller().turn_off(now));
+        let first = !self.shared.shutting_down.swap(true, Ordering::SeqCst);
         if first {
             // Connection numbers start at 1: every connection is closed.
             self.shared.close_all_for_shutdown(0);
@@ -1184,19 +1180,20 @@ fn answer(
     too_long: bool,
     counts: &mut Counts,
 ) -> Result<(), &'static str> {
-    let text = String::from_utf8_lossy(line);
+    let text = String::from_utf8_lossy(line).into_owned();
     shared.command_turn();
-    let (reply, shut_down) = {
-        let mut cell = shared.lock_cell();
-        let now = shared.now();
-        cell.advance(now);
+    let allow_shutdown = shared.allow_shutdown;
+    let mut session = std::mem::take(dashboard);
+    let asked = text.clone();
+    let (reply, turned_off, session) = shared.ask(move |cell, now| {
+        let text = asked;
         let c = cell.controller();
         let before = c.program_state();
         let reply = if too_long {
-            dashboard.line_too_long(&text)
+            session.line_too_long(&text)
         } else {
             let command = DashboardCommand::parse(&text, c.config().major());
-            if command == DashboardCommand::Shutdown && !shared.allow_shutdown {
+            if command == DashboardCommand::Shutdown && !allow_shutdown {
                 // Refused as the controller refuses it: in local control its one reply
                 // to every command that acts, else the failure UR's commands answer.
                 if c.config().remote_control_enabled && !c.remote_control() {
@@ -1205,19 +1202,23 @@ fn answer(
                     one_line("Failed to execute: shutdown")
                 }
             } else {
-                dashboard.answer(c, &command, now)
+                session.answer(c, &command, now)
             }
         };
-        let shut_down = c.is_shut_down() && !shared.shutting_down.swap(true, Ordering::SeqCst);
+        let turned_off = c.is_shut_down();
         if let Some(cause) = stop_cause(c, before, now) {
             cell.set_stop_cause(cause);
         }
-        (reply, shut_down)
-    };
+        (reply, turned_off, session)
+    });
+    *dashboard = session;
+    // The flag follows the controller's turning off (the loop that sees it finds the
+    // program already stopped); the first connection to set it shuts the server down.
+    let shut_down = turned_off && !shared.shutting_down.swap(true, Ordering::SeqCst);
     let shown = if too_long {
         format!("{}...", text.chars().take(SHOWN).collect::<String>())
     } else {
-        text.into_owned()
+        text
     };
     shared.emit(ServerEvent::Dashboard {
         conn,

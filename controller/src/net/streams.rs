@@ -48,6 +48,7 @@ use std::time::Duration;
 use urscript_interp::drive::{connect_stream, describe_connect_error, Activity, Driver, Options};
 use urscript_interp::{Event as ProgramEvent, MessageKind};
 
+use super::owner::{Owner, Request};
 use super::{Lateness, ServerEvent as Event, Shared, EVICT_IDLE};
 use crate::primary::{self, RobotMessage};
 use crate::realtime;
@@ -276,10 +277,22 @@ pub(crate) struct Listeners {
     pub(crate) rtde: Option<TcpListener>,
 }
 
-/// Runs the loop until the server stops; `first` is the controller's status before
-/// any client acted: its robot mode, safety status and program state are not changes.
-pub(crate) fn run(shared: &Arc<Shared>, listeners: Listeners, first: &Status) {
+/// Runs the loop until the server stops, owning the cell meanwhile and serving the
+/// `requests` other threads send it; `first` is the controller's status before any
+/// client acted: its robot mode, safety status and program state are not changes.
+pub(crate) fn run(
+    shared: &Arc<Shared>,
+    listeners: Listeners,
+    requests: mpsc::Receiver<Box<dyn Request>>,
+    first: &Status,
+) {
+    let Some(cell) = shared.take_cell() else {
+        shared.loop_ended();
+        return;
+    };
+    let step = cell.step_time();
     let mut lp = Loop {
+        owner: Owner::new(cell, requests),
         clients: Vec::new(),
         driver: Driver::new(Options::default()),
         connects: Connects::new(MAX_CONNECTING),
@@ -307,10 +320,6 @@ pub(crate) fn run(shared: &Arc<Shared>, listeners: Listeners, first: &Status) {
             let _ = l.set_nonblocking(true);
         }
     }
-    let step = {
-        let cell = shared.cell.lock().unwrap_or_else(|p| p.into_inner());
-        cell.step_time()
-    };
     // Every step is computed, at its own time (a multiple of the step), however late
     // the thread woke: late steps run back to back until the loop is on time, so the
     // streams' timestamps are consecutive and RTDE's schedule (kept in the same steps)
@@ -322,9 +331,12 @@ pub(crate) fn run(shared: &Arc<Shared>, listeners: Listeners, first: &Status) {
     let mut late = LateReport::new(shared.now());
     *shared.loop_thread.lock().unwrap_or_else(|p| p.into_inner()) = Some(std::thread::current());
     while !shared.stopped() {
+        // What other threads asked of the cell since the last turn (a request wakes the
+        // loop when it sleeps).
+        lp.owner.serve(shared);
         // Idle (no stream client, nothing in the cell that needs steps): one step every
-        // `IDLE_POLL` (to accept clients and say state changes), or at once when another
-        // thread acts on the cell (it wakes the loop); the steps start again from then.
+        // `IDLE_POLL` (to accept clients and say state changes), or at once after a
+        // request; the steps start again from then.
         let idle = lp.is_idle(shared);
         let due = match last {
             Some(l) => l + step,
@@ -335,8 +347,8 @@ pub(crate) fn run(shared: &Arc<Shared>, listeners: Listeners, first: &Status) {
         };
         let (now, held) = shared.clock.catch_up(due);
         if now < due {
-            // Woke before the step's time: sleep on.
-            std::thread::sleep((due - now).min(step));
+            // Woke before the step's time (a request, or early): sleep on.
+            std::thread::park_timeout((due - now).min(step));
             continue;
         }
         let tick = due;
@@ -365,6 +377,7 @@ pub(crate) fn run(shared: &Arc<Shared>, listeners: Listeners, first: &Status) {
             }
             lp.drop_gone(shared);
             lp.driver.close_all();
+            lp.owner.park(shared);
             shared.loop_ended();
             return;
         }
@@ -378,9 +391,10 @@ pub(crate) fn run(shared: &Arc<Shared>, listeners: Listeners, first: &Status) {
         let next = tick + step;
         let now = shared.now();
         if next > now {
-            std::thread::sleep((next - now).min(step));
+            std::thread::park_timeout((next - now).min(step));
         }
     }
+    lp.owner.park(shared);
 }
 
 /// How long the idle loop (no stream client, nothing in the cell that needs steps)
@@ -543,6 +557,8 @@ impl Connects {
 }
 
 struct Loop {
+    /// The cell, owned by the loop while it runs, and the requests other threads send it.
+    owner: Owner,
     clients: Vec<Client>,
     driver: Driver,
     connects: Connects,
@@ -579,7 +595,7 @@ impl Loop {
             && self.secondary_connects.waiting.is_empty()
             && self.secondary_connects.in_flight == 0
             && !shared.shutting_down()
-            && shared.loop_cell().is_idle()
+            && self.owner.cell.is_idle()
     }
 
     fn accept(&mut self, shared: &Shared, listener: &TcpListener, service: Service) {
@@ -749,11 +765,8 @@ impl Loop {
         let out = session.take_outbox();
         c.push(&out);
         let _ = now;
-        if !inputs.is_empty() {
-            let mut cell = shared.loop_cell();
-            for (_, set) in &inputs {
-                cell.apply(set);
-            }
+        for (_, set) in &inputs {
+            self.owner.cell.apply(set);
         }
     }
 
@@ -807,21 +820,21 @@ impl Loop {
             match item {
                 Ok(Intake::Program { name, source }) => {
                     emit("program", &|| name.clone());
-                    shared.loop_cell().submit(Submitted::Program(source), now);
+                    self.owner.cell.submit(Submitted::Program(source), now);
                 }
                 Ok(Intake::Secondary { name, source }) => {
                     emit("secondary", &|| name.clone());
-                    shared.loop_cell().submit(Submitted::Secondary(source), now);
+                    self.owner.cell.submit(Submitted::Secondary(source), now);
                 }
                 Ok(Intake::Line(line)) => {
                     emit("line", &|| line.clone());
-                    shared
-                        .loop_cell()
+                    self.owner
+                        .cell
                         .submit(Submitted::Program(format!("{line}\n")), now);
                 }
                 Ok(Intake::Command(cmd)) => {
                     emit("command", &|| format!("{cmd:?}"));
-                    let mut cell = shared.loop_cell();
+                    let cell = &mut self.owner.cell;
                     let c = cell.controller();
                     let before = c.program_state();
                     let _ = match cmd {
@@ -862,7 +875,7 @@ impl Loop {
         // MAX_EVENTS and what the program's sockets did in one step).
         let deferred = std::cell::RefCell::new(Vec::new());
         let status = {
-            let mut cell = shared.loop_cell();
+            let cell = &mut self.owner.cell;
             cell.advance(now);
             let emit = |e: Event| deferred.borrow_mut().push(e);
             // The program's messages, calls and socket bytes, within their budget.
@@ -1006,12 +1019,10 @@ impl Loop {
                                     &shared,
                                     &shared.program_file(&path).to_string_lossy(),
                                 );
-                                let now = shared.now();
-                                let mut cell = shared.lock_cell();
-                                match result {
+                                shared.ask(move |cell, now| match result {
                                     Ok(script) => cell.start_loaded(script, now),
                                     Err(why) => cell.refuse_loaded(format!("{name}: {why}"), now),
-                                }
+                                });
                             });
                         if let Err(e) = spawned {
                             cell.refuse_loaded(format!("cannot start a thread: {e}"), now);
