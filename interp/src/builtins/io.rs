@@ -8,9 +8,10 @@
 //! `request_*_from_primary_client` at once with fixed values (False, 0, 0.0, "").
 //! Other I/O settings are accepted with their manual signatures and change nothing.
 
-use super::{accept, opt, req, Args, Builtin, Default, Domain, Out};
+use super::{accept, builtin, opt, req, Args, Builtin, Default, Domain, Out};
 use crate::error::Fault;
 use crate::event::{Event, OutputValue, OutputWrite};
+use crate::native::index;
 use crate::runtime::ModbusSignal;
 use crate::runtime::Runtime;
 use crate::value::Value;
@@ -22,117 +23,77 @@ const ADDRESS: &[super::Param] = &[req("address")];
 const ADDRESS_VALUE: &[super::Param] = &[req("address"), req("value")];
 
 pub(super) const TABLE: &[Builtin] = &[
-    Builtin::new(
-        "set_standard_digital_out",
-        D,
-        N_B,
+    builtin!(
+        set_standard_digital_out(n: i32, b: bool)
+            => |c, x, n, b| set_digital(c, x, DigitalOut::Standard, n, b),
         "Sets standard digital output n (0-7).",
-        set_digital,
     ),
-    Builtin::new(
-        "set_digital_out",
-        D,
-        N_B,
+    builtin!(
+        set_digital_out(n: i32, b: bool)
+            => |c, x, n, b| set_digital(c, x, DigitalOut::Legacy, n, b),
         "Deprecated: sets digital output n (0-7 standard, 8-9 tool).",
-        set_digital,
     ),
-    Builtin::new(
-        "set_configurable_digital_out",
-        D,
-        N_B,
+    builtin!(
+        set_configurable_digital_out(n: i32, b: bool)
+            => |c, x, n, b| set_digital(c, x, DigitalOut::Configurable, n, b),
         "Sets configurable digital output n (0-7).",
-        set_digital,
     ),
-    Builtin::new(
-        "set_tool_digital_out",
-        D,
-        N_B,
+    builtin!(
+        set_tool_digital_out(n: i32, b: bool)
+            => |c, x, n, b| set_digital(c, x, DigitalOut::Tool, n, b),
         "Sets tool digital output n (0-1).",
-        set_digital,
     ),
-    Builtin::new(
-        "get_standard_digital_out",
-        D,
-        N,
+    builtin!(
+        get_standard_digital_out(n: i32)
+            => |c, x, n| get_digital_out(c, x, DigitalOut::Standard, n),
         "Standard digital output n as last set.",
-        get_digital_out,
     ),
-    Builtin::new(
-        "get_digital_out",
-        D,
-        N,
+    builtin!(
+        get_digital_out(n: i32) => |c, x, n| get_digital_out(c, x, DigitalOut::Legacy, n),
         "Deprecated: digital output n as last set (0-7 standard, 8-9 tool).",
-        get_digital_out,
     ),
-    Builtin::new(
-        "get_configurable_digital_out",
-        D,
-        N,
+    builtin!(
+        get_configurable_digital_out(n: i32)
+            => |c, x, n| get_digital_out(c, x, DigitalOut::Configurable, n),
         "Configurable digital output n as last set.",
-        get_digital_out,
     ),
-    Builtin::new(
-        "get_tool_digital_out",
-        D,
-        N,
+    builtin!(
+        get_tool_digital_out(n: i32) => |c, x, n| get_digital_out(c, x, DigitalOut::Tool, n),
         "Tool digital output n as last set.",
-        get_digital_out,
     ),
-    Builtin::new(
-        "get_standard_digital_in",
-        D,
-        N,
+    builtin!(
+        get_standard_digital_in(n: i32)
+            => |c, x, n| get_digital_in(c, x, DigitalIn::Standard, n),
         "Standard digital input n (0-7): False (nothing is wired).",
-        get_digital_in,
     ),
-    Builtin::new(
-        "get_digital_in",
-        D,
-        N,
+    builtin!(
+        get_digital_in(n: i32) => |c, x, n| get_digital_in(c, x, DigitalIn::Legacy, n),
         "Deprecated: digital input n (0-7 standard, 8-9 tool): False (nothing is wired).",
-        get_digital_in,
     ),
-    Builtin::new(
-        "get_configurable_digital_in",
-        D,
-        N,
+    builtin!(
+        get_configurable_digital_in(n: i32)
+            => |c, x, n| get_digital_in(c, x, DigitalIn::Configurable, n),
         "Configurable digital input n (0-7): False (nothing is wired).",
-        get_digital_in,
     ),
-    Builtin::new(
-        "get_tool_digital_in",
-        D,
-        N,
+    builtin!(
+        get_tool_digital_in(n: i32) => |c, x, n| get_digital_in(c, x, DigitalIn::Tool, n),
         "Tool digital input n (0-1): False (nothing is wired).",
-        get_digital_in,
     ),
-    Builtin::new(
-        "set_standard_analog_out",
-        D,
-        &[req("n"), req("f")],
+    builtin!(
+        set_standard_analog_out(n: i32, f: f64) => set_analog_out,
         "Sets analog output n (0-1) to the fraction f of its range.",
-        set_analog_out,
     ),
-    Builtin::new(
-        "set_analog_out",
-        D,
-        &[req("n"), req("f")],
+    builtin!(
+        set_analog_out(n: i32, f: f64) => set_analog_out,
         "Deprecated: sets analog output n (0-1).",
-        set_analog_out,
     ),
-    Builtin::new(
-        "get_standard_analog_out",
-        D,
-        N,
+    builtin!(
+        get_standard_analog_out(n: i32) => get_analog_out,
         "Analog output n (0-1) as last set.",
-        get_analog_out,
     ),
-    Builtin::new(
-        "get_analog_out",
-        D,
-        N,
+    builtin!(
+        get_analog_out(n: i32) => get_analog_out,
         "Deprecated: analog output n (0-1) as last set.",
-        get_analog_out,
     ),
     Builtin::new(
         "get_euromap_input",
@@ -192,26 +153,17 @@ pub(super) const TABLE: &[Builtin] = &[
         "Writes a register port of the Modbus server (-32768 to 65535, kept as 16 bits).",
         port,
     ),
-    Builtin::new(
-        "get_standard_analog_in",
-        D,
-        N,
+    builtin!(
+        get_standard_analog_in(n: i32) => |c, x, n| get_analog_in(c, x, AnalogIn::Standard, n),
         "Standard analog input n (0-1): 0.0 (nothing is wired).",
-        get_analog_in,
     ),
-    Builtin::new(
-        "get_analog_in",
-        D,
-        N,
+    builtin!(
+        get_analog_in(n: i32) => |c, x, n| get_analog_in(c, x, AnalogIn::Legacy, n),
         "Deprecated: analog input n (0-1 standard, 2-3 tool): 0.0 (nothing is wired).",
-        get_analog_in,
     ),
-    Builtin::new(
-        "get_tool_analog_in",
-        D,
-        N,
+    builtin!(
+        get_tool_analog_in(n: i32) => |c, x, n| get_analog_in(c, x, AnalogIn::Tool, n),
         "Tool analog input n (0-1): 0.0 (nothing is wired).",
-        get_analog_in,
     ),
     Builtin::new(
         "read_input_integer_register",
@@ -595,47 +547,75 @@ pub(super) const TABLE: &[Builtin] = &[
     ),
 ];
 
-/// The output slot a digital function names.
-fn digital_slot<'a>(c: &'a mut Runtime, a: &Args) -> Result<&'a mut bool, Fault> {
-    let n = a.int(0)?;
+/// The digital outputs a function numbers from 0.
+#[derive(Clone, Copy)]
+enum DigitalOut {
+    /// Standard outputs 0-7.
+    Standard,
+    /// Configurable outputs 0-7.
+    Configurable,
+    /// Tool outputs 0-1.
+    Tool,
+    /// The deprecated `set/get_digital_out`: 0-7 standard, 8-9 tool.
+    Legacy,
+}
+
+/// The slot of output `n` of `kind`.
+fn digital_slot<'a>(
+    c: &'a mut Runtime,
+    a: &Args,
+    kind: DigitalOut,
+    n: i32,
+) -> Result<&'a mut bool, Fault> {
     let arm = &mut c.arm;
-    let slot = usize::try_from(n).ok().and_then(|k| {
-        if a.name.contains("tool") {
-            arm.tool_out.get_mut(k)
-        } else if a.name.contains("configurable") {
-            arm.digital_out[8..16].get_mut(k)
-        } else if a.name.contains("standard") {
-            arm.digital_out[..8].get_mut(k)
-        } else if k >= 8 {
-            // The deprecated set/get_digital_out: 8-9 are the tool outputs.
-            arm.tool_out.get_mut(k - 8)
-        } else {
-            arm.digital_out.get_mut(k)
-        }
+    let slot = usize::try_from(n).ok().and_then(|k| match kind {
+        DigitalOut::Tool => arm.tool_out.get_mut(k),
+        DigitalOut::Configurable => arm.digital_out[8..16].get_mut(k),
+        DigitalOut::Standard => arm.digital_out[..8].get_mut(k),
+        DigitalOut::Legacy if k >= 8 => arm.tool_out.get_mut(k - 8),
+        DigitalOut::Legacy => arm.digital_out.get_mut(k),
     });
     slot.ok_or_else(|| Fault::from(format!("`{}`: no output {n}", a.name)))
 }
 
-fn set_digital(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
-    let on = a.boolean(1)?;
-    let slot = digital_slot(c, a)?;
+fn set_digital(
+    c: &mut Runtime,
+    a: &mut Args,
+    kind: DigitalOut,
+    n: i32,
+    on: bool,
+) -> Result<Out, Fault> {
+    let slot = digital_slot(c, a, kind, n)?;
     if std::mem::replace(slot, on) != on {
-        output_changed(c, a, OutputValue::Digital(on));
+        output_changed(c, a, n, OutputValue::Digital(on));
     }
     Ok(Out::Value(Value::None))
 }
 
-fn get_digital_out(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
-    Ok(Out::Value(Value::Bool(*digital_slot(c, a)?)))
+fn get_digital_out(c: &mut Runtime, a: &mut Args, kind: DigitalOut, n: i32) -> Result<Out, Fault> {
+    Ok(Out::Value(Value::Bool(*digital_slot(c, a, kind, n)?)))
 }
 
-fn get_digital_in(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
+/// The digital inputs a function numbers from 0.
+#[derive(Clone, Copy)]
+enum DigitalIn {
+    /// Standard inputs 0-7.
+    Standard,
+    /// Configurable inputs 0-7.
+    Configurable,
+    /// Tool inputs 0-1.
+    Tool,
+    /// The deprecated `get_digital_in`: 0-7 standard, 8-9 tool.
+    Legacy,
+}
+
+fn get_digital_in(c: &mut Runtime, a: &mut Args, kind: DigitalIn, n: i32) -> Result<Out, Fault> {
     // digital_in: standard 0-7, configurable 8-15, tool 16-17.
-    let k = match a.name {
-        "get_standard_digital_in" => a.index(0, 8, "input")?,
-        "get_configurable_digital_in" => 8 + a.index(0, 8, "input")?,
-        "get_tool_digital_in" => 16 + a.index(0, 2, "input")?,
-        _ => match a.index(0, 10, "input")? {
+    let k = match kind {
+        DigitalIn::Standard => index(a, n, 8, "input")?,
+        DigitalIn::Configurable => 8 + index(a, n, 8, "input")?,
+        DigitalIn::Tool => 16 + index(a, n, 2, "input")?,
+        DigitalIn::Legacy => match index(a, n, 10, "input")? {
             k @ 8.. => k + 8,
             k => k,
         },
@@ -643,41 +623,49 @@ fn get_digital_in(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
     Ok(Out::Value(Value::Bool(c.arm.world.digital_in[k])))
 }
 
-fn set_analog_out(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
-    let n = a.int(0)?;
-    let x = a.num(1)?;
+fn set_analog_out(c: &mut Runtime, a: &mut Args, n: i32, x: f64) -> Result<Out, Fault> {
     let slot = usize::try_from(n)
         .ok()
         .and_then(|n| c.arm.analog_out.get_mut(n))
         .ok_or_else(|| format!("`{}`: no analog output {n}", a.name))?;
     if std::mem::replace(slot, x) != x {
-        output_changed(c, a, OutputValue::Analog(x));
+        output_changed(c, a, n, OutputValue::Analog(x));
     }
     Ok(Out::Value(Value::None))
 }
 
-/// Reports the change of the output `a` names (its first argument, the pin).
-fn output_changed(c: &mut Runtime, a: &Args, value: OutputValue) {
-    let pin = a.int(0).map_or(-1, i64::from);
+/// Reports the change of output `pin` of the function `a` calls.
+fn output_changed(c: &mut Runtime, a: &Args, pin: i32, value: OutputValue) {
     c.events.push_back(Event::Output(OutputWrite {
         line: a.line,
         function: a.name,
-        pin,
+        pin: i64::from(pin),
         value,
     }));
 }
 
-fn get_analog_out(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
-    let n = a.index(0, 2, "analog output")?;
+fn get_analog_out(c: &mut Runtime, a: &mut Args, n: i32) -> Result<Out, Fault> {
+    let n = index(a, n, 2, "analog output")?;
     Ok(Out::Value(Value::Float(c.arm.analog_out[n])))
 }
 
-fn get_analog_in(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
+/// The analog inputs a function numbers from 0.
+#[derive(Clone, Copy)]
+enum AnalogIn {
+    /// Standard inputs 0-1.
+    Standard,
+    /// Tool inputs 0-1.
+    Tool,
+    /// The deprecated `get_analog_in`: 0-1 standard, 2-3 tool.
+    Legacy,
+}
+
+fn get_analog_in(c: &mut Runtime, a: &mut Args, kind: AnalogIn, n: i32) -> Result<Out, Fault> {
     // analog_in: standard 0-1, tool 2-3.
-    let k = match a.name {
-        "get_standard_analog_in" => a.index(0, 2, "analog input")?,
-        "get_tool_analog_in" => 2 + a.index(0, 2, "analog input")?,
-        _ => a.index(0, 4, "analog input")?,
+    let k = match kind {
+        AnalogIn::Standard => index(a, n, 2, "analog input")?,
+        AnalogIn::Tool => 2 + index(a, n, 2, "analog input")?,
+        AnalogIn::Legacy => index(a, n, 4, "analog input")?,
     };
     Ok(Out::Value(Value::Float(c.arm.world.analog_in[k])))
 }
