@@ -17,10 +17,6 @@ use crate::runtime::Runtime;
 use crate::value::Value;
 
 const D: Domain = Domain::Io;
-const N_B: &[super::Param] = &[req("n"), req("b")];
-const N: &[super::Param] = &[req("n")];
-const ADDRESS: &[super::Param] = &[req("address")];
-const ADDRESS_VALUE: &[super::Param] = &[req("address"), req("value")];
 
 pub(super) const TABLE: &[Builtin] = &[
     builtin!(
@@ -95,63 +91,40 @@ pub(super) const TABLE: &[Builtin] = &[
         get_analog_out(n: i32) => get_analog_out,
         "Deprecated: analog output n (0-1) as last set.",
     ),
-    Builtin::new(
-        "get_euromap_input",
-        D,
-        &[req("port_number")],
+    builtin!(
+        get_euromap_input(port_number: i32) => get_euromap_input,
         "Euromap67 input signal port_number (0-31; World::euromap_in, False unless a test sets it).",
-        euromap,
     ),
-    Builtin::new(
-        "get_euromap_output",
-        D,
-        &[req("port_number")],
+    builtin!(
+        get_euromap_output(port_number: i32) => get_euromap_output,
         "Euromap67 output signal port_number (0-31) as last set.",
-        euromap,
     ),
-    Builtin::new(
-        "set_euromap_output",
-        D,
-        &[req("port_number"), req("signal_value")],
+    builtin!(
+        set_euromap_output(port_number: i32, signal_value: bool) => set_euromap_output,
         "Sets Euromap67 output signal port_number (0-31).",
-        euromap,
     ),
-    Builtin::new(
-        "set_euromap_runstate_dependent_choice",
-        D,
-        &[req("port_number"), req("runstate_choice")],
+    builtin!(
+        set_euromap_runstate_dependent_choice(port_number: i32, runstate_choice: i32)
+            => set_euromap_runstate_dependent_choice,
         "How Euromap67 output port_number behaves when no program runs (0 preserve, 1 low, 2 high); recorded.",
-        euromap,
     ),
-    Builtin::new("set_flag", D, N_B, "Sets flag n (0-31).", flag),
-    Builtin::new("get_flag", D, N, "Flag n (0-31) as last set.", flag),
-    Builtin::new(
-        "read_port_bit",
-        D,
-        ADDRESS,
+    builtin!(set_flag(n: i32, b: bool) => set_flag, "Sets flag n (0-31)."),
+    builtin!(get_flag(n: i32) => get_flag, "Flag n (0-31) as last set."),
+    builtin!(
+        read_port_bit(address: i32) => read_port_bit,
         "The Modbus server's bit port as last written (False if never).",
-        port,
     ),
-    Builtin::new(
-        "read_port_register",
-        D,
-        ADDRESS,
+    builtin!(
+        read_port_register(address: i32) => read_port_register,
         "The Modbus server's register port as last written, signed 16-bit (0 if never).",
-        port,
     ),
-    Builtin::new(
-        "write_port_bit",
-        D,
-        ADDRESS_VALUE,
+    builtin!(
+        write_port_bit(address: i32, value: bool) => write_port_bit,
         "Writes a bit port of the Modbus server.",
-        port,
     ),
-    Builtin::new(
-        "write_port_register",
-        D,
-        ADDRESS_VALUE,
+    builtin!(
+        write_port_register(address: i32, value: i32) => write_port_register,
         "Writes a register port of the Modbus server (-32768 to 65535, kept as 16 bits).",
-        port,
     ),
     builtin!(
         get_standard_analog_in(n: i32) => |c, x, n| get_analog_in(c, x, AnalogIn::Standard, n),
@@ -165,68 +138,47 @@ pub(super) const TABLE: &[Builtin] = &[
         get_tool_analog_in(n: i32) => |c, x, n| get_analog_in(c, x, AnalogIn::Tool, n),
         "Tool analog input n (0-1): 0.0 (nothing is wired).",
     ),
-    Builtin::new(
-        "read_input_integer_register",
-        D,
-        ADDRESS,
+    builtin!(
+        read_input_integer_register(address: i32) => |c, x, k| read_input(c, x, Register::Int, k),
         "Input int register (0-47): 0 (no RTDE client writes it).",
-        read_input,
     ),
-    Builtin::new(
-        "read_input_float_register",
-        D,
-        ADDRESS,
+    builtin!(
+        read_input_float_register(address: i32) => |c, x, k| read_input(c, x, Register::Float, k),
         "Input float register (0-47): 0.0 (no RTDE client writes it).",
-        read_input,
     ),
-    Builtin::new(
-        "read_input_boolean_register",
-        D,
-        ADDRESS,
+    builtin!(
+        read_input_boolean_register(address: i32) => |c, x, k| read_input(c, x, Register::Bool, k),
         "Input bool register (0-127): False (no RTDE client writes it).",
-        read_input,
     ),
-    Builtin::new(
-        "read_output_integer_register",
-        D,
-        ADDRESS,
+    builtin!(
+        read_output_integer_register(address: i32)
+            => |c, x, k| read_output(c, x, Register::Int, k),
         "Output int register (0-47) as last written.",
-        register,
     ),
-    Builtin::new(
-        "read_output_float_register",
-        D,
-        ADDRESS,
+    builtin!(
+        read_output_float_register(address: i32)
+            => |c, x, k| read_output(c, x, Register::Float, k),
         "Output float register (0-47) as last written.",
-        register,
     ),
-    Builtin::new(
-        "read_output_boolean_register",
-        D,
-        ADDRESS,
+    builtin!(
+        read_output_boolean_register(address: i32)
+            => |c, x, k| read_output(c, x, Register::Bool, k),
         "Output bool register (0-127) as last written.",
-        register,
     ),
-    Builtin::new(
-        "write_output_integer_register",
-        D,
-        ADDRESS_VALUE,
+    builtin!(
+        write_output_integer_register(address: i32, value: i32)
+            => |c, x, k, v| write_output(c, x, k, RegisterValue::Int(v)),
         "Writes output int register (0-47).",
-        register,
     ),
-    Builtin::new(
-        "write_output_float_register",
-        D,
-        ADDRESS_VALUE,
+    builtin!(
+        write_output_float_register(address: i32, value: f64)
+            => |c, x, k, v| write_output(c, x, k, RegisterValue::Float(v)),
         "Writes output float register (0-47).",
-        register,
     ),
-    Builtin::new(
-        "write_output_boolean_register",
-        D,
-        ADDRESS_VALUE,
+    builtin!(
+        write_output_boolean_register(address: i32, value: bool)
+            => |c, x, k, v| write_output(c, x, k, RegisterValue::Bool(v)),
         "Writes output bool register (0-127).",
-        register,
     ),
     // Settings accepted with their manual signatures; they change nothing here.
     Builtin::new(
@@ -670,54 +622,116 @@ fn get_analog_in(c: &mut Runtime, a: &mut Args, kind: AnalogIn, n: i32) -> Resul
     Ok(Out::Value(Value::Float(c.arm.world.analog_in[k])))
 }
 
-fn read_input(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
-    let arm = &c.arm;
-    Ok(Out::Value(match a.name {
-        "read_input_integer_register" => {
-            Value::Int(arm.world.input_int_regs[a.index(0, 48, "register")?])
+/// A kind of RTDE general purpose register.
+#[derive(Clone, Copy)]
+enum Register {
+    /// Int registers, 0-47.
+    Int,
+    /// Float registers, 0-47.
+    Float,
+    /// Bool registers, 0-127.
+    Bool,
+}
+
+impl Register {
+    /// How many registers of this kind there are, each way.
+    fn count(self) -> usize {
+        match self {
+            Register::Int | Register::Float => 48,
+            Register::Bool => 128,
         }
-        "read_input_float_register" => {
-            Value::Float(arm.world.input_float_regs[a.index(0, 48, "register")?])
-        }
-        _ => Value::Bool(arm.world.input_bool_regs[a.index(0, 128, "register")?]),
+    }
+}
+
+/// A value written to an output register: its kind and the value.
+#[derive(Clone, Copy)]
+enum RegisterValue {
+    Int(i32),
+    Float(f64),
+    Bool(bool),
+}
+
+fn read_input(c: &mut Runtime, a: &mut Args, kind: Register, addr: i32) -> Result<Out, Fault> {
+    let k = index(a, addr, kind.count(), "register")?;
+    let world = &c.arm.world;
+    Ok(Out::Value(match kind {
+        Register::Int => Value::Int(world.input_int_regs[k]),
+        Register::Float => Value::Float(world.input_float_regs[k]),
+        Register::Bool => Value::Bool(world.input_bool_regs[k]),
     }))
 }
 
-fn flag(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
-    let n = a.index(0, 32, "flag")?;
-    if a.name == "set_flag" {
-        c.arm.flags[n] = a.boolean(1)?;
-        return Ok(Out::Value(Value::None));
-    }
-    Ok(Out::Value(Value::Bool(c.arm.flags[n])))
+/// `addr` as the index of an output register of `kind`.
+fn output_register(a: &Args, kind: Register, addr: i32) -> Result<usize, Fault> {
+    usize::try_from(addr)
+        .ok()
+        .filter(|k| *k < kind.count())
+        .ok_or_else(|| Fault::from(format!("`{}`: no register {addr}", a.name)))
 }
 
-fn port(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
-    let addr = a.int(0)?;
+fn read_output(c: &mut Runtime, a: &mut Args, kind: Register, addr: i32) -> Result<Out, Fault> {
+    let k = output_register(a, kind, addr)?;
+    let arm = &c.arm;
+    Ok(Out::Value(match kind {
+        Register::Int => Value::Int(arm.int_regs[k]),
+        Register::Float => Value::Float(arm.float_regs[k]),
+        Register::Bool => Value::Bool(arm.bool_regs[k]),
+    }))
+}
+
+fn write_output(c: &mut Runtime, a: &mut Args, addr: i32, v: RegisterValue) -> Result<Out, Fault> {
+    let arm = &mut c.arm;
+    match v {
+        RegisterValue::Int(x) => arm.int_regs[output_register(a, Register::Int, addr)?] = x,
+        RegisterValue::Float(x) => arm.float_regs[output_register(a, Register::Float, addr)?] = x,
+        RegisterValue::Bool(x) => arm.bool_regs[output_register(a, Register::Bool, addr)?] = x,
+    }
+    Ok(Out::Value(Value::None))
+}
+
+fn set_flag(c: &mut Runtime, a: &mut Args, n: i32, on: bool) -> Result<Out, Fault> {
+    c.arm.flags[index(a, n, 32, "flag")?] = on;
+    Ok(Out::Value(Value::None))
+}
+
+fn get_flag(c: &mut Runtime, a: &mut Args, n: i32) -> Result<Out, Fault> {
+    Ok(Out::Value(Value::Bool(
+        c.arm.flags[index(a, n, 32, "flag")?],
+    )))
+}
+
+/// `addr` as a port address of the Modbus server (0 or more).
+fn port(a: &Args, addr: i32) -> Result<i32, Fault> {
     if addr < 0 {
         return Err(Fault::from(format!("`{}`: no port {addr}", a.name)));
     }
-    let arm = &mut c.arm;
-    Ok(Out::Value(match a.name {
-        "read_port_bit" => Value::Bool(arm.port_bits.get(&addr).copied().unwrap_or(false)),
-        "read_port_register" => Value::Int(i32::from(
-            arm.port_registers.get(&addr).copied().unwrap_or(0),
-        )),
-        "write_port_bit" => {
-            arm.port_bits.insert(addr, a.boolean(1)?);
-            Value::None
-        }
-        _ => {
-            let v = a.int(1)?;
-            if !(-32768..=65535).contains(&v) {
-                return Err(Fault::from(format!(
-                    "`write_port_register`: {v} does not fit a register (-32768 to 65535)"
-                )));
-            }
-            arm.port_registers.insert(addr, v as u16 as i16);
-            Value::None
-        }
-    }))
+    Ok(addr)
+}
+
+fn read_port_bit(c: &mut Runtime, a: &mut Args, addr: i32) -> Result<Out, Fault> {
+    let bit = c.arm.port_bits.get(&port(a, addr)?).copied();
+    Ok(Out::Value(Value::Bool(bit.unwrap_or(false))))
+}
+
+fn read_port_register(c: &mut Runtime, a: &mut Args, addr: i32) -> Result<Out, Fault> {
+    let register = c.arm.port_registers.get(&port(a, addr)?).copied();
+    Ok(Out::Value(Value::Int(i32::from(register.unwrap_or(0)))))
+}
+
+fn write_port_bit(c: &mut Runtime, a: &mut Args, addr: i32, on: bool) -> Result<Out, Fault> {
+    c.arm.port_bits.insert(port(a, addr)?, on);
+    Ok(Out::Value(Value::None))
+}
+
+fn write_port_register(c: &mut Runtime, a: &mut Args, addr: i32, v: i32) -> Result<Out, Fault> {
+    let addr = port(a, addr)?;
+    if !(-32768..=65535).contains(&v) {
+        return Err(Fault::from(format!(
+            "`write_port_register`: {v} does not fit a register (-32768 to 65535)"
+        )));
+    }
+    c.arm.port_registers.insert(addr, v as u16 as i16);
+    Ok(Out::Value(Value::None))
 }
 
 fn set_analog_outputdomain(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
@@ -902,34 +916,6 @@ fn request(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
     }))
 }
 
-fn register(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
-    let write = a.name.starts_with("write");
-    let addr = a.int(0)?;
-    let bools = a.name.contains("boolean");
-    let k = usize::try_from(addr)
-        .ok()
-        .filter(|k| *k < if bools { 128 } else { 48 })
-        .ok_or_else(|| format!("`{}`: no register {addr}", a.name))?;
-    let arm = &mut c.arm;
-    let v = if a.name.contains("integer") {
-        if write {
-            arm.int_regs[k] = a.int(1)?;
-        }
-        Value::Int(arm.int_regs[k])
-    } else if a.name.contains("float") {
-        if write {
-            arm.float_regs[k] = a.num(1)?;
-        }
-        Value::Float(arm.float_regs[k])
-    } else {
-        if write {
-            arm.bool_regs[k] = a.boolean(1)?;
-        }
-        Value::Bool(arm.bool_regs[k])
-    };
-    Ok(Out::Value(if write { Value::None } else { v }))
-}
-
 /// `rtde_set_watchdog(variable_name, min_frequency, action="pause")`: a watchdog on one
 /// RTDE input field, replacing any on the same field; the action is taken when the
 /// field has no update for `1 / min_frequency` s (checked each step, once per time-out).
@@ -1007,26 +993,43 @@ fn rtde_set_watchdog(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
 /// Inputs read [`World::euromap_in`](crate::World::euromap_in); outputs read back what
 /// was set; the run-state choice (0: preserve, 1: low, 2: high when no program runs) is
 /// recorded (no program runs on the virtual arm between programs to apply it).
-fn euromap(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
-    let n = a.index(0, 32, "Euromap67 signal")?;
-    Ok(Out::Value(match a.name {
-        "get_euromap_input" => Value::Bool(c.arm.world.euromap_in[n]),
-        "get_euromap_output" => Value::Bool(c.arm.euromap_out[n]),
-        "set_euromap_output" => {
-            c.arm.euromap_out[n] = a.boolean(1)?;
-            Value::None
-        }
-        _ => {
-            let choice = a.int(1)?;
-            if !(0..=2).contains(&choice) {
-                return Err(format!(
-                    "`{}`: runstate_choice must be 0, 1 or 2, got {choice}",
-                    a.name
-                )
-                .into());
-            }
-            c.arm.euromap_runstate[n] = choice as u8;
-            Value::None
-        }
-    }))
+///
+/// This is signal `n` of those (0-31) as an index.
+fn euromap_signal(a: &Args, n: i32) -> Result<usize, Fault> {
+    index(a, n, 32, "Euromap67 signal")
+}
+
+fn get_euromap_input(c: &mut Runtime, a: &mut Args, n: i32) -> Result<Out, Fault> {
+    Ok(Out::Value(Value::Bool(
+        c.arm.world.euromap_in[euromap_signal(a, n)?],
+    )))
+}
+
+fn get_euromap_output(c: &mut Runtime, a: &mut Args, n: i32) -> Result<Out, Fault> {
+    Ok(Out::Value(Value::Bool(
+        c.arm.euromap_out[euromap_signal(a, n)?],
+    )))
+}
+
+fn set_euromap_output(c: &mut Runtime, a: &mut Args, n: i32, on: bool) -> Result<Out, Fault> {
+    c.arm.euromap_out[euromap_signal(a, n)?] = on;
+    Ok(Out::Value(Value::None))
+}
+
+fn set_euromap_runstate_dependent_choice(
+    c: &mut Runtime,
+    a: &mut Args,
+    n: i32,
+    choice: i32,
+) -> Result<Out, Fault> {
+    let n = euromap_signal(a, n)?;
+    if !(0..=2).contains(&choice) {
+        return Err(format!(
+            "`{}`: runstate_choice must be 0, 1 or 2, got {choice}",
+            a.name
+        )
+        .into());
+    }
+    c.arm.euromap_runstate[n] = choice as u8;
+    Ok(Out::Value(Value::None))
 }
