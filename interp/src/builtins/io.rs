@@ -6,9 +6,15 @@
 //! Modbus signals live in a virtual client with no device behind it: an output signal
 //! reads back what was set, an input signal reads 0/False. The virtual operator answers
 //! `request_*_from_primary_client` at once with fixed values (False, 0, 0.0, "").
-//! Other I/O settings are accepted with their manual signatures and change nothing.
+//! Other I/O settings are accepted with their manual signatures and change nothing
+//! (their arguments are still checked against the manual's types).
+//!
+//! Each entry declares its signature once (`builtin!`); a family of functions (the
+//! standard, configurable, tool and deprecated digital outputs, the register functions,
+//! the Modbus signal functions...) shares a private function that takes the member as a
+//! typed parameter (`DigitalOut`, `Register`, `SignalKind`, ...).
 
-use super::{accept, builtin, opt, req, Args, Builtin, Default, Domain, Out};
+use super::{builtin, Args, Builtin, Domain, Out};
 use crate::error::Fault;
 use crate::event::{Event, OutputValue, OutputWrite};
 use crate::native::index;
@@ -181,321 +187,220 @@ pub(super) const TABLE: &[Builtin] = &[
         "Writes output bool register (0-127).",
     ),
     // Settings accepted with their manual signatures; they change nothing here.
-    Builtin::new(
-        "set_tool_voltage",
-        D,
-        &[req("voltage")],
-        "Accepted.",
-        accept,
-    ),
-    Builtin::new(
-        "set_tool_communication",
-        D,
-        &[
-            req("enabled"),
-            req("baud_rate"),
-            req("parity"),
-            req("stop_bits"),
-            req("rx_idle_chars"),
-            req("tx_idle_chars"),
-        ],
+    builtin!(set_tool_voltage(voltage: i32) => |_, _, _| none(), "Accepted."),
+    builtin!(
+        set_tool_communication(
+            enabled: bool,
+            baud_rate: i32,
+            parity: i32,
+            stop_bits: i32,
+            rx_idle_chars: f64,
+            tx_idle_chars: f64,
+        ) => |_, _, _, _, _, _, _, _| none(),
         "Accepted (no tool serial port).",
-        accept,
     ),
-    Builtin::new(
-        "set_tool_output_mode",
-        D,
-        &[req("mode")],
+    builtin!(set_tool_output_mode(mode: i32) => |_, _, _| none(), "Accepted."),
+    builtin!(
+        set_tool_digital_output_mode(n: i32, mode: i32) => |_, _, _, _| none(),
         "Accepted.",
-        accept,
     ),
-    Builtin::new(
-        "set_tool_digital_output_mode",
-        D,
-        &[req("n"), req("mode")],
+    builtin!(
+        set_standard_analog_input_domain(port: i32, domain: i32) => |_, _, _, _| none(),
         "Accepted.",
-        accept,
     ),
-    Builtin::new(
-        "set_standard_analog_input_domain",
-        D,
-        &[req("port"), req("domain")],
+    builtin!(
+        set_tool_analog_input_domain(port: i32, domain: i32) => |_, _, _, _| none(),
         "Accepted.",
-        accept,
     ),
-    Builtin::new(
-        "set_tool_analog_input_domain",
-        D,
-        &[req("port"), req("domain")],
+    builtin!(
+        set_analog_inputrange(port: i32, range: i32) => |_, _, _, _| none(),
         "Accepted.",
-        accept,
-    ),
-    Builtin::new(
-        "set_analog_inputrange",
-        D,
-        &[req("port"), req("range")],
-        "Accepted.",
-        accept,
     ),
     // CB3 3.x (deprecated there): PolyScope 3.0-3.2 program headers and python-urx
     // emit `set_runstate_outputs([])`.
-    Builtin::new(
-        "set_runstate_outputs",
-        D,
-        &[opt("outputs", Default::Ints(&[]))],
+    builtin!(
+        set_runstate_outputs(outputs: &[Value] = Ints(&[])) => |_, _, _| none(),
         "Accepted (CB3, deprecated): the outputs kept on when the program stops.",
-        accept,
     ),
-    Builtin::new("set_input_actions_to_default", D, &[], "Accepted.", accept),
-    Builtin::new(
-        "set_standard_digital_input_action",
-        D,
-        &[req("port"), req("action")],
+    builtin!(set_input_actions_to_default() => |_, _| none(), "Accepted."),
+    builtin!(
+        set_standard_digital_input_action(port: i32, action: &[u8]) => |_, _, _, _| none(),
         "Accepted.",
-        accept,
     ),
-    Builtin::new(
-        "set_runstate_standard_digital_output_to_value",
-        D,
-        &[req("outputId"), req("state")],
+    builtin!(
+        set_runstate_standard_digital_output_to_value(outputId: i32, state: i32)
+            => |_, _, _, _| none(),
         "Accepted.",
-        accept,
     ),
-    Builtin::new(
-        "set_analog_outputdomain",
-        D,
-        &[req("port"), req("domain")],
+    builtin!(
+        set_analog_outputdomain(port: i32, domain: i32) => set_analog_outputdomain,
         "Sets analog output port's (0-1) domain (0: 4-20 mA, 1: 0-10 V).",
-        set_analog_outputdomain,
     ),
-    Builtin::new(
-        "set_configurable_digital_input_action",
-        D,
-        &[req("port"), req("action")],
+    builtin!(
+        set_configurable_digital_input_action(port: i32, action: &[u8])
+            => |_, x, port, action| input_action(x, 8, port, action),
         "Sets the input's action, \"default\" or \"freedrive\" (accepted; nothing presses it).",
-        input_action,
     ),
-    Builtin::new(
-        "set_tool_digital_input_action",
-        D,
-        &[req("port"), req("action")],
+    builtin!(
+        set_tool_digital_input_action(port: i32, action: &[u8])
+            => |_, x, port, action| input_action(x, 2, port, action),
         "Sets the input's action, \"default\" or \"freedrive\" (accepted; nothing presses it).",
-        input_action,
     ),
-    Builtin::new(
-        "set_gp_boolean_input_action",
-        D,
-        &[req("port"), req("action")],
+    builtin!(
+        set_gp_boolean_input_action(port: i32, action: &[u8])
+            => |_, x, port, action| input_action(x, 128, port, action),
         "Sets the bool input register's action, \"default\" or \"freedrive\" (accepted).",
-        input_action,
     ),
-    Builtin::new(
-        "set_runstate_configurable_digital_output_to_value",
-        D,
-        &[req("outputId"), req("state")],
+    builtin!(
+        set_runstate_configurable_digital_output_to_value(outputId: i32, state: i32)
+            => |_, _, _, _| none(),
         "Accepted (the program's run state drives no output here).",
-        accept,
     ),
-    Builtin::new(
-        "set_runstate_tool_digital_output_to_value",
-        D,
-        &[req("outputId"), req("state")],
+    builtin!(
+        set_runstate_tool_digital_output_to_value(outputId: i32, state: i32)
+            => |_, _, _, _| none(),
         "Accepted (the program's run state drives no output here).",
-        accept,
     ),
-    Builtin::new(
-        "set_runstate_standard_analog_output_to_value",
-        D,
-        &[req("outputId"), req("state")],
+    builtin!(
+        set_runstate_standard_analog_output_to_value(outputId: i32, state: i32)
+            => |_, _, _, _| none(),
         "Accepted (the program's run state drives no output here).",
-        accept,
     ),
-    Builtin::new(
-        "set_runstate_gp_boolean_output_to_value",
-        D,
-        &[req("outputId"), req("state")],
+    builtin!(
+        set_runstate_gp_boolean_output_to_value(outputId: i32, state: i32)
+            => |_, _, _, _| none(),
         "Accepted (the program's run state drives no output here).",
-        accept,
     ),
-    Builtin::new(
-        "modbus_set_runstate_dependent_choice",
-        D,
-        &[req("signal_name"), req("runstate_choice")],
+    builtin!(
+        modbus_set_runstate_dependent_choice(signal_name: String, runstate_choice: i32)
+            => |c, x, name, _| modbus_exists(c, x, name, Value::None),
         "Accepted for a signal that exists (the run state drives no output here).",
-        modbus,
     ),
-    Builtin::new(
-        "rtde_set_watchdog",
-        D,
-        &[
-            req("variable_name"),
-            req("min_frequency"),
-            opt("action", Default::Str("pause")),
-        ],
+    builtin!(
+        rtde_set_watchdog(
+            variable_name: String,
+            min_frequency: f64,
+            action: String = Str("pause"),
+        ) => rtde_set_watchdog,
         "Watches an RTDE input field: no update within 1/min_frequency s and the action (ignore, pause, stop) is taken (World::rtde_watchdogs).",
-        rtde_set_watchdog,
     ),
-    Builtin::new(
-        "modbus_add_signal",
-        D,
-        &[
-            req("IP"),
-            req("slave_number"),
-            req("signal_address"),
-            req("signal_type"),
-            req("signal_name"),
-            opt("sequential_mode", Default::Bool(false)),
-            opt("register_count", Default::Int(1)),
-        ],
+    builtin!(
+        modbus_add_signal(
+            IP: String,
+            slave_number: i32,
+            signal_address: i32,
+            signal_type: i32,
+            signal_name: String,
+            sequential_mode: bool = Bool(false),
+            register_count: i32 = Int(1),
+        ) => |c, x, _, slave, address, signal_type, name, _, count| {
+            modbus_add(c, x, slave, address, SignalKind::Typed(signal_type), count, name)
+        },
         "Adds a signal (type 0, 1, 2, 3, 15, 16) to the virtual Modbus client (no device).",
-        modbus,
     ),
-    Builtin::new(
-        "modbus_add_rw_signal",
-        D,
-        &[
-            req("IP"),
-            req("slave_number"),
-            req("read_address"),
-            req("read_register_count"),
-            req("write_address"),
-            req("write_register_count"),
-            req("signal_name"),
-            opt("sequential_mode", Default::Bool(false)),
-        ],
+    builtin!(
+        modbus_add_rw_signal(
+            IP: String,
+            slave_number: i32,
+            read_address: i32,
+            read_register_count: i32,
+            write_address: i32,
+            write_register_count: i32,
+            signal_name: String,
+            sequential_mode: bool = Bool(false),
+        ) => |c, x, _, slave, address, count, _, _, name, _| {
+            modbus_add(c, x, slave, address, SignalKind::ReadWrite, count, name)
+        },
         "Adds a read-write register signal to the virtual Modbus client (no device).",
-        modbus,
     ),
-    Builtin::new(
-        "modbus_delete_signal",
-        D,
-        &[req("signal_name")],
+    builtin!(
+        modbus_delete_signal(signal_name: String) => modbus_delete_signal,
         "Deletes a signal.",
-        modbus,
     ),
-    Builtin::new(
-        "modbus_get_signal_status",
-        D,
-        &[
-            req("signal_name"),
-            opt("is_secondary_program", Default::Bool(false)),
-        ],
+    builtin!(
+        modbus_get_signal_status(signal_name: String, is_secondary_program: bool = Bool(false))
+            => |c, x, name, _| modbus_get_signal_status(c, x, name),
         "An output signal's value(s) as last set; an input's 0/False (a list if several).",
-        modbus,
     ),
-    Builtin::new(
-        "modbus_set_output_register",
-        D,
-        &[
-            req("signal_name"),
-            req("register_value"),
-            opt("is_secondary_program", Default::Bool(false)),
-        ],
+    builtin!(
+        modbus_set_output_register(
+            signal_name: String,
+            register_value: &Value,
+            is_secondary_program: bool = Bool(false),
+        ) => |c, x, name, v, _| modbus_set_output(c, x, name, false, v),
         "Sets a register output signal (0-65535, or a list).",
-        modbus,
     ),
-    Builtin::new(
-        "modbus_set_output_signal",
-        D,
-        &[
-            req("signal_name"),
-            req("digital_value"),
-            opt("is_secondary_program", Default::Bool(false)),
-        ],
+    builtin!(
+        modbus_set_output_signal(
+            signal_name: String,
+            digital_value: &Value,
+            is_secondary_program: bool = Bool(false),
+        ) => |c, x, name, v, _| modbus_set_output(c, x, name, true, v),
         "Sets a digital output signal (a bool, or a list).",
-        modbus,
     ),
-    Builtin::new(
-        "modbus_send_custom_command",
-        D,
-        &[
-            req("IP"),
-            req("slave_number"),
-            req("function_code"),
-            req("data"),
-        ],
+    builtin!(
+        modbus_send_custom_command(
+            IP: String,
+            slave_number: i32,
+            function_code: i32,
+            data: &[Value],
+        ) => |_, _, _, _, _, _| none(),
         "Accepted (no Modbus device; nothing is sent).",
-        accept,
     ),
-    Builtin::new(
-        "modbus_set_digital_input_action",
-        D,
-        &[req("signal_name"), req("action")],
+    builtin!(
+        modbus_set_digital_input_action(signal_name: String, action: &[u8])
+            => modbus_set_digital_input_action,
         "Sets a signal's action, \"default\" or \"freedrive\" (accepted).",
-        modbus,
     ),
-    Builtin::new(
-        "modbus_set_signal_update_frequency",
-        D,
-        &[req("signal_name"), req("update_frequency")],
+    builtin!(
+        modbus_set_signal_update_frequency(signal_name: String, update_frequency: f64)
+            => |c, x, name, _| modbus_exists(c, x, name, Value::None),
         "Accepted for a signal that exists (no device is polled).",
-        modbus,
     ),
-    Builtin::new(
-        "modbus_get_error",
-        D,
-        &[req("signal_name"), opt("error_source", Default::Int(0))],
+    builtin!(
+        modbus_get_error(signal_name: String, error_source: i32 = Int(0))
+            => |c, x, name, _| modbus_exists(c, x, name, Value::Int(0)),
         "0: the virtual device never errs.",
-        modbus,
     ),
-    Builtin::new(
-        "modbus_get_time_since_signal_invalid",
-        D,
-        &[req("signal_name")],
+    builtin!(
+        modbus_get_time_since_signal_invalid(signal_name: String)
+            => |c, x, name| modbus_exists(c, x, name, Value::Float(0.0)),
         "0.0: the virtual signals are never invalid.",
-        modbus,
     ),
-    Builtin::new(
-        "modbus_request_update_signal_value",
-        D,
-        &[req("signal_name")],
+    builtin!(
+        modbus_request_update_signal_value(signal_name: String)
+            => |c, x, name| modbus_exists(c, x, name, Value::None),
         "Accepted for a signal that exists.",
-        modbus,
     ),
-    Builtin::new(
-        "modbus_reset_connection",
-        D,
-        &[
-            req("connection_id"),
-            opt("is_blocking", Default::Bool(true)),
-        ],
+    builtin!(
+        modbus_reset_connection(connection_id: String, is_blocking: bool = Bool(true))
+            => |_, _, _, _| none(),
         "Accepted (the virtual device is always connected).",
-        accept,
     ),
-    Builtin::new(
-        "modbus_set_signal_watchdog",
-        D,
-        &[req("signal_name"), req("new_timeout_in_sec")],
+    builtin!(
+        modbus_set_signal_watchdog(signal_name: String, new_timeout_in_sec: f64)
+            => |c, x, name, _| modbus_exists(c, x, name, Value::None),
         "Accepted for a signal that exists.",
-        modbus,
     ),
-    Builtin::new(
-        "request_boolean_from_primary_client",
-        D,
-        &[req("message")],
+    builtin!(
+        request_boolean_from_primary_client(message: &[u8])
+            => |c, x, m| request(c, x, Answer::Bool, m),
         "The virtual operator's answer at once: False.",
-        request,
     ),
-    Builtin::new(
-        "request_integer_from_primary_client",
-        D,
-        &[req("message")],
+    builtin!(
+        request_integer_from_primary_client(message: &[u8])
+            => |c, x, m| request(c, x, Answer::Int, m),
         "The virtual operator's answer at once: 0.",
-        request,
     ),
-    Builtin::new(
-        "request_float_from_primary_client",
-        D,
-        &[req("message")],
+    builtin!(
+        request_float_from_primary_client(message: &[u8])
+            => |c, x, m| request(c, x, Answer::Float, m),
         "The virtual operator's answer at once: 0.0.",
-        request,
     ),
-    Builtin::new(
-        "request_string_from_primary_client",
-        D,
-        &[req("message")],
+    builtin!(
+        request_string_from_primary_client(message: &[u8])
+            => |c, x, m| request(c, x, Answer::String, m),
         "The virtual operator's answer at once: \"\".",
-        request,
     ),
 ];
 
@@ -734,9 +639,18 @@ fn write_port_register(c: &mut Runtime, a: &mut Args, addr: i32, v: i32) -> Resu
     Ok(Out::Value(Value::None))
 }
 
-fn set_analog_outputdomain(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
-    let port = a.index(0, 2, "analog output")?;
-    let domain = a.int(1)?;
+/// What an accepted setting returns.
+fn none() -> Result<Out, Fault> {
+    Ok(Out::Value(Value::None))
+}
+
+fn set_analog_outputdomain(
+    c: &mut Runtime,
+    a: &mut Args,
+    port: i32,
+    domain: i32,
+) -> Result<Out, Fault> {
+    let port = index(a, port, 2, "analog output")?;
     if !(0..=1).contains(&domain) {
         return Err(Fault::from(format!(
             "`set_analog_outputdomain`: domain {domain} is not 0 (4-20 mA) or 1 (0-10 V)"
@@ -747,8 +661,7 @@ fn set_analog_outputdomain(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> 
 }
 
 /// Checks an input action: "default" or "freedrive".
-fn check_action(a: &Args, i: usize) -> Result<(), Fault> {
-    let action = a.bytes(i)?;
+fn check_action(a: &Args, action: &[u8]) -> Result<(), Fault> {
     if action == b"default" || action == b"freedrive" {
         Ok(())
     } else {
@@ -760,159 +673,182 @@ fn check_action(a: &Args, i: usize) -> Result<(), Fault> {
     }
 }
 
-fn input_action(_: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
-    let n = match a.name {
-        "set_configurable_digital_input_action" => 8,
-        "set_tool_digital_input_action" => 2,
-        _ => 128,
-    };
-    a.index(0, n, "input")?;
-    check_action(a, 1)?;
-    Ok(Out::Value(Value::None))
+/// Checks the action of input `port` of `n` inputs (accepted; nothing presses it).
+fn input_action(a: &mut Args, n: usize, port: i32, action: &[u8]) -> Result<Out, Fault> {
+    index(a, port, n, "input")?;
+    check_action(a, action)?;
+    none()
 }
 
-/// The Modbus signal named by argument `i`.
-fn signal<'a>(c: &'a mut Runtime, a: &Args, i: usize) -> Result<&'a mut ModbusSignal, Fault> {
-    let name = a.text(i)?;
+/// The Modbus signal called `name`.
+fn signal<'a>(c: &'a mut Runtime, a: &Args, name: &str) -> Result<&'a mut ModbusSignal, Fault> {
     c.arm
         .modbus
-        .get_mut(&name)
+        .get_mut(name)
         .ok_or_else(|| Fault::from(format!("`{}`: no Modbus signal \"{name}\"", a.name)))
 }
 
-fn modbus(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
-    match a.name {
-        "modbus_add_signal" | "modbus_add_rw_signal" => {
-            let rw = a.name == "modbus_add_rw_signal";
-            a.text(0)?;
-            let slave = a.int(1)?;
-            if !(0..=255).contains(&slave) {
-                return Err(Fault::from(format!(
-                    "`{}`: slave number {slave} is not 0-255",
-                    a.name
-                )));
-            }
-            let (signal_type, count, name_at) = if rw {
-                (23, a.int(3)?, 6)
-            } else {
-                let t = a.int(3)?;
-                if ![0, 1, 2, 3, 15, 16].contains(&t) {
-                    return Err(Fault::from(format!(
-                        "`modbus_add_signal`: signal type {t} is not 0, 1, 2, 3, 15 or 16"
-                    )));
-                }
-                (t, a.int(6)?, 4)
-            };
-            if a.int(2)? < 0 || !(1..=123).contains(&count) {
-                return Err(Fault::from(format!(
-                    "`{}`: address below 0 or register count {count} not 1-123",
-                    a.name
-                )));
-            }
-            let name = a.text(name_at)?;
-            if name.is_empty() || name.len() > 20 {
-                return Err(Fault::from(format!(
-                    "`{}`: signal name \"{name}\" must be 1-20 characters",
-                    a.name
-                )));
-            }
-            c.arm.modbus.insert(
-                name,
-                ModbusSignal {
-                    signal_type,
-                    values: vec![0; count as usize],
-                },
-            );
-        }
-        "modbus_delete_signal" => {
-            let name = a.text(0)?;
-            c.arm.modbus.remove(&name);
-        }
-        "modbus_get_signal_status" => {
-            let s = signal(c, a, 0)?;
-            let digital = matches!(s.signal_type, 0 | 1 | 15);
-            let one = |v: i32| {
-                if digital {
-                    Value::Bool(v != 0)
-                } else {
-                    Value::Int(v)
-                }
-            };
-            return Ok(Out::Value(if s.values.len() == 1 {
-                one(s.values[0])
-            } else {
-                Value::List(s.values.iter().map(|v| one(*v)).collect())
-            }));
-        }
-        "modbus_set_output_register" | "modbus_set_output_signal" => {
-            let digital = a.name == "modbus_set_output_signal";
-            let given: Vec<Value> = match &a.v[1] {
-                Value::List(items) => items.clone(),
-                v => vec![v.clone()],
-            };
-            let name = a.name;
-            let s = signal(c, a, 0)?;
-            let fits = if digital {
-                matches!(s.signal_type, 1 | 15)
-            } else {
-                matches!(s.signal_type, 3 | 16 | 23)
-            };
-            if !fits || given.is_empty() || given.len() > s.values.len() {
-                return Err(Fault::from(format!(
-                    "`{name}`: the signal (type {}, {} value(s)) cannot take {} value(s)",
-                    s.signal_type,
-                    s.values.len(),
-                    given.len()
-                )));
-            }
-            for (slot, v) in s.values.iter_mut().zip(&given) {
-                *slot = match v {
-                    Value::Bool(b) if digital => i32::from(*b),
-                    Value::Int(x) if digital => i32::from(*x != 0),
-                    Value::Int(x) if (0..=65535).contains(x) => *x,
-                    other => {
-                        return Err(Fault::from(format!(
-                            "`{name}`: {} is not a {}",
-                            other.to_source(),
-                            if digital {
-                                "bool"
-                            } else {
-                                "register value (0-65535)"
-                            }
-                        )))
-                    }
-                };
-            }
-        }
-        "modbus_set_digital_input_action" => {
-            check_action(a, 1)?;
-            signal(c, a, 0)?;
-        }
-        "modbus_get_error" => {
-            signal(c, a, 0)?;
-            return Ok(Out::Value(Value::Int(0)));
-        }
-        "modbus_get_time_since_signal_invalid" => {
-            signal(c, a, 0)?;
-            return Ok(Out::Value(Value::Float(0.0)));
-        }
-        _ => {
-            signal(c, a, 0)?;
-        }
-    }
-    Ok(Out::Value(Value::None))
+/// `v` if the signal called `name` exists (its error otherwise): the functions that
+/// change nothing on a signal of the virtual client.
+fn modbus_exists(c: &mut Runtime, a: &mut Args, name: String, v: Value) -> Result<Out, Fault> {
+    signal(c, a, &name)?;
+    Ok(Out::Value(v))
 }
 
-fn request(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
-    if a.bytes(0)?.is_empty() {
+/// A Modbus signal's type as it is added.
+#[derive(Clone, Copy)]
+enum SignalKind {
+    /// `modbus_add_signal`'s `signal_type`: 0, 1, 2, 3, 15 or 16.
+    Typed(i32),
+    /// `modbus_add_rw_signal`: a read-write register signal (type 23 here).
+    ReadWrite,
+}
+
+fn modbus_add(
+    c: &mut Runtime,
+    a: &mut Args,
+    slave: i32,
+    address: i32,
+    kind: SignalKind,
+    count: i32,
+    name: String,
+) -> Result<Out, Fault> {
+    if !(0..=255).contains(&slave) {
+        return Err(Fault::from(format!(
+            "`{}`: slave number {slave} is not 0-255",
+            a.name
+        )));
+    }
+    let signal_type = match kind {
+        SignalKind::ReadWrite => 23,
+        SignalKind::Typed(t) if [0, 1, 2, 3, 15, 16].contains(&t) => t,
+        SignalKind::Typed(t) => {
+            return Err(Fault::from(format!(
+                "`modbus_add_signal`: signal type {t} is not 0, 1, 2, 3, 15 or 16"
+            )))
+        }
+    };
+    if address < 0 || !(1..=123).contains(&count) {
+        return Err(Fault::from(format!(
+            "`{}`: address below 0 or register count {count} not 1-123",
+            a.name
+        )));
+    }
+    if name.is_empty() || name.len() > 20 {
+        return Err(Fault::from(format!(
+            "`{}`: signal name \"{name}\" must be 1-20 characters",
+            a.name
+        )));
+    }
+    c.arm.modbus.insert(
+        name,
+        ModbusSignal {
+            signal_type,
+            values: vec![0; count as usize],
+        },
+    );
+    none()
+}
+
+fn modbus_set_digital_input_action(
+    c: &mut Runtime,
+    a: &mut Args,
+    name: String,
+    action: &[u8],
+) -> Result<Out, Fault> {
+    check_action(a, action)?;
+    modbus_exists(c, a, name, Value::None)
+}
+
+fn modbus_delete_signal(c: &mut Runtime, _: &mut Args, name: String) -> Result<Out, Fault> {
+    c.arm.modbus.remove(&name);
+    none()
+}
+
+fn modbus_get_signal_status(c: &mut Runtime, a: &mut Args, name: String) -> Result<Out, Fault> {
+    let s = signal(c, a, &name)?;
+    let digital = matches!(s.signal_type, 0 | 1 | 15);
+    let one = |v: i32| {
+        if digital {
+            Value::Bool(v != 0)
+        } else {
+            Value::Int(v)
+        }
+    };
+    Ok(Out::Value(if s.values.len() == 1 {
+        one(s.values[0])
+    } else {
+        Value::List(s.values.iter().map(|v| one(*v)).collect())
+    }))
+}
+
+/// Sets a digital (`digital`) or register output signal to `value`, one value or a list.
+fn modbus_set_output(
+    c: &mut Runtime,
+    a: &mut Args,
+    name: String,
+    digital: bool,
+    value: &Value,
+) -> Result<Out, Fault> {
+    let given = match value {
+        Value::List(items) => items.as_slice(),
+        v => std::slice::from_ref(v),
+    };
+    let function = a.name;
+    let s = signal(c, a, &name)?;
+    let fits = if digital {
+        matches!(s.signal_type, 1 | 15)
+    } else {
+        matches!(s.signal_type, 3 | 16 | 23)
+    };
+    if !fits || given.is_empty() || given.len() > s.values.len() {
+        return Err(Fault::from(format!(
+            "`{function}`: the signal (type {}, {} value(s)) cannot take {} value(s)",
+            s.signal_type,
+            s.values.len(),
+            given.len()
+        )));
+    }
+    for (slot, v) in s.values.iter_mut().zip(given) {
+        *slot = match v {
+            Value::Bool(b) if digital => i32::from(*b),
+            Value::Int(x) if digital => i32::from(*x != 0),
+            Value::Int(x) if (0..=65535).contains(x) => *x,
+            other => {
+                return Err(Fault::from(format!(
+                    "`{function}`: {} is not a {}",
+                    other.to_source(),
+                    if digital {
+                        "bool"
+                    } else {
+                        "register value (0-65535)"
+                    }
+                )))
+            }
+        };
+    }
+    none()
+}
+
+/// The kind of answer a `request_*_from_primary_client` asks the operator for.
+#[derive(Clone, Copy)]
+enum Answer {
+    Bool,
+    Int,
+    Float,
+    String,
+}
+
+fn request(c: &mut Runtime, a: &mut Args, kind: Answer, message: &[u8]) -> Result<Out, Fault> {
+    if message.is_empty() {
         return Err(Fault::from(format!("`{}`: the message is empty", a.name)));
     }
-    let arm = &c.arm;
-    Ok(Out::Value(match a.name {
-        "request_boolean_from_primary_client" => Value::Bool(arm.world.operator_bool),
-        "request_integer_from_primary_client" => Value::Int(arm.world.operator_int),
-        "request_float_from_primary_client" => Value::Float(arm.world.operator_float),
-        _ => Value::Str(arm.world.operator_string.clone()),
+    let world = &c.arm.world;
+    Ok(Out::Value(match kind {
+        Answer::Bool => Value::Bool(world.operator_bool),
+        Answer::Int => Value::Int(world.operator_int),
+        Answer::Float => Value::Float(world.operator_float),
+        Answer::String => Value::Str(world.operator_string.clone()),
     }))
 }
 
@@ -924,16 +860,20 @@ fn request(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
 /// the program's end). The watchdogs end with the program. `variable_name` must be an
 /// input field of [`crate::rtde_fields`] (`input_int_register_0`,
 /// `speed_slider_fraction`, ...): any other name is a runtime error.
-fn rtde_set_watchdog(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
-    let variable = a.text(0)?;
+fn rtde_set_watchdog(
+    c: &mut Runtime,
+    _: &mut Args,
+    variable: String,
+    f: f64,
+    action: String,
+) -> Result<Out, Fault> {
     if crate::rtde_fields::Field::lookup(&variable, crate::rtde_fields::Direction::Input).is_none()
     {
         return Err(
             format!("`rtde_set_watchdog`: \"{variable}\" is not an RTDE input field").into(),
         );
     }
-    let f = a.num(1)?;
-    let action = match a.text(2)?.to_ascii_lowercase().as_str() {
+    let action = match action.to_ascii_lowercase().as_str() {
         "ignore" => 0,
         "pause" => 1,
         "stop" => 2,
@@ -1032,4 +972,47 @@ fn set_euromap_runstate_dependent_choice(
     }
     c.arm.euromap_runstate[n] = choice as u8;
     Ok(Out::Value(Value::None))
+}
+
+#[cfg(test)]
+mod tests {
+    use std::time::Duration;
+
+    use crate::{Config, Machine, Program, State};
+
+    /// The error `src` stops with (a program of one step or so).
+    fn error(src: &str) -> String {
+        let mut m = Machine::new(Program::parse(src).unwrap(), Config::default());
+        m.run_until(Duration::from_secs(1));
+        match m.state() {
+            State::Error(e) => e.to_string(),
+            other => panic!("{src}: expected an error, got {other:?}"),
+        }
+    }
+
+    /// The settings that change nothing check their arguments' types as the manual
+    /// gives them, and take arguments of those types.
+    #[test]
+    fn accepted_settings_check_their_argument_types() {
+        assert_eq!(
+            error("set_tool_voltage(\"24\")\n"),
+            "line 1: type error: `set_tool_voltage` argument `voltage` needs an int, got string \"24\""
+        );
+        assert_eq!(
+            error("set_tool_communication(True, 115200, 0, 1, 1.5, \"x\")\n"),
+            "line 1: type error: `set_tool_communication` argument `tx_idle_chars` needs a number, got string \"x\""
+        );
+        assert_eq!(
+            error("modbus_send_custom_command(\"10.0.0.2\", 1, 6, 17)\n"),
+            "line 1: type error: `modbus_send_custom_command` argument `data` needs a list, got int 17"
+        );
+        assert_eq!(
+            error("modbus_add_signal(\"10.0.0.2\", 1, 5, 3, \"r\", \"yes\")\n"),
+            "line 1: type error: `modbus_add_signal` argument `sequential_mode` needs a bool, got string \"yes\""
+        );
+        let fine = "set_tool_voltage(24)\nset_tool_communication(True, 115200, 0, 1, 1.5, 3.5)\n\
+                    set_runstate_outputs([])\nmodbus_reset_connection(\"10.0.0.2\", False)\n\
+                    modbus_send_custom_command(\"10.0.0.2\", 1, 6, [17, 32])\nx = 1 / 0\n";
+        assert!(error(fine).starts_with("line 6:"), "{}", error(fine));
+    }
 }
