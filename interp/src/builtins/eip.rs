@@ -5,40 +5,27 @@
 //! adapter's configuration service (`add_configuration`, `is_instance_connected`) is
 //! reached as on the robot, through `rpc_factory("xmlrpc", "http://127.0.0.1:40000/RPC2")`.
 
-use super::{req, Args, Builtin, Domain, Out};
+use super::{builtin, Builtin, Domain, Out};
 use crate::error::Fault;
 use crate::runtime::Runtime;
 
-const PARAMS: &[super::Param] = &[req("instance_name"), req("data_size")];
+const D: Domain = Domain::Io;
 
 pub(super) const TABLE: &[Builtin] = &[
-    Builtin::new(
-        "eip_reader_factory",
-        Domain::Io,
-        PARAMS,
+    builtin!(
+        eip_reader_factory(instance_name: &[u8], data_size: i32)
+            => |c, _, name, size| open(c, false, name, size),
         "Opens a read-only handle on the PLC→Robot EtherNet/IP instance `instance_name` (an id as a string) of `data_size` bytes.",
-        reader,
     ),
-    Builtin::new(
-        "eip_writer_factory",
-        Domain::Io,
-        PARAMS,
+    builtin!(
+        eip_writer_factory(instance_name: &[u8], data_size: i32)
+            => |c, _, name, size| open(c, true, name, size),
         "Opens a write-only handle on the Robot→PLC EtherNet/IP instance `instance_name` (an id as a string) of `data_size` bytes.",
-        writer,
     ),
 ];
 
-fn open(c: &mut Runtime, a: &Args, writer: bool) -> Result<Out, Fault> {
-    let name = a.bytes(0)?.to_vec();
-    let size = a.int(1)?;
+/// A handle on instance `name` of `size` bytes: a writer's (Robot→PLC) or a reader's.
+fn open(c: &mut Runtime, writer: bool, name: &[u8], size: i32) -> Result<Out, Fault> {
     let Runtime { eip, arm, .. } = c;
-    eip.open(&mut arm.eip, writer, &name, size).map(Out::Value)
-}
-
-fn reader(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
-    open(c, a, false)
-}
-
-fn writer(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
-    open(c, a, true)
+    eip.open(&mut arm.eip, writer, name, size).map(Out::Value)
 }

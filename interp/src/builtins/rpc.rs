@@ -4,25 +4,22 @@
 //! `handle.name(args...)` connects, sends one HTTP POST and waits for the reply (see
 //! the crate docs' "Bounds" and the package README for the types, errors and bounds).
 
-use super::{req, Args, Builtin, Domain, Out};
+use super::{builtin, Args, Builtin, Domain, Out};
 use crate::error::Fault;
 use crate::runtime::Runtime;
 use crate::value::Value;
 
-pub(super) const TABLE: &[Builtin] = &[Builtin::new(
-    "rpc_factory",
-    Domain::Sockets,
-    &[req("type"), req("url")],
+const D: Domain = Domain::Sockets;
+
+pub(super) const TABLE: &[Builtin] = &[builtin!(
+    rpc_factory(r#type: String, url: String) => rpc_factory,
     "Returns a handle for remote procedure calls to an XML-RPC server (type \"xmlrpc\", url http://host[:port]/path); `handle.name(args)` calls `name` on it.",
-    rpc_factory,
 )];
 
-fn rpc_factory(_c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
-    let kind = a.text(0)?;
+fn rpc_factory(_: &mut Runtime, _: &mut Args, kind: String, url: String) -> Result<Out, Fault> {
     if kind != "xmlrpc" {
         return Err(format!("`rpc_factory`: type must be \"xmlrpc\", got \"{kind}\"").into());
     }
-    let url = a.text(1)?;
     crate::rpc::parse_url(&url).map_err(|e| format!("`rpc_factory`: {e}"))?;
     Ok(Out::Value(Value::Rpc(url)))
 }

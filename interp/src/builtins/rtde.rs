@@ -29,19 +29,18 @@
 //! misspelt name, a register number out of range or with a leading zero) is a runtime
 //! error naming it.
 
-use super::{req, Args, Builtin, Domain, Out};
+use super::{builtin, Args, Builtin, Domain, Out};
 use crate::error::Fault;
 use crate::kinematics::Dh;
 use crate::rtde_fields::{self, Direction, Field, RtdeSource, RtdeValue};
 use crate::runtime::Runtime;
 use crate::value::Value;
 
-pub(super) const TABLE: &[Builtin] = &[Builtin::new(
-    "get_rtde_value",
-    Domain::Io,
-    &[req("key")],
+const D: Domain = Domain::Io;
+
+pub(super) const TABLE: &[Builtin] = &[builtin!(
+    get_rtde_value(key: String) => get_rtde_value,
     "The value of RTDE output field key, from the virtual arm's state.",
-    get_rtde_value,
 )];
 
 /// Bools packed bit 0 first (at most 64).
@@ -194,8 +193,7 @@ impl RtdeSource for Runtime {
     }
 }
 
-fn get_rtde_value(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
-    let key = a.text(0)?;
+fn get_rtde_value(c: &mut Runtime, _: &mut Args, key: String) -> Result<Out, Fault> {
     let field = Field::lookup(&key, Direction::Output).ok_or_else(|| {
         Fault::from(format!(
             "`get_rtde_value`: \"{key}\" is not an RTDE output field this virtual controller serves"
