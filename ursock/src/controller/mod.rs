@@ -662,7 +662,7 @@ fn operator(server: &Server, json: bool, out: &mpsc::SyncSender<Queued>) {
                 continue;
             }
             Err(OperatorError::BadArgument(why)) => format!("refused: {why}"),
-            Ok(command) => server.with_cell(|cell, now| match command.apply(cell, now) {
+            Ok(command) => server.with_cell(move |cell, now| match command.apply(cell, now) {
                 Err(why) => format!("refused: {why}"),
                 Ok(()) => {
                     let c = cell.controller();
