@@ -67,10 +67,13 @@
 //! - Settings the virtual arm has no use for (`zero_ftsensor`,
 //!   `screw_driving`, ...) are accepted with their manual signatures and do nothing.
 
-use super::{accept, float_list, floats, opt, req, secs, Args, Builtin, Default, Domain, Out};
+use super::{
+    accept, builtin, float_list, floats, opt, req, secs, Args, Builtin, Default, Domain, Out,
+};
 use crate::arm::trajectory::{self, Kind, Path, Profile};
 use crate::error::Fault;
 use crate::event::MoveStart;
+use crate::native::FromArg;
 use crate::runtime::Runtime;
 use crate::value::Value;
 
@@ -78,37 +81,6 @@ const D: Domain = Domain::Motion;
 const ZERO3: &[f64] = &[0.0, 0.0, 0.0];
 const NONE: &[super::Param] = &[];
 
-const fn movej_like(da: f64, dv: f64) -> [super::Param; 5] {
-    [
-        req("q"),
-        opt("a", Default::Float(da)),
-        opt("v", Default::Float(dv)),
-        opt("t", Default::Float(0.0)),
-        opt("r", Default::Float(0.0)),
-    ]
-}
-const MOVEJ: [super::Param; 5] = movej_like(1.4, 1.05);
-const MOVEL: [super::Param; 5] = [
-    req("pose"),
-    opt("a", Default::Float(1.2)),
-    opt("v", Default::Float(0.25)),
-    opt("t", Default::Float(0.0)),
-    opt("r", Default::Float(0.0)),
-];
-const MOVEP: [super::Param; 4] = [
-    req("pose"),
-    opt("a", Default::Float(1.2)),
-    opt("v", Default::Float(0.25)),
-    opt("r", Default::Float(0.0)),
-];
-/// `optimovej(goal, a=0.3, v=0.3, r=0)`, `optimovel(goal, ...)`: the manual names the
-/// target `goal` (joints or a pose here).
-const OPTIMOVE: [super::Param; 4] = [
-    req("goal"),
-    opt("a", Default::Float(0.3)),
-    opt("v", Default::Float(0.3)),
-    opt("r", Default::Float(0.0)),
-];
 const SENSOR: [super::Param; 4] = [
     req("enable"),
     opt("sensor_mass", Default::Float(0.0)),
@@ -117,122 +89,94 @@ const SENSOR: [super::Param; 4] = [
 ];
 
 pub(super) const TABLE: &[Builtin] = &[
-    Builtin::new(
-        "movej",
-        D,
-        &MOVEJ,
+    builtin!(
+        movej(q: Target, a: f64 = Float(1.4), v: f64 = Float(1.05), t: f64 = Float(0.0), r: f64 = Float(0.0))
+            => |c, x, q, a, v, t, r| go(c, x, Space::Joint, q, (a, v, t, r)),
         "Moves in joint space: a trapezoidal profile on the largest joint distance (t: stretched to take t).",
-        movej,
     ),
-    Builtin::new(
-        "movel",
-        D,
-        &MOVEL,
+    builtin!(
+        movel(pose: Target, a: f64 = Float(1.2), v: f64 = Float(0.25), t: f64 = Float(0.0), r: f64 = Float(0.0))
+            => |c, x, pose, a, v, t, r| go(c, x, Space::Tool, pose, (a, v, t, r)),
         "Moves the tool in a straight line: a trapezoidal profile on the distance (t: stretched to take t).",
-        movej,
     ),
-    Builtin::new("movep", D, &MOVEP, "Process move: as movel.", movej),
-    Builtin::new(
-        "servoc",
-        D,
-        &MOVEP,
+    builtin!(
+        movep(pose: Target, a: f64 = Float(1.2), v: f64 = Float(0.25), r: f64 = Float(0.0))
+            => |c, x, pose, a, v, r| go(c, x, Space::Tool, pose, (a, v, 0.0, r)),
+        "Process move: as movel.",
+    ),
+    builtin!(
+        servoc(pose: Target, a: f64 = Float(1.2), v: f64 = Float(0.25), r: f64 = Float(0.0))
+            => |c, x, pose, a, v, r| go(c, x, Space::Tool, pose, (a, v, 0.0, r)),
         "Servo to a pose in a circular blend: timed as movel to the pose.",
-        movej,
     ),
-    Builtin::new(
-        "powerdown",
-        D,
-        &[],
+    builtin!(
+        powerdown() => powerdown,
         "Shuts the robot down: the program halts and the controller running it powers the arm off (Arm::powerdown).",
-        powerdown,
     ),
-    Builtin::new(
-        "protective_stop",
-        D,
-        NONE,
+    builtin!(
+        protective_stop() => protective_stop,
         "Triggers a protective stop: the arm stops and the call takes one step, so the controller running it pauses the program before the next statement (Arm::protective_stop).",
-        protective_stop,
     ),
-    Builtin::new(
-        "optimovej",
-        D,
-        &OPTIMOVE,
+    // `optimovej(goal, a=0.3, v=0.3, r=0)`, `optimovel(goal, ...)`: the manual names the
+    // target `goal` (joints or a pose here).
+    builtin!(
+        optimovej(goal: Target, a: f64 = Float(0.3), v: f64 = Float(0.3), r: f64 = Float(0.0))
+            => |c, x, goal, a, v, r| go(c, x, Space::Joint, goal, (a, v, 0.0, r)),
         "As movej (a and v taken as speeds).",
-        movej,
     ),
-    Builtin::new(
-        "optimovel",
-        D,
-        &OPTIMOVE,
+    builtin!(
+        optimovel(goal: Target, a: f64 = Float(0.3), v: f64 = Float(0.3), r: f64 = Float(0.0))
+            => |c, x, goal, a, v, r| go(c, x, Space::Tool, goal, (a, v, 0.0, r)),
         "As movel (a and v taken as speeds).",
-        movej,
     ),
-    Builtin::new(
-        "movec",
-        D,
-        &[
-            req("pose_via"),
-            req("pose_to"),
-            opt("a", Default::Float(1.2)),
-            opt("v", Default::Float(0.25)),
-            opt("r", Default::Float(0.0)),
-            opt("mode", Default::Int(0)),
-        ],
+    builtin!(
+        movec(
+            pose_via: Target,
+            pose_to: Target,
+            a: f64 = Float(1.2),
+            v: f64 = Float(0.25),
+            r: f64 = Float(0.0),
+            mode: Given<'_, f64> = Int(0),
+        ) => |c, x, via, to, a, v, r, mode| movec(c, x, via, to, (a, v, r), mode),
         "Circular move: the tool along the arc through pose_via to pose_to.",
-        movec,
     ),
-    Builtin::new(
-        "servoj",
-        D,
-        &[
-            req("q"),
-            opt("a", Default::Float(0.0)),
-            opt("v", Default::Float(0.0)),
-            opt("t", Default::Float(0.002)),
-            opt("lookahead_time", Default::Float(0.1)),
-            opt("gain", Default::Float(300.0)),
-        ],
+    builtin!(
+        servoj(
+            q: [f64; 6],
+            a: f64 = Float(0.0),
+            v: f64 = Float(0.0),
+            t: f64 = Float(0.002),
+            lookahead_time: &Value = Float(0.1),
+            gain: &Value = Float(300.0),
+        ) => |c, x, q, a, v, t, _, _| servoj(c, x, q, (a, v, t)),
         "Moves to q at constant speed over t.",
-        servoj,
     ),
-    Builtin::new(
-        "speedj",
-        D,
-        &[req("qd"), req("a"), opt("t", Default::Absent)],
+    builtin!(
+        speedj(qd: [f64; 6], a: f64, t: Option<f64> = Absent)
+            => |c, x, qd, a, t| speed(c, x, Space::Joint, qd, a, t, None),
         "Ramps the joint speeds to qd at a and holds them; returns after t (one step if not given).",
-        speed,
     ),
-    Builtin::new(
-        "speedl",
-        D,
-        &[
-            req("xd"),
-            req("a"),
-            opt("t", Default::Absent),
-            opt("aRot", Default::Absent),
-        ],
+    builtin!(
+        speedl(xd: [f64; 6], a: f64, t: Option<f64> = Absent, aRot: Option<f64> = Absent)
+            => |c, x, xd, a, t, a_rot| speed(c, x, Space::Tool, xd, a, t, a_rot),
         "Ramps the tool speed to xd at a (aRot) and holds it; returns after t (one step if not given).",
-        speed,
     ),
-    Builtin::new("stopj", D, &[req("a")], "Ramps the joint speeds down to zero at a; returns at rest.", stop),
-    Builtin::new(
-        "stopl",
-        D,
-        &[req("a"), opt("aRot", Default::Absent)],
+    builtin!(
+        stopj(a: f64) => |c, _, a| stop(c, Space::Joint, a, None),
+        "Ramps the joint speeds down to zero at a; returns at rest.",
+    ),
+    builtin!(
+        stopl(a: f64, aRot: Option<f64> = Absent) => |c, _, a, a_rot| stop(c, Space::Tool, a, a_rot),
         "Ramps the tool speed down to zero at a (aRot); returns at rest.",
-        stop,
     ),
-    Builtin::new(
-        "direct_torque",
-        D,
-        &[
-            req("torque"),
-            opt("friction_comp", Default::Bool(true)),
-            opt("viscous_scale", Default::Absent),
-            opt("coulomb_scale", Default::Absent),
-        ],
+    builtin!(
+        direct_torque(
+            torque: [f64; 6],
+            friction_comp: &Value = Bool(true),
+            viscous_scale: &Value = Absent,
+            coulomb_scale: &Value = Absent,
+        ) => |c, _, _, _, _, _| direct_torque(c),
         "Torque control has no model here: takes one step.",
-        direct_torque,
     ),
     Builtin::new(
         "get_actual_joint_positions",
@@ -820,20 +764,59 @@ fn check_joints(name: &str, q: [f64; 6]) -> Result<[f64; 6], Fault> {
     Ok(q)
 }
 
+/// What a motion command moves: the joints, or the tool (in the base frame).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Space {
+    Joint,
+    Tool,
+}
+
+/// A motion's target as the program gives it: joint positions (a list of 6 numbers) or
+/// a pose.
+#[derive(Debug, Clone, Copy)]
+enum Target {
+    Joints([f64; 6]),
+    Pose([f64; 6]),
+}
+
+impl Target {
+    /// True if the target is joint positions.
+    fn is_joints(self) -> bool {
+        matches!(self, Target::Joints(_))
+    }
+}
+
+/// A list of 6 numbers (joints) or a pose; the type error names the parameter otherwise.
+impl FromArg<'_> for Target {
+    fn from_arg(a: &Args, v: &Value, i: usize) -> Result<Self, Fault> {
+        let six = <[f64; 6]>::from_arg(a, v, i)?;
+        Ok(match v {
+            Value::Pose(_) => Target::Pose(six),
+            _ => Target::Joints(six),
+        })
+    }
+}
+
+/// An argument converted to `T`, with the value as the program wrote it (for an error
+/// that quotes it).
+struct Given<'v, T>(T, &'v Value);
+
+impl<'v, T: FromArg<'v>> FromArg<'v> for Given<'v, T> {
+    fn from_arg(a: &Args, v: &'v Value, i: usize) -> Result<Self, Fault> {
+        Ok(Given(T::from_arg(a, v, i)?, v))
+    }
+}
+
 /// A motion's target: joints (checked against the joint range), or a pose reached
 /// through inverse kinematics nearest the joints the move starts from. Returns the joints
 /// and the tool pose there (the pose given, for a pose).
-fn target(
-    c: &Runtime,
-    name: &str,
-    v: &Value,
-    six: [f64; 6],
-) -> Result<([f64; 6], [f64; 6]), Fault> {
-    if matches!(v, Value::Pose(_)) {
-        Ok((c.inverse(six, c.move_start().0, c.arm.tcp)?, six))
-    } else {
-        let q = check_joints(name, six)?;
-        Ok((q, c.tool_pose(q)))
+fn target(c: &Runtime, name: &str, to: Target) -> Result<([f64; 6], [f64; 6]), Fault> {
+    match to {
+        Target::Pose(pose) => Ok((c.inverse(pose, c.move_start().0, c.arm.tcp)?, pose)),
+        Target::Joints(q) => {
+            let q = check_joints(name, q)?;
+            Ok((q, c.tool_pose(q)))
+        }
     }
 }
 
@@ -842,21 +825,15 @@ fn target(
 /// stops with a protective stop (as a real arm stops when the line runs it into a
 /// singularity); the joints returned are then the move's start, which do not reach
 /// the pose.
-fn tool_target(
-    c: &Runtime,
-    name: &str,
-    v: &Value,
-    six: [f64; 6],
-) -> Result<([f64; 6], [f64; 6]), Fault> {
-    match target(c, name, v, six) {
-        Err(_) if matches!(v, Value::Pose(_)) => Ok((c.move_start().0, six)),
-        other => other,
+fn tool_target(c: &Runtime, name: &str, to: Target) -> Result<([f64; 6], [f64; 6]), Fault> {
+    match (target(c, name, to), to) {
+        (Err(_), Target::Pose(pose)) => Ok((c.move_start().0, pose)),
+        (other, _) => other,
     }
 }
 
-/// The blend radius argument `r` (m): not negative.
-fn radius(a: &Args, i: usize) -> Result<f64, Fault> {
-    let r = a.num(i)?;
+/// The blend radius `r` (m) of a call to `a`: not negative.
+fn radius(a: &Args, r: f64) -> Result<f64, Fault> {
     if r.is_finite() && r >= 0.0 {
         Ok(r)
     } else {
@@ -947,38 +924,40 @@ fn move_start(
     }
 }
 
-/// `movej`, `movel`, `movep`, `optimovej`, `optimovel`: the arm moves along a trapezoidal
-/// profile (accelerate at `a` to `v`, cruise, decelerate), stretched to `t` if given, and
-/// is at the target when the move ends; with a blend radius `r > 0` the program gets
-/// control back where the blend begins (see [`Runtime::start_move`]).
-fn movej(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
-    let six = a.six(0)?;
-    let (accel, speed) = (a.num(1)?, a.num(2)?);
-    // movep and optimove* have no `t`; `r` is last.
-    let t = if a.params.len() == 5 { a.num(3)? } else { 0.0 };
-    let r = radius(a, a.params.len() - 1)?;
-    let joint_move = matches!(a.name, "movej" | "optimovej");
-    let (q1, pose) = if joint_move {
-        target(c, a.name, &a.v[0], six)?
-    } else {
-        tool_target(c, a.name, &a.v[0], six)?
-    };
-    let back = if joint_move {
-        let q0 = c.move_start().0;
-        let profile = Profile::new(joint_distance(q0, q1), speed, accel, t);
-        let tcp = c.arm.tcp;
-        let info = move_start(a.name, a.line, Some(q1), Some(pose), (accel, speed, t, r));
-        c.start_move(Kind::Joint { q0, q1, profile }, tcp, r, info)
-    } else {
-        let given = !matches!(a.v[0], Value::Pose(_));
-        tool_move(
-            c,
-            None,
-            pose,
-            (q1, given),
-            (accel, speed, t, r),
-            (a.name, a.line, false),
-        )
+/// `movej`, `movel`, `movep`, `servoc`, `optimovej`, `optimovel`: the arm moves along a
+/// trapezoidal profile (accelerate at `a` to `v`, cruise, decelerate), stretched to `t`
+/// if given (0 for those without `t`), and is at the target when the move ends; with a
+/// blend radius `r > 0` the program gets control back where the blend begins (see
+/// [`Runtime::start_move`]). `space`: the joints move (`movej`, `optimovej`) or the tool
+/// in a line (the others).
+fn go(
+    c: &mut Runtime,
+    a: &mut Args,
+    space: Space,
+    to: Target,
+    (accel, speed, t, r): (f64, f64, f64, f64),
+) -> Result<Out, Fault> {
+    let r = radius(a, r)?;
+    let back = match space {
+        Space::Joint => {
+            let (q1, pose) = target(c, a.name, to)?;
+            let q0 = c.move_start().0;
+            let profile = Profile::new(joint_distance(q0, q1), speed, accel, t);
+            let tcp = c.arm.tcp;
+            let info = move_start(a.name, a.line, Some(q1), Some(pose), (accel, speed, t, r));
+            c.start_move(Kind::Joint { q0, q1, profile }, tcp, r, info)
+        }
+        Space::Tool => {
+            let (q1, pose) = tool_target(c, a.name, to)?;
+            tool_move(
+                c,
+                None,
+                pose,
+                (q1, to.is_joints()),
+                (accel, speed, t, r),
+                (a.name, a.line, false),
+            )
+        }
     };
     Ok(Out::Motion(back, Value::None))
 }
@@ -988,18 +967,20 @@ fn movej(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
 /// from the start's to `pose_to`'s; `mode=1` (fixed): it keeps its relation to the
 /// arc's tangent from the start's, turning about the circle's axis by the angle swept
 /// (`pose_to`'s orientation is not used); another mode is a runtime error.
-fn movec(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
-    let via_six = a.six(0)?;
-    let via = if matches!(a.v[0], Value::Pose(_)) {
-        via_six
-    } else {
-        c.tool_pose(check_joints(a.name, via_six)?)
+fn movec(
+    c: &mut Runtime,
+    a: &mut Args,
+    via: Target,
+    to: Target,
+    (accel, speed, r): (f64, f64, f64),
+    Given(mode, mode_given): Given<'_, f64>,
+) -> Result<Out, Fault> {
+    let via = match via {
+        Target::Pose(pose) => pose,
+        Target::Joints(q) => c.tool_pose(check_joints(a.name, q)?),
     };
-    let six = a.six(1)?;
-    let (accel, speed) = (a.num(2)?, a.num(3)?);
-    let r = radius(a, 4)?;
-    let (q1, pose) = tool_target(c, a.name, &a.v[1], six)?;
-    let mode = a.num(5)?;
+    let r = radius(a, r)?;
+    let (q1, pose) = tool_target(c, a.name, to)?;
     let fixed = if mode == 0.0 {
         false
     } else if mode == 1.0 {
@@ -1007,15 +988,14 @@ fn movec(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
     } else {
         return Err(Fault::from(format!(
             "`movec`: mode={} is neither 0 (unconstrained) nor 1 (fixed)",
-            a.v[5].to_str()
+            mode_given.to_str()
         )));
     };
-    let given = !matches!(a.v[1], Value::Pose(_));
     let back = tool_move(
         c,
         Some(via),
         pose,
-        (q1, given),
+        (q1, to.is_joints()),
         (accel, speed, 0.0, r),
         (a.name, a.line, fixed),
     );
@@ -1043,14 +1023,17 @@ fn protective_stop(c: &mut Runtime, _: &mut Args) -> Result<Out, Fault> {
 
 /// `servoj`: straight to `q` in joint space at constant speed over `t` (`a`, `v`,
 /// `lookahead_time` and `gain` shape a real servo's tracking; not modelled).
-fn servoj(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
-    let q1 = check_joints(a.name, a.six(0)?)?;
-    let t = a.num(3)?;
+fn servoj(
+    c: &mut Runtime,
+    a: &mut Args,
+    q: [f64; 6],
+    (acc, speed, t): (f64, f64, f64),
+) -> Result<Out, Fault> {
+    let q1 = check_joints(a.name, q)?;
     let q0 = c.arm.q;
     let profile = Profile::new(joint_distance(q0, q1), 0.0, 0.0, t);
     let tcp = c.arm.tcp;
     let pose = c.tool_pose(q1);
-    let (acc, speed) = (a.num(1)?, a.num(2)?);
     let info = move_start(a.name, a.line, Some(q1), Some(pose), (acc, speed, t, 0.0));
     c.start_motion(Kind::Joint { q0, q1, profile }, tcp, Some(info));
     Ok(Out::Wait(secs(t), Value::None))
@@ -1060,34 +1043,36 @@ fn servoj(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
 /// current one to the target at `a` (the component that changes most; `aRot` for the
 /// tool's rotation, `a` if left out), then holds until the next motion command; returns
 /// after `t` (one step if left out).
-fn speed(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
-    let target = a.six(0)?;
-    let acc = a.num(1)?;
-    let t = if a.is_absent(2) {
-        c.step_time.as_secs_f64()
-    } else {
-        a.num(2)?
-    };
+fn speed(
+    c: &mut Runtime,
+    a: &mut Args,
+    space: Space,
+    target: [f64; 6],
+    acc: f64,
+    t: Option<f64>,
+    a_rot: Option<f64>,
+) -> Result<Out, Fault> {
+    let t = t.unwrap_or(c.step_time.as_secs_f64());
     let tcp = c.arm.tcp;
     let mut info = move_start(a.name, a.line, None, None, (acc, 0.0, t, 0.0));
     info.speed = Some(target);
-    if a.name == "speedj" {
-        let qd0 = c.arm.qd;
-        let ramp = trajectory::ramp_time(&qd0, &target, acc);
-        let q0 = c.arm.q;
-        c.start_motion(
-            Kind::JointSpeed {
-                q0,
-                qd0,
-                qd1: target,
-                ramp,
-            },
-            tcp,
-            Some(info),
-        );
-    } else {
-        let a_rot = if a.is_absent(3) { acc } else { a.num(3)? };
-        tool_speed(c, target, acc, a_rot, Some(info));
+    match space {
+        Space::Joint => {
+            let qd0 = c.arm.qd;
+            let ramp = trajectory::ramp_time(&qd0, &target, acc);
+            let q0 = c.arm.q;
+            c.start_motion(
+                Kind::JointSpeed {
+                    q0,
+                    qd0,
+                    qd1: target,
+                    ramp,
+                },
+                tcp,
+                Some(info),
+            );
+        }
+        Space::Tool => tool_speed(c, target, acc, a_rot.unwrap_or(acc), Some(info)),
     }
     Ok(Out::Wait(secs(t), Value::None))
 }
@@ -1106,34 +1091,36 @@ fn tool_speed(c: &mut Runtime, v1: [f64; 6], acc: f64, a_rot: f64, info: Option<
 }
 
 /// `stopj(a)`: the joint speeds ramp down to zero at `a` (the fastest joint; the others
-/// in proportion); `stopl(a, aRot)`: the tool speed, at `a` (`aRot` for its rotation).
-/// Returns when the arm is at rest (at least one step).
-fn stop(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
-    let acc = a.num(0)?;
-    let ramp = if a.name == "stopj" {
-        let qd0 = c.arm.qd;
-        let ramp = trajectory::ramp_time(&qd0, &[0.0; 6], acc);
-        let (q0, tcp) = (c.arm.q, c.arm.tcp);
-        c.start_motion(
-            Kind::JointSpeed {
-                q0,
-                qd0,
-                qd1: [0.0; 6],
-                ramp,
-            },
-            tcp,
-            None,
-        );
-        ramp
-    } else {
-        let a_rot = if a.is_absent(1) { acc } else { a.num(1)? };
-        let v0 = c.arm.tcp_speed;
-        tool_speed(c, [0.0; 6], acc, a_rot, None);
-        trajectory::ramp_time(&v0[..3], &[0.0; 3], acc).max(trajectory::ramp_time(
-            &v0[3..],
-            &[0.0; 3],
-            a_rot,
-        ))
+/// in proportion); `stopl(a, aRot)`: the tool speed, at `a` (`aRot` for its rotation,
+/// `a` if left out). Returns when the arm is at rest (at least one step).
+fn stop(c: &mut Runtime, space: Space, acc: f64, a_rot: Option<f64>) -> Result<Out, Fault> {
+    let ramp = match space {
+        Space::Joint => {
+            let qd0 = c.arm.qd;
+            let ramp = trajectory::ramp_time(&qd0, &[0.0; 6], acc);
+            let (q0, tcp) = (c.arm.q, c.arm.tcp);
+            c.start_motion(
+                Kind::JointSpeed {
+                    q0,
+                    qd0,
+                    qd1: [0.0; 6],
+                    ramp,
+                },
+                tcp,
+                None,
+            );
+            ramp
+        }
+        Space::Tool => {
+            let a_rot = a_rot.unwrap_or(acc);
+            let v0 = c.arm.tcp_speed;
+            tool_speed(c, [0.0; 6], acc, a_rot, None);
+            trajectory::ramp_time(&v0[..3], &[0.0; 3], acc).max(trajectory::ramp_time(
+                &v0[3..],
+                &[0.0; 3],
+                a_rot,
+            ))
+        }
     };
     // At rest when the ramp ends on the motion clock (at least a step).
     let n = secs(ramp)
@@ -1143,8 +1130,7 @@ fn stop(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
     Ok(Out::Motion(until, Value::None))
 }
 
-fn direct_torque(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
-    a.six(0)?;
+fn direct_torque(c: &mut Runtime) -> Result<Out, Fault> {
     Ok(Out::Wait(c.step_time, Value::None))
 }
 
