@@ -207,7 +207,8 @@ pub(crate) struct Args {
     pub name: &'static str,
     /// The built-in's parameters.
     pub params: &'static [Param],
-    /// One value per parameter.
+    /// One value per parameter; the entry's code gets them converted (see
+    /// [`builtin!`]) and finds this empty.
     pub v: Vec<Value>,
     /// How many arguments were given by position (the first `positional` of `v`).
     pub positional: usize,
@@ -221,67 +222,8 @@ pub(crate) struct Args {
     pub traced: bool,
 }
 
-impl Args {
-    pub(crate) fn bad(&self, i: usize, what: &str) -> Fault {
-        bad_arg(self, self.v.get(i).unwrap_or(&Value::None), i, what)
-    }
-
-    /// Argument `i` converted to `T` (a type error naming the parameter otherwise).
-    fn arg<'s, T: FromArg<'s>>(&'s self, i: usize) -> Result<T, Fault> {
-        T::from_arg(self, self.v.get(i).unwrap_or(NONE), i)
-    }
-
-    /// Argument `i` as a number (an int or a float).
-    pub fn num(&self, i: usize) -> Result<f64, Fault> {
-        self.arg(i)
-    }
-
-    /// Argument `i` as an int (a float with no fraction is accepted).
-    pub fn int(&self, i: usize) -> Result<i32, Fault> {
-        self.arg(i)
-    }
-
-    /// Argument `i` as a string's bytes.
-    pub fn bytes(&self, i: usize) -> Result<&[u8], Fault> {
-        self.arg(i)
-    }
-
-    /// Argument `i` as text (a socket or variable name).
-    pub fn text(&self, i: usize) -> Result<String, Fault> {
-        self.arg(i)
-    }
-
-    /// Argument `i` as a bool (an int: non-zero is true).
-    pub fn boolean(&self, i: usize) -> Result<bool, Fault> {
-        self.arg(i)
-    }
-
-    /// Argument `i` as six numbers (a pose or a list of 6 numbers).
-    pub fn six(&self, i: usize) -> Result<[f64; 6], Fault> {
-        self.arg(i)
-    }
-
-    /// Argument `i` as a list of numbers of length `n` (a pose when `n` is 6).
-    pub fn nums<const N: usize>(&self, i: usize) -> Result<[f64; N], Fault> {
-        self.arg(i)
-    }
-
-    /// Argument `i` as an index into `0..n` (`what` names the thing indexed).
-    pub fn index(&self, i: usize, n: usize, what: &str) -> Result<usize, Fault> {
-        index(self, self.int(i)?, n, what)
-    }
-
-    /// Argument `i` was left out (its default is [`Default::Absent`]).
-    pub fn is_absent(&self, i: usize) -> bool {
-        matches!(self.v.get(i), None | Some(Value::None))
-    }
-}
-
-/// The value an argument past the end of a call's arguments reads as.
-const NONE: &Value = &Value::None;
-
 /// The type error for argument `i` of the call `a`, whose value `v` is not `what`.
-fn bad_arg(a: &Args, v: &Value, i: usize, what: &str) -> Fault {
+pub(crate) fn bad_arg(a: &Args, v: &Value, i: usize, what: &str) -> Fault {
     Fault::type_error(format!(
         "type error: `{}` argument `{}` needs {what}, got {} {}",
         a.name,

@@ -927,8 +927,7 @@ impl Server {
     /// [`ServerEvent::Shutdown`]. While a dashboard `shutdown` is under way it only
     /// waits for the server to stop.
     pub fn shut_down(&self) {
-        self.shared
-            .ask(|cell, now| cell.controller().turn_off(now));
+        self.shared.ask(|cell, now| cell.controller().turn_off(now));
         let first = !self.shared.shutting_down.swap(true, Ordering::SeqCst);
         if first {
             // Connection numbers start at 1: every connection is closed.

@@ -12,107 +12,67 @@
 //!   more than half of it; None if the encoder is not enabled.
 //! - `track_conveyor_linear`, `track_conveyor_circular`, `stop_conveyor_tracking`.
 
-use super::{opt, req, Args, Builtin, Default, Domain, Out};
+use super::{builtin, Args, Builtin, Domain, Out};
 use crate::error::Fault;
+use crate::native::index;
 use crate::runtime::{Encoder, Runtime};
 use crate::value::Value;
 
 const D: Domain = Domain::Motion;
 
 pub(super) const TABLE: &[Builtin] = &[
-    Builtin::new(
-        "encoder_enable_pulse_decode",
-        D,
-        &[
-            req("encoder_index"),
-            req("decoder_type"),
-            req("A"),
-            req("B"),
-        ],
+    builtin!(
+        encoder_enable_pulse_decode(encoder_index: i32, decoder_type: i32, A: i32, B: i32)
+            => pulse_decode,
         "Enables encoder 0/1 on pulse inputs A, B (8-11); no pulses arrive, it stays at 0.",
-        enable,
     ),
-    Builtin::new(
-        "encoder_enable_set_tick_count",
-        D,
-        &[req("encoder_index"), req("range_id")],
+    builtin!(
+        encoder_enable_set_tick_count(encoder_index: i32, range_id: i32) => enable_set_tick_count,
         "Enables encoder 0/1 fed by encoder_set_tick_count, with range_id 0-4.",
-        enable,
     ),
-    Builtin::new(
-        "conveyor_pulse_decode",
-        D,
-        &[req("type"), req("A"), opt("B", Default::Absent)],
+    builtin!(
+        conveyor_pulse_decode(r#type: i32, A: i32, B: &Value = Absent)
+            => |c, x, t, _, _| conveyor_pulse_decode(c, x, t),
         "Deprecated form of encoder_enable_pulse_decode for encoder 0 (inputs 0-3).",
-        enable,
     ),
-    Builtin::new(
-        "encoder_get_tick_count",
-        D,
-        &[req("encoder_index"), opt("opt", Default::Str(""))],
+    builtin!(
+        encoder_get_tick_count(encoder_index: i32, opt: &[u8] = Str("")) => get_tick_count,
         "The encoder's tick count: a float, or the raw int with opt=\"raw\".",
-        get_ticks,
     ),
-    Builtin::new(
-        "get_conveyor_tick_count",
-        D,
-        &[],
+    builtin!(
+        get_conveyor_tick_count() => |c, _| ticks(c, 0, false),
         "Deprecated: encoder 0's tick count (a float).",
-        get_ticks,
     ),
-    Builtin::new(
-        "encoder_set_tick_count",
-        D,
-        &[req("encoder_index"), req("count")],
+    builtin!(
+        encoder_set_tick_count(encoder_index: i32, count: f64) => set_tick_count,
         "Sets the tick count of an encoder enabled by encoder_enable_set_tick_count.",
-        set_ticks,
     ),
-    Builtin::new(
-        "set_conveyor_tick_count",
-        D,
-        &[
-            req("tick_count"),
-            opt("absolute_encoder_resolution", Default::Int(0)),
-        ],
+    builtin!(
+        set_conveyor_tick_count(tick_count: i32, absolute_encoder_resolution: i32 = Int(0))
+            => set_conveyor_tick_count,
         "Deprecated: sets encoder 0's tick count, with its range (0-4).",
-        set_ticks,
     ),
-    Builtin::new(
-        "encoder_unwind_delta_tick_count",
-        D,
-        &[req("encoder_index"), req("delta_tick_count")],
+    builtin!(
+        encoder_unwind_delta_tick_count(encoder_index: i32, delta_tick_count: f64) => unwind,
         "The delta unwound by the encoder's range if it wrapped (None if not enabled).",
-        unwind,
     ),
-    Builtin::new(
-        "track_conveyor_linear",
-        D,
-        &[
-            req("direction"),
-            req("ticks_per_meter"),
-            opt("encoder_index", Default::Int(0)),
-        ],
+    builtin!(
+        track_conveyor_linear(direction: [f64; 6], ticks_per_meter: f64, encoder_index: i32 = Int(0))
+            => |c, x, _, _, k| track(c, x, k),
         "Tracks a linear conveyor on the encoder (recorded; no conveyor moves here).",
-        track,
     ),
-    Builtin::new(
-        "track_conveyor_circular",
-        D,
-        &[
-            req("center"),
-            req("ticks_per_revolution"),
-            opt("rotate_tool", Default::Bool(false)),
-            opt("encoder_index", Default::Int(0)),
-        ],
+    builtin!(
+        track_conveyor_circular(
+            center: [f64; 6],
+            ticks_per_revolution: f64,
+            rotate_tool: bool = Bool(false),
+            encoder_index: i32 = Int(0),
+        ) => |c, x, _, _, _, k| track(c, x, k),
         "Tracks a circular conveyor on the encoder (recorded; no conveyor moves here).",
-        track,
     ),
-    Builtin::new(
-        "stop_conveyor_tracking",
-        D,
-        &[opt("a", Default::Float(20.0))],
+    builtin!(
+        stop_conveyor_tracking(a: f64 = Float(20.0)) => |c, _, _| stop(c),
         "Stops conveyor tracking; the joints' speeds are zero.",
-        stop,
     ),
 ];
 
@@ -126,8 +86,7 @@ fn range_len(id: i32) -> f64 {
     }
 }
 
-fn range_id(a: &Args, i: usize) -> Result<i32, Fault> {
-    let id = a.int(i)?;
+fn range_id(a: &Args, id: i32) -> Result<i32, Fault> {
     if (0..=4).contains(&id) {
         Ok(id)
     } else {
@@ -143,73 +102,78 @@ fn wrap(id: i32, ticks: i64) -> i64 {
     }
 }
 
-fn enable(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
-    let (k, enc) = match a.name {
-        "conveyor_pulse_decode" => {
-            let t = a.int(0)?;
-            if !(0..=4).contains(&t) {
-                return Err(Fault::from(format!(
-                    "`conveyor_pulse_decode`: type {t} is not 0-4"
-                )));
-            }
-            a.int(1)?;
-            let mode = if t == 0 { 0 } else { 1 };
-            (
-                0,
-                Encoder {
-                    mode,
-                    ..Encoder::default()
-                },
-            )
+/// The encoder a pulse decoder of type `t` (0: none, 1-4: A/B quadrature or pulses)
+/// enables: mode 0 without a decoder, 1 with one; no pulses arrive, so its count stays 0.
+fn pulse_encoder(t: i32) -> Encoder {
+    Encoder {
+        mode: if t == 0 { 0 } else { 1 },
+        ..Encoder::default()
+    }
+}
+
+fn pulse_decode(
+    c: &mut Runtime,
+    a: &mut Args,
+    encoder_index: i32,
+    t: i32,
+    pin_a: i32,
+    pin_b: i32,
+) -> Result<Out, Fault> {
+    let k = index(a, encoder_index, 2, "encoder")?;
+    if !(0..=4).contains(&t) {
+        return Err(Fault::from(format!(
+            "`encoder_enable_pulse_decode`: decoder type {t} is not 0-4"
+        )));
+    }
+    for pin in [pin_a, pin_b] {
+        if t != 0 && !(8..=11).contains(&pin) {
+            return Err(Fault::from(format!(
+                "`encoder_enable_pulse_decode`: pin {pin} is not 8-11"
+            )));
         }
-        "encoder_enable_pulse_decode" => {
-            let k = a.index(0, 2, "encoder")?;
-            let t = a.int(1)?;
-            if !(0..=4).contains(&t) {
-                return Err(Fault::from(format!(
-                    "`encoder_enable_pulse_decode`: decoder type {t} is not 0-4"
-                )));
-            }
-            for i in [2, 3] {
-                let pin = a.int(i)?;
-                if t != 0 && !(8..=11).contains(&pin) {
-                    return Err(Fault::from(format!(
-                        "`encoder_enable_pulse_decode`: pin {pin} is not 8-11"
-                    )));
-                }
-            }
-            let mode = if t == 0 { 0 } else { 1 };
-            (
-                k,
-                Encoder {
-                    mode,
-                    ..Encoder::default()
-                },
-            )
-        }
-        _ => {
-            let k = a.index(0, 2, "encoder")?;
-            let id = range_id(a, 1)?;
-            (
-                k,
-                Encoder {
-                    mode: 2,
-                    range_id: id,
-                    ticks: 0,
-                },
-            )
-        }
-    };
-    c.arm.encoders[k] = enc;
+    }
+    c.arm.encoders[k] = pulse_encoder(t);
     Ok(Out::Value(Value::None))
 }
 
-fn get_ticks(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
-    let (k, raw) = if a.name == "get_conveyor_tick_count" {
-        (0, false)
-    } else {
-        (a.index(0, 2, "encoder")?, a.bytes(1)? == b"raw")
+fn conveyor_pulse_decode(c: &mut Runtime, _: &mut Args, t: i32) -> Result<Out, Fault> {
+    if !(0..=4).contains(&t) {
+        return Err(Fault::from(format!(
+            "`conveyor_pulse_decode`: type {t} is not 0-4"
+        )));
+    }
+    c.arm.encoders[0] = pulse_encoder(t);
+    Ok(Out::Value(Value::None))
+}
+
+fn enable_set_tick_count(
+    c: &mut Runtime,
+    a: &mut Args,
+    encoder_index: i32,
+    range: i32,
+) -> Result<Out, Fault> {
+    let k = index(a, encoder_index, 2, "encoder")?;
+    let id = range_id(a, range)?;
+    c.arm.encoders[k] = Encoder {
+        mode: 2,
+        range_id: id,
+        ticks: 0,
     };
+    Ok(Out::Value(Value::None))
+}
+
+fn get_tick_count(
+    c: &mut Runtime,
+    a: &mut Args,
+    encoder_index: i32,
+    opt: &[u8],
+) -> Result<Out, Fault> {
+    let k = index(a, encoder_index, 2, "encoder")?;
+    ticks(c, k, opt == b"raw")
+}
+
+/// Encoder `k`'s tick count: a float, or an int if `raw`.
+fn ticks(c: &Runtime, k: usize, raw: bool) -> Result<Out, Fault> {
     let ticks = c.arm.encoders[k].ticks;
     Ok(Out::Value(if raw {
         Value::Int(ticks as i32)
@@ -218,19 +182,28 @@ fn get_ticks(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
     }))
 }
 
-fn set_ticks(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
-    if a.name == "set_conveyor_tick_count" {
-        let ticks = a.int(0)?;
-        let id = range_id(a, 1)?;
-        c.arm.encoders[0] = Encoder {
-            mode: 2,
-            range_id: id,
-            ticks: wrap(id, i64::from(ticks)),
-        };
-        return Ok(Out::Value(Value::None));
-    }
-    let k = a.index(0, 2, "encoder")?;
-    let count = a.num(1)?;
+fn set_conveyor_tick_count(
+    c: &mut Runtime,
+    a: &mut Args,
+    ticks: i32,
+    resolution: i32,
+) -> Result<Out, Fault> {
+    let id = range_id(a, resolution)?;
+    c.arm.encoders[0] = Encoder {
+        mode: 2,
+        range_id: id,
+        ticks: wrap(id, i64::from(ticks)),
+    };
+    Ok(Out::Value(Value::None))
+}
+
+fn set_tick_count(
+    c: &mut Runtime,
+    a: &mut Args,
+    encoder_index: i32,
+    count: f64,
+) -> Result<Out, Fault> {
+    let k = index(a, encoder_index, 2, "encoder")?;
     let enc = &mut c.arm.encoders[k];
     if enc.mode != 2 {
         return Err(Fault::from(format!(
@@ -252,9 +225,8 @@ fn set_ticks(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
     Ok(Out::Value(Value::None))
 }
 
-fn unwind(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
-    let k = a.index(0, 2, "encoder")?;
-    let delta = a.num(1)?;
+fn unwind(c: &mut Runtime, a: &mut Args, encoder_index: i32, delta: f64) -> Result<Out, Fault> {
+    let k = index(a, encoder_index, 2, "encoder")?;
     let enc = c.arm.encoders[k];
     if enc.mode == 0 {
         return Ok(Out::Value(Value::None));
@@ -270,22 +242,13 @@ fn unwind(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
     Ok(Out::Value(Value::Float(d)))
 }
 
-fn track(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
-    a.six(0)?;
-    a.num(1)?;
-    let at = if a.name == "track_conveyor_linear" {
-        2
-    } else {
-        a.boolean(2)?;
-        3
-    };
-    let k = a.index(at, 2, "encoder")?;
+fn track(c: &mut Runtime, a: &mut Args, encoder_index: i32) -> Result<Out, Fault> {
+    let k = index(a, encoder_index, 2, "encoder")?;
     c.arm.conveyor = Some(k);
     Ok(Out::Value(Value::None))
 }
 
-fn stop(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
-    a.num(0)?;
+fn stop(c: &mut Runtime) -> Result<Out, Fault> {
     c.arm.conveyor = None;
     c.arm.qd = [0.0; 6];
     Ok(Out::Value(Value::None))

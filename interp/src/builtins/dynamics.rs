@@ -33,91 +33,69 @@
 //! An arm whose DH parameters are not one of [`MODELS`]'s has no dynamics parameters:
 //! the dynamics functions are then a runtime error.
 
-use super::{float_list, floats, opt, Args, Builtin, Default, Domain, Out};
+use super::{builtin, float_list, floats, Args, Builtin, Domain, Out};
 use crate::error::Fault;
 use crate::kinematics::dynamics::{self, Payload};
 use crate::kinematics::{self, Model, MODELS};
+use crate::native::FromArg;
 use crate::runtime::Runtime;
 use crate::value::Value;
-
-const NONE: &[super::Param] = &[];
 
 /// The most poses `estimate_payload` takes. Its orientation check compares every pair
 /// (about 27 multiply-adds each): 500 poses are about 3.4 M, under the 4 M a matrix
 /// product may take, so one call stays well within a step.
 pub const MAX_PAYLOAD_POSES: usize = 500;
 
+/// The chapter of the entries below, but for the Jacobians (in blocks of their own).
+const D: Domain = Domain::Motion;
+
 pub(super) const TABLE: &[Builtin] = &[
-    Builtin::new(
-        "get_jacobian",
-        Domain::Poses,
-        &[opt("q", Default::Absent), opt("tcp", Default::Absent)],
-        "The 6x6 Jacobian (base frame: linear, then angular speed per joint speed) at q (default: the joints now) through tcp (default: the active TCP).",
-        jacobian,
-    ),
-    Builtin::new(
-        "get_jacobian_time_derivative",
-        Domain::Poses,
-        &[
-            opt("q", Default::Absent),
-            opt("qd", Default::Absent),
-            opt("tcp", Default::Absent),
-        ],
-        "The time derivative of the Jacobian at q moving at qd (defaults: the joints and joint speeds now) through tcp (default: the active TCP).",
-        jacobian_time_derivative,
-    ),
-    Builtin::new(
-        "get_mass_matrix",
-        Domain::Motion,
-        &[
-            opt("q", Default::Absent),
-            opt("include_rotors_inertia", Default::Bool(false)),
-        ],
+    {
+        const D: Domain = Domain::Poses;
+        builtin!(
+            get_jacobian(q: Option<[f64; 6]> = Absent, tcp: Option<[f64; 6]> = Absent)
+                => jacobian,
+            "The 6x6 Jacobian (base frame: linear, then angular speed per joint speed) at q (default: the joints now) through tcp (default: the active TCP).",
+        )
+    },
+    {
+        const D: Domain = Domain::Poses;
+        builtin!(
+            get_jacobian_time_derivative(
+                q: Option<[f64; 6]> = Absent,
+                qd: Option<[f64; 6]> = Absent,
+                tcp: Option<[f64; 6]> = Absent,
+            ) => jacobian_time_derivative,
+            "The time derivative of the Jacobian at q moving at qd (defaults: the joints and joint speeds now) through tcp (default: the active TCP).",
+        )
+    },
+    builtin!(
+        get_mass_matrix(q: Option<[f64; 6]> = Absent, include_rotors_inertia: bool = Bool(false))
+            => mass_matrix,
         "The 6x6 joint-space mass matrix at q (default: the joints now) with the active payload, rotor inertias added if asked.",
-        mass_matrix,
     ),
-    Builtin::new(
-        "get_coriolis_and_centrifugal_torques",
-        Domain::Motion,
-        &[opt("q", Default::Absent), opt("qd", Default::Absent)],
+    builtin!(
+        get_coriolis_and_centrifugal_torques(q: Option<[f64; 6]> = Absent, qd: Option<[f64; 6]> = Absent)
+            => coriolis,
         "The Coriolis and centrifugal joint torques at q moving at qd (defaults: the joints and joint speeds now).",
-        coriolis,
     ),
-    Builtin::new(
-        "estimate_payload",
-        Domain::Motion,
-        &[super::req("poses"), super::req("wrenches")],
+    builtin!(
+        estimate_payload(poses: Sixes, wrenches: Sixes) => estimate_payload,
         "struct(mass, cog): the payload whose weight explains the wrenches measured at the TCP poses (at least 4, orientations pi/(2n) apart).",
-        estimate_payload,
     ),
-    Builtin::new(
-        "get_target_joint_accelerations",
-        Domain::Motion,
-        NONE,
+    builtin!(
+        get_target_joint_accelerations() => accelerations,
         "The joint accelerations of the motion under way (zero at rest).",
-        accelerations,
     ),
-    Builtin::new(
-        "get_actual_joint_accelerations",
-        Domain::Motion,
-        NONE,
+    builtin!(
+        get_actual_joint_accelerations() => accelerations,
         "The joint accelerations now (the virtual arm follows its target exactly).",
-        accelerations,
     ),
 ];
 
 /// A 6×6 matrix as URScript's matrix: a list of 6 rows.
 fn matrix(m: [[f64; 6]; 6]) -> Value {
     Value::List(m.iter().map(|row| floats(*row)).collect())
-}
-
-/// Argument `i`, or `now` if it was left out.
-fn six_or(a: &Args, i: usize, now: [f64; 6]) -> Result<[f64; 6], Fault> {
-    if a.is_absent(i) {
-        Ok(now)
-    } else {
-        a.six(i)
-    }
 }
 
 /// The model whose DH parameters the arm has.
@@ -141,26 +119,42 @@ fn payload(c: &Runtime) -> Payload {
     }
 }
 
-fn jacobian(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
-    let q = six_or(a, 0, c.arm.q)?;
-    let tcp = six_or(a, 1, c.arm.tcp)?;
+fn jacobian(
+    c: &mut Runtime,
+    _: &mut Args,
+    q: Option<[f64; 6]>,
+    tcp: Option<[f64; 6]>,
+) -> Result<Out, Fault> {
+    let q = q.unwrap_or(c.arm.q);
+    let tcp = tcp.unwrap_or(c.arm.tcp);
     Ok(Out::Value(matrix(kinematics::jacobian(&c.dh, q, tcp))))
 }
 
-fn jacobian_time_derivative(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
-    let q = six_or(a, 0, c.arm.q)?;
-    let qd = six_or(a, 1, c.arm.qd)?;
-    let tcp = six_or(a, 2, c.arm.tcp)?;
+fn jacobian_time_derivative(
+    c: &mut Runtime,
+    _: &mut Args,
+    q: Option<[f64; 6]>,
+    qd: Option<[f64; 6]>,
+    tcp: Option<[f64; 6]>,
+) -> Result<Out, Fault> {
+    let q = q.unwrap_or(c.arm.q);
+    let qd = qd.unwrap_or(c.arm.qd);
+    let tcp = tcp.unwrap_or(c.arm.tcp);
     Ok(Out::Value(matrix(kinematics::jacobian_time_derivative(
         &c.dh, q, qd, tcp,
     ))))
 }
 
-fn mass_matrix(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
+fn mass_matrix(
+    c: &mut Runtime,
+    a: &mut Args,
+    q: Option<[f64; 6]>,
+    rotors: bool,
+) -> Result<Out, Fault> {
     let model = model(c, a.name)?;
-    let q = six_or(a, 0, c.arm.q)?;
+    let q = q.unwrap_or(c.arm.q);
     let mut m = dynamics::mass_matrix(model, q, &payload(c));
-    if a.boolean(1)? {
+    if rotors {
         for (i, row) in m.iter_mut().enumerate() {
             row[i] += c.arm.world.rotor_inertia[i];
         }
@@ -168,10 +162,15 @@ fn mass_matrix(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
     Ok(Out::Value(matrix(m)))
 }
 
-fn coriolis(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
+fn coriolis(
+    c: &mut Runtime,
+    a: &mut Args,
+    q: Option<[f64; 6]>,
+    qd: Option<[f64; 6]>,
+) -> Result<Out, Fault> {
     let model = model(c, a.name)?;
-    let q = six_or(a, 0, c.arm.q)?;
-    let qd = six_or(a, 1, c.arm.qd)?;
+    let q = q.unwrap_or(c.arm.q);
+    let qd = qd.unwrap_or(c.arm.qd);
     let tau = dynamics::coriolis_and_centrifugal_torques(model, q, qd, &payload(c));
     Ok(Out::Value(float_list(&tau)))
 }
@@ -180,49 +179,62 @@ fn accelerations(c: &mut Runtime, _: &mut Args) -> Result<Out, Fault> {
     Ok(Out::Value(floats(c.arm.qdd)))
 }
 
-/// Argument `i` as a list of 6-number items (poses, or lists of 6 numbers).
-fn sixes(a: &Args, i: usize, what: &str) -> Result<Vec<[f64; 6]>, Fault> {
-    let Value::List(items) = &a.v[i] else {
-        return Err(a.bad(i, what));
-    };
-    if items.len() > MAX_PAYLOAD_POSES {
-        return Err(Fault::from(format!(
-            "`{}`: {} items in `{}`, at most {MAX_PAYLOAD_POSES}",
-            a.name,
-            items.len(),
-            a.params[i].name
-        )));
-    }
-    items
-        .iter()
-        .enumerate()
-        .map(|(k, x)| match x {
-            Value::Pose(p) => Ok(*p),
-            Value::List(v) if v.len() == 6 => {
-                let mut out = [0.0; 6];
-                for (o, n) in out.iter_mut().zip(v) {
-                    *o = n.as_f64().ok_or_else(|| bad_item(a, i, k, x))?;
+/// A list of at most [`MAX_PAYLOAD_POSES`] items of 6 numbers each (poses, or lists of 6
+/// numbers): `estimate_payload`'s poses and wrenches. Anything else is a type error
+/// naming the parameter ("a list of poses") or the item.
+struct Sixes(Vec<[f64; 6]>);
+
+impl FromArg<'_> for Sixes {
+    fn from_arg(a: &Args, v: &Value, i: usize) -> Result<Self, Fault> {
+        let param = a.params.get(i).map_or("?", |p| p.name);
+        let Value::List(items) = v else {
+            return Err(Fault::type_error(format!(
+                "type error: `{}` argument `{param}` needs a list of {param}, got {} {}",
+                a.name,
+                v.type_name(),
+                v.to_source()
+            )));
+        };
+        if items.len() > MAX_PAYLOAD_POSES {
+            return Err(Fault::from(format!(
+                "`{}`: {} items in `{param}`, at most {MAX_PAYLOAD_POSES}",
+                a.name,
+                items.len(),
+            )));
+        }
+        let bad_item = |k: usize, x: &Value| {
+            Fault::type_error(format!(
+                "type error: `{}` argument `{param}` needs 6 numbers in each item, item {k} is {} {}",
+                a.name,
+                x.type_name(),
+                x.to_source()
+            ))
+        };
+        items
+            .iter()
+            .enumerate()
+            .map(|(k, x)| match x {
+                Value::Pose(p) => Ok(*p),
+                Value::List(v) if v.len() == 6 => {
+                    let mut out = [0.0; 6];
+                    for (o, n) in out.iter_mut().zip(v) {
+                        *o = n.as_f64().ok_or_else(|| bad_item(k, x))?;
+                    }
+                    Ok(out)
                 }
-                Ok(out)
-            }
-            _ => Err(bad_item(a, i, k, x)),
-        })
-        .collect()
+                _ => Err(bad_item(k, x)),
+            })
+            .collect::<Result<_, _>>()
+            .map(Sixes)
+    }
 }
 
-fn bad_item(a: &Args, i: usize, k: usize, x: &Value) -> Fault {
-    Fault::type_error(format!(
-        "type error: `{}` argument `{}` needs 6 numbers in each item, item {k} is {} {}",
-        a.name,
-        a.params[i].name,
-        x.type_name(),
-        x.to_source()
-    ))
-}
-
-fn estimate_payload(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
-    let poses = sixes(a, 0, "a list of poses")?;
-    let wrenches = sixes(a, 1, "a list of wrenches")?;
+fn estimate_payload(
+    c: &mut Runtime,
+    _: &mut Args,
+    Sixes(poses): Sixes,
+    Sixes(wrenches): Sixes,
+) -> Result<Out, Fault> {
     // The flange's orientation: the TCP pose composed with the inverse of the TCP's
     // rotation (its offset does not change the orientation).
     let tcp_rot_inv =

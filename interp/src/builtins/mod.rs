@@ -1,10 +1,14 @@
-//! The built-in functions: **one table**, one entry per function (name, parameters with
-//! their defaults, what it does, the code), grouped in modules by domain as UR's script
-//! manual groups them. The compiler resolves a call to its entry once and checks its
+//! The built-in functions: **one table**, one entry per function, grouped in modules by
+//! domain as UR's script manual groups them. An entry is the function's signature,
+//! declared once (`builtin!`: its name, each parameter's name, Rust type and default,
+//! the code, what it does). The compiler resolves a call to its entry once and checks its
 //! arguments (count, names) with line and column before anything runs; the machine then
-//! calls the entry's code with the arguments bound, defaults filled.
+//! binds the arguments (defaults filled), converts each to its parameter's type (a type
+//! error names the parameter) and calls the code with them. The code never looks at
+//! which function was called: functions that share code pass what differs as a value.
 //!
-//! Adding a built-in is one entry in its domain's `TABLE` (and its function beside it).
+//! Adding a built-in is one `builtin!` entry in its domain's `TABLE` (and its function
+//! beside it).
 //!
 //! | module | what |
 //! | --- | --- |
@@ -55,19 +59,6 @@ pub(crate) use crate::native::{builtin, Args, Out};
 pub use crate::native::{Builtin, Default, Domain, Param};
 pub(crate) use crate::runtime::secs;
 pub use strings::MAX_STRING_LEN;
-
-/// A required parameter.
-pub(crate) const fn req(name: &'static str) -> Param {
-    Param {
-        name,
-        default: Default::Required,
-    }
-}
-
-/// An optional parameter with this default.
-pub(crate) const fn opt(name: &'static str, default: Default) -> Param {
-    Param { name, default }
-}
 
 /// Every built-in, sorted by name (names are unique: a test proves it).
 ///

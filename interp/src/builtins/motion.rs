@@ -67,736 +67,455 @@
 //! - Settings the virtual arm has no use for (`zero_ftsensor`,
 //!   `screw_driving`, ...) are accepted with their manual signatures and do nothing.
 
-use super::{accept, float_list, floats, opt, req, secs, Args, Builtin, Default, Domain, Out};
+use super::{accept, builtin, float_list, floats, secs, Args, Builtin, Domain, Out};
 use crate::arm::trajectory::{self, Kind, Path, Profile};
 use crate::error::Fault;
 use crate::event::MoveStart;
+use crate::native::{index, FromArg};
 use crate::runtime::Runtime;
 use crate::value::Value;
 
 const D: Domain = Domain::Motion;
 const ZERO3: &[f64] = &[0.0, 0.0, 0.0];
-const NONE: &[super::Param] = &[];
-
-const fn movej_like(da: f64, dv: f64) -> [super::Param; 5] {
-    [
-        req("q"),
-        opt("a", Default::Float(da)),
-        opt("v", Default::Float(dv)),
-        opt("t", Default::Float(0.0)),
-        opt("r", Default::Float(0.0)),
-    ]
-}
-const MOVEJ: [super::Param; 5] = movej_like(1.4, 1.05);
-const MOVEL: [super::Param; 5] = [
-    req("pose"),
-    opt("a", Default::Float(1.2)),
-    opt("v", Default::Float(0.25)),
-    opt("t", Default::Float(0.0)),
-    opt("r", Default::Float(0.0)),
-];
-const MOVEP: [super::Param; 4] = [
-    req("pose"),
-    opt("a", Default::Float(1.2)),
-    opt("v", Default::Float(0.25)),
-    opt("r", Default::Float(0.0)),
-];
-/// `optimovej(goal, a=0.3, v=0.3, r=0)`, `optimovel(goal, ...)`: the manual names the
-/// target `goal` (joints or a pose here).
-const OPTIMOVE: [super::Param; 4] = [
-    req("goal"),
-    opt("a", Default::Float(0.3)),
-    opt("v", Default::Float(0.3)),
-    opt("r", Default::Float(0.0)),
-];
-const SENSOR: [super::Param; 4] = [
-    req("enable"),
-    opt("sensor_mass", Default::Float(0.0)),
-    opt("sensor_measuring_offset", Default::Floats(ZERO3)),
-    opt("sensor_cog", Default::Floats(ZERO3)),
-];
 
 pub(super) const TABLE: &[Builtin] = &[
-    Builtin::new(
-        "movej",
-        D,
-        &MOVEJ,
+    builtin!(
+        movej(q: Target, a: f64 = Float(1.4), v: f64 = Float(1.05), t: f64 = Float(0.0), r: f64 = Float(0.0))
+            => |c, x, q, a, v, t, r| go(c, x, Space::Joint, q, (a, v, t, r)),
         "Moves in joint space: a trapezoidal profile on the largest joint distance (t: stretched to take t).",
-        movej,
     ),
-    Builtin::new(
-        "movel",
-        D,
-        &MOVEL,
+    builtin!(
+        movel(pose: Target, a: f64 = Float(1.2), v: f64 = Float(0.25), t: f64 = Float(0.0), r: f64 = Float(0.0))
+            => |c, x, pose, a, v, t, r| go(c, x, Space::Tool, pose, (a, v, t, r)),
         "Moves the tool in a straight line: a trapezoidal profile on the distance (t: stretched to take t).",
-        movej,
     ),
-    Builtin::new("movep", D, &MOVEP, "Process move: as movel.", movej),
-    Builtin::new(
-        "servoc",
-        D,
-        &MOVEP,
+    builtin!(
+        movep(pose: Target, a: f64 = Float(1.2), v: f64 = Float(0.25), r: f64 = Float(0.0))
+            => |c, x, pose, a, v, r| go(c, x, Space::Tool, pose, (a, v, 0.0, r)),
+        "Process move: as movel.",
+    ),
+    builtin!(
+        servoc(pose: Target, a: f64 = Float(1.2), v: f64 = Float(0.25), r: f64 = Float(0.0))
+            => |c, x, pose, a, v, r| go(c, x, Space::Tool, pose, (a, v, 0.0, r)),
         "Servo to a pose in a circular blend: timed as movel to the pose.",
-        movej,
     ),
-    Builtin::new(
-        "powerdown",
-        D,
-        &[],
-        "Shuts the robot down: the program halts and the controller running it powers the arm off (Arm::powerdown).",
-        powerdown,
+    builtin!(
+        powerdown() => powerdown,
+        "Shuts the robot down: the program halts and the controller running it powers the arm off (Effect::PowerOff).",
     ),
-    Builtin::new(
-        "protective_stop",
-        D,
-        NONE,
-        "Triggers a protective stop: the arm stops and the call takes one step, so the controller running it pauses the program before the next statement (Arm::protective_stop).",
-        protective_stop,
+    builtin!(
+        protective_stop() => protective_stop,
+        "Triggers a protective stop: the arm stops and the call takes one step, so the controller running it pauses the program before the next statement (Effect::ProtectiveStop).",
     ),
-    Builtin::new(
-        "optimovej",
-        D,
-        &OPTIMOVE,
+    // `optimovej(goal, a=0.3, v=0.3, r=0)`, `optimovel(goal, ...)`: the manual names the
+    // target `goal` (joints or a pose here).
+    builtin!(
+        optimovej(goal: Target, a: f64 = Float(0.3), v: f64 = Float(0.3), r: f64 = Float(0.0))
+            => |c, x, goal, a, v, r| go(c, x, Space::Joint, goal, (a, v, 0.0, r)),
         "As movej (a and v taken as speeds).",
-        movej,
     ),
-    Builtin::new(
-        "optimovel",
-        D,
-        &OPTIMOVE,
+    builtin!(
+        optimovel(goal: Target, a: f64 = Float(0.3), v: f64 = Float(0.3), r: f64 = Float(0.0))
+            => |c, x, goal, a, v, r| go(c, x, Space::Tool, goal, (a, v, 0.0, r)),
         "As movel (a and v taken as speeds).",
-        movej,
     ),
-    Builtin::new(
-        "movec",
-        D,
-        &[
-            req("pose_via"),
-            req("pose_to"),
-            opt("a", Default::Float(1.2)),
-            opt("v", Default::Float(0.25)),
-            opt("r", Default::Float(0.0)),
-            opt("mode", Default::Int(0)),
-        ],
+    builtin!(
+        movec(
+            pose_via: Target,
+            pose_to: Target,
+            a: f64 = Float(1.2),
+            v: f64 = Float(0.25),
+            r: f64 = Float(0.0),
+            mode: Given<'_, f64> = Int(0),
+        ) => |c, x, via, to, a, v, r, mode| movec(c, x, via, to, (a, v, r), mode),
         "Circular move: the tool along the arc through pose_via to pose_to.",
-        movec,
     ),
-    Builtin::new(
-        "servoj",
-        D,
-        &[
-            req("q"),
-            opt("a", Default::Float(0.0)),
-            opt("v", Default::Float(0.0)),
-            opt("t", Default::Float(0.002)),
-            opt("lookahead_time", Default::Float(0.1)),
-            opt("gain", Default::Float(300.0)),
-        ],
+    builtin!(
+        servoj(
+            q: [f64; 6],
+            a: f64 = Float(0.0),
+            v: f64 = Float(0.0),
+            t: f64 = Float(0.002),
+            lookahead_time: &Value = Float(0.1),
+            gain: &Value = Float(300.0),
+        ) => |c, x, q, a, v, t, _, _| servoj(c, x, q, (a, v, t)),
         "Moves to q at constant speed over t.",
-        servoj,
     ),
-    Builtin::new(
-        "speedj",
-        D,
-        &[req("qd"), req("a"), opt("t", Default::Absent)],
+    builtin!(
+        speedj(qd: [f64; 6], a: f64, t: Option<f64> = Absent)
+            => |c, x, qd, a, t| speed(c, x, Space::Joint, qd, a, t, None),
         "Ramps the joint speeds to qd at a and holds them; returns after t (one step if not given).",
-        speed,
     ),
-    Builtin::new(
-        "speedl",
-        D,
-        &[
-            req("xd"),
-            req("a"),
-            opt("t", Default::Absent),
-            opt("aRot", Default::Absent),
-        ],
+    builtin!(
+        speedl(xd: [f64; 6], a: f64, t: Option<f64> = Absent, aRot: Option<f64> = Absent)
+            => |c, x, xd, a, t, a_rot| speed(c, x, Space::Tool, xd, a, t, a_rot),
         "Ramps the tool speed to xd at a (aRot) and holds it; returns after t (one step if not given).",
-        speed,
     ),
-    Builtin::new("stopj", D, &[req("a")], "Ramps the joint speeds down to zero at a; returns at rest.", stop),
-    Builtin::new(
-        "stopl",
-        D,
-        &[req("a"), opt("aRot", Default::Absent)],
+    builtin!(
+        stopj(a: f64) => |c, _, a| stop(c, Space::Joint, a, None),
+        "Ramps the joint speeds down to zero at a; returns at rest.",
+    ),
+    builtin!(
+        stopl(a: f64, aRot: Option<f64> = Absent) => |c, _, a, a_rot| stop(c, Space::Tool, a, a_rot),
         "Ramps the tool speed down to zero at a (aRot); returns at rest.",
-        stop,
     ),
-    Builtin::new(
-        "direct_torque",
-        D,
-        &[
-            req("torque"),
-            opt("friction_comp", Default::Bool(true)),
-            opt("viscous_scale", Default::Absent),
-            opt("coulomb_scale", Default::Absent),
-        ],
+    builtin!(
+        direct_torque(
+            torque: [f64; 6],
+            friction_comp: &Value = Bool(true),
+            viscous_scale: &Value = Absent,
+            coulomb_scale: &Value = Absent,
+        ) => |c, _, _, _, _, _| direct_torque(c),
         "Torque control has no model here: takes one step.",
-        direct_torque,
     ),
-    Builtin::new(
-        "get_actual_joint_positions",
-        D,
-        NONE,
+    builtin!(
+        get_actual_joint_positions() => joints,
         "The commanded joints.",
-        joints,
     ),
-    Builtin::new(
-        "get_target_joint_positions",
-        D,
-        NONE,
+    builtin!(
+        get_target_joint_positions() => joints,
         "The commanded joints.",
-        joints,
     ),
-    Builtin::new(
-        "get_joint_positions",
-        D,
-        NONE,
+    builtin!(
+        get_joint_positions() => joints,
         "The commanded joints (CB3 name).",
-        joints,
     ),
-    Builtin::new(
-        "get_actual_joint_positions_history",
-        D,
-        &[opt("steps", Default::Int(0))],
+    builtin!(
+        get_actual_joint_positions_history(steps: i32 = Int(0)) => joints_history,
         "The joints `steps` controller steps ago (0: now); a runtime error past the history's JOINT_HISTORY_STEPS steps.",
-        joints_history,
     ),
-    Builtin::new(
-        "get_actual_joint_speeds",
-        D,
-        NONE,
+    builtin!(
+        get_actual_joint_speeds() => joint_speeds,
         "The commanded joint speeds.",
-        joint_speeds,
     ),
-    Builtin::new(
-        "get_target_joint_speeds",
-        D,
-        NONE,
+    builtin!(
+        get_target_joint_speeds() => joint_speeds,
         "The commanded joint speeds.",
-        joint_speeds,
     ),
-    Builtin::new(
-        "get_actual_tcp_pose",
-        D,
-        NONE,
+    builtin!(
+        get_actual_tcp_pose() => tcp_pose,
         "The commanded tool pose.",
-        tcp_pose,
     ),
-    Builtin::new(
-        "get_target_tcp_pose",
-        D,
-        NONE,
+    builtin!(
+        get_target_tcp_pose() => tcp_pose,
         "The commanded tool pose.",
-        tcp_pose,
     ),
-    Builtin::new(
-        "get_actual_tcp_speed",
-        D,
-        NONE,
+    builtin!(
+        get_actual_tcp_speed() => tcp_speed,
         "The commanded tool speed.",
-        tcp_speed,
     ),
-    Builtin::new(
-        "get_target_tcp_speed",
-        D,
-        NONE,
+    builtin!(
+        get_target_tcp_speed() => tcp_speed,
         "The commanded tool speed.",
-        tcp_speed,
     ),
-    Builtin::new(
-        "get_tcp_force",
-        D,
-        NONE,
+    builtin!(
+        get_tcp_force() => tcp_force,
         "The force/torque sensor (base frame): World::tcp_force plus the contact plane's push on the TCP (settable: tcp_force, contact_plane, contact_stiffness).",
-        tcp_force,
     ),
-    Builtin::new(
-        "force",
-        D,
-        NONE,
+    builtin!(
+        force() => force,
         "The norm of get_tcp_force()'s force part.",
-        force,
     ),
-    Builtin::new(
-        "get_actual_tool_flange_pose",
-        D,
-        NONE,
+    builtin!(
+        get_actual_tool_flange_pose() => flange_pose,
         "The commanded tool pose without the TCP offset.",
-        flange_pose,
     ),
-    Builtin::new(
-        "get_target_waypoint",
-        D,
-        NONE,
+    builtin!(
+        get_target_waypoint() => waypoint,
         "The target of the move under way (during a blend, the next move's); at rest, the tool pose.",
-        waypoint,
     ),
-    Builtin::new(
-        "get_target_tcp_pose_along_path",
-        D,
-        NONE,
+    builtin!(
+        get_target_tcp_pose_along_path() => tcp_pose,
         "The commanded tool pose (no conveyor or path offset is added to it here).",
-        tcp_pose,
     ),
-    Builtin::new(
-        "get_target_tcp_speed_along_path",
-        D,
-        NONE,
+    builtin!(
+        get_target_tcp_speed_along_path() => tcp_speed,
         "The commanded tool speed.",
-        tcp_speed,
     ),
-    Builtin::new(
-        "get_target_payload",
-        D,
-        NONE,
+    builtin!(
+        get_target_payload() => |c, _| read(c, |c| Value::Float(c.arm.payload_mass)),
         "The payload mass last set (kg; 0.0 at start).",
-        payload,
     ),
-    Builtin::new(
-        "get_target_payload_cog",
-        D,
-        NONE,
+    builtin!(
+        get_target_payload_cog() => |c, _| read(c, |c| float_list(&c.arm.payload_cog)),
         "The payload CoG last set ([x, y, z] m from the flange).",
-        payload,
     ),
-    Builtin::new(
-        "get_target_payload_inertia",
-        D,
-        NONE,
+    builtin!(
+        get_target_payload_inertia() => |c, _| read(c, |c| float_list(&c.arm.payload_inertia)),
         "The payload inertia last set ([Ixx, Iyy, Izz, Ixy, Ixz, Iyz] kg*m^2).",
-        payload,
     ),
-    Builtin::new(
-        "get_joint_torques",
-        D,
-        NONE,
+    builtin!(
+        get_joint_torques() => |c, _| read(c, |c| floats(c.arm.world.joint_torques)),
         "The joints' torques beyond moving the arm itself: fixed, [0, 0, 0, 0, 0, 0] Nm.",
-        joint_torques,
     ),
-    Builtin::new(
-        "get_joint_temp",
-        D,
-        &[req("j")],
+    builtin!(
+        get_joint_temp(j: i32) => joint_temp,
         "The temperature of joint j (0-5): fixed, 35.0 degrees C.",
-        joint_temp,
     ),
-    Builtin::new(
-        "get_controller_temp",
-        D,
-        NONE,
+    builtin!(
+        get_controller_temp() => |c, _| read(c, |c| Value::Float(c.arm.world.controller_temp)),
         "The control box temperature: fixed, 30.0 degrees C.",
-        scalar,
     ),
-    Builtin::new(
-        "get_tool_temp",
-        D,
-        NONE,
+    builtin!(
+        get_tool_temp() => |c, _| read(c, |c| Value::Float(c.arm.world.tool_temp)),
         "The tool temperature: fixed, 32.0 degrees C.",
-        scalar,
     ),
-    Builtin::new(
-        "get_tool_current",
-        D,
-        NONE,
+    builtin!(
+        get_tool_current() => |c, _| read(c, |c| Value::Float(c.arm.world.tool_current)),
         "The tool current: fixed, 0.0 A (nothing draws from the tool connector).",
-        scalar,
     ),
-    Builtin::new(
-        "get_tool_accelerometer_reading",
-        D,
-        NONE,
+    builtin!(
+        get_tool_accelerometer_reading() => accelerometer,
         "The gravity vector (set_gravity) in the flange's axes, m/s^2: [0, 0, 9.82] with the flange up.",
-        accelerometer,
     ),
-    Builtin::new(
-        "get_gravity",
-        D,
-        NONE,
+    builtin!(
+        get_gravity() => |c, _| read(c, |c| float_list(&c.arm.gravity)),
         "The gravity vector last set by set_gravity ([0, 0, 9.82] at start).",
-        get3,
     ),
-    Builtin::new(
-        "get_base_acceleration",
-        D,
-        NONE,
+    builtin!(
+        get_base_acceleration() => |c, _| read(c, |c| float_list(&c.arm.base_acceleration)),
         "The base acceleration last set by set_base_acceleration ([0, 0, 0] at start).",
-        get3,
     ),
-    Builtin::new(
-        "get_freedrive_status",
-        D,
-        NONE,
+    builtin!(
+        get_freedrive_status() => |c, _| read(c, |_| Value::Int(0)),
         "0: normal operation (no singularity is modelled).",
-        zero_int,
     ),
-    Builtin::new(
-        "get_inverse_kin_has_solution",
-        D,
-        &[
-            req("pose"),
-            opt("qnear", Default::Absent),
-            opt("maxPositionError", Default::Float(1e-10)),
-            opt("maxOrientationError", Default::Float(1e-10)),
-            opt("tcp", Default::Absent),
-        ],
+    builtin!(
+        get_inverse_kin_has_solution(
+            pose: [f64; 6],
+            qnear: Option<[f64; 6]> = Absent,
+            maxPositionError: f64 = Float(1e-10),
+            maxOrientationError: f64 = Float(1e-10),
+            tcp: Option<[f64; 6]> = Absent,
+        ) => has_solution,
         "True if get_inverse_kin has a solution: the arm reaches the pose exactly, or within maxPositionError and maxOrientationError.",
-        has_solution,
     ),
-    Builtin::new(
-        "set_pos",
-        D,
-        &[req("q")],
+    builtin!(
+        set_pos(q: [f64; 6]) => set_pos,
         "Sets the joints of the simulated robot at once (the arm at rest).",
-        set_pos,
     ),
-    Builtin::new(
-        "path_offset_enable",
-        D,
-        NONE,
+    builtin!(
+        path_offset_enable() => path_offset_enable,
         "Enables path offsetting.",
-        path_offset,
     ),
-    Builtin::new(
-        "path_offset_disable",
-        D,
-        &[opt("a", Default::Float(20.0))],
+    builtin!(
+        path_offset_disable(a: f64 = Float(20.0)) => |c, _, _| path_offset_disable(c),
         "Disables path offsetting: the applied offset is zero again.",
-        path_offset,
     ),
-    Builtin::new(
-        "path_offset_set",
-        D,
-        &[req("offset"), req("type")],
+    builtin!(
+        path_offset_set(offset: [f64; 6], r#type: i32) => path_offset_set,
         "Sets the offset (type 1-4), clamped to the maximum offset; applied while enabled.",
-        path_offset,
     ),
-    Builtin::new(
-        "path_offset_get",
-        D,
-        &[req("type")],
+    builtin!(
+        path_offset_get(r#type: i32) => path_offset_get,
         "The offset applied now (as set; zero while disabled).",
-        path_offset,
     ),
-    Builtin::new(
-        "path_offset_set_alpha_filter",
-        D,
-        &[req("alpha")],
+    builtin!(
+        path_offset_set_alpha_filter(alpha: f64) => path_offset_set_alpha_filter,
         "Sets the offset filter coefficient (0-1; the offset is applied unfiltered here).",
-        path_offset,
     ),
-    Builtin::new(
-        "path_offset_set_max_offset",
-        D,
-        &[req("transLimit"), req("rotLimit")],
+    builtin!(
+        path_offset_set_max_offset(transLimit: f64, rotLimit: f64) => path_offset_set_max_offset,
         "Sets the largest offset per axis (m, rad; 0.1 and 0.52 at start).",
-        path_offset,
     ),
-    Builtin::new(
-        "get_tcp_offset",
-        D,
-        NONE,
+    builtin!(
+        get_tcp_offset() => |c, _| read(c, |c| Value::Pose(c.arm.tcp)),
         "The active TCP offset.",
-        tcp_offset,
     ),
-    Builtin::new(
-        "tool_contact",
-        D,
-        &[opt("direction", Default::Absent)],
+    builtin!(
+        tool_contact(direction: Option<[f64; 6]> = Absent) => tool_contact,
         "Steps since the TCP touched the contact plane (against `direction`, base frame; any if absent or zero); 0: no contact.",
-        tool_contact,
     ),
-    Builtin::new(
-        "is_steady",
-        D,
-        NONE,
+    builtin!(
+        is_steady() => is_steady,
         "True when no motion is under way, the joints are at rest and the arm is not in teach/freedrive mode.",
-        is_steady,
     ),
-    Builtin::new(
-        "is_within_safety_limits",
-        D,
-        &[req("pose"), opt("qnear", Default::Absent)],
+    builtin!(
+        is_within_safety_limits(pose: Target, qnear: Option<[f64; 6]> = Absent) => within_safety_limits,
         "A pose: True if the inverse kinematics reach it with every joint within ±2π (TCP offset, from qnear or the joints now); joints: True if each is within ±2π.",
-        within_safety_limits,
     ),
-    // Settings accepted with their manual signatures; they change nothing here.
-    Builtin::new(
-        "set_payload",
-        D,
-        &[req("m"), opt("cog", Default::Absent)],
+    builtin!(
+        set_payload(m: f64, cog: Option<[f64; 3]> = Absent) => set_payload,
         "Sets the payload mass and CoG (the TCP's position if cog is left out); zero inertia.",
-        set_payload,
     ),
-    Builtin::new(
-        "set_payload_mass",
-        D,
-        &[req("m")],
+    builtin!(
+        set_payload_mass(m: f64) => |c, _, m| set_payload_mass(c, m),
         "Sets the payload mass; zero inertia.",
-        set_payload,
     ),
-    Builtin::new(
-        "set_payload_cog",
-        D,
-        &[req("CoG")],
+    builtin!(
+        set_payload_cog(CoG: [f64; 3]) => |c, _, cog| set_payload_cog(c, cog),
         "Sets the payload CoG; zero inertia.",
-        set_payload,
     ),
-    Builtin::new(
-        "set_target_payload",
-        D,
-        &[
-            req("m"),
-            req("cog"),
-            opt("inertia", Default::Floats(&[0.0; 6])),
-            opt("transition_time", Default::Float(0.0)),
-        ],
+    builtin!(
+        set_target_payload(
+            m: f64,
+            cog: [f64; 3],
+            inertia: [f64; 6] = Floats(&[0.0; 6]),
+            transition_time: f64 = Float(0.0),
+        ) => |c, _, m, cog, inertia, _| set_target_payload(c, m, cog, inertia),
         "Sets the payload mass, CoG and inertia (|I| <= 133, Ixx, Iyy, Izz >= 0).",
-        set_payload,
     ),
-    Builtin::new(
-        "set_tcp",
-        D,
-        &[req("pose"), opt("tcp_name", Default::Str(""))],
+    builtin!(
+        set_tcp(pose: [f64; 6], tcp_name: &Value = Str("")) => |c, _, pose, _| set_tcp(c, pose),
         "Sets the active TCP offset (get_tcp_offset).",
-        set_tcp,
     ),
-    Builtin::new(
-        "set_gravity",
-        D,
-        &[req("d")],
+    builtin!(
+        set_gravity(d: [f64; 3]) => |c, _, d| set_gravity(c, d),
         "Sets the gravity vector (get_gravity, the accelerometer).",
-        set3,
     ),
-    Builtin::new(
-        "set_base_acceleration",
-        D,
-        &[req("a")],
+    builtin!(
+        set_base_acceleration(a: [f64; 3]) => |c, _, a| set_base_acceleration(c, a),
         "Sets the base acceleration (get_base_acceleration).",
-        set3,
     ),
-    Builtin::new(
-        "zero_ftsensor",
-        D,
-        NONE,
+    builtin!(
+        zero_ftsensor() => accept,
         "Accepted (no force sensor).",
-        accept,
     ),
-    Builtin::new(
-        "force_mode",
-        D,
-        &[
-            req("task_frame"),
-            req("selection_vector"),
-            req("wrench"),
-            req("type"),
-            req("limits"),
-        ],
+    builtin!(
+        force_mode(
+            task_frame: [f64; 6],
+            selection_vector: Given<'_, [f64; 6]>,
+            wrench: [f64; 6],
+            r#type: i32,
+            limits: [f64; 6],
+        ) => force_mode,
         "Starts force mode: compliant axes move to reach the wrench at their speed limits, stopped by the contact plane (see crate::arm::force).",
-        force_mode,
     ),
-    Builtin::new(
-        "end_force_mode",
-        D,
-        NONE,
+    builtin!(
+        end_force_mode() => end_force_mode,
         "Ends force mode: the arm stays where it is.",
-        force_mode,
     ),
-    Builtin::new(
-        "force_mode_set_damping",
-        D,
-        &[req("damping")],
+    builtin!(
+        force_mode_set_damping(damping: f64)
+            => |c, x, v| store(c, x, v, (0.0, 1.0), |arm| &mut arm.force_mode_damping),
         "Stores the force mode damping (0-1), as force_mode_get_damping reads it.",
-        motion_setting,
     ),
-    Builtin::new(
-        "force_mode_set_gain_scaling",
-        D,
-        &[req("scaling")],
+    builtin!(
+        force_mode_set_gain_scaling(scaling: f64)
+            => |c, x, v| store(c, x, v, (0.0, 2.0), |arm| &mut arm.force_mode_gain_scaling),
         "Stores the force mode gain scaling (0-2), as force_mode_get_gain_scaling reads it.",
-        motion_setting,
     ),
-    Builtin::new(
-        "force_mode_get_damping",
-        D,
-        NONE,
+    builtin!(
+        force_mode_get_damping() => |c, _| read(c, |c| Value::Float(c.arm.force_mode_damping)),
         "The force mode damping last set (default 0).",
-        motion_setting_get,
     ),
-    Builtin::new(
-        "force_mode_get_gain_scaling",
-        D,
-        NONE,
+    builtin!(
+        force_mode_get_gain_scaling()
+            => |c, _| read(c, |c| Value::Float(c.arm.force_mode_gain_scaling)),
         "The force mode gain scaling last set (default 1).",
-        motion_setting_get,
     ),
-    Builtin::new(
-        "motion_version_set",
-        D,
-        &[req("version")],
+    builtin!(
+        motion_version_set(version: i32) => |c, _, v| motion_version_set(c, v),
         "Stores the motion version (1 or 2) for movej/movel (the virtual arm's profiles are the same for both).",
-        motion_setting,
     ),
-    Builtin::new(
-        "motion_version_get",
-        D,
-        NONE,
+    builtin!(
+        motion_version_get() => |c, _| read(c, |c| Value::Int(c.arm.motion_version)),
         "The motion version last set (default 1).",
-        motion_setting_get,
     ),
-    Builtin::new(
-        "jerk_gain_scaling_set",
-        D,
-        &[req("gain")],
+    builtin!(
+        jerk_gain_scaling_set(gain: f64)
+            => |c, x, v| store(c, x, v, (0.01, 1.0), |arm| &mut arm.jerk_gain_scaling),
         "Stores the jerk gain scaling (0.01-1) (the virtual arm's profiles have no jerk limit).",
-        motion_setting,
     ),
-    Builtin::new(
-        "jerk_gain_scaling_get",
-        D,
-        NONE,
+    builtin!(
+        jerk_gain_scaling_get() => |c, _| read(c, |c| Value::Float(c.arm.jerk_gain_scaling)),
         "The jerk gain scaling last set (default 1).",
-        motion_setting_get,
     ),
-    Builtin::new(
-        "freedrive_mode",
-        D,
-        &[
-            opt("freeAxes", Default::Ints(&[1, 1, 1, 1, 1, 1])),
-            opt("feature", Default::Pose([0.0; 6])),
-        ],
+    builtin!(
+        freedrive_mode(
+            freeAxes: Given<'_, [f64; 6]> = Ints(&[1, 1, 1, 1, 1, 1]),
+            feature: [f64; 6] = Pose([0.0; 6]),
+        ) => |c, _, axes, _| freedrive_mode(c, axes),
         "Freedrive: the arm stops; the operator moves the joints (Arm::move_by_hand); is_steady() False until end_freedrive_mode() or the program's end.",
-        hand_mode,
     ),
-    Builtin::new(
-        "end_freedrive_mode",
-        D,
-        NONE,
+    builtin!(
+        end_freedrive_mode() => end_hand_mode,
         "Ends freedrive: the arm holds where the operator left it.",
-        hand_mode,
     ),
-    Builtin::new(
-        "teach_mode",
-        D,
-        NONE,
+    builtin!(
+        teach_mode() => |c, _| hand_mode(c, TEACH),
         "Teach mode: the arm stops; the operator moves the joints (Arm::move_by_hand); is_steady() False until end_teach_mode() or the program's end.",
-        hand_mode,
     ),
-    Builtin::new(
-        "end_teach_mode",
-        D,
-        NONE,
+    builtin!(
+        end_teach_mode() => end_hand_mode,
         "Ends teach mode: the arm holds where the operator left it.",
-        hand_mode,
     ),
-    Builtin::new(
-        "set_safety_mode_transition_hardness",
-        D,
-        &[req("type")],
+    // Settings accepted with their manual signatures (their arguments unchecked); they
+    // change nothing here.
+    builtin!(
+        set_safety_mode_transition_hardness(r#type: &Value) => |c, x, _| accept(c, x),
         "Accepted.",
-        accept,
     ),
-    Builtin::new(
-        "enable_external_ft_sensor",
-        D,
-        &SENSOR,
+    builtin!(
+        enable_external_ft_sensor(
+            enable: &Value,
+            sensor_mass: &Value = Float(0.0),
+            sensor_measuring_offset: &Value = Floats(ZERO3),
+            sensor_cog: &Value = Floats(ZERO3),
+        ) => |c, x, _, _, _, _| accept(c, x),
         "Accepted (no force sensor).",
-        accept,
     ),
-    Builtin::new(
-        "ft_rtde_input_enable",
-        D,
-        &SENSOR,
+    builtin!(
+        ft_rtde_input_enable(
+            enable: &Value,
+            sensor_mass: &Value = Float(0.0),
+            sensor_measuring_offset: &Value = Floats(ZERO3),
+            sensor_cog: &Value = Floats(ZERO3),
+        ) => |c, x, _, _, _, _| accept(c, x),
         "Accepted (no force sensor).",
-        accept,
     ),
-    Builtin::new(
-        "set_friction_compensation",
-        D,
-        &[req("enabled")],
+    builtin!(
+        set_friction_compensation(enabled: &Value) => |c, x, _| accept(c, x),
         "Accepted.",
-        accept,
     ),
-    Builtin::new("end_screw_driving", D, NONE, "Accepted.", accept),
-    Builtin::new(
-        "screw_driving",
-        D,
-        &[req("f"), req("v_limit")],
+    builtin!(end_screw_driving() => accept, "Accepted."),
+    builtin!(
+        screw_driving(f: &Value, v_limit: &Value) => |c, x, _, _| accept(c, x),
         "Accepted (no forces are modelled).",
-        accept,
     ),
-    Builtin::new(
-        "freedrive_mode_no_incorrect_payload_check",
-        D,
-        NONE,
+    builtin!(
+        freedrive_mode_no_incorrect_payload_check() => accept,
         "Accepted (nobody pushes the virtual arm).",
-        accept,
     ),
-    Builtin::new(
-        "high_holding_torque_disable",
-        D,
-        NONE,
-        "Accepted.",
-        accept,
-    ),
-    Builtin::new("high_holding_torque_enable", D, NONE, "Accepted.", accept),
-    Builtin::new(
-        "pause_on_error_code",
-        D,
-        &[req("code"), opt("argument", Default::Absent)],
+    builtin!(high_holding_torque_disable() => accept, "Accepted."),
+    builtin!(high_holding_torque_enable() => accept, "Accepted."),
+    builtin!(
+        pause_on_error_code(code: &Value, argument: &Value = Absent) => |c, x, _, _| accept(c, x),
         "Accepted (the virtual arm raises no error codes).",
-        accept,
     ),
-    Builtin::new(
-        "position_deviation_warning",
-        D,
-        &[req("enabled"), opt("threshold", Default::Float(0.8))],
+    builtin!(
+        position_deviation_warning(enabled: &Value, threshold: &Value = Float(0.8))
+            => |c, x, _, _| accept(c, x),
         "Accepted (the virtual arm follows its target exactly).",
-        accept,
     ),
-    Builtin::new(
-        "reset_revolution_counter",
-        D,
-        &[opt("qNear", Default::Floats(&[0.0; 6]))],
+    builtin!(
+        reset_revolution_counter(qNear: &Value = Floats(&[0.0; 6])) => |c, x, _| accept(c, x),
         "Accepted.",
-        accept,
     ),
-    Builtin::new(
-        "tool_wrench_limit_set",
-        D,
-        &[
-            req("frame_offset"),
-            opt("Fx", Default::Absent),
-            opt("Fy", Default::Absent),
-            opt("Fz", Default::Absent),
-            opt("Mx", Default::Absent),
-            opt("My", Default::Absent),
-            opt("Mz", Default::Absent),
-        ],
+    builtin!(
+        tool_wrench_limit_set(
+            frame_offset: &Value,
+            Fx: &Value = Absent,
+            Fy: &Value = Absent,
+            Fz: &Value = Absent,
+            Mx: &Value = Absent,
+            My: &Value = Absent,
+            Mz: &Value = Absent,
+        ) => |c, x, _, _, _, _, _, _, _| accept(c, x),
         "Accepted (no dynamics).",
-        accept,
     ),
-    Builtin::new("tool_wrench_limit_disable", D, NONE, "Accepted.", accept),
-    Builtin::new(
-        "set_baselight_off",
-        D,
-        NONE,
+    builtin!(tool_wrench_limit_disable() => accept, "Accepted."),
+    builtin!(
+        set_baselight_off() => accept,
         "Accepted (UR20/UR30 base light).",
-        accept,
     ),
-    Builtin::new(
-        "set_baselight_iec",
-        D,
-        NONE,
+    builtin!(
+        set_baselight_iec() => accept,
         "Accepted (UR20/UR30 base light).",
-        accept,
     ),
-    Builtin::new(
-        "set_baselight_solid",
-        D,
-        &[req("r"), req("g"), req("b")],
+    builtin!(
+        set_baselight_solid(r: &Value, g: &Value, b: &Value) => |c, x, _, _, _| accept(c, x),
         "Accepted (UR20/UR30 base light).",
-        accept,
     ),
 ];
 
@@ -820,20 +539,59 @@ fn check_joints(name: &str, q: [f64; 6]) -> Result<[f64; 6], Fault> {
     Ok(q)
 }
 
+/// What a motion command moves: the joints, or the tool (in the base frame).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Space {
+    Joint,
+    Tool,
+}
+
+/// A motion's target as the program gives it: joint positions (a list of 6 numbers) or
+/// a pose.
+#[derive(Debug, Clone, Copy)]
+enum Target {
+    Joints([f64; 6]),
+    Pose([f64; 6]),
+}
+
+impl Target {
+    /// True if the target is joint positions.
+    fn is_joints(self) -> bool {
+        matches!(self, Target::Joints(_))
+    }
+}
+
+/// A list of 6 numbers (joints) or a pose; the type error names the parameter otherwise.
+impl FromArg<'_> for Target {
+    fn from_arg(a: &Args, v: &Value, i: usize) -> Result<Self, Fault> {
+        let six = <[f64; 6]>::from_arg(a, v, i)?;
+        Ok(match v {
+            Value::Pose(_) => Target::Pose(six),
+            _ => Target::Joints(six),
+        })
+    }
+}
+
+/// An argument converted to `T`, with the value as the program wrote it (for an error
+/// that quotes it).
+struct Given<'v, T>(T, &'v Value);
+
+impl<'v, T: FromArg<'v>> FromArg<'v> for Given<'v, T> {
+    fn from_arg(a: &Args, v: &'v Value, i: usize) -> Result<Self, Fault> {
+        Ok(Given(T::from_arg(a, v, i)?, v))
+    }
+}
+
 /// A motion's target: joints (checked against the joint range), or a pose reached
 /// through inverse kinematics nearest the joints the move starts from. Returns the joints
 /// and the tool pose there (the pose given, for a pose).
-fn target(
-    c: &Runtime,
-    name: &str,
-    v: &Value,
-    six: [f64; 6],
-) -> Result<([f64; 6], [f64; 6]), Fault> {
-    if matches!(v, Value::Pose(_)) {
-        Ok((c.inverse(six, c.move_start().0, c.arm.tcp)?, six))
-    } else {
-        let q = check_joints(name, six)?;
-        Ok((q, c.tool_pose(q)))
+fn target(c: &Runtime, name: &str, to: Target) -> Result<([f64; 6], [f64; 6]), Fault> {
+    match to {
+        Target::Pose(pose) => Ok((c.inverse(pose, c.move_start().0, c.arm.tcp)?, pose)),
+        Target::Joints(q) => {
+            let q = check_joints(name, q)?;
+            Ok((q, c.tool_pose(q)))
+        }
     }
 }
 
@@ -842,21 +600,15 @@ fn target(
 /// stops with a protective stop (as a real arm stops when the line runs it into a
 /// singularity); the joints returned are then the move's start, which do not reach
 /// the pose.
-fn tool_target(
-    c: &Runtime,
-    name: &str,
-    v: &Value,
-    six: [f64; 6],
-) -> Result<([f64; 6], [f64; 6]), Fault> {
-    match target(c, name, v, six) {
-        Err(_) if matches!(v, Value::Pose(_)) => Ok((c.move_start().0, six)),
-        other => other,
+fn tool_target(c: &Runtime, name: &str, to: Target) -> Result<([f64; 6], [f64; 6]), Fault> {
+    match (target(c, name, to), to) {
+        (Err(_), Target::Pose(pose)) => Ok((c.move_start().0, pose)),
+        (other, _) => other,
     }
 }
 
-/// The blend radius argument `r` (m): not negative.
-fn radius(a: &Args, i: usize) -> Result<f64, Fault> {
-    let r = a.num(i)?;
+/// The blend radius `r` (m) of a call to `a`: not negative.
+fn radius(a: &Args, r: f64) -> Result<f64, Fault> {
     if r.is_finite() && r >= 0.0 {
         Ok(r)
     } else {
@@ -947,38 +699,40 @@ fn move_start(
     }
 }
 
-/// `movej`, `movel`, `movep`, `optimovej`, `optimovel`: the arm moves along a trapezoidal
-/// profile (accelerate at `a` to `v`, cruise, decelerate), stretched to `t` if given, and
-/// is at the target when the move ends; with a blend radius `r > 0` the program gets
-/// control back where the blend begins (see [`Runtime::start_move`]).
-fn movej(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
-    let six = a.six(0)?;
-    let (accel, speed) = (a.num(1)?, a.num(2)?);
-    // movep and optimove* have no `t`; `r` is last.
-    let t = if a.params.len() == 5 { a.num(3)? } else { 0.0 };
-    let r = radius(a, a.params.len() - 1)?;
-    let joint_move = matches!(a.name, "movej" | "optimovej");
-    let (q1, pose) = if joint_move {
-        target(c, a.name, &a.v[0], six)?
-    } else {
-        tool_target(c, a.name, &a.v[0], six)?
-    };
-    let back = if joint_move {
-        let q0 = c.move_start().0;
-        let profile = Profile::new(joint_distance(q0, q1), speed, accel, t);
-        let tcp = c.arm.tcp;
-        let info = move_start(a.name, a.line, Some(q1), Some(pose), (accel, speed, t, r));
-        c.start_move(Kind::Joint { q0, q1, profile }, tcp, r, info)
-    } else {
-        let given = !matches!(a.v[0], Value::Pose(_));
-        tool_move(
-            c,
-            None,
-            pose,
-            (q1, given),
-            (accel, speed, t, r),
-            (a.name, a.line, false),
-        )
+/// `movej`, `movel`, `movep`, `servoc`, `optimovej`, `optimovel`: the arm moves along a
+/// trapezoidal profile (accelerate at `a` to `v`, cruise, decelerate), stretched to `t`
+/// if given (0 for those without `t`), and is at the target when the move ends; with a
+/// blend radius `r > 0` the program gets control back where the blend begins (see
+/// [`Runtime::start_move`]). `space`: the joints move (`movej`, `optimovej`) or the tool
+/// in a line (the others).
+fn go(
+    c: &mut Runtime,
+    a: &mut Args,
+    space: Space,
+    to: Target,
+    (accel, speed, t, r): (f64, f64, f64, f64),
+) -> Result<Out, Fault> {
+    let r = radius(a, r)?;
+    let back = match space {
+        Space::Joint => {
+            let (q1, pose) = target(c, a.name, to)?;
+            let q0 = c.move_start().0;
+            let profile = Profile::new(joint_distance(q0, q1), speed, accel, t);
+            let tcp = c.arm.tcp;
+            let info = move_start(a.name, a.line, Some(q1), Some(pose), (accel, speed, t, r));
+            c.start_move(Kind::Joint { q0, q1, profile }, tcp, r, info)
+        }
+        Space::Tool => {
+            let (q1, pose) = tool_target(c, a.name, to)?;
+            tool_move(
+                c,
+                None,
+                pose,
+                (q1, to.is_joints()),
+                (accel, speed, t, r),
+                (a.name, a.line, false),
+            )
+        }
     };
     Ok(Out::Motion(back, Value::None))
 }
@@ -988,18 +742,20 @@ fn movej(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
 /// from the start's to `pose_to`'s; `mode=1` (fixed): it keeps its relation to the
 /// arc's tangent from the start's, turning about the circle's axis by the angle swept
 /// (`pose_to`'s orientation is not used); another mode is a runtime error.
-fn movec(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
-    let via_six = a.six(0)?;
-    let via = if matches!(a.v[0], Value::Pose(_)) {
-        via_six
-    } else {
-        c.tool_pose(check_joints(a.name, via_six)?)
+fn movec(
+    c: &mut Runtime,
+    a: &mut Args,
+    via: Target,
+    to: Target,
+    (accel, speed, r): (f64, f64, f64),
+    Given(mode, mode_given): Given<'_, f64>,
+) -> Result<Out, Fault> {
+    let via = match via {
+        Target::Pose(pose) => pose,
+        Target::Joints(q) => c.tool_pose(check_joints(a.name, q)?),
     };
-    let six = a.six(1)?;
-    let (accel, speed) = (a.num(2)?, a.num(3)?);
-    let r = radius(a, 4)?;
-    let (q1, pose) = tool_target(c, a.name, &a.v[1], six)?;
-    let mode = a.num(5)?;
+    let r = radius(a, r)?;
+    let (q1, pose) = tool_target(c, a.name, to)?;
     let fixed = if mode == 0.0 {
         false
     } else if mode == 1.0 {
@@ -1007,15 +763,14 @@ fn movec(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
     } else {
         return Err(Fault::from(format!(
             "`movec`: mode={} is neither 0 (unconstrained) nor 1 (fixed)",
-            a.v[5].to_str()
+            mode_given.to_str()
         )));
     };
-    let given = !matches!(a.v[1], Value::Pose(_));
     let back = tool_move(
         c,
         Some(via),
         pose,
-        (q1, given),
+        (q1, to.is_joints()),
         (accel, speed, 0.0, r),
         (a.name, a.line, fixed),
     );
@@ -1044,14 +799,17 @@ fn protective_stop(c: &mut Runtime, _: &mut Args) -> Result<Out, Fault> {
 
 /// `servoj`: straight to `q` in joint space at constant speed over `t` (`a`, `v`,
 /// `lookahead_time` and `gain` shape a real servo's tracking; not modelled).
-fn servoj(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
-    let q1 = check_joints(a.name, a.six(0)?)?;
-    let t = a.num(3)?;
+fn servoj(
+    c: &mut Runtime,
+    a: &mut Args,
+    q: [f64; 6],
+    (acc, speed, t): (f64, f64, f64),
+) -> Result<Out, Fault> {
+    let q1 = check_joints(a.name, q)?;
     let q0 = c.arm.q;
     let profile = Profile::new(joint_distance(q0, q1), 0.0, 0.0, t);
     let tcp = c.arm.tcp;
     let pose = c.tool_pose(q1);
-    let (acc, speed) = (a.num(1)?, a.num(2)?);
     let info = move_start(a.name, a.line, Some(q1), Some(pose), (acc, speed, t, 0.0));
     c.start_motion(Kind::Joint { q0, q1, profile }, tcp, Some(info));
     Ok(Out::Wait(secs(t), Value::None))
@@ -1061,34 +819,36 @@ fn servoj(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
 /// current one to the target at `a` (the component that changes most; `aRot` for the
 /// tool's rotation, `a` if left out), then holds until the next motion command; returns
 /// after `t` (one step if left out).
-fn speed(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
-    let target = a.six(0)?;
-    let acc = a.num(1)?;
-    let t = if a.is_absent(2) {
-        c.step_time.as_secs_f64()
-    } else {
-        a.num(2)?
-    };
+fn speed(
+    c: &mut Runtime,
+    a: &mut Args,
+    space: Space,
+    target: [f64; 6],
+    acc: f64,
+    t: Option<f64>,
+    a_rot: Option<f64>,
+) -> Result<Out, Fault> {
+    let t = t.unwrap_or(c.step_time.as_secs_f64());
     let tcp = c.arm.tcp;
     let mut info = move_start(a.name, a.line, None, None, (acc, 0.0, t, 0.0));
     info.speed = Some(target);
-    if a.name == "speedj" {
-        let qd0 = c.arm.qd;
-        let ramp = trajectory::ramp_time(&qd0, &target, acc);
-        let q0 = c.arm.q;
-        c.start_motion(
-            Kind::JointSpeed {
-                q0,
-                qd0,
-                qd1: target,
-                ramp,
-            },
-            tcp,
-            Some(info),
-        );
-    } else {
-        let a_rot = if a.is_absent(3) { acc } else { a.num(3)? };
-        tool_speed(c, target, acc, a_rot, Some(info));
+    match space {
+        Space::Joint => {
+            let qd0 = c.arm.qd;
+            let ramp = trajectory::ramp_time(&qd0, &target, acc);
+            let q0 = c.arm.q;
+            c.start_motion(
+                Kind::JointSpeed {
+                    q0,
+                    qd0,
+                    qd1: target,
+                    ramp,
+                },
+                tcp,
+                Some(info),
+            );
+        }
+        Space::Tool => tool_speed(c, target, acc, a_rot.unwrap_or(acc), Some(info)),
     }
     Ok(Out::Wait(secs(t), Value::None))
 }
@@ -1107,34 +867,36 @@ fn tool_speed(c: &mut Runtime, v1: [f64; 6], acc: f64, a_rot: f64, info: Option<
 }
 
 /// `stopj(a)`: the joint speeds ramp down to zero at `a` (the fastest joint; the others
-/// in proportion); `stopl(a, aRot)`: the tool speed, at `a` (`aRot` for its rotation).
-/// Returns when the arm is at rest (at least one step).
-fn stop(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
-    let acc = a.num(0)?;
-    let ramp = if a.name == "stopj" {
-        let qd0 = c.arm.qd;
-        let ramp = trajectory::ramp_time(&qd0, &[0.0; 6], acc);
-        let (q0, tcp) = (c.arm.q, c.arm.tcp);
-        c.start_motion(
-            Kind::JointSpeed {
-                q0,
-                qd0,
-                qd1: [0.0; 6],
-                ramp,
-            },
-            tcp,
-            None,
-        );
-        ramp
-    } else {
-        let a_rot = if a.is_absent(1) { acc } else { a.num(1)? };
-        let v0 = c.arm.tcp_speed;
-        tool_speed(c, [0.0; 6], acc, a_rot, None);
-        trajectory::ramp_time(&v0[..3], &[0.0; 3], acc).max(trajectory::ramp_time(
-            &v0[3..],
-            &[0.0; 3],
-            a_rot,
-        ))
+/// in proportion); `stopl(a, aRot)`: the tool speed, at `a` (`aRot` for its rotation,
+/// `a` if left out). Returns when the arm is at rest (at least one step).
+fn stop(c: &mut Runtime, space: Space, acc: f64, a_rot: Option<f64>) -> Result<Out, Fault> {
+    let ramp = match space {
+        Space::Joint => {
+            let qd0 = c.arm.qd;
+            let ramp = trajectory::ramp_time(&qd0, &[0.0; 6], acc);
+            let (q0, tcp) = (c.arm.q, c.arm.tcp);
+            c.start_motion(
+                Kind::JointSpeed {
+                    q0,
+                    qd0,
+                    qd1: [0.0; 6],
+                    ramp,
+                },
+                tcp,
+                None,
+            );
+            ramp
+        }
+        Space::Tool => {
+            let a_rot = a_rot.unwrap_or(acc);
+            let v0 = c.arm.tcp_speed;
+            tool_speed(c, [0.0; 6], acc, a_rot, None);
+            trajectory::ramp_time(&v0[..3], &[0.0; 3], acc).max(trajectory::ramp_time(
+                &v0[3..],
+                &[0.0; 3],
+                a_rot,
+            ))
+        }
     };
     // At rest when the ramp ends on the motion clock (at least a step).
     let n = secs(ramp)
@@ -1144,17 +906,25 @@ fn stop(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
     Ok(Out::Motion(until, Value::None))
 }
 
-fn direct_torque(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
-    a.six(0)?;
+fn direct_torque(c: &mut Runtime) -> Result<Out, Fault> {
     Ok(Out::Wait(c.step_time, Value::None))
+}
+
+/// A value read off the runtime, returned now.
+fn read(c: &mut Runtime, f: impl FnOnce(&Runtime) -> Value) -> Result<Out, Fault> {
+    Ok(Out::Value(f(c)))
+}
+
+/// Nothing returned now.
+fn done() -> Result<Out, Fault> {
+    Ok(Out::Value(Value::None))
 }
 
 fn joints(c: &mut Runtime, _: &mut Args) -> Result<Out, Fault> {
     Ok(Out::Value(floats(c.arm.q)))
 }
 
-fn joints_history(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
-    let back = a.int(0)?;
+fn joints_history(c: &mut Runtime, _: &mut Args, back: i32) -> Result<Out, Fault> {
     let q = c
         .joint_history
         .at(c.step, i64::from(back), c.arm.q)
@@ -1198,102 +968,79 @@ fn flange_pose(c: &mut Runtime, _: &mut Args) -> Result<Out, Fault> {
     Ok(Out::Value(Value::Pose(c.flange_pose())))
 }
 
-fn payload(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
-    Ok(Out::Value(match a.name {
-        "get_target_payload" => Value::Float(c.arm.payload_mass),
-        "get_target_payload_cog" => float_list(&c.arm.payload_cog),
-        _ => float_list(&c.arm.payload_inertia),
-    }))
-}
-
-fn set_payload(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
+/// `set_payload(m, cog)`: without a CoG the controller takes the TCP's position. The
+/// deprecated setters (this, `set_payload_mass`, `set_payload_cog`) reset the inertia.
+fn set_payload(c: &mut Runtime, _: &mut Args, m: f64, cog: Option<[f64; 3]>) -> Result<Out, Fault> {
     let arm = &mut c.arm;
-    match a.name {
-        "set_payload_mass" => arm.payload_mass = a.num(0)?,
-        "set_payload_cog" => arm.payload_cog = a.nums(0)?,
-        "set_payload" => {
-            arm.payload_mass = a.num(0)?;
-            // Without a CoG the controller takes the TCP's position.
-            arm.payload_cog = if a.is_absent(1) {
-                [arm.tcp[0], arm.tcp[1], arm.tcp[2]]
-            } else {
-                a.nums(1)?
-            };
-        }
-        _ => {
-            let (m, cog, inertia): (f64, [f64; 3], [f64; 6]) = (a.num(0)?, a.nums(1)?, a.nums(2)?);
-            a.num(3)?;
-            if inertia.iter().any(|x| x.abs() > 133.0) || inertia[..3].iter().any(|x| *x < 0.0) {
-                return Err(Fault::from(format!(
-                    "`set_target_payload`: inertia {inertia:?} out of range (each at most 133 kg*m^2, Ixx, Iyy, Izz not negative)"
-                )));
-            }
-            arm.payload_mass = m;
-            arm.payload_cog = cog;
-            arm.payload_inertia = inertia;
-            return Ok(Out::Value(Value::None));
-        }
-    }
-    // The deprecated setters reset the inertia.
+    arm.payload_mass = m;
+    arm.payload_cog = cog.unwrap_or([arm.tcp[0], arm.tcp[1], arm.tcp[2]]);
     arm.payload_inertia = [0.0; 6];
-    Ok(Out::Value(Value::None))
+    done()
 }
 
-/// Settings stored on the arm and read back by their getters: each refuses a value
-/// outside the range the manual gives, naming it.
-fn motion_setting(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
+fn set_payload_mass(c: &mut Runtime, m: f64) -> Result<Out, Fault> {
+    c.arm.payload_mass = m;
+    c.arm.payload_inertia = [0.0; 6];
+    done()
+}
+
+fn set_payload_cog(c: &mut Runtime, cog: [f64; 3]) -> Result<Out, Fault> {
+    c.arm.payload_cog = cog;
+    c.arm.payload_inertia = [0.0; 6];
+    done()
+}
+
+fn set_target_payload(
+    c: &mut Runtime,
+    m: f64,
+    cog: [f64; 3],
+    inertia: [f64; 6],
+) -> Result<Out, Fault> {
+    if inertia.iter().any(|x| x.abs() > 133.0) || inertia[..3].iter().any(|x| *x < 0.0) {
+        return Err(Fault::from(format!(
+            "`set_target_payload`: inertia {inertia:?} out of range (each at most 133 kg*m^2, Ixx, Iyy, Izz not negative)"
+        )));
+    }
     let arm = &mut c.arm;
-    let (slot, lo, hi) = match a.name {
-        "force_mode_set_damping" => (&mut arm.force_mode_damping, 0.0, 1.0),
-        "force_mode_set_gain_scaling" => (&mut arm.force_mode_gain_scaling, 0.0, 2.0),
-        "jerk_gain_scaling_set" => (&mut arm.jerk_gain_scaling, 0.01, 1.0),
-        _ => {
-            let v = a.int(0)?;
-            if v != 1 && v != 2 {
-                return Err(Fault::from(format!(
-                    "`motion_version_set`: motion version {v} is not 1 or 2"
-                )));
-            }
-            arm.motion_version = v;
-            return Ok(Out::Value(Value::None));
-        }
-    };
-    let v = a.num(0)?;
+    arm.payload_mass = m;
+    arm.payload_cog = cog;
+    arm.payload_inertia = inertia;
+    done()
+}
+
+/// A setting stored on the arm (`slot`) and read back by its getter: `v` outside the
+/// range `lo`-`hi` the manual gives is refused, naming the call's parameter.
+fn store(
+    c: &mut Runtime,
+    a: &Args,
+    v: f64,
+    (lo, hi): (f64, f64),
+    slot: impl FnOnce(&mut crate::Arm) -> &mut f64,
+) -> Result<Out, Fault> {
     if !(lo..=hi).contains(&v) {
         return Err(Fault::from(format!(
             "`{}`: {} {v} is not in {lo}-{hi}",
-            a.name, a.params[0].name
+            a.name,
+            a.params.first().map_or("?", |p| p.name)
         )));
     }
-    *slot = v;
-    Ok(Out::Value(Value::None))
+    *slot(&mut c.arm) = v;
+    done()
 }
 
-fn motion_setting_get(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
-    let arm = &c.arm;
-    Ok(Out::Value(match a.name {
-        "force_mode_get_damping" => Value::Float(arm.force_mode_damping),
-        "force_mode_get_gain_scaling" => Value::Float(arm.force_mode_gain_scaling),
-        "jerk_gain_scaling_get" => Value::Float(arm.jerk_gain_scaling),
-        _ => Value::Int(arm.motion_version),
-    }))
+fn motion_version_set(c: &mut Runtime, v: i32) -> Result<Out, Fault> {
+    if v != 1 && v != 2 {
+        return Err(Fault::from(format!(
+            "`motion_version_set`: motion version {v} is not 1 or 2"
+        )));
+    }
+    c.arm.motion_version = v;
+    done()
 }
 
-fn joint_torques(c: &mut Runtime, _: &mut Args) -> Result<Out, Fault> {
-    Ok(Out::Value(floats(c.arm.world.joint_torques)))
-}
-
-fn joint_temp(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
-    let j = a.index(0, 6, "joint")?;
+fn joint_temp(c: &mut Runtime, a: &mut Args, j: i32) -> Result<Out, Fault> {
+    let j = index(a, j, 6, "joint")?;
     Ok(Out::Value(Value::Float(c.arm.world.joint_temp[j])))
-}
-
-fn scalar(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
-    Ok(Out::Value(Value::Float(match a.name {
-        "get_controller_temp" => c.arm.world.controller_temp,
-        "get_tool_temp" => c.arm.world.tool_temp,
-        _ => c.arm.world.tool_current,
-    })))
 }
 
 fn accelerometer(c: &mut Runtime, _: &mut Args) -> Result<Out, Fault> {
@@ -1305,110 +1052,124 @@ fn accelerometer(c: &mut Runtime, _: &mut Args) -> Result<Out, Fault> {
     ))))
 }
 
-fn get3(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
-    Ok(Out::Value(float_list(if a.name == "get_gravity" {
-        &c.arm.gravity
-    } else {
-        &c.arm.base_acceleration
-    })))
+fn set_gravity(c: &mut Runtime, d: [f64; 3]) -> Result<Out, Fault> {
+    c.arm.gravity = d;
+    done()
 }
 
-fn set3(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
-    let v = a.nums(0)?;
-    if a.name == "set_gravity" {
-        c.arm.gravity = v;
-    } else {
-        c.arm.base_acceleration = v;
-    }
-    Ok(Out::Value(Value::None))
+fn set_base_acceleration(c: &mut Runtime, a: [f64; 3]) -> Result<Out, Fault> {
+    c.arm.base_acceleration = a;
+    done()
 }
 
-fn zero_int(_: &mut Runtime, _: &mut Args) -> Result<Out, Fault> {
-    Ok(Out::Value(Value::Int(0)))
-}
-
-fn has_solution(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
-    let pose = a.six(0)?;
-    let qnear = if a.is_absent(1) { c.arm.q } else { a.six(1)? };
-    let tcp = if a.is_absent(4) { c.arm.tcp } else { a.six(4)? };
-    let (max_position, max_orientation) = super::poses::tolerances(a, a.num(2)?, a.num(3)?)?;
+/// `get_inverse_kin_has_solution`: the joints nearest `qnear` (the joints now if left
+/// out) through `tcp` (the active TCP if left out) reach `pose`, or come within both
+/// allowed errors (each 0 or more).
+fn has_solution(
+    c: &mut Runtime,
+    a: &mut Args,
+    pose: [f64; 6],
+    qnear: Option<[f64; 6]>,
+    max_position: f64,
+    max_orientation: f64,
+    tcp: Option<[f64; 6]>,
+) -> Result<Out, Fault> {
+    let (max_position, max_orientation) =
+        super::poses::tolerances(a, max_position, max_orientation)?;
+    let qnear = qnear.unwrap_or(c.arm.q);
+    let tcp = tcp.unwrap_or(c.arm.tcp);
     Ok(Out::Value(Value::Bool(
         super::poses::inverse_within(c, pose, qnear, tcp, max_position, max_orientation).is_ok(),
     )))
 }
 
-fn set_pos(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
-    let q = check_joints(a.name, a.six(0)?)?;
+fn set_pos(c: &mut Runtime, a: &mut Args, q: [f64; 6]) -> Result<Out, Fault> {
+    let q = check_joints(a.name, q)?;
     c.halt();
     c.arm.q = q;
     c.arm.qd = [0.0; 6];
     c.arm.tcp_speed = [0.0; 6];
-    Ok(Out::Value(Value::None))
+    done()
 }
 
-fn path_offset(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
-    let po = &mut c.arm.path_offset;
-    let kind = |a: &Args, i: usize| -> Result<i32, Fault> {
-        let t = a.int(i)?;
-        if (1..=4).contains(&t) {
-            Ok(t)
-        } else {
-            Err(Fault::from(format!("`{}`: type {t} is not 1-4", a.name)))
-        }
-    };
-    match a.name {
-        "path_offset_enable" => po.enabled = true,
-        "path_offset_disable" => {
-            a.num(0)?;
-            po.enabled = false;
-            po.offset = [0.0; 6];
-        }
-        "path_offset_set" => {
-            let mut o = a.six(0)?;
-            po.kind = kind(a, 1)?;
-            for (k, x) in o.iter_mut().enumerate() {
-                let lim = if k < 3 { po.max_trans } else { po.max_rot };
-                *x = x.clamp(-lim, lim);
-            }
-            po.offset = o;
-        }
-        "path_offset_get" => {
-            kind(a, 0)?;
-            let o = if po.enabled { po.offset } else { [0.0; 6] };
-            return Ok(Out::Value(Value::Pose(o)));
-        }
-        "path_offset_set_alpha_filter" => {
-            let alpha = a.num(0)?;
-            if !(0.0..=1.0).contains(&alpha) {
-                return Err(Fault::from(format!(
-                    "`path_offset_set_alpha_filter`: alpha {alpha} is not in 0-1"
-                )));
-            }
-            po.alpha = alpha;
-        }
-        _ => {
-            po.max_trans = a.num(0)?.abs();
-            po.max_rot = a.num(1)?.abs();
-        }
+/// A path offset's `type` (1-4).
+fn offset_type(a: &Args, t: i32) -> Result<i32, Fault> {
+    if (1..=4).contains(&t) {
+        Ok(t)
+    } else {
+        Err(Fault::from(format!("`{}`: type {t} is not 1-4", a.name)))
     }
-    Ok(Out::Value(Value::None))
 }
 
-fn tcp_offset(c: &mut Runtime, _: &mut Args) -> Result<Out, Fault> {
-    Ok(Out::Value(Value::Pose(c.arm.tcp)))
+fn path_offset_enable(c: &mut Runtime, _: &mut Args) -> Result<Out, Fault> {
+    c.arm.path_offset.enabled = true;
+    done()
 }
 
-fn set_tcp(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
-    c.arm.tcp = a.six(0)?;
-    Ok(Out::Value(Value::None))
+fn path_offset_disable(c: &mut Runtime) -> Result<Out, Fault> {
+    let po = &mut c.arm.path_offset;
+    po.enabled = false;
+    po.offset = [0.0; 6];
+    done()
+}
+
+/// `path_offset_set(offset, type)`: each element clamped to the maximum offset.
+fn path_offset_set(
+    c: &mut Runtime,
+    a: &mut Args,
+    mut offset: [f64; 6],
+    t: i32,
+) -> Result<Out, Fault> {
+    let po = &mut c.arm.path_offset;
+    po.kind = offset_type(a, t)?;
+    for (k, x) in offset.iter_mut().enumerate() {
+        let lim = if k < 3 { po.max_trans } else { po.max_rot };
+        *x = x.clamp(-lim, lim);
+    }
+    po.offset = offset;
+    done()
+}
+
+fn path_offset_get(c: &mut Runtime, a: &mut Args, t: i32) -> Result<Out, Fault> {
+    offset_type(a, t)?;
+    let po = &c.arm.path_offset;
+    let o = if po.enabled { po.offset } else { [0.0; 6] };
+    Ok(Out::Value(Value::Pose(o)))
+}
+
+fn path_offset_set_alpha_filter(c: &mut Runtime, _: &mut Args, alpha: f64) -> Result<Out, Fault> {
+    if !(0.0..=1.0).contains(&alpha) {
+        return Err(Fault::from(format!(
+            "`path_offset_set_alpha_filter`: alpha {alpha} is not in 0-1"
+        )));
+    }
+    c.arm.path_offset.alpha = alpha;
+    done()
+}
+
+fn path_offset_set_max_offset(
+    c: &mut Runtime,
+    _: &mut Args,
+    trans: f64,
+    rot: f64,
+) -> Result<Out, Fault> {
+    let po = &mut c.arm.path_offset;
+    po.max_trans = trans.abs();
+    po.max_rot = rot.abs();
+    done()
+}
+
+fn set_tcp(c: &mut Runtime, pose: [f64; 6]) -> Result<Out, Fault> {
+    c.arm.tcp = pose;
+    done()
 }
 
 /// `tool_contact(direction)`: the number of steps back to just before the TCP touched
 /// the contact plane (at least 1 while it touches), 0 without contact. With a direction
 /// (base frame, its first three elements) only a contact against it counts: the plane's
 /// normal opposes the direction.
-fn tool_contact(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
-    let direction = if a.is_absent(0) { [0.0; 6] } else { a.six(0)? };
+fn tool_contact(c: &mut Runtime, _: &mut Args, direction: Option<[f64; 6]>) -> Result<Out, Fault> {
+    let direction = direction.unwrap_or([0.0; 6]);
     let f = c.measured_contact();
     let touching = f.iter().any(|x| *x != 0.0);
     let against = direction[..3].iter().all(|x| *x == 0.0)
@@ -1432,68 +1193,80 @@ fn is_steady(c: &mut Runtime, _: &mut Args) -> Result<Out, Fault> {
 /// inverse kinematics reach it with every joint within its range (±2π; through the
 /// active TCP offset, nearest `qnear` or the joints now); joint positions if each is
 /// within its range. The installation's safety planes and TCP limits are not modelled.
-fn within_safety_limits(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
-    let six = a.six(0)?;
-    let ok = if matches!(a.v[0], Value::Pose(_)) {
-        let qnear = if a.is_absent(1) { c.arm.q } else { a.six(1)? };
-        c.inverse(six, qnear, c.arm.tcp).is_ok()
-    } else {
-        check_joints(a.name, six).is_ok()
+fn within_safety_limits(
+    c: &mut Runtime,
+    a: &mut Args,
+    pose: Target,
+    qnear: Option<[f64; 6]>,
+) -> Result<Out, Fault> {
+    let ok = match pose {
+        Target::Pose(pose) => c.inverse(pose, qnear.unwrap_or(c.arm.q), c.arm.tcp).is_ok(),
+        Target::Joints(q) => check_joints(a.name, q).is_ok(),
     };
     Ok(Out::Value(Value::Bool(ok)))
 }
 
-/// `teach_mode()`, `freedrive_mode(freeAxes, feature)` and their ends. The arm stops
-/// (and leaves force mode) on entering; the operator then moves the joints
-/// ([`crate::Arm::move_by_hand`]; `freeAxes` and `feature` are checked, and the
-/// operator's joints taken as given).
-fn hand_mode(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
-    match a.name {
-        "teach_mode" | "freedrive_mode" => {
-            if a.name == "freedrive_mode" {
-                let axes = a.six(0)?;
-                if axes.iter().any(|x| *x != 0.0 && *x != 1.0) {
-                    return Err(Fault::from(format!(
-                        "`freedrive_mode`: freeAxes {} must be 0 or 1 each",
-                        a.v[0].to_str()
-                    )));
-                }
-                a.six(1)?;
-            }
-            c.stop_at_once();
-            c.arm.force_mode = None;
-            c.arm.hand_mode = if a.name == "teach_mode" { 1 } else { 2 };
-        }
-        _ => {
-            c.arm.hand_mode = 0;
-            c.arm.qd = [0.0; 6];
-            c.arm.tcp_speed = [0.0; 6];
-        }
-    }
-    Ok(Out::Value(Value::None))
+/// [`hand_mode`] of `teach_mode()`.
+const TEACH: u8 = 1;
+/// [`hand_mode`] of `freedrive_mode()`.
+const FREEDRIVE: u8 = 2;
+
+/// `teach_mode()` ([`TEACH`]), `freedrive_mode(freeAxes, feature)` ([`FREEDRIVE`]): the
+/// arm stops (and leaves force mode); the operator then moves the joints
+/// ([`crate::Arm::move_by_hand`]) until [`end_hand_mode`].
+fn hand_mode(c: &mut Runtime, mode: u8) -> Result<Out, Fault> {
+    c.stop_at_once();
+    c.arm.force_mode = None;
+    c.arm.hand_mode = mode;
+    done()
 }
 
-/// `force_mode(task_frame, selection_vector, wrench, type, limits)` and
-/// `end_force_mode()` (see [`crate::arm::force`]).
-fn force_mode(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
-    if a.name == "end_force_mode" {
-        c.arm.force_mode = None;
-        if c.motion.is_none() {
-            c.arm.qd = [0.0; 6];
-            c.arm.qdd = [0.0; 6];
-            c.arm.tcp_speed = [0.0; 6];
-        }
-        return Ok(Out::Value(Value::None));
+/// `freedrive_mode(freeAxes, feature)`: `freeAxes` must be 0 or 1 each (`feature` is
+/// checked to be a pose; the operator's joints are taken as given).
+fn freedrive_mode(c: &mut Runtime, Given(axes, given): Given<'_, [f64; 6]>) -> Result<Out, Fault> {
+    if axes.iter().any(|x| *x != 0.0 && *x != 1.0) {
+        return Err(Fault::from(format!(
+            "`freedrive_mode`: freeAxes {} must be 0 or 1 each",
+            given.to_str()
+        )));
     }
-    let frame = a.six(0)?;
-    let sel = a.six(1)?;
-    let wrench = a.six(2)?;
-    let kind = a.int(3)?;
-    let limits = a.six(4)?;
+    hand_mode(c, FREEDRIVE)
+}
+
+/// `end_teach_mode()`, `end_freedrive_mode()`: the arm holds where the operator left it.
+fn end_hand_mode(c: &mut Runtime, _: &mut Args) -> Result<Out, Fault> {
+    c.arm.hand_mode = 0;
+    c.arm.qd = [0.0; 6];
+    c.arm.tcp_speed = [0.0; 6];
+    done()
+}
+
+/// `end_force_mode()`: the arm stays where it is (at rest unless a motion is under way).
+fn end_force_mode(c: &mut Runtime, _: &mut Args) -> Result<Out, Fault> {
+    c.arm.force_mode = None;
+    if c.motion.is_none() {
+        c.arm.qd = [0.0; 6];
+        c.arm.qdd = [0.0; 6];
+        c.arm.tcp_speed = [0.0; 6];
+    }
+    done()
+}
+
+/// `force_mode(task_frame, selection_vector, wrench, type, limits)` (see
+/// [`crate::arm::force`]).
+fn force_mode(
+    c: &mut Runtime,
+    _: &mut Args,
+    frame: [f64; 6],
+    Given(sel, sel_given): Given<'_, [f64; 6]>,
+    wrench: [f64; 6],
+    kind: i32,
+    limits: [f64; 6],
+) -> Result<Out, Fault> {
     if sel.iter().any(|x| *x != 0.0 && *x != 1.0) {
         return Err(Fault::from(format!(
             "`force_mode`: selection_vector {} must be 0 or 1 each",
-            a.v[1].to_str()
+            sel_given.to_str()
         )));
     }
     let kind = match kind {
@@ -1528,5 +1301,5 @@ fn force_mode(c: &mut Runtime, a: &mut Args) -> Result<Out, Fault> {
     });
     // The arm moves from this step's pose on.
     c.sampled = Some(c.step);
-    Ok(Out::Value(Value::None))
+    done()
 }

@@ -182,7 +182,10 @@ impl Machine {
         };
         if let Some(r) = record.as_mut() {
             if let Some(k) = builtin.param("socket_name") {
-                r.socket = a.text(k).ok();
+                r.socket = match a.v.get(k) {
+                    Some(Value::Str(s)) => Some(String::from_utf8_lossy(s).into_owned()),
+                    _ => None,
+                };
             }
         }
         // A built-in refuses to allocate past the count before it changes anything: the
