@@ -390,3 +390,29 @@ fn a_secondary_program_calls_xml_rpc() {
     );
     server.stop();
 }
+
+/// The real-time loop owns the cell while it runs: what a test (or the dashboard) asks of
+/// the cell runs on the loop's thread, every request of many threads at once is answered
+/// (more than the request queue holds), and once the loop has ended a request runs on
+/// its caller's thread.
+#[test]
+fn the_loop_owns_the_cell_and_answers_every_request() {
+    let (server, _events) = start();
+    let on = server.with_cell(|_, _| std::thread::current().name().map(str::to_string));
+    assert_eq!(on.as_deref(), Some("controller"));
+    let server = std::sync::Arc::new(server);
+    let askers: Vec<_> = (0..urscript_controller::net::MAX_REQUESTS + 44)
+        .map(|k| {
+            let server = std::sync::Arc::clone(&server);
+            std::thread::spawn(move || server.with_cell(move |cell, _| (k, cell.step_time())))
+        })
+        .collect();
+    for (k, t) in askers.into_iter().enumerate() {
+        assert_eq!(t.join().unwrap(), (k, Duration::from_millis(2)));
+    }
+    // Shut down (as on SIGTERM): the loop parks the cell and a request runs here.
+    server.shut_down();
+    let here = std::thread::current().name().map(str::to_string);
+    let on = server.with_cell(|_, _| std::thread::current().name().map(str::to_string));
+    assert_eq!(on, here);
+}

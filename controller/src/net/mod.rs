@@ -6,8 +6,9 @@
 //! - The dashboard server: one thread per connection (at most [`MAX_CONNECTIONS`]), every
 //!   line a command, every reply written in one piece ending in `"\n"`.
 //! - Primary, secondary, realtime and RTDE, and the program running on the arm: one
-//!   real-time thread that steps the [`Cell`] at the controller's step (2 ms e-Series,
-//!   8 ms CB3). See [`streams`](self) for its bounds.
+//!   real-time thread that owns the [`Cell`] and steps it at the controller's step (2 ms
+//!   e-Series, 8 ms CB3). See [`streams`](self) for its bounds. The other threads act on
+//!   the cell only by requests the loop runs between its steps ([`owner`](self)).
 //! - The interpreter socket (30020): one thread per connection (at most
 //!   [`MAX_INTERPRETER_CONNECTIONS`]), each line a statement or command for the running
 //!   program's interpreter mode, each reply one line. See [`interpreter`](self) for the
@@ -17,7 +18,8 @@
 //!
 //! What happens is reported as [`ServerEvent`]s to the callback given to
 //! [`Server::start`], from the server's threads, the real-time loop among them: the
-//! callback must not block (queue the event, as `ursock controller` does). A dashboard
+//! callback must not block (queue the event, as `ursock controller` does) and must not
+//! call [`Server::with_cell`] (the loop would wait for itself). A dashboard
 //! `shutdown` (unless [`ServerOptions::allow_shutdown`] is off: then it is refused as
 //! the controller refuses a command, `Failed to execute: shutdown`) ends the running
 //! program, closes every client (each with its [`ServerEvent::Close`]) and stops the
