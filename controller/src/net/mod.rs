@@ -94,6 +94,7 @@
 mod clock;
 mod owner;
 mod priority;
+mod ready;
 pub use clock::MAX_CATCH_UP;
 pub use owner::MAX_REQUESTS;
 pub use priority::{Realtime, Scheduling, FIFO_PRIORITY, NICE};

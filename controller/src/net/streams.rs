@@ -353,8 +353,9 @@ pub(crate) fn run(
         }
         let tick = due;
         late.record(now - tick, held, step);
-        for (l, service) in &listeners {
-            if let Some(l) = l {
+        let pending = super::ready::pending(listeners.each_ref().map(|(l, _)| l.as_ref()));
+        for ((l, service), pending) in listeners.iter().zip(pending) {
+            if let (Some(l), true) = (l, pending) {
                 lp.accept(shared, l, *service);
             }
         }
