@@ -25,8 +25,11 @@
 //!    30-field recipe, no program), all recording for `--seconds`.
 //!
 //! `--hog` runs a busy loop per core (`sh -c 'while :; do :; done'`) during every
-//! scenario; `--realtime auto|off` is passed to each controller; `--only NAME[,NAME]`
-//! picks scenarios (`startup`, `one`, `four`, `silent`, `idle`, `fleet`).
+//! scenario; `--realtime auto|off` is passed to each controller; `--client-realtime`
+//! has each RTDE client's thread ask for `SCHED_FIFO` at the controllers' priority (10;
+//! Linux, where allowed), so that with a busy neighbour the figures show the controller's
+//! timing rather than a starved client's; `--only NAME[,NAME]` picks scenarios
+//! (`startup`, `one`, `four`, `silent`, `idle`, `fleet`).
 //!
 //! For each run: packages received against expected, the inter-arrival period's
 //! percentiles, the jitter `|period - 2 ms|`, the controller's `timestamp` deltas, the
@@ -100,6 +103,8 @@ struct Options {
     hog: bool,
     /// `--realtime` of each controller.
     realtime: String,
+    /// The RTDE clients' threads ask for `SCHED_FIFO`.
+    client_realtime: bool,
     /// The scenarios to run (all when empty).
     only: Vec<String>,
 }
@@ -123,10 +128,15 @@ fn run() -> Result<()> {
     println!("controller: {}", bin.display());
     println!("machine: {}", machine());
     println!(
-        "controllers run with --realtime {}{}",
+        "controllers run with --realtime {}{}{}",
         opts.realtime,
         if opts.hog {
             "; a busy loop per core runs throughout"
+        } else {
+            ""
+        },
+        if opts.client_realtime {
+            "; RTDE clients ask for SCHED_FIFO"
         } else {
             ""
         }
@@ -181,6 +191,7 @@ fn parse_args() -> Result<Options> {
         fleet: 8,
         hog: false,
         realtime: "auto".into(),
+        client_realtime: false,
         only: Vec::new(),
     };
     let mut args = std::env::args().skip(1);
@@ -195,6 +206,7 @@ fn parse_args() -> Result<Options> {
             "--starts" => opts.starts = number(value()?)?.max(1) as usize,
             "--fleet" => opts.fleet = number(value()?)?.clamp(1, 256) as usize,
             "--hog" => opts.hog = true,
+            "--client-realtime" => opts.client_realtime = true,
             "--realtime" => {
                 opts.realtime = value()?;
                 if !["auto", "off"].contains(&opts.realtime.as_str()) {
@@ -205,7 +217,7 @@ fn parse_args() -> Result<Options> {
             "-h" | "--help" => {
                 println!(
                     "controller_load [--seconds N (30)] [--starts N (20)] [--fleet N (8)] \
-                     [--hog] [--realtime auto|off] \
+                     [--hog] [--realtime auto|off] [--client-realtime] \
                      [--only startup,one,four,silent,idle,fleet]"
                 );
                 std::process::exit(0);
@@ -613,6 +625,26 @@ impl Default for Record {
     }
 }
 
+/// The calling thread asks for `SCHED_FIFO` at the controllers' priority (a refusal
+/// leaves it as it was; it is said once in the header).
+fn client_fifo() {
+    #[cfg(target_os = "linux")]
+    {
+        use thread_priority::unix::{
+            set_thread_priority_and_policy, thread_native_id, RealtimeThreadSchedulePolicy,
+            ThreadSchedulePolicy,
+        };
+        use thread_priority::{ThreadPriority, ThreadPriorityValue};
+        if let Ok(p) = ThreadPriorityValue::try_from(urscript_controller::net::FIFO_PRIORITY) {
+            let _ = set_thread_priority_and_policy(
+                thread_native_id(),
+                ThreadPriority::Crossplatform(p),
+                ThreadSchedulePolicy::Realtime(RealtimeThreadSchedulePolicy::Fifo),
+            );
+        }
+    }
+}
+
 // ---------------------------------------------------------------------------------------
 // 2 and 3. Streaming under load
 
@@ -673,7 +705,15 @@ fn scenario(
     let end = t0 + Duration::from_secs(seconds);
     let handles: Vec<_> = clients
         .into_iter()
-        .map(|r| std::thread::spawn(move || r.record(end)))
+        .map(|r| {
+            let fifo = opts.client_realtime;
+            std::thread::spawn(move || {
+                if fifo {
+                    client_fifo();
+                }
+                r.record(end)
+            })
+        })
         .collect();
     let mut records = Vec::new();
     for h in handles {
@@ -845,7 +885,15 @@ fn fleet(bin: &PathBuf, opts: &Options) -> Result<()> {
     let end = t0 + Duration::from_secs(opts.seconds);
     let handles: Vec<_> = clients
         .into_iter()
-        .map(|r| std::thread::spawn(move || r.record(end)))
+        .map(|r| {
+            let fifo = opts.client_realtime;
+            std::thread::spawn(move || {
+                if fifo {
+                    client_fifo();
+                }
+                r.record(end)
+            })
+        })
         .collect();
     let mut records = Vec::new();
     for h in handles {
