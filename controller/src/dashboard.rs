@@ -138,168 +138,272 @@ impl Dashboard {
         command: &DashboardCommand,
         now: Duration,
     ) -> Reply {
-        use DashboardCommand as C;
         self.commands += 1;
         controller.handle_timeout(now);
-        match command {
-            C::LoadInstallation(name) => match controller.load_installation(name) {
-                Ok(()) => Reply::line(format!("Loading installation: {name}")),
-                Err(e) => refused(e, || match e {
-                    Refused::NotFound => format!("File not found: {name}"),
-                    _ => format!("Failed to load installation: {name}"),
-                }),
-            },
-            C::Load(name) => match controller.load(name) {
-                Ok(()) => Reply::line(format!("Loading program: {name}")),
-                Err(e) => refused(e, || match e {
-                    Refused::NotFound => format!("File not found: {name}"),
-                    _ => format!("Error while loading program: {name}"),
-                }),
-            },
-            C::Play => match controller.play(now) {
-                Ok(()) => Reply::line("Starting program"),
-                Err(e) => refused(e, || "Failed to execute: play".into()),
-            },
-            C::Stop => match controller.stop(now) {
-                Ok(()) => Reply::line("Stopped"),
-                Err(e) => refused(e, || "Failed to execute: stop".into()),
-            },
-            C::Pause => match controller.pause(now) {
-                Ok(()) => Reply::line("Pausing program"),
-                Err(e) => refused(e, || "Failed to execute: pause".into()),
-            },
-            C::Quit => Reply::closing("Disconnected"),
-            C::Shutdown => match controller.shutdown(now) {
-                Ok(()) => Reply::closing("Shutting down"),
-                Err(e) => refused(e, || "Failed to execute: shutdown".into()),
-            },
-            C::Running => {
-                let playing = controller.program_state() == crate::ProgramState::Playing;
-                Reply::line(format!("Program running: {playing}"))
-            }
-            C::RobotMode => Reply::line(format!("Robotmode: {}", controller.robot_mode(now))),
-            C::GetLoadedProgram => Reply::line(match controller.loaded_program() {
-                Some((_, path)) => format!("Loaded program: {path}"),
-                None => "No program loaded".into(),
+        match command.group() {
+            Group::Program => program_command(controller, command, now),
+            Group::PowerAndSafety => power_and_safety(controller, command, now),
+            Group::Operator => operator_command(controller, command),
+            Group::About => about(controller, command),
+        }
+    }
+}
+
+/// The dashboard's commands by what they act on.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Group {
+    /// Programs and installations: load, play, pause, stop, their state; the connection
+    /// and the controller (`quit`, `shutdown`).
+    Program,
+    /// Power, brakes, safety, operational mode, remote control; the robot mode.
+    PowerAndSafety,
+    /// What the operator sees: popups, the log.
+    Operator,
+    /// The controller itself: versions, serial number, model, user role, reports; and
+    /// the lines not understood.
+    About,
+}
+
+impl DashboardCommand {
+    fn group(&self) -> Group {
+        use DashboardCommand as C;
+        match self {
+            C::LoadInstallation(_)
+            | C::Load(_)
+            | C::Play
+            | C::Stop
+            | C::Pause
+            | C::Quit
+            | C::Shutdown
+            | C::Running
+            | C::GetLoadedProgram
+            | C::IsProgramSaved
+            | C::ProgramState => Group::Program,
+            C::RobotMode
+            | C::PowerOn
+            | C::PowerOff
+            | C::BrakeRelease
+            | C::SafetyStatus
+            | C::SafetyMode
+            | C::UnlockProtectiveStop
+            | C::CloseSafetyPopup
+            | C::RestartSafety
+            | C::ClearOperationalMode
+            | C::SetOperationalMode(_)
+            | C::GetOperationalMode
+            | C::IsInRemoteControl => Group::PowerAndSafety,
+            C::Popup(_) | C::ClosePopup | C::AddToLog(_) | C::SaveLog => Group::Operator,
+            C::PolyscopeVersion
+            | C::Version
+            | C::SetUserRole(_)
+            | C::GetUserRole
+            | C::GetSerialNumber
+            | C::GetRobotModel
+            | C::GenerateFlightReport(_)
+            | C::GenerateSupportFile(_)
+            | C::Unknown(_) => Group::About,
+        }
+    }
+}
+
+/// Why a command reached a group's function that does not answer it.
+fn misrouted(command: &DashboardCommand) -> Reply {
+    Reply::line(format!("could not understand: '{command}'"))
+}
+
+/// `load`, `load installation`, `play`, `pause`, `stop`, their state; `quit`, `shutdown`.
+fn program_command(
+    controller: &mut Controller,
+    command: &DashboardCommand,
+    now: Duration,
+) -> Reply {
+    use DashboardCommand as C;
+    match command {
+        C::LoadInstallation(name) => match controller.load_installation(name) {
+            Ok(()) => Reply::line(format!("Loading installation: {name}")),
+            Err(e) => refused(e, || match e {
+                Refused::NotFound => format!("File not found: {name}"),
+                _ => format!("Failed to load installation: {name}"),
             }),
-            C::Popup(text) => {
-                controller.set_popup(Some(text.clone()));
-                Reply::line("showing popup")
-            }
-            C::ClosePopup => {
-                controller.set_popup(None);
-                Reply::line("closing popup")
-            }
-            C::AddToLog(text) if text.is_empty() => Reply::line("No log message to add"),
-            C::AddToLog(text) => {
-                controller.add_to_log(text.clone());
-                Reply::line("Added log message")
-            }
-            C::IsProgramSaved => Reply::line(match controller.loaded_program() {
-                Some((_, path)) => format!("true {}", file_name(path)),
-                None => "false <unnamed>".into(),
+        },
+        C::Load(name) => match controller.load(name) {
+            Ok(()) => Reply::line(format!("Loading program: {name}")),
+            Err(e) => refused(e, || match e {
+                Refused::NotFound => format!("File not found: {name}"),
+                _ => format!("Error while loading program: {name}"),
             }),
-            C::ProgramState => {
-                let name = controller
-                    .loaded_program()
-                    .map_or("<unnamed>", |(_, path)| file_name(path));
-                Reply::line(format!("{} {name}", controller.program_state()))
-            }
-            C::PolyscopeVersion => {
-                let c = controller.config();
-                Reply::line(format!(
-                    "URSoftware {} ({})",
-                    c.full_version(),
-                    c.build_date
-                ))
-            }
-            C::Version => Reply::line(controller.config().full_version()),
-            C::SetUserRole(role) => {
-                let known = ["programmer", "operator", "none", "locked", "restricted"];
-                Reply::line(if known.iter().any(|k| k.eq_ignore_ascii_case(role)) {
-                    format!("Setting user role: {role}")
-                } else {
-                    format!("Failed setting user role: {role}")
-                })
-            }
-            C::GetUserRole => Reply::line("PROGRAMMER"),
-            C::PowerOn => match controller.power_on(now) {
-                Err(Refused::LocalControl) => Reply::line(LOCAL_CONTROL),
-                // Under an emergency stop or a fault the command is taken but power
-                // stays off, as `robotmode` then shows.
-                _ => Reply::line("Powering on"),
-            },
-            C::PowerOff => match controller.power_off(now) {
-                Err(Refused::LocalControl) => Reply::line(LOCAL_CONTROL),
-                _ => Reply::line("Powering off"),
-            },
-            C::BrakeRelease => match controller.brake_release(now) {
-                Err(Refused::LocalControl) => Reply::line(LOCAL_CONTROL),
-                _ => Reply::line("Brake releasing"),
-            },
-            C::SafetyStatus => {
-                Reply::line(format!("Safetystatus: {}", controller.safety_status(now)))
-            }
-            C::SafetyMode => {
-                let s = controller.safety_status(now);
-                Reply::line(format!("Safetymode: {}", s.safety_mode_name()))
-            }
-            C::UnlockProtectiveStop => match controller.unlock_protective_stop(now) {
-                Ok(()) => Reply::line("Protective stop releasing"),
-                Err(e) => refused(e, || UNLOCK_TOO_EARLY.into()),
-            },
-            C::CloseSafetyPopup => Reply::line("closing safety popup"),
-            C::RestartSafety => match controller.restart_safety(now) {
-                Ok(()) => Reply::line("Restarting safety"),
-                Err(e) => refused(e, || "Failed to execute: restart safety".into()),
-            },
-            C::ClearOperationalMode => match controller.clear_operational_mode() {
-                Ok(()) => Reply::line(
-                    "No longer controlling the operational mode. Current operational mode: 'NONE'.",
-                ),
+        },
+        C::Play => match controller.play(now) {
+            Ok(()) => Reply::line("Starting program"),
+            Err(e) => refused(e, || "Failed to execute: play".into()),
+        },
+        C::Stop => match controller.stop(now) {
+            Ok(()) => Reply::line("Stopped"),
+            Err(e) => refused(e, || "Failed to execute: stop".into()),
+        },
+        C::Pause => match controller.pause(now) {
+            Ok(()) => Reply::line("Pausing program"),
+            Err(e) => refused(e, || "Failed to execute: pause".into()),
+        },
+        C::Quit => Reply::closing("Disconnected"),
+        C::Shutdown => match controller.shutdown(now) {
+            Ok(()) => Reply::closing("Shutting down"),
+            Err(e) => refused(e, || "Failed to execute: shutdown".into()),
+        },
+        C::Running => {
+            let playing = controller.program_state() == crate::ProgramState::Playing;
+            Reply::line(format!("Program running: {playing}"))
+        }
+        C::GetLoadedProgram => Reply::line(match controller.loaded_program() {
+            Some((_, path)) => format!("Loaded program: {path}"),
+            None => "No program loaded".into(),
+        }),
+        C::IsProgramSaved => Reply::line(match controller.loaded_program() {
+            Some((_, path)) => format!("true {}", file_name(path)),
+            None => "false <unnamed>".into(),
+        }),
+        C::ProgramState => {
+            let name = controller
+                .loaded_program()
+                .map_or("<unnamed>", |(_, path)| file_name(path));
+            Reply::line(format!("{} {name}", controller.program_state()))
+        }
+        _ => misrouted(command),
+    }
+}
+
+/// Power, brakes, safety, operational mode, remote control, the robot mode.
+fn power_and_safety(
+    controller: &mut Controller,
+    command: &DashboardCommand,
+    now: Duration,
+) -> Reply {
+    use DashboardCommand as C;
+    match command {
+        C::RobotMode => Reply::line(format!("Robotmode: {}", controller.robot_mode(now))),
+        C::PowerOn => match controller.power_on(now) {
+            Err(Refused::LocalControl) => Reply::line(LOCAL_CONTROL),
+            // Under an emergency stop or a fault the command is taken but power
+            // stays off, as `robotmode` then shows.
+            _ => Reply::line("Powering on"),
+        },
+        C::PowerOff => match controller.power_off(now) {
+            Err(Refused::LocalControl) => Reply::line(LOCAL_CONTROL),
+            _ => Reply::line("Powering off"),
+        },
+        C::BrakeRelease => match controller.brake_release(now) {
+            Err(Refused::LocalControl) => Reply::line(LOCAL_CONTROL),
+            _ => Reply::line("Brake releasing"),
+        },
+        C::SafetyStatus => Reply::line(format!("Safetystatus: {}", controller.safety_status(now))),
+        C::SafetyMode => {
+            let s = controller.safety_status(now);
+            Reply::line(format!("Safetymode: {}", s.safety_mode_name()))
+        }
+        C::UnlockProtectiveStop => match controller.unlock_protective_stop(now) {
+            Ok(()) => Reply::line("Protective stop releasing"),
+            Err(e) => refused(e, || UNLOCK_TOO_EARLY.into()),
+        },
+        C::CloseSafetyPopup => Reply::line("closing safety popup"),
+        C::RestartSafety => match controller.restart_safety(now) {
+            Ok(()) => Reply::line("Restarting safety"),
+            Err(e) => refused(e, || "Failed to execute: restart safety".into()),
+        },
+        C::ClearOperationalMode => match controller.clear_operational_mode() {
+            Ok(()) => Reply::line(
+                "No longer controlling the operational mode. Current operational mode: 'NONE'.",
+            ),
+            Err(e) => refused(e, String::new),
+        },
+        C::SetOperationalMode(mode) => match OperationalMode::parse(mode) {
+            Some(m) => match controller.set_operational_mode(m) {
+                Ok(()) => Reply::line(format!("Operational mode '{mode}' is set")),
                 Err(e) => refused(e, String::new),
             },
-            C::SetOperationalMode(mode) => match OperationalMode::parse(mode) {
-                Some(m) => match controller.set_operational_mode(m) {
-                    Ok(()) => Reply::line(format!("Operational mode '{mode}' is set")),
-                    Err(e) => refused(e, String::new),
-                },
-                None => Reply::line(format!("Failed setting operational mode: {mode}")),
-            },
-            C::GetOperationalMode => {
-                Reply::line(controller.operational_mode().map_or("NONE", |m| m.name()))
-            }
-            C::IsInRemoteControl => Reply::line(controller.remote_control().to_string()),
-            C::GetSerialNumber => Reply::line(controller.config().serial.clone()),
-            C::GetRobotModel => Reply::line(model_name(controller)),
-            C::GenerateFlightReport(kind) => {
-                let kind = if kind.is_empty() { "system" } else { kind };
-                if !["controller", "software", "system"]
-                    .iter()
-                    .any(|k| k.eq_ignore_ascii_case(kind))
-                {
-                    return Reply::line(format!(
-                        "Error: report type '{}' is not one of controller, software, system",
-                        cut(kind, 64)
-                    ));
-                }
-                let id = controller.next_report();
-                Reply::line(format!("Flight Report generated with id: {id:08x}"))
-            }
-            C::GenerateSupportFile(dir) => {
-                let id = controller.next_report();
-                let serial = controller.config().serial.clone();
-                let dir = dir.trim_end_matches('/');
-                let file = format!("ur_{serial}_support_file_{id:04}.zip");
-                Reply::line(if dir.is_empty() || dir == "." {
-                    format!("Completed successfully: {file}")
-                } else {
-                    format!("Completed successfully: {dir}/{file}")
-                })
-            }
-            C::SaveLog => Reply::line("Log saved to disk"),
-            C::Unknown(line) => Reply::line(format!("could not understand: '{line}'")),
+            None => Reply::line(format!("Failed setting operational mode: {mode}")),
+        },
+        C::GetOperationalMode => {
+            Reply::line(controller.operational_mode().map_or("NONE", |m| m.name()))
         }
+        C::IsInRemoteControl => Reply::line(controller.remote_control().to_string()),
+        _ => misrouted(command),
+    }
+}
+
+/// Popups and the log.
+fn operator_command(controller: &mut Controller, command: &DashboardCommand) -> Reply {
+    use DashboardCommand as C;
+    match command {
+        C::Popup(text) => {
+            controller.set_popup(Some(text.clone()));
+            Reply::line("showing popup")
+        }
+        C::ClosePopup => {
+            controller.set_popup(None);
+            Reply::line("closing popup")
+        }
+        C::AddToLog(text) if text.is_empty() => Reply::line("No log message to add"),
+        C::AddToLog(text) => {
+            controller.add_to_log(text.clone());
+            Reply::line("Added log message")
+        }
+        C::SaveLog => Reply::line("Log saved to disk"),
+        _ => misrouted(command),
+    }
+}
+
+/// Versions, serial number, model, user role, reports; a line not understood.
+fn about(controller: &mut Controller, command: &DashboardCommand) -> Reply {
+    use DashboardCommand as C;
+    match command {
+        C::PolyscopeVersion => {
+            let c = controller.config();
+            Reply::line(format!(
+                "URSoftware {} ({})",
+                c.full_version(),
+                c.build_date
+            ))
+        }
+        C::Version => Reply::line(controller.config().full_version()),
+        C::SetUserRole(role) => {
+            let known = ["programmer", "operator", "none", "locked", "restricted"];
+            Reply::line(if known.iter().any(|k| k.eq_ignore_ascii_case(role)) {
+                format!("Setting user role: {role}")
+            } else {
+                format!("Failed setting user role: {role}")
+            })
+        }
+        C::GetUserRole => Reply::line("PROGRAMMER"),
+        C::GetSerialNumber => Reply::line(controller.config().serial.clone()),
+        C::GetRobotModel => Reply::line(model_name(controller)),
+        C::GenerateFlightReport(kind) => {
+            let kind = if kind.is_empty() { "system" } else { kind };
+            if !["controller", "software", "system"]
+                .iter()
+                .any(|k| k.eq_ignore_ascii_case(kind))
+            {
+                return Reply::line(format!(
+                    "Error: report type '{}' is not one of controller, software, system",
+                    cut(kind, 64)
+                ));
+            }
+            let id = controller.next_report();
+            Reply::line(format!("Flight Report generated with id: {id:08x}"))
+        }
+        C::GenerateSupportFile(dir) => {
+            let id = controller.next_report();
+            let serial = controller.config().serial.clone();
+            let dir = dir.trim_end_matches('/');
+            let file = format!("ur_{serial}_support_file_{id:04}.zip");
+            Reply::line(if dir.is_empty() || dir == "." {
+                format!("Completed successfully: {file}")
+            } else {
+                format!("Completed successfully: {dir}/{file}")
+            })
+        }
+        C::Unknown(line) => Reply::line(format!("could not understand: '{line}'")),
+
+        _ => misrouted(command),
     }
 }
 
@@ -634,6 +738,31 @@ mod tests {
                 known += 1;
             }
             assert_eq!(known, COMMANDS.len() - if major >= 5 { 2 } else { 0 });
+        }
+    }
+
+    /// Every command reaches the function of its group, which answers it (none is
+    /// answered as not understood), on a CB3 and an e-Series controller.
+    #[test]
+    fn every_command_is_answered_by_its_group() {
+        for major in [3, 5] {
+            for (name, arg) in COMMANDS {
+                let line = match arg {
+                    Arg::Rest => format!("{name} {}", sample(name)),
+                    Arg::None => name.to_string(),
+                };
+                let command = DashboardCommand::parse(&line, major);
+                if matches!(command, DashboardCommand::Unknown(_)) {
+                    continue;
+                }
+                let config = crate::Config {
+                    polyscope: if major == 3 { "3.15.8" } else { "5.21.0" }.into(),
+                    ..crate::Config::default()
+                };
+                let mut controller = Controller::new(config);
+                let reply = Dashboard::new().answer(&mut controller, &command, Duration::ZERO);
+                assert_ne!(reply, misrouted(&command), "{line:?}");
+            }
         }
     }
 
