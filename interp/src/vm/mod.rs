@@ -586,7 +586,7 @@ fn suggestion(name: &str, program: &Program) -> String {
 mod tests {
     use super::*;
 
-    /// Short-lived threads (issue 18): finished threads leave the scheduler's list, so a
+    /// Short-lived threads: finished threads leave the scheduler's list, so a
     /// step visits the live threads only, and a handle of a finished thread names no
     /// new one.
     #[test]
