@@ -311,14 +311,13 @@ fn report_event(e: ServerEvent) -> Option<Event> {
         ServerEvent::Client {
             conn,
             service,
-            what,
-            text,
+            event,
         } => Event::Client(report::Client {
             t,
             conn,
             service,
-            what,
-            text,
+            what: event.what(),
+            text: event.to_string(),
         }),
         ServerEvent::Program {
             what,
