@@ -744,7 +744,10 @@ mod tests {
             };
             let json = e.to_json();
             assert!(json.starts_with(r#"{"event":"client","t":"#), "{json}");
-            assert!(json.ends_with(&format!(r#","conn":3,{json_tail}"#)), "{json}");
+            assert!(
+                json.ends_with(&format!(r#","conn":3,{json_tail}"#)),
+                "{json}"
+            );
             assert_eq!(crate::listen::human(&e, usize::MAX), [human]);
         }
     }
