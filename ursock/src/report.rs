@@ -632,7 +632,9 @@ pub struct Program {
 }
 
 /// `controller`: what a client of the primary, secondary or realtime interface sent
-/// (a program, a secondary program, a line, a command) or what an RTDE client did.
+/// (a program, a secondary program, a line, a command), what an RTDE client did, or
+/// the interpreter socket's reply. Made from the server's typed
+/// [`urscript_controller::net::ClientEvent`]: `what` is its kind, `text` its `Display`.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Client {
     pub t: f64,
@@ -640,7 +642,8 @@ pub struct Client {
     /// `primary`, `secondary`, `realtime`, `rtde` or `interpreter`.
     pub service: &'static str,
     /// `program`, `secondary`, `line`, `command`, `refused` (primary/secondary/realtime);
-    /// `protocol`, `outputs`, `inputs`, `start`, `pause`, `text`, `error` (RTDE).
+    /// `protocol`, `outputs`, `inputs`, `start`, `pause`, `text`, `error` (RTDE);
+    /// `reply` (interpreter).
     pub what: &'static str,
     /// Its text: the program's name, the line, the command, the recipe's fields.
     pub text: String,

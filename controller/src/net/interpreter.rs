@@ -21,7 +21,7 @@ use std::time::Duration;
 
 use urscript_interp::interpreter::{Discard, Reply, MAX_LINE};
 
-use super::{Activity, Counts, ServerEvent, Shared, WRITE_TIMEOUT};
+use super::{Activity, ClientEvent, Counts, ServerEvent, Shared, WRITE_TIMEOUT};
 use crate::lines::{Event, LineReader};
 
 /// Interpreter connections served at once; more are accepted and closed at once. Each
@@ -65,8 +65,7 @@ fn send(stream: &mut TcpStream, conn: u64, shared: &Shared, reply: &Reply, tx: &
     shared.emit(ServerEvent::Client {
         conn,
         service: "interpreter",
-        what: "reply",
-        text: text.clone(),
+        event: ClientEvent::Reply(reply.clone()),
     });
     let mut bytes = text.into_bytes();
     bytes.push(b'\n');

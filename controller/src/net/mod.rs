@@ -91,10 +91,12 @@
 //! # Ok::<(), std::io::Error>(())
 //! ```
 
+mod client_event;
 mod clock;
 mod owner;
 mod priority;
 mod ready;
+pub use client_event::ClientEvent;
 pub use clock::MAX_CATCH_UP;
 pub use owner::MAX_REQUESTS;
 pub use priority::{Realtime, Scheduling, FIFO_PRIORITY, NICE};
@@ -317,18 +319,16 @@ pub enum ServerEvent {
         /// The reply lines.
         reply: Vec<String>,
     },
-    /// What a primary, secondary, realtime or RTDE client did.
+    /// What a primary, secondary, realtime or RTDE client did, or the interpreter
+    /// socket's reply to its client.
     Client {
         /// The client.
         conn: u64,
-        /// Its interface.
+        /// Its interface (`primary`, `secondary`, `realtime`, `rtde`, `interpreter`).
         service: &'static str,
-        /// `program`, `secondary`, `line`, `command`, `refused`; RTDE: `protocol`,
-        /// `outputs`, `inputs`, `start`, `pause`, `text`, `error`; interpreter: `reply`
-        /// (the reply line written).
-        what: &'static str,
-        /// The program's name, the line, the command, the recipe.
-        text: String,
+        /// What it did: a program, a line, a command, an RTDE request, a reply
+        /// ([`ClientEvent::what`] names its kind, its `Display` is its text).
+        event: ClientEvent,
     },
     /// A program started, ended or was refused.
     Program {

@@ -49,7 +49,7 @@ use urscript_interp::drive::{connect_stream, describe_connect_error, Activity, D
 use urscript_interp::{Event as ProgramEvent, MessageKind};
 
 use super::owner::{Owner, Request};
-use super::{Lateness, ServerEvent as Event, Shared, EVICT_IDLE};
+use super::{ClientEvent, Lateness, ServerEvent as Event, Shared, EVICT_IDLE};
 use crate::primary::{self, RobotMessage};
 use crate::realtime;
 use crate::rtde::{InputRegistry, RtdeEvent, RtdeSession};
@@ -756,9 +756,10 @@ impl Loop {
                     None => inputs.push((recipe, set)),
                 },
                 other => {
-                    if c.events.allow() {
-                        let (what, text) = rtde_event(&other);
-                        shared.emit(client_event(conn, service, what, text));
+                    if let Some(event) = ClientEvent::from_rtde(other) {
+                        if c.events.allow() {
+                            shared.emit(client_event(conn, service, event));
+                        }
                     }
                 }
             }
@@ -813,28 +814,28 @@ impl Loop {
                 continue;
             }
             let report = c.events.allow();
-            let emit = |what: &'static str, text: &dyn Fn() -> String| {
+            let emit = |event: &dyn Fn() -> ClientEvent| {
                 if report {
-                    shared.emit(client_event(conn, service, what, text()));
+                    shared.emit(client_event(conn, service, event()));
                 }
             };
             match item {
                 Ok(Intake::Program { name, source }) => {
-                    emit("program", &|| name.clone());
+                    emit(&|| ClientEvent::Program { name: name.clone() });
                     self.owner.cell.submit(Submitted::Program(source), now);
                 }
                 Ok(Intake::Secondary { name, source }) => {
-                    emit("secondary", &|| name.clone());
+                    emit(&|| ClientEvent::Secondary { name: name.clone() });
                     self.owner.cell.submit(Submitted::Secondary(source), now);
                 }
                 Ok(Intake::Line(line)) => {
-                    emit("line", &|| line.clone());
+                    emit(&|| ClientEvent::Line(line.clone()));
                     self.owner
                         .cell
                         .submit(Submitted::Program(format!("{line}\n")), now);
                 }
                 Ok(Intake::Command(cmd)) => {
-                    emit("command", &|| format!("{cmd:?}"));
+                    emit(&|| ClientEvent::Command(cmd));
                     let cell = &mut self.owner.cell;
                     let c = cell.controller();
                     let before = c.program_state();
@@ -863,7 +864,7 @@ impl Loop {
                         cell.set_stop_cause(cause);
                     }
                 }
-                Err(e) => emit("refused", &|| e.to_string()),
+                Err(e) => emit(&|| ClientEvent::Refused(e.clone())),
             }
         }
     }
@@ -1295,75 +1296,11 @@ fn program_event(
     }
 }
 
-fn client_event(conn: u64, service: Service, what: &'static str, text: String) -> Event {
+fn client_event(conn: u64, service: Service, event: ClientEvent) -> Event {
     Event::Client {
         conn,
         service: service.name(),
-        what,
-        text,
-    }
-}
-
-/// An RTDE session's event as a `client` event's `what` and `text`.
-/// A recipe as the event shows it: `name:TYPE` pairs, comma-separated.
-fn recipe_text(fields: &[String], types: &[String]) -> String {
-    fields
-        .iter()
-        .zip(types)
-        .map(|(f, t)| format!("{f}:{t}"))
-        .collect::<Vec<_>>()
-        .join(",")
-}
-
-fn rtde_event(e: &RtdeEvent) -> (&'static str, String) {
-    match e {
-        RtdeEvent::ProtocolVersion {
-            requested,
-            accepted,
-        } => (
-            "protocol",
-            format!(
-                "version {requested} {}",
-                if *accepted { "accepted" } else { "refused" }
-            ),
-        ),
-        RtdeEvent::OutputSetup {
-            recipe,
-            frequency,
-            fields,
-            types,
-        } => (
-            "outputs",
-            format!(
-                "recipe {recipe} at {frequency} Hz: {}",
-                recipe_text(fields, types)
-            ),
-        ),
-        RtdeEvent::InputSetup {
-            recipe,
-            fields,
-            types,
-        } => (
-            "inputs",
-            format!("recipe {recipe}: {}", recipe_text(fields, types)),
-        ),
-        RtdeEvent::Started { accepted } => (
-            "start",
-            if *accepted {
-                "started"
-            } else {
-                "refused: no recipe"
-            }
-            .to_string(),
-        ),
-        RtdeEvent::Paused => ("pause", "paused".to_string()),
-        RtdeEvent::Inputs { recipe, .. } => ("inputs", format!("recipe {recipe}")),
-        RtdeEvent::TextMessage {
-            level,
-            message,
-            source,
-        } => ("text", format!("[{level}] {source}: {message}")),
-        RtdeEvent::Error(e) => ("error", e.to_string()),
+        event,
     }
 }
 

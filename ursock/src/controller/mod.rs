@@ -311,14 +311,13 @@ fn report_event(e: ServerEvent) -> Option<Event> {
         ServerEvent::Client {
             conn,
             service,
-            what,
-            text,
+            event,
         } => Event::Client(report::Client {
             t,
             conn,
             service,
-            what,
-            text,
+            what: event.what(),
+            text: event.to_string(),
         }),
         ServerEvent::Program {
             what,
@@ -696,5 +695,60 @@ fn operator(server: &Server, json: bool, out: &mpsc::SyncSender<Queued>) {
         // In order with the server's events; the operator's thread may wait for the
         // output.
         let _ = out.send(Queued::Event(event));
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use urscript_controller::net::ClientEvent;
+    use urscript_controller::script_intake::Command;
+
+    /// A client's typed event becomes the `client` event's `what` and `text`, in its
+    /// JSON line and its line for people.
+    #[test]
+    fn client_events_print_their_kind_and_text() {
+        let cases = [
+            (
+                "primary",
+                ClientEvent::Program {
+                    name: "pick".into(),
+                },
+                r#""service":"primary","what":"program","text":"pick"}"#,
+                "primary program: pick",
+            ),
+            (
+                "secondary",
+                ClientEvent::Command(Command::SetSpeed(0.5)),
+                r#""service":"secondary","what":"command","text":"SetSpeed(0.5)"}"#,
+                "secondary command: SetSpeed(0.5)",
+            ),
+            (
+                "rtde",
+                ClientEvent::Inputs {
+                    recipe: 1,
+                    fields: vec!["speed_slider_mask".into()],
+                    types: vec!["UINT32".into()],
+                },
+                r#""service":"rtde","what":"inputs","text":"recipe 1: speed_slider_mask:UINT32"}"#,
+                "rtde inputs: recipe 1: speed_slider_mask:UINT32",
+            ),
+        ];
+        for (service, event, json_tail, human) in cases {
+            let Some(e) = report_event(ServerEvent::Client {
+                conn: 3,
+                service,
+                event,
+            }) else {
+                panic!("a client event is reported");
+            };
+            let json = e.to_json();
+            assert!(json.starts_with(r#"{"event":"client","t":"#), "{json}");
+            assert!(
+                json.ends_with(&format!(r#","conn":3,{json_tail}"#)),
+                "{json}"
+            );
+            assert_eq!(crate::listen::human(&e, usize::MAX), [human]);
+        }
     }
 }
