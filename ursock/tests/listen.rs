@@ -80,11 +80,7 @@ fn exit_after_counts_robots_that_left() {
     drop(robot(&l.addr));
     drop(robot(&l.addr));
     assert!(l.wait_exit().success());
-    let start = std::time::Instant::now();
-    while l.stdout().matches("closed (").count() < 2 {
-        assert!(start.elapsed() < listen_common::WAIT, "{}", l.stdout());
-        std::thread::sleep(Duration::from_millis(20));
-    }
+    l.wait_for_n("closed (", 2, false);
 }
 
 #[test]
@@ -476,19 +472,7 @@ fn a_robot_that_stops_reading_is_dropped_after_write_timeout() {
 
 #[test]
 fn reply_and_rules_are_checked_once_at_start() {
-    let out = std::process::Command::new(listen_common::bin())
-        .args([
-            "listen",
-            "--bind",
-            "127.0.0.1",
-            "--port",
-            "0",
-            "--exit-after",
-            "0",
-        ])
-        .args(["--reply", "line [0.1, 0.2]"])
-        .output()
-        .unwrap();
+    let out = listen_common::output(&["--exit-after", "0", "--reply", "line [0.1, 0.2]"]);
     assert!(out.status.success());
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(
@@ -510,18 +494,14 @@ fn reply_and_rules_are_checked_once_at_start() {
 #[test]
 fn listen_checks_replies_with_the_read_rules() {
     let run = |reply: &str, reads: &str| {
-        let out = std::process::Command::new(listen_common::bin())
-            .args(["listen", "--bind", "127.0.0.1", "--port", "0"])
-            .args([
-                "--exit-after",
-                "0",
-                "--robot-reads",
-                reads,
-                "--reply",
-                reply,
-            ])
-            .output()
-            .unwrap();
+        let out = listen_common::output(&[
+            "--exit-after",
+            "0",
+            "--robot-reads",
+            reads,
+            "--reply",
+            reply,
+        ]);
         assert!(out.status.success());
         String::from_utf8_lossy(&out.stderr).into_owned()
     };
@@ -638,11 +618,7 @@ fn send_to_all_reaches_every_robot_and_says_so_per_robot() {
     l.wait_for("sent 2 bytes to 2 of 2 robots (#1 #2)", false);
     // With every robot gone, there is nobody to send to.
     drop((a, b));
-    let start = std::time::Instant::now();
-    while l.stdout().matches("closed (").count() < 2 {
-        assert!(start.elapsed() < listen_common::WAIT, "{}", l.stdout());
-        std::thread::sleep(Duration::from_millis(20));
-    }
+    l.wait_for_n("closed (", 2, false);
     l.type_line("@* line x");
     l.wait_for("no robot connected; nothing sent", true);
 }
@@ -691,18 +667,7 @@ fn snippets_are_sent_by_name_or_number() {
 #[test]
 fn a_bad_snippets_file_is_refused_naming_the_line() {
     let f = TempFile::new("bad-snips.txt", "ok = line a\n\nbad = floatz 1\n");
-    let out = std::process::Command::new(listen_common::bin())
-        .args([
-            "listen",
-            "--bind",
-            "127.0.0.1",
-            "--port",
-            "0",
-            "--snippets",
-            f.path(),
-        ])
-        .output()
-        .unwrap();
+    let out = listen_common::output(&["--snippets", f.path()]);
     assert!(!out.status.success());
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(
@@ -765,21 +730,14 @@ fn a_robot_run_by_listen_shows_its_moves() {
         "socket_send_line(\"hi\")\nmovel(p[0.3, -0.2, 0.4, 0, 3.14, 0], a=1.2, v=0.25, t=0, r=0)\nmovej([0.5, -1.5, 1, -1, 0.2, 0], t=0.5)\n",
     )
     .unwrap();
-    let out = std::process::Command::new(listen_common::bin())
-        .args([
-            "listen",
-            "--bind",
-            "127.0.0.1",
-            "--port",
-            "0",
-            "--decode",
-            "line",
-        ])
-        .args(["--exit-after", "1", "--robot"])
-        .arg(&program)
-        .stdin(std::process::Stdio::null())
-        .output()
-        .unwrap();
+    let out = listen_common::output(&[
+        "--decode",
+        "line",
+        "--exit-after",
+        "1",
+        "--robot",
+        program.to_str().unwrap(),
+    ]);
     let _ = std::fs::remove_dir_all(&dir);
     let text = String::from_utf8_lossy(&out.stdout);
     assert!(out.status.success(), "{text}");

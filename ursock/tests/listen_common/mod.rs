@@ -117,15 +117,21 @@ impl Listener {
     /// Waits until stdout (or stderr, `on_err`) contains `needle`; panics with both after
     /// [`WAIT`].
     pub fn wait_for(&self, needle: &str, on_err: bool) -> String {
+        self.wait_for_n(needle, 1, on_err)
+    }
+
+    /// Waits until stdout (or stderr, `on_err`) contains `needle` `n` times; panics with
+    /// both after [`WAIT`].
+    pub fn wait_for_n(&self, needle: &str, n: usize, on_err: bool) -> String {
         let start = Instant::now();
         loop {
             let text = if on_err { self.stderr() } else { self.stdout() };
-            if text.contains(needle) {
+            if text.matches(needle).count() >= n {
                 return text;
             }
             if start.elapsed() > WAIT {
                 panic!(
-                    "waited for {needle:?}\n--- stdout\n{}\n--- stderr\n{}",
+                    "waited for {needle:?} ({n} times)\n--- stdout\n{}\n--- stderr\n{}",
                     self.stdout(),
                     self.stderr()
                 );
@@ -173,6 +179,17 @@ impl Drop for Listener {
         let _ = self.child.kill();
         let _ = self.child.wait();
     }
+}
+
+/// `ursock listen --bind 127.0.0.1 --port 0 ARGS` run to its end (stdin closed): its
+/// exit status and output.
+pub fn output(args: &[&str]) -> std::process::Output {
+    Command::new(bin())
+        .args(["listen", "--bind", "127.0.0.1", "--port", "0"])
+        .args(args)
+        .stdin(Stdio::null())
+        .output()
+        .expect("run ursock listen")
 }
 
 /// A robot connection with a read timeout.
