@@ -628,11 +628,10 @@ fn robot_json_lines_match_the_schema() {
     assert_eq!(events.last().unwrap()["outcome"], "error");
 }
 
-#[test]
-fn controller_json_lines_match_the_schema() {
-    use std::io::{BufRead, BufReader, Write};
-    let root = schema();
-    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_ursock"))
+/// `ursock controller --json` with only its dashboard server (on a free port); its
+/// standard output piped, its standard input as given.
+fn dashboard_only_controller(stdin: std::process::Stdio) -> std::process::Child {
+    std::process::Command::new(env!("CARGO_BIN_EXE_ursock"))
         .args([
             "controller",
             "--dashboard-port",
@@ -640,11 +639,18 @@ fn controller_json_lines_match_the_schema() {
             "--no-streams",
             "--json",
         ])
-        .stdin(std::process::Stdio::null())
+        .stdin(stdin)
         .stdout(std::process::Stdio::piped())
         .stderr(std::process::Stdio::null())
         .spawn()
-        .unwrap();
+        .unwrap()
+}
+
+#[test]
+fn controller_json_lines_match_the_schema() {
+    use std::io::{BufRead, BufReader, Write};
+    let root = schema();
+    let mut child = dashboard_only_controller(std::process::Stdio::null());
     let mut out = BufReader::new(child.stdout.take().unwrap());
     // `listening` events, `scheduling`, then `ready`: a client connects once the
     // controller is ready (a connection accepted earlier may be reported before `ready`).
@@ -793,19 +799,7 @@ fn listen_snippet_all_and_periodic_events_match_the_schema() {
 fn controller_operator_commands_and_state_changes_are_events_that_match_the_schema() {
     use std::io::{BufRead, BufReader, Write};
     let root = schema();
-    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_ursock"))
-        .args([
-            "controller",
-            "--dashboard-port",
-            "0",
-            "--no-streams",
-            "--json",
-        ])
-        .stdin(std::process::Stdio::piped())
-        .stdout(std::process::Stdio::piped())
-        .stderr(std::process::Stdio::null())
-        .spawn()
-        .unwrap();
+    let mut child = dashboard_only_controller(std::process::Stdio::piped());
     // Hang guard: the process ends after 20 s whatever happens, closing its output.
     let pid = child.id().to_string();
     std::thread::spawn(move || {
