@@ -260,11 +260,11 @@ fn good_rate_under(what: &str, f: &Fixture, attack: impl FnOnce(&Fixture, &mut A
 fn brake_release(f: &Fixture) {
     let mut d = dashboard(f.addr("dashboard")).expect("dashboard");
     let _ = ask(&mut d, "brake release");
-    let start = Instant::now();
-    while ask(&mut d, "robotmode").ok().as_deref() != Some("Robotmode: RUNNING") {
-        assert!(start.elapsed() < WAIT, "the arm never runs");
-        thread::sleep(Duration::from_millis(20));
-    }
+    poll_until(
+        WAIT,
+        || ask(&mut d, "robotmode").ok().as_deref() == Some("Robotmode: RUNNING"),
+        || "the arm never runs".into(),
+    );
 }
 
 #[test]
@@ -390,18 +390,6 @@ fn many_clients_with_many_large_recipes_leave_the_good_client_its_rate() {
             a.drain(s);
         }
     });
-}
-
-/// Tries `f` until it succeeds (at most [`WAIT`]).
-fn eventually<T>(what: &str, mut f: impl FnMut() -> std::io::Result<T>) -> T {
-    let start = Instant::now();
-    loop {
-        match f() {
-            Ok(t) => return t,
-            Err(e) => assert!(start.elapsed() < WAIT, "{what}: {e}"),
-        }
-        thread::sleep(Duration::from_millis(20));
-    }
 }
 
 #[test]

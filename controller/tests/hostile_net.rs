@@ -14,7 +14,7 @@ use std::net::{Shutdown, SocketAddr, TcpListener, TcpStream};
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::{Arc, Mutex, MutexGuard};
 use std::thread;
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
 mod support;
 use support::*;
@@ -108,28 +108,18 @@ impl Fixture {
     fn healthy(&self, after: &str) {
         // A connection the attack's peers still hold a slot for (their threads have not
         // seen them leave yet) is refused: the slots must come back, within WAIT.
-        let start = Instant::now();
-        let mode = loop {
-            match dashboard_ask(self.addr("dashboard"), "robotmode") {
-                Ok(mode) => break mode,
-                Err(e) if start.elapsed() > WAIT => {
-                    panic!("after {after}: the dashboard does not answer: {e}")
-                }
-                Err(_) => thread::sleep(Duration::from_millis(20)),
-            }
-        };
+        let mode = eventually(
+            &format!("after {after}: the dashboard does not answer"),
+            || dashboard_ask(self.addr("dashboard"), "robotmode"),
+        );
         assert!(
             mode.starts_with("Robotmode: "),
             "after {after}: robotmode answered {mode:?}"
         );
-        let start = Instant::now();
-        while let Err(e) = rtde_gets_data(self.addr("rtde")) {
-            assert!(
-                start.elapsed() < WAIT,
-                "after {after}: a fresh RTDE client got no data: {e}"
-            );
-            thread::sleep(Duration::from_millis(20));
-        }
+        eventually(
+            &format!("after {after}: a fresh RTDE client got no data"),
+            || rtde_gets_data(self.addr("rtde")),
+        );
         check_threads(after);
         assert_eq!(PANICS.load(Ordering::SeqCst), 0, "after {after}: a panic");
     }
@@ -487,15 +477,16 @@ fn connection_floods_half_closes_and_reconnect_storms() {
         f.healthy(&format!("a reconnect storm on {service}"));
     }
     // Every connection thread ends once its client is gone.
-    let start = Instant::now();
-    while connection_threads() > 0 {
-        assert!(
-            start.elapsed() < WAIT,
-            "{} connection threads outlive their clients",
-            connection_threads()
-        );
-        thread::sleep(Duration::from_millis(20));
-    }
+    poll_until(
+        WAIT,
+        || connection_threads() == 0,
+        || {
+            format!(
+                "{} connection threads outlive their clients",
+                connection_threads()
+            )
+        },
+    );
 }
 
 #[test]
@@ -551,23 +542,23 @@ fn clients_that_never_read_are_bounded_and_slow_nothing_down() {
         .map(|(c, _)| *c)
         .collect();
     assert_eq!(realtime.len(), 8);
-    let start = Instant::now();
-    loop {
-        let dropped = f
-            .log()
+    let dropped = || {
+        f.log()
             .closes
             .iter()
             .filter(|(c, r)| realtime.contains(c) && r == "the client stopped reading")
-            .count();
-        if dropped == realtime.len() {
-            break;
-        }
-        assert!(
-            start.elapsed() < WAIT + MAX_STALL,
-            "only {dropped} of the deaf realtime clients were dropped"
-        );
-        thread::sleep(Duration::from_millis(50));
-    }
+            .count()
+    };
+    poll_until(
+        WAIT + MAX_STALL,
+        || dropped() == realtime.len(),
+        || {
+            format!(
+                "only {} of the deaf realtime clients were dropped",
+                dropped()
+            )
+        },
+    );
     f.healthy("clients that never read");
     let grown = rss().saturating_sub(before);
     // 33 clients, each at most MAX_QUEUE (4 MiB) queued: well under this.
@@ -582,15 +573,16 @@ fn clients_that_never_read_are_bounded_and_slow_nothing_down() {
 /// Brakes released, the arm running (programs run).
 fn running(f: &Fixture) {
     let _ = dashboard_ask(f.addr("dashboard"), "brake release");
-    let start = Instant::now();
-    while dashboard_ask(f.addr("dashboard"), "robotmode")
-        .ok()
-        .as_deref()
-        != Some("Robotmode: RUNNING")
-    {
-        assert!(start.elapsed() < WAIT, "the arm never runs");
-        thread::sleep(Duration::from_millis(20));
-    }
+    poll_until(
+        WAIT,
+        || {
+            dashboard_ask(f.addr("dashboard"), "robotmode")
+                .ok()
+                .as_deref()
+                == Some("Robotmode: RUNNING")
+        },
+        || "the arm never runs".into(),
+    );
 }
 
 /// A primary client that reads everything, keeping the last 4 MiB.
@@ -717,14 +709,11 @@ fn hostile_programs_end_in_runtime_errors_and_the_next_program_runs() {
             text.contains(expected),
             "the {what} program's error: {text}"
         );
-        let start = Instant::now();
-        while !primary.saw(&text) {
-            assert!(
-                start.elapsed() < WAIT,
-                "the primary client never heard of the {what} program's error {text:?}"
-            );
-            thread::sleep(Duration::from_millis(10));
-        }
+        poll_until(
+            WAIT,
+            || primary.saw(&text),
+            || format!("the primary client never heard of the {what} program's error {text:?}"),
+        );
         // The next program runs.
         let hello = format!("next program {n}");
         sender
