@@ -34,17 +34,7 @@ fn serial() -> MutexGuard<'static, ()> {
         let default = std::panic::take_hook();
         std::panic::set_hook(Box::new(move |info| {
             // The server's threads (a test's own failed assertion is not counted).
-            let name = thread::current().name().unwrap_or("").to_string();
-            if [
-                "dashboard",
-                "interpreter",
-                "controller",
-                "load-program",
-                "connect",
-            ]
-            .iter()
-            .any(|n| name.starts_with(n))
-            {
+            if thread::current().name().is_some_and(server_thread) {
                 PANICS.fetch_add(1, Ordering::SeqCst);
             }
             default(info);
@@ -125,6 +115,20 @@ impl Fixture {
     }
 }
 
+/// Whether a thread of this name is one of the server's (by the prefixes it names its
+/// threads with).
+fn server_thread(name: &str) -> bool {
+    [
+        "dashboard",
+        "interpreter",
+        "controller",
+        "load-program",
+        "connect",
+    ]
+    .iter()
+    .any(|p| name.starts_with(p))
+}
+
 /// The names of this process's threads now.
 fn thread_names() -> Vec<String> {
     let Ok(dir) = std::fs::read_dir("/proc/self/task") else {
@@ -152,17 +156,7 @@ fn check_threads(after: &str) {
     );
     let all = thread_names()
         .iter()
-        .filter(|name| {
-            [
-                "dashboard",
-                "interpreter",
-                "controller",
-                "load-program",
-                "connect",
-            ]
-            .iter()
-            .any(|p| name.starts_with(p))
-        })
+        .filter(|name| server_thread(name))
         .count();
     assert!(
         all <= MAX_SERVER_THREADS,
@@ -511,7 +505,7 @@ fn clients_that_never_read_are_bounded_and_slow_nothing_down() {
             .find(|(_, s)| *s == "primary")
             .map(|(c, _)| *c)
     });
-    running(&f);
+    running(&f.server);
     let mut p = connect(f.addr("primary")).expect("connect");
     let text = "m".repeat(1000);
     p.write_all(
@@ -568,21 +562,6 @@ fn clients_that_never_read_are_bounded_and_slow_nothing_down() {
     );
     drop(idle);
     drop(deaf);
-}
-
-/// Brakes released, the arm running (programs run).
-fn running(f: &Fixture) {
-    let _ = dashboard_ask(f.addr("dashboard"), "brake release");
-    poll_until(
-        WAIT,
-        || {
-            dashboard_ask(f.addr("dashboard"), "robotmode")
-                .ok()
-                .as_deref()
-                == Some("Robotmode: RUNNING")
-        },
-        || "the arm never runs".into(),
-    );
 }
 
 /// A primary client that reads everything, keeping the last 4 MiB.
@@ -649,7 +628,7 @@ impl Drop for Primary {
 fn hostile_programs_end_in_runtime_errors_and_the_next_program_runs() {
     let _turn = serial();
     let f = start();
-    running(&f);
+    running(&f.server);
     // A server for the programs' sockets: it takes every connection and keeps it.
     let server = TcpListener::bind("127.0.0.1:0").expect("bind");
     let port = server.local_addr().expect("addr").port();
@@ -733,7 +712,7 @@ fn hostile_programs_end_in_runtime_errors_and_the_next_program_runs() {
 fn connects_to_a_server_that_never_answers_block_nothing() {
     let _turn = serial();
     let f = start();
-    running(&f);
+    running(&f.server);
     // A server that never answers: a listener that never accepts, its backlog full, so
     // the kernel drops further SYNs and a connect waits out its timeout.
     let blackhole = TcpListener::bind("127.0.0.1:0").expect("bind");
@@ -784,7 +763,7 @@ fn connects_to_a_server_that_never_answers_block_nothing() {
 fn an_interpreter_flood_while_a_program_is_in_interpreter_mode() {
     let _turn = serial();
     let f = start();
-    running(&f);
+    running(&f.server);
     let mut p = connect(f.addr("primary")).expect("connect");
     p.write_all(b"def im():\n  interpreter_mode()\nend\n")
         .expect("send");
@@ -825,7 +804,7 @@ fn an_interpreter_flood_while_a_program_is_in_interpreter_mode() {
 fn a_tight_loop_runs_on_a_slice_per_step_and_the_controller_still_serves() {
     let _turn = serial();
     let f = start();
-    running(&f);
+    running(&f.server);
     let mut sender = connect(f.addr("primary")).expect("connect");
     let seen = f.log().programs.len();
     sender
