@@ -296,14 +296,16 @@ fn ui_loop(
         if !event::poll(Duration::from_millis(100)).map_err(terminal_error)? {
             continue;
         }
-        match event::read().map_err(terminal_error)? {
-            Event::Key(key) => {
-                if on_key(&mut ui, shared, cmds, &rows, key)?.is_break() {
-                    return Ok(());
-                }
+        let flow = match event::read().map_err(terminal_error)? {
+            Event::Key(key) => on_key(&mut ui, shared, cmds, &rows, key)?,
+            Event::Mouse(m) if !ui.help => {
+                on_mouse(&mut ui, shared, m.kind);
+                ControlFlow::Continue(())
             }
-            Event::Mouse(m) if !ui.help => on_mouse(&mut ui, shared, m.kind),
-            _ => {}
+            _ => ControlFlow::Continue(()),
+        };
+        if flow.is_break() {
+            return Ok(());
         }
     }
     Ok(())
