@@ -13,7 +13,7 @@ use std::io::Write;
 use serde_json::Value;
 
 use controller_common::Controller;
-use listen_common::{read_line, robot, Listener};
+use listen_common::{read_line, robot, Listener, TempFile};
 use run_common::run;
 
 fn schema() -> Value {
@@ -766,12 +766,12 @@ fn a_program_that_does_not_parse_reports_error_and_end_as_json() {
 /// multi-line notes).
 #[test]
 fn listen_snippet_all_and_periodic_events_match_the_schema() {
-    let dir = std::env::temp_dir().join(format!("ursock-schema-snips-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let file = dir.join("snippets.txt");
-    std::fs::write(&file, "tick = line T\nack = text OK\\r\\n\n").unwrap();
+    let file = TempFile::new(
+        "schema-snippets.txt",
+        "tick = line T\nack = text OK\\r\\n\n",
+    );
     let root = schema();
-    let mut l = Listener::start(&["--json", "--snippets", file.to_str().unwrap()]);
+    let mut l = Listener::start(&["--json", "--snippets", file.path()]);
     let mut s = robot(&l.addr);
     l.wait_for("\"connect\"", false);
     l.type_line("snippets");
@@ -792,7 +792,6 @@ fn listen_snippet_all_and_periodic_events_match_the_schema() {
     }
     assert!(origins.iter().any(|o| o == "periodic"), "{origins:?}");
     assert!(out.contains("$2 ack = text OK"), "{out}");
-    let _ = std::fs::remove_dir_all(&dir);
 }
 
 #[test]
@@ -883,14 +882,10 @@ fn controller_json_move_events_match_the_schema() {
 #[test]
 fn listen_robot_json_lines_match_the_schema() {
     let root = schema();
-    let dir = std::env::temp_dir().join(format!("ursock-listen-robot-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let program = dir.join("moves.script");
-    std::fs::write(
-        &program,
+    let program = TempFile::new(
+        "listen-robot.script",
         "socket_send_line(\"hello\")\nmovej([0.5, -1.5, 1, -1, 0.2, 0], a=3, v=3, r=0)\nset_standard_digital_out(1, True)\n",
-    )
-    .unwrap();
+    );
     let (code, out, err) = run(
         &[
             "listen",
@@ -904,11 +899,10 @@ fn listen_robot_json_lines_match_the_schema() {
             "1",
             "--json",
             "--robot",
-            program.to_str().unwrap(),
+            program.path(),
         ],
         b"",
     );
-    let _ = std::fs::remove_dir_all(&dir);
     assert_eq!(code, 0, "{err}");
     let events: Vec<Value> = out.lines().map(|l| check_event(&root, l)).collect();
     let at = |kind: &str| {

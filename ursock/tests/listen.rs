@@ -6,7 +6,7 @@ mod listen_common;
 use std::io::{Read, Write};
 use std::time::Duration;
 
-use listen_common::{ask, read_line, read_n, robot, Listener};
+use listen_common::{ask, read_line, read_n, robot, Listener, TempFile};
 
 #[test]
 fn reply_without_decode_is_sent() {
@@ -283,19 +283,15 @@ fn log_file_holds_the_session_and_counters_are_shown() {
 
 #[test]
 fn rules_emulate_a_camera() {
-    let dir = std::env::temp_dir().join(format!("ursock-listen-rules-{}", std::process::id()));
-    let _ = std::fs::create_dir_all(&dir);
-    let path = dir.join("camera.rules");
-    std::fs::write(
-        &path,
+    let rules = TempFile::new(
+        "camera.rules",
         "# a camera\ntrigger => floats 0.5 -0.25\njob * => line OK\nst?tus => hex 06\n",
-    )
-    .unwrap();
+    );
     let l = Listener::start(&[
         "--decode",
         "line",
         "--rules",
-        path.to_str().unwrap(),
+        rules.path(),
         "--reply",
         "line ?",
     ]);
@@ -309,7 +305,6 @@ fn rules_emulate_a_camera() {
     s.write_all(b"other\n").unwrap();
     assert_eq!(read_line(&mut s), "?\n");
     l.wait_for("rule 3 (job *) matched", false);
-    let _ = std::fs::remove_dir_all(&dir);
     // A bad rules file fails at start, one line on stderr.
     let bad = std::process::Command::new(listen_common::bin())
         .args(["listen", "--port", "0", "--rules", "/nonexistent/rules"])
@@ -578,27 +573,6 @@ fn a_log_that_cannot_be_written_is_said_once_and_the_session_goes_on() {
     assert_eq!(ask(&l.addr, "GET A\n"), "A 1\n");
 }
 
-/// A snippets file in the temp dir, removed on drop.
-struct TempFile(std::path::PathBuf);
-
-impl TempFile {
-    fn new(name: &str, text: &str) -> TempFile {
-        let p = std::env::temp_dir().join(format!("ursock-{}-{name}", std::process::id()));
-        std::fs::write(&p, text).unwrap();
-        TempFile(p)
-    }
-
-    fn path(&self) -> &str {
-        self.0.to_str().unwrap()
-    }
-}
-
-impl Drop for TempFile {
-    fn drop(&mut self) {
-        let _ = std::fs::remove_file(&self.0);
-    }
-}
-
 #[test]
 fn send_to_all_reaches_every_robot_and_says_so_per_robot() {
     let mut l = Listener::start(&[]);
@@ -722,23 +696,18 @@ fn every_sends_periodically_until_stopped_or_the_robot_leaves() {
 /// and when it ends (how, in how long).
 #[test]
 fn a_robot_run_by_listen_shows_its_moves() {
-    let dir = std::env::temp_dir().join(format!("ursock-listen-moves-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let program = dir.join("moves.script");
-    std::fs::write(
-        &program,
+    let program = TempFile::new(
+        "moves.script",
         "socket_send_line(\"hi\")\nmovel(p[0.3, -0.2, 0.4, 0, 3.14, 0], a=1.2, v=0.25, t=0, r=0)\nmovej([0.5, -1.5, 1, -1, 0.2, 0], t=0.5)\n",
-    )
-    .unwrap();
+    );
     let out = listen_common::output(&[
         "--decode",
         "line",
         "--exit-after",
         "1",
         "--robot",
-        program.to_str().unwrap(),
+        program.path(),
     ]);
-    let _ = std::fs::remove_dir_all(&dir);
     let text = String::from_utf8_lossy(&out.stdout);
     assert!(out.status.success(), "{text}");
     let line = |needle: &str| {

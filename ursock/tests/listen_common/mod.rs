@@ -192,6 +192,28 @@ pub fn output(args: &[&str]) -> std::process::Output {
         .expect("run ursock listen")
 }
 
+/// A file of `text` in the temp dir (snippets, rules, a robot's program), named for
+/// this process and `name`; removed on drop.
+pub struct TempFile(std::path::PathBuf);
+
+impl TempFile {
+    pub fn new(name: &str, text: &str) -> TempFile {
+        let p = std::env::temp_dir().join(format!("ursock-{}-{name}", std::process::id()));
+        std::fs::write(&p, text).unwrap();
+        TempFile(p)
+    }
+
+    pub fn path(&self) -> &str {
+        self.0.to_str().unwrap()
+    }
+}
+
+impl Drop for TempFile {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_file(&self.0);
+    }
+}
+
 /// A robot connection with a read timeout.
 pub fn robot(addr: &str) -> TcpStream {
     let s = TcpStream::connect(addr).expect("connect");
