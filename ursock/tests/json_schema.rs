@@ -886,24 +886,18 @@ fn listen_robot_json_lines_match_the_schema() {
         "listen-robot.script",
         "socket_send_line(\"hello\")\nmovej([0.5, -1.5, 1, -1, 0.2, 0], a=3, v=3, r=0)\nset_standard_digital_out(1, True)\n",
     );
-    let (code, out, err) = run(
-        &[
-            "listen",
-            "--bind",
-            "127.0.0.1",
-            "--port",
-            "0",
-            "--decode",
-            "line",
-            "--exit-after",
-            "1",
-            "--json",
-            "--robot",
-            program.path(),
-        ],
-        b"",
-    );
-    assert_eq!(code, 0, "{err}");
+    let listened = listen_common::output(&[
+        "--decode",
+        "line",
+        "--exit-after",
+        "1",
+        "--json",
+        "--robot",
+        program.path(),
+    ]);
+    let out = String::from_utf8_lossy(&listened.stdout).into_owned();
+    let err = String::from_utf8_lossy(&listened.stderr);
+    assert_eq!(listened.status.code(), Some(0), "{err}");
     let events: Vec<Value> = out.lines().map(|l| check_event(&root, l)).collect();
     let at = |kind: &str| {
         events
