@@ -256,17 +256,6 @@ fn good_rate_under(what: &str, f: &Fixture, attack: impl FnOnce(&Fixture, &mut A
     drop(good);
 }
 
-/// Brakes released, the arm running (programs run).
-fn brake_release(f: &Fixture) {
-    let mut d = dashboard(f.addr("dashboard")).expect("dashboard");
-    let _ = ask(&mut d, "brake release");
-    let start = Instant::now();
-    while ask(&mut d, "robotmode").ok().as_deref() != Some("Robotmode: RUNNING") {
-        assert!(start.elapsed() < WAIT, "the arm never runs");
-        thread::sleep(Duration::from_millis(20));
-    }
-}
-
 #[test]
 fn a_set_speed_flood_on_the_primary_leaves_the_good_client_its_rate() {
     let _turn = serial();
@@ -281,7 +270,7 @@ fn a_set_speed_flood_on_the_primary_leaves_the_good_client_its_rate() {
 fn bare_line_floods_from_two_peers_leave_the_good_client_its_rate() {
     let _turn = serial();
     let f = start();
-    brake_release(&f);
+    running(&f.server);
     good_rate_under("bare-line floods", &f, |f, a| {
         for service in ["primary", "secondary"] {
             let s = connect(f.addr(service)).expect("connect");
@@ -294,7 +283,7 @@ fn bare_line_floods_from_two_peers_leave_the_good_client_its_rate() {
 fn bare_line_floods_from_many_peers_leave_the_good_client_its_rate() {
     let _turn = serial();
     let f = start();
-    brake_release(&f);
+    running(&f.server);
     good_rate_under("bare-line floods from 48 peers", &f, |f, a| {
         for service in ["primary", "secondary", "realtime"] {
             for _ in 0..16 {
@@ -311,7 +300,7 @@ fn dashboard_and_interpreter_floods_leave_the_good_client_its_rate() {
     // sixteen of them sending as fast as they can took the loop's CPU and lock.
     let _turn = serial();
     let f = start();
-    brake_release(&f);
+    running(&f.server);
     good_rate_under("dashboard floods from 16 clients", &f, |f, a| {
         for _ in 0..16 {
             let s = dashboard(f.addr("dashboard")).expect("connect");
@@ -390,18 +379,6 @@ fn many_clients_with_many_large_recipes_leave_the_good_client_its_rate() {
             a.drain(s);
         }
     });
-}
-
-/// Tries `f` until it succeeds (at most [`WAIT`]).
-fn eventually<T>(what: &str, mut f: impl FnMut() -> std::io::Result<T>) -> T {
-    let start = Instant::now();
-    loop {
-        match f() {
-            Ok(t) => return t,
-            Err(e) => assert!(start.elapsed() < WAIT, "{what}: {e}"),
-        }
-        thread::sleep(Duration::from_millis(20));
-    }
 }
 
 #[test]
@@ -508,7 +485,7 @@ fn idle_dashboard_and_interpreter_connections_are_evicted_for_newcomers() {
 fn shutdown_ends_the_program_and_closes_every_client_before_its_last_event() {
     let _turn = serial();
     let f = start();
-    brake_release(&f);
+    running(&f.server);
     let mut p = connect(f.addr("primary")).expect("connect");
     p.write_all(b"def waits():\n  while True:\n    sync()\n  end\nend\n")
         .expect("send");

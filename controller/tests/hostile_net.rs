@@ -14,7 +14,7 @@ use std::net::{Shutdown, SocketAddr, TcpListener, TcpStream};
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::{Arc, Mutex, MutexGuard};
 use std::thread;
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
 mod support;
 use support::*;
@@ -34,17 +34,7 @@ fn serial() -> MutexGuard<'static, ()> {
         let default = std::panic::take_hook();
         std::panic::set_hook(Box::new(move |info| {
             // The server's threads (a test's own failed assertion is not counted).
-            let name = thread::current().name().unwrap_or("").to_string();
-            if [
-                "dashboard",
-                "interpreter",
-                "controller",
-                "load-program",
-                "connect",
-            ]
-            .iter()
-            .any(|n| name.starts_with(n))
-            {
+            if thread::current().name().is_some_and(server_thread) {
                 PANICS.fetch_add(1, Ordering::SeqCst);
             }
             default(info);
@@ -108,31 +98,35 @@ impl Fixture {
     fn healthy(&self, after: &str) {
         // A connection the attack's peers still hold a slot for (their threads have not
         // seen them leave yet) is refused: the slots must come back, within WAIT.
-        let start = Instant::now();
-        let mode = loop {
-            match dashboard_ask(self.addr("dashboard"), "robotmode") {
-                Ok(mode) => break mode,
-                Err(e) if start.elapsed() > WAIT => {
-                    panic!("after {after}: the dashboard does not answer: {e}")
-                }
-                Err(_) => thread::sleep(Duration::from_millis(20)),
-            }
-        };
+        let mode = eventually(
+            &format!("after {after}: the dashboard does not answer"),
+            || dashboard_ask(self.addr("dashboard"), "robotmode"),
+        );
         assert!(
             mode.starts_with("Robotmode: "),
             "after {after}: robotmode answered {mode:?}"
         );
-        let start = Instant::now();
-        while let Err(e) = rtde_gets_data(self.addr("rtde")) {
-            assert!(
-                start.elapsed() < WAIT,
-                "after {after}: a fresh RTDE client got no data: {e}"
-            );
-            thread::sleep(Duration::from_millis(20));
-        }
+        eventually(
+            &format!("after {after}: a fresh RTDE client got no data"),
+            || rtde_gets_data(self.addr("rtde")),
+        );
         check_threads(after);
         assert_eq!(PANICS.load(Ordering::SeqCst), 0, "after {after}: a panic");
     }
+}
+
+/// Whether a thread of this name is one of the server's (by the prefixes it names its
+/// threads with).
+fn server_thread(name: &str) -> bool {
+    [
+        "dashboard",
+        "interpreter",
+        "controller",
+        "load-program",
+        "connect",
+    ]
+    .iter()
+    .any(|p| name.starts_with(p))
 }
 
 /// The names of this process's threads now.
@@ -162,17 +156,7 @@ fn check_threads(after: &str) {
     );
     let all = thread_names()
         .iter()
-        .filter(|name| {
-            [
-                "dashboard",
-                "interpreter",
-                "controller",
-                "load-program",
-                "connect",
-            ]
-            .iter()
-            .any(|p| name.starts_with(p))
-        })
+        .filter(|name| server_thread(name))
         .count();
     assert!(
         all <= MAX_SERVER_THREADS,
@@ -487,15 +471,16 @@ fn connection_floods_half_closes_and_reconnect_storms() {
         f.healthy(&format!("a reconnect storm on {service}"));
     }
     // Every connection thread ends once its client is gone.
-    let start = Instant::now();
-    while connection_threads() > 0 {
-        assert!(
-            start.elapsed() < WAIT,
-            "{} connection threads outlive their clients",
-            connection_threads()
-        );
-        thread::sleep(Duration::from_millis(20));
-    }
+    poll_until(
+        WAIT,
+        || connection_threads() == 0,
+        || {
+            format!(
+                "{} connection threads outlive their clients",
+                connection_threads()
+            )
+        },
+    );
 }
 
 #[test]
@@ -520,7 +505,7 @@ fn clients_that_never_read_are_bounded_and_slow_nothing_down() {
             .find(|(_, s)| *s == "primary")
             .map(|(c, _)| *c)
     });
-    running(&f);
+    running(&f.server);
     let mut p = connect(f.addr("primary")).expect("connect");
     let text = "m".repeat(1000);
     p.write_all(
@@ -551,23 +536,23 @@ fn clients_that_never_read_are_bounded_and_slow_nothing_down() {
         .map(|(c, _)| *c)
         .collect();
     assert_eq!(realtime.len(), 8);
-    let start = Instant::now();
-    loop {
-        let dropped = f
-            .log()
+    let dropped = || {
+        f.log()
             .closes
             .iter()
             .filter(|(c, r)| realtime.contains(c) && r == "the client stopped reading")
-            .count();
-        if dropped == realtime.len() {
-            break;
-        }
-        assert!(
-            start.elapsed() < WAIT + MAX_STALL,
-            "only {dropped} of the deaf realtime clients were dropped"
-        );
-        thread::sleep(Duration::from_millis(50));
-    }
+            .count()
+    };
+    poll_until(
+        WAIT + MAX_STALL,
+        || dropped() == realtime.len(),
+        || {
+            format!(
+                "only {} of the deaf realtime clients were dropped",
+                dropped()
+            )
+        },
+    );
     f.healthy("clients that never read");
     let grown = rss().saturating_sub(before);
     // 33 clients, each at most MAX_QUEUE (4 MiB) queued: well under this.
@@ -577,20 +562,6 @@ fn clients_that_never_read_are_bounded_and_slow_nothing_down() {
     );
     drop(idle);
     drop(deaf);
-}
-
-/// Brakes released, the arm running (programs run).
-fn running(f: &Fixture) {
-    let _ = dashboard_ask(f.addr("dashboard"), "brake release");
-    let start = Instant::now();
-    while dashboard_ask(f.addr("dashboard"), "robotmode")
-        .ok()
-        .as_deref()
-        != Some("Robotmode: RUNNING")
-    {
-        assert!(start.elapsed() < WAIT, "the arm never runs");
-        thread::sleep(Duration::from_millis(20));
-    }
 }
 
 /// A primary client that reads everything, keeping the last 4 MiB.
@@ -657,7 +628,7 @@ impl Drop for Primary {
 fn hostile_programs_end_in_runtime_errors_and_the_next_program_runs() {
     let _turn = serial();
     let f = start();
-    running(&f);
+    running(&f.server);
     // A server for the programs' sockets: it takes every connection and keeps it.
     let server = TcpListener::bind("127.0.0.1:0").expect("bind");
     let port = server.local_addr().expect("addr").port();
@@ -717,14 +688,11 @@ fn hostile_programs_end_in_runtime_errors_and_the_next_program_runs() {
             text.contains(expected),
             "the {what} program's error: {text}"
         );
-        let start = Instant::now();
-        while !primary.saw(&text) {
-            assert!(
-                start.elapsed() < WAIT,
-                "the primary client never heard of the {what} program's error {text:?}"
-            );
-            thread::sleep(Duration::from_millis(10));
-        }
+        poll_until(
+            WAIT,
+            || primary.saw(&text),
+            || format!("the primary client never heard of the {what} program's error {text:?}"),
+        );
         // The next program runs.
         let hello = format!("next program {n}");
         sender
@@ -744,7 +712,7 @@ fn hostile_programs_end_in_runtime_errors_and_the_next_program_runs() {
 fn connects_to_a_server_that_never_answers_block_nothing() {
     let _turn = serial();
     let f = start();
-    running(&f);
+    running(&f.server);
     // A server that never answers: a listener that never accepts, its backlog full, so
     // the kernel drops further SYNs and a connect waits out its timeout.
     let blackhole = TcpListener::bind("127.0.0.1:0").expect("bind");
@@ -795,7 +763,7 @@ fn connects_to_a_server_that_never_answers_block_nothing() {
 fn an_interpreter_flood_while_a_program_is_in_interpreter_mode() {
     let _turn = serial();
     let f = start();
-    running(&f);
+    running(&f.server);
     let mut p = connect(f.addr("primary")).expect("connect");
     p.write_all(b"def im():\n  interpreter_mode()\nend\n")
         .expect("send");
@@ -836,7 +804,7 @@ fn an_interpreter_flood_while_a_program_is_in_interpreter_mode() {
 fn a_tight_loop_runs_on_a_slice_per_step_and_the_controller_still_serves() {
     let _turn = serial();
     let f = start();
-    running(&f);
+    running(&f.server);
     let mut sender = connect(f.addr("primary")).expect("connect");
     let seen = f.log().programs.len();
     sender

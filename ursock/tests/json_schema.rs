@@ -4,6 +4,7 @@
 //! 127.0.0.1; `read --json` and `decode --json` run on stdin. The examples in
 //! `docs/json-events.md` are checked too, and every event of the schema has one.
 
+mod controller_common;
 mod listen_common;
 mod run_common;
 
@@ -11,7 +12,8 @@ use std::io::Write;
 
 use serde_json::Value;
 
-use listen_common::{read_line, robot, Listener};
+use controller_common::Controller;
+use listen_common::{read_line, robot, Listener, TempFile};
 use run_common::run;
 
 fn schema() -> Value {
@@ -626,11 +628,10 @@ fn robot_json_lines_match_the_schema() {
     assert_eq!(events.last().unwrap()["outcome"], "error");
 }
 
-#[test]
-fn controller_json_lines_match_the_schema() {
-    use std::io::{BufRead, BufReader, Write};
-    let root = schema();
-    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_ursock"))
+/// `ursock controller --json` with only its dashboard server (on a free port); its
+/// standard output piped, its standard input as given.
+fn dashboard_only_controller(stdin: std::process::Stdio) -> std::process::Child {
+    std::process::Command::new(env!("CARGO_BIN_EXE_ursock"))
         .args([
             "controller",
             "--dashboard-port",
@@ -638,11 +639,18 @@ fn controller_json_lines_match_the_schema() {
             "--no-streams",
             "--json",
         ])
-        .stdin(std::process::Stdio::null())
+        .stdin(stdin)
         .stdout(std::process::Stdio::piped())
         .stderr(std::process::Stdio::null())
         .spawn()
-        .unwrap();
+        .unwrap()
+}
+
+#[test]
+fn controller_json_lines_match_the_schema() {
+    use std::io::{BufRead, BufReader, Write};
+    let root = schema();
+    let mut child = dashboard_only_controller(std::process::Stdio::null());
     let mut out = BufReader::new(child.stdout.take().unwrap());
     // `listening` events, `scheduling`, then `ready`: a client connects once the
     // controller is ready (a connection accepted earlier may be reported before `ready`).
@@ -758,12 +766,12 @@ fn a_program_that_does_not_parse_reports_error_and_end_as_json() {
 /// multi-line notes).
 #[test]
 fn listen_snippet_all_and_periodic_events_match_the_schema() {
-    let dir = std::env::temp_dir().join(format!("ursock-schema-snips-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let file = dir.join("snippets.txt");
-    std::fs::write(&file, "tick = line T\nack = text OK\\r\\n\n").unwrap();
+    let file = TempFile::new(
+        "schema-snippets.txt",
+        "tick = line T\nack = text OK\\r\\n\n",
+    );
     let root = schema();
-    let mut l = Listener::start(&["--json", "--snippets", file.to_str().unwrap()]);
+    let mut l = Listener::start(&["--json", "--snippets", file.path()]);
     let mut s = robot(&l.addr);
     l.wait_for("\"connect\"", false);
     l.type_line("snippets");
@@ -784,26 +792,13 @@ fn listen_snippet_all_and_periodic_events_match_the_schema() {
     }
     assert!(origins.iter().any(|o| o == "periodic"), "{origins:?}");
     assert!(out.contains("$2 ack = text OK"), "{out}");
-    let _ = std::fs::remove_dir_all(&dir);
 }
 
 #[test]
 fn controller_operator_commands_and_state_changes_are_events_that_match_the_schema() {
     use std::io::{BufRead, BufReader, Write};
     let root = schema();
-    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_ursock"))
-        .args([
-            "controller",
-            "--dashboard-port",
-            "0",
-            "--no-streams",
-            "--json",
-        ])
-        .stdin(std::process::Stdio::piped())
-        .stdout(std::process::Stdio::piped())
-        .stderr(std::process::Stdio::null())
-        .spawn()
-        .unwrap();
+    let mut child = dashboard_only_controller(std::process::Stdio::piped());
     // Hang guard: the process ends after 20 s whatever happens, closing its output.
     let pid = child.id().to_string();
     std::thread::spawn(move || {
@@ -856,87 +851,17 @@ fn controller_operator_commands_and_state_changes_are_events_that_match_the_sche
 /// does, in the same schema.
 #[test]
 fn controller_json_move_events_match_the_schema() {
-    use std::io::{BufRead, BufReader, Write};
-    use std::sync::mpsc;
-    use std::time::Duration;
     let root = schema();
-    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_ursock"))
-        .args([
-            "controller",
-            "--dashboard-port",
-            "0",
-            "--primary-port",
-            "0",
-            "--secondary-port",
-            "0",
-            "--realtime-port",
-            "0",
-            "--rtde-port",
-            "0",
-            "--interpreter-port",
-            "0",
-            "--json",
-        ])
-        .stdin(std::process::Stdio::null())
-        .stdout(std::process::Stdio::piped())
-        .stderr(std::process::Stdio::null())
-        .spawn()
-        .unwrap();
-    let stdout = child.stdout.take().unwrap();
-    let (tx, rx) = mpsc::channel::<String>();
-    std::thread::spawn(move || {
-        for line in BufReader::new(stdout).lines() {
-            let Ok(line) = line else { break };
-            if tx.send(line).is_err() {
-                break;
-            }
-        }
-    });
-    // A hang guard for each line.
-    let next = || rx.recv_timeout(Duration::from_secs(30)).expect("an event");
-    let (mut dashboard, mut primary) = (None, None);
-    while dashboard.is_none() || primary.is_none() {
-        let v = check_event(&root, &next());
-        if v["event"] == "listening" {
-            let addr = v["addr"].as_str().unwrap().to_string();
-            match v["service"].as_str() {
-                Some("dashboard") => dashboard = Some(addr),
-                Some("primary") => primary = Some(addr),
-                _ => {}
-            }
-        }
-    }
-    let s = std::net::TcpStream::connect(dashboard.unwrap()).unwrap();
-    s.set_read_timeout(Some(Duration::from_secs(20))).unwrap();
-    let mut r = BufReader::new(s.try_clone().unwrap());
-    let mut w = s;
-    let mut line = String::new();
-    r.read_line(&mut line).unwrap();
-    let mut ask = |cmd: &str| {
-        w.write_all(format!("{cmd}\n").as_bytes()).unwrap();
-        let mut reply = String::new();
-        r.read_line(&mut reply).unwrap();
-        reply
-    };
-    ask("power on");
-    let deadline = std::time::Instant::now() + Duration::from_secs(20);
-    while ask("robotmode").trim() != "Robotmode: IDLE" {
-        assert!(std::time::Instant::now() < deadline, "never IDLE");
-        std::thread::sleep(Duration::from_millis(20));
-    }
-    ask("brake release");
-    while ask("robotmode").trim() != "Robotmode: RUNNING" {
-        assert!(std::time::Instant::now() < deadline, "never RUNNING");
-        std::thread::sleep(Duration::from_millis(20));
-    }
-    let mut p = std::net::TcpStream::connect(primary.unwrap()).unwrap();
+    let c = Controller::start_checked(&[], move |l| check_event(&root, l));
+    let _dashboard = c.power_on_and_release();
+    let mut p = c.connect("primary");
     p.write_all(
         b"def go():\n  movej([0.5, -1.5, 1, -1, 0.2, 0], a=3, v=3)\n  set_standard_digital_out(1, True)\nend\n",
     )
     .unwrap();
     let mut seen = Vec::new();
     while !seen.iter().any(|v: &Value| v["event"] == "output") {
-        let v = check_event(&root, &next());
+        let v = c.next_event();
         if matches!(
             v["event"].as_str(),
             Some("move_start" | "move_end" | "output")
@@ -944,8 +869,7 @@ fn controller_json_move_events_match_the_schema() {
             seen.push(v);
         }
     }
-    let _ = child.kill();
-    let _ = child.wait();
+    drop(c);
     let kinds: Vec<&str> = seen.iter().filter_map(|v| v["event"].as_str()).collect();
     assert_eq!(kinds, ["move_start", "move_end", "output"]);
     assert_eq!(seen[1]["outcome"], "reached");
@@ -958,33 +882,22 @@ fn controller_json_move_events_match_the_schema() {
 #[test]
 fn listen_robot_json_lines_match_the_schema() {
     let root = schema();
-    let dir = std::env::temp_dir().join(format!("ursock-listen-robot-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let program = dir.join("moves.script");
-    std::fs::write(
-        &program,
+    let program = TempFile::new(
+        "listen-robot.script",
         "socket_send_line(\"hello\")\nmovej([0.5, -1.5, 1, -1, 0.2, 0], a=3, v=3, r=0)\nset_standard_digital_out(1, True)\n",
-    )
-    .unwrap();
-    let (code, out, err) = run(
-        &[
-            "listen",
-            "--bind",
-            "127.0.0.1",
-            "--port",
-            "0",
-            "--decode",
-            "line",
-            "--exit-after",
-            "1",
-            "--json",
-            "--robot",
-            program.to_str().unwrap(),
-        ],
-        b"",
     );
-    let _ = std::fs::remove_dir_all(&dir);
-    assert_eq!(code, 0, "{err}");
+    let listened = listen_common::output(&[
+        "--decode",
+        "line",
+        "--exit-after",
+        "1",
+        "--json",
+        "--robot",
+        program.path(),
+    ]);
+    let out = String::from_utf8_lossy(&listened.stdout).into_owned();
+    let err = String::from_utf8_lossy(&listened.stderr);
+    assert_eq!(listened.status.code(), Some(0), "{err}");
     let events: Vec<Value> = out.lines().map(|l| check_event(&root, l)).collect();
     let at = |kind: &str| {
         events
@@ -1019,79 +932,16 @@ fn listen_robot_json_lines_match_the_schema() {
 /// `pause` and `stop`, a runtime error (its message), a protective stop, its end.
 #[test]
 fn controller_json_says_why_a_program_paused_or_stopped() {
-    use std::io::{BufRead, BufReader, Write};
-    use std::sync::mpsc;
-    use std::time::Duration;
     let root = schema();
-    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_ursock"))
-        .args(["controller", "--dashboard-port", "0", "--primary-port", "0"])
-        .args([
-            "--secondary-port",
-            "0",
-            "--realtime-port",
-            "0",
-            "--rtde-port",
-            "0",
-        ])
-        .args(["--interpreter-port", "0", "--json"])
-        .stdin(std::process::Stdio::null())
-        .stdout(std::process::Stdio::piped())
-        .stderr(std::process::Stdio::null())
-        .spawn()
-        .unwrap();
-    let stdout = child.stdout.take().unwrap();
-    let (tx, rx) = mpsc::channel::<String>();
-    std::thread::spawn(move || {
-        for line in BufReader::new(stdout).lines() {
-            let Ok(line) = line else { break };
-            if tx.send(line).is_err() {
-                break;
-            }
-        }
-    });
-    // A hang guard for each line.
-    let next = || rx.recv_timeout(Duration::from_secs(30)).expect("an event");
-    let (mut dashboard, mut primary) = (None, None);
-    while dashboard.is_none() || primary.is_none() {
-        let v = check_event(&root, &next());
-        if v["event"] == "listening" {
-            let addr = v["addr"].as_str().unwrap().to_string();
-            match v["service"].as_str() {
-                Some("dashboard") => dashboard = Some(addr),
-                Some("primary") => primary = Some(addr),
-                _ => {}
-            }
-        }
-    }
-    let s = std::net::TcpStream::connect(dashboard.unwrap()).unwrap();
-    s.set_read_timeout(Some(Duration::from_secs(20))).unwrap();
-    let mut r = BufReader::new(s.try_clone().unwrap());
-    let mut w = s;
-    let mut line = String::new();
-    r.read_line(&mut line).unwrap();
-    let mut ask = |cmd: &str| {
-        w.write_all(format!("{cmd}\n").as_bytes()).unwrap();
-        let mut reply = String::new();
-        r.read_line(&mut reply).unwrap();
-        reply
-    };
-    ask("power on");
-    let deadline = std::time::Instant::now() + Duration::from_secs(20);
-    while ask("robotmode").trim() != "Robotmode: IDLE" {
-        assert!(std::time::Instant::now() < deadline, "never IDLE");
-        std::thread::sleep(Duration::from_millis(20));
-    }
-    ask("brake release");
-    while ask("robotmode").trim() != "Robotmode: RUNNING" {
-        assert!(std::time::Instant::now() < deadline, "never RUNNING");
-        std::thread::sleep(Duration::from_millis(20));
-    }
-    let mut p = std::net::TcpStream::connect(primary.unwrap()).unwrap();
+    let c = Controller::start_checked(&[], move |l| check_event(&root, l));
+    let mut dashboard = c.power_on_and_release();
+    let mut ask = |cmd: &str| dashboard.ask(cmd);
+    let mut p = c.connect("primary");
     // The events up to the one `until` accepts, each checked against the schema.
     let upto = |until: &dyn Fn(&Value) -> bool| {
         let mut seen = Vec::new();
         loop {
-            let v = check_event(&root, &next());
+            let v = c.next_event();
             let done = until(&v);
             if matches!(v["event"].as_str(), Some("program" | "state")) {
                 seen.push(v);
@@ -1140,6 +990,4 @@ fn controller_json_says_why_a_program_paused_or_stopped() {
         .unwrap();
     let seen = upto(&program("stopped", "four"));
     assert_eq!(seen.last().unwrap()["reason"], "protective_stop");
-    let _ = child.kill();
-    let _ = child.wait();
 }

@@ -6,7 +6,7 @@ mod listen_common;
 use std::io::{Read, Write};
 use std::time::Duration;
 
-use listen_common::{ask, read_line, read_n, robot, Listener};
+use listen_common::{ask, read_line, read_n, robot, Listener, TempFile};
 
 #[test]
 fn reply_without_decode_is_sent() {
@@ -80,11 +80,7 @@ fn exit_after_counts_robots_that_left() {
     drop(robot(&l.addr));
     drop(robot(&l.addr));
     assert!(l.wait_exit().success());
-    let start = std::time::Instant::now();
-    while l.stdout().matches("closed (").count() < 2 {
-        assert!(start.elapsed() < listen_common::WAIT, "{}", l.stdout());
-        std::thread::sleep(Duration::from_millis(20));
-    }
+    l.wait_for_n("closed (", 2, false);
 }
 
 #[test]
@@ -287,19 +283,15 @@ fn log_file_holds_the_session_and_counters_are_shown() {
 
 #[test]
 fn rules_emulate_a_camera() {
-    let dir = std::env::temp_dir().join(format!("ursock-listen-rules-{}", std::process::id()));
-    let _ = std::fs::create_dir_all(&dir);
-    let path = dir.join("camera.rules");
-    std::fs::write(
-        &path,
+    let rules = TempFile::new(
+        "camera.rules",
         "# a camera\ntrigger => floats 0.5 -0.25\njob * => line OK\nst?tus => hex 06\n",
-    )
-    .unwrap();
+    );
     let l = Listener::start(&[
         "--decode",
         "line",
         "--rules",
-        path.to_str().unwrap(),
+        rules.path(),
         "--reply",
         "line ?",
     ]);
@@ -313,7 +305,6 @@ fn rules_emulate_a_camera() {
     s.write_all(b"other\n").unwrap();
     assert_eq!(read_line(&mut s), "?\n");
     l.wait_for("rule 3 (job *) matched", false);
-    let _ = std::fs::remove_dir_all(&dir);
     // A bad rules file fails at start, one line on stderr.
     let bad = std::process::Command::new(listen_common::bin())
         .args(["listen", "--port", "0", "--rules", "/nonexistent/rules"])
@@ -476,19 +467,7 @@ fn a_robot_that_stops_reading_is_dropped_after_write_timeout() {
 
 #[test]
 fn reply_and_rules_are_checked_once_at_start() {
-    let out = std::process::Command::new(listen_common::bin())
-        .args([
-            "listen",
-            "--bind",
-            "127.0.0.1",
-            "--port",
-            "0",
-            "--exit-after",
-            "0",
-        ])
-        .args(["--reply", "line [0.1, 0.2]"])
-        .output()
-        .unwrap();
+    let out = listen_common::output(&["--exit-after", "0", "--reply", "line [0.1, 0.2]"]);
     assert!(out.status.success());
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(
@@ -510,18 +489,14 @@ fn reply_and_rules_are_checked_once_at_start() {
 #[test]
 fn listen_checks_replies_with_the_read_rules() {
     let run = |reply: &str, reads: &str| {
-        let out = std::process::Command::new(listen_common::bin())
-            .args(["listen", "--bind", "127.0.0.1", "--port", "0"])
-            .args([
-                "--exit-after",
-                "0",
-                "--robot-reads",
-                reads,
-                "--reply",
-                reply,
-            ])
-            .output()
-            .unwrap();
+        let out = listen_common::output(&[
+            "--exit-after",
+            "0",
+            "--robot-reads",
+            reads,
+            "--reply",
+            reply,
+        ]);
         assert!(out.status.success());
         String::from_utf8_lossy(&out.stderr).into_owned()
     };
@@ -598,27 +573,6 @@ fn a_log_that_cannot_be_written_is_said_once_and_the_session_goes_on() {
     assert_eq!(ask(&l.addr, "GET A\n"), "A 1\n");
 }
 
-/// A snippets file in the temp dir, removed on drop.
-struct TempFile(std::path::PathBuf);
-
-impl TempFile {
-    fn new(name: &str, text: &str) -> TempFile {
-        let p = std::env::temp_dir().join(format!("ursock-{}-{name}", std::process::id()));
-        std::fs::write(&p, text).unwrap();
-        TempFile(p)
-    }
-
-    fn path(&self) -> &str {
-        self.0.to_str().unwrap()
-    }
-}
-
-impl Drop for TempFile {
-    fn drop(&mut self) {
-        let _ = std::fs::remove_file(&self.0);
-    }
-}
-
 #[test]
 fn send_to_all_reaches_every_robot_and_says_so_per_robot() {
     let mut l = Listener::start(&[]);
@@ -638,11 +592,7 @@ fn send_to_all_reaches_every_robot_and_says_so_per_robot() {
     l.wait_for("sent 2 bytes to 2 of 2 robots (#1 #2)", false);
     // With every robot gone, there is nobody to send to.
     drop((a, b));
-    let start = std::time::Instant::now();
-    while l.stdout().matches("closed (").count() < 2 {
-        assert!(start.elapsed() < listen_common::WAIT, "{}", l.stdout());
-        std::thread::sleep(Duration::from_millis(20));
-    }
+    l.wait_for_n("closed (", 2, false);
     l.type_line("@* line x");
     l.wait_for("no robot connected; nothing sent", true);
 }
@@ -691,18 +641,7 @@ fn snippets_are_sent_by_name_or_number() {
 #[test]
 fn a_bad_snippets_file_is_refused_naming_the_line() {
     let f = TempFile::new("bad-snips.txt", "ok = line a\n\nbad = floatz 1\n");
-    let out = std::process::Command::new(listen_common::bin())
-        .args([
-            "listen",
-            "--bind",
-            "127.0.0.1",
-            "--port",
-            "0",
-            "--snippets",
-            f.path(),
-        ])
-        .output()
-        .unwrap();
+    let out = listen_common::output(&["--snippets", f.path()]);
     assert!(!out.status.success());
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(
@@ -757,30 +696,18 @@ fn every_sends_periodically_until_stopped_or_the_robot_leaves() {
 /// and when it ends (how, in how long).
 #[test]
 fn a_robot_run_by_listen_shows_its_moves() {
-    let dir = std::env::temp_dir().join(format!("ursock-listen-moves-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let program = dir.join("moves.script");
-    std::fs::write(
-        &program,
+    let program = TempFile::new(
+        "moves.script",
         "socket_send_line(\"hi\")\nmovel(p[0.3, -0.2, 0.4, 0, 3.14, 0], a=1.2, v=0.25, t=0, r=0)\nmovej([0.5, -1.5, 1, -1, 0.2, 0], t=0.5)\n",
-    )
-    .unwrap();
-    let out = std::process::Command::new(listen_common::bin())
-        .args([
-            "listen",
-            "--bind",
-            "127.0.0.1",
-            "--port",
-            "0",
-            "--decode",
-            "line",
-        ])
-        .args(["--exit-after", "1", "--robot"])
-        .arg(&program)
-        .stdin(std::process::Stdio::null())
-        .output()
-        .unwrap();
-    let _ = std::fs::remove_dir_all(&dir);
+    );
+    let out = listen_common::output(&[
+        "--decode",
+        "line",
+        "--exit-after",
+        "1",
+        "--robot",
+        program.path(),
+    ]);
     let text = String::from_utf8_lossy(&out.stdout);
     assert!(out.status.success(), "{text}");
     let line = |needle: &str| {

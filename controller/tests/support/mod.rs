@@ -16,6 +16,32 @@ use urscript_controller::net::{Ports, Server, ServerEvent, ServerOptions};
 /// The longest any wait of these tests lasts before the test fails.
 pub const WAIT: Duration = Duration::from_secs(20);
 
+/// How often a polling wait tries again.
+pub const POLL: Duration = Duration::from_millis(20);
+
+/// Tries `done` every [`POLL`] until it holds. After `limit` the test fails, saying
+/// `why()` (worked out then, so that it can tell how far the wait got).
+pub fn poll_until(limit: Duration, mut done: impl FnMut() -> bool, why: impl Fn() -> String) {
+    let start = Instant::now();
+    while !done() {
+        assert!(start.elapsed() < limit, "{}", why());
+        thread::sleep(POLL);
+    }
+}
+
+/// Tries `f` every [`POLL`] until it succeeds; after [`WAIT`] the test fails with
+/// `what` and the last error.
+pub fn eventually<T>(what: &str, mut f: impl FnMut() -> std::io::Result<T>) -> T {
+    let start = Instant::now();
+    loop {
+        match f() {
+            Ok(t) => return t,
+            Err(e) => assert!(start.elapsed() < WAIT, "{what}: {e}"),
+        }
+        thread::sleep(POLL);
+    }
+}
+
 /// Options for a server on loopback, every port chosen by the system.
 pub fn any_ports() -> ServerOptions {
     ServerOptions {
@@ -197,11 +223,11 @@ pub fn ask(s: &mut TcpStream, command: &str) -> std::io::Result<String> {
 pub fn running(server: &Server) {
     let mut d = LineClient::dashboard(server);
     assert_eq!(d.say("brake release"), "Brake releasing");
-    let start = Instant::now();
-    while d.say("robotmode") != "Robotmode: RUNNING" {
-        assert!(start.elapsed() < WAIT, "the arm never ran");
-        thread::sleep(Duration::from_millis(20));
-    }
+    poll_until(
+        WAIT,
+        || d.say("robotmode") == "Robotmode: RUNNING",
+        || "the arm never ran".into(),
+    );
 }
 
 /// An RTDE packet: size, type, payload.

@@ -10,6 +10,7 @@
 //! capturing the mouse takes away the terminal's own text selection, which is how a line
 //! is copied out of the traffic (F12 again gives it back).
 
+use std::ops::ControlFlow;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Duration;
 
@@ -21,6 +22,7 @@ use ratatui::layout::{Constraint, Layout, Rect};
 use ratatui::style::{Modifier, Style};
 use ratatui::text::Line;
 use ratatui::widgets::{Block, Borders, Clear, List, ListItem, ListState, Paragraph};
+use ratatui::Frame;
 use tokio::sync::mpsc;
 use unicode_width::UnicodeWidthChar;
 
@@ -34,6 +36,7 @@ const WHEEL_LINES: u64 = 3;
 /// Rows of the status area: the newest general lines (notes, warnings), wrapped.
 const STATUS_ROWS: usize = 4;
 
+/// One robot of the robots' list: live connections and closed ones with kept traffic.
 struct Row {
     id: u64,
     label: String,
@@ -61,6 +64,8 @@ struct Ui {
     width: usize,
 }
 
+/// Runs the UI in the terminal until Esc or Ctrl+C, or until the listener is `done`;
+/// typed lines and snippet keys go to `cmds`. The terminal is restored however it ends.
 pub fn run(
     shared: &Shared,
     cmds: &mpsc::Sender<Result<String, String>>,
@@ -74,6 +79,8 @@ pub fn run(
     r
 }
 
+/// The robots' list: every live connection and every closed one whose traffic is kept,
+/// by connection number.
 fn rows(shared: &Shared) -> Vec<Row> {
     let live = shared.conns.lock().unwrap_or_else(|p| p.into_inner());
     let screen = shared.out.screen.as_ref();
@@ -272,6 +279,9 @@ fn centred(area: Rect, pct: u16) -> Rect {
     }
 }
 
+/// The UI until Esc or Ctrl+C, or until the listener is `done`: each turn follows the
+/// selection, draws a frame, then handles at most one terminal event (waiting up to
+/// 100 ms for it, so the frame follows the traffic).
 fn ui_loop(
     terminal: &mut ratatui::DefaultTerminal,
     shared: &Shared,
@@ -279,235 +289,337 @@ fn ui_loop(
     done: &AtomicBool,
 ) -> Result<(), String> {
     let mut ui = Ui::default();
-    loop {
-        if done.load(Ordering::Relaxed) {
-            return Ok(());
-        }
+    while !done.load(Ordering::Relaxed) {
         let rows = rows(shared);
-        let selected_live = rows.iter().any(|r| Some(r.id) == ui.selected && r.live);
-        if ui.selected.is_none_or(|s| !rows.iter().any(|r| r.id == s))
-            || (!ui.picked && !selected_live)
-        {
-            let next = rows
-                .iter()
-                .rev()
-                .find(|r| r.live)
-                .or(rows.last())
-                .map(|r| r.id);
-            if next != ui.selected {
-                ui.back = None;
-            }
-            ui.selected = next;
-        }
-        let index = rows.iter().position(|r| Some(r.id) == ui.selected);
-        let status: Vec<String> = shared
-            .out
-            .screen
-            .as_ref()
-            .map(|sc| {
-                let sc = sc.lock().unwrap_or_else(|p| p.into_inner());
-                let skip = sc.general.len().saturating_sub(STATUS_ROWS);
-                sc.general.iter().skip(skip).cloned().collect()
-            })
-            .unwrap_or_default();
-        let help = ui.help.then(|| help_text(shared));
-        let jobs = shared
-            .periodic
-            .lock()
-            .unwrap_or_else(|p| p.into_inner())
-            .values()
-            .filter(|j| !j.task.is_finished())
-            .count();
-        terminal
-            .draw(|f| {
-                let (status_rows, _) =
-                    bottom_rows(status.iter(), usize::from(f.area().width), STATUS_ROWS);
-                let [main, input_area, status_area] = Layout::vertical([
-                    Constraint::Min(3),
-                    Constraint::Length(3),
-                    Constraint::Length(status_rows.len() as u16),
-                ])
-                .areas(f.area());
-                let [list_area, traffic_area] =
-                    Layout::horizontal([Constraint::Length(36), Constraint::Min(10)]).areas(main);
-                let items: Vec<ListItem> =
-                    rows.iter().map(|r| ListItem::new(r.label.clone())).collect();
-                let list = List::new(items)
-                    .block(Block::default().borders(Borders::ALL).title("robots (Up/Down)"))
-                    .highlight_style(Style::default().add_modifier(Modifier::REVERSED))
-                    .highlight_symbol("> ");
-                let mut state = ListState::default();
-                state.select(index);
-                f.render_stateful_widget(list, list_area, &mut state);
-                let height = usize::from(traffic_area.height.saturating_sub(2));
-                let width = usize::from(traffic_area.width.saturating_sub(2));
-                (ui.height, ui.width) = (height, width);
-                let (shown, below) = match (shared.out.screen.as_ref(), ui.selected) {
-                    (Some(sc), Some(id)) => {
-                        let sc = sc.lock().unwrap_or_else(|p| p.into_inner());
-                        match sc.per_conn.get(&id) {
-                            Some(sb) => {
-                                // A view scrolled past the oldest kept line shows it at the top.
-                                let end = ui.back.unwrap_or(sb.total).clamp(sb.first(), sb.total);
-                                let (shown, whole) = traffic_rows(sb, end, width, height);
-                                ui.page = whole.max(1);
-                                (shown, sb.total - end)
-                            }
-                            None => (Vec::new(), 0),
-                        }
-                    }
-                    _ => (Vec::new(), 0),
-                };
-                let title = match ui.selected {
-                    Some(id) if ui.back.is_some() => format!(
-                        "#{id} traffic, scrolled back: {below} new lines below (End follows)"
-                    ),
-                    Some(id) => format!("#{id} traffic (PgUp scrolls back)"),
-                    None => "no robot yet".to_string(),
-                };
-                let shown: Vec<Line> = shown.into_iter().map(Line::raw).collect();
-                f.render_widget(
-                    Paragraph::new(shown).block(Block::default().borders(Borders::ALL).title(title)),
-                    traffic_area,
-                );
-                let target = ui.selected.map(|id| format!("#{id}")).unwrap_or_else(|| "-".into());
-                let jobs = if jobs > 0 {
-                    format!(" | {jobs} periodic (every)")
-                } else {
-                    String::new()
-                };
-                // A line longer than the box shows its end, where the typing is.
-                let typed = format!("> {}", ui.input);
-                let inner = usize::from(input_area.width.saturating_sub(2));
-                let typed = tail(&typed, inner);
-                f.render_widget(
-                    Paragraph::new(typed).block(
-                        Block::default().borders(Borders::ALL).title(format!(
-                            "send to {target}: floats 1 2 3 | line OK | hex 02 41 03 | $snippet{jobs}  (F1 help, Esc quits)"
-                        )),
-                    ),
-                    input_area,
-                );
-                let status: Vec<Line> = status_rows.iter().map(|r| Line::raw(r.clone())).collect();
-                f.render_widget(Paragraph::new(status), status_area);
-                if let Some(help) = &help {
-                    let area = centred(f.area(), 90);
-                    // Scrolled no further than its last row.
-                    let inner = usize::from(area.width.saturating_sub(2));
-                    // Wrapped here, as the traffic is, so the row count is exact.
-                    let rows: Vec<Line> =
-                        help.iter().flat_map(|l| wrap(l, inner)).map(Line::raw).collect();
-                    let last = rows.len().saturating_sub(usize::from(area.height.saturating_sub(2)));
-                    ui.help_scroll = ui.help_scroll.min(u16::try_from(last).unwrap_or(u16::MAX));
-                    f.render_widget(Clear, area);
-                    f.render_widget(
-                        Paragraph::new(rows)
-                            .scroll((ui.help_scroll, 0))
-                            .block(
-                                Block::default()
-                                    .borders(Borders::ALL)
-                                    .title("help (Esc closes, Up/Down scroll)"),
-                            ),
-                        area,
-                    );
-                }
-            })
-            .map_err(|e| format!("terminal: {e}"))?;
-        if !event::poll(Duration::from_millis(100)).map_err(|e| format!("terminal: {e}"))? {
+        follow_newest(&mut ui, &rows);
+        draw(terminal, &mut ui, shared, &rows)?;
+        if !event::poll(Duration::from_millis(100)).map_err(terminal_error)? {
             continue;
         }
-        let key = match event::read().map_err(|e| format!("terminal: {e}"))? {
-            Event::Key(key) => key,
+        let flow = match event::read().map_err(terminal_error)? {
+            Event::Key(key) => on_key(&mut ui, shared, cmds, &rows, key)?,
             Event::Mouse(m) if !ui.help => {
-                match m.kind {
-                    MouseEventKind::ScrollUp => scroll(&mut ui, shared, Move::Up(WHEEL_LINES)),
-                    MouseEventKind::ScrollDown => {
-                        scroll(&mut ui, shared, Move::Down(WHEEL_LINES));
-                    }
-                    _ => {}
-                }
-                continue;
+                on_mouse(&mut ui, shared, m.kind);
+                ControlFlow::Continue(())
             }
-            _ => continue,
+            _ => ControlFlow::Continue(()),
         };
-        if key.kind != KeyEventKind::Press {
-            continue;
-        }
-        if key.code == KeyCode::Char('c') && key.modifiers.contains(KeyModifiers::CONTROL) {
+        if flow.is_break() {
             return Ok(());
         }
-        if ui.help {
-            help_key(&mut ui, key);
-            continue;
-        }
-        let send = |line: String| {
-            let _ = cmds.blocking_send(Ok(line));
-        };
-        match key.code {
-            KeyCode::Esc => return Ok(()),
-            KeyCode::F(1) => open_help(&mut ui),
-            KeyCode::Char('?') if ui.input.is_empty() => open_help(&mut ui),
-            KeyCode::F(n) if (2..2 + SNIPPET_KEYS).contains(&n) => match ui.selected {
-                Some(id) => send(format!("@{id} ${}", n - 1)),
-                None => send(format!("${}", n - 1)),
-            },
-            KeyCode::Up => {
-                ui.picked = true;
-                if let Some(i) = index {
-                    select(&mut ui, rows.get(i.saturating_sub(1)).map(|r| r.id));
-                }
-            }
-            KeyCode::Down => {
-                ui.picked = true;
-                if let Some(i) = index {
-                    let next = rows.get((i + 1).min(rows.len().saturating_sub(1)));
-                    select(&mut ui, next.map(|r| r.id));
-                }
-            }
-            KeyCode::PageUp => {
-                let page = ui.page.saturating_sub(1);
-                scroll(&mut ui, shared, Move::Up(page));
-            }
-            KeyCode::PageDown => {
-                let page = ui.page.saturating_sub(1);
-                scroll(&mut ui, shared, Move::Down(page));
-            }
-            KeyCode::Home => scroll(&mut ui, shared, Move::Home),
-            KeyCode::End => scroll(&mut ui, shared, Move::End),
-            KeyCode::F(12) => {
-                ui.mouse = !ui.mouse;
-                let mut out = std::io::stdout();
-                let r = if ui.mouse {
-                    ratatui::crossterm::execute!(out, EnableMouseCapture)
-                } else {
-                    ratatui::crossterm::execute!(out, DisableMouseCapture)
-                };
-                r.map_err(|e| format!("terminal: {e}"))?;
-            }
-            KeyCode::Enter => {
-                let line = std::mem::take(&mut ui.input);
-                let line = line.trim();
-                if line == "help" {
-                    open_help(&mut ui);
-                } else if !line.is_empty() {
-                    let all = key.modifiers.contains(KeyModifiers::ALT);
-                    send(command_for(line, ui.selected, all));
-                }
-            }
-            KeyCode::Backspace => {
-                ui.input.pop();
-            }
-            KeyCode::Char(c) => ui.input.push(c),
-            _ => {}
-        }
+    }
+    Ok(())
+}
+
+/// A terminal error as the UI reports it.
+fn terminal_error(e: std::io::Error) -> String {
+    format!("terminal: {e}")
+}
+
+/// Chooses the selected robot from `rows`: a selection that is gone moves to the newest
+/// live robot (else the newest row), and so does one not picked by hand once its robot
+/// has closed. A new selection follows the end of its traffic.
+fn follow_newest(ui: &mut Ui, rows: &[Row]) {
+    let selected_live = rows.iter().any(|r| Some(r.id) == ui.selected && r.live);
+    if ui.selected.is_none_or(|s| !rows.iter().any(|r| r.id == s)) || (!ui.picked && !selected_live)
+    {
+        let next = rows
+            .iter()
+            .rev()
+            .find(|r| r.live)
+            .or(rows.last())
+            .map(|r| r.id);
+        select(ui, next);
     }
 }
 
+/// The newest general lines (notes, warnings) for the status area: at most [`STATUS_ROWS`].
+fn status_lines(shared: &Shared) -> Vec<String> {
+    shared
+        .out
+        .screen
+        .as_ref()
+        .map(|sc| {
+            let sc = sc.lock().unwrap_or_else(|p| p.into_inner());
+            let skip = sc.general.len().saturating_sub(STATUS_ROWS);
+            sc.general.iter().skip(skip).cloned().collect()
+        })
+        .unwrap_or_default()
+}
+
+/// How many periodic sends (`every`) are running.
+fn running_jobs(shared: &Shared) -> usize {
+    shared
+        .periodic
+        .lock()
+        .unwrap_or_else(|p| p.into_inner())
+        .values()
+        .filter(|j| !j.task.is_finished())
+        .count()
+}
+
+/// Draws one frame: the robots, the selected robot's traffic, the input line, the status
+/// area and, while open, the help over them. Remembers the traffic pane's size and page
+/// in `ui` (scrolling needs them) and clamps the help's scroll to its length.
+fn draw(
+    terminal: &mut ratatui::DefaultTerminal,
+    ui: &mut Ui,
+    shared: &Shared,
+    rows: &[Row],
+) -> Result<(), String> {
+    let status = status_lines(shared);
+    let help = ui.help.then(|| help_text(shared));
+    let jobs = running_jobs(shared);
+    terminal
+        .draw(|f| {
+            let (status_rows, _) =
+                bottom_rows(status.iter(), usize::from(f.area().width), STATUS_ROWS);
+            let [main, input_area, status_area] = Layout::vertical([
+                Constraint::Min(3),
+                Constraint::Length(3),
+                Constraint::Length(status_rows.len() as u16),
+            ])
+            .areas(f.area());
+            let [list_area, traffic_area] =
+                Layout::horizontal([Constraint::Length(36), Constraint::Min(10)]).areas(main);
+            draw_robots(f, list_area, rows, ui.selected);
+            draw_traffic(f, traffic_area, ui, shared);
+            draw_input(f, input_area, ui, jobs);
+            let status: Vec<Line> = status_rows.iter().map(|r| Line::raw(r.clone())).collect();
+            f.render_widget(Paragraph::new(status), status_area);
+            if let Some(help) = &help {
+                draw_help(f, ui, help);
+            }
+        })
+        .map_err(terminal_error)?;
+    Ok(())
+}
+
+/// The robots' list, the `selected` one highlighted.
+fn draw_robots(f: &mut Frame, area: Rect, rows: &[Row], selected: Option<u64>) {
+    let items: Vec<ListItem> = rows
+        .iter()
+        .map(|r| ListItem::new(r.label.clone()))
+        .collect();
+    let list = List::new(items)
+        .block(
+            Block::default()
+                .borders(Borders::ALL)
+                .title("robots (Up/Down)"),
+        )
+        .highlight_style(Style::default().add_modifier(Modifier::REVERSED))
+        .highlight_symbol("> ");
+    let mut state = ListState::default();
+    state.select(rows.iter().position(|r| Some(r.id) == selected));
+    f.render_stateful_widget(list, area, &mut state);
+}
+
+/// The selected robot's traffic, ending where the view is scrolled to; the title says
+/// how many lines are below a scrolled-back view. Sets the pane's size and page in `ui`.
+fn draw_traffic(f: &mut Frame, area: Rect, ui: &mut Ui, shared: &Shared) {
+    let height = usize::from(area.height.saturating_sub(2));
+    let width = usize::from(area.width.saturating_sub(2));
+    (ui.height, ui.width) = (height, width);
+    let (shown, below) = match (shared.out.screen.as_ref(), ui.selected) {
+        (Some(sc), Some(id)) => {
+            let sc = sc.lock().unwrap_or_else(|p| p.into_inner());
+            match sc.per_conn.get(&id) {
+                Some(sb) => {
+                    // A view scrolled past the oldest kept line shows it at the top.
+                    let end = ui.back.unwrap_or(sb.total).clamp(sb.first(), sb.total);
+                    let (shown, whole) = traffic_rows(sb, end, width, height);
+                    ui.page = whole.max(1);
+                    (shown, sb.total - end)
+                }
+                None => (Vec::new(), 0),
+            }
+        }
+        _ => (Vec::new(), 0),
+    };
+    let title = match ui.selected {
+        Some(id) if ui.back.is_some() => {
+            format!("#{id} traffic, scrolled back: {below} new lines below (End follows)")
+        }
+        Some(id) => format!("#{id} traffic (PgUp scrolls back)"),
+        None => "no robot yet".to_string(),
+    };
+    let shown: Vec<Line> = shown.into_iter().map(Line::raw).collect();
+    f.render_widget(
+        Paragraph::new(shown).block(Block::default().borders(Borders::ALL).title(title)),
+        area,
+    );
+}
+
+/// The input line, its title naming where Enter sends and how many periodic sends
+/// (`jobs`) run.
+fn draw_input(f: &mut Frame, area: Rect, ui: &Ui, jobs: usize) {
+    let target = ui
+        .selected
+        .map(|id| format!("#{id}"))
+        .unwrap_or_else(|| "-".into());
+    let jobs = if jobs > 0 {
+        format!(" | {jobs} periodic (every)")
+    } else {
+        String::new()
+    };
+    // A line longer than the box shows its end, where the typing is.
+    let typed = format!("> {}", ui.input);
+    let inner = usize::from(area.width.saturating_sub(2));
+    let typed = tail(&typed, inner);
+    f.render_widget(
+        Paragraph::new(typed).block(Block::default().borders(Borders::ALL).title(format!(
+            "send to {target}: floats 1 2 3 | line OK | hex 02 41 03 | $snippet{jobs}  (F1 help, Esc quits)"
+        ))),
+        area,
+    );
+}
+
+/// The help pane over the middle of the frame, scrolled to `ui.help_scroll` (clamped
+/// there to its last row).
+fn draw_help(f: &mut Frame, ui: &mut Ui, help: &[String]) {
+    let area = centred(f.area(), 90);
+    // Scrolled no further than its last row.
+    let inner = usize::from(area.width.saturating_sub(2));
+    // Wrapped here, as the traffic is, so the row count is exact.
+    let rows: Vec<Line> = help
+        .iter()
+        .flat_map(|l| wrap(l, inner))
+        .map(Line::raw)
+        .collect();
+    let last = rows
+        .len()
+        .saturating_sub(usize::from(area.height.saturating_sub(2)));
+    ui.help_scroll = ui.help_scroll.min(u16::try_from(last).unwrap_or(u16::MAX));
+    f.render_widget(Clear, area);
+    f.render_widget(
+        Paragraph::new(rows).scroll((ui.help_scroll, 0)).block(
+            Block::default()
+                .borders(Borders::ALL)
+                .title("help (Esc closes, Up/Down scroll)"),
+        ),
+        area,
+    );
+}
+
+/// A mouse event (mouse capture on, help closed): the wheel scrolls the traffic by
+/// [`WHEEL_LINES`].
+fn on_mouse(ui: &mut Ui, shared: &Shared, kind: MouseEventKind) {
+    match kind {
+        MouseEventKind::ScrollUp => scroll(ui, shared, Move::Up(WHEEL_LINES)),
+        MouseEventKind::ScrollDown => scroll(ui, shared, Move::Down(WHEEL_LINES)),
+        _ => {}
+    }
+}
+
+/// One key event: Ctrl+C quits; with the help open, the help's keys; else Esc quits and
+/// the other keys select, scroll, send snippets, toggle the mouse or edit and send the
+/// input line. Only presses count (not releases or repeats reported as such).
+fn on_key(
+    ui: &mut Ui,
+    shared: &Shared,
+    cmds: &mpsc::Sender<Result<String, String>>,
+    rows: &[Row],
+    key: KeyEvent,
+) -> Result<ControlFlow<()>, String> {
+    if key.kind != KeyEventKind::Press {
+        return Ok(ControlFlow::Continue(()));
+    }
+    if key.code == KeyCode::Char('c') && key.modifiers.contains(KeyModifiers::CONTROL) {
+        return Ok(ControlFlow::Break(()));
+    }
+    if ui.help {
+        help_key(ui, key);
+        return Ok(ControlFlow::Continue(()));
+    }
+    match key.code {
+        KeyCode::Esc => return Ok(ControlFlow::Break(())),
+        KeyCode::F(1) => open_help(ui),
+        KeyCode::Char('?') if ui.input.is_empty() => open_help(ui),
+        KeyCode::F(n) if (2..2 + SNIPPET_KEYS).contains(&n) => match ui.selected {
+            Some(id) => send(cmds, format!("@{id} ${}", n - 1)),
+            None => send(cmds, format!("${}", n - 1)),
+        },
+        KeyCode::Up => pick(ui, rows, Step::Up),
+        KeyCode::Down => pick(ui, rows, Step::Down),
+        KeyCode::PageUp => {
+            let page = ui.page.saturating_sub(1);
+            scroll(ui, shared, Move::Up(page));
+        }
+        KeyCode::PageDown => {
+            let page = ui.page.saturating_sub(1);
+            scroll(ui, shared, Move::Down(page));
+        }
+        KeyCode::Home => scroll(ui, shared, Move::Home),
+        KeyCode::End => scroll(ui, shared, Move::End),
+        KeyCode::F(12) => toggle_mouse(ui)?,
+        KeyCode::Enter => enter(ui, cmds, key.modifiers.contains(KeyModifiers::ALT)),
+        KeyCode::Backspace => {
+            ui.input.pop();
+        }
+        KeyCode::Char(c) => ui.input.push(c),
+        _ => {}
+    }
+    Ok(ControlFlow::Continue(()))
+}
+
+/// Queues `line` for the listener's command loop, as if typed on stdin (dropped once
+/// the listener has stopped reading commands).
+fn send(cmds: &mpsc::Sender<Result<String, String>>, line: String) {
+    let _ = cmds.blocking_send(Ok(line));
+}
+
+/// Enter: takes the typed line; `help` opens the help, any other non-blank line is sent
+/// as [`command_for`] addresses it (`all`: Alt+Enter, to every robot).
+fn enter(ui: &mut Ui, cmds: &mpsc::Sender<Result<String, String>>, all: bool) {
+    let line = std::mem::take(&mut ui.input);
+    let line = line.trim();
+    if line == "help" {
+        open_help(ui);
+    } else if !line.is_empty() {
+        send(cmds, command_for(line, ui.selected, all));
+    }
+}
+
+/// F12: turns mouse capture on or off.
+fn toggle_mouse(ui: &mut Ui) -> Result<(), String> {
+    ui.mouse = !ui.mouse;
+    let mut out = std::io::stdout();
+    if ui.mouse {
+        ratatui::crossterm::execute!(out, EnableMouseCapture)
+    } else {
+        ratatui::crossterm::execute!(out, DisableMouseCapture)
+    }
+    .map_err(terminal_error)
+}
+
+/// A step through the robots' list.
+#[derive(Clone, Copy)]
+enum Step {
+    Up,
+    Down,
+}
+
+/// Up/Down: selects the row above or below the selected one (staying at either end), and
+/// stops the selection following the newest robot.
+fn pick(ui: &mut Ui, rows: &[Row], step: Step) {
+    ui.picked = true;
+    let Some(i) = rows.iter().position(|r| Some(r.id) == ui.selected) else {
+        return;
+    };
+    let next = match step {
+        Step::Up => rows.get(i.saturating_sub(1)),
+        Step::Down => rows.get((i + 1).min(rows.len().saturating_sub(1))),
+    };
+    select(ui, next.map(|r| r.id));
+}
+
+/// Opens the help at its top.
 fn open_help(ui: &mut Ui) {
     ui.help = true;
     ui.help_scroll = 0;
 }
 
+/// A key while the help is open: Esc, F1, ? or q closes it, Up/Down/PgUp/PgDn scroll it.
 fn help_key(ui: &mut Ui, key: KeyEvent) {
     match key.code {
         KeyCode::Esc | KeyCode::F(1) | KeyCode::Char('?' | 'q') => ui.help = false,
@@ -520,6 +632,7 @@ fn help_key(ui: &mut Ui, key: KeyEvent) {
     }
 }
 
+/// Selects robot `id`; a different robot's traffic is shown from its end.
 fn select(ui: &mut Ui, id: Option<u64>) {
     if id != ui.selected {
         ui.back = None;

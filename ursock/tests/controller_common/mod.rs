@@ -1,6 +1,7 @@
 //! One `ursock controller --json` process on free ports for a test, with its JSON
-//! events, its ports by service, a dashboard client and the RTDE package helpers
-//! that the streaming tests share. Every wait is bounded by [`WAIT`].
+//! events (each line parsed, or checked by the test's own function), its ports by
+//! service, a dashboard client, the arm made ready, and the RTDE package helpers that
+//! the streaming tests share. Every wait is bounded by [`WAIT`].
 #![allow(dead_code)] // each test binary uses its own part
 
 use std::collections::HashMap;
@@ -23,11 +24,15 @@ const SERVICES: [&str; 6] = [
     "interpreter",
 ];
 
+/// Turns one output line into its event (and fails the test on a bad one).
+type Check = Box<dyn Fn(&str) -> serde_json::Value>;
+
 /// A running `ursock controller --json` (killed when dropped).
 pub struct Controller {
     pub child: Child,
     ports: HashMap<String, u16>,
-    events: mpsc::Receiver<serde_json::Value>,
+    lines: mpsc::Receiver<String>,
+    check: Check,
 }
 
 impl Drop for Controller {
@@ -45,6 +50,17 @@ impl Controller {
 
     /// The same, with extra command-line arguments.
     pub fn start_with(extra: &[&str]) -> Controller {
+        Self::start_checked(extra, |line| {
+            serde_json::from_str(line).unwrap_or_else(|e| panic!("{e}: {line}"))
+        })
+    }
+
+    /// The same, every output line (from the first `listening` on) turned into its
+    /// event by `check`, which fails the test on a line it refuses.
+    pub fn start_checked(
+        extra: &[&str],
+        check: impl Fn(&str) -> serde_json::Value + 'static,
+    ) -> Controller {
         let mut child = Command::new(env!("CARGO_BIN_EXE_ursock"))
             .args(["controller", "--json"])
             .args(extra)
@@ -57,30 +73,42 @@ impl Controller {
             .spawn()
             .expect("start ursock controller");
         let out = BufReader::new(child.stdout.take().expect("piped stdout"));
-        let (tx, events) = mpsc::channel();
+        let (tx, lines) = mpsc::channel();
         std::thread::spawn(move || {
             for line in out.lines() {
                 let Ok(line) = line else { return };
-                let v: serde_json::Value =
-                    serde_json::from_str(&line).unwrap_or_else(|e| panic!("{e}: {line}"));
-                if tx.send(v).is_err() {
+                if tx.send(line).is_err() {
                     return;
                 }
             }
         });
-        let mut ports = HashMap::new();
-        while !SERVICES.iter().all(|s| ports.contains_key(*s)) {
-            let v = events.recv_timeout(WAIT).expect("listening events");
+        let mut c = Controller {
+            child,
+            ports: HashMap::new(),
+            lines,
+            check: Box::new(check),
+        };
+        while !SERVICES.iter().all(|s| c.ports.contains_key(*s)) {
+            let v = c.next_event();
             assert_eq!(v["event"], "listening", "{v}");
             let addr = v["addr"].as_str().expect("addr");
             let port = addr.rsplit_once(':').expect("host:port").1.parse().unwrap();
-            ports.insert(v["service"].as_str().expect("service").to_string(), port);
+            c.ports
+                .insert(v["service"].as_str().expect("service").to_string(), port);
         }
-        Controller {
-            child,
-            ports,
-            events,
-        }
+        c
+    }
+
+    /// The next event, waiting at most `left`.
+    fn recv(&self, left: Duration) -> Result<serde_json::Value, mpsc::RecvTimeoutError> {
+        self.lines
+            .recv_timeout(left)
+            .map(|line| (self.check)(&line))
+    }
+
+    /// The next event (at most [`WAIT`]).
+    pub fn next_event(&self) -> serde_json::Value {
+        self.recv(WAIT).expect("an event")
     }
 
     /// A client of `service` (as the `listening` event names it), reads bounded.
@@ -111,15 +139,18 @@ impl Controller {
     pub fn ready(&self) {
         let mut d = self.dashboard();
         d.ask("brake release");
-        let start = Instant::now();
-        loop {
-            let mode = d.ask("robotmode");
-            if mode == "Robotmode: RUNNING" {
-                return;
-            }
-            assert!(start.elapsed() < WAIT, "never RUNNING: {mode}");
-            std::thread::sleep(Duration::from_millis(50));
-        }
+        d.wait_mode("RUNNING");
+    }
+
+    /// As an operator does: `power on`, then (once the robot mode is IDLE) `brake
+    /// release`, then waits until it is RUNNING. The dashboard client it used, to ask on.
+    pub fn power_on_and_release(&self) -> Dashboard {
+        let mut d = self.dashboard();
+        d.ask("power on");
+        d.wait_mode("IDLE");
+        d.ask("brake release");
+        d.wait_mode("RUNNING");
+        d
     }
 
     /// Every event until the process closes its output (at most [`WAIT`]).
@@ -128,7 +159,7 @@ impl Controller {
         let mut all = Vec::new();
         loop {
             let left = WAIT.saturating_sub(start.elapsed());
-            match self.events.recv_timeout(left) {
+            match self.recv(left) {
                 Ok(v) => all.push(v),
                 Err(mpsc::RecvTimeoutError::Disconnected) => return all,
                 Err(mpsc::RecvTimeoutError::Timeout) => panic!("the output never ended"),
@@ -146,8 +177,7 @@ impl Controller {
         loop {
             let left = WAIT.saturating_sub(start.elapsed());
             let v = self
-                .events
-                .recv_timeout(left)
+                .recv(left)
                 .unwrap_or_else(|_| panic!("no {what} event"));
             if want(&v) {
                 return v;
@@ -169,6 +199,20 @@ impl Dashboard {
         let mut line = String::new();
         self.r.read_line(&mut line).unwrap();
         line.trim_end().to_string()
+    }
+
+    /// Asks `robotmode` until the reply is `Robotmode: MODE` (at most [`WAIT`]).
+    pub fn wait_mode(&mut self, mode: &str) {
+        let want = format!("Robotmode: {mode}");
+        let start = Instant::now();
+        loop {
+            let got = self.ask("robotmode");
+            if got == want {
+                return;
+            }
+            assert!(start.elapsed() < WAIT, "never {mode}: {got}");
+            std::thread::sleep(Duration::from_millis(20));
+        }
     }
 }
 

@@ -117,15 +117,21 @@ impl Listener {
     /// Waits until stdout (or stderr, `on_err`) contains `needle`; panics with both after
     /// [`WAIT`].
     pub fn wait_for(&self, needle: &str, on_err: bool) -> String {
+        self.wait_for_n(needle, 1, on_err)
+    }
+
+    /// Waits until stdout (or stderr, `on_err`) contains `needle` `n` times; panics with
+    /// both after [`WAIT`].
+    pub fn wait_for_n(&self, needle: &str, n: usize, on_err: bool) -> String {
         let start = Instant::now();
         loop {
             let text = if on_err { self.stderr() } else { self.stdout() };
-            if text.contains(needle) {
+            if text.matches(needle).count() >= n {
                 return text;
             }
             if start.elapsed() > WAIT {
                 panic!(
-                    "waited for {needle:?}\n--- stdout\n{}\n--- stderr\n{}",
+                    "waited for {needle:?} ({n} times)\n--- stdout\n{}\n--- stderr\n{}",
                     self.stdout(),
                     self.stderr()
                 );
@@ -172,6 +178,39 @@ impl Drop for Listener {
     fn drop(&mut self) {
         let _ = self.child.kill();
         let _ = self.child.wait();
+    }
+}
+
+/// `ursock listen --bind 127.0.0.1 --port 0 ARGS` run to its end (stdin closed): its
+/// exit status and output.
+pub fn output(args: &[&str]) -> std::process::Output {
+    Command::new(bin())
+        .args(["listen", "--bind", "127.0.0.1", "--port", "0"])
+        .args(args)
+        .stdin(Stdio::null())
+        .output()
+        .expect("run ursock listen")
+}
+
+/// A file of `text` in the temp dir (snippets, rules, a robot's program), named for
+/// this process and `name`; removed on drop.
+pub struct TempFile(std::path::PathBuf);
+
+impl TempFile {
+    pub fn new(name: &str, text: &str) -> TempFile {
+        let p = std::env::temp_dir().join(format!("ursock-{}-{name}", std::process::id()));
+        std::fs::write(&p, text).unwrap();
+        TempFile(p)
+    }
+
+    pub fn path(&self) -> &str {
+        self.0.to_str().unwrap()
+    }
+}
+
+impl Drop for TempFile {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_file(&self.0);
     }
 }
 
