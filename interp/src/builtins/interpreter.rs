@@ -1,8 +1,7 @@
 //! Interpreter mode (e-Series 5.10+): `interpreter_mode`, `end_interpreter`,
 //! `clear_interpreter`. They act on the program itself (its queue of interpreted
-//! statements, its main thread): each returns its request
-//! ([`Out::Interpreter`](crate::native::Out)) and the machine acts on it. See [`crate::interpreter`] for the mode and the
-//! interpreter socket's lines.
+//! statements, its main thread): each returns its request to the machine, which acts on
+//! it. See [`crate::interpreter`] for the mode and the interpreter socket's lines.
 
 use super::{builtin, Args, Builtin, Domain, Out};
 use crate::error::Fault;
