@@ -416,3 +416,17 @@ fn the_loop_owns_the_cell_and_answers_every_request() {
     let on = server.with_cell(|_, _| std::thread::current().name().map(str::to_string));
     assert_eq!(on, here);
 }
+
+/// A request whose function panics fails its caller only: the loop goes on serving.
+#[test]
+fn a_request_that_panics_fails_its_caller_and_the_loop_goes_on() {
+    let (server, _events) = start();
+    let failed = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+        server.with_cell(|_, _| -> u8 { panic!("a bug in the caller's function") })
+    }));
+    assert!(failed.is_err());
+    let mut d = LineClient::dashboard(&server);
+    assert_eq!(d.say("robotmode"), "Robotmode: POWER_OFF");
+    let on = server.with_cell(|_, _| std::thread::current().name().map(str::to_string));
+    assert_eq!(on.as_deref(), Some("controller"));
+}

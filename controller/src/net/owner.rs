@@ -10,6 +10,7 @@
 //! request still waiting in one turn of the parking lot's lock, so no request is lost
 //! between the two.
 
+use std::panic::AssertUnwindSafe;
 use std::sync::mpsc::{self, Receiver, SyncSender, TrySendError};
 use std::sync::{Mutex, MutexGuard};
 use std::time::Duration;
@@ -93,13 +94,19 @@ impl Shared {
                     return f(cell, now);
                 }
                 let pending = Box::new(Pending { f: Some(f), reply });
-                if let Err(TrySendError::Full(p) | TrySendError::Disconnected(p)) =
-                    self.requests.try_send(pending)
-                {
+                match self.requests.try_send(pending) {
+                    Ok(()) => {}
                     // The request comes back whole (its drop returns the function).
-                    drop(p);
-                    drop(parked);
-                    std::thread::sleep(QUEUE_FULL_WAIT);
+                    Err(TrySendError::Full(p)) => {
+                        drop(p);
+                        drop(parked);
+                        std::thread::sleep(QUEUE_FULL_WAIT);
+                    }
+                    // No loop to serve it and no cell parked: the loop's thread died
+                    // without parking it.
+                    Err(TrySendError::Disconnected(_)) => {
+                        panic!("the controller's loop ended without parking its state")
+                    }
                 }
             }
             self.wake_loop();
@@ -132,12 +139,15 @@ impl Owner {
 
     /// Runs every waiting request, each on the cell advanced to the time it runs at;
     /// returns how many ran.
+    /// A request whose function panics fails its caller (who gets no answer and
+    /// panics as it would have had it run the function itself); the loop goes on.
     pub(crate) fn serve(&mut self, shared: &Shared) -> usize {
         let mut n = 0;
         while let Ok(request) = self.requests.try_recv() {
             let now = shared.now();
             self.cell.advance(now);
-            request.run(&mut self.cell, now);
+            let cell = &mut self.cell;
+            let _ = std::panic::catch_unwind(AssertUnwindSafe(|| request.run(cell, now)));
             n += 1;
         }
         n
