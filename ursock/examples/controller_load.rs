@@ -645,6 +645,27 @@ fn client_fifo() {
     }
 }
 
+/// Each client records until `end` in a thread of its own (at `SCHED_FIFO` if `fifo`);
+/// their records, in order.
+fn record_all(clients: Vec<Rtde>, end: Instant, fifo: bool) -> Result<Vec<Record>> {
+    let handles: Vec<_> = clients
+        .into_iter()
+        .map(|r| {
+            std::thread::spawn(move || {
+                if fifo {
+                    client_fifo();
+                }
+                r.record(end)
+            })
+        })
+        .collect();
+    let mut records = Vec::new();
+    for h in handles {
+        records.push(h.join().map_err(|_| "an RTDE client thread failed")??);
+    }
+    Ok(records)
+}
+
 // ---------------------------------------------------------------------------------------
 // 2 and 3. Streaming under load
 
@@ -703,22 +724,7 @@ fn scenario(
     let cpu0 = cpu_seconds(c.pid());
     let t0 = Instant::now();
     let end = t0 + Duration::from_secs(seconds);
-    let handles: Vec<_> = clients
-        .into_iter()
-        .map(|r| {
-            let fifo = opts.client_realtime;
-            std::thread::spawn(move || {
-                if fifo {
-                    client_fifo();
-                }
-                r.record(end)
-            })
-        })
-        .collect();
-    let mut records = Vec::new();
-    for h in handles {
-        records.push(h.join().map_err(|_| "an RTDE client thread failed")??);
-    }
+    let records = record_all(clients, end, opts.client_realtime)?;
     let wall = t0.elapsed().as_secs_f64();
     let cpu1 = cpu_seconds(c.pid());
     let hwm = peak_rss_kib(c.pid());
@@ -883,22 +889,7 @@ fn fleet(bin: &PathBuf, opts: &Options) -> Result<()> {
         .collect();
     let t0 = Instant::now();
     let end = t0 + Duration::from_secs(opts.seconds);
-    let handles: Vec<_> = clients
-        .into_iter()
-        .map(|r| {
-            let fifo = opts.client_realtime;
-            std::thread::spawn(move || {
-                if fifo {
-                    client_fifo();
-                }
-                r.record(end)
-            })
-        })
-        .collect();
-    let mut records = Vec::new();
-    for h in handles {
-        records.push(h.join().map_err(|_| "an RTDE client thread failed")??);
-    }
+    let records = record_all(clients, end, opts.client_realtime)?;
     let wall = t0.elapsed().as_secs_f64();
     let expected = (opts.seconds as f64 * FREQUENCY).round() as usize;
     println!("controller  packages/expected  skipped  late steps  jitter p99 ms  max gap ms  CPU %  RSS MiB");
