@@ -61,6 +61,87 @@ pub enum Submitted {
     Secondary(String),
 }
 
+/// A program compiled ahead of its start: parsed and checked (every name defined or
+/// built in), or refused with the controller's reason. Compiling a large program takes
+/// time; a caller with a real-time loop compiles on another thread
+/// ([`Cell::compiler`]) and hands the result over ([`Cell::start_compiled`],
+/// [`Cell::run_secondary_compiled`], [`Cell::start_loaded_compiled`]).
+pub struct Compiled {
+    machine: Result<Machine, CellEvent>,
+    entry: Option<String>,
+}
+
+impl std::fmt::Debug for Compiled {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Compiled")
+            .field("entry", &self.entry)
+            .field("refused", &self.machine.as_ref().err())
+            .finish_non_exhaustive()
+    }
+}
+
+impl Compiled {
+    /// A program refused for `why` before it was compiled.
+    pub(crate) fn refused(why: String) -> Compiled {
+        Compiled {
+            machine: Err(CellEvent::Refused {
+                line: 0,
+                column: 0,
+                text: why,
+                code: None,
+            }),
+            entry: None,
+        }
+    }
+}
+
+/// What compiling a program needs (the interpreter's configuration and the
+/// installation's URCap preamble), apart from the cell: it can go to another thread.
+#[derive(Debug, Clone)]
+pub struct Compiler {
+    config: urscript_interp::Config,
+    preamble: Preamble,
+}
+
+impl Compiler {
+    /// Compiles a program a client sent (no preamble: the controller adds none).
+    pub fn program(&self, text: &str) -> Compiled {
+        compile(text, None, &self.config)
+    }
+
+    /// Compiles the script of a loaded `.urp` program, after the URCap preamble as
+    /// PolyScope writes it.
+    pub fn loaded(&self, text: &str) -> Compiled {
+        compile(text, Some(&self.preamble), &self.config)
+    }
+}
+
+/// Parses `text` (after `preamble`, if given) and checks it as a program's start does.
+fn compile(text: &str, preamble: Option<&Preamble>, config: &urscript_interp::Config) -> Compiled {
+    let program = match parse(text, preamble) {
+        Ok(p) => p,
+        Err(refused) => {
+            return Compiled {
+                machine: Err(refused),
+                entry: None,
+            }
+        }
+    };
+    let entry = program.entry_name().map(str::to_string);
+    let machine = Machine::with_arm(program, config.clone(), Arm::default());
+    // A program that does not compile (a name neither defined nor built in) is refused.
+    let machine = match machine.state() {
+        State::Error(e) => Err(CellEvent::Refused {
+            line: e.line(),
+            column: e.column(),
+            text: e.message().to_string(),
+            code: e.code().cloned(),
+        }),
+        _ => Ok(machine),
+    };
+    Compiled { machine, entry }
+}
+
 /// How a program ended.
 #[derive(Debug, Clone, PartialEq)]
 pub enum Ended {
@@ -162,7 +243,7 @@ pub struct Cell {
     secondary: Option<secondary::Secondary>,
     /// The secondary programs sent while one waits (at most
     /// [`secondary::MAX_SECONDARY_QUEUED`]).
-    secondary_queue: VecDeque<String>,
+    secondary_queue: VecDeque<Compiled>,
 
     /// Why the program state is about to leave PLAYING, as the client that acted said
     /// ([`Cell::set_stop_cause`]) or the cell itself knows; used by the next pause or
@@ -403,17 +484,46 @@ impl Cell {
         self.events.pop_front()
     }
 
-    /// A program (or secondary program) arrived at `now`.
+    /// A program (or secondary program) arrived at `now`; it is compiled here (see
+    /// [`Cell::compiler`] to compile elsewhere).
     pub fn submit(&mut self, submitted: Submitted, now: Duration) {
-        self.advance(now);
+        let compiler = self.compiler();
         match submitted {
-            Submitted::Program(text) => self.start(text, None, now),
-            Submitted::Secondary(text) => self.run_secondary(&text, now),
+            Submitted::Program(text) => self.start_compiled(compiler.program(&text), now),
+            Submitted::Secondary(text) => self.run_secondary_compiled(compiler.program(&text), now),
         }
+    }
+
+    /// What compiling a program needs, to compile on another thread.
+    pub fn compiler(&self) -> Compiler {
+        Compiler {
+            config: self.interp.clone(),
+            preamble: self.preamble.clone(),
+        }
+    }
+
+    /// A program a client sent, compiled ([`Compiler::program`]), arrived at `now`:
+    /// it replaces the running one, as [`Cell::submit`] says.
+    pub fn start_compiled(&mut self, program: Compiled, now: Duration) {
+        self.advance(now);
+        self.start(program, None, now);
+    }
+
+    /// A secondary program, compiled ([`Compiler::program`]), arrived at `now`.
+    pub fn run_secondary_compiled(&mut self, program: Compiled, now: Duration) {
+        self.advance(now);
+        self.run_secondary(program, now);
     }
 
     /// The text of the loaded `.urp` program that [`CellEvent::NeedProgram`] asked for.
     pub fn start_loaded(&mut self, script: String, now: Duration) {
+        let program = self.compiler().loaded(&script);
+        self.start_loaded_compiled(program, now);
+    }
+
+    /// The loaded `.urp` program that [`CellEvent::NeedProgram`] asked for, compiled
+    /// ([`Compiler::loaded`]).
+    pub fn start_loaded_compiled(&mut self, program: Compiled, now: Duration) {
         self.awaiting_load = false;
         if self.controller.program_state() != ProgramState::Playing || self.running.is_some() {
             return; // stopped (or started otherwise) meanwhile
@@ -423,7 +533,7 @@ impl Cell {
             .loaded_program()
             .map(|(n, _)| n.to_string())
             .unwrap_or_default();
-        self.start(script, Some(name), now);
+        self.start(program, Some(name), now);
     }
 
     /// The loaded program could not be read or translated: it does not play.
@@ -443,12 +553,13 @@ impl Cell {
         });
     }
 
-    fn start(&mut self, text: String, file: Option<String>, now: Duration) {
-        // PolyScope writes the installation's URCap preamble into the programs it
-        // generates (a `.urp` played); a script a client sends gets none.
-        let preamble = file.as_ref().map(|_| &self.preamble);
-        let program = match parse(&text, preamble) {
-            Ok(p) => p,
+    fn start(&mut self, program: Compiled, file: Option<String>, now: Duration) {
+        // A program that does not parse or compile is refused before it replaces
+        // anything: the running program goes on. A driver that sends `def f(): ... end`
+        // and then `f()` gets its program run to the end and the call refused.
+        let Compiled { machine, entry } = program;
+        let mut machine = match machine {
+            Ok(m) => m,
             Err(refused) => {
                 if file.is_some() {
                     self.controller.program_ended();
@@ -457,25 +568,6 @@ impl Cell {
                 return;
             }
         };
-        // A program that does not compile (a name neither defined nor built in) is
-        // refused before it replaces anything: the running program goes on. A driver that
-        // sends `def f(): ... end` and then `f()` gets its program run to the end and the
-        // call refused.
-        let entry = program.entry_name().map(str::to_string);
-        let mut machine = Machine::with_arm(program, self.interp.clone(), Arm::default());
-        if let State::Error(e) = machine.state() {
-            if file.is_some() {
-                self.controller.program_ended();
-            }
-            let refused = CellEvent::Refused {
-                line: e.line(),
-                column: e.column(),
-                text: e.message().to_string(),
-                code: e.code().cloned(),
-            };
-            self.push(refused);
-            return;
-        }
         if !self.controller.ready_for_program(now) {
             if file.is_some() {
                 self.controller.program_ended();

@@ -144,7 +144,7 @@ mod status;
 pub mod urp;
 
 pub use cell::secondary::{MAX_SECONDARY_QUEUED, SECONDARY_TIME};
-pub use cell::{Cell, CellEvent, Ended, Submitted, MAX_EVENTS};
+pub use cell::{Cell, CellEvent, Compiled, Compiler, Ended, Submitted, MAX_EVENTS};
 pub use dashboard::{
     Dashboard, DashboardCommand, Reply, GREETING, LOCAL_CONTROL, MAX_LINE, UNLOCK_TOO_EARLY,
 };

@@ -20,7 +20,7 @@ use std::time::{Duration, Instant};
 mod support;
 use support::*;
 use urscript_controller::net::{
-    Ports, ServerEvent, ServerOptions, EVICT_IDLE, MAX_CLIENTS, MAX_CONNECTIONS,
+    Ports, ServerEvent, ServerOptions, EVENT_INTERVAL, EVICT_IDLE, MAX_CLIENTS, MAX_CONNECTIONS,
     MAX_INTERPRETER_CONNECTIONS,
 };
 
@@ -277,6 +277,34 @@ fn bare_line_floods_from_two_peers_leave_the_good_client_its_rate() {
             a.flood(s, b"x = 1\n".repeat(16384));
         }
     });
+}
+
+#[test]
+fn a_flood_of_the_largest_programs_leaves_the_good_client_its_rate() {
+    // Compiling a 4 MiB program takes seconds in a debug build: on the loop, each one
+    // held every stream that long.
+    let _turn = serial();
+    let f = start();
+    running(&f.server);
+    let mut program = b"def large():\n".to_vec();
+    let mut i = 0u64;
+    while program.len() < urscript_controller::script_intake::MAX_PROGRAM - 64 {
+        program.extend_from_slice(format!("  x{} = {i} + 1.5 * {}\n", i % 500, i % 7).as_bytes());
+        i += 1;
+    }
+    program.extend_from_slice(b"end\n");
+    good_rate_under("a flood of 4 MiB programs", &f, |f, a| {
+        let s = connect(f.addr("primary")).expect("connect");
+        a.flood(s, program);
+    });
+    // The programs were compiled and started meanwhile.
+    f.wait_log("a large program started", |l| {
+        l.order.iter().any(|o| o == "program started").then_some(())
+    });
+    // No stall long enough to be held back (compiling on the loop held it 4.5 s here).
+    thread::sleep(EVENT_INTERVAL + Duration::from_millis(100));
+    let late = f.server.lateness();
+    assert_eq!(late.holds, 0, "the loop stalled: {late:?}");
 }
 
 #[test]

@@ -430,3 +430,34 @@ fn a_request_that_panics_fails_its_caller_and_the_loop_goes_on() {
     let on = server.with_cell(|_, _| std::thread::current().name().map(str::to_string));
     assert_eq!(on.as_deref(), Some("controller"));
 }
+
+/// A client's items keep their order though its program is compiled on a thread of its
+/// own: `stop program` sent right after a program stops that program (it does not come
+/// first and leave the program running).
+#[test]
+fn a_command_after_a_program_acts_after_that_program_started() {
+    let (server, rx) = start();
+    running(&server);
+    let mut s = connect_to(&server, "primary");
+    s.write_all(b"def first():\n  textmsg(\"first\")\n  sleep(30)\nend\nstop program\n")
+        .expect("send");
+    let mut seen = Vec::new();
+    while seen.len() < 2 {
+        if let ServerEvent::Program { what, name, .. } =
+            wait_for(&rx, |e| matches!(e, ServerEvent::Program { .. }))
+        {
+            seen.push(format!("{what} {name}"));
+        }
+    }
+    assert_eq!(seen, ["started first", "stopped first"]);
+    // The program after it starts once it is compiled.
+    s.write_all(b"def second():\n  sleep(30)\nend\n")
+        .expect("send");
+    let ServerEvent::Program { what, name, .. } =
+        wait_for(&rx, |e| matches!(e, ServerEvent::Program { .. }))
+    else {
+        unreachable!()
+    };
+    assert_eq!((what, name.as_str()), ("started", "second"));
+    server.stop();
+}

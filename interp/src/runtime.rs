@@ -629,6 +629,27 @@ impl Runtime {
         self.clock.at(self.step)
     }
 
+    /// The joint speeds in motion time: the programmed speeds the arm moves at the
+    /// slider's fraction of (the speeds themselves at a fraction of 0 or 1). A speed
+    /// command ramps from these, so a stream of them keeps its path under the slider.
+    pub fn motion_qd(&self) -> [f64; 6] {
+        self.unscaled(self.arm.qd)
+    }
+
+    /// The tool speed in motion time (see [`Runtime::motion_qd`]).
+    pub fn motion_tcp_speed(&self) -> [f64; 6] {
+        self.unscaled(self.arm.tcp_speed)
+    }
+
+    fn unscaled(&self, v: [f64; 6]) -> [f64; 6] {
+        let f = self.clock.fraction;
+        if f > 0.0 && f < 1.0 {
+            v.map(|x| x / f)
+        } else {
+            v
+        }
+    }
+
     /// Ends teach/freedrive mode and force mode (the program stopped).
     pub fn end_modes(&mut self) {
         self.arm.hand_mode = 0;

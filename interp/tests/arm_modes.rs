@@ -307,7 +307,7 @@ fn the_speed_slider_scales_the_arm_speeds_and_stops_the_arm_at_zero() {
     let mut m =
         machine("speedj([0.2, 0, 0, 0, 0, 0], 100, 1.0)\ntextmsg(get_actual_joint_speeds())\n");
     m.arm_mut().speed_fraction = 0.5;
-    run(&mut m, 1000);
+    run(&mut m, 2000);
     let msgs = messages(&mut m);
     let qd = floats(&msgs[0]);
     assert!((qd[0] - 0.1).abs() < 1e-9, "{qd:?}");
@@ -324,6 +324,65 @@ fn the_speed_slider_scales_the_arm_speeds_and_stops_the_arm_at_zero() {
     }
     assert_eq!(m.state(), &State::Finished);
     assert_eq!(messages(&mut m), ["done"]);
+}
+
+/// The joints after a streamed `speedj` (50 calls of `t=0.002`, each speed a little
+/// higher, as UR's External Control script interpolates a spline) at the slider's
+/// `fraction`, and the step the stream ended in.
+fn speedj_stream(fraction: f64) -> ([f64; 6], u32) {
+    let src = "i = 0
+        while i < 50:
+          i = i + 1
+          speedj([0.01 * i, -0.005 * i, 0, 0, 0, 0], 20, 0.002)
+        end
+        stopj(1000)
+";
+    let mut m = machine(src);
+    m.arm_mut().speed_fraction = fraction;
+    let end = run(&mut m, 10_000);
+    assert_eq!(m.state(), &State::Finished);
+    (m.joint_positions(), end)
+}
+
+#[test]
+fn under_the_speed_slider_a_streamed_speedj_keeps_its_path_and_takes_longer() {
+    let (full, full_steps) = speedj_stream(1.0);
+    let (quarter, quarter_steps) = speedj_stream(0.25);
+    // Each call lasts its `t` of motion time: four steps at 25 %, so the program's own
+    // clock (its count of calls) stays on the path the arm follows.
+    assert!(
+        quarter_steps >= 4 * full_steps - 8 && quarter_steps <= 4 * full_steps + 8,
+        "{full_steps} steps at 100 %, {quarter_steps} at 25 %"
+    );
+    for j in 0..6 {
+        assert!(
+            (full[j] - quarter[j]).abs() < 1e-6,
+            "joint {j}: {} at 100 %, {} at 25 %",
+            full[j],
+            quarter[j]
+        );
+    }
+    assert!(
+        full[0] - Arm::default().q[0] > 0.01,
+        "the stream moved the arm"
+    );
+}
+
+/// A `servoj` with `t` reaches its target in `t` of motion time and returns then.
+#[test]
+fn under_the_speed_slider_servoj_returns_when_its_target_is_reached() {
+    let src = "q = get_actual_joint_positions()
+        servoj([q[0] + 0.01, q[1], q[2], q[3], q[4], q[5]], t=0.1)
+        textmsg(get_actual_joint_positions()[0] - q[0])
+";
+    let mut m = machine(src);
+    m.arm_mut().speed_fraction = 0.5;
+    let end = run(&mut m, 1000);
+    assert_eq!(m.state(), &State::Finished);
+    let moved: f64 = messages(&mut m)[0].parse().unwrap();
+    assert!((moved - 0.01).abs() < 1e-9, "moved {moved}");
+    // 0.1 s of motion at half speed: 100 steps of 2 ms.
+    assert!((100..=102).contains(&end), "ended in step {end}");
 }
 
 #[test]

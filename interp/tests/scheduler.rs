@@ -171,3 +171,36 @@ fn machine_is_send_and_reports_time_and_sockets() {
     assert_eq!(m.state(), &State::Finished);
     assert!(m.open_sockets().is_empty());
 }
+
+/// `socket_open` is a blocking call: however soon the connection is up, it returns in the
+/// step after its call at the earliest, so successive opens happen in successive steps
+/// (a server that accepts each connection in a thread of its own has that step to).
+#[test]
+fn successive_socket_opens_take_a_step_each() {
+    let p = Program::parse(
+        "socket_open(\"h\", 1, \"a\")\nsocket_open(\"h\", 2, \"b\")\ntextmsg(\"both\")\n",
+    )
+    .unwrap();
+    let mut m = Machine::new(p, Config::default());
+    let connects = |m: &mut Machine| {
+        std::iter::from_fn(|| m.poll_event())
+            .filter(|e| matches!(e, Event::Connect { .. }))
+            .count()
+    };
+    m.run_until(Duration::ZERO);
+    assert_eq!(connects(&mut m), 1);
+    // Answered at once: the program still waits for the next step.
+    m.handle_connected("a", Ok(()));
+    m.run_until(Duration::ZERO);
+    assert_eq!(
+        connects(&mut m),
+        0,
+        "the second open ran in the first's step"
+    );
+    assert_eq!(m.poll_timeout(), Some(Duration::from_millis(2)));
+    m.run_until(Duration::from_millis(2));
+    assert_eq!(connects(&mut m), 1);
+    m.handle_connected("b", Ok(()));
+    m.run_until(Duration::from_millis(4));
+    assert_eq!(m.state(), &State::Finished);
+}

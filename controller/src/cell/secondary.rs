@@ -14,7 +14,7 @@ use std::time::Duration;
 
 use urscript_interp::{Event, Machine, State};
 
-use super::{parse, Cell, CellEvent, Ended};
+use super::{Cell, CellEvent, Compiled, Ended};
 use crate::state::ProgramState;
 
 /// The steps a secondary program gets at once: one, and the few a stray `sync()` might
@@ -50,7 +50,7 @@ impl Cell {
 
     /// A `sec` program arrived at `now`: it runs now, or after the one waiting for the
     /// network.
-    pub(super) fn run_secondary(&mut self, text: &str, now: Duration) {
+    pub(super) fn run_secondary(&mut self, program: Compiled, now: Duration) {
         if self.secondary.is_some() {
             if self.secondary_queue.len() >= MAX_SECONDARY_QUEUED {
                 return self.push(CellEvent::Refused {
@@ -62,19 +62,18 @@ impl Cell {
                     code: None,
                 });
             }
-            self.secondary_queue.push_back(text.to_string());
+            self.secondary_queue.push_back(program);
             return;
         }
-        self.start_secondary(text, now);
+        self.start_secondary(program, now);
     }
 
-    fn start_secondary(&mut self, text: &str, now: Duration) {
-        let program = match parse(text, None) {
-            Ok(p) => p,
+    fn start_secondary(&mut self, program: Compiled, now: Duration) {
+        let mut machine = match program.machine {
+            Ok(m) => m,
             Err(refused) => return self.push(refused),
         };
-        let copy = self.arm().clone();
-        let mut machine = Machine::with_arm(program, self.interp.clone(), copy);
+        *machine.arm_mut() = self.arm().clone();
         machine.run_until(self.interp.step_time * SECONDARY_STEPS);
         self.settle_secondary(
             Secondary {
@@ -168,7 +167,7 @@ impl Cell {
             self.push(CellEvent::SecondaryEnded);
         }
         if let Some(next) = self.secondary_queue.pop_front() {
-            self.start_secondary(&next, now);
+            self.start_secondary(next, now);
         }
     }
 

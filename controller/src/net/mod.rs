@@ -35,8 +35,8 @@
 //!   one per interpreter connection ([`MAX_INTERPRETER_CONNECTIONS`]), one per connect
 //!   of the running program in progress ([`MAX_CONNECTING`]: a connect never blocks the
 //!   real-time loop), one per connect of a secondary program ([`MAX_SECONDARY_CONNECTING`]),
-//!   and one reading a played `.urp` program (the cell asks for one
-//!   program at a time).
+//!   one reading (and compiling) a played `.urp` program (the cell asks for one
+//!   program at a time), and one compiling the programs stream clients send.
 //! - Connections past a limit ([`MAX_CONNECTIONS`], [`MAX_INTERPRETER_CONNECTIONS`],
 //!   [`MAX_CLIENTS`]): a newcomer evicts the connection of that limit idle longest if it
 //!   has been idle [`EVICT_IDLE`], else it is accepted and closed at once, so the
@@ -93,6 +93,7 @@
 
 mod client_event;
 mod clock;
+mod compile;
 mod owner;
 mod priority;
 mod ready;
@@ -134,14 +135,14 @@ pub const MAX_CONNECTIONS: usize = 16;
 /// The most threads a [`Server`] runs at once: the real-time loop, two accepting
 /// threads, [`MAX_CONNECTIONS`] dashboard and [`MAX_INTERPRETER_CONNECTIONS`]
 /// interpreter connections, [`MAX_CONNECTING`] connects of the program,
-/// [`MAX_SECONDARY_CONNECTING`] of the secondary program waiting for the network, and one reading
-/// a played `.urp` program.
+/// [`MAX_SECONDARY_CONNECTING`] of the secondary program waiting for the network, one reading
+/// a played `.urp` program, and one compiling the programs clients send.
 pub const MAX_SERVER_THREADS: usize = 3
     + MAX_CONNECTIONS
     + MAX_INTERPRETER_CONNECTIONS
     + MAX_CONNECTING
     + MAX_SECONDARY_CONNECTING
-    + 1;
+    + 2;
 
 /// How long a connection must have been idle to be evicted for a newcomer when its
 /// interface's limit ([`MAX_CONNECTIONS`], [`MAX_INTERPRETER_CONNECTIONS`],

@@ -22,7 +22,9 @@
 //! commands, programs) wait in the client's queue and at most its fair share of
 //! [`STEP_ITEM_BUDGET`] (at least [`MIN_ITEM_SHARE`]) of them are done a step, the
 //! client not read again until its queue is empty, and at most [`STEP_START_BUDGET`]
-//! programs of all clients start a step (the clients take turns being first). Within one step's items of one
+//! programs of all clients are handed a step to the thread that compiles them (the
+//! clients take turns being first; see [`compile`](super::compile): the loop never
+//! compiles, the client's later items wait for its program to start). Within one step's items of one
 //! client only the last program (or bare line) starts, as the others would be stopped
 //! before their first step, and only the last `set speed` is applied; of one step's
 //! RTDE input packages of one recipe only the last is applied. A client's RTDE data
@@ -48,13 +50,14 @@ use std::time::Duration;
 use urscript_interp::drive::{connect_stream, describe_connect_error, Activity, Driver, Options};
 use urscript_interp::{Event as ProgramEvent, MessageKind};
 
+use super::compile::{Compiles, Job};
 use super::owner::{Owner, Request};
 use super::{ClientEvent, Lateness, ServerEvent as Event, Shared, EVICT_IDLE};
 use crate::primary::{self, RobotMessage};
 use crate::realtime;
 use crate::rtde::{InputRegistry, RtdeEvent, RtdeSession};
 use crate::script_intake::{Command, Intake, IntakeError, ScriptIntake};
-use crate::{CellEvent, Ended, Status, Submitted};
+use crate::{CellEvent, Ended, Status};
 
 /// Clients of the streaming interfaces served at once (all four together); more are
 /// accepted and closed at once. They cost no thread; the bound caps the memory their
@@ -117,11 +120,11 @@ pub const MIN_OUTPUT_SHARE: usize = 1024;
 pub const STEP_ITEM_BUDGET: usize = 64;
 /// The least number of script items a client may have done in one step.
 pub const MIN_ITEM_SHARE: usize = 2;
-/// Programs (and secondary programs) of the stream clients compiled and started in one
-/// step, all clients together: 1000 a second at 2 ms steps, more than a controller
-/// compiles, while many clients' floods of lines cannot keep the loop compiling. A
-/// program past it waits in its client's queue for the next step; the clients take
-/// turns being first.
+/// Programs (and secondary programs) of the stream clients handed to the compiling
+/// thread in one step, all clients together: 1000 a second at 2 ms steps, more than a
+/// controller compiles, while many clients' floods of lines cannot keep the compiling
+/// thread busy for one. A program past it waits in its client's queue for the next
+/// step; the clients take turns being first.
 pub const STEP_START_BUDGET: usize = 2;
 /// The interval over which events are counted for [`MAX_EVENTS_PER_INTERVAL`].
 pub const EVENT_INTERVAL: Duration = Duration::from_secs(1);
@@ -169,6 +172,8 @@ struct Client {
     last_active: Duration,
     /// Script items read and not done yet (at most what one read completed).
     pending: VecDeque<Result<Intake, IntakeError>>,
+    /// Its program is being compiled: its later items wait (and it is not read).
+    compiling: bool,
     /// Its events this interval.
     events: EventBudget,
     /// Bytes of RTDE data packages it may still be given (its share of
@@ -291,6 +296,7 @@ pub(crate) fn run(
         return;
     };
     let step = cell.step_time();
+    let cell_compiler = cell.compiler();
     let mut lp = Loop {
         owner: Owner::new(cell, requests),
         clients: Vec::new(),
@@ -307,6 +313,7 @@ pub(crate) fn run(
         program_events: EventBudget::new(shared.now()),
         senders: 0,
         starts_left: 0,
+        compiles: Compiles::start(cell_compiler),
         turn: 0,
     };
     let listeners = [
@@ -359,6 +366,7 @@ pub(crate) fn run(
                 lp.accept(shared, l, *service);
             }
         }
+        lp.take_compiled(tick);
         lp.read_clients(shared, tick);
         // Read before the step: the shutdown stopped the program under the cell's lock
         // before it set the flag, so this step ends the program and reports it.
@@ -580,8 +588,11 @@ struct Loop {
     program_events: EventBudget,
     /// Clients that sent something in the last step (the read budget's shares).
     senders: usize,
-    /// Programs that may still start this step ([`STEP_START_BUDGET`]).
+    /// Programs that may still be handed to the compiling thread this step
+    /// ([`STEP_START_BUDGET`]).
     starts_left: usize,
+    /// The compiling thread.
+    compiles: Compiles,
     /// Counts the steps: the client served first.
     turn: usize,
 }
@@ -596,6 +607,7 @@ impl Loop {
             && self.secondary_connects.waiting.is_empty()
             && self.secondary_connects.in_flight == 0
             && !shared.shutting_down()
+            && !self.compiles.busy()
             && self.owner.cell.is_idle()
     }
 
@@ -636,6 +648,7 @@ impl Loop {
                 last_write: now,
                 last_active: now,
                 pending: VecDeque::new(),
+                compiling: false,
                 events: EventBudget::new(now),
                 credit: 0,
             };
@@ -690,6 +703,9 @@ impl Loop {
         self.turn = self.turn.wrapping_add(1);
         let first = self.turn % count.max(1);
         for i in (first..count).chain(0..first) {
+            if self.clients[i].compiling {
+                continue;
+            }
             if !self.clients[i].pending.is_empty() {
                 self.do_items(shared, i, item_share, now);
                 continue;
@@ -774,30 +790,34 @@ impl Loop {
 
     /// Does at most `max` of client `i`'s waiting script items: of them, only the last
     /// program or line starts and only the last `set speed` is applied (the others are
-    /// superseded within the step and counted as suppressed events).
+    /// superseded within the step and counted as suppressed events). A program goes to
+    /// the compiling thread ([`compile`](super::compile)): the client's items after it
+    /// wait until it is back and started ([`Loop::take_compiled`]).
     fn do_items(&mut self, shared: &Shared, i: usize, max: usize, now: Duration) {
-        let c = &mut self.clients[i];
         let starts = |it: &Result<Intake, IntakeError>| {
             matches!(it, Ok(Intake::Program { .. } | Intake::Line(_)))
         };
         let secondary =
             |it: &Result<Intake, IntakeError>| matches!(it, Ok(Intake::Secondary { .. }));
+        let compiles = |it: &Result<Intake, IntakeError>| starts(it) || secondary(it);
+        let c = &mut self.clients[i];
         let mut k = c.pending.len().min(max);
-        // At most one secondary program a batch; its programs within the step's budget
-        // (the rest wait for the next step).
-        if let Some(s) = c.pending.iter().take(k).position(secondary) {
+        // One program a batch, its last item: the last program before the first
+        // secondary program (the earlier ones superseded), else that secondary program.
+        // The items after it wait until it is compiled and started.
+        let first_secondary = c.pending.iter().take(k).position(secondary);
+        let before = first_secondary.unwrap_or(k);
+        if let Some(l) = c.pending.iter().take(before).rposition(starts) {
+            k = l + 1;
+        } else if let Some(s) = first_secondary {
             k = s + 1;
         }
-        let head = || c.pending.iter().take(k);
-        let mut compiles =
-            usize::from(head().any(starts)) + head().filter(|it| secondary(it)).count();
-        if compiles > self.starts_left {
-            k = head()
-                .position(|it| starts(it) || secondary(it))
-                .unwrap_or(0);
-            compiles = 0;
+        // Within the step's budget of programs, and while the compiling queue has room.
+        if c.pending.iter().take(k).any(compiles)
+            && (self.starts_left == 0 || !self.compiles.has_room())
+        {
+            k = c.pending.iter().take(k).position(compiles).unwrap_or(0);
         }
-        self.starts_left -= compiles;
         if k == 0 {
             return;
         }
@@ -809,63 +829,94 @@ impl Loop {
         let last_speed = batch.iter().rposition(speed);
         let (conn, service) = (c.conn, c.service);
         for (j, item) in batch.into_iter().enumerate() {
+            let c = &mut self.clients[i];
             if (starts(&item) && Some(j) != last_start) || (speed(&item) && Some(j) != last_speed) {
                 c.events.skip(1);
                 continue;
             }
             let report = c.events.allow();
-            let emit = |event: &dyn Fn() -> ClientEvent| {
+            let emit = |event: ClientEvent| {
                 if report {
-                    shared.emit(client_event(conn, service, event()));
+                    shared.emit(client_event(conn, service, event));
                 }
             };
-            match item {
+            let (secondary, text) = match item {
                 Ok(Intake::Program { name, source }) => {
-                    emit(&|| ClientEvent::Program { name: name.clone() });
-                    self.owner.cell.submit(Submitted::Program(source), now);
+                    emit(ClientEvent::Program { name });
+                    (false, source)
                 }
                 Ok(Intake::Secondary { name, source }) => {
-                    emit(&|| ClientEvent::Secondary { name: name.clone() });
-                    self.owner.cell.submit(Submitted::Secondary(source), now);
+                    emit(ClientEvent::Secondary { name });
+                    (true, source)
                 }
                 Ok(Intake::Line(line)) => {
-                    emit(&|| ClientEvent::Line(line.clone()));
-                    self.owner
-                        .cell
-                        .submit(Submitted::Program(format!("{line}\n")), now);
+                    let text = format!("{line}\n");
+                    emit(ClientEvent::Line(line));
+                    (false, text)
                 }
                 Ok(Intake::Command(cmd)) => {
-                    emit(&|| ClientEvent::Command(cmd));
-                    let cell = &mut self.owner.cell;
-                    let c = cell.controller();
-                    let before = c.program_state();
-                    let _ = match cmd {
-                        Command::PowerOn => c.power_on(now),
-                        Command::PowerOff => c.power_off(now),
-                        Command::BrakeRelease => c.brake_release(now),
-                        Command::UnlockProtectiveStop => c.request_unlock_protective_stop(now),
-                        Command::StopProgram => c.stop(now),
-                        Command::SetSpeed(f) => {
-                            cell.apply(&crate::Inputs {
-                                speed_slider_fraction: Some(f),
-                                ..Default::default()
-                            });
-                            Ok(())
-                        }
-                    };
-                    // A primary client's `stop program` or `power off`.
-                    let cause = match super::stop_cause(cell.controller(), before, now) {
-                        Some(crate::StopReason::DashboardStop) => {
-                            Some(crate::StopReason::ClientStop)
-                        }
-                        other => other,
-                    };
-                    if let Some(cause) = cause {
-                        cell.set_stop_cause(cause);
-                    }
+                    emit(ClientEvent::Command(cmd));
+                    self.do_command(cmd, now);
+                    continue;
                 }
-                Err(e) => emit(&|| ClientEvent::Refused(e.clone())),
+                Err(e) => {
+                    emit(ClientEvent::Refused(e));
+                    continue;
+                }
+            };
+            // The last item of the batch (see above).
+            self.starts_left = self.starts_left.saturating_sub(1);
+            self.clients[i].compiling = true;
+            self.compiles.send(Job {
+                conn,
+                secondary,
+                text,
+            });
+        }
+    }
+
+    /// Starts the programs compiled since the last step (see [`compile`](super::compile)),
+    /// and lets their clients' later items be done.
+    fn take_compiled(&mut self, now: Duration) {
+        while let Some(done) = self.compiles.take() {
+            if let Some(c) = self.clients.iter_mut().find(|c| c.conn == done.conn) {
+                c.compiling = false;
             }
+            let cell = &mut self.owner.cell;
+            if done.secondary {
+                cell.run_secondary_compiled(done.program, now);
+            } else {
+                cell.start_compiled(done.program, now);
+            }
+        }
+    }
+
+    /// A primary client's command (`power on`, `set speed`...).
+    fn do_command(&mut self, cmd: Command, now: Duration) {
+        let cell = &mut self.owner.cell;
+        let c = cell.controller();
+        let before = c.program_state();
+        let _ = match cmd {
+            Command::PowerOn => c.power_on(now),
+            Command::PowerOff => c.power_off(now),
+            Command::BrakeRelease => c.brake_release(now),
+            Command::UnlockProtectiveStop => c.request_unlock_protective_stop(now),
+            Command::StopProgram => c.stop(now),
+            Command::SetSpeed(f) => {
+                cell.apply(&crate::Inputs {
+                    speed_slider_fraction: Some(f),
+                    ..Default::default()
+                });
+                Ok(())
+            }
+        };
+        // A primary client's `stop program` or `power off`.
+        let cause = match super::stop_cause(cell.controller(), before, now) {
+            Some(crate::StopReason::DashboardStop) => Some(crate::StopReason::ClientStop),
+            other => other,
+        };
+        if let Some(cause) = cause {
+            cell.set_stop_cause(cause);
         }
     }
 
@@ -1014,15 +1065,18 @@ impl Loop {
                         // Reading, translating and fetching External Control scripts
                         // take time: the streams go on meanwhile.
                         let shared = Arc::clone(shared);
+                        let compiler = cell.compiler();
                         let spawned = std::thread::Builder::new()
                             .name("load-program".into())
                             .spawn(move || {
+                                // Compiled here too: the loop only starts it.
                                 let result = super::fetch::load(
                                     &shared,
                                     &shared.program_file(&path).to_string_lossy(),
-                                );
+                                )
+                                .map(|script| compiler.loaded(&script));
                                 shared.ask(move |cell, now| match result {
-                                    Ok(script) => cell.start_loaded(script, now),
+                                    Ok(program) => cell.start_loaded_compiled(program, now),
                                     Err(why) => cell.refuse_loaded(format!("{name}: {why}"), now),
                                 });
                             });

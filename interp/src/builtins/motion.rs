@@ -50,7 +50,8 @@
 //! - The speed slider (`Arm::speed_fraction`): every motion above runs on the motion
 //!   clock, which advances by the slider's fraction each step; moves and `stopj`/`stopl`
 //!   return when their motion ends on it; `servoj`, `speedj`, `speedl` return after `t`
-//!   of program time (the arm gets only as far as the slider lets it).
+//!   of motion time (at a fraction `f`, `t / f` of program time), so a program that
+//!   streams them (UR's External Control script) follows its path at the slider's pace.
 //! - `force_mode`/`end_force_mode`: see `crate::arm::force`. `teach_mode`/`freedrive_mode`:
 //!   the arm stops and the operator moves the joints (`Arm::move_by_hand`) until the
 //!   `end_` call or the program's end.
@@ -812,7 +813,7 @@ fn servoj(
     let pose = c.tool_pose(q1);
     let info = move_start(a.name, a.line, Some(q1), Some(pose), (acc, speed, t, 0.0));
     c.start_motion(Kind::Joint { q0, q1, profile }, tcp, Some(info));
-    Ok(Out::Wait(secs(t), Value::None))
+    Ok(after_motion_time(c, t))
 }
 
 /// `speedj(qd, a, t)`, `speedl(xd, a, t, aRot)`: the speed ramps linearly from the
@@ -834,7 +835,7 @@ fn speed(
     info.speed = Some(target);
     match space {
         Space::Joint => {
-            let qd0 = c.arm.qd;
+            let qd0 = c.motion_qd();
             let ramp = trajectory::ramp_time(&qd0, &target, acc);
             let q0 = c.arm.q;
             c.start_motion(
@@ -850,12 +851,12 @@ fn speed(
         }
         Space::Tool => tool_speed(c, target, acc, a_rot.unwrap_or(acc), Some(info)),
     }
-    Ok(Out::Wait(secs(t), Value::None))
+    Ok(after_motion_time(c, t))
 }
 
 /// Ramps the tool speed to `v1` from the current one.
 fn tool_speed(c: &mut Runtime, v1: [f64; 6], acc: f64, a_rot: f64, info: Option<MoveStart>) {
-    let v0 = c.arm.tcp_speed;
+    let v0 = c.motion_tcp_speed();
     let ramp = trajectory::ramp_time(&v0[..3], &v1[..3], acc).max(trajectory::ramp_time(
         &v0[3..],
         &v1[3..],
@@ -872,7 +873,7 @@ fn tool_speed(c: &mut Runtime, v1: [f64; 6], acc: f64, a_rot: f64, info: Option<
 fn stop(c: &mut Runtime, space: Space, acc: f64, a_rot: Option<f64>) -> Result<Out, Fault> {
     let ramp = match space {
         Space::Joint => {
-            let qd0 = c.arm.qd;
+            let qd0 = c.motion_qd();
             let ramp = trajectory::ramp_time(&qd0, &[0.0; 6], acc);
             let (q0, tcp) = (c.arm.q, c.arm.tcp);
             c.start_motion(
@@ -889,7 +890,7 @@ fn stop(c: &mut Runtime, space: Space, acc: f64, a_rot: Option<f64>) -> Result<O
         }
         Space::Tool => {
             let a_rot = a_rot.unwrap_or(acc);
-            let v0 = c.arm.tcp_speed;
+            let v0 = c.motion_tcp_speed();
             tool_speed(c, [0.0; 6], acc, a_rot, None);
             trajectory::ramp_time(&v0[..3], &[0.0; 3], acc).max(trajectory::ramp_time(
                 &v0[3..],
@@ -899,11 +900,18 @@ fn stop(c: &mut Runtime, space: Space, acc: f64, a_rot: Option<f64>) -> Result<O
         }
     };
     // At rest when the ramp ends on the motion clock (at least a step).
-    let n = secs(ramp)
+    Ok(after_motion_time(c, ramp))
+}
+
+/// Returns after `t` seconds of motion time: whole steps of the motion clock (at least
+/// one), so at the speed slider's fraction `f` a call takes `t / f` of program time.
+fn after_motion_time(c: &Runtime, t: f64) -> Out {
+    let n = secs(t)
         .as_nanos()
-        .div_ceil(c.step_time.as_nanos().max(1));
+        .div_ceil(c.step_time.as_nanos().max(1))
+        .max(1);
     let until = c.clock_now() + u64::try_from(n).unwrap_or(u64::MAX) as f64;
-    Ok(Out::Motion(until, Value::None))
+    Out::Motion(until, Value::None)
 }
 
 fn direct_torque(c: &mut Runtime) -> Result<Out, Fault> {
