@@ -67,6 +67,9 @@ enum Command {
         /// send it to the controller), which is run.
         #[arg(long, conflicts_with = "eval")]
         script: Option<std::path::PathBuf>,
+        /// The program file, as `--script FILE` (`ursock robot prog.script`).
+        #[arg(value_name = "FILE", conflicts_with_all = ["script", "eval"])]
+        file: Option<std::path::PathBuf>,
         /// Program lines given on the command line (repeatable).
         #[arg(short = 'e', long = "eval")]
         eval: Vec<String>,
@@ -221,6 +224,7 @@ fn run(cli: Cli) -> Result<(), String> {
         Command::Robot {
             connect,
             script,
+            file,
             eval,
             trace,
             json,
@@ -260,7 +264,7 @@ fn run(cli: Cli) -> Result<(), String> {
                 .iter()
                 .map(|s| urscript_interp::Stub::from_arg(s).map_err(|e| format!("--stub {s}: {e}")))
                 .collect::<Result<Vec<_>, _>>()?;
-            let text = match script {
+            let text = match script.or(file) {
                 Some(path) => {
                     let bytes =
                         std::fs::read(&path).map_err(|e| format!("{}: {e}", path.display()))?;
@@ -273,7 +277,7 @@ fn run(cli: Cli) -> Result<(), String> {
                     })?
                 }
                 None if !eval.is_empty() => eval.join("\n"),
-                None => return Err("give --script FILE or -e 'CALL'".into()),
+                None => return Err("give a program: FILE, --script FILE or -e 'CALL'".into()),
             };
             script::run(
                 &text,

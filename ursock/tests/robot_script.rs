@@ -674,3 +674,30 @@ fn one_call_per_line_scripts_still_run() {
     );
     assert!(text.contains("textmsg([2, 1, 2]) -> [2, 1, 2]"), "{text}");
 }
+
+#[test]
+fn the_program_file_may_be_given_without_script() {
+    let path =
+        std::env::temp_dir().join(format!("ursock-positional-{}.script", std::process::id()));
+    std::fs::write(&path, "textmsg(\"from a file\")\n").unwrap();
+    let out = ursock()
+        .args(["robot", path.to_str().unwrap()])
+        .stdin(Stdio::null())
+        .output()
+        .expect("spawn ursock");
+    let both = ursock()
+        .args([
+            "robot",
+            path.to_str().unwrap(),
+            "--script",
+            path.to_str().unwrap(),
+        ])
+        .stdin(Stdio::null())
+        .output()
+        .expect("spawn ursock");
+    let _ = std::fs::remove_file(&path);
+    assert_eq!(out.status.code(), Some(0), "{out:?}");
+    assert!(String::from_utf8_lossy(&out.stdout).contains("from a file"));
+    // One program: a file and --script together is a usage error.
+    assert_eq!(both.status.code(), Some(2));
+}
