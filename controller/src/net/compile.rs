@@ -6,7 +6,9 @@
 //! order, and the other clients and the streams go on.
 //!
 //! At most [`MAX_COMPILES`] programs wait to be compiled (each client has at most one
-//! in flight). If the thread cannot be started, programs are compiled on the loop.
+//! in flight), in the order they came: a client's program waits behind at most one
+//! program of each other client. If the thread cannot be started, programs are
+//! compiled on the loop.
 
 use std::collections::VecDeque;
 use std::sync::mpsc::{self, Receiver, SyncSender, TrySendError};
