@@ -487,10 +487,15 @@ impl Cell {
     /// A program (or secondary program) arrived at `now`; it is compiled here (see
     /// [`Cell::compiler`] to compile elsewhere).
     pub fn submit(&mut self, submitted: Submitted, now: Duration) {
-        let compiler = self.compiler();
         match submitted {
-            Submitted::Program(text) => self.start_compiled(compiler.program(&text), now),
-            Submitted::Secondary(text) => self.run_secondary_compiled(compiler.program(&text), now),
+            Submitted::Program(text) => {
+                let program = compile(&text, None, &self.interp);
+                self.start_compiled(program, now);
+            }
+            Submitted::Secondary(text) => {
+                let program = compile(&text, None, &self.interp);
+                self.run_secondary_compiled(program, now);
+            }
         }
     }
 
@@ -517,7 +522,7 @@ impl Cell {
 
     /// The text of the loaded `.urp` program that [`CellEvent::NeedProgram`] asked for.
     pub fn start_loaded(&mut self, script: String, now: Duration) {
-        let program = self.compiler().loaded(&script);
+        let program = compile(&script, Some(&self.preamble), &self.interp);
         self.start_loaded_compiled(program, now);
     }
 
